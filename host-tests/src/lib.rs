@@ -1,0 +1,1 @@
+//! Host-side tools shared by the tests and binaries in this package.

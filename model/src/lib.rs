@@ -1,0 +1,4 @@
+#![no_std]
+pub mod error;
+pub mod params;
+pub mod real;

@@ -1,0 +1,328 @@
+//! The finger's parameters (MODEL.md "Geometry", "Dielectric elastomer stack", "Cable"),
+//! their defaults, the paper preset, validation, and access by name for the console.
+//!
+//! What it is not: derived quantities (compliances, pull-in) live in `hinge`, `de`, `finger`.
+
+use crate::error::Error;
+use crate::real::Real;
+
+/// Most joints a finger may have (fixed capacity; the paper's finger has 3).
+pub const MAX_JOINTS: usize = 5;
+/// Most sub-elements per hinge (m; m = 1 is the paper's model).
+pub const MAX_SUB: usize = 8;
+/// Most DE layers per stack.
+pub const MAX_LAYERS: u32 = 64;
+
+/// Vacuum permittivity, F/m. With lengths in mm and pressures in MPa the Maxwell pressure is
+/// `p[MPa] = EPS0 * eps_r * V^2 / z[mm]^2` (the 1e-6 of m^2->mm^2 and Pa->MPa cancel).
+pub const EPS0: f64 = 8.854e-12;
+
+/// How the stack's Young's modulus follows from G and nu.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeModulusRule {
+    /// Isotropic elasticity: E = 2 G (1 + nu) (MODEL.md's correction).
+    Isotropic,
+    /// The paper's Eq. 3 as printed: E = G / (2 (1 + nu)). Only for reproducing its scenes.
+    PaperEq3,
+}
+
+/// Every model parameter. Units: mm, N, MPa, V (MODEL.md "Units and frames").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Params<R> {
+    /// Number of elements (joints), 1..=MAX_JOINTS.
+    pub n: usize,
+    /// Element pitch, node to node, mm.
+    pub l: R,
+    /// Link thickness in the bending plane, mm.
+    pub b: R,
+    /// Width out of the plane (the paper's h), mm.
+    pub w: R,
+    /// Thinnest hinge section, mm.
+    pub t_min: R,
+    /// Elliptical notch semi-axis along x, mm; hinge length L_h = 2a.
+    pub a: R,
+    /// Body Young's modulus, MPa.
+    pub e_b: R,
+    /// Cable offset from the centerline on the flexor side, mm.
+    pub e: R,
+    /// DE layers per stack (0: no stacks).
+    pub layers: u32,
+    /// Initial thickness of one DE layer, mm.
+    pub z0: R,
+    /// DE shear modulus, MPa.
+    pub g: R,
+    /// DE Poisson ratio.
+    pub nu: R,
+    /// DE relative permittivity.
+    pub eps_r: R,
+    /// Which relation gives E_de from G and nu.
+    pub de_rule: DeModulusRule,
+    /// Fraction of the pull-in voltage the ceiling allows, (0, 1).
+    pub margin: R,
+    /// HV supply maximum, V.
+    pub v_supply: R,
+    /// Load increments of the paper's stepping solver.
+    pub n_inc: u32,
+    /// Sub-elements per hinge (m = 1 is the paper's model).
+    pub m: usize,
+    /// Use the plate (plane-strain) modulus E_b / (1 - nu_b^2) for the hinges.
+    pub plate: bool,
+    /// Body Poisson ratio (for the plate modulus).
+    pub nu_b: R,
+    /// Shortest cable span before the links are taken to touch (contact), mm.
+    pub span_floor: R,
+}
+
+impl<R: Real> Default for Params<R> {
+    /// MODEL.md's defaults.
+    fn default() -> Self {
+        let f = R::from_f64;
+        Params {
+            n: 3,
+            l: f(27.0),
+            b: f(10.0),
+            w: f(20.0),
+            t_min: f(1.5),
+            a: f(5.0),
+            e_b: f(12.0),
+            e: f(5.0),
+            layers: 4,
+            z0: f(0.5),
+            g: f(0.6),
+            nu: f(0.49),
+            eps_r: f(4.7),
+            de_rule: DeModulusRule::Isotropic,
+            margin: f(0.9),
+            v_supply: f(10_000.0),
+            n_inc: 20,
+            m: 1,
+            plate: false,
+            nu_b: f(0.45),
+            span_floor: f(0.1),
+        }
+    }
+}
+
+/// A parameter's name and its valid range, as the console reports them.
+#[derive(Clone, Copy, Debug)]
+pub struct ParamInfo {
+    pub name: &'static str,
+    pub min: f64,
+    pub max: f64,
+    /// Whether the bounds are exclusive.
+    pub open: bool,
+    pub range: &'static str,
+    pub read_only: bool,
+}
+
+const fn info(name: &'static str, min: f64, max: f64, open: bool, range: &'static str) -> ParamInfo {
+    ParamInfo { name, min, max, open, range, read_only: false }
+}
+
+/// Every parameter by its console name, with its range. Lengths are bounded to 1e-3..1e4 mm
+/// and moduli to 1e-3..1e6 MPa so that no product in the model overflows f32.
+pub const PARAMS: &[ParamInfo] = &[
+    info("n", 1.0, MAX_JOINTS as f64, false, "integer 1..5"),
+    info("l", 1e-3, 1e4, false, "1e-3..1e4 mm, > 2a"),
+    info("b", 1e-3, 1e4, false, "1e-3..1e4 mm, > t_min"),
+    info("w", 1e-3, 1e4, false, "1e-3..1e4 mm"),
+    info("t_min", 1e-3, 1e4, false, "1e-3..1e4 mm, < b"),
+    info("a", 1e-3, 1e4, false, "1e-3..1e4 mm, 2a < l"),
+    info("e_b", 1e-3, 1e6, false, "1e-3..1e6 MPa"),
+    info("e", 1e-3, 1e4, false, "1e-3 mm..b/2"),
+    info("layers", 0.0, MAX_LAYERS as f64, false, "integer 0..64"),
+    info("z0", 1e-3, 1e2, false, "1e-3..100 mm"),
+    info("g", 1e-3, 1e4, false, "1e-3..1e4 MPa"),
+    info("nu", 0.0, 0.5, false, "0..0.5"),
+    info("eps_r", 1.0, 1e3, false, "1..1000"),
+    ParamInfo { name: "e_de", min: 0.0, max: 0.0, open: false, range: "read-only", read_only: true },
+    info("margin", 0.0, 1.0, true, "0 < margin < 1"),
+    info("v_supply", 0.0, 1e5, false, "0..1e5 V"),
+    info("n_inc", 1.0, 100_000.0, false, "integer 1..100000"),
+    info("m", 1.0, MAX_SUB as f64, false, "integer 1..8"),
+    info("plate", 0.0, 1.0, false, "0 or 1"),
+    info("nu_b", 0.0, 0.499, false, "0..0.499"),
+    info("span_floor", 1e-6, 1e3, false, "1e-6 mm..L_h"),
+];
+
+fn is_integer_name(name: &str) -> bool {
+    matches!(name, "n" | "layers" | "n_inc" | "m" | "plate")
+}
+
+impl<R: Real> Params<R> {
+    /// The paper's preset: MODEL.md's geometry with the DE modulus of Eq. 3 as printed
+    /// (E = G / (2 (1 + nu)) = 0.201 MPa), to reproduce the paper's scenes.
+    pub fn paper() -> Self {
+        Params { de_rule: DeModulusRule::PaperEq3, ..Self::default() }
+    }
+
+    /// A finger without DE stacks.
+    pub fn without_stacks(self) -> Self {
+        Params { layers: 0, ..self }
+    }
+
+    /// Hinge length L_h = 2a, mm.
+    pub fn hinge_len(&self) -> R {
+        self.a + self.a
+    }
+
+    /// The DE Young's modulus E_de, MPa, by the selected rule.
+    pub fn e_de(&self) -> R {
+        let two = R::from_f64(2.0);
+        match self.de_rule {
+            DeModulusRule::Isotropic => two * self.g * (R::one() + self.nu),
+            DeModulusRule::PaperEq3 => self.g / (two * (R::one() + self.nu)),
+        }
+    }
+
+    /// The body modulus the hinges bend with: E_b, or the plate modulus E_b / (1 - nu_b^2).
+    pub fn hinge_modulus(&self) -> R {
+        if self.plate {
+            self.e_b / (R::one() - self.nu_b.sq())
+        } else {
+            self.e_b
+        }
+    }
+
+    /// Read a parameter by its console name.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        Some(match name {
+            "n" => self.n as f64,
+            "l" => self.l.to_f64(),
+            "b" => self.b.to_f64(),
+            "w" => self.w.to_f64(),
+            "t_min" => self.t_min.to_f64(),
+            "a" => self.a.to_f64(),
+            "e_b" => self.e_b.to_f64(),
+            "e" => self.e.to_f64(),
+            "layers" => self.layers as f64,
+            "z0" => self.z0.to_f64(),
+            "g" => self.g.to_f64(),
+            "nu" => self.nu.to_f64(),
+            "eps_r" => self.eps_r.to_f64(),
+            "e_de" => self.e_de().to_f64(),
+            "margin" => self.margin.to_f64(),
+            "v_supply" => self.v_supply.to_f64(),
+            "n_inc" => self.n_inc as f64,
+            "m" => self.m as f64,
+            "plate" => self.plate as u32 as f64,
+            "nu_b" => self.nu_b.to_f64(),
+            "span_floor" => self.span_floor.to_f64(),
+            _ => return None,
+        })
+    }
+
+    /// Set a parameter by its console name. The whole set is validated; on error nothing
+    /// changes.
+    pub fn set(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        let info = PARAMS
+            .iter()
+            .find(|p| p.name == name)
+            .ok_or(Error::Input { input: "parameter", reason: "unknown parameter name" })?;
+        if !value.is_finite() {
+            return Err(Error::NonFinite { input: info.name });
+        }
+        let bad = Error::Param { name: info.name, range: info.range };
+        if info.read_only {
+            return Err(bad);
+        }
+        let inside = if info.open {
+            value > info.min && value < info.max
+        } else {
+            value >= info.min && value <= info.max
+        };
+        if !inside || (is_integer_name(name) && value != libm::trunc(value)) {
+            return Err(bad);
+        }
+        let mut p = *self;
+        let r = R::from_f64(value);
+        match name {
+            "n" => p.n = value as usize,
+            "l" => p.l = r,
+            "b" => p.b = r,
+            "w" => p.w = r,
+            "t_min" => p.t_min = r,
+            "a" => p.a = r,
+            "e_b" => p.e_b = r,
+            "e" => p.e = r,
+            "layers" => p.layers = value as u32,
+            "z0" => p.z0 = r,
+            "g" => p.g = r,
+            "nu" => p.nu = r,
+            "eps_r" => p.eps_r = r,
+            "margin" => p.margin = r,
+            "v_supply" => p.v_supply = r,
+            "n_inc" => p.n_inc = value as u32,
+            "m" => p.m = value as usize,
+            "plate" => p.plate = value != 0.0,
+            "nu_b" => p.nu_b = r,
+            "span_floor" => p.span_floor = r,
+            _ => return Err(bad),
+        }
+        p.validate()?;
+        *self = p;
+        Ok(())
+    }
+
+    /// Check the whole parameter set: every value finite and in range, and the geometry
+    /// consistent (t_min < b, 2a < l, the cable inside the link: 0 < e <= b/2, the span
+    /// floor shorter than the hinge).
+    pub fn validate(&self) -> Result<(), Error> {
+        for info in PARAMS.iter().filter(|i| !i.read_only) {
+            let v = self.get(info.name).unwrap_or(f64::NAN);
+            if !v.is_finite() {
+                return Err(Error::NonFinite { input: info.name });
+            }
+            let inside = if info.open { v > info.min && v < info.max } else { v >= info.min && v <= info.max };
+            if !inside {
+                return Err(Error::Param { name: info.name, range: info.range });
+            }
+        }
+        let f = |x: R| x.to_f64();
+        if f(self.t_min) >= f(self.b) {
+            return Err(Error::Param { name: "t_min", range: "t_min < b" });
+        }
+        if 2.0 * f(self.a) >= f(self.l) {
+            return Err(Error::Param { name: "a", range: "hinge length 2a < pitch l" });
+        }
+        if f(self.e) > 0.5 * f(self.b) {
+            return Err(Error::Param { name: "e", range: "cable inside the link: 0 < e <= b/2" });
+        }
+        if f(self.span_floor) >= 2.0 * f(self.a) {
+            return Err(Error::Param { name: "span_floor", range: "span_floor < hinge length 2a" });
+        }
+        let e_de = f(self.e_de());
+        if self.layers > 0 && !(e_de > 1e-6 && e_de.is_finite()) {
+            return Err(Error::Param { name: "e_de", range: "E_de > 0 (from g, nu)" });
+        }
+        Ok(())
+    }
+
+    /// The same parameters in another scalar type.
+    pub fn cast<S: Real>(&self) -> Params<S> {
+        let c = |x: R| S::from_f64(x.to_f64());
+        Params {
+            n: self.n,
+            l: c(self.l),
+            b: c(self.b),
+            w: c(self.w),
+            t_min: c(self.t_min),
+            a: c(self.a),
+            e_b: c(self.e_b),
+            e: c(self.e),
+            layers: self.layers,
+            z0: c(self.z0),
+            g: c(self.g),
+            nu: c(self.nu),
+            eps_r: c(self.eps_r),
+            de_rule: self.de_rule,
+            margin: c(self.margin),
+            v_supply: c(self.v_supply),
+            n_inc: self.n_inc,
+            m: self.m,
+            plate: self.plate,
+            nu_b: c(self.nu_b),
+            span_floor: c(self.span_floor),
+        }
+    }
+}
