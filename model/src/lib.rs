@@ -1,4 +1,28 @@
+//! The variable-stiffness soft finger: a `no_std`, allocation-free model of the paper's
+//! three-element iteration (n-FEM-NI) with MODEL.md's corrections.
+//!
+//! Modules, each one idea:
+//! - [`real`]: the scalar (f32 on the target, f64 on the host), with explicitly chosen math.
+//! - [`params`]: parameters, defaults, the paper preset, validation, access by name.
+//! - [`hinge`]: elliptical notch thickness and compliance (Castigliano integrals).
+//! - [`de`]: DE layer thinning, pull-in (33 %) limit, ceiling, stack stiffness.
+//! - [`finger`]: joint equilibrium, posture, cable excursion, tip stiffness, two solvers.
+//! - [`mat3`]: the 3x3 algebra they need.
+//! - [`error`]: typed errors; nothing here panics or returns a non-finite result.
+//!
+//! docs/model.md puts each function next to the paper's equation and each correction.
 #![no_std]
+#![forbid(unsafe_code)]
+
+pub mod de;
 pub mod error;
+pub mod finger;
+pub mod hinge;
+pub mod mat3;
 pub mod params;
 pub mod real;
+
+pub use error::Error;
+pub use finger::{Compliances, Finger, Method, Pose, Solution};
+pub use params::{DeModulusRule, Params, MAX_JOINTS, MAX_SUB};
+pub use real::Real;

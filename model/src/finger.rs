@@ -1,0 +1,910 @@
+//! The finger: joint equilibrium under cable tension (and an optional tip load), posture,
+//! cable excursion and tip stiffness (MODEL.md "Cable", "Equilibrium"; the paper's n-FEM-NI,
+//! sections II-C/D).
+//!
+//! What it is: a prepared finger (`Finger::new` validates the parameters and computes the
+//! hinge compliances once) and two solvers: the converged equilibrium (Newton) and the paper's
+//! load stepping (Eq. 29). What it is not: the inverse (see `inverse`) or anything that drives
+//! hardware.
+//!
+//! Each hinge is split into m sub-elements (m = 1 is the paper's model). Sub-element j of
+//! joint k carries q = (δax, δtr, Δθ): the displacement of its distal end in its proximal frame,
+//! `q = C · w`, with w the wrench (Fx, Fy, M) on its distal end from everything distal to it,
+//! in its proximal frame, M about its distal end (the paper's Eq. 7 and 15, with the loads
+//! taken in the deformed geometry rather than its Eq. 12-14 and 32-34).
+//!
+//! Under tension alone the cable's only load on the distal chain beyond a cut in hinge k is
+//! P along span k, applied at link k's proximal hole B (spans further out pull on two points
+//! of the distal chain and cancel). So a joint's state is fixed by where B sits: the solver
+//! guesses B (two numbers, in the joint's proximal frame), marches through the sub-elements
+//! with their loads (each a closed form: the moment's dependence on the sub-element's own
+//! deflection is linear), and asks that the hole it arrives at is the guessed B. Newton on that
+//! 2x2 residual, with a finite-difference Jacobian and backtracking, and load continuation
+//! when a full step fails. A tip load couples the joints: then the unknowns are every B and
+//! the tip position, solved together.
+
+use crate::error::Error;
+use crate::mat3::{self, Mat3};
+use crate::params::{Params, MAX_JOINTS, MAX_SUB};
+use crate::real::Real;
+use crate::{de, hinge};
+
+/// A planar pose: position (mm) and angle (rad, positive toward +y).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Pose<R> {
+    pub x: R,
+    pub y: R,
+    pub theta: R,
+}
+
+impl<R: Real> Pose<R> {
+    pub fn origin() -> Self {
+        Pose { x: R::zero(), y: R::zero(), theta: R::zero() }
+    }
+    /// `self ∘ (dx, dy, dθ)`: move by (dx, dy) in this pose's frame, then turn by dθ.
+    pub fn then(&self, dx: R, dy: R, dtheta: R) -> Self {
+        let (s, c) = self.theta.sin_cos();
+        Pose { x: self.x + c * dx - s * dy, y: self.y + s * dx + c * dy, theta: self.theta + dtheta }
+    }
+    /// A point given in this pose's frame, in the parent frame.
+    pub fn point(&self, px: R, py: R) -> [R; 2] {
+        let (s, c) = self.theta.sin_cos();
+        [self.x + c * px - s * py, self.y + s * px + c * py]
+    }
+}
+
+/// Which solver.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method<R> {
+    /// The converged equilibrium: Newton to `tol` (mm, on the guide-hole position), at most
+    /// `max_iter` iterations in all. A `tol` below the type's resolution is raised to it.
+    Converged { tol: R, max_iter: u32 },
+    /// The paper's load stepping (Eq. 29): `n_inc` increments, the load direction taken from
+    /// the geometry of the step before. First order in 1/n_inc.
+    Stepping { n_inc: u32 },
+}
+
+impl<R: Real> Method<R> {
+    /// The converged solver at its default tolerance (1e-9 mm, or the type's resolution).
+    pub fn converged() -> Self {
+        Method::Converged { tol: R::from_f64(1e-9), max_iter: 200 }
+    }
+}
+
+/// Compliance of every sub-element of every joint, for one set of channel voltages.
+#[derive(Clone, Copy, Debug)]
+pub struct Compliances<R> {
+    pub n: usize,
+    pub m: usize,
+    /// C of sub-element j of joint k: `c[k][j]`.
+    pub c: [[Mat3<R>; MAX_SUB]; MAX_JOINTS],
+    /// Whole-stack thickness per joint, mm (0 without stacks).
+    pub thickness: [R; MAX_JOINTS],
+    /// The channel voltages these compliances are for, V.
+    pub volts: [R; MAX_JOINTS],
+}
+
+/// A solved posture.
+#[derive(Clone, Copy, Debug)]
+pub struct Solution<R> {
+    pub n: usize,
+    pub m: usize,
+    /// Cable tension, N.
+    pub tension: R,
+    /// External tip force (base frame), N.
+    pub tip_force: [R; 2],
+    /// Sub-element displacements q = (δax, δtr, Δθ), `q[k][j]`.
+    pub q: [[[R; 3]; MAX_SUB]; MAX_JOINTS],
+    /// Joint angles Δθ_k (sum over the joint's sub-elements), rad.
+    pub joint_angle: [R; MAX_JOINTS],
+    /// Node poses 0..=n; node n is the tip (centreline, distal end of the last link).
+    pub nodes: [Pose<R>; MAX_JOINTS + 1],
+    /// Length of cable span k, mm.
+    pub span: [R; MAX_JOINTS],
+    /// Stack thickness per joint, mm.
+    pub thickness: [R; MAX_JOINTS],
+    /// Channel voltages, V.
+    pub volts: [R; MAX_JOINTS],
+    /// Cable the servo must pull in: Σ (L_h - |span k|), mm.
+    pub cable_excursion: R,
+    /// Newton iterations (converged) or load steps (stepping).
+    pub iterations: u32,
+    /// Final equilibrium residual: guide-hole mismatch, mm.
+    pub residual: R,
+    /// Determinant of each joint's equilibrium tangent (2x2, dimensionless; 1 unloaded).
+    /// It falls to zero at a limit point of the equilibrium branch.
+    pub tangent_det: [R; MAX_JOINTS],
+}
+
+impl<R: Real> Solution<R> {
+    /// Tip pose (node n).
+    pub fn tip(&self) -> Pose<R> {
+        self.nodes[self.n]
+    }
+    pub fn joint_angles(&self) -> &[R] {
+        &self.joint_angle[..self.n]
+    }
+}
+
+/// A prepared finger: validated parameters and the hinge compliances, computed once.
+#[derive(Clone, Copy, Debug)]
+pub struct Finger<R> {
+    p: Params<R>,
+    /// Hinge (no stack) compliance of sub-element j.
+    hinge_c: [Mat3<R>; MAX_SUB],
+    /// Its inverse (stiffness), for adding the stack in parallel.
+    hinge_k: [Mat3<R>; MAX_SUB],
+    /// Sub-element length, mm (L_h / m).
+    sub_len: R,
+}
+
+/// The loads a joint sees besides the cable, in its proximal frame.
+#[derive(Clone, Copy)]
+struct TipLoad<R> {
+    force: [R; 2],
+    point: [R; 2],
+}
+
+/// A joint's marched state.
+#[derive(Clone, Copy)]
+struct JointState<R> {
+    q: [[R; 3]; MAX_SUB],
+    /// Hinge distal-end pose in the joint's proximal frame.
+    end: Pose<R>,
+    /// Link k's proximal guide hole, as the march arrives at it (proximal frame).
+    hole: [R; 2],
+}
+
+enum MarchError {
+    Contact,
+    Singular,
+}
+
+fn norm2<R: Real>(v: [R; 2]) -> R {
+    (v[0] * v[0] + v[1] * v[1]).sqrt()
+}
+
+impl<R: Real> Finger<R> {
+    /// Validate the parameters and compute the hinge compliances (once per parameter set).
+    pub fn new(p: Params<R>) -> Result<Self, Error> {
+        p.validate()?;
+        #[cfg(not(feature = "de"))]
+        if p.layers > 0 {
+            return Err(Error::Param { name: "layers", range: "0 (this build has no DE support)" });
+        }
+        let mut hinge_c = [mat3::zero(); MAX_SUB];
+        let mut hinge_k = [mat3::zero(); MAX_SUB];
+        let e = p.hinge_modulus();
+        for j in 0..p.m {
+            let (x0, x1) = hinge::sub_element_bounds(p.a, p.m, j);
+            hinge_c[j] = hinge::stretch_compliance(p.b, p.t_min, p.a, e, p.w, x0, x1);
+            hinge_k[j] = mat3::inverse(&hinge_c[j]).ok_or(Error::Singular { what: "hinge compliance" })?;
+            if !hinge_c[j].iter().flatten().all(|x| x.is_finite()) {
+                return Err(Error::Singular { what: "hinge compliance" });
+            }
+        }
+        let sub_len = p.hinge_len() / R::from_f64(p.m as f64);
+        Ok(Finger { p, hinge_c, hinge_k, sub_len })
+    }
+
+    pub fn params(&self) -> &Params<R> {
+        &self.p
+    }
+
+    /// Hinge compliance of sub-element j (no stack).
+    pub fn hinge_compliance(&self, j: usize) -> Mat3<R> {
+        self.hinge_c[j.min(MAX_SUB - 1)]
+    }
+
+    /// Pull-in voltage V_pi of a layer, V (0 without stacks).
+    pub fn pull_in_voltage(&self) -> R {
+        de::pull_in_voltage(&self.p)
+    }
+
+    /// The ceiling every channel stays below: min(margin x V_pi, supply), V.
+    pub fn voltage_ceiling(&self) -> R {
+        de::voltage_ceiling(&self.p)
+    }
+
+    /// Whole-stack thickness at `volts`, mm (refuses a voltage at or past the ceiling).
+    pub fn stack_thickness(&self, volts: R) -> Result<R, Error> {
+        de::stack_thickness(&self.p, 1, volts)
+    }
+
+    /// The compliance of every sub-element for these channel voltages (one per joint):
+    /// `C = (C_hinge⁻¹ + Tᵀ C_de(t_k)⁻¹ T)⁻¹`, or C_hinge alone without stacks.
+    pub fn compliances(&self, volts: &[R]) -> Result<Compliances<R>, Error> {
+        let p = &self.p;
+        if volts.len() != p.n {
+            return Err(Error::Input { input: "voltages", reason: "one voltage per joint is required" });
+        }
+        let mut out = Compliances {
+            n: p.n,
+            m: p.m,
+            c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS],
+            thickness: [R::zero(); MAX_JOINTS],
+            volts: [R::zero(); MAX_JOINTS],
+        };
+        out.volts[..p.n].copy_from_slice(volts);
+        for (k, &v) in volts.iter().enumerate() {
+            de::check_voltage(p, k + 1, v)?;
+            if p.layers == 0 {
+                out.c[k][..p.m].copy_from_slice(&self.hinge_c[..p.m]);
+                continue;
+            }
+            let t = de::stack_thickness(p, k + 1, v)?;
+            out.thickness[k] = t;
+            for j in 0..p.m {
+                let k_de = de::stack_stiffness(p, self.sub_len, t);
+                let k_sum = mat3::add(&self.hinge_k[j], &k_de);
+                out.c[k][j] = mat3::inverse(&k_sum).ok_or(Error::Singular { what: "joint stiffness" })?;
+            }
+        }
+        Ok(out)
+    }
+
+    /// Solve under cable tension alone (N) with one voltage per joint (V).
+    pub fn solve(&self, tension: R, volts: &[R], method: Method<R>) -> Result<Solution<R>, Error> {
+        let c = self.compliances(volts)?;
+        self.solve_with(&c, tension, [R::zero(); 2], method)
+    }
+
+    /// Solve with an external tip force too (N, base frame): the joints couple.
+    pub fn solve_loaded(
+        &self,
+        tension: R,
+        volts: &[R],
+        tip_force: [R; 2],
+        method: Method<R>,
+    ) -> Result<Solution<R>, Error> {
+        let c = self.compliances(volts)?;
+        self.solve_with(&c, tension, tip_force, method)
+    }
+
+    /// Solve with precomputed compliances (see `compliances`).
+    pub fn solve_with(
+        &self,
+        c: &Compliances<R>,
+        tension: R,
+        tip_force: [R; 2],
+        method: Method<R>,
+    ) -> Result<Solution<R>, Error> {
+        if !tension.is_finite() {
+            return Err(Error::NonFinite { input: "tension" });
+        }
+        if tension < R::zero() {
+            return Err(Error::Input { input: "tension", reason: "a cable cannot push: tension must be >= 0" });
+        }
+        if !(tip_force[0].is_finite() && tip_force[1].is_finite()) {
+            return Err(Error::NonFinite { input: "tip force" });
+        }
+        if c.n != self.p.n || c.m != self.p.m {
+            return Err(Error::Input { input: "compliances", reason: "computed for other parameters" });
+        }
+        let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
+        let (states, iterations) = match method {
+            Method::Stepping { n_inc } => {
+                if n_inc == 0 {
+                    return Err(Error::Input { input: "n_inc", reason: "at least one load step" });
+                }
+                (self.stepping(c, tension, tip_force, n_inc)?, n_inc)
+            }
+            Method::Converged { tol, max_iter } => {
+                if !tol.is_finite() || tol <= R::zero() {
+                    return Err(Error::Input { input: "tol", reason: "tolerance must be positive" });
+                }
+                let tol = tol.max(self.resolution());
+                if loaded {
+                    self.newton_coupled(c, tension, tip_force, tol, max_iter)?
+                } else {
+                    let mut states = [self.straight(); MAX_JOINTS];
+                    let mut iters = 0;
+                    for k in 0..self.p.n {
+                        let (s, it) = self.newton_joint(k, &c.c[k], tension, tol, max_iter)?;
+                        states[k] = s;
+                        iters += it;
+                    }
+                    (states, iters)
+                }
+            }
+        };
+        self.assemble(c, tension, tip_force, &states, iterations)
+    }
+
+    /// The finest hole-position residual the scalar type can resolve, mm.
+    fn resolution(&self) -> R {
+        R::from_f64(16.0 * R::EPS) * (self.p.hinge_len() + self.p.e + self.p.l)
+    }
+
+    fn straight(&self) -> JointState<R> {
+        let lh = self.p.hinge_len();
+        JointState {
+            q: [[R::zero(); 3]; MAX_SUB],
+            end: Pose { x: lh, y: R::zero(), theta: R::zero() },
+            hole: [lh, self.p.e],
+        }
+    }
+
+    /// March through joint k's sub-elements for a guessed guide-hole position `b_hole` (the
+    /// joint's proximal frame): cable force P along the span from `b_hole` to the hole at the
+    /// proximal node, plus an optional tip load. Each sub-element's deflection is the closed
+    /// solution of `q = C (f, M0 + s)` with `s = -f_y δax + f_x δtr` (the moment arm's own
+    /// change, linear in δ).
+    fn march(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b_hole: [R; 2],
+        tip: Option<TipLoad<R>>,
+    ) -> Result<JointState<R>, MarchError> {
+        let e = self.p.e;
+        let span_v = [b_hole[0], b_hole[1] - e];
+        let span = norm2(span_v);
+        if !(span >= self.p.span_floor) {
+            return Err(MarchError::Contact);
+        }
+        // force of the cable on the distal chain, toward the proximal hole
+        let fc = [-tension * span_v[0] / span, -tension * span_v[1] / span];
+        let (ft, tp) = match tip {
+            Some(t) => (t.force, t.point),
+            None => ([R::zero(); 2], [R::zero(); 2]),
+        };
+        let ftot = [fc[0] + ft[0], fc[1] + ft[1]];
+        let mut pose: Pose<R> = Pose::origin();
+        let (mut s, mut co) = (R::zero(), R::one());
+        let mut q = [[R::zero(); 3]; MAX_SUB];
+        for j in 0..self.p.m {
+            let cj = &c[j];
+            // nominal distal end (no own deflection)
+            let d0 = [pose.x + co * self.sub_len, pose.y + s * self.sub_len];
+            let mut m0 = (b_hole[0] - d0[0]) * fc[1] - (b_hole[1] - d0[1]) * fc[0];
+            if tip.is_some() {
+                m0 += (tp[0] - d0[0]) * ft[1] - (tp[1] - d0[1]) * ft[0];
+            }
+            // total force in the sub-element's proximal frame
+            let f = [co * ftot[0] + s * ftot[1], -s * ftot[0] + co * ftot[1]];
+            let q0 = mat3::mul_vec(cj, &[f[0], f[1], m0]);
+            let den = R::one() + f[1] * cj[0][2] - f[0] * cj[1][2];
+            if !(den.abs() > R::from_f64(1e-6)) {
+                return Err(MarchError::Singular);
+            }
+            let sm = (-f[1] * q0[0] + f[0] * q0[1]) / den;
+            let qj = [q0[0] + cj[0][2] * sm, q0[1] + cj[1][2] * sm, q0[2] + cj[2][2] * sm];
+            q[j] = qj;
+            pose = Pose {
+                x: pose.x + co * (self.sub_len + qj[0]) - s * qj[1],
+                y: pose.y + s * (self.sub_len + qj[0]) + co * qj[1],
+                theta: pose.theta + qj[2],
+            };
+            let sc = pose.theta.sin_cos();
+            s = sc.0;
+            co = sc.1;
+        }
+        let hole = [pose.x - s * e, pose.y + co * e];
+        if !(hole[0].is_finite() && hole[1].is_finite() && pose.theta.is_finite()) {
+            return Err(MarchError::Singular);
+        }
+        Ok(JointState { q, end: pose, hole })
+    }
+
+    /// Residual of the hole guess: guess - arrived.
+    fn hole_residual(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        tip: Option<TipLoad<R>>,
+    ) -> Result<([R; 2], JointState<R>), MarchError> {
+        let st = self.march(c, tension, b, tip)?;
+        Ok(([b[0] - st.hole[0], b[1] - st.hole[1]], st))
+    }
+
+    /// The 2x2 tangent of a joint's hole residual by forward differences.
+    fn joint_tangent(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        r: [R; 2],
+    ) -> Result<[[R; 2]; 2], MarchError> {
+        let h = R::from_f64(R::EPS.sqrt()) * (self.p.hinge_len() + self.p.e);
+        let mut jac = [[R::zero(); 2]; 2];
+        for i in 0..2 {
+            let mut bp = b;
+            bp[i] += h;
+            let (rp, _) = self.hole_residual(c, tension, bp, None)?;
+            jac[0][i] = (rp[0] - r[0]) / h;
+            jac[1][i] = (rp[1] - r[1]) / h;
+        }
+        Ok(jac)
+    }
+
+    /// Converged equilibrium of joint k under tension alone: Newton on the hole position, with
+    /// backtracking; load continuation (halving the increment) when a full step fails.
+    fn newton_joint(
+        &self,
+        k: usize,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        tol: R,
+        max_iter: u32,
+    ) -> Result<(JointState<R>, u32), Error> {
+        let mut b = [self.p.hinge_len(), self.p.e];
+        let mut done = R::zero();
+        let mut step = tension;
+        let mut iters = 0u32;
+        let min_step = tension / R::from_f64(4096.0);
+        if tension == R::zero() {
+            let st = self.march(c, tension, b, None).map_err(|_| Error::Singular { what: "joint" })?;
+            return Ok((st, 0));
+        }
+        loop {
+            let target = (done + step).min(tension);
+            match self.newton_at(c, target, b, tol, max_iter.saturating_sub(iters)) {
+                Ok((st, it)) => {
+                    iters += it;
+                    b = st.hole;
+                    done = target;
+                    if done >= tension {
+                        return Ok((st, iters));
+                    }
+                    step = step + step;
+                }
+                Err((why, it)) => {
+                    iters += it;
+                    step = step / R::from_f64(2.0);
+                    if iters >= max_iter || step < min_step {
+                        return Err(match why {
+                            Some(MarchError::Contact) => Error::Contact { joint: k + 1, tension: target.to_f64() },
+                            _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
+                        });
+                    }
+                }
+            }
+        }
+    }
+
+    /// Newton at one tension from a starting hole guess. On failure returns why (contact on
+    /// the way, or plain non-convergence) and the iterations spent.
+    fn newton_at(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        mut b: [R; 2],
+        tol: R,
+        max_iter: u32,
+    ) -> Result<(JointState<R>, u32), (Option<MarchError>, u32)> {
+        let (mut r, mut st) = self.hole_residual(c, tension, b, None).map_err(|e| (Some(e), 0))?;
+        let mut rn = norm2(r);
+        let floor = self.resolution();
+        for it in 0..max_iter {
+            if rn <= tol {
+                return Ok((st, it));
+            }
+            let jac = self.joint_tangent(c, tension, b, r).map_err(|e| (Some(e), it))?;
+            let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+            if !(det.abs() > R::from_f64(1e-12)) {
+                return Err((None, it));
+            }
+            let db = [
+                -(jac[1][1] * r[0] - jac[0][1] * r[1]) / det,
+                -(-jac[1][0] * r[0] + jac[0][0] * r[1]) / det,
+            ];
+            // backtracking: accept the first step length that lowers the residual
+            let mut lambda = R::one();
+            let mut accepted = false;
+            let mut last_err = None;
+            for _ in 0..12 {
+                let bt = [b[0] + lambda * db[0], b[1] + lambda * db[1]];
+                match self.hole_residual(c, tension, bt, None) {
+                    Ok((rt, stt)) => {
+                        let rtn = norm2(rt);
+                        if rtn < rn {
+                            b = bt;
+                            r = rt;
+                            rn = rtn;
+                            st = stt;
+                            accepted = true;
+                            break;
+                        }
+                    }
+                    Err(e) => last_err = Some(e),
+                }
+                lambda = lambda / R::from_f64(2.0);
+            }
+            if !accepted {
+                // at the scalar's resolution the residual stops falling: that is convergence
+                if rn <= floor {
+                    return Ok((st, it + 1));
+                }
+                return Err((last_err, it + 1));
+            }
+        }
+        if rn <= tol {
+            Ok((st, max_iter))
+        } else {
+            Err((None, max_iter))
+        }
+    }
+
+    /// Node k-1 poses (proximal frames of each joint) and the tip for given joint states.
+    fn chain(&self, states: &[JointState<R>; MAX_JOINTS]) -> [Pose<R>; MAX_JOINTS + 1] {
+        let link = self.p.l - self.p.hinge_len();
+        let mut nodes = [Pose::origin(); MAX_JOINTS + 1];
+        for k in 0..self.p.n {
+            let e = states[k].end;
+            nodes[k + 1] = nodes[k].then(e.x, e.y, e.theta).then(link, R::zero(), R::zero());
+        }
+        nodes
+    }
+
+    /// The tip load as joint k sees it (its proximal frame), from a base-frame force at a
+    /// base-frame point.
+    fn tip_in_frame(frame: &Pose<R>, force: [R; 2], point: [R; 2]) -> TipLoad<R> {
+        let (s, c) = frame.theta.sin_cos();
+        let dx = point[0] - frame.x;
+        let dy = point[1] - frame.y;
+        TipLoad {
+            force: [c * force[0] + s * force[1], -s * force[0] + c * force[1]],
+            point: [c * dx + s * dy, -s * dx + c * dy],
+        }
+    }
+
+    /// Coupled residual for the tip-loaded case. Unknowns: each joint's hole (2 per joint),
+    /// then the tip position (2). Returns the residual and the marched states.
+    fn coupled_residual(
+        &self,
+        c: &Compliances<R>,
+        tension: R,
+        force: [R; 2],
+        x: &[R; 2 * MAX_JOINTS + 2],
+    ) -> Result<([R; 2 * MAX_JOINTS + 2], [JointState<R>; MAX_JOINTS]), MarchError> {
+        let n = self.p.n;
+        let tip = [x[2 * n], x[2 * n + 1]];
+        let mut states = [self.straight(); MAX_JOINTS];
+        let mut r = [R::zero(); 2 * MAX_JOINTS + 2];
+        let link = self.p.l - self.p.hinge_len();
+        let mut frame = Pose::origin();
+        for k in 0..n {
+            let tl = Self::tip_in_frame(&frame, force, tip);
+            let b = [x[2 * k], x[2 * k + 1]];
+            let st = self.march(&c.c[k], tension, b, Some(tl))?;
+            r[2 * k] = b[0] - st.hole[0];
+            r[2 * k + 1] = b[1] - st.hole[1];
+            frame = frame.then(st.end.x, st.end.y, st.end.theta).then(link, R::zero(), R::zero());
+            states[k] = st;
+        }
+        r[2 * n] = tip[0] - frame.x;
+        r[2 * n + 1] = tip[1] - frame.y;
+        Ok((r, states))
+    }
+
+    /// Converged equilibrium with a tip load: Newton on all holes and the tip together, with
+    /// backtracking and load continuation.
+    fn newton_coupled(
+        &self,
+        c: &Compliances<R>,
+        tension: R,
+        force: [R; 2],
+        tol: R,
+        max_iter: u32,
+    ) -> Result<([JointState<R>; MAX_JOINTS], u32), Error> {
+        const N: usize = 2 * MAX_JOINTS + 2;
+        let n = self.p.n;
+        let dim = 2 * n + 2;
+        let mut x = [R::zero(); N];
+        for k in 0..n {
+            x[2 * k] = self.p.hinge_len();
+            x[2 * k + 1] = self.p.e;
+        }
+        x[2 * n] = R::from_f64(n as f64) * self.p.l;
+        let mut done = R::zero();
+        let mut step = R::one();
+        let mut iters = 0u32;
+        let h = R::from_f64(R::EPS.sqrt()) * (self.p.hinge_len() + self.p.e);
+        let floor = self.resolution() * R::from_f64(n as f64);
+        let mut last_contact = false;
+        loop {
+            let lam = (done + step).min(R::one());
+            let (p, f) = (tension * lam, [force[0] * lam, force[1] * lam]);
+            let mut xt = x;
+            let mut ok = None;
+            let mut res = match self.coupled_residual(c, p, f, &xt) {
+                Ok(v) => Some(v),
+                Err(e) => {
+                    last_contact = matches!(e, MarchError::Contact);
+                    None
+                }
+            };
+            while let Some((r, states)) = res {
+                let rn = r[..dim].iter().fold(R::zero(), |a, &v| a + v * v).sqrt();
+                if rn <= tol {
+                    ok = Some(states);
+                    break;
+                }
+                if iters >= max_iter {
+                    break;
+                }
+                iters += 1;
+                // forward-difference Jacobian
+                let mut jac = [[R::zero(); N]; N];
+                let mut fail = false;
+                for i in 0..dim {
+                    let mut xp = xt;
+                    xp[i] += h;
+                    match self.coupled_residual(c, p, f, &xp) {
+                        Ok((rp, _)) => {
+                            for row in 0..dim {
+                                jac[row][i] = (rp[row] - r[row]) / h;
+                            }
+                        }
+                        Err(_) => fail = true,
+                    }
+                }
+                if fail {
+                    break;
+                }
+                let mut rhs = [R::zero(); N];
+                for i in 0..dim {
+                    rhs[i] = -r[i];
+                }
+                let Some(dx) = solve_dense(&mut jac, &mut rhs, dim) else { break };
+                let mut lambda = R::one();
+                let mut next = None;
+                for _ in 0..12 {
+                    let mut xn = xt;
+                    for i in 0..dim {
+                        xn[i] += lambda * dx[i];
+                    }
+                    match self.coupled_residual(c, p, f, &xn) {
+                        Ok((rt, st)) => {
+                            let rtn = rt[..dim].iter().fold(R::zero(), |a, &v| a + v * v).sqrt();
+                            if rtn < rn {
+                                xt = xn;
+                                next = Some((rt, st));
+                                break;
+                            }
+                        }
+                        Err(e) => last_contact = matches!(e, MarchError::Contact),
+                    }
+                    lambda = lambda / R::from_f64(2.0);
+                }
+                if next.is_none() && rn <= floor {
+                    ok = Some(states);
+                    break;
+                }
+                res = next;
+            }
+            match ok {
+                Some(states) => {
+                    x = xt;
+                    done = lam;
+                    if done >= R::one() {
+                        return Ok((states, iters));
+                    }
+                    step = step + step;
+                }
+                None => {
+                    step = step / R::from_f64(2.0);
+                    if iters >= max_iter || step < R::from_f64(1.0 / 4096.0) {
+                        return Err(if last_contact {
+                            Error::Contact { joint: 0, tension: (tension * lam).to_f64() }
+                        } else {
+                            Error::NotConverged { iterations: iters, residual: f64::INFINITY }
+                        });
+                    }
+                }
+            }
+        }
+    }
+
+    /// The paper's load stepping (Eq. 29): P_n = n/n_inc P; each step's loads (direction of the
+    /// span, moment arms, tip-load point) come from the geometry of the step before, and each
+    /// sub-element takes `q = C w` at once.
+    fn stepping(
+        &self,
+        c: &Compliances<R>,
+        tension: R,
+        force: [R; 2],
+        n_inc: u32,
+    ) -> Result<[JointState<R>; MAX_JOINTS], Error> {
+        let n = self.p.n;
+        let mut states = [self.straight(); MAX_JOINTS];
+        let loaded = force[0] != R::zero() || force[1] != R::zero();
+        for step in 1..=n_inc {
+            let lam = R::from_f64(step as f64 / n_inc as f64);
+            let p = tension * lam;
+            let f = [force[0] * lam, force[1] * lam];
+            let nodes = self.chain(&states);
+            let tip = [nodes[n].x, nodes[n].y];
+            let mut next = states;
+            for k in 0..n {
+                let tl = Self::tip_in_frame(&nodes[k], f, tip);
+                next[k] = self
+                    .explicit_step(&c.c[k], p, &states[k], if loaded { Some(tl) } else { None })
+                    .map_err(|_| Error::Contact { joint: k + 1, tension: p.to_f64() })?;
+            }
+            states = next;
+        }
+        Ok(states)
+    }
+
+    /// One explicit step for a joint: loads from the previous geometry `prev`.
+    fn explicit_step(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        prev: &JointState<R>,
+        tip: Option<TipLoad<R>>,
+    ) -> Result<JointState<R>, MarchError> {
+        let e = self.p.e;
+        let b = prev.hole;
+        let span_v = [b[0], b[1] - e];
+        let span = norm2(span_v);
+        if !(span >= self.p.span_floor) {
+            return Err(MarchError::Contact);
+        }
+        let fc = [-tension * span_v[0] / span, -tension * span_v[1] / span];
+        let (ft, tp) = match tip {
+            Some(t) => (t.force, t.point),
+            None => ([R::zero(); 2], [R::zero(); 2]),
+        };
+        let ftot = [fc[0] + ft[0], fc[1] + ft[1]];
+        let mut pose: Pose<R> = Pose::origin();
+        let mut q = [[R::zero(); 3]; MAX_SUB];
+        for j in 0..self.p.m {
+            let (s, co) = pose.theta.sin_cos();
+            let qp = prev.q[j];
+            // previous distal end of this sub-element
+            let d = [
+                pose.x + co * (self.sub_len + qp[0]) - s * qp[1],
+                pose.y + s * (self.sub_len + qp[0]) + co * qp[1],
+            ];
+            let mut mo = (b[0] - d[0]) * fc[1] - (b[1] - d[1]) * fc[0];
+            if tip.is_some() {
+                mo += (tp[0] - d[0]) * ft[1] - (tp[1] - d[1]) * ft[0];
+            }
+            let f = [co * ftot[0] + s * ftot[1], -s * ftot[0] + co * ftot[1]];
+            q[j] = mat3::mul_vec(&c[j], &[f[0], f[1], mo]);
+            pose = Pose { x: d[0], y: d[1], theta: pose.theta + qp[2] };
+        }
+        // new geometry from the new q
+        let mut end = Pose::origin();
+        for qj in q.iter().take(self.p.m) {
+            end = end.then(self.sub_len + qj[0], qj[1], qj[2]);
+        }
+        let hole = end.point(R::zero(), e);
+        if !(hole[0].is_finite() && hole[1].is_finite()) {
+            return Err(MarchError::Singular);
+        }
+        Ok(JointState { q, end, hole })
+    }
+
+    /// Collect the solution: nodes, joint angles, spans, excursion, residual, tangents.
+    fn assemble(
+        &self,
+        c: &Compliances<R>,
+        tension: R,
+        tip_force: [R; 2],
+        states: &[JointState<R>; MAX_JOINTS],
+        iterations: u32,
+    ) -> Result<Solution<R>, Error> {
+        let n = self.p.n;
+        let nodes = self.chain(states);
+        let mut sol = Solution {
+            n,
+            m: self.p.m,
+            tension,
+            tip_force,
+            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            joint_angle: [R::zero(); MAX_JOINTS],
+            nodes,
+            span: [R::zero(); MAX_JOINTS],
+            thickness: c.thickness,
+            volts: c.volts,
+            cable_excursion: R::zero(),
+            iterations,
+            residual: R::zero(),
+            tangent_det: [R::one(); MAX_JOINTS],
+        };
+        let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
+        let tip = [nodes[n].x, nodes[n].y];
+        let mut res2 = R::zero();
+        for k in 0..n {
+            let st = &states[k];
+            sol.q[k] = st.q;
+            sol.joint_angle[k] = st.end.theta;
+            // the span as the final geometry has it (not the one the loads came from)
+            let span = norm2([st.hole[0], st.hole[1] - self.p.e]);
+            if !(span >= self.p.span_floor) {
+                return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() });
+            }
+            sol.span[k] = span;
+            sol.cable_excursion += self.p.hinge_len() - span;
+            let tl = if loaded { Some(Self::tip_in_frame(&nodes[k], tip_force, tip)) } else { None };
+            match self.hole_residual(&c.c[k], tension, st.hole, tl) {
+                Ok((r, _)) => {
+                    res2 += r[0] * r[0] + r[1] * r[1];
+                    if let Ok(jac) = self.joint_tangent(&c.c[k], tension, st.hole, r) {
+                        sol.tangent_det[k] = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+                    }
+                }
+                Err(_) => return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() }),
+            }
+        }
+        sol.residual = res2.sqrt();
+        let all_finite = nodes.iter().take(n + 1).all(|p| p.x.is_finite() && p.y.is_finite() && p.theta.is_finite())
+            && sol.residual.is_finite()
+            && sol.cable_excursion.is_finite();
+        if !all_finite {
+            return Err(Error::Singular { what: "solution (non-finite)" });
+        }
+        Ok(sol)
+    }
+
+    /// Linearised tip compliance `C_tip = Σ J C Jᵀ` over every sub-element (MODEL.md "Tip
+    /// stiffness"), J mapping a sub-element's distal-end displacement (its proximal frame,
+    /// rotation about its distal end) to the tip's (x, y, θ) in the base frame.
+    pub fn tip_compliance(&self, c: &Compliances<R>, sol: &Solution<R>) -> Mat3<R> {
+        let n = sol.n;
+        let tip = sol.nodes[n];
+        let mut ct = mat3::zero();
+        for k in 0..n {
+            let mut pose = sol.nodes[k];
+            for j in 0..sol.m {
+                let qj = sol.q[k][j];
+                let (s, co) = pose.theta.sin_cos();
+                let next = pose.then(self.sub_len + qj[0], qj[1], qj[2]);
+                let (dx, dy) = (tip.x - next.x, tip.y - next.y);
+                let jm: Mat3<R> = [[co, -s, -dy], [s, co, dx], [R::zero(), R::zero(), R::one()]];
+                let jc = mat3::mul(&jm, &c.c[k][j]);
+                ct = mat3::add(&ct, &mat3::mul(&jc, &mat3::transpose(&jm)));
+                pose = next;
+            }
+        }
+        ct
+    }
+
+    /// Linearised tip stiffness K_tip = C_tip⁻¹ (rows/columns x mm, y mm, θ rad; N/mm and
+    /// N·mm/rad) at a solved posture (with the channel voltages it was solved with).
+    pub fn tip_stiffness(&self, sol: &Solution<R>) -> Result<Mat3<R>, Error> {
+        let c = self.compliances(&sol.volts[..sol.n])?;
+        let ct = self.tip_compliance(&c, sol);
+        mat3::inverse(&ct).ok_or(Error::Singular { what: "tip compliance" })
+    }
+}
+
+/// Gaussian elimination with partial pivoting on the leading `dim` block; `None` if singular.
+fn solve_dense<R: Real, const N: usize>(a: &mut [[R; N]; N], b: &mut [R; N], dim: usize) -> Option<[R; N]> {
+    for col in 0..dim {
+        let mut piv = col;
+        for row in col + 1..dim {
+            if a[row][col].abs() > a[piv][col].abs() {
+                piv = row;
+            }
+        }
+        if !(a[piv][col].abs() > R::from_f64(1e-300_f64.max(R::EPS * 1e-12))) {
+            return None;
+        }
+        a.swap(col, piv);
+        b.swap(col, piv);
+        for row in col + 1..dim {
+            let f = a[row][col] / a[col][col];
+            for k in col..dim {
+                let v = a[col][k];
+                a[row][k] -= f * v;
+            }
+            let v = b[col];
+            b[row] -= f * v;
+        }
+    }
+    let mut x = [R::zero(); N];
+    for i in (0..dim).rev() {
+        let mut s = b[i];
+        for k in i + 1..dim {
+            s -= a[i][k] * x[k];
+        }
+        x[i] = s / a[i][i];
+    }
+    Some(x)
+}

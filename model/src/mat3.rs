@@ -1,0 +1,74 @@
+//! 3x3 matrices and 3-vectors for compliances and wrenches: the few operations the model
+//! needs, on fixed arrays, no allocation. Not a linear-algebra library.
+
+use crate::real::Real;
+
+pub type Vec3<R> = [R; 3];
+pub type Mat3<R> = [[R; 3]; 3];
+
+pub fn zero<R: Real>() -> Mat3<R> {
+    [[R::zero(); 3]; 3]
+}
+
+pub fn mul_vec<R: Real>(m: &Mat3<R>, v: &Vec3<R>) -> Vec3<R> {
+    let mut o = [R::zero(); 3];
+    for i in 0..3 {
+        o[i] = m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2];
+    }
+    o
+}
+
+pub fn add<R: Real>(a: &Mat3<R>, b: &Mat3<R>) -> Mat3<R> {
+    let mut o = *a;
+    for i in 0..3 {
+        for j in 0..3 {
+            o[i][j] += b[i][j];
+        }
+    }
+    o
+}
+
+pub fn mul<R: Real>(a: &Mat3<R>, b: &Mat3<R>) -> Mat3<R> {
+    let mut o = zero();
+    for i in 0..3 {
+        for j in 0..3 {
+            o[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
+        }
+    }
+    o
+}
+
+pub fn transpose<R: Real>(a: &Mat3<R>) -> Mat3<R> {
+    let mut o = zero();
+    for i in 0..3 {
+        for j in 0..3 {
+            o[i][j] = a[j][i];
+        }
+    }
+    o
+}
+
+pub fn det<R: Real>(m: &Mat3<R>) -> R {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
+/// Inverse by cofactors; `None` if the matrix is singular to working precision (its
+/// determinant is small against the product of its row norms) or not finite.
+pub fn inverse<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
+    let d = det(m);
+    let mut scale = R::one();
+    for row in m {
+        scale *= (row[0].sq() + row[1].sq() + row[2].sq()).sqrt();
+    }
+    if !(d.is_finite() && scale.is_finite()) || d.abs() <= scale * R::from_f64(64.0 * R::EPS) {
+        return None;
+    }
+    let inv_d = R::one() / d;
+    let c = |a: usize, b: usize, x: usize, y: usize| m[a][b] * m[x][y] - m[a][y] * m[x][b];
+    Some([
+        [c(1, 1, 2, 2) * inv_d, -c(0, 1, 2, 2) * inv_d, c(0, 1, 1, 2) * inv_d],
+        [-c(1, 0, 2, 2) * inv_d, c(0, 0, 2, 2) * inv_d, -c(0, 0, 1, 2) * inv_d],
+        [c(1, 0, 2, 1) * inv_d, -c(0, 0, 2, 1) * inv_d, c(0, 0, 1, 1) * inv_d],
+    ])
+}
