@@ -1,1 +1,3 @@
 //! Host-side tools shared by the tests and binaries in this package.
+
+pub mod paper;

@@ -438,29 +438,74 @@ impl<R: Real> Finger<R> {
             let st = self.march(c, tension, b, None).map_err(|_| Error::Singular { what: "joint" })?;
             return Ok((st, 0));
         }
+        let mut last = self.march(c, R::zero(), b, None).map_err(|_| Error::Singular { what: "joint" })?;
+        let mut why_failed = None;
+        // secant predictor: the hole's rate of change with tension over the last accepted step
+        let mut rate = [R::zero(); 2];
         loop {
             let target = (done + step).min(tension);
-            match self.newton_at(c, target, b, tol, max_iter.saturating_sub(iters)) {
-                Ok((st, it)) => {
+            let dp = target - done;
+            let guess = [b[0] + rate[0] * dp, b[1] + rate[1] * dp];
+            let attempt = match self.newton_at(c, target, guess, tol, max_iter.saturating_sub(iters)) {
+                Err((_, it)) if done > R::zero() => {
+                    // the predictor overshot: retry from the last solution itself
                     iters += it;
+                    self.newton_at(c, target, b, tol, max_iter.saturating_sub(iters))
+                }
+                other => other,
+            };
+            let (it, outcome) = match attempt {
+                Ok((st, it)) => (it, if self.same_branch(&last, &st) { Ok(st) } else { Err(None) }),
+                Err((why, it)) => (it, Err(why)),
+            };
+            iters += it;
+            match outcome {
+                Ok(st) => {
+                    let dp = target - done;
+                    rate = [(st.hole[0] - b[0]) / dp, (st.hole[1] - b[1]) / dp];
                     b = st.hole;
+                    last = st;
                     done = target;
                     if done >= tension {
                         return Ok((st, iters));
                     }
                     step = step + step;
                 }
-                Err((why, it)) => {
-                    iters += it;
+                Err(why) => {
+                    if why.is_some() {
+                        why_failed = why;
+                    }
                     step = step / R::from_f64(2.0);
                     if iters >= max_iter || step < min_step {
-                        return Err(match why {
+                        return Err(match why_failed {
                             Some(MarchError::Contact) => Error::Contact { joint: k + 1, tension: target.to_f64() },
+                            _ if done > R::zero() && self.near_limit_point(c, done, &last) => {
+                                Error::LimitPoint { joint: k + 1, tension: done.to_f64() }
+                            }
                             _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
                         });
                     }
                 }
             }
+        }
+    }
+
+    /// Load continuation stays on the physical branch: under a growing tension a joint flexes
+    /// further (its angle grows) by a bounded amount per step. A Newton solution that fails
+    /// this (a jump to another branch, far from the last one) is rejected and the step halved.
+    fn same_branch(&self, last: &JointState<R>, next: &JointState<R>) -> bool {
+        let dtheta = next.end.theta - last.end.theta;
+        let dhole = norm2([next.hole[0] - last.hole[0], next.hole[1] - last.hole[1]]);
+        dtheta >= -R::from_f64(1e-9) && dtheta <= R::from_f64(0.8) && dhole <= R::from_f64(0.5) * self.p.hinge_len()
+    }
+
+    /// Whether the equilibrium tangent at a solved state is (nearly) singular: the branch
+    /// turns back there (a limit point), so no solution exists just beyond it.
+    fn near_limit_point(&self, c: &[Mat3<R>; MAX_SUB], tension: R, st: &JointState<R>) -> bool {
+        let Ok((r, _)) = self.hole_residual(c, tension, st.hole, None) else { return false };
+        match self.joint_tangent(c, tension, st.hole, r) {
+            Ok(j) => (j[0][0] * j[1][1] - j[0][1] * j[1][0]).abs() < R::from_f64(0.05),
+            Err(_) => false,
         }
     }
 
