@@ -84,6 +84,36 @@ pub struct Compliances<R> {
     pub volts: [R; MAX_JOINTS],
 }
 
+fn cast_mat<R: Real, S: Real>(m: &Mat3<R>) -> Mat3<S> {
+    let mut o = mat3::zero();
+    for i in 0..3 {
+        for j in 0..3 {
+            o[i][j] = S::from_f64(m[i][j].to_f64());
+        }
+    }
+    o
+}
+
+impl<R: Real> Compliances<R> {
+    /// The same compliances in another scalar type (computed once in f32/f64, used in fixed
+    /// point; issue 5).
+    pub fn cast<S: Real>(&self) -> Compliances<S> {
+        let mut c = [[mat3::zero(); MAX_SUB]; MAX_JOINTS];
+        for k in 0..MAX_JOINTS {
+            for j in 0..MAX_SUB {
+                c[k][j] = cast_mat(&self.c[k][j]);
+            }
+        }
+        Compliances {
+            n: self.n,
+            m: self.m,
+            c,
+            thickness: self.thickness.map(|x| S::from_f64(x.to_f64())),
+            volts: self.volts.map(|x| S::from_f64(x.to_f64())),
+        }
+    }
+}
+
 /// A solved posture.
 #[derive(Clone, Copy, Debug)]
 pub struct Solution<R> {
@@ -189,6 +219,19 @@ impl<R: Real> Finger<R> {
 
     pub fn params(&self) -> &Params<R> {
         &self.p
+    }
+
+    /// The same prepared finger in another scalar type: the parameters and the hinge
+    /// compliances computed once in `R` and cast (fixed point cannot hold the quadrature's
+    /// intermediate products; issue 5).
+    pub fn cast<S: Real>(&self) -> Finger<S> {
+        let mut hinge_c = [mat3::zero(); MAX_SUB];
+        let mut hinge_k = [mat3::zero(); MAX_SUB];
+        for j in 0..MAX_SUB {
+            hinge_c[j] = cast_mat(&self.hinge_c[j]);
+            hinge_k[j] = cast_mat(&self.hinge_k[j]);
+        }
+        Finger { p: self.p.cast(), hinge_c, hinge_k, sub_len: S::from_f64(self.sub_len.to_f64()) }
     }
 
     /// Hinge compliance of sub-element j (no stack).
