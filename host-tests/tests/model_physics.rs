@@ -219,9 +219,11 @@ fn raising_one_channel_bends_that_joint_most() {
 
 #[test]
 fn f32_agrees_with_f64() {
-    // f32 carries ~7 digits; the solve converges to the f32 resolution of the hole position
-    // (16 eps x 37 mm ~ 7e-5 mm), and the tip sits ~80 mm out, so we expect the tip within
-    // 1e-3 mm and the joint angles within 1e-4 degrees... measured ~1e-5 mm/1e-6 deg.
+    // f32 carries ~7 digits. The f32 solve stops at the resolution of the guide-hole position
+    // (16 eps x (L_h + e + l) = 16 x 1.2e-7 x 37 mm ~ 7e-5 mm); a hole error of that size turns
+    // the joint by ~1e-5 rad, which the ~80 mm finger carries to the tip as ~1e-4 mm.
+    // Measured: worst tip 9.4e-5 mm, worst joint 4.3e-5 deg over these cases. Asserted with
+    // a factor ~5 of headroom: tip < 5e-4 mm, joints < 2e-4 deg.
     let p64 = Params::<f64>::default();
     let f64m = Finger::new(p64).unwrap();
     let f32m = Finger::new(p64.cast::<f32>()).unwrap();
@@ -240,8 +242,8 @@ fn f32_agrees_with_f64() {
         }
     }
     println!("f32 vs f64: worst tip {worst_tip:.2e} mm, worst joint {worst_deg:.2e} deg");
-    assert!(worst_tip < 1e-3, "tip {worst_tip}");
-    assert!(worst_deg < 1e-3, "angle {worst_deg}");
+    assert!(worst_tip < 5e-4, "tip {worst_tip}");
+    assert!(worst_deg < 2e-4, "angle {worst_deg}");
 }
 
 #[test]
