@@ -346,3 +346,17 @@ fn paper_preset_matching_tension() {
     let s = f.solve(p_match, &[0.0; 3], conv()).unwrap();
     assert!((s.tip().theta - angle).abs() < 1e-9);
 }
+
+#[test]
+fn fmax_is_the_end_of_the_branch_and_solves_stop_there() {
+    use finger_model::BranchEnd;
+    let f = Finger::new(Params::<f64> { m: 8, plate: true, ..Params::default() }.without_stacks()).unwrap();
+    let end = f.fmax(&[0.0; 3]).unwrap();
+    assert_eq!(end.kind, BranchEnd::Contact);
+    assert!(end.tension > 7.4 && end.tension < 7.7, "{end:?}");
+    assert!(f.solve(0.99 * end.tension, &[0.0; 3], conv()).is_ok());
+    assert!(matches!(f.solve(1.01 * end.tension, &[0.0; 3], conv()), Err(Error::Contact { .. })));
+    // the paper's m = 1 hinge never closes its span: the search bound is reported as such
+    let g = Finger::new(Params::<f64>::default().without_stacks()).unwrap();
+    assert_eq!(g.fmax(&[0.0; 3]).unwrap().kind, BranchEnd::SearchBound);
+}

@@ -156,6 +156,27 @@ impl<R: Real> Solution<R> {
     }
 }
 
+/// How the equilibrium branch ends (see `Finger::fmax`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BranchEnd {
+    /// A cable span closed to its floor: the links touch.
+    Contact,
+    /// The equilibrium tangent turned singular: the branch turns back.
+    LimitPoint,
+    /// Neither below the search bound.
+    SearchBound,
+}
+
+/// The tension at which the equilibrium branch ends, and where and how.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BranchLimit<R> {
+    /// N.
+    pub tension: R,
+    /// 1-based joint where it ends first.
+    pub joint: usize,
+    pub kind: BranchEnd,
+}
+
 /// A prepared finger: validated parameters and the hinge compliances, computed once.
 #[derive(Clone, Copy, Debug)]
 pub struct Finger<R> {
@@ -343,7 +364,8 @@ impl<R: Real> Finger<R> {
                     let mut states = [self.straight(); MAX_JOINTS];
                     let mut iters = 0;
                     for k in 0..self.p.n {
-                        let (s, it) = self.newton_joint(k, &c.c[k], tension, tol, max_iter)?;
+                        let min_step = tension / R::from_f64(4096.0);
+                        let (s, it) = self.newton_joint(k, &c.c[k], tension, tol, max_iter, min_step)?;
                         states[k] = s;
                         iters += it;
                     }
@@ -471,12 +493,12 @@ impl<R: Real> Finger<R> {
         tension: R,
         tol: R,
         max_iter: u32,
+        min_step: R,
     ) -> Result<(JointState<R>, u32), Error> {
         let mut b = [self.p.hinge_len(), self.p.e];
         let mut done = R::zero();
         let mut step = tension;
         let mut iters = 0u32;
-        let min_step = tension / R::from_f64(4096.0);
         if tension == R::zero() {
             let st = self.march(c, tension, b, None).map_err(|_| Error::Singular { what: "joint" })?;
             return Ok((st, 0));
@@ -547,7 +569,7 @@ impl<R: Real> Finger<R> {
     fn near_limit_point(&self, c: &[Mat3<R>; MAX_SUB], tension: R, st: &JointState<R>) -> bool {
         let Ok((r, _)) = self.hole_residual(c, tension, st.hole, None) else { return false };
         match self.joint_tangent(c, tension, st.hole, r) {
-            Ok(j) => (j[0][0] * j[1][1] - j[0][1] * j[1][0]).abs() < R::from_f64(0.05),
+            Ok(j) => (j[0][0] * j[1][1] - j[0][1] * j[1][0]).abs() < R::from_f64(0.2),
             Err(_) => false,
         }
     }
@@ -928,6 +950,37 @@ impl<R: Real> Finger<R> {
             return Err(Error::Singular { what: "solution (non-finite)" });
         }
         Ok(sol)
+    }
+
+    /// The end of the equilibrium branch under tension alone for these voltages: the lowest
+    /// tension at which a joint's span closes to its floor (contact) or its equilibrium tangent
+    /// turns singular (a limit point), whichever comes first, found by load continuation to
+    /// 1e-4 relative. If neither happens below a search bound (50 times the tension that would
+    /// turn the softest joint by 1 rad linearly), that bound is returned as `SearchBound`.
+    /// The converged solver refuses tensions past this end (its continuation cannot pass it).
+    pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
+        let c = self.compliances(volts)?;
+        let mut best: Option<BranchLimit<R>> = None;
+        let tol = self.resolution().max(R::from_f64(1e-9));
+        for k in 0..self.p.n {
+            let c33 = c.c[k][..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
+            let p_hi = R::from_f64(50.0) / (self.p.e * c33);
+            let min_step = p_hi * R::from_f64(1e-4 / 50.0);
+            let end = match self.newton_joint(k, &c.c[k], p_hi, tol, 20_000, min_step) {
+                Ok(_) => BranchLimit { tension: p_hi, joint: k + 1, kind: BranchEnd::SearchBound },
+                Err(Error::Contact { tension, .. }) => {
+                    BranchLimit { tension: R::from_f64(tension), joint: k + 1, kind: BranchEnd::Contact }
+                }
+                Err(Error::LimitPoint { tension, .. }) => {
+                    BranchLimit { tension: R::from_f64(tension), joint: k + 1, kind: BranchEnd::LimitPoint }
+                }
+                Err(e) => return Err(e),
+            };
+            if best.map_or(true, |b| end.tension < b.tension) {
+                best = Some(end);
+            }
+        }
+        best.ok_or(Error::Input { input: "n", reason: "no joints" })
     }
 
     /// Linearised tip compliance `C_tip = Σ J C Jᵀ` over every sub-element (MODEL.md "Tip

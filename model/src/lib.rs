@@ -23,6 +23,6 @@ pub mod params;
 pub mod real;
 
 pub use error::Error;
-pub use finger::{Compliances, Finger, Method, Pose, Solution};
+pub use finger::{BranchEnd, BranchLimit, Compliances, Finger, Method, Pose, Solution};
 pub use params::{DeModulusRule, Params, MAX_JOINTS, MAX_SUB};
 pub use real::Real;
