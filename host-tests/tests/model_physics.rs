@@ -360,3 +360,25 @@ fn fmax_is_the_end_of_the_branch_and_solves_stop_there() {
     let g = Finger::new(Params::<f64>::default().without_stacks()).unwrap();
     assert_eq!(g.fmax(&[0.0; 3]).unwrap().kind, BranchEnd::SearchBound);
 }
+
+#[test]
+fn flexible_links_bend_under_the_eccentric_cable() {
+    let rigid = Finger::new(Params::<f64>::default().without_stacks()).unwrap();
+    let flex = Finger::new(Params::<f64> { flex_links: true, ..Params::default() }.without_stacks()).unwrap();
+    let p = 1.0;
+    let a = rigid.solve(p, &[0.0; 3], conv()).unwrap();
+    let b = flex.solve(p, &[0.0; 3], conv()).unwrap();
+    // a link of length l - 2a = 17 mm, thickness b = 10 mm bends by P e L / (E I)
+    let ei = 12.0 * 20.0 * 1000.0 / 12.0;
+    let link_rot = p * 5.0 * 17.0 / ei;
+    for k in 0..3 {
+        assert!((b.links[k][2] - link_rot).abs() < 1e-12, "{:?}", b.links[k]);
+        assert!((b.joint_angle[k] - a.joint_angle[k] - link_rot).abs() < 1e-9);
+        assert!(a.links[k] == [0.0; 3]);
+    }
+    // softer chain: lower tip stiffness
+    assert!(flex.tip_stiffness(&b).unwrap()[1][1] < rigid.tip_stiffness(&a).unwrap()[1][1]);
+    // and the coupled (tip-loaded) path agrees with the decoupled one at zero tip load
+    let c = flex.solve_loaded(p, &[0.0; 3], [1e-12, 0.0], conv()).unwrap();
+    assert!((c.tip().y - b.tip().y).abs() < 1e-6);
+}

@@ -125,7 +125,10 @@ pub struct Solution<R> {
     pub tip_force: [R; 2],
     /// Sub-element displacements q = (δax, δtr, Δθ), `q[k][j]`.
     pub q: [[[R; 3]; MAX_SUB]; MAX_JOINTS],
-    /// Joint angles Δθ_k (sum over the joint's sub-elements), rad.
+    /// Link deflections (δax, δtr, Δθ) in each link's proximal frame (zero for rigid links).
+    pub links: [[R; 3]; MAX_JOINTS],
+    /// Joint angles Δθ_k: the rotation of element k (its hinge's sub-elements, and its link
+    /// when links are flexible), rad.
     pub joint_angle: [R; MAX_JOINTS],
     /// Node poses 0..=n; node n is the tip (centreline, distal end of the last link).
     pub nodes: [Pose<R>; MAX_JOINTS + 1],
@@ -187,6 +190,10 @@ pub struct Finger<R> {
     hinge_k: [Mat3<R>; MAX_SUB],
     /// Sub-element length, mm (L_h / m).
     sub_len: R,
+    /// Link length l - L_h, mm.
+    link_len: R,
+    /// Link compliance (a uniform beam of the body, thickness b), when `flex_links` is set.
+    link_c: Mat3<R>,
 }
 
 /// The loads a joint sees besides the cable, in its proximal frame.
@@ -235,7 +242,9 @@ impl<R: Real> Finger<R> {
             }
         }
         let sub_len = p.hinge_len() / R::from_f64(p.m as f64);
-        Ok(Finger { p, hinge_c, hinge_k, sub_len })
+        let link_len = p.l - p.hinge_len();
+        let link_c = if p.flex_links { uniform_beam_compliance(e, p.w, p.b, link_len) } else { mat3::zero() };
+        Ok(Finger { p, hinge_c, hinge_k, sub_len, link_len, link_c })
     }
 
     pub fn params(&self) -> &Params<R> {
@@ -252,7 +261,14 @@ impl<R: Real> Finger<R> {
             hinge_c[j] = cast_mat(&self.hinge_c[j]);
             hinge_k[j] = cast_mat(&self.hinge_k[j]);
         }
-        Finger { p: self.p.cast(), hinge_c, hinge_k, sub_len: S::from_f64(self.sub_len.to_f64()) }
+        Finger {
+            p: self.p.cast(),
+            hinge_c,
+            hinge_k,
+            sub_len: S::from_f64(self.sub_len.to_f64()),
+            link_len: S::from_f64(self.link_len.to_f64()),
+            link_c: cast_mat(&self.link_c),
+        }
     }
 
     /// Hinge compliance of sub-element j (no stack).
@@ -637,15 +653,50 @@ impl<R: Real> Finger<R> {
         }
     }
 
-    /// Node k-1 poses (proximal frames of each joint) and the tip for given joint states.
-    fn chain(&self, states: &[JointState<R>; MAX_JOINTS]) -> [Pose<R>; MAX_JOINTS + 1] {
-        let link = self.p.l - self.p.hinge_len();
-        let mut nodes = [Pose::origin(); MAX_JOINTS + 1];
-        for k in 0..self.p.n {
-            let e = states[k].end;
-            nodes[k + 1] = nodes[k].then(e.x, e.y, e.theta).then(link, R::zero(), R::zero());
+    /// Deflection of a link (proximal frame `hinge_end`, base frame) when `flex_links` is set:
+    /// the cable inside the link compresses it with P at the offset e (moment P·e about its
+    /// axis), plus the tip load if any; linear, loads in the undeformed link frame.
+    fn link_q(&self, tension: R, hinge_end: &Pose<R>, tip: Option<([R; 2], [R; 2])>) -> [R; 3] {
+        if !self.p.flex_links {
+            return [R::zero(); 3];
         }
-        nodes
+        let mut w = [-tension, R::zero(), tension * self.p.e];
+        if let Some((force, point)) = tip {
+            let end = hinge_end.then(self.link_len, R::zero(), R::zero());
+            let tl = Self::tip_in_frame(&end, force, point);
+            let (s, c) = hinge_end.theta.sin_cos();
+            w[0] += c * force[0] + s * force[1];
+            w[1] += -s * force[0] + c * force[1];
+            w[2] += tl.point[0] * tl.force[1] - tl.point[1] * tl.force[0];
+        }
+        mat3::mul_vec(&self.link_c, &w)
+    }
+
+    /// Node poses 0..=n (node k-1 is joint k's proximal frame; node n the tip) for given joint
+    /// states, and each link's deflection.
+    fn chain(
+        &self,
+        states: &[JointState<R>; MAX_JOINTS],
+        tension: R,
+        tip_force: [R; 2],
+    ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
+        let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
+        let mut nodes = [Pose::origin(); MAX_JOINTS + 1];
+        let mut links = [[R::zero(); 3]; MAX_JOINTS];
+        // with a tip load on flexible links the tip point enters the links' loads: two passes
+        let passes = if loaded && self.p.flex_links { 2 } else { 1 };
+        for _ in 0..passes {
+            let n = self.p.n;
+            let tip = if loaded { Some((tip_force, [nodes[n].x, nodes[n].y])) } else { None };
+            for k in 0..n {
+                let e = states[k].end;
+                let hinge_end = nodes[k].then(e.x, e.y, e.theta);
+                links[k] = self.link_q(tension, &hinge_end, tip);
+                let q = links[k];
+                nodes[k + 1] = hinge_end.then(self.link_len + q[0], q[1], q[2]);
+            }
+        }
+        (nodes, links)
     }
 
     /// The tip load as joint k sees it (its proximal frame), from a base-frame force at a
@@ -673,7 +724,6 @@ impl<R: Real> Finger<R> {
         let tip = [x[2 * n], x[2 * n + 1]];
         let mut states = [self.straight(); MAX_JOINTS];
         let mut r = [R::zero(); 2 * MAX_JOINTS + 2];
-        let link = self.p.l - self.p.hinge_len();
         let mut frame = Pose::origin();
         for k in 0..n {
             let tl = Self::tip_in_frame(&frame, force, tip);
@@ -681,7 +731,9 @@ impl<R: Real> Finger<R> {
             let st = self.march(&c.c[k], tension, b, Some(tl))?;
             r[2 * k] = b[0] - st.hole[0];
             r[2 * k + 1] = b[1] - st.hole[1];
-            frame = frame.then(st.end.x, st.end.y, st.end.theta).then(link, R::zero(), R::zero());
+            let hinge_end = frame.then(st.end.x, st.end.y, st.end.theta);
+            let ql = self.link_q(tension, &hinge_end, Some((force, tip)));
+            frame = hinge_end.then(self.link_len + ql[0], ql[1], ql[2]);
             states[k] = st;
         }
         r[2 * n] = tip[0] - frame.x;
@@ -825,7 +877,7 @@ impl<R: Real> Finger<R> {
             let lam = R::from_f64(step as f64 / n_inc as f64);
             let p = tension * lam;
             let f = [force[0] * lam, force[1] * lam];
-            let nodes = self.chain(&states);
+            let (nodes, _) = self.chain(&states, p, f);
             let tip = [nodes[n].x, nodes[n].y];
             let mut next = states;
             for k in 0..n {
@@ -900,13 +952,14 @@ impl<R: Real> Finger<R> {
         iterations: u32,
     ) -> Result<Solution<R>, Error> {
         let n = self.p.n;
-        let nodes = self.chain(states);
+        let (nodes, links) = self.chain(states, tension, tip_force);
         let mut sol = Solution {
             n,
             m: self.p.m,
             tension,
             tip_force,
             q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            links: [[R::zero(); 3]; MAX_JOINTS],
             joint_angle: [R::zero(); MAX_JOINTS],
             nodes,
             span: [R::zero(); MAX_JOINTS],
@@ -923,7 +976,8 @@ impl<R: Real> Finger<R> {
         for k in 0..n {
             let st = &states[k];
             sol.q[k] = st.q;
-            sol.joint_angle[k] = st.end.theta;
+            sol.links[k] = links[k];
+            sol.joint_angle[k] = st.end.theta + links[k][2];
             // the span as the final geometry has it (not the one the loads came from)
             let span = norm2([st.hole[0], st.hole[1] - self.p.e]);
             if !(span >= self.p.span_floor) {
@@ -1002,6 +1056,14 @@ impl<R: Real> Finger<R> {
                 ct = mat3::add(&ct, &mat3::mul(&jc, &mat3::transpose(&jm)));
                 pose = next;
             }
+            if self.p.flex_links {
+                let (s, co) = pose.theta.sin_cos();
+                let end = sol.nodes[k + 1];
+                let (dx, dy) = (tip.x - end.x, tip.y - end.y);
+                let jm: Mat3<R> = [[co, -s, -dy], [s, co, dx], [R::zero(), R::zero(), R::one()]];
+                let jc = mat3::mul(&jm, &self.link_c);
+                ct = mat3::add(&ct, &mat3::mul(&jc, &mat3::transpose(&jm)));
+            }
         }
         ct
     }
@@ -1013,6 +1075,19 @@ impl<R: Real> Finger<R> {
         let ct = self.tip_compliance(&c, sol);
         mat3::inverse(&ct).ok_or(Error::Singular { what: "tip compliance" })
     }
+}
+
+/// Compliance of a uniform beam (modulus e, width w, thickness t, length len), clamped at its
+/// proximal end, loads at its distal end: [[L/EA,0,0],[0,L³/3EI,L²/2EI],[0,L²/2EI,L/EI]].
+pub fn uniform_beam_compliance<R: Real>(e: R, w: R, t: R, len: R) -> Mat3<R> {
+    let ea = e * w * t;
+    let ei = e * w * t * t * t / R::from_f64(12.0);
+    let z = R::zero();
+    [
+        [len / ea, z, z],
+        [z, len * len * len / (R::from_f64(3.0) * ei), len * len / (R::from_f64(2.0) * ei)],
+        [z, len * len / (R::from_f64(2.0) * ei), len / ei],
+    ]
 }
 
 /// Gaussian elimination with partial pivoting on the leading `dim` block; `None` if singular.

@@ -71,6 +71,9 @@ pub struct Params<R> {
     pub nu_b: R,
     /// Shortest cable span before the links are taken to touch (contact), mm.
     pub span_floor: R,
+    /// Treat the links as beams of the body material (compression + bending under the cable's
+    /// eccentric load) instead of rigid (the paper's model).
+    pub flex_links: bool,
 }
 
 impl<R: Real> Default for Params<R> {
@@ -99,6 +102,7 @@ impl<R: Real> Default for Params<R> {
             plate: false,
             nu_b: f(0.45),
             span_floor: f(0.1),
+            flex_links: false,
         }
     }
 }
@@ -143,10 +147,11 @@ pub const PARAMS: &[ParamInfo] = &[
     info("plate", 0.0, 1.0, false, "0 or 1"),
     info("nu_b", 0.0, 0.499, false, "0..0.499"),
     info("span_floor", 1e-6, 1e3, false, "1e-6 mm..L_h"),
+    info("flex_links", 0.0, 1.0, false, "0 or 1"),
 ];
 
 fn is_integer_name(name: &str) -> bool {
-    matches!(name, "n" | "layers" | "n_inc" | "m" | "plate")
+    matches!(name, "n" | "layers" | "n_inc" | "m" | "plate" | "flex_links")
 }
 
 impl<R: Real> Params<R> {
@@ -208,6 +213,7 @@ impl<R: Real> Params<R> {
             "plate" => self.plate as u32 as f64,
             "nu_b" => self.nu_b.to_f64(),
             "span_floor" => self.span_floor.to_f64(),
+            "flex_links" => self.flex_links as u32 as f64,
             _ => return None,
         })
     }
@@ -257,6 +263,7 @@ impl<R: Real> Params<R> {
             "plate" => p.plate = value != 0.0,
             "nu_b" => p.nu_b = r,
             "span_floor" => p.span_floor = r,
+            "flex_links" => p.flex_links = value != 0.0,
             _ => return Err(bad),
         }
         p.validate()?;
@@ -323,6 +330,7 @@ impl<R: Real> Params<R> {
             plate: self.plate,
             nu_b: c(self.nu_b),
             span_floor: c(self.span_floor),
+            flex_links: self.flex_links,
         }
     }
 }
