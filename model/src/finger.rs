@@ -521,6 +521,7 @@ impl<R: Real> Finger<R> {
         }
         let mut last = self.march(c, R::zero(), b, None).map_err(|_| Error::Singular { what: "joint" })?;
         let mut why_failed = None;
+        let mut attempts = 0u32;
         // secant predictor: the hole's rate of change with tension over the last accepted step
         let mut rate = [R::zero(); 2];
         loop {
@@ -557,7 +558,8 @@ impl<R: Real> Finger<R> {
                         why_failed = why;
                     }
                     step = step / R::from_f64(2.0);
-                    if iters >= max_iter || step < min_step {
+                    attempts += 1;
+                    if iters >= max_iter || step <= min_step || attempts > 4 * max_iter {
                         return Err(match why_failed {
                             Some(MarchError::Contact) => Error::Contact { joint: k + 1, tension: target.to_f64() },
                             _ if done > R::zero() && self.near_limit_point(c, done, &last) => {
