@@ -527,6 +527,10 @@ impl<R: Real> Finger<R> {
         loop {
             let target = (done + step).min(tension);
             let dp = target - done;
+            if !(dp > R::zero()) {
+                // the increment vanished against the tension reached: no further progress
+                return Err(Error::NotConverged { iterations: iters, residual: f64::INFINITY });
+            }
             let guess = [b[0] + rate[0] * dp, b[1] + rate[1] * dp];
             let attempt = match self.newton_at(c, target, guess, tol, max_iter.saturating_sub(iters)) {
                 Err((_, it)) if done > R::zero() => {
