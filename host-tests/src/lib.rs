@@ -1,3 +1,5 @@
 //! Host-side tools shared by the tests and binaries in this package.
 
 pub mod paper;
+pub mod scene;
+pub mod svg;

@@ -1,0 +1,452 @@
+//! Scenes (issue 6): parsing, errors with line numbers, every shipped scene runs, the refused
+//! scene is refused with no output file, the CSV is the model's own numbers, the SVG is
+//! well-formed with one polyline per posture.
+
+use finger_model::{de, Error, Finger, Method, Params};
+use host_tests::scene::{self, Drive, Kind, Reference, SceneResult, SolverSpec};
+use std::path::{Path, PathBuf};
+
+fn top() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn shipped(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "scene"))
+        .collect();
+    v.sort();
+    v
+}
+
+fn run_text(text: &str) -> Result<SceneResult, scene::SceneError> {
+    let s = scene::parse("t", text)?;
+    scene::run(&s, None)
+}
+
+/// Parse a CSV (no quoted commas in the columns read here) into header + rows.
+fn csv(text: &str) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut lines = text.lines();
+    let head = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines.map(|l| l.split(',').map(String::from).collect()).collect();
+    (head, rows)
+}
+
+fn col(head: &[String], name: &str) -> usize {
+    head.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name} in {head:?}"))
+}
+
+#[test]
+fn parses_every_section() {
+    let text = "# comment\ntitle = \"Hello\"\n[finger]\npreset = paper\nlayers = 4   # trailing comment\nw = 18\n\
+                thickness = 1.9, 2.0, 1.95\n[drive]\ntensions = 0, 0.25,1\n[solver]\nmethod = stepping\nn_inc = 7\n\
+                [output]\npostures = no\ntip_stiffness = yes\ncable_excursion = no\nreference = none\n";
+    let s = scene::parse("x", text).unwrap();
+    assert_eq!(s.title, "Hello");
+    assert_eq!(s.finger.params.de_rule, Params::<f64>::paper().de_rule);
+    assert_eq!(s.finger.params.layers, 4);
+    assert_eq!(s.finger.params.w, 18.0);
+    assert_eq!(s.finger.drive, Drive::Thickness(vec![1.9, 2.0, 1.95]));
+    assert_eq!(s.finger.drive_line, 7);
+    assert_eq!(s.tensions, vec![0.0, 0.25, 1.0]);
+    assert_eq!(s.solver, SolverSpec::Stepping { n_inc: 7 });
+    assert!(!s.output.postures && s.output.tip_stiffness && !s.output.cable_excursion);
+    assert_eq!(s.output.reference, Reference::None);
+
+    // defaults: MODEL.md's preset, 0 V, converged, postures and excursion, no stiffness
+    let d = scene::parse("d", "[drive]\ntensions = 0.5\n").unwrap();
+    assert_eq!(d.finger.params, Params::<f64>::default());
+    assert_eq!(d.finger.drive, Drive::Volts(vec![0.0; 3]));
+    assert!(matches!(d.solver, SolverSpec::Converged { .. }));
+    assert!(d.output.postures && d.output.cable_excursion && !d.output.tip_stiffness);
+
+    // one value for every joint
+    let u = scene::parse("u", "[finger]\nvolts = 500\n[drive]\ntensions = 1\n").unwrap();
+    assert_eq!(u.finger.drive, Drive::Volts(vec![500.0; 3]));
+}
+
+#[test]
+fn overrides_apply_whatever_their_order() {
+    // `a = 15` alone breaks 2a < l = 27; with `l = 40` after it the set is valid.
+    let s = scene::parse("o", "[finger]\na = 15\nl = 40\n[drive]\ntensions = 0.1\n").unwrap();
+    assert_eq!((s.finger.params.a, s.finger.params.l), (15.0, 40.0));
+    // alone, it is refused at its line, naming the parameter
+    let e = scene::parse("o", "[finger]\nb = 12\na = 15\n[drive]\ntensions = 0.1\n").unwrap_err();
+    assert_eq!(e.line, 3, "{e}");
+    assert!(matches!(e.model, Some(Error::Param { name: "a", .. })), "{e:?}");
+}
+
+#[test]
+fn errors_name_their_line() {
+    let cases: &[(&str, usize, &str)] = &[
+        ("[drive]\ntensions = 1\n[bogus]\n", 3, "unknown section"),
+        ("[drive]\ntensions = 1\ncolour = red\n", 3, "unknown key `colour`"),
+        ("[finger]\nlayers = four\n[drive]\ntensions = 1\n", 2, "not a number"),
+        ("[finger]\nlayers = 4\nlayers = 3\n[drive]\ntensions = 1\n", 3, "already given on line 2"),
+        ("[drive]\ntensions = 1\njust words\n", 3, "expected `key = value`"),
+        ("[finger]\nvolts = 0,0,0\nthickness = 2,2,2\n[drive]\ntensions = 1\n", 3, "already given on line 2"),
+        ("[finger]\nvolts = 0, 0\n[drive]\ntensions = 1\n", 2, "2 values for 3 joints"),
+        ("[drive]\ntensions = 0.5, -1\n", 2, "cannot push"),
+        ("[drive]\ntensions = 1, nan\n", 2, "not a finite number"),
+        ("[drive]\ntensions = 1\n[solver]\nn_inc = 10\n", 4, "only for method = stepping"),
+        ("[drive]\ntensions = 1\n[solver]\nmethod = newton\n", 4, "not converged or stepping"),
+        ("[finger]\nt_min = 20\n[drive]\ntensions = 1\n", 2, "t_min"),
+        ("[finger]\nnu = 0.7\n[drive]\ntensions = 1\n", 2, "nu"),
+        ("[drive]\ntensions = 1\n[drive]\n", 3, "already opened on line 1"),
+        ("[drive]\ntensions = 1\n[output]\npostures = maybe\n", 4, "not yes/no"),
+        ("[drive]\ntensions = 1\n[match]\nlayers = 0\n", 3, "needs `tension"),
+        ("[finger]\npreset = fancy\n[drive]\ntensions = 1\n", 2, "not default or paper"),
+        ("title = x\n", 0, "no tensions"),
+    ];
+    for (text, line, what) in cases {
+        let e = scene::parse("e", text).unwrap_err();
+        assert_eq!(e.line, *line, "{text:?}: {e}");
+        assert!(e.to_string().contains(what), "{text:?}: `{e}` lacks `{what}`");
+        if *line > 0 {
+            assert!(e.to_string().starts_with(&format!("line {line}: ")), "{e}");
+        }
+    }
+}
+
+#[test]
+fn model_refusals_name_joint_limit_and_line() {
+    // a voltage past the ceiling at joint 2
+    let p = Params::<f64>::default();
+    let ceiling = de::voltage_ceiling(&p);
+    let text = format!("[finger]\nvolts = 0, {}, 0\n[drive]\ntensions = 1\n", ceiling * 1.01);
+    let e = run_text(&text).unwrap_err();
+    assert_eq!(e.line, 2);
+    assert!(matches!(e.model, Some(Error::VoltageCeiling { joint: 2, .. })), "{e:?}");
+    // a thickness past 33 % at joint 3
+    let limit = p.layers as f64 * p.z0 * 2.0 / 3.0;
+    let text = format!("[finger]\nthickness = 2, 2, {}\n[drive]\ntensions = 1\n", limit * 0.99);
+    let e = run_text(&text).unwrap_err();
+    assert_eq!(e.line, 2);
+    match e.model {
+        Some(Error::ThicknessLimit { joint, limit_mm, .. }) => {
+            assert_eq!(joint, 3);
+            assert!((limit_mm - limit).abs() < 1e-12);
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(e.to_string().contains("joint 3") && e.to_string().contains(&format!("{limit:.3}")), "{e}");
+}
+
+#[test]
+fn every_shipped_scene_runs_and_the_refused_one_is_refused() {
+    let dir = top().join("scenes");
+    let files = shipped(&dir);
+    assert!(files.len() >= 6, "scenes/ holds {} scenes", files.len());
+    for f in &files {
+        let r = scene::run_file(f, None).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        assert_eq!(r.postures.len(), r.scene.tensions.len() + r.scene.matching.as_ref().map_or(0, |m| 1 + m.show as usize));
+        for p in &r.postures {
+            assert!(p.points.iter().flatten().all(|x| x.is_finite()));
+        }
+        assert!(!scene::outputs(&r).is_empty());
+    }
+    let refused = shipped(&dir.join("refused"));
+    assert!(!refused.is_empty());
+    for f in &refused {
+        let e = scene::run_file(f, None).unwrap_err();
+        assert!(matches!(e.model, Some(Error::ThicknessLimit { .. })), "{}: {e:?}", f.display());
+        assert!(e.line > 0);
+    }
+}
+
+#[test]
+fn the_papers_2mm_to_1mm_request_writes_no_file_and_exits_nonzero() {
+    let out = std::env::temp_dir().join(format!("finger-scene-refused-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let scene = top().join("scenes/refused/paper-2mm-to-1mm.scene");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene"))
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "stderr: {err}");
+    let p = Params::<f64>::paper();
+    let limit = p.layers as f64 * p.z0 * 2.0 / 3.0;
+    assert!(err.contains("joint 1"), "{err}");
+    assert!(err.contains(&format!("{limit:.3} mm")), "{err}");
+    assert!(err.contains("paper-2mm-to-1mm.scene:"), "{err}");
+    assert!(!out.exists(), "a refused scene created {}", out.display());
+
+    // the same command on a good scene writes its three files
+    let good = top().join("scenes/paper-de-0v.scene");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene"))
+        .arg(&good)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["paper-de-0v.csv", "paper-de-0v-postures.csv", "paper-de-0v.svg"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+
+    // usage errors are status 2
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene")).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn csv_is_the_models_own_solution() {
+    let path = top().join("scenes/paper-de-joint1-thin.scene");
+    let r = scene::run_file(&path, None).unwrap();
+    let Drive::Thickness(th) = &r.scene.finger.drive else { panic!("scene drives by thickness") };
+    let p = r.scene.finger.params;
+    let f = Finger::new(p).unwrap();
+    let volts: Vec<f64> = th.iter().enumerate().map(|(k, &t)| de::voltage_for_thickness(&p, k + 1, t).unwrap()).collect();
+    let (head, rows) = csv(&scene::summary_csv(&r));
+    assert_eq!(rows.len(), r.scene.tensions.len());
+    let num = |row: &Vec<String>, name: &str| -> f64 { row[col(&head, name)].parse().unwrap() };
+    for (row, &t) in rows.iter().zip(&r.scene.tensions) {
+        let s = f.solve(t, &volts, Method::converged()).unwrap();
+        assert_eq!(num(row, "tension_N"), t);
+        for k in 0..3 {
+            assert_eq!(num(row, &format!("volts{}_V", k + 1)), volts[k]);
+            assert_eq!(num(row, &format!("joint{}_deg", k + 1)), s.joint_angle[k].to_degrees());
+            // the stack is the thickness asked for
+            assert!((num(row, &format!("thickness{}_mm", k + 1)) - th[k]).abs() < 1e-9);
+        }
+        assert_eq!(num(row, "tip_x_mm"), s.tip().x);
+        assert_eq!(num(row, "tip_y_mm"), s.tip().y);
+        assert_eq!(num(row, "tip_deg"), s.tip().theta.to_degrees());
+        assert_eq!(num(row, "cable_excursion_mm"), s.cable_excursion);
+    }
+    // the postures CSV: its node rows are the solution's nodes
+    let (head, rows) = csv(&scene::postures_csv(&r));
+    for (i, &t) in r.scene.tensions.iter().enumerate() {
+        let s = f.solve(t, &volts, Method::converged()).unwrap();
+        let nodes: Vec<&Vec<String>> = rows
+            .iter()
+            .filter(|row| row[col(&head, "posture")] == (i + 1).to_string() && row[col(&head, "what")].starts_with("node"))
+            .collect();
+        assert_eq!(nodes.len(), 4);
+        for (k, row) in nodes.iter().enumerate() {
+            assert_eq!(row[col(&head, "x_mm")].parse::<f64>().unwrap(), s.nodes[k].x);
+            assert_eq!(row[col(&head, "y_mm")].parse::<f64>().unwrap(), s.nodes[k].y);
+        }
+    }
+}
+
+#[test]
+fn stiffness_only_when_asked_and_equal_to_the_models() {
+    let base = "[finger]\npreset = paper\n[drive]\ntensions = 0.3, 0.9\n";
+    let r = run_text(base).unwrap();
+    assert!(r.postures.iter().all(|p| p.stiffness.is_none()));
+    assert!(!scene::summary_csv(&r).contains("k_yy"));
+    let r = run_text(&format!("{base}[output]\ntip_stiffness = yes\ncable_excursion = no\npostures = no\n")).unwrap();
+    let f = Finger::new(Params::<f64>::paper()).unwrap();
+    let (head, rows) = csv(&scene::summary_csv(&r));
+    assert!(!head.iter().any(|h| h == "cable_excursion_mm"));
+    for (row, t) in rows.iter().zip([0.3, 0.9]) {
+        let k = f.tip_stiffness(&f.solve(t, &[0.0; 3], Method::converged()).unwrap()).unwrap();
+        assert_eq!(row[col(&head, "k_yy_N_per_mm")].parse::<f64>().unwrap(), k[1][1]);
+        assert_eq!(row[col(&head, "k_tt_Nmm_per_rad")].parse::<f64>().unwrap(), k[2][2]);
+    }
+    // postures = no: only the summary CSV
+    let files = scene::outputs(&r);
+    assert_eq!(files.len(), 1);
+    assert!(files[0].0.ends_with(".csv"));
+}
+
+#[test]
+fn stepping_scene_is_the_papers_stepping() {
+    let r = scene::run_file(&top().join("scenes/paper-no-de-stepping.scene"), None).unwrap();
+    let SolverSpec::Stepping { n_inc } = r.scene.solver else { panic!("stepping scene") };
+    let f = Finger::new(r.scene.finger.params).unwrap();
+    for p in &r.postures {
+        let s = f.solve(p.tension, &[0.0; 3], Method::Stepping { n_inc }).unwrap();
+        assert_eq!(p.tip().y, s.tip().y);
+        assert_eq!(p.solution.iterations, n_inc);
+    }
+}
+
+#[test]
+fn match_finds_the_tension_of_equal_tip_angle() {
+    let r = scene::run_file(&top().join("scenes/paper-no-de.scene"), None).unwrap();
+    let m = r.scene.matching.as_ref().unwrap();
+    let tm = r.matched_tension.unwrap();
+    let matched = r.postures.iter().find(|p| p.kind == Kind::Matched).unwrap();
+    let target = r.postures.iter().find(|p| p.kind == Kind::MatchTarget).unwrap();
+    assert_eq!(matched.tension, tm);
+    assert_eq!(target.tension, m.tension);
+    assert!((matched.tip().theta - target.tip().theta).abs() < 1e-9);
+    // the stacks stiffen the finger: the finger without them needs less tension
+    assert!(tm > 0.0 && tm < m.tension, "{tm}");
+    // and, the joints being alike and decoupled, every joint angle matches
+    for (a, b) in matched.joint_angles().iter().zip(target.joint_angles()) {
+        assert!((a - b).abs() < 1e-9, "{a} {b}");
+    }
+}
+
+#[test]
+fn reference_without_a_solver_is_a_clear_error() {
+    let e = run_text("[drive]\ntensions = 1\n[output]\nreference = continuum\n").unwrap_err();
+    assert_eq!(e.line, 3);
+    assert!(e.to_string().contains("continuum"));
+}
+
+/// A small XML well-formedness check: balanced tags, one root, quoted attributes, no raw `<`
+/// or stray `&` in text or attribute values.
+fn check_xml(s: &str) -> Result<usize, String> {
+    let b = s.as_bytes();
+    let mut i = 0;
+    let mut stack: Vec<String> = Vec::new();
+    let mut roots = 0;
+    let entity_ok = |rest: &str| ["&amp;", "&lt;", "&gt;", "&quot;", "&apos;"].iter().any(|e| rest.starts_with(e));
+    let mut elements = 0;
+    while i < b.len() {
+        if b[i] == b'<' {
+            if s[i..].starts_with("<?") {
+                i += s[i..].find("?>").ok_or("unclosed <?")? + 2;
+                continue;
+            }
+            let end = i + s[i..].find('>').ok_or("unclosed tag")?;
+            let tag = &s[i + 1..end];
+            if let Some(name) = tag.strip_prefix('/') {
+                let open = stack.pop().ok_or(format!("stray </{name}>"))?;
+                if open != name.trim() {
+                    return Err(format!("<{open}> closed by </{name}>"));
+                }
+            } else {
+                let selfclose = tag.ends_with('/');
+                let body = tag.trim_end_matches('/');
+                let name: String = body.chars().take_while(|c| !c.is_whitespace()).collect();
+                if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == ':') {
+                    return Err(format!("bad tag name in <{tag}>"));
+                }
+                // attributes: name="value"
+                let mut rest = body[name.len()..].trim();
+                while !rest.is_empty() {
+                    let eq = rest.find('=').ok_or(format!("attribute without value in <{tag}>"))?;
+                    let an = rest[..eq].trim();
+                    if an.is_empty() || an.contains(char::is_whitespace) {
+                        return Err(format!("bad attribute name in <{tag}>"));
+                    }
+                    let v = rest[eq + 1..].trim_start();
+                    let v = v.strip_prefix('"').ok_or(format!("unquoted attribute in <{tag}>"))?;
+                    let close = v.find('"').ok_or("unclosed attribute")?;
+                    let val = &v[..close];
+                    if val.contains('<') {
+                        return Err(format!("< in attribute of <{tag}>"));
+                    }
+                    for (j, _) in val.match_indices('&') {
+                        if !entity_ok(&val[j..]) {
+                            return Err(format!("bare & in <{tag}>"));
+                        }
+                    }
+                    rest = v[close + 1..].trim_start();
+                }
+                if stack.is_empty() {
+                    roots += 1;
+                }
+                elements += 1;
+                if !selfclose {
+                    stack.push(name);
+                }
+            }
+            i = end + 1;
+        } else {
+            if b[i] == b'&' && !entity_ok(&s[i..]) {
+                return Err("bare & in text".into());
+            }
+            if b[i] == b'>' && !stack.is_empty() {
+                // a '>' in text is legal XML; nothing to do
+            }
+            i += 1;
+        }
+    }
+    if !stack.is_empty() {
+        return Err(format!("unclosed <{}>", stack.last().unwrap()));
+    }
+    if roots != 1 {
+        return Err(format!("{roots} root elements"));
+    }
+    Ok(elements)
+}
+
+#[test]
+fn the_xml_checker_catches_what_it_should() {
+    assert!(check_xml("<svg><g></g></svg>").is_ok());
+    assert!(check_xml("<svg><g></svg>").is_err());
+    assert!(check_xml("<svg a=b/>").is_err());
+    assert!(check_xml("<svg>a & b</svg>").is_err());
+    assert!(check_xml("<svg/><svg/>").is_err());
+}
+
+#[test]
+fn svg_is_well_formed_with_one_polyline_per_posture() {
+    for name in ["paper-no-de", "paper-de-uniform"] {
+        let r = scene::run_file(&top().join(format!("scenes/{name}.scene")), None).unwrap();
+        let svg = host_tests::svg::plot(&r);
+        check_xml(&svg).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(svg.contains("<svg xmlns=\"http://www.w3.org/2000/svg\""));
+        let polys: Vec<&str> = svg.lines().filter(|l| l.contains("<polyline class=\"posture\"")).collect();
+        assert_eq!(polys.len(), r.postures.len(), "{name}");
+        for (line, p) in polys.iter().zip(&r.postures) {
+            let pts = line.split("points=\"").nth(1).unwrap().split('"').next().unwrap();
+            assert_eq!(pts.split(' ').count(), p.points.len());
+            assert!(line.contains(&format!("data-tension=\"{}\"", p.tension)));
+        }
+        // a legend entry for each posture, and the axes in mm
+        for p in &r.postures {
+            assert!(svg.contains(&host_tests::svg::escape(&p.label)));
+        }
+        assert!(svg.contains("x (mm)") && svg.contains("y (mm)"));
+        // one colour per posture
+        let cols = host_tests::svg::colours(&r);
+        let mut uniq = cols.clone();
+        uniq.sort();
+        uniq.dedup();
+        assert_eq!(uniq.len(), cols.len());
+    }
+}
+
+#[test]
+fn svg_has_equal_aspect() {
+    // the straight finger (0 N) spans n*l mm along x; the plotted polyline must span the same
+    // number of pixels per mm as a vertical segment of the grid
+    let r = run_text("[drive]\ntensions = 0, 2\n").unwrap();
+    let svg = host_tests::svg::plot(&r);
+    let line = svg.lines().find(|l| l.contains("class=\"posture\"")).unwrap();
+    let pts: Vec<[f64; 2]> = line
+        .split("points=\"")
+        .nth(1)
+        .unwrap()
+        .split('"')
+        .next()
+        .unwrap()
+        .split(' ')
+        .map(|p| {
+            let mut it = p.split(',').map(|v| v.parse::<f64>().unwrap());
+            [it.next().unwrap(), it.next().unwrap()]
+        })
+        .collect();
+    let sx = (pts.last().unwrap()[0] - pts[0][0]) / (3.0 * 27.0);
+    // the second posture's tip: its pixel offsets over its mm offsets in x and y agree
+    let line2 = svg.lines().filter(|l| l.contains("class=\"posture\"")).nth(1).unwrap();
+    let p2: Vec<[f64; 2]> = line2
+        .split("points=\"")
+        .nth(1)
+        .unwrap()
+        .split('"')
+        .next()
+        .unwrap()
+        .split(' ')
+        .map(|p| {
+            let mut it = p.split(',').map(|v| v.parse::<f64>().unwrap());
+            [it.next().unwrap(), it.next().unwrap()]
+        })
+        .collect();
+    let tip = r.postures[1].tip();
+    let sy = -(p2.last().unwrap()[1] - p2[0][1]) / tip.y;
+    let sx2 = (p2.last().unwrap()[0] - p2[0][0]) / tip.x;
+    assert!((sx - sy).abs() < 1e-3 * sx && (sx - sx2).abs() < 1e-3 * sx, "{sx} {sy} {sx2}");
+}
