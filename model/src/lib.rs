@@ -7,6 +7,7 @@
 //! - [`hinge`]: elliptical notch thickness and compliance (Castigliano integrals).
 //! - [`de`]: DE layer thinning, pull-in (33 %) limit, ceiling, stack stiffness.
 //! - [`finger`]: joint equilibrium, posture, cable excursion, tip stiffness, two solvers.
+//! - [`inverse`]: joint angles (and a tension) to tension and voltages; stiffness range; contact force.
 //! - [`mat3`]: the 3x3 algebra they need.
 //! - [`error`]: typed errors; nothing here panics or returns a non-finite result.
 //!
@@ -18,11 +19,13 @@ pub mod de;
 pub mod error;
 pub mod finger;
 pub mod hinge;
+pub mod inverse;
 pub mod mat3;
 pub mod params;
 pub mod real;
 
 pub use error::Error;
 pub use finger::{BranchEnd, BranchLimit, Compliances, Finger, Method, Pose, Solution};
+pub use inverse::{solve_pose, Contact, PoseSolution, StiffnessRange};
 pub use params::{DeModulusRule, Params, MAX_JOINTS, MAX_SUB};
 pub use real::Real;

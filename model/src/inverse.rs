@@ -1,0 +1,697 @@
+//! The inverse model: joint angles (and optionally a cable tension) to the tension and the
+//! channel voltages that hold them; the interval of tensions that can hold a posture (its
+//! stiffness range); and the contact force of a tip held at a point (the paper's second
+//! conclusion). docs/inverse.md has the algorithm with its reasons and the figures.
+//!
+//! What it is: closed per-joint Newton solves on the joint equilibrium with the joint angle
+//! fixed, no trigonometry inside the loops, cheap enough for the target (issue 4: at most
+//! 20,000 instructions per `solve_pose` on the Cortex-M4F). What it is not: a forward solver
+//! (see `finger`), or anything that drives hardware.
+//!
+//! ## Why the angle is a good unknown to fix
+//! Under cable tension alone the joints decouple (finger.rs header): joint k's state depends
+//! on its own compliance C_k(t_k) (t_k the stack thickness, set by V_k) and on P. For the
+//! paper's hinge model (m = 1) the state is q = (δax, δtr, θ) and the equilibrium reads
+//!
+//! `K(t) q = P ŵ(q)`,  K(t) = C_hinge⁻¹ + Tᵀ C_de(t)⁻¹ T  (MODEL.md),
+//!
+//! where ŵ is the wrench per newton of tension on the hinge's distal end: the unit vector
+//! along span k toward the hole at node k-1, and its moment about the distal end. With θ
+//! given, sin θ and cos θ are computed once; ŵ then depends on (δax, δtr) through one square
+//! root. Three equations; the unknowns are (δax, δtr) and one of P or t:
+//! - `hold_tension`: t given (a voltage), unknowns (δax, δtr, P). K is constant, the
+//!   equations are linear in P.
+//! - `hold_thickness`: P given, unknowns (δax, δtr, t). K(t) is an explicit polynomial in t
+//!   (EA ∝ t, EI ∝ t³, offset d = (t_min + t)/2), its derivative is written out.
+//! Both are Newton with the analytic Jacobian, from a guess that is already close (the
+//! deflections δ are small), 2-5 iterations each. The voltage follows from t in closed form
+//! (`de::voltage_for_thickness`, the inverse of the thinning balance).
+//!
+//! ## The algorithm (`solve_pose`)
+//! 1. For every joint, `hold_tension` at the stiffest stack (t0 = N_L z0, 0 V) and at the
+//!    softest the ceiling allows (t_top, at `top` x ceiling): the tensions P_hi,k and P_lo,k
+//!    between which joint k can hold its angle (more voltage, thinner stack, softer joint,
+//!    less tension needed). The implicit derivative dP/dθ must be positive at both (else the
+//!    posture lies past a limit point of the forward branch: `LimitPoint`).
+//! 2. The feasible interval is [max_k P_lo,k, min_k P_hi,k]. Empty: `Unreachable`.
+//! 3. The tension: the one given (checked against every joint's range), or by the rule below.
+//! 4. For every joint, `hold_thickness` at that tension (started from the linear interpolation
+//!    of step 1's two ends), then the voltage from the thickness.
+//!
+//! ## The rule for the tension
+//! Without a tension given, the midpoint of the feasible interval. It keeps every joint as far
+//! from both of its limits (0 V and the ceiling) as the others allow, which leaves the most
+//! room for model error and for trimming the stiffness later in either direction.
+//!
+//! ## Without stacks (layers = 0)
+//! Only the tension is free: joint k holds its angle at one tension P_k. The posture is
+//! reachable if one tension gives every joint angle within `angle_tol` (linearised:
+//! |P - P_k| dθ_k/dP <= angle_tol). The tension chosen minimises the largest angle error (the
+//! weighted Chebyshev centre of the P_k); the interval is the set of tensions within the
+//! tolerance for every joint.
+//!
+//! ## Unreachable: the compliance the joint would need
+//! A joint's effective compliance at a posture is θ/M, M the moment of the cable about the
+//! hinge's distal end (for θ → 0 its linear limit, (C ŵ)_θ / ŵ_M). At the target posture the
+//! ceiling allows the range between θ/M at P_hi,k (0 V, least compliant) and at P_lo,k (top
+//! voltage); the joint would need θ/M at the reference tension: the one given, or the median of
+//! the joints' mid-range tensions (so that the odd joint out is the one named). The joint with
+//! the largest violation (relative to the reference tension) is reported.
+//!
+//! ## Contact force (`contact_force`)
+//! The tip stops at a point X0, the tip of the free posture at (P0, V0). At (P, V) the tip load
+//! F that holds the tip at X0 solves `tip(F) = X0`, with `tip(F)` from `Finger::solve_loaded`
+//! (the load couples the joints). Newton on F with the 2x2 tangent d tip/dF by forward
+//! differences (the linearised `Finger::tip_compliance` leaves out the stiffening by the
+//! cable's follower load, so it is a poor Jacobian), with backtracking. F is the force the object exerts on the tip; the finger presses on the object
+//! with -F. The tip is taken as pinned at the point (no slip, no separation test).
+
+use crate::de;
+use crate::error::Error;
+use crate::finger::{Finger, Method, Pose, Solution};
+use crate::mat3::{self, Mat3};
+use crate::params::{Params, MAX_JOINTS, MAX_SUB};
+use crate::real::Real;
+
+/// Tuning of the inverse solve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options<R> {
+    /// The highest voltage the inverse commands, as a fraction of the ceiling (< 1; the ceiling
+    /// itself is refused by the model). Default 1 - 1e-4.
+    pub top: R,
+    /// Without stacks: the largest joint-angle error one tension may leave, rad. Default 1e-4
+    /// rad (0.0057°).
+    pub angle_tol: R,
+    /// Newton iterations per joint solve. Default 30.
+    pub max_iter: u32,
+}
+
+impl<R: Real> Default for Options<R> {
+    fn default() -> Self {
+        Options { top: R::from_f64(1.0 - 1e-4), angle_tol: R::from_f64(1e-4), max_iter: 30 }
+    }
+}
+
+/// The answer of the inverse model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoseSolution<R> {
+    pub n: usize,
+    /// The target joint angles, rad.
+    pub angles: [R; MAX_JOINTS],
+    /// The cable tension, N.
+    pub tension: R,
+    /// Whether the tension was given (else chosen by the midpoint rule).
+    pub tension_given: bool,
+    /// Channel voltages, V.
+    pub volts: [R; MAX_JOINTS],
+    /// Stack thickness per joint, mm (0 without stacks).
+    pub thickness: [R; MAX_JOINTS],
+    /// Hinge distal-end displacement per joint (δax mm, δtr mm, θ rad), m = 1.
+    pub q: [[R; 3]; MAX_JOINTS],
+    /// The tensions that can hold the posture, [low, high], N.
+    pub interval: [R; 2],
+    /// Newton iterations spent in all.
+    pub iterations: u32,
+}
+
+/// The stiffness range of a posture: the solutions at both ends of its tension interval and
+/// the tip stiffness (`Finger::tip_stiffness`) at each.
+#[derive(Clone, Copy, Debug)]
+pub struct StiffnessRange<R> {
+    /// [low-tension end, high-tension end].
+    pub ends: [PoseSolution<R>; 2],
+    /// K_tip at each end (x mm, y mm, θ rad; N/mm, N·mm/rad).
+    pub stiffness: [Mat3<R>; 2],
+}
+
+/// The contact force of a tip held at a point.
+#[derive(Clone, Copy, Debug)]
+pub struct Contact<R> {
+    /// The contact point (base frame), mm: the free tip at (P0, V0).
+    pub point: [R; 2],
+    /// The force the object exerts on the tip (base frame), N. The finger presses with -force.
+    pub force: [R; 2],
+    /// The loaded equilibrium that holds the tip at the point.
+    pub solution: Solution<R>,
+    /// Newton iterations on the force.
+    pub iterations: u32,
+}
+
+impl<R: Real> Contact<R> {
+    /// |force|, N.
+    pub fn magnitude(&self) -> R {
+        (self.force[0].sq() + self.force[1].sq()).sqrt()
+    }
+}
+
+/// One joint held at its angle: the Newton result.
+#[derive(Clone, Copy, Debug)]
+struct Hold<R> {
+    delta: [R; 2],
+    tension: R,
+    thickness: R,
+    /// Moment per newton of tension at the solution, N·mm/N.
+    wm: R,
+    /// dP/dθ at fixed t (only from `hold_tension`), N/rad.
+    dp_dtheta: R,
+    iters: u32,
+}
+
+/// What the solver needs of the finger, prepared once per solve.
+struct Ctx<'a, R> {
+    p: &'a Params<R>,
+    k_hinge: Mat3<R>,
+    lh: R,
+    max_iter: u32,
+    rel: R,
+}
+
+/// The joint's target angle with its sine and cosine.
+#[derive(Clone, Copy)]
+struct Angle<R> {
+    theta: R,
+    s: R,
+    c: R,
+}
+
+/// ŵ, its derivatives by δax, δtr, θ (columns), and the span length.
+struct Wrench<R> {
+    w: [R; 3],
+    d: [[R; 3]; 3],
+}
+
+impl<'a, R: Real> Ctx<'a, R> {
+    fn new(f: &'a Finger<R>, opts: &Options<R>) -> Result<Self, Error> {
+        let p = f.params();
+        if p.m != 1 {
+            return Err(Error::Input { input: "m", reason: "the inverse model is for m = 1 (the paper's hinge model)" });
+        }
+        if p.flex_links {
+            return Err(Error::Input { input: "flex_links", reason: "the inverse model is for rigid links" });
+        }
+        let k_hinge = mat3::inverse(&f.hinge_compliance(0)).ok_or(Error::Singular { what: "hinge compliance" })?;
+        let rel = R::from_f64(1e-11_f64.max(64.0 * R::EPS));
+        Ok(Ctx { p, k_hinge, lh: p.hinge_len(), max_iter: opts.max_iter.max(1), rel })
+    }
+
+    /// Joint stiffness K(t) = K_hinge + Tᵀ C_de(t)⁻¹ T (K_hinge alone without stacks).
+    fn stiffness(&self, t: R) -> Mat3<R> {
+        if self.p.layers == 0 {
+            return self.k_hinge;
+        }
+        mat3::add(&self.k_hinge, &de::stack_stiffness(self.p, self.lh, t))
+    }
+
+    /// dK/dt: the derivative of `de::stack_stiffness` in t, written out. With a = E w t / L,
+    /// b = E w t³ / L³, c = -E w t³ / (2 L²), g = E w t³ / (3 L), d = (t_min + t)/2:
+    /// K_de = [[a, 0, a d], [0, b, c], [a d, c, g + a d²]].
+    fn stiffness_dt(&self, t: R) -> Mat3<R> {
+        let p = self.p;
+        let e = p.e_de();
+        let l = self.lh;
+        let two = R::from_f64(2.0);
+        let a = e * p.w * t / l;
+        let da = e * p.w / l;
+        let t3 = t * t * t;
+        let db = R::from_f64(3.0) * e * p.w * t * t / (l * l * l);
+        let dc = -R::from_f64(3.0) * e * p.w * t * t / (two * l * l);
+        let dg = e * p.w * t * t / l;
+        let _ = t3;
+        let d = (p.t_min + t) / two;
+        let half = R::from_f64(0.5);
+        let z = R::zero();
+        let dad = da * d + a * half;
+        [[da, z, dad], [z, db, dc], [dad, dc, dg + da * d * d + a * d]]
+    }
+
+    /// ŵ at (δax, δtr, θ) and its derivatives. v = B - A (A = (0, e) the hole at node k-1,
+    /// B = D + e (-sin θ, cos θ) link k's proximal hole, D = (L_h + δax, δtr) the hinge's
+    /// distal end); the force per newton is f = -v/|v|, the moment about D is
+    /// M = (B - D) × f = -e (sin θ f_y + cos θ f_x).
+    fn wrench(&self, ang: &Angle<R>, d: [R; 2], joint: usize, tension: R) -> Result<Wrench<R>, Error> {
+        let e = self.p.e;
+        let v = [self.lh + d[0] - e * ang.s, d[1] + e * ang.c - e];
+        let rho = (v[0] * v[0] + v[1] * v[1]).sqrt();
+        if !(rho >= self.p.span_floor) {
+            return Err(Error::Contact { joint, tension: tension.to_f64() });
+        }
+        let u = [v[0] / rho, v[1] / rho];
+        let f = [-u[0], -u[1]];
+        let m = -e * (ang.s * f[1] + ang.c * f[0]);
+        // df/dv = -(I - u uᵀ)/rho
+        let j00 = -(R::one() - u[0] * u[0]) / rho;
+        let j01 = u[0] * u[1] / rho;
+        let j11 = -(R::one() - u[1] * u[1]) / rho;
+        let dmdf = |df0: R, df1: R| -e * (ang.s * df1 + ang.c * df0);
+        // by δax (v0), δtr (v1)
+        let col0 = [j00, j01, dmdf(j00, j01)];
+        let col1 = [j01, j11, dmdf(j01, j11)];
+        // by θ: dv/dθ = e (-cos θ, -sin θ), plus the explicit dependence of M on θ
+        let dv = [-e * ang.c, -e * ang.s];
+        let df = [j00 * dv[0] + j01 * dv[1], j01 * dv[0] + j11 * dv[1]];
+        let col2 = [df[0], df[1], -e * (ang.c * f[1] - ang.s * f[0]) + dmdf(df[0], df[1])];
+        Ok(Wrench { w: [f[0], f[1], m], d: [col0, col1, col2] })
+    }
+
+    /// Joint `joint` (1-based) held at `ang` with stack thickness t: Newton on (δax, δtr, P) of
+    /// `K q - P ŵ(q) = 0`. Also the implicit dP/dθ at fixed t.
+    fn hold_tension(&self, joint: usize, ang: &Angle<R>, t: R, guess: [R; 2]) -> Result<Hold<R>, Error> {
+        let k = self.stiffness(t);
+        let mut d = guess;
+        // first tension from the moment row with the guessed δ
+        let w0 = self.wrench(ang, d, joint, R::zero())?;
+        let kq = |d: [R; 2], row: usize| k[row][0] * d[0] + k[row][1] * d[1] + k[row][2] * ang.theta;
+        let mut p = kq(d, 2) / w0.w[2];
+        let tol_len = self.rel * self.lh;
+        for it in 1..=self.max_iter {
+            let w = self.wrench(ang, d, joint, p)?;
+            let r = [kq(d, 0) - p * w.w[0], kq(d, 1) - p * w.w[1], kq(d, 2) - p * w.w[2]];
+            let mut jm: Mat3<R> = mat3::zero();
+            for row in 0..3 {
+                jm[row][0] = k[row][0] - p * w.d[0][row];
+                jm[row][1] = k[row][1] - p * w.d[1][row];
+                jm[row][2] = -w.w[row];
+            }
+            let inv = mat3::inverse(&jm).ok_or(Error::LimitPoint { joint, tension: p.to_f64() })?;
+            let dx = mat3::mul_vec(&inv, &r);
+            d[0] -= dx[0];
+            d[1] -= dx[1];
+            p -= dx[2];
+            if !(p.is_finite() && d[0].is_finite() && d[1].is_finite()) {
+                return Err(Error::NotConverged { iterations: it, residual: f64::INFINITY });
+            }
+            if dx[0].abs() <= tol_len && dx[1].abs() <= tol_len && dx[2].abs() <= self.rel * (p.abs() + self.rel) {
+                // implicit derivative: J (dδ, dP) = -(K[:,2] - P dŵ/dθ)
+                let rhs = [
+                    -(k[0][2] - p * w.d[2][0]),
+                    -(k[1][2] - p * w.d[2][1]),
+                    -(k[2][2] - p * w.d[2][2]),
+                ];
+                let dp = mat3::mul_vec(&inv, &rhs)[2];
+                return Ok(Hold { delta: d, tension: p, thickness: t, wm: w.w[2], dp_dtheta: dp, iters: it });
+            }
+        }
+        Err(Error::NotConverged { iterations: self.max_iter, residual: f64::INFINITY })
+    }
+
+    /// Joint held at `ang` under tension P: Newton on (δax, δtr, t) of `K(t) q - P ŵ(q) = 0`.
+    fn hold_thickness(&self, joint: usize, ang: &Angle<R>, p: R, guess: Hold<R>) -> Result<Hold<R>, Error> {
+        let mut d = guess.delta;
+        let mut t = guess.thickness;
+        let tol_len = self.rel * self.lh;
+        for it in 1..=self.max_iter {
+            let k = self.stiffness(t);
+            let kd = self.stiffness_dt(t);
+            let w = self.wrench(ang, d, joint, p)?;
+            let q = [d[0], d[1], ang.theta];
+            let kq = mat3::mul_vec(&k, &q);
+            let kdq = mat3::mul_vec(&kd, &q);
+            let r = [kq[0] - p * w.w[0], kq[1] - p * w.w[1], kq[2] - p * w.w[2]];
+            let mut jm: Mat3<R> = mat3::zero();
+            for row in 0..3 {
+                jm[row][0] = k[row][0] - p * w.d[0][row];
+                jm[row][1] = k[row][1] - p * w.d[1][row];
+                jm[row][2] = kdq[row];
+            }
+            let inv = mat3::inverse(&jm).ok_or(Error::Singular { what: "inverse joint Jacobian" })?;
+            let dx = mat3::mul_vec(&inv, &r);
+            d[0] -= dx[0];
+            d[1] -= dx[1];
+            t -= dx[2];
+            if !(t.is_finite() && t > R::zero() && d[0].is_finite() && d[1].is_finite()) {
+                return Err(Error::NotConverged { iterations: it, residual: f64::INFINITY });
+            }
+            if dx[0].abs() <= tol_len && dx[1].abs() <= tol_len && dx[2].abs() <= self.rel * t {
+                return Ok(Hold { delta: d, tension: p, thickness: t, wm: w.w[2], dp_dtheta: R::zero(), iters: it });
+            }
+        }
+        Err(Error::NotConverged { iterations: self.max_iter, residual: f64::INFINITY })
+    }
+
+    /// The joint's effective compliance θ/M at its target posture when held with tension P
+    /// (moment per newton `wm`), or its linear limit (C(t) ŵ)_θ / ŵ_M when P M vanishes.
+    fn compliance(&self, ang: &Angle<R>, p: R, wm: R, t: R) -> f64 {
+        let m = p * wm;
+        if m.abs() > R::from_f64(1e-30_f64.max(R::EPS * 1e-20)) {
+            return (ang.theta / m).to_f64();
+        }
+        let Some(c) = mat3::inverse(&self.stiffness(t)) else { return 0.0 };
+        let Ok(w) = self.wrench(ang, [R::zero(); 2], 0, R::zero()) else { return 0.0 };
+        let cw = mat3::mul_vec(&c, &w.w);
+        (cw[2] / w.w[2]).to_f64()
+    }
+}
+
+/// Inverse model at the default options: target joint angles (rad, one per joint) and
+/// optionally a tension (N) to the tension and the voltages that hold them. The entry point
+/// for the target benchmark: `inverse::solve_pose(&finger, &angles, None)`.
+pub fn solve_pose<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>) -> Result<PoseSolution<R>, Error> {
+    solve_pose_with(f, angles, tension, &Options::default())
+}
+
+/// Inverse model with explicit options (see the module documentation for the algorithm).
+pub fn solve_pose_with<R: Real>(
+    f: &Finger<R>,
+    angles: &[R],
+    tension: Option<R>,
+    opts: &Options<R>,
+) -> Result<PoseSolution<R>, Error> {
+    let p = f.params();
+    let n = p.n;
+    if angles.len() != n {
+        return Err(Error::Input { input: "angles", reason: "one angle per joint is required" });
+    }
+    if angles.iter().any(|a| !a.is_finite()) {
+        return Err(Error::NonFinite { input: "angle" });
+    }
+    if let Some(t) = tension {
+        if !t.is_finite() {
+            return Err(Error::NonFinite { input: "tension" });
+        }
+        if t < R::zero() {
+            return Err(Error::Input { input: "tension", reason: "a cable cannot push: tension must be >= 0" });
+        }
+    }
+    if !(opts.top.is_finite() && opts.top > R::zero() && opts.top < R::one()) {
+        return Err(Error::Input { input: "top", reason: "fraction of the ceiling in (0, 1)" });
+    }
+    if !(opts.angle_tol.is_finite() && opts.angle_tol > R::zero()) {
+        return Err(Error::Input { input: "angle_tol", reason: "must be positive" });
+    }
+    let ctx = Ctx::new(f, opts)?;
+    let mut ang = [Angle { theta: R::zero(), s: R::zero(), c: R::one() }; MAX_JOINTS];
+    for k in 0..n {
+        let (s, c) = angles[k].sin_cos();
+        ang[k] = Angle { theta: angles[k], s, c };
+    }
+    let mut out = PoseSolution {
+        n,
+        angles: [R::zero(); MAX_JOINTS],
+        tension: R::zero(),
+        tension_given: tension.is_some(),
+        volts: [R::zero(); MAX_JOINTS],
+        thickness: [R::zero(); MAX_JOINTS],
+        q: [[R::zero(); 3]; MAX_JOINTS],
+        interval: [R::zero(); 2],
+        iterations: 0,
+    };
+    out.angles[..n].copy_from_slice(angles);
+    if p.layers == 0 {
+        return no_stacks(&ctx, &ang, tension, opts, out);
+    }
+
+    // 1. every joint's tension range: stiffest stack (0 V) and softest (top voltage)
+    let t0 = R::from_f64(p.layers as f64) * p.z0;
+    let v_top = f.voltage_ceiling() * opts.top;
+    let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
+    let mut hi = [ctx.hold_tension(1, &ang[0], t0, [R::zero(); 2])?; MAX_JOINTS];
+    let mut lo = hi;
+    for k in 0..n {
+        if k > 0 {
+            hi[k] = ctx.hold_tension(k + 1, &ang[k], t0, [R::zero(); 2])?;
+        }
+        lo[k] = ctx.hold_tension(k + 1, &ang[k], t_top, hi[k].delta)?;
+        out.iterations += hi[k].iters + lo[k].iters;
+        for h in [&hi[k], &lo[k]] {
+            if !(h.dp_dtheta > R::zero()) && ang[k].theta != R::zero() {
+                return Err(Error::LimitPoint { joint: k + 1, tension: h.tension.to_f64() });
+            }
+        }
+    }
+    // 2. the feasible interval
+    let mut p_lo = lo[0].tension;
+    let mut p_hi = hi[0].tension;
+    for k in 1..n {
+        p_lo = p_lo.max(lo[k].tension);
+        p_hi = p_hi.min(hi[k].tension);
+    }
+    out.interval = [p_lo, p_hi];
+    // 3. the tension
+    let pt = match tension {
+        Some(t) => t,
+        None if p_lo <= p_hi => (p_lo + p_hi) / R::from_f64(2.0),
+        None => {
+            // infeasible: the reference tension is the median of the joints' mid-range tensions
+            let mut mids = [R::zero(); MAX_JOINTS];
+            for k in 0..n {
+                mids[k] = (lo[k].tension + hi[k].tension) / R::from_f64(2.0);
+            }
+            median(&mut mids[..n])
+        }
+    };
+    let slack = ctx.rel * (pt.abs() + ctx.rel);
+    let mut worst: Option<(usize, R)> = None;
+    for k in 0..n {
+        let v = (lo[k].tension - pt).max(pt - hi[k].tension);
+        if v > slack && worst.map_or(true, |(_, w)| v > w) {
+            worst = Some((k, v));
+        }
+    }
+    if let Some((k, _)) = worst {
+        return Err(Error::Unreachable {
+            joint: k + 1,
+            needed: ctx.compliance(&ang[k], pt, hi[k].wm, t0),
+            min: ctx.compliance(&ang[k], hi[k].tension, hi[k].wm, t0),
+            max: ctx.compliance(&ang[k], lo[k].tension, lo[k].wm, t_top),
+        });
+    }
+    out.tension = pt;
+    // 4. every joint's thickness at that tension, then its voltage. At zero tension (every
+    //    angle zero, or the check above refused it) any voltage holds the straight finger: 0 V.
+    for k in 0..n {
+        if pt == R::zero() {
+            out.thickness[k] = t0;
+            out.q[k] = [hi[k].delta[0], hi[k].delta[1], ang[k].theta];
+            continue;
+        }
+        let span = hi[k].tension - lo[k].tension;
+        let frac = if span > R::zero() { ((pt - lo[k].tension) / span).max(R::zero()).min(R::one()) } else { R::one() };
+        let lerp = |a: R, b: R| a + (b - a) * frac;
+        let guess = Hold {
+            delta: [lerp(lo[k].delta[0], hi[k].delta[0]), lerp(lo[k].delta[1], hi[k].delta[1])],
+            thickness: lerp(t_top, t0),
+            ..hi[k]
+        };
+        let h = ctx.hold_thickness(k + 1, &ang[k], pt, guess)?;
+        out.iterations += h.iters;
+        let t = h.thickness.max(t_top).min(t0);
+        out.thickness[k] = t;
+        out.volts[k] = if t >= t0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, t)?.min(v_top) };
+        out.q[k] = [h.delta[0], h.delta[1], ang[k].theta];
+    }
+    Ok(out)
+}
+
+/// The finger without stacks: only the tension is free.
+fn no_stacks<R: Real>(
+    ctx: &Ctx<'_, R>,
+    ang: &[Angle<R>; MAX_JOINTS],
+    tension: Option<R>,
+    opts: &Options<R>,
+    mut out: PoseSolution<R>,
+) -> Result<PoseSolution<R>, Error> {
+    let n = out.n;
+    let z = R::zero();
+    let mut h = [ctx.hold_tension(1, &ang[0], z, [z; 2])?; MAX_JOINTS];
+    // weights dθ/dP
+    let mut wt = [z; MAX_JOINTS];
+    for k in 0..n {
+        if k > 0 {
+            h[k] = ctx.hold_tension(k + 1, &ang[k], z, [z; 2])?;
+        }
+        out.iterations += h[k].iters;
+        if !(h[k].dp_dtheta > z) {
+            return Err(Error::LimitPoint { joint: k + 1, tension: h[k].tension.to_f64() });
+        }
+        wt[k] = R::one() / h[k].dp_dtheta;
+        out.q[k] = [h[k].delta[0], h[k].delta[1], ang[k].theta];
+    }
+    // the tensions within the tolerance for every joint
+    let tol = opts.angle_tol;
+    let mut lo = h[0].tension - tol * h[0].dp_dtheta;
+    let mut hi = h[0].tension + tol * h[0].dp_dtheta;
+    for k in 1..n {
+        lo = lo.max(h[k].tension - tol * h[k].dp_dtheta);
+        hi = hi.min(h[k].tension + tol * h[k].dp_dtheta);
+    }
+    out.interval = [lo.max(z), hi.max(z)];
+    // the tension: given, or the weighted Chebyshev centre (minimises the largest angle error)
+    let pt = match tension {
+        Some(t) => t,
+        None => {
+            let mut best = (h[0].tension, R::from_f64(-1.0));
+            for i in 0..n {
+                for j in i + 1..n {
+                    let e = wt[i] * wt[j] * (h[i].tension - h[j].tension).abs() / (wt[i] + wt[j]);
+                    if e > best.1 {
+                        best = ((wt[i] * h[i].tension + wt[j] * h[j].tension) / (wt[i] + wt[j]), e);
+                    }
+                }
+            }
+            best.0.max(z)
+        }
+    };
+    let mut worst: Option<(usize, R)> = None;
+    for k in 0..n {
+        let err = (pt - h[k].tension).abs() * wt[k];
+        // 0.1 % slack: the ends of the interval sit exactly on the tolerance
+        if err > tol * R::from_f64(1.001) && worst.map_or(true, |(_, w)| err > w) {
+            worst = Some((k, err));
+        }
+    }
+    if let Some((k, _)) = worst {
+        let c = ctx.compliance(&ang[k], h[k].tension, h[k].wm, z);
+        return Err(Error::Unreachable { joint: k + 1, needed: ctx.compliance(&ang[k], pt, h[k].wm, z), min: c, max: c });
+    }
+    out.tension = pt;
+    Ok(out)
+}
+
+/// Median of a short slice (sorted in place; insertion sort, no allocation).
+fn median<R: Real>(v: &mut [R]) -> R {
+    for i in 1..v.len() {
+        let mut j = i;
+        while j > 0 && v[j - 1] > v[j] {
+            v.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    let n = v.len();
+    if n == 0 {
+        R::zero()
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / R::from_f64(2.0)
+    }
+}
+
+impl<R: Real> PoseSolution<R> {
+    /// The posture as a forward `Solution` (nodes, spans, cable excursion), built from `q`
+    /// without a forward solve, so that `Finger::tip_stiffness` and the console can use it.
+    /// `residual` is 0 and `tangent_det` 1 (not evaluated here; the inverse checked dP/dθ > 0).
+    pub fn to_solution(&self, f: &Finger<R>) -> Result<Solution<R>, Error> {
+        let p = f.params();
+        if p.m != 1 || p.flex_links || self.n != p.n {
+            return Err(Error::Input { input: "pose solution", reason: "computed for other parameters" });
+        }
+        let n = self.n;
+        let lh = p.hinge_len();
+        let link = p.l - lh;
+        let mut sol = Solution {
+            n,
+            m: 1,
+            tension: self.tension,
+            tip_force: [R::zero(); 2],
+            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            links: [[R::zero(); 3]; MAX_JOINTS],
+            joint_angle: [R::zero(); MAX_JOINTS],
+            nodes: [Pose::origin(); MAX_JOINTS + 1],
+            span: [R::zero(); MAX_JOINTS],
+            thickness: self.thickness,
+            volts: self.volts,
+            cable_excursion: R::zero(),
+            iterations: self.iterations,
+            residual: R::zero(),
+            tangent_det: [R::one(); MAX_JOINTS],
+        };
+        for k in 0..n {
+            let q = self.q[k];
+            sol.q[k][0] = q;
+            sol.joint_angle[k] = q[2];
+            let end = Pose::origin().then(lh + q[0], q[1], q[2]);
+            let hole = end.point(R::zero(), p.e);
+            let span = (hole[0].sq() + (hole[1] - p.e).sq()).sqrt();
+            sol.span[k] = span;
+            sol.cable_excursion += lh - span;
+            sol.nodes[k + 1] = sol.nodes[k].then(lh + q[0], q[1], q[2]).then(link, R::zero(), R::zero());
+        }
+        Ok(sol)
+    }
+}
+
+/// The stiffness range of the posture `sol` was solved for: the inverse at both ends of its
+/// tension interval, and the tip stiffness at each.
+pub fn stiffness_range<R: Real>(f: &Finger<R>, sol: &PoseSolution<R>) -> Result<StiffnessRange<R>, Error> {
+    let angles = &sol.angles[..sol.n];
+    let a = solve_pose(f, angles, Some(sol.interval[0]))?;
+    let b = solve_pose(f, angles, Some(sol.interval[1]))?;
+    let ka = f.tip_stiffness(&a.to_solution(f)?)?;
+    let kb = f.tip_stiffness(&b.to_solution(f)?)?;
+    Ok(StiffnessRange { ends: [a, b], stiffness: [ka, kb] })
+}
+
+/// The contact force: the tip stops at the free tip of (p0, volts0); at tension `p` and
+/// `volts` the tip load that holds it there. Newton on the 2-D force with the linearised tip
+/// tangent by finite differences, with backtracking; converged when the tip is within `tol` (mm, raised to the
+/// scalar's resolution) of the point.
+pub fn contact_force<R: Real>(
+    f: &Finger<R>,
+    p0: R,
+    volts0: &[R],
+    p: R,
+    volts: &[R],
+) -> Result<Contact<R>, Error> {
+    let free0 = f.solve(p0, volts0, Method::converged())?;
+    let x0 = [free0.tip().x, free0.tip().y];
+    let c = f.compliances(volts)?;
+    let scale = f.params().l * R::from_f64(f.params().n as f64);
+    let tol = R::from_f64(1e-9_f64.max(R::EPS * 256.0)) * scale;
+    let max_iter = 40u32;
+    let tip_res = |force: [R; 2]| -> Result<([R; 2], R, Solution<R>), Error> {
+        let sol = f.solve_with(&c, p, force, Method::converged())?;
+        let r = [sol.tip().x - x0[0], sol.tip().y - x0[1]];
+        Ok((r, (r[0].sq() + r[1].sq()).sqrt(), sol))
+    };
+    let mut force = [R::zero(); 2];
+    let (mut r, mut rn, mut sol) = tip_res(force)?;
+    // finite-difference step, N: relative to a force that moves the tip by ~1 mm
+    let h0 = R::from_f64(R::EPS.sqrt());
+    for it in 0..max_iter {
+        if rn <= tol {
+            return Ok(Contact { point: x0, force, solution: sol, iterations: it });
+        }
+        // Jacobian d tip / dF by forward differences (the tip load couples the joints and the
+        // cable's follower load stiffens the finger: the linearised C_tip is not the tangent)
+        let ct = f.tip_compliance(&c, &sol);
+        let fscale = (force[0].abs() + force[1].abs()).max(R::one() / (ct[0][0].abs() + ct[1][1].abs()));
+        let h = h0 * fscale;
+        let mut jac = [[R::zero(); 2]; 2];
+        for i in 0..2 {
+            let mut fp = force;
+            fp[i] += h;
+            let (rp, _, _) = tip_res(fp)?;
+            jac[0][i] = (rp[0] - r[0]) / h;
+            jac[1][i] = (rp[1] - r[1]) / h;
+        }
+        let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+        if !(det.abs() > R::zero() && det.is_finite()) {
+            return Err(Error::Singular { what: "tip tangent" });
+        }
+        let df = [-(jac[1][1] * r[0] - jac[0][1] * r[1]) / det, -(-jac[1][0] * r[0] + jac[0][0] * r[1]) / det];
+        // backtracking: the first step length that lowers the tip error
+        let mut lambda = R::one();
+        let mut accepted = false;
+        for _ in 0..16 {
+            let ft = [force[0] + lambda * df[0], force[1] + lambda * df[1]];
+            if let Ok((rt, rtn, st)) = tip_res(ft) {
+                if rtn < rn {
+                    force = ft;
+                    r = rt;
+                    rn = rtn;
+                    sol = st;
+                    accepted = true;
+                    break;
+                }
+            }
+            lambda = lambda / R::from_f64(2.0);
+        }
+        if !accepted {
+            break;
+        }
+    }
+    if rn <= tol {
+        return Ok(Contact { point: x0, force, solution: sol, iterations: max_iter });
+    }
+    Err(Error::NotConverged { iterations: max_iter, residual: rn.to_f64() })
+}
