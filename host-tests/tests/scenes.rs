@@ -450,3 +450,34 @@ fn svg_has_equal_aspect() {
     let sx2 = (p2.last().unwrap()[0] - p2[0][0]) / tip.x;
     assert!((sx - sy).abs() < 1e-3 * sx && (sx - sx2).abs() < 1e-3 * sx, "{sx} {sy} {sx2}");
 }
+
+#[test]
+fn shipped_scenes_show_the_papers_statements() {
+    let run = |n: &str| scene::run_file(&top().join(format!("scenes/{n}.scene")), None).unwrap();
+    let at = |r: &SceneResult, t: f64| r.postures.iter().find(|p| p.kind == Kind::Tension && p.tension == t).unwrap().clone();
+    // DE layers stiffen the finger (Fig. 4 (a) against (b))
+    let no_de = run("paper-no-de");
+    let de0 = run("paper-de-0v");
+    assert!(at(&de0, 1.0).tip().theta < at(&no_de, 1.0).tip().theta);
+    // the least stiff (thinned) joint bends most (Fig. 4 (d)-(f))
+    for j in 1..=3 {
+        let r = run(&format!("paper-de-joint{j}-thin"));
+        for p in r.postures.iter().filter(|p| p.tension > 0.0) {
+            let a = p.joint_angles();
+            for k in 0..3 {
+                if k != j - 1 {
+                    assert!(a[j - 1] > a[k], "joint {j} thinned: angles {a:?} at {} N", p.tension);
+                }
+            }
+        }
+    }
+    // uniform thinning: equal joints at every load (one bending path), softer than at 0 V
+    let u = run("paper-de-uniform");
+    for p in &u.postures {
+        let a = p.joint_angles();
+        assert!((a[0] - a[1]).abs() < 1e-12 && (a[1] - a[2]).abs() < 1e-12, "{a:?}");
+    }
+    let (ku, k0) = (at(&u, 1.0).stiffness.unwrap(), at(&de0, 0.0).stiffness.unwrap());
+    assert!(at(&u, 0.0).stiffness.unwrap()[2][2] < k0[2][2], "thinner stacks, lower rotational stiffness");
+    assert!(ku[2][2].is_finite());
+}

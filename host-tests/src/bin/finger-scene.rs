@@ -17,7 +17,8 @@ use std::process::ExitCode;
 const USAGE: &str = "usage: finger-scene SCENE... [--out DIR]\n       finger-scene --all [--scenes DIR] [--out DIR]";
 
 fn repo_top() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    p.canonicalize().unwrap_or(p)
 }
 
 struct Args {
