@@ -1,0 +1,238 @@
+//! The inverse model (issue 4): forward(inverse(angles)) returns the angles; unreachable
+//! postures are refused with the joint and the compliances; the tension interval of a posture
+//! spans different tip stiffnesses, each consistent with a forward solve; the contact force
+//! grows with P - P0 and changes with the voltages.
+//!
+//! Tolerances (stated in docs/inverse.md): f64, joint angles within 1e-9 rad of the target
+//! after a converged forward solve at the returned tension and voltages; f32 (the target's
+//! scalar), within 2e-5 rad (about 1e-3 degree).
+
+use finger_model::inverse::{self, contact_force, solve_pose, solve_pose_with, stiffness_range, Options};
+use finger_model::{Error, Finger, Method, Params, Real};
+
+/// Reachable postures: the forward model's own postures over a grid of tensions and voltages.
+fn grid<R: Real>(f: &Finger<R>, tensions: &[f64]) -> Vec<(f64, [f64; 3], Vec<R>)> {
+    let ceil = f.voltage_ceiling().to_f64();
+    let fr = [0.0, 0.5, 0.95];
+    let mut out = Vec::new();
+    for &p in tensions {
+        for a in fr {
+            for b in fr {
+                for c in fr {
+                    let v = [a * ceil, b * ceil, c * ceil];
+                    let vr: Vec<R> = v.iter().map(|&x| R::from_f64(x)).collect();
+                    let s = f.solve(R::from_f64(p), &vr, Method::converged()).unwrap();
+                    out.push((p, v, s.joint_angles().to_vec()));
+                }
+            }
+        }
+    }
+    out
+}
+
+fn round_trip<R: Real>(params: Params<R>, tol: f64) -> usize {
+    let f = Finger::new(params).unwrap();
+    let mut count = 0;
+    for (p, _v, angles) in grid(&f, &[0.2, 0.5, 1.0, 2.0, 4.0]) {
+        for given in [None, Some(R::from_f64(p))] {
+            let s = solve_pose(&f, &angles, given).unwrap_or_else(|e| panic!("P={p} {angles:?}: {e}"));
+            // the tension the grid posture was made with lies in the interval
+            assert!(
+                s.interval[0].to_f64() <= p * (1.0 + 1e-6) && p <= s.interval[1].to_f64() * (1.0 + 1e-6),
+                "P={p} outside {:?}",
+                s.interval
+            );
+            let ceil = f.voltage_ceiling();
+            for k in 0..3 {
+                assert!(s.volts[k] >= R::zero() && s.volts[k] < ceil, "voltage {:?} vs ceiling {ceil:?}", s.volts[k]);
+            }
+            let back = f.solve(s.tension, &s.volts[..3], Method::converged()).unwrap();
+            for k in 0..3 {
+                let err = (back.joint_angle[k] - angles[k]).abs().to_f64();
+                assert!(err <= tol, "P={p} joint {k}: {err:e} rad > {tol:e}");
+            }
+            count += 1;
+        }
+    }
+    count
+}
+
+#[test]
+fn forward_of_inverse_returns_the_angles_default() {
+    assert_eq!(round_trip(Params::<f64>::default(), 1e-9), 270);
+}
+
+#[test]
+fn forward_of_inverse_returns_the_angles_paper() {
+    assert_eq!(round_trip(Params::<f64>::paper(), 1e-9), 270);
+}
+
+#[test]
+fn forward_of_inverse_returns_the_angles_f32() {
+    round_trip(Params::<f32>::default(), 2e-5);
+    round_trip(Params::<f32>::paper(), 2e-5);
+}
+
+#[test]
+fn given_tension_gives_back_the_voltages() {
+    let f = Finger::new(Params::<f64>::paper()).unwrap();
+    let v = [3000.0, 6000.0, 9000.0];
+    let s = f.solve(1.0, &v, Method::converged()).unwrap();
+    let inv = solve_pose(&f, s.joint_angles(), Some(1.0)).unwrap();
+    for k in 0..3 {
+        assert!((inv.volts[k] - v[k]).abs() < 1e-3, "{:?}", inv.volts);
+    }
+    assert!(inv.tension_given && inv.tension == 1.0);
+}
+
+#[test]
+fn without_stacks_only_consistent_postures() {
+    let f = Finger::new(Params::<f64>::default().without_stacks()).unwrap();
+    for p in [0.1, 0.7, 2.5] {
+        let s = f.solve(p, &[0.0; 3], Method::converged()).unwrap();
+        let inv = solve_pose(&f, s.joint_angles(), None).unwrap();
+        assert!((inv.tension - p).abs() < 1e-9 * p.max(1.0), "{} vs {p}", inv.tension);
+        assert_eq!(&inv.volts[..3], &[0.0; 3]);
+        let back = f.solve(inv.tension, &[0.0; 3], Method::converged()).unwrap();
+        for k in 0..3 {
+            assert!((back.joint_angle[k] - s.joint_angle[k]).abs() < 1e-9);
+        }
+        // one joint off by 10 angle tolerances: no tension holds it
+        let mut a = s.joint_angles().to_vec();
+        a[1] += 10.0 * Options::<f64>::default().angle_tol;
+        match solve_pose(&f, &a, None) {
+            Err(Error::Unreachable { needed, min, max, .. }) => {
+                assert_eq!(min, max, "without stacks the compliance is fixed");
+                assert!(needed != min);
+            }
+            other => panic!("expected unreachable, got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn unreachable_postures_are_refused() {
+    let f = Finger::new(Params::<f64>::default()).unwrap();
+    // joint 1 bent twice as far as joints 2 and 3: the stacks change compliance by ~1 %
+    match solve_pose(&f, &[0.2, 0.1, 0.1], None) {
+        Err(Error::Unreachable { joint, needed, min, max }) => {
+            assert_eq!(joint, 1);
+            assert!(min < max && needed > max, "{needed} {min} {max}");
+        }
+        other => panic!("expected unreachable, got {other:?}"),
+    }
+    // joint 3 straighter than the others
+    match solve_pose(&f, &[0.1, 0.1, 0.05], None) {
+        Err(Error::Unreachable { joint, needed, min, .. }) => {
+            assert_eq!(joint, 3);
+            assert!(needed < min);
+        }
+        other => panic!("expected unreachable, got {other:?}"),
+    }
+    // a reachable posture at a tension outside its interval
+    let s = f.solve(1.0, &[5000.0; 3], Method::converged()).unwrap();
+    let ok = solve_pose(&f, s.joint_angles(), None).unwrap();
+    let p_out = ok.interval[1] * 1.01;
+    assert!(matches!(solve_pose(&f, s.joint_angles(), Some(p_out)), Err(Error::Unreachable { .. })));
+    let p_out = ok.interval[0] * 0.99;
+    assert!(matches!(solve_pose(&f, s.joint_angles(), Some(p_out)), Err(Error::Unreachable { .. })));
+    // a negative angle: the cable only flexes
+    assert!(matches!(solve_pose(&f, &[-0.05, 0.1, 0.1], None), Err(Error::Unreachable { joint: 1, .. })));
+    // the straight finger: zero tension
+    let z = solve_pose(&f, &[0.0; 3], None).unwrap();
+    assert_eq!(z.tension, 0.0);
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let f = Finger::new(Params::<f64>::default()).unwrap();
+    assert!(matches!(solve_pose(&f, &[f64::NAN, 0.1, 0.1], None), Err(Error::NonFinite { .. })));
+    assert!(matches!(solve_pose(&f, &[0.1, 0.1], None), Err(Error::Input { .. })));
+    assert!(matches!(solve_pose(&f, &[0.1; 3], Some(-1.0)), Err(Error::Input { .. })));
+    assert!(matches!(solve_pose(&f, &[0.1; 3], Some(f64::INFINITY)), Err(Error::NonFinite { .. })));
+    let bad = Options { top: 1.0, ..Options::default() };
+    assert!(matches!(solve_pose_with(&f, &[0.1; 3], None, &bad), Err(Error::Input { .. })));
+    let m2 = Finger::new(Params::<f64> { m: 2, ..Params::default() }).unwrap();
+    assert!(matches!(solve_pose(&m2, &[0.1; 3], None), Err(Error::Input { input: "m", .. })));
+}
+
+#[test]
+fn tensions_across_the_interval_give_different_stiffnesses() {
+    for params in [Params::<f64>::default(), Params::<f64>::paper()] {
+        let f = Finger::new(params).unwrap();
+        let s = f.solve(1.0, &[4000.0, 5000.0, 6000.0], Method::converged()).unwrap();
+        let pose = solve_pose(&f, s.joint_angles(), None).unwrap();
+        let range = stiffness_range(&f, &pose).unwrap();
+        let mut last_kyy = 0.0;
+        for i in 0..=4 {
+            let p = pose.interval[0] + (pose.interval[1] - pose.interval[0]) * i as f64 / 4.0;
+            let inv = solve_pose(&f, s.joint_angles(), Some(p)).unwrap();
+            // the forward solve at that tension and those voltages holds the posture ...
+            let fw = f.solve(p, &inv.volts[..3], Method::converged()).unwrap();
+            for k in 0..3 {
+                assert!((fw.joint_angle[k] - s.joint_angle[k]).abs() < 1e-9);
+            }
+            // ... with the stiffness the inverse's posture gives
+            let k_fw = f.tip_stiffness(&fw).unwrap();
+            let k_inv = f.tip_stiffness(&inv.to_solution(&f).unwrap()).unwrap();
+            for r in 0..3 {
+                for c in 0..3 {
+                    assert!((k_fw[r][c] - k_inv[r][c]).abs() <= 1e-6 * k_fw[r][c].abs().max(1e-3), "{k_fw:?} {k_inv:?}");
+                }
+            }
+            // more tension, less voltage: stiffer at the same posture
+            assert!(k_fw[1][1] > last_kyy, "kyy {} not above {last_kyy}", k_fw[1][1]);
+            last_kyy = k_fw[1][1];
+            if i == 0 || i == 4 {
+                let end = range.stiffness[i / 4];
+                assert!((end[1][1] - k_fw[1][1]).abs() <= 1e-6 * k_fw[1][1]);
+            }
+        }
+        let (lo, hi) = (range.stiffness[0][1][1], range.stiffness[1][1][1]);
+        assert!(hi > lo * (1.0 + 1e-4), "stiffness range too narrow to see: {lo} {hi}");
+        // at the low end some joint is at the top voltage; at the high end some joint at 0 V
+        let ceil = f.voltage_ceiling();
+        assert!(range.ends[0].volts[..3].iter().any(|&v| v > 0.999 * ceil));
+        assert!(range.ends[1].volts[..3].iter().any(|&v| v < 1.0));
+    }
+}
+
+#[test]
+fn contact_force_grows_with_tension_and_changes_with_voltage() {
+    for params in [Params::<f64>::default(), Params::<f64>::paper()] {
+        let f = Finger::new(params).unwrap();
+        let ceil = f.voltage_ceiling();
+        let p0 = 1.0;
+        let zero = [0.0; 3];
+        // at P0 with the same voltages the tip rests on the point without force
+        let c0 = contact_force(&f, p0, &zero, p0, &zero).unwrap();
+        assert!(c0.magnitude() < 1e-9, "{:?}", c0.force);
+        let mut last = 0.0;
+        for p in [1.1, 1.3, 1.6, 2.0] {
+            let c = contact_force(&f, p0, &zero, p, &zero).unwrap();
+            assert!(c.magnitude() > last, "force {} at {p} N not above {last}", c.magnitude());
+            last = c.magnitude();
+            // an independent loaded solve with that force puts the tip on the point
+            let s = f.solve_loaded(p, &zero, c.force, Method::converged()).unwrap();
+            assert!((s.tip().x - c.point[0]).abs() < 1e-6 && (s.tip().y - c.point[1]).abs() < 1e-6);
+        }
+        // same tension, higher voltages: softer joints press harder
+        let p = 1.5;
+        let mut last = 0.0;
+        for frac in [0.0, 0.5, 0.95] {
+            let v = [frac * ceil; 3];
+            let c = contact_force(&f, p0, &zero, p, &v).unwrap();
+            assert!(c.magnitude() > last * (1.0 + 1e-6), "V={frac}: {} vs {last}", c.magnitude());
+            last = c.magnitude();
+        }
+    }
+}
+
+#[test]
+fn cost_entry_point_is_generic_over_the_scalar() {
+    // the benchmark calls inverse::solve_pose with f32 on the target
+    let f = Finger::new(Params::<f32>::default()).unwrap();
+    let s = f.solve(1.0f32, &[2000.0, 4000.0, 6000.0], Method::converged()).unwrap();
+    let inv = inverse::solve_pose(&f, s.joint_angles(), None).unwrap();
+    assert!(inv.iterations > 0 && inv.tension > 0.9 && inv.tension < 1.1);
+}
