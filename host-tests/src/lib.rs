@@ -3,3 +3,4 @@
 pub mod paper;
 pub mod scene;
 pub mod svg;
+pub mod continuum;
