@@ -1,0 +1,127 @@
+//! Console commands of the inverse model (issue 4): `pose` (CONSOLE.md) and `contact` (an
+//! addition, docs/inverse.md). Each handler takes the already parsed arguments, runs the model
+//! and writes the one final reply line (without the line ending); the dispatcher owns parsing,
+//! the armed state and the outputs.
+//!
+//! - `pose <d1> <d2> <d3> [<P>]` (degrees, N): the tension and voltages that hold the joint
+//!   angles. Reply `ok force=<N> volts=<v1,v2,v3> joints=<d1,d2,d3> range=<lo,hi>` (`range`,
+//!   the tensions that can hold the posture, is an addition). The outputs move only through
+//!   the `apply` callback, which the dispatcher makes a no-op while disarmed; if `apply`
+//!   refuses (a limit, a fault), its error is the reply and nothing has moved. Unreachable:
+//!   `err unreachable: joint k: needs compliance ..., the ceiling allows ...`, `apply` is not
+//!   called.
+//! - `contact <P0> <P> [<V1> <V2> <V3>]` (N, V): model only, nothing moves. The tip stops at
+//!   the free tip of P0 at 0 V; at P with the voltages (default 0 V) the force the tip presses
+//!   with. Reply `ok fx=<N> fy=<N> force=<N> point=<x,y>`: (fx, fy) the force of the finger
+//!   on the object (base frame), force its magnitude, point the contact point (mm).
+//!
+//! no_std, no allocation: replies go to any `core::fmt::Write`.
+
+use core::fmt::{self, Write};
+use finger_model::inverse::{contact_force, solve_pose};
+use finger_model::{Error, Finger, Real, MAX_JOINTS};
+
+/// Write `err <code>: <message>` for a model error.
+fn write_err<W: Write>(out: &mut W, e: &Error) -> fmt::Result {
+    write!(out, "err {}: {}", e.code(), e)
+}
+
+/// Write a comma-separated list with `prec` decimals.
+fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f64>, prec: usize) -> fmt::Result {
+    for (i, x) in v.enumerate() {
+        if i > 0 {
+            out.write_char(',')?;
+        }
+        write!(out, "{:.*}", prec, x)?;
+    }
+    Ok(())
+}
+
+/// `pose <d1> .. <dn> [<P>]`. `degrees`: the joint angles as parsed (one per joint);
+/// `tension`: the optional fourth argument. `apply(tension, volts)` moves the outputs (the
+/// dispatcher passes a no-op while disarmed) or refuses with (code, message).
+/// Returns whether the command succeeded (and `apply` was called).
+pub fn pose<R, W, F>(
+    out: &mut W,
+    finger: &Finger<R>,
+    degrees: &[f64],
+    tension: Option<f64>,
+    apply: F,
+) -> Result<bool, fmt::Error>
+where
+    R: Real,
+    W: Write,
+    F: FnOnce(R, &[R]) -> Result<(), (&'static str, &'static str)>,
+{
+    let n = finger.params().n;
+    if degrees.len() != n {
+        write!(out, "err usage: pose <d1> .. <d{n}> [<P>] (degrees, N)")?;
+        return Ok(false);
+    }
+    let mut angles = [R::zero(); MAX_JOINTS];
+    for (a, &d) in angles.iter_mut().zip(degrees) {
+        if !d.is_finite() {
+            write!(out, "err bad-number: angle is not a finite number")?;
+            return Ok(false);
+        }
+        *a = R::from_f64(d * core::f64::consts::PI / 180.0);
+    }
+    let sol = match solve_pose(finger, &angles[..n], tension.map(R::from_f64)) {
+        Ok(s) => s,
+        Err(e) => {
+            write_err(out, &e)?;
+            return Ok(false);
+        }
+    };
+    if let Err((code, msg)) = apply(sol.tension, &sol.volts[..n]) {
+        write!(out, "err {code}: {msg}")?;
+        return Ok(false);
+    }
+    write!(out, "ok force={:.4} volts=", sol.tension.to_f64())?;
+    write_list(out, sol.volts[..n].iter().map(|v| v.to_f64()), 0)?;
+    out.write_str(" joints=")?;
+    write_list(out, sol.angles[..n].iter().map(|a| a.to_f64() * 180.0 / core::f64::consts::PI), 3)?;
+    out.write_str(" range=")?;
+    write_list(out, sol.interval.iter().map(|p| p.to_f64()), 4)?;
+    Ok(true)
+}
+
+/// `contact <P0> <P> [<V1> .. <Vn>]`: model only. `volts` empty (0 V) or one per joint.
+pub fn contact<R, W>(out: &mut W, finger: &Finger<R>, p0: f64, p: f64, volts: &[f64]) -> Result<bool, fmt::Error>
+where
+    R: Real,
+    W: Write,
+{
+    let n = finger.params().n;
+    if !(volts.is_empty() || volts.len() == n) {
+        write!(out, "err usage: contact <P0> <P> [<V1> .. <V{n}>] (N, V)")?;
+        return Ok(false);
+    }
+    if !(p0.is_finite() && p.is_finite() && volts.iter().all(|v| v.is_finite())) {
+        write!(out, "err bad-number: not a finite number")?;
+        return Ok(false);
+    }
+    let zero = [R::zero(); MAX_JOINTS];
+    let mut v = [R::zero(); MAX_JOINTS];
+    for (x, &y) in v.iter_mut().zip(volts) {
+        *x = R::from_f64(y);
+    }
+    match contact_force(finger, R::from_f64(p0), &zero[..n], R::from_f64(p), &v[..n]) {
+        Ok(c) => {
+            // the finger presses on the object with minus the object's force on the tip
+            let (fx, fy) = (-c.force[0].to_f64(), -c.force[1].to_f64());
+            write!(
+                out,
+                "ok fx={fx:.4} fy={fy:.4} force={:.4} point={:.3},{:.3}",
+                c.magnitude().to_f64(),
+                c.point[0].to_f64(),
+                c.point[1].to_f64()
+            )?;
+            Ok(true)
+        }
+        Err(e) => {
+            write_err(out, &e)?;
+            Ok(false)
+        }
+    }
+}
