@@ -29,6 +29,8 @@ use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 use crate::{de, hinge};
 
+mod dual;
+
 /// A planar pose: position (mm) and angle (rad, positive toward +y).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Pose<R> {
@@ -380,6 +382,12 @@ impl<R: Real> Finger<R> {
                     let mut states = [self.straight(); MAX_JOINTS];
                     let mut iters = 0;
                     for k in 0..self.p.n {
+                        // joints decouple under tension alone: a joint with the same
+                        // compliance as the one before has the same state (no work)
+                        if k > 0 && c.c[k][..self.p.m] == c.c[k - 1][..self.p.m] {
+                            states[k] = states[k - 1];
+                            continue;
+                        }
                         let min_step = tension / R::from_f64(4096.0);
                         let (s, it) = self.newton_joint(k, &c.c[k], tension, tol, max_iter, min_step)?;
                         states[k] = s;
@@ -480,24 +488,16 @@ impl<R: Real> Finger<R> {
         Ok(([b[0] - st.hole[0], b[1] - st.hole[1]], st))
     }
 
-    /// The 2x2 tangent of a joint's hole residual by forward differences.
+    /// The exact 2x2 tangent of a joint's hole residual (tension alone), from one march on
+    /// dual numbers (see `dual`).
     fn joint_tangent(
         &self,
         c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b: [R; 2],
-        r: [R; 2],
+        _r: [R; 2],
     ) -> Result<[[R; 2]; 2], MarchError> {
-        let h = R::from_f64(R::EPS.sqrt()) * (self.p.hinge_len() + self.p.e);
-        let mut jac = [[R::zero(); 2]; 2];
-        for i in 0..2 {
-            let mut bp = b;
-            bp[i] += h;
-            let (rp, _) = self.hole_residual(c, tension, bp, None)?;
-            jac[0][i] = (rp[0] - r[0]) / h;
-            jac[1][i] = (rp[1] - r[1]) / h;
-        }
-        Ok(jac)
+        self.eval_dual(c, tension, b).map(|(_, _, jac)| jac)
     }
 
     /// Converged equilibrium of joint k under tension alone: Newton on the hole position, with
@@ -532,11 +532,11 @@ impl<R: Real> Finger<R> {
                 return Err(Error::NotConverged { iterations: iters, residual: f64::INFINITY });
             }
             let guess = [b[0] + rate[0] * dp, b[1] + rate[1] * dp];
-            let attempt = match self.newton_at(c, target, guess, tol, max_iter.saturating_sub(iters)) {
+            let attempt = match self.newton_dual(c, target, guess, tol, max_iter.saturating_sub(iters)) {
                 Err((_, it)) if done > R::zero() => {
                     // the predictor overshot: retry from the last solution itself
                     iters += it;
-                    self.newton_at(c, target, b, tol, max_iter.saturating_sub(iters))
+                    self.newton_dual(c, target, b, tol, max_iter.saturating_sub(iters))
                 }
                 other => other,
             };
@@ -593,69 +593,6 @@ impl<R: Real> Finger<R> {
         match self.joint_tangent(c, tension, st.hole, r) {
             Ok(j) => (j[0][0] * j[1][1] - j[0][1] * j[1][0]).abs() < R::from_f64(0.2),
             Err(_) => false,
-        }
-    }
-
-    /// Newton at one tension from a starting hole guess. On failure returns why (contact on
-    /// the way, or plain non-convergence) and the iterations spent.
-    fn newton_at(
-        &self,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        mut b: [R; 2],
-        tol: R,
-        max_iter: u32,
-    ) -> Result<(JointState<R>, u32), (Option<MarchError>, u32)> {
-        let (mut r, mut st) = self.hole_residual(c, tension, b, None).map_err(|e| (Some(e), 0))?;
-        let mut rn = norm2(r);
-        let floor = self.resolution();
-        for it in 0..max_iter {
-            if rn <= tol {
-                return Ok((st, it));
-            }
-            let jac = self.joint_tangent(c, tension, b, r).map_err(|e| (Some(e), it))?;
-            let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
-            if !(det.abs() > R::from_f64(1e-12)) {
-                return Err((None, it));
-            }
-            let db = [
-                -(jac[1][1] * r[0] - jac[0][1] * r[1]) / det,
-                -(-jac[1][0] * r[0] + jac[0][0] * r[1]) / det,
-            ];
-            // backtracking: accept the first step length that lowers the residual
-            let mut lambda = R::one();
-            let mut accepted = false;
-            let mut last_err = None;
-            for _ in 0..12 {
-                let bt = [b[0] + lambda * db[0], b[1] + lambda * db[1]];
-                match self.hole_residual(c, tension, bt, None) {
-                    Ok((rt, stt)) => {
-                        let rtn = norm2(rt);
-                        if rtn < rn {
-                            b = bt;
-                            r = rt;
-                            rn = rtn;
-                            st = stt;
-                            accepted = true;
-                            break;
-                        }
-                    }
-                    Err(e) => last_err = Some(e),
-                }
-                lambda = lambda / R::from_f64(2.0);
-            }
-            if !accepted {
-                // at the scalar's resolution the residual stops falling: that is convergence
-                if rn <= floor {
-                    return Ok((st, it + 1));
-                }
-                return Err((last_err, it + 1));
-            }
-        }
-        if rn <= tol {
-            Ok((st, max_iter))
-        } else {
-            Err((None, max_iter))
         }
     }
 
