@@ -214,7 +214,10 @@ pub enum ContinuumError {
     Contact { joint: usize, span: f64, tension: f64 },
     /// Newton failed even with the smallest continuation step, last converged tension given.
     NoConvergence { tension: f64 },
-    /// The tangent (Newton Jacobian) changed sign between `from` and `to` N: a limit point.
+    /// A limit point (fold) of the load path between `from` and `to` (the ramped load:
+    /// the tension, or the tip force's largest component when the tension is zero):
+    /// the tangent det(∂g/∂z) changed sign, or fell below 1 % of its unloaded value
+    /// where continuation could not go on.
     LimitPoint { from: f64, to: f64 },
 }
 
@@ -230,7 +233,7 @@ impl fmt::Display for ContinuumError {
                 write!(f, "no convergence past P = {tension:.4} N")
             }
             ContinuumError::LimitPoint { from, to } => {
-                write!(f, "limit point (singular tangent) between P = {from:.4} and {to:.4} N")
+                write!(f, "limit point (singular tangent) between {from:.6} and {to:.6} N")
             }
         }
     }
@@ -416,7 +419,7 @@ fn offset_point(st: &State, e: f64) -> [f64; 2] {
 // ---------------------------------------------------------------------------
 
 /// Solves A x = b in place by Gaussian elimination with partial pivoting.
-/// Returns the sign of det(A), or None if singular.
+/// Returns det(A), or None if singular.
 fn lu_solve(a: &mut [f64], b: &mut [f64], n: usize) -> Option<f64> {
     let mut sign = 1.0;
     for c in 0..n {
@@ -438,9 +441,7 @@ fn lu_solve(a: &mut [f64], b: &mut [f64], n: usize) -> Option<f64> {
             sign = -sign;
         }
         let p = a[c * n + c];
-        if p < 0.0 {
-            sign = -sign;
-        }
+        sign *= p;
         for r in c + 1..n {
             let fct = a[r * n + c] / p;
             if fct != 0.0 {
@@ -464,6 +465,7 @@ fn lu_solve(a: &mut [f64], b: &mut [f64], n: usize) -> Option<f64> {
 struct NewtonOut {
     z: Vec<f64>,
     iters: usize,
+    /// det(∂g/∂z) at the last Jacobian.
     det_sign: f64,
     residual: f64,
 }
@@ -674,19 +676,23 @@ impl<'a> Finger<'a> {
     }
 
     fn newton_at(&self, z0: &[f64], tension: f64, tip: [f64; 2]) -> Option<NewtonOut> {
-        newton(|z| self.shoot(z, tension, tip, false).map(|s| s.z), z0, 30)
+        newton(|z| self.shoot(z, tension, tip, false).map(|s| s.z), z0, 15)
     }
 }
 
-/// Continuation state: the last converged point on the load path λ ↦ λ (P, F_tip).
+/// Continuation state: the last converged point on the load path
+/// λ ↦ (λ P, F_fixed + λ F_tip).
 struct Tracker<'f, 'a> {
     f: &'f Finger<'a>,
     tension: f64,
     tip: [f64; 2],
+    tip_fixed: [f64; 2],
     lam: f64,
     z: Vec<f64>,
     prev: Option<(f64, Vec<f64>)>,
+    /// det(∂g/∂z) at the last and at the first converged step.
     det_sign: Option<f64>,
+    det_first: Option<f64>,
     steps: usize,
     iters: usize,
     residual: f64,
@@ -705,10 +711,12 @@ impl<'f, 'a> Tracker<'f, 'a> {
             f,
             tension,
             tip,
+            tip_fixed: [0.0, 0.0],
             lam: 0.0,
             z: f.straight(),
             prev: None,
             det_sign: None,
+            det_first: None,
             steps: 0,
             iters: 0,
             residual: 0.0,
@@ -717,7 +725,10 @@ impl<'f, 'a> Tracker<'f, 'a> {
     }
 
     fn loads(&self, lam: f64) -> (f64, [f64; 2]) {
-        (lam * self.tension, [lam * self.tip[0], lam * self.tip[1]])
+        (
+            lam * self.tension,
+            [self.tip_fixed[0] + lam * self.tip[0], self.tip_fixed[1] + lam * self.tip[1]],
+        )
     }
 
     fn predict(&self, lam: f64) -> Vec<f64> {
@@ -745,7 +756,7 @@ impl<'f, 'a> Tracker<'f, 'a> {
 
     fn accept(&mut self, lam: f64, out: NewtonOut) -> Result<(), ContinuumError> {
         if let Some(s) = self.det_sign {
-            if s != out.det_sign {
+            if s.signum() != out.det_sign.signum() {
                 return Err(ContinuumError::LimitPoint {
                     from: self.lam * self.tension,
                     to: lam * self.tension,
@@ -753,6 +764,7 @@ impl<'f, 'a> Tracker<'f, 'a> {
             }
         }
         self.det_sign = Some(out.det_sign);
+        self.det_first.get_or_insert(out.det_sign);
         self.prev = Some((self.lam, std::mem::take(&mut self.z)));
         self.z = out.z;
         self.lam = lam;
@@ -791,6 +803,15 @@ impl<'f, 'a> Tracker<'f, 'a> {
                 None => {
                     self.dlam *= 0.5;
                     if self.dlam < 1e-9 {
+                        // Stuck: if the tangent has all but vanished, this is a fold
+                        // of the load path (a limit point), not a numerical failure.
+                        if let (Some(d), Some(d0)) = (self.det_sign, self.det_first) {
+                            if d.abs() < 1e-2 * d0.abs() {
+                                let from = self.lam * self.tension.max(self.tip[0].abs().max(self.tip[1].abs()));
+                                let to = (self.lam + 2.0 * self.dlam) * self.tension.max(self.tip[0].abs().max(self.tip[1].abs()));
+                                return Err(ContinuumError::LimitPoint { from, to });
+                            }
+                        }
                         return Err(ContinuumError::NoConvergence { tension: self.lam * self.tension });
                     }
                 }
@@ -916,9 +937,20 @@ pub fn closing_tension(
 ) -> Result<Option<ClosingReport>, ContinuumError> {
     check_loads(p_max, tip_force)?;
     let f = Finger::new(p, stack_mm, disc)?;
-    // Ramp the tip force first (at zero tension would need a separate path);
-    // here both are ramped together, as in `solve`.
-    let mut tr = Tracker::new(&f, p_max, tip_force);
+    // First the tip force alone (at zero tension), then the tension with the
+    // tip force held fixed.
+    let mut z0 = f.straight();
+    if tip_force != [0.0, 0.0] {
+        let mut pre = Tracker::new(&f, 0.0, tip_force);
+        if let StepEnd::Contact { joint, span, .. } = pre.advance_to(1.0)? {
+            return Err(ContinuumError::Contact { joint, span, tension: 0.0 });
+        }
+        z0 = pre.z;
+    }
+    let mut tr = Tracker::new(&f, p_max, [0.0, 0.0]);
+    tr.tip_fixed = tip_force;
+    tr.z = z0;
+    tr.dlam = (0.25 / p_max.max(1e-300)).min(1.0);
     let (mut lo, mut hi) = match tr.advance_to(1.0)? {
         StepEnd::Reached => return Ok(None),
         StepEnd::Contact { lam, .. } => (tr.lam, lam),

@@ -288,6 +288,28 @@ fn span_closure_is_reported_not_returned() {
     assert!(s.centreline.iter().flatten().all(|v| v.is_finite()));
     // Nothing closes at 2 N.
     assert!(closing_tension(&p, &[], [0.0, 0.0], disc, 2.0).unwrap().is_none());
+    // With a fixed tip force the report is consistent with `solve` under the same loads.
+    let held = closing_tension(&p, &[], [0.0, -0.05], disc, 20.0).unwrap().unwrap();
+    assert_eq!(held.solution.tip_force, [0.0, -0.05]);
+    let below = solve(&p, held.tension * 0.99, &[], [0.0, -0.05], disc).unwrap();
+    assert!(below.spans.iter().all(|v| *v > p.contact_floor));
+    assert!(matches!(
+        solve(&p, held.tension * 1.01, &[], [0.0, -0.05], disc),
+        Err(ContinuumError::Contact { .. })
+    ));
+    // A larger dead force toward -y makes the curling finger snap through: the load
+    // path folds near 3.40 N, reported as a limit point, never as an answer past it.
+    let coarse = Discretisation::new(32, 8);
+    match closing_tension(&p, &[], [0.0, -0.3], coarse, 20.0) {
+        Err(ContinuumError::LimitPoint { from, to }) => {
+            assert!(from > 3.3 && from < 3.5 && to >= from, "fold at {from}..{to}");
+            assert!(matches!(solve(&p, 3.6, &[], [0.0, -0.3], coarse), Err(ContinuumError::LimitPoint { .. })));
+            let s = solve(&p, 3.3, &[], [0.0, -0.3], coarse).unwrap();
+            assert!(s.joint_angles.iter().all(|v| v.is_finite()));
+        }
+        other => panic!("expected a limit point, got {other:?}"),
+    }
+    println!("closing: {} N alone, {} N with a 0.05 N tip force toward -y", rep.tension, held.tension);
 }
 
 #[test]
