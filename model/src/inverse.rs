@@ -440,7 +440,7 @@ pub fn solve_pose_with<R: Real>(
         }
     };
     // a given tension on an end of the interval (as printed by an earlier reply) is accepted
-    let slack = R::from_f64(1e-8_f64.max(64.0 * R::EPS)) * (pt.abs() + ctx.rel);
+    let slack = R::from_f64(1e-8_f64.max(256.0 * R::EPS)) * (pt.abs() + ctx.rel);
     let mut worst: Option<(usize, R)> = None;
     for k in 0..n {
         let v = (lo[k].tension - pt).max(pt - hi[k].tension);
