@@ -20,6 +20,14 @@ fn shipped(dir: &Path) -> Vec<PathBuf> {
     v
 }
 
+/// A shipped scene run without its continuum overlay (for tests of the model's side only).
+fn without_reference(name: &str) -> SceneResult {
+    let text = std::fs::read_to_string(top().join(format!("scenes/{name}.scene"))).unwrap();
+    let mut s = scene::parse(name, &text).unwrap();
+    s.output.reference = Reference::None;
+    scene::run(&s, None).unwrap()
+}
+
 fn run_text(text: &str) -> Result<SceneResult, scene::SceneError> {
     let s = scene::parse("t", text)?;
     scene::run(&s, None)
@@ -138,8 +146,9 @@ fn every_shipped_scene_runs_and_the_refused_one_is_refused() {
     let dir = top().join("scenes");
     let files = shipped(&dir);
     assert!(files.len() >= 6, "scenes/ holds {} scenes", files.len());
+    let reference = scene::reference_solver();
     for f in &files {
-        let r = scene::run_file(f, None).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        let r = scene::run_file(f, reference.as_deref()).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
         assert_eq!(r.postures.len(), r.scene.tensions.len() + r.scene.matching.as_ref().map_or(0, |m| 1 + m.show as usize));
         for p in &r.postures {
             assert!(p.points.iter().flatten().all(|x| x.is_finite()));
@@ -197,7 +206,7 @@ fn the_papers_2mm_to_1mm_request_writes_no_file_and_exits_nonzero() {
 #[test]
 fn csv_is_the_models_own_solution() {
     let path = top().join("scenes/paper-de-joint1-thin.scene");
-    let r = scene::run_file(&path, None).unwrap();
+    let r = scene::run_file(&path, scene::reference_solver().as_deref()).unwrap();
     let Drive::Thickness(th) = &r.scene.finger.drive else { panic!("scene drives by thickness") };
     let p = r.scene.finger.params;
     let f = Finger::new(p).unwrap();
@@ -258,7 +267,7 @@ fn stiffness_only_when_asked_and_equal_to_the_models() {
 
 #[test]
 fn stepping_scene_is_the_papers_stepping() {
-    let r = scene::run_file(&top().join("scenes/paper-no-de-stepping.scene"), None).unwrap();
+    let r = without_reference("paper-no-de-stepping");
     let SolverSpec::Stepping { n_inc } = r.scene.solver else { panic!("stepping scene") };
     let f = Finger::new(r.scene.finger.params).unwrap();
     for p in &r.postures {
@@ -270,7 +279,7 @@ fn stepping_scene_is_the_papers_stepping() {
 
 #[test]
 fn match_finds_the_tension_of_equal_tip_angle() {
-    let r = scene::run_file(&top().join("scenes/paper-no-de.scene"), None).unwrap();
+    let r = without_reference("paper-no-de");
     let m = r.scene.matching.as_ref().unwrap();
     let tm = r.matched_tension.unwrap();
     let matched = r.postures.iter().find(|p| p.kind == Kind::Matched).unwrap();
@@ -383,13 +392,18 @@ fn the_xml_checker_catches_what_it_should() {
 
 #[test]
 fn svg_is_well_formed_with_one_polyline_per_posture() {
+    let reference = scene::reference_solver();
     for name in ["paper-no-de", "paper-de-uniform"] {
-        let r = scene::run_file(&top().join(format!("scenes/{name}.scene")), None).unwrap();
+        let r = scene::run_file(&top().join(format!("scenes/{name}.scene")), reference.as_deref()).unwrap();
         let svg = host_tests::svg::plot(&r);
         check_xml(&svg).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(svg.contains("<svg xmlns=\"http://www.w3.org/2000/svg\""));
         let polys: Vec<&str> = svg.lines().filter(|l| l.contains("<polyline class=\"posture\"")).collect();
         assert_eq!(polys.len(), r.postures.len(), "{name}");
+        // the continuum overlay: one dashed polyline per posture, when asked
+        let refs = svg.lines().filter(|l| l.contains("<polyline class=\"reference\"")).count();
+        let asked = r.scene.output.reference == Reference::Continuum;
+        assert_eq!(refs, if asked { r.postures.len() } else { 0 }, "{name}");
         for (line, p) in polys.iter().zip(&r.postures) {
             let pts = line.split("points=\"").nth(1).unwrap().split('"').next().unwrap();
             assert_eq!(pts.split(' ').count(), p.points.len());
@@ -453,7 +467,11 @@ fn svg_has_equal_aspect() {
 
 #[test]
 fn shipped_scenes_show_the_papers_statements() {
-    let run = |n: &str| scene::run_file(&top().join(format!("scenes/{n}.scene")), None).unwrap();
+    let run = |n: &str| {
+        let mut s = scene::parse(n, &std::fs::read_to_string(top().join(format!("scenes/{n}.scene"))).unwrap()).unwrap();
+        s.output.reference = Reference::None;
+        scene::run(&s, None).unwrap()
+    };
     let at = |r: &SceneResult, t: f64| r.postures.iter().find(|p| p.kind == Kind::Tension && p.tension == t).unwrap().clone();
     // DE layers stiffen the finger (Fig. 4 (a) against (b))
     let no_de = run("paper-no-de");
@@ -480,4 +498,59 @@ fn shipped_scenes_show_the_papers_statements() {
     let (ku, k0) = (at(&u, 1.0).stiffness.unwrap(), at(&de0, 0.0).stiffness.unwrap());
     assert!(at(&u, 0.0).stiffness.unwrap()[2][2] < k0[2][2], "thinner stacks, lower rotational stiffness");
     assert!(ku[2][2].is_finite());
+}
+
+/// Counts the reference solves a scene asks for.
+struct Counting(std::cell::Cell<usize>);
+
+impl scene::ReferenceSolver for Counting {
+    fn solve(&self, _: &Params<f64>, _: f64, _: &[f64], _: &[f64]) -> Result<scene::RefPosture, String> {
+        self.0.set(self.0.get() + 1);
+        Err("counted".into())
+    }
+}
+
+#[test]
+fn the_reference_is_solved_only_when_asked() {
+    let c = Counting(std::cell::Cell::new(0));
+    let s = scene::parse("c", "[drive]\ntensions = 0.2, 0.4\n").unwrap();
+    scene::run(&s, Some(&c)).unwrap();
+    assert_eq!(c.0.get(), 0);
+    let s = scene::parse("c", "[drive]\ntensions = 0.2, 0.4\n[output]\nreference = continuum\n").unwrap();
+    let e = scene::run(&s, Some(&c)).unwrap_err();
+    assert_eq!(c.0.get(), 1);
+    assert_eq!(e.line, 3);
+    assert!(e.to_string().contains("counted"), "{e}");
+}
+
+#[test]
+fn continuum_overlay_is_the_continuum_models_solution() {
+    use host_tests::continuum;
+    let path = top().join("scenes/paper-de-joint1-thin.scene");
+    let r = scene::run_file(&path, scene::reference_solver().as_deref()).unwrap();
+    assert_eq!(r.scene.output.reference, Reference::Continuum);
+    let cp = scene::continuum_params(&r.scene.finger.params);
+    assert_eq!(cp.e_de, r.scene.finger.params.e_de());
+    let (head, rows) = csv(&scene::summary_csv(&r));
+    let num = |row: &Vec<String>, name: &str| -> f64 { row[col(&head, name)].parse().unwrap() };
+    for (p, row) in r.postures.iter().zip(&rows) {
+        let direct = continuum::solve(&cp, p.tension, &p.thickness, [0.0, 0.0], continuum::Discretisation::default()).unwrap();
+        let rf = p.reference.as_ref().unwrap();
+        assert_eq!(rf.tip.x, direct.tip.x);
+        assert_eq!(rf.tip.y, direct.tip.y);
+        assert_eq!(num(row, "ref_tip_deg"), direct.tip.theta.to_degrees());
+        let tip = p.tip();
+        let err = ((tip.x - direct.tip.x).powi(2) + (tip.y - direct.tip.y).powi(2)).sqrt();
+        assert_eq!(num(row, "err_tip_mm"), err);
+        for k in 0..3 {
+            assert_eq!(num(row, &format!("err_joint{}_deg", k + 1)), (p.joint_angles()[k] - direct.joint_angles[k]).to_degrees());
+        }
+        // the overlay starts at the clamp and ends at the reference's tip
+        assert_eq!(rf.points[0], [0.0, 0.0]);
+        let last = rf.points.last().unwrap();
+        assert!((last[0] - direct.tip.x).abs() < 1e-9 && (last[1] - direct.tip.y).abs() < 1e-9);
+    }
+    // the postures CSV carries the reference's points too
+    let pc = scene::postures_csv(&r);
+    assert_eq!(pc.lines().filter(|l| l.contains(",reference,")).count(), r.postures.iter().map(|p| p.reference.as_ref().unwrap().points.len()).sum::<usize>());
 }
