@@ -4,3 +4,4 @@ pub mod paper;
 pub mod scene;
 pub mod svg;
 pub mod continuum;
+pub mod perf;

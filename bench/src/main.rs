@@ -1,0 +1,163 @@
+//! Bench image: every scene of `scenes.rs` with every solver variant this image was built
+//! for (features f32, f64, fixed; trig from libm or micromath), the instruction count of each
+//! solve from SysTick under `-icount shift=0`, printed over semihosting, one line per result:
+//!
+//! `R <scene> <scalar> <method> ok <solve_ticks> <setup_ticks> <tip_x> <tip_y> <a1> <a2> <a3> <iters>`
+//! `R <scene> <scalar> <method> err <solve_ticks> <setup_ticks> <error code>`
+//!
+//! `setup` is `Finger::compliances` (DE thinning and the joint compliances for the scene's
+//! voltages, once per voltage change); `solve` is `Finger::solve_with` (equilibrium, posture,
+//! excursion). Angles in rad, positions in mm. The host (perf-report) turns ticks into
+//! instructions with the `CAL` line and compares against its f64 reference.
+#![no_std]
+#![no_main]
+// `unsafe` only in the calibration loop's inline asm (cycles.rs).
+
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use finger_model::{Finger, Method, Params, Real};
+
+mod cycles;
+#[cfg(feature = "fixed")]
+mod fix;
+#[path = "scenes.rs"]
+mod scenes;
+
+use scenes::{Scene, N_INC, SCENES};
+
+fn method_name(m: &Method<f64>, buf: &mut [u8; 12]) -> usize {
+    // tiny formatter: "conv" or "step<N>"
+    match m {
+        Method::Converged { .. } => {
+            buf[..4].copy_from_slice(b"conv");
+            4
+        }
+        Method::Stepping { n_inc } => {
+            buf[..4].copy_from_slice(b"step");
+            let mut digits = [0u8; 8];
+            let (mut v, mut k) = (*n_inc, 0);
+            loop {
+                digits[k] = b'0' + (v % 10) as u8;
+                k += 1;
+                v /= 10;
+                if v == 0 {
+                    break;
+                }
+            }
+            for i in 0..k {
+                buf[4 + i] = digits[k - 1 - i];
+            }
+            4 + k
+        }
+    }
+}
+
+/// The methods every scene runs: stepping at each n_inc, then the converged solver.
+fn methods() -> impl Iterator<Item = Method<f64>> {
+    // `quick`: only the converged solver (the CI smoke test and profiling)
+    let n_inc: &[u32] = if cfg!(feature = "quick") { &[] } else { N_INC };
+    n_inc.iter().map(|&n| Method::Stepping { n_inc: n }).chain(core::iter::once(Method::converged()))
+}
+
+fn cast_method<S: Real>(m: Method<f64>) -> Method<S> {
+    match m {
+        // a tolerance below the scalar's resolution is raised to it (1e-9 is 0 in I16F16)
+        Method::Converged { tol, max_iter } => Method::Converged { tol: S::from_f64(tol.max(S::EPS)), max_iter },
+        Method::Stepping { n_inc } => Method::Stepping { n_inc },
+    }
+}
+
+fn params(s: &Scene) -> Params<f64> {
+    Params { layers: s.layers, ..Params::default() }
+}
+
+/// Run one scene with scalar `S`. `prep` builds the finger and its compliances (in `S`, or in
+/// f32 and cast for fixed point).
+fn run_scene<S: Real>(
+    name: &str,
+    s: &Scene,
+    prep: impl Fn(&Scene) -> Result<(Finger<S>, finger_model::Compliances<S>, u64), finger_model::Error>,
+) {
+    let (finger, comp, setup) = match prep(s) {
+        Ok(v) => v,
+        Err(e) => {
+            hprintln!("R {} {} all err 0 0 {}", s.name, name, e.code());
+            return;
+        }
+    };
+    for m in methods() {
+        let mut buf = [0u8; 12];
+        let len = method_name(&m, &mut buf);
+        let mname = core::str::from_utf8(&buf[..len]).unwrap_or("?");
+        let method = cast_method::<S>(m);
+        let tension = S::from_f64(s.tension);
+        let t0 = cycles::now();
+        let r = finger.solve_with(&comp, tension, [S::zero(); 2], method);
+        let t1 = cycles::now();
+        let r = core::hint::black_box(r);
+        match r {
+            Ok(sol) => {
+                let tip = sol.tip();
+                let a = sol.joint_angles();
+                hprintln!(
+                    "R {} {} {} ok {} {} {:e} {:e} {:e} {:e} {:e} {}",
+                    s.name,
+                    name,
+                    mname,
+                    t1 - t0,
+                    setup,
+                    tip.x.to_f64(),
+                    tip.y.to_f64(),
+                    a[0].to_f64(),
+                    a[1].to_f64(),
+                    a[2].to_f64(),
+                    sol.iterations
+                );
+            }
+            Err(e) => hprintln!("R {} {} {} err {} {} {}", s.name, name, mname, t1 - t0, setup, e.code()),
+        }
+    }
+}
+
+/// Finger and compliances computed in `S` itself (floats).
+#[allow(dead_code)]
+fn prep_float<S: Real>(s: &Scene) -> Result<(Finger<S>, finger_model::Compliances<S>, u64), finger_model::Error> {
+    let f = Finger::new(params(s).cast::<S>())?;
+    let v = [S::from_f64(s.volts[0]), S::from_f64(s.volts[1]), S::from_f64(s.volts[2])];
+    let t0 = cycles::now();
+    let c = f.compliances(&v);
+    let t1 = cycles::now();
+    Ok((f, c?, t1 - t0))
+}
+
+/// A panic in the model is a bug (it must return typed errors): say so and fail the run.
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("PANIC {}", info);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}
+
+#[entry]
+fn main() -> ! {
+    let cp = cortex_m::Peripherals::take().unwrap();
+    cycles::start(cp.SYST);
+    let (ticks, overhead) = cycles::calibrate(1_000_000);
+    hprintln!("CAL {} {} {}", 2_000_000u32, ticks, overhead);
+    // `quick`: one scene (bare finger, 1.0 N)
+    let scenes = if cfg!(feature = "quick") { &SCENES[2..3] } else { SCENES };
+    for s in scenes.iter() {
+        #[cfg(feature = "f32")]
+        run_scene::<f32>(<f32 as Real>::NAME, s, prep_float::<f32>);
+        #[cfg(feature = "f64")]
+        run_scene::<f64>(<f64 as Real>::NAME, s, prep_float::<f64>);
+        #[cfg(feature = "fixed")]
+        {
+            run_scene::<fix::Q16>("i16f16", s, fix::prep::<fix::Q16>);
+            run_scene::<fix::Q32>("i32f32", s, fix::prep::<fix::Q32>);
+        }
+    }
+    hprintln!("END");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {}
+}

@@ -1,0 +1,36 @@
+//! The fixed scene set of the performance report, shared by the bench image (target) and
+//! perf-report (host reference) through `#[path]` includes. Plain data, no dependencies.
+//!
+//! MODEL.md's default finger (3 joints, corrected DE modulus), with (`layers` = 4) and without
+//! (`layers` = 0) DE stacks. Loads are the paper's 0.2, 0.5 and 1.0 N, uniform and per-joint
+//! voltages, and two high tensions: 7 N (where the paper's stepping at n_inc = 1 is off by
+//! tens of mm) and 250 N (near contact: the links touch at about 300 N).
+
+/// One scene: cable tension (N), DE layers per stack, channel voltages (V).
+#[derive(Clone, Copy, Debug)]
+pub struct Scene {
+    pub name: &'static str,
+    pub layers: u32,
+    pub tension: f64,
+    pub volts: [f64; 3],
+}
+
+const fn sc(name: &'static str, layers: u32, tension: f64, volts: [f64; 3]) -> Scene {
+    Scene { name, layers, tension, volts }
+}
+
+pub const SCENES: &[Scene] = &[
+    sc("bare-0.2N", 0, 0.2, [0.0; 3]),
+    sc("bare-0.5N", 0, 0.5, [0.0; 3]),
+    sc("bare-1.0N", 0, 1.0, [0.0; 3]),
+    sc("de-0.2N", 4, 0.2, [0.0; 3]),
+    sc("de-0.5N", 4, 0.5, [0.0; 3]),
+    sc("de-1.0N", 4, 1.0, [0.0; 3]),
+    sc("de-1.0N-uni8kV", 4, 1.0, [8000.0; 3]),
+    sc("de-1.0N-per9/5/0kV", 4, 1.0, [9000.0, 5000.0, 0.0]),
+    sc("bare-7N", 0, 7.0, [0.0; 3]),
+    sc("bare-250N-contact", 0, 250.0, [0.0; 3]),
+];
+
+/// The paper's stepping at these increment counts; plus the converged solver.
+pub const N_INC: &[u32] = &[1, 2, 5, 10, 20, 50, 100, 200];

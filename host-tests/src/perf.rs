@@ -1,0 +1,227 @@
+//! The bench images (bench/, a `no_std` firmware of its own) seen from the host: build them
+//! for a core, run them in QEMU with `-icount` (deterministic instruction counts), parse what
+//! they print over semihosting, and compare against the host's f64 reference. Used by the
+//! `perf-report` binary (docs/performance.md) and by the quick test `tests/perf_bench.rs`.
+//!
+//! What it is not: a benchmark harness for host nanoseconds (that is in `perf-report`).
+
+use finger_model::{Finger, Method, Params};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+#[path = "../../bench/src/scenes.rs"]
+pub mod scenes;
+use scenes::Scene;
+
+/// One bench image: a core, the QEMU machine for it, the model features compiled in.
+#[derive(Clone, Copy, Debug)]
+pub struct Image {
+    pub name: &'static str,
+    pub core: &'static str,
+    pub triple: &'static str,
+    pub machine: &'static str,
+    /// `-icount shift`: 0 on the M4F (1 ns per instruction); 4 on the AN385, whose SysTick
+    /// (25 MHz) is too coarse at shift 0 for the calibration loop.
+    pub shift: u32,
+    pub features: &'static str,
+}
+
+pub const M4F: &str = "thumbv7em-none-eabihf";
+pub const M3: &str = "thumbv7m-none-eabi";
+
+/// Every image the report runs.
+pub const IMAGES: &[Image] = &[
+    Image { name: "m4f-libm", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,f64" },
+    Image { name: "m4f-micromath", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,micromath" },
+    Image { name: "m3-softfloat", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32" },
+    Image { name: "m3-micromath", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32,micromath" },
+    Image { name: "m3-fixed", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,fixed" },
+];
+
+/// The quick image for the CI smoke test: one scene, converged solver, f32 with libm, M4F.
+pub const QUICK: Image =
+    Image { name: "m4f-quick", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,quick" };
+
+pub fn bench_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("bench")
+}
+
+/// Where cargo puts the bench builds: $CARGO_TARGET_DIR if set, else bench/target.
+pub fn target_dir() -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(d) => {
+            let p = PathBuf::from(d);
+            if p.is_absolute() {
+                p
+            } else {
+                std::env::current_dir().unwrap_or_default().join(p)
+            }
+        }
+        None => bench_dir().join("target"),
+    }
+}
+
+/// Build binary `bin` of the bench crate for `triple` with `features` (no defaults), and copy
+/// the ELF to `<target>/perf-images/<name>.elf` (builds with other features overwrite the
+/// cargo output). Returns the copy's path.
+pub fn build(bin: &str, triple: &str, features: &str, name: &str) -> Result<PathBuf, String> {
+    let tdir = target_dir();
+    let out = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .current_dir(bench_dir())
+        .env("CARGO_TARGET_DIR", &tdir)
+        .args(["build", "--release", "--quiet", "--bin", bin, "--target", triple, "--no-default-features"])
+        .args(["--features", features])
+        .output()
+        .map_err(|e| format!("cargo: {e}"))?;
+    if !out.status.success() {
+        return Err(format!("build of {name} failed:\n{}", String::from_utf8_lossy(&out.stderr)));
+    }
+    let elf = tdir.join(triple).join("release").join(bin);
+    let dir = tdir.join("perf-images");
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let copy = dir.join(format!("{name}.elf"));
+    std::fs::copy(&elf, &copy).map_err(|e| format!("{}: {e}", elf.display()))?;
+    Ok(copy)
+}
+
+/// Run an image in QEMU (semihosting, -icount) and return what it printed. Fails on a
+/// non-zero exit (the image exits 1 on a panic) or a timeout.
+pub fn run_qemu(elf: &Path, machine: &str, shift: u32) -> Result<String, String> {
+    let out = Command::new("timeout")
+        .arg("900")
+        .arg("qemu-system-arm")
+        .args(["-machine", machine, "-nographic"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(["-icount", &format!("shift={shift}")])
+        .arg("-kernel")
+        .arg(elf)
+        .output()
+        .map_err(|e| format!("qemu-system-arm: {e}"))?;
+    // semihosting output comes on QEMU's stdout or stderr depending on its version
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    if !out.status.success() {
+        return Err(format!("{} exited with {:?}:\n{text}", elf.display(), out.status));
+    }
+    Ok(text)
+}
+
+/// One result line of a bench image.
+#[derive(Clone, Debug)]
+pub struct Rec {
+    pub image: String,
+    pub core: String,
+    pub scene: String,
+    pub scalar: String,
+    pub method: String,
+    /// Ok: tip (x, y) mm, joint angles rad, iterations; Err: the error code.
+    pub result: Result<([f64; 2], [f64; 3], u32), String>,
+    /// Instructions of `solve_with` and of `compliances` (setup).
+    pub instr: f64,
+    pub setup_instr: f64,
+}
+
+/// Parse a bench image's output: the `CAL` line gives ticks per instruction (a loop of known
+/// length) and the timing overhead, which is subtracted.
+pub fn parse(image: &Image, out: &str) -> Result<Vec<Rec>, String> {
+    let mut per_instr = None;
+    let mut overhead = 0.0;
+    let mut recs = Vec::new();
+    let mut ended = false;
+    for line in out.lines() {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        match f.first() {
+            Some(&"CAL") if f.len() == 4 => {
+                let n: f64 = f[1].parse().map_err(|_| "CAL")?;
+                let t: f64 = f[2].parse().map_err(|_| "CAL")?;
+                overhead = f[3].parse().map_err(|_| "CAL")?;
+                if !(t > 0.0 && t < 1e12) {
+                    return Err(format!("calibration failed: {line}"));
+                }
+                per_instr = Some(t / n);
+            }
+            Some(&"R") if f.len() >= 8 => {
+                let k = per_instr.ok_or("R before CAL")?;
+                let num = |i: usize| -> Result<f64, String> { f[i].parse::<f64>().map_err(|_| format!("bad number in {line}")) };
+                let instr = ((num(5)? - overhead).max(0.0)) / k;
+                let setup_instr = num(6)? / k;
+                let result = if f[4] == "ok" && f.len() >= 13 {
+                    Ok(([num(7)?, num(8)?], [num(9)?, num(10)?, num(11)?], num(12)? as u32))
+                } else {
+                    Err(f[7].to_string())
+                };
+                recs.push(Rec {
+                    image: image.name.into(),
+                    core: image.core.into(),
+                    scene: f[1].into(),
+                    scalar: f[2].into(),
+                    method: f[3].into(),
+                    result,
+                    instr,
+                    setup_instr,
+                });
+            }
+            Some(&"END") => ended = true,
+            Some(&"PANIC") => return Err(format!("the image panicked: {line}")),
+            _ => {}
+        }
+    }
+    if !ended {
+        return Err("the image did not finish (no END)".into());
+    }
+    Ok(recs)
+}
+
+pub fn scene_params(s: &Scene) -> Params<f64> {
+    Params { layers: s.layers, ..Params::default() }
+}
+
+/// The reference: f64, converged solver at 1e-12 mm. Tip (x, y) mm and joint angles rad.
+pub fn reference(s: &Scene) -> Result<([f64; 2], [f64; 3]), finger_model::Error> {
+    let f = Finger::new(scene_params(s))?;
+    let sol = f.solve(s.tension, &s.volts, Method::Converged { tol: 1e-12, max_iter: 400 })?;
+    let t = sol.tip();
+    let a = sol.joint_angles();
+    Ok(([t.x, t.y], [a[0], a[1], a[2]]))
+}
+
+/// Tip position error (mm) and largest joint-angle error (degrees) against the reference.
+pub fn errors(tip: [f64; 2], angles: [f64; 3], reference: &([f64; 2], [f64; 3])) -> (f64, f64) {
+    let (rt, ra) = reference;
+    let tip_err = ((tip[0] - rt[0]).powi(2) + (tip[1] - rt[1]).powi(2)).sqrt();
+    let ang = (0..3).map(|i| (angles[i] - ra[i]).abs().to_degrees()).fold(0.0, f64::max);
+    (tip_err, ang)
+}
+
+/// Flash (allocated sections with contents: vectors, text, rodata, data's load image) and
+/// static RAM (writable allocated sections: data, bss, uninit; the stack not included) of a
+/// 32-bit little-endian ELF, in bytes.
+pub fn elf_sizes(path: &Path) -> Result<(u64, u64), String> {
+    let b = std::fs::read(path).map_err(|e| e.to_string())?;
+    if b.len() < 52 || &b[..4] != b"\x7fELF" || b[4] != 1 || b[5] != 1 {
+        return Err("not a 32-bit little-endian ELF".into());
+    }
+    let u16_at = |o: usize| u16::from_le_bytes([b[o], b[o + 1]]) as usize;
+    let u32_at = |o: usize| u32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]) as u64;
+    let (shoff, shentsize, shnum) = (u32_at(0x20) as usize, u16_at(0x2e), u16_at(0x30));
+    let (mut flash, mut ram) = (0, 0);
+    for i in 0..shnum {
+        let h = shoff + i * shentsize;
+        if h + 24 > b.len() {
+            return Err("truncated section headers".into());
+        }
+        let (ty, flags, size) = (u32_at(h + 4), u32_at(h + 8), u32_at(h + 20));
+        const ALLOC: u64 = 2;
+        const WRITE: u64 = 1;
+        const NOBITS: u64 = 8;
+        if flags & ALLOC == 0 {
+            continue;
+        }
+        if ty != NOBITS {
+            flash += size;
+        }
+        if flags & WRITE != 0 {
+            ram += size;
+        }
+    }
+    Ok((flash, ram))
+}
