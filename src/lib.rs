@@ -1,1 +1,27 @@
+//! The driver-board application: serial console, setpoints, slew, safety and model calls.
+//!
+//! No chip code lives here. The application is generic over embedded-hal 1.0 traits
+//! (`SetDutyCycle` for the servo PWM and the three HV control PWMs, `OutputPin` for the HV
+//! enable) gathered by the small [`Board`] trait; `src/main.rs` implements it for the
+//! STM32F405, [`sim::SimBoard`] for the host (`finger-sim`, the host tests).
+//!
+//! - [`console`]: line assembly (CR/LF/CRLF, bounded buffer, overlong lines), tokens, strict
+//!   number parsing.
+//! - [`app`]: the commands of shared/CONSOLE.md, the HV ceilings, the one function that writes
+//!   an HV duty, the slewed control loop, the servo.
+//! - [`board`]: the board trait.
+//! - [`sim`]: a simulated board (records every output).
 #![no_std]
+
+pub mod app;
+pub mod board;
+pub mod console;
+pub mod sim;
+
+pub use app::{App, FwParams, CHANNELS};
+pub use board::Board;
+
+/// Firmware name, as `version` reports it.
+pub const NAME: &str = "finger-fw";
+/// Firmware version (the package version).
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
