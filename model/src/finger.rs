@@ -182,6 +182,23 @@ pub struct BranchLimit<R> {
     pub kind: BranchEnd,
 }
 
+/// One joint's equilibrium under tension alone (`Finger::joint_equilibrium`; for the inverse).
+#[derive(Clone, Copy, Debug)]
+pub struct JointEquilibrium<R> {
+    /// Sub-element displacements q = (δax, δtr, Δθ).
+    pub q: [[R; 3]; MAX_SUB],
+    /// The hinge's distal-end pose in the joint's proximal frame.
+    pub end: Pose<R>,
+    /// Link k's proximal guide hole (joint's proximal frame), mm.
+    pub hole: [R; 2],
+    /// The link's deflection (zero for rigid links).
+    pub link: [R; 3],
+    /// The joint angle as `Solution::joint_angle` has it: end.theta + the link's rotation, rad.
+    pub angle: R,
+    /// Newton iterations.
+    pub iterations: u32,
+}
+
 /// A prepared finger: validated parameters and the hinge compliances, computed once.
 #[derive(Clone, Copy, Debug)]
 pub struct Finger<R> {
@@ -947,6 +964,38 @@ impl<R: Real> Finger<R> {
             return Err(Error::Singular { what: "solution (non-finite)" });
         }
         Ok(sol)
+    }
+
+    /// Joint `joint`'s (1-based) equilibrium under tension alone for its sub-element compliances
+    /// `c` (as in `Compliances::c[k]`), the same solve as `solve_with` does per joint. Newton
+    /// from `guess` (link k's proximal hole, the joint's proximal frame) when given, accepted
+    /// if the hole moved less than half a hinge length; else, or if it fails, load continuation
+    /// from the straight joint. Additive, for the inverse model's per-joint root finding.
+    pub fn joint_equilibrium(
+        &self,
+        joint: usize,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        guess: Option<[R; 2]>,
+        tol: R,
+    ) -> Result<JointEquilibrium<R>, Error> {
+        if !tension.is_finite() || tension < R::zero() {
+            return Err(Error::Input { input: "tension", reason: "a cable cannot push: tension must be >= 0" });
+        }
+        let tol = tol.max(self.resolution());
+        let k = joint.max(1) - 1;
+        let warm = guess.and_then(|b| match self.newton_dual(c, tension, b, tol, 40) {
+            Ok((st, it)) if norm2([st.hole[0] - b[0], st.hole[1] - b[1]]) <= self.p.hinge_len() / R::from_f64(2.0) => {
+                Some((st, it))
+            }
+            _ => None,
+        });
+        let (st, iterations) = match warm {
+            Some(v) => v,
+            None => self.newton_joint(k, c, tension, tol, 200, tension / R::from_f64(4096.0))?,
+        };
+        let link = self.link_q(tension, &st.end, None);
+        Ok(JointEquilibrium { q: st.q, end: st.end, hole: st.hole, link, angle: st.end.theta + link[2], iterations })
     }
 
     /// The end of the equilibrium branch under tension alone for these voltages: the lowest
