@@ -1,0 +1,494 @@
+//! The firmware application (finger-fw's lib) on the simulated board: every CONSOLE.md
+//! command and error code, and the safety rules of issue 3, each shown here.
+use finger_fw::sim::SimBoard;
+use finger_fw::App;
+
+struct Out(String);
+impl std::fmt::Write for Out {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        self.0.push_str(s);
+        Ok(())
+    }
+}
+
+fn app() -> App<SimBoard> {
+    App::new(SimBoard::default())
+}
+
+/// Feed raw bytes, run the control loop through any `wait`; every output line.
+fn feed(a: &mut App<SimBoard>, bytes: &[u8]) -> Vec<String> {
+    let mut out = Out(String::new());
+    for &b in bytes {
+        a.input_byte(b, &mut out);
+        while a.busy() {
+            a.tick(1, &mut out);
+        }
+    }
+    out.0.lines().map(str::to_owned).collect()
+}
+
+/// One command line: its final reply line (asserting there is exactly one ok/err line, last).
+fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
+    let lines = feed(a, format!("{line}\n").as_bytes());
+    let finals: Vec<_> = lines.iter().filter(|l| l.starts_with("ok") || l.starts_with("err ")).collect();
+    assert_eq!(finals.len(), 1, "{line:?} -> {lines:?}");
+    assert!(lines.last().unwrap().starts_with("ok") || lines.last().unwrap().starts_with("err "));
+    lines.last().unwrap().clone()
+}
+
+fn ok(a: &mut App<SimBoard>, line: &str) -> String {
+    let r = cmd(a, line);
+    assert!(r == "ok" || r.starts_with("ok "), "{line:?} -> {r}");
+    r
+}
+
+fn err(a: &mut App<SimBoard>, line: &str, code: &str) -> String {
+    let r = cmd(a, line);
+    assert!(r.starts_with(&format!("err {code}: ")), "{line:?} -> {r} (wanted {code})");
+    r
+}
+
+/// Value of `key=` in a reply.
+fn val<'a>(reply: &'a str, key: &str) -> &'a str {
+    reply
+        .split_whitespace()
+        .find_map(|kv| kv.strip_prefix(key).and_then(|r| r.strip_prefix('=')))
+        .unwrap_or_else(|| panic!("no {key} in {reply}"))
+}
+
+fn nums(s: &str) -> Vec<f64> {
+    s.split(',').map(|x| x.parse().unwrap()).collect()
+}
+
+/// Everything observable: the status reply and the outputs of the board.
+fn snapshot(a: &mut App<SimBoard>) -> String {
+    let st = cmd(a, "status");
+    let b = a.board();
+    format!("{st} | servo={} hv={:?} en={}", b.servo.duty, b.hv.map(|h| h.duty), b.enable.high)
+}
+
+#[test]
+fn every_command_answers() {
+    let mut a = app();
+    let help = feed(&mut a, b"help\n");
+    assert!(help.len() > 10 && help.last().unwrap() == "ok");
+    for c in ["help", "version", "status", "limits", "solve", "arm", "disarm", "stop", "volt", "force", "pose", "param", "preset"] {
+        assert!(help.iter().any(|l| l.split_whitespace().any(|w| w == c)), "help lacks {c}");
+    }
+    let v = ok(&mut a, "version");
+    assert_eq!(val(&v, "version"), env!("CARGO_PKG_VERSION"));
+    assert_eq!(val(&v, "name"), "finger-fw");
+    let s = ok(&mut a, "status");
+    for k in ["armed", "force", "volts", "thick", "joints", "tip", "cable", "servo", "fault"] {
+        val(&s, k);
+    }
+    assert_eq!(val(&s, "armed"), "0");
+    assert_eq!(val(&s, "fault"), "none");
+    let l = ok(&mut a, "limits");
+    for k in ["vmax", "vpullin", "supply", "fmax"] {
+        val(&l, k);
+    }
+    let vpi: f64 = val(&l, "vpullin").parse().unwrap();
+    assert!((vpi - 39_900.0).abs() < 100.0, "{vpi}");
+    assert_eq!(nums(val(&l, "vmax")), vec![10_000.0; 3]);
+    let s = ok(&mut a, "solve 0.5 0 1000 2000");
+    for k in ["joints", "tip", "cable", "thick", "stiffness", "iters"] {
+        val(&s, k);
+    }
+    assert!(nums(val(&s, "joints")).iter().all(|&d| d > 0.0));
+    assert!(nums(val(&s, "stiffness")).iter().all(|&k| k > 0.0));
+    assert_eq!(ok(&mut a, "arm"), "ok armed=1");
+    assert!(ok(&mut a, "volt 2 1000").starts_with("ok volts=0.0,1000.0,0.0"));
+    let f = ok(&mut a, "force 0.5");
+    assert!(val(&f, "cable").parse::<f64>().unwrap() > 0.0 && val(&f, "servo").parse::<f64>().unwrap() > 0.0);
+    assert_eq!(ok(&mut a, "disarm"), "ok armed=0");
+    assert_eq!(ok(&mut a, "stop"), "ok stopped");
+    let p = feed(&mut a, b"param\n");
+    assert!(p.len() > 20 && p.last().unwrap().starts_with("ok params="));
+    for n in ["l", "b", "w", "t_min", "a", "e_b", "e", "layers", "z0", "g", "nu", "eps_r", "e_de", "margin", "v_supply", "slew", "spool_r", "n_inc"] {
+        assert!(p.iter().any(|l| l.starts_with(&format!("{n}="))), "param list lacks {n}");
+        ok(&mut a, &format!("param {n}"));
+    }
+    assert_eq!(ok(&mut a, "param l 30"), "ok l=30");
+    assert_eq!(ok(&mut a, "param l"), "ok l=30");
+    assert_eq!(ok(&mut a, "preset default"), "ok preset=default");
+    assert_eq!(ok(&mut a, "param l"), "ok l=27");
+    assert_eq!(ok(&mut a, "preset paper"), "ok preset=paper");
+    let e_de: f64 = val(&ok(&mut a, "param e_de"), "e_de").parse().unwrap();
+    assert!((e_de - 0.201).abs() < 1e-3, "{e_de}");
+    let l = ok(&mut a, "limits");
+    assert!((val(&l, "vpullin").parse::<f64>().unwrap() - 13_300.0).abs() < 100.0);
+    // pose: the inverse model; disarmed it moves nothing
+    let before = snapshot(&mut a);
+    let r = cmd(&mut a, "pose 5 5 5");
+    assert!(r.starts_with("ok force=") || r.starts_with("err unreachable:"), "{r}");
+    assert_eq!(snapshot(&mut a), before);
+    // case-insensitive, extra spaces
+    ok(&mut a, "  VERSION  ");
+    ok(&mut a, "Solve\t0.2  0 0 0");
+}
+
+#[test]
+fn error_codes() {
+    let mut a = app();
+    err(&mut a, "frobnicate", "unknown");
+    err(&mut a, "solve 1", "usage");
+    err(&mut a, "version 1", "usage");
+    err(&mut a, "volt 4 100", "usage");
+    err(&mut a, "preset other", "usage");
+    err(&mut a, "param nonsense", "usage");
+    err(&mut a, "param l 0.5", "usage"); // 2a < l
+    err(&mut a, "param margin 1", "usage");
+    err(&mut a, "param e_de 2", "usage"); // read-only
+    err(&mut a, "param n 4", "usage");
+    err(&mut a, "volt 1 100", "not-armed");
+    err(&mut a, "volt all 100", "not-armed");
+    err(&mut a, "force 0.5", "not-armed");
+    err(&mut a, "solve 0.5 10000 0 0", "limit");
+    err(&mut a, "solve 1e9 0 0 0", "limit");
+    err(&mut a, "solve 2000 0 0 0", "limit"); // past fmax
+    ok(&mut a, "arm");
+    err(&mut a, "param l 30", "armed");
+    err(&mut a, "param", "armed");
+    err(&mut a, "preset paper", "armed");
+    err(&mut a, "volt 1 10000", "limit");
+    err(&mut a, "volt 1 1e30", "limit");
+    err(&mut a, "force 1e30", "limit");
+    err(&mut a, "force 2000", "limit");
+    err(&mut a, &format!("{}\n", "x".repeat(300)), "too-long");
+    // fault: a refused HV write latches it; arm refuses until stop
+    let d = a.duty_ceiling()[0];
+    assert!(a.write_hv_duty(0, d + 1).is_err());
+    err(&mut a, "volt 1 100", "fault");
+    ok(&mut a, "stop");
+    err(&mut a, "volt 1 100", "not-armed");
+}
+
+#[test]
+fn bad_numbers() {
+    let mut a = app();
+    for bad in ["nan", "NaN", "inf", "-inf", "infinity", "0x10", "1.5abc", "1e", "--1", "+", ".", "1,5", "1e999", "-1e999", "1.2.3", "e5", "٣"] {
+        err(&mut a, &format!("solve {bad} 0 0 0"), "bad-number");
+        err(&mut a, &format!("solve 0.5 0 {bad} 0"), "bad-number");
+    }
+    ok(&mut a, "solve +0.5 0 0 0");
+    ok(&mut a, "solve 5e-1 0.0 0 1.5E3");
+    ok(&mut a, "solve .5 0. 0 0");
+    err(&mut a, "solve -0.5 0 0 0", "usage");
+    err(&mut a, "solve 0.5 -1 0 0", "usage");
+    err(&mut a, "param l nan", "bad-number");
+    err(&mut a, "param l -5", "usage");
+    err(&mut a, "param l 1e300", "usage");
+    err(&mut a, "wait inf", "bad-number");
+    err(&mut a, "wait -1", "usage");
+    ok(&mut a, "arm");
+    err(&mut a, "volt 1 -5", "usage");
+    err(&mut a, "force -0.1", "usage");
+    err(&mut a, "volt 1 0x100", "bad-number");
+}
+
+#[test]
+fn lines_and_bytes() {
+    let mut a = app();
+    // CR, LF and CRLF each end one line; blank lines get no reply
+    let r = feed(&mut a, b"version\rversion\nversion\r\n\r\n\n\r   \nversion\n");
+    assert_eq!(r.len(), 4, "{r:?}");
+    assert!(r.iter().all(|l| l.starts_with("ok version=")));
+    // the longest line the buffer holds (128 bytes) is read; one byte more is discarded whole
+    let line = format!("version{}", " ".repeat(128 - 7));
+    assert_eq!(feed(&mut a, format!("{line}\n").as_bytes()).len(), 1);
+    assert!(feed(&mut a, format!("{line}\n").as_bytes())[0].starts_with("ok"));
+    let r = feed(&mut a, format!("{line} \nversion\n").as_bytes());
+    assert_eq!(r.len(), 2, "{r:?}");
+    assert!(r[0].starts_with("err too-long: "), "{r:?}");
+    assert!(r[1].starts_with("ok version="));
+    // an overlong line of a command is not executed
+    ok(&mut a, "arm");
+    let r = feed(&mut a, format!("volt 1 100{}\n", " ".repeat(200)).as_bytes());
+    assert!(r[0].starts_with("err too-long"));
+    assert_eq!(a.targets(), [0.0; 3]);
+    // garbage and non-ASCII bytes
+    for g in [&b"\xff\xfe\x80\n"[..], b"\x00\x01\x02\n", b"\x1b[A\n", "h\u{e9}lp\n".as_bytes(), b"!!!\n"] {
+        let r = feed(&mut a, g);
+        assert_eq!(r.len(), 1, "{g:?} -> {r:?}");
+        assert!(r[0].starts_with("err unknown: "), "{g:?} -> {r:?}");
+    }
+    err(&mut a, "volt 1 \u{0661}\u{0660}", "bad-number");
+    // too many tokens
+    err(&mut a, "solve 1 2 3 4 5 6 7 8 9", "usage");
+}
+
+#[test]
+fn every_line_one_final_reply() {
+    let mut a = app();
+    let script = "help\nversion\r\nstatus\rlimits\nsolve 0.3 0 0 0\nsolve x\nbogus\n\u{ff}\nvolt 1 5\narm\nvolt 1 500\nvolt 1 99999\nforce 0.2\nforce nan\nparam l\npose 1 2 3\npose\nwait 0.01\ndisarm\nparam\nparam l\nparam slew 5000\npreset paper\npreset default\nstop\n";
+    let bytes: Vec<u8> = script.bytes().collect();
+    let mut out = Out(String::new());
+    let mut finals = 0;
+    for &b in &bytes {
+        a.input_byte(b, &mut out);
+        while a.busy() {
+            a.tick(1, &mut out);
+        }
+    }
+    let nonblank = script.split(['\n', '\r']).filter(|l| !l.trim().is_empty()).count();
+    for l in out.0.lines() {
+        if l.starts_with("ok") || l.starts_with("err ") {
+            finals += 1;
+        }
+    }
+    assert_eq!(finals, nonblank, "{}", out.0);
+}
+
+#[test]
+fn rejected_commands_change_nothing() {
+    let mut a = app();
+    ok(&mut a, "arm");
+    ok(&mut a, "volt all 800");
+    ok(&mut a, "force 0.3");
+    ok(&mut a, "wait 1");
+    let before = snapshot(&mut a);
+    let params = feed(&mut a, b"param\n");
+    for bad in [
+        "volt 1 10000",
+        "volt all 1e9",
+        "volt 2 -1",
+        "volt 5 100",
+        "volt 1 nan",
+        "force 1e9",
+        "force -1",
+        "force 5000",
+        "param l 30",
+        "preset paper",
+        "solve 0.5 20000 0 0",
+        "bogus 1 2",
+        "pose 170 170 170",
+    ] {
+        cmd(&mut a, bad);
+        assert_eq!(snapshot(&mut a), before, "after {bad}");
+    }
+    ok(&mut a, "stop");
+    let params2 = feed(&mut a, b"param\n");
+    assert_eq!(params, vec!["err armed: param only while disarmed".to_string()]);
+    let before = params2.clone();
+    for bad in ["param l 0.1", "param margin 0", "param layers 2.5", "param slew 0", "param spool_r nan", "param servo_dir 0", "param n 2"] {
+        cmd(&mut a, bad);
+        assert_eq!(feed(&mut a, b"param\n"), before, "after {bad}");
+    }
+}
+
+#[test]
+fn ceiling_recomputed_on_every_parameter_change() {
+    let mut a = app();
+    let vmax = |a: &mut App<SimBoard>| nums(val(&ok(a, "limits"), "vmax"))[0];
+    assert_eq!(vmax(&mut a), 10_000.0);
+    ok(&mut a, "param margin 0.1"); // 0.1 x 39.9 kV
+    let v = vmax(&mut a);
+    assert!((v - 3989.2).abs() < 1.0, "{v}");
+    let vm = a.vmax();
+    assert!(vm.iter().all(|&x| x == vm[0]));
+    ok(&mut a, "arm");
+    err(&mut a, &format!("volt 1 {}", vm[0]), "limit"); // at the ceiling
+    err(&mut a, &format!("volt 2 {}", vm[0] + 0.5), "limit");
+    ok(&mut a, &format!("volt 1 {}", vm[0] - 1.0));
+    ok(&mut a, "stop");
+    ok(&mut a, "param margin 0.9");
+    ok(&mut a, "param v_supply 5000");
+    assert_eq!(vmax(&mut a), 5000.0);
+    ok(&mut a, "param z0 0.1"); // V_pi scales with z0: 7.98 kV, x0.9 = 7.18 kV > supply
+    assert_eq!(vmax(&mut a), 5000.0);
+    ok(&mut a, "param z0 0.05"); // 3.99 kV x 0.9
+    assert!((vmax(&mut a) - 3590.3).abs() < 1.0);
+    ok(&mut a, "param hv_fs 2000"); // the HV module's full scale caps it too
+    assert_eq!(vmax(&mut a), 2000.0);
+    let d = a.duty_ceiling();
+    assert_eq!(d, [8400; 3]);
+    ok(&mut a, "param layers 0"); // no stacks: no voltage allowed
+    assert_eq!(vmax(&mut a), 0.0);
+    ok(&mut a, "arm");
+    err(&mut a, "volt 1 0", "limit");
+    ok(&mut a, "stop");
+    ok(&mut a, "preset default");
+    ok(&mut a, "param hv_fs 10000");
+    assert_eq!(vmax(&mut a), 10_000.0);
+}
+
+#[test]
+fn hv_write_refuses_above_ceiling_duty_whoever_calls() {
+    let mut a = app();
+    ok(&mut a, "param margin 0.1");
+    let d = a.duty_ceiling();
+    assert!(d[0] > 0 && d[0] < 8400);
+    ok(&mut a, "arm");
+    ok(&mut a, "volt 1 1000");
+    ok(&mut a, "wait 1");
+    let duty = a.board().hv[0].duty;
+    assert!(duty > 0 && duty <= d[0]);
+    for ch in 0..3 {
+        let writes = a.board().hv[ch].writes;
+        assert!(a.write_hv_duty(ch, d[ch] + 1).is_err());
+        assert!(a.write_hv_duty(ch, u16::MAX).is_err());
+        assert_eq!(a.board().hv[ch].writes, writes, "nothing written");
+    }
+    assert_eq!(a.board().hv[0].duty, duty);
+    assert!(a.write_hv_duty(3, 0).is_err());
+    assert_eq!(a.fault(), Some("hv-refused"));
+    assert_eq!(val(&ok(&mut a, "status"), "fault"), "hv-refused");
+    err(&mut a, "arm", "fault");
+    ok(&mut a, "stop");
+    assert_eq!(a.fault(), None);
+    // at the ceiling's duty itself: allowed
+    assert!(a.write_hv_duty(0, d[0]).is_ok());
+    ok(&mut a, "stop");
+}
+
+#[test]
+fn slew_and_disarm_ramp() {
+    let mut a = app();
+    ok(&mut a, "param slew 1000");
+    ok(&mut a, "arm");
+    assert!(a.hv_enabled() && a.board().enable.high);
+    ok(&mut a, "volt all 2000");
+    assert_eq!(a.volts(), [0.0; 3], "setpoints move only with the control loop");
+    let mut last = 0.0;
+    for _ in 0..5 {
+        ok(&mut a, "wait 0.25");
+        let v = nums(val(&ok(&mut a, "status"), "volts"));
+        assert!(v[0] > last && v[0] - last <= 250.0 + 1e-3, "{v:?}");
+        last = v[0];
+    }
+    assert!((last - 1250.0).abs() < 1.0, "{last}");
+    ok(&mut a, "wait 1");
+    assert_eq!(a.volts(), [2000.0; 3]);
+    let duty = a.board().hv[0].duty;
+    assert_eq!(duty, (2000.0f32 / 10_000.0 * 8400.0) as u16);
+    // disarm: ramps to 0 at the slew rate, then drops the enable
+    assert_eq!(ok(&mut a, "disarm"), "ok armed=0");
+    assert!(a.board().enable.high, "enable stays until the ramp ends");
+    ok(&mut a, "wait 1");
+    let s = ok(&mut a, "status");
+    assert!((nums(val(&s, "volts"))[0] - 1000.0).abs() < 1.0, "{s}");
+    assert!(a.board().enable.high);
+    err(&mut a, "param l 30", "armed"); // HV still ramping down
+    ok(&mut a, "wait 1.1");
+    assert_eq!(a.volts(), [0.0; 3]);
+    assert!(!a.board().enable.high);
+    assert_eq!(a.board().hv.map(|h| h.duty), [0; 3]);
+    ok(&mut a, "param l 30");
+}
+
+#[test]
+fn stop_is_immediate() {
+    let mut a = app();
+    let released = a.board().servo.duty;
+    assert_eq!(released, 2000, "1.0 ms of 20 ms: cable released");
+    ok(&mut a, "arm");
+    ok(&mut a, "volt all 3000");
+    ok(&mut a, "force 0.8");
+    ok(&mut a, "wait 2");
+    assert!(a.board().hv.iter().all(|h| h.duty > 0));
+    assert!(a.board().servo.duty > released);
+    assert_eq!(ok(&mut a, "stop"), "ok stopped");
+    let b = a.board();
+    assert_eq!(b.hv.map(|h| h.duty), [0; 3]);
+    assert!(!b.enable.high);
+    assert_eq!(b.servo.duty, released);
+    let s = ok(&mut a, "status");
+    assert_eq!(val(&s, "armed"), "0");
+    assert_eq!(val(&s, "force"), "0.000");
+    assert_eq!(nums(val(&s, "volts")), vec![0.0; 3]);
+    assert_eq!(nums(val(&s, "target")), vec![0.0; 3]);
+    err(&mut a, "volt 1 100", "not-armed");
+    // stop during a ramp-down too
+    ok(&mut a, "arm");
+    ok(&mut a, "volt 1 3000");
+    ok(&mut a, "wait 2");
+    ok(&mut a, "disarm");
+    ok(&mut a, "stop");
+    assert_eq!(a.board().hv.map(|h| h.duty), [0; 3]);
+    assert!(!a.board().enable.high);
+}
+
+#[test]
+fn enable_low_from_reset_until_arm() {
+    let mut a = app();
+    assert!(!a.board().enable.high && !a.hv_enabled());
+    assert_eq!(a.board().hv.map(|h| h.duty), [0; 3]);
+    for c in ["help", "status", "limits", "solve 0.5 100 100 100", "volt 1 100", "force 0.2", "param l 28", "preset paper", "disarm", "stop", "wait 0.1", "pose 3 3 3", "bogus"] {
+        cmd(&mut a, c);
+        assert!(!a.board().enable.high_ever, "enable went high after {c}");
+    }
+    ok(&mut a, "arm");
+    assert!(a.board().enable.high);
+}
+
+#[test]
+fn watchdog_fed_only_by_the_control_loop() {
+    let mut a = app();
+    for c in ["help", "status", "limits", "solve 0.5 0 0 0", "param"] {
+        feed(&mut a, format!("{c}\n").as_bytes());
+    }
+    assert_eq!(a.board().watchdog_feeds, 0);
+    ok(&mut a, "wait 0.05");
+    assert_eq!(a.board().watchdog_feeds, 50);
+}
+
+#[test]
+fn force_servo_and_travel() {
+    let mut a = app();
+    ok(&mut a, "arm");
+    let r = ok(&mut a, "force 0.5");
+    let cable: f64 = val(&r, "cable").parse().unwrap();
+    let servo: f64 = val(&r, "servo").parse().unwrap();
+    assert!((servo - cable / 10.0 * 180.0 / std::f64::consts::PI).abs() < 0.02, "{r}");
+    // the model's excursion: same as solve
+    let s = ok(&mut a, "solve 0.5 0 0 0");
+    assert!((val(&s, "cable").parse::<f64>().unwrap() - cable).abs() < 1e-3);
+    // servo pulse 1.0..2.0 ms over servo_range
+    let duty = a.board().servo.duty as f64;
+    assert!((duty - (1.0 + servo / 180.0) / 20.0 * 40_000.0).abs() <= 1.0, "{duty}");
+    // past the servo travel
+    ok(&mut a, "stop");
+    ok(&mut a, "param spool_r 0.5");
+    ok(&mut a, "param servo_range 10");
+    ok(&mut a, "arm");
+    err(&mut a, "force 2", "limit");
+    // direction
+    ok(&mut a, "stop");
+    ok(&mut a, "preset default");
+    ok(&mut a, "param spool_r 10");
+    ok(&mut a, "param servo_range 180");
+    ok(&mut a, "param servo_dir -1");
+    assert_eq!(a.board().servo.duty, 4000, "released at 2.0 ms when reversed");
+    ok(&mut a, "arm");
+    ok(&mut a, "force 0.5");
+    assert!(a.board().servo.duty < 4000);
+}
+
+#[test]
+fn finger_sim_binary() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let mut c = Command::new(env!("CARGO_BIN_EXE_finger-sim"))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let script = b"version\r\nbogus\nsolve nan 0 0 0\nvolt 1 100\narm\nvolt 1 500\nwait 0.1\nstatus\nparam l 30\nstop\n\xff\n";
+    c.stdin.take().unwrap().write_all(script).unwrap();
+    let out = c.wait_with_output().unwrap(); // exits at end of input
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 11, "{text}");
+    assert!(lines[0].starts_with("ok version="));
+    assert!(lines[1].starts_with("err unknown:"));
+    assert!(lines[2].starts_with("err bad-number:"));
+    assert!(lines[3].starts_with("err not-armed:"));
+    assert_eq!(lines[4], "ok armed=1");
+    assert_eq!(lines[6], "ok waited=0.1");
+    assert!(lines[7].contains(" volts=200.0,0.0,0.0 "), "{}", lines[7]);
+    assert!(lines[8].starts_with("err armed:"));
+    assert_eq!(lines[9], "ok stopped");
+    assert!(lines[10].starts_with("err unknown:"));
+}
