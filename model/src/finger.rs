@@ -959,7 +959,8 @@ impl<R: Real> Finger<R> {
         sol.residual = res2.sqrt();
         let all_finite = nodes.iter().take(n + 1).all(|p| p.x.is_finite() && p.y.is_finite() && p.theta.is_finite())
             && sol.residual.is_finite()
-            && sol.cable_excursion.is_finite();
+            && sol.cable_excursion.is_finite()
+            && sol.tangent_det[..n].iter().all(|d| d.is_finite());
         if !all_finite {
             return Err(Error::Singular { what: "solution (non-finite)" });
         }

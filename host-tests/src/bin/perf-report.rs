@@ -1,0 +1,550 @@
+//! perf-report: error against run time for every solver variant, and flash/RAM of lean
+//! images. Writes docs/performance.md and docs/perf-error-vs-instructions.svg.
+//!
+//! `cd host-tests && cargo run --release --bin perf-report` (needs qemu-system-arm and the
+//! rustup targets thumbv7em-none-eabihf and thumbv7m-none-eabi; takes a few minutes).
+//!
+//! - Target instructions: the bench images (bench/) built for the Cortex-M4F (netduinoplus2)
+//!   and the Cortex-M3 (mps2-an385), run in QEMU with `-icount` (see host_tests::perf).
+//! - Errors: tip position (mm) and joint angles (degrees) against the host's f64 converged
+//!   solution at 1e-12 mm.
+//! - Host nanoseconds: a repeated-timing harness here (`time_ns`): warm-up, batches of at
+//!   least 2 ms, the median of 9 batches per variant; release build, inputs through
+//!   `black_box`.
+
+use finger_model::{Finger, Method, Params, Real};
+use host_tests::perf::{self, scenes::SCENES, scenes::N_INC, Rec, IMAGES};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Instant;
+
+/// The paper's scenes (0.2..1.0 N): the error and instruction summaries use these; the two
+/// high-tension scenes are reported separately.
+fn is_paper_scene(name: &str) -> bool {
+    !(name.starts_with("bare-7N") || name.starts_with("bare-250N"))
+}
+
+/// Median time per call in ns: warm-up, then batches of at least 2 ms, median of 9.
+fn time_ns(mut f: impl FnMut()) -> f64 {
+    for _ in 0..3 {
+        f();
+    }
+    let mut n = 1u64;
+    loop {
+        let t = Instant::now();
+        for _ in 0..n {
+            f();
+        }
+        if t.elapsed().as_secs_f64() >= 2e-3 || n >= 1 << 24 {
+            break;
+        }
+        n *= 2;
+    }
+    let mut v: Vec<f64> = (0..9)
+        .map(|_| {
+            let t = Instant::now();
+            for _ in 0..n {
+                f();
+            }
+            t.elapsed().as_secs_f64() * 1e9 / n as f64
+        })
+        .collect();
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[4]
+}
+
+fn method_of(name: &str) -> Method<f64> {
+    match name.strip_prefix("step") {
+        Some(n) => Method::Stepping { n_inc: n.parse().unwrap() },
+        None => Method::converged(),
+    }
+}
+
+fn method_label(m: &str) -> String {
+    match m.strip_prefix("step") {
+        Some(n) => format!("stepping n_inc={n}"),
+        None => "converged".into(),
+    }
+}
+
+fn cast_method<S: Real>(m: Method<f64>) -> Method<S> {
+    match m {
+        Method::Converged { tol, max_iter } => Method::Converged { tol: S::from_f64(tol), max_iter },
+        Method::Stepping { n_inc } => Method::Stepping { n_inc },
+    }
+}
+
+/// Host ns per solve (`solve_with`, compliances precomputed, as on the target) per scene and
+/// method, for scalar S.
+fn host_times<S: Real>() -> BTreeMap<(String, String), f64> {
+    let mut out = BTreeMap::new();
+    for s in SCENES {
+        let Ok(f) = Finger::new(perf::scene_params(s).cast::<S>()) else { continue };
+        let v = s.volts.map(S::from_f64);
+        let Ok(c) = f.compliances(&v) else { continue };
+        let methods = N_INC.iter().map(|n| format!("step{n}")).chain(std::iter::once("conv".to_string()));
+        for m in methods {
+            let method = cast_method::<S>(method_of(&m));
+            let p = S::from_f64(s.tension);
+            let ns = time_ns(|| {
+                let _ = black_box(f.solve_with(black_box(&c), black_box(p), [S::zero(); 2], method));
+            });
+            out.insert((s.name.to_string(), m), ns);
+        }
+    }
+    out
+}
+
+struct Row {
+    rec: Rec,
+    tip_err: Option<f64>,
+    ang_err: Option<f64>,
+}
+
+fn fmt_e(x: f64) -> String {
+    if x == 0.0 {
+        "0".into()
+    } else {
+        format!("{x:.2e}")
+    }
+}
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut refs = BTreeMap::new();
+    for s in SCENES {
+        refs.insert(s.name.to_string(), perf::reference(s));
+    }
+
+    // ---- target runs
+    let mut rows: Vec<Row> = Vec::new();
+    let mut cal_notes = Vec::new();
+    for img in IMAGES {
+        eprintln!("perf-report: building and running {} ({})", img.name, img.features);
+        let elf = perf::build("finger-bench", img.triple, img.features, img.name).unwrap_or_else(|e| panic!("{e}"));
+        let out = perf::run_qemu(&elf, img.machine, img.shift).unwrap_or_else(|e| panic!("{e}"));
+        let recs = perf::parse(img, &out).unwrap_or_else(|e| panic!("{}: {e}", img.name));
+        let cal = out.lines().find(|l| l.starts_with("CAL")).unwrap_or("").to_string();
+        cal_notes.push(format!("{}: `{}`", img.name, cal));
+        for rec in recs {
+            let (tip_err, ang_err) = match (&rec.result, refs.get(&rec.scene)) {
+                (Ok((tip, ang, _)), Some(Ok(r))) => {
+                    let (t, a) = perf::errors(*tip, *ang, r);
+                    (Some(t), Some(a))
+                }
+                _ => (None, None),
+            };
+            rows.push(Row { rec, tip_err, ang_err });
+        }
+    }
+
+    // ---- host timings
+    eprintln!("perf-report: host timings");
+    let host64 = host_times::<f64>();
+    let host32 = host_times::<f32>();
+
+    // ---- lean images
+    eprintln!("perf-report: lean images");
+    let lean: &[(&str, &str, &str, &str, u32)] = &[
+        ("M4F f32 libm, DE", perf::M4F, "de", "netduinoplus2", 0),
+        ("M4F f32 libm, no DE", perf::M4F, "", "netduinoplus2", 0),
+        ("M4F f32 micromath, DE", perf::M4F, "de,micromath", "netduinoplus2", 0),
+        ("M4F f32 micromath, no DE", perf::M4F, "micromath", "netduinoplus2", 0),
+        ("M3 f32 soft-float libm, no DE", perf::M3, "", "mps2-an385", 4),
+        ("M3 f32 soft-float micromath, no DE", perf::M3, "micromath", "mps2-an385", 4),
+        ("M3 fixed I16F16 (setup in f32), no DE", perf::M3, "fixed", "mps2-an385", 4),
+        ("M3 fixed I16F16 (setup in f32), DE", perf::M3, "fixed,de", "mps2-an385", 4),
+    ];
+    let mut lean_rows = Vec::new();
+    for (i, (label, triple, feats, machine, shift)) in lean.iter().enumerate() {
+        let name = format!("lean-{i}");
+        let elf = perf::build("lean", triple, feats, &name).unwrap_or_else(|e| panic!("{e}"));
+        let (flash, ram) = perf::elf_sizes(&elf).unwrap_or_else(|e| panic!("{e}"));
+        let out = perf::run_qemu(&elf, machine, *shift).unwrap_or_else(|e| panic!("{e}"));
+        let y = out
+            .lines()
+            .find_map(|l| u64::from_str_radix(l.trim(), 16).ok())
+            .map(f64::from_bits)
+            .unwrap_or(f64::NAN);
+        lean_rows.push((label.to_string(), feats.to_string(), flash, ram, y));
+    }
+
+    // ---- stepping study on the host (f64)
+    let tensions = [0.2, 0.5, 1.0, 2.0, 4.0, 7.0, 10.0, 20.0, 50.0, 100.0, 250.0];
+    let n_incs = [1u32, 2, 5, 10, 20, 50, 100, 200, 1000];
+    let f = Finger::new(Params::<f64>::default().without_stacks()).unwrap();
+    let mut study = Vec::new();
+    for &p in &tensions {
+        let reference = f.solve(p, &[0.0; 3], Method::Converged { tol: 1e-12, max_iter: 400 });
+        let mut cells = Vec::new();
+        for &n in &n_incs {
+            let cell = match (&reference, f.solve(p, &[0.0; 3], Method::Stepping { n_inc: n })) {
+                (Ok(r), Ok(s)) => {
+                    let (rt, st) = (r.tip(), s.tip());
+                    Ok((st.x - rt.x, st.y - rt.y, (s.joint_angle[0] - r.joint_angle[0]).to_degrees()))
+                }
+                (_, Err(e)) => Err(e.code().to_string()),
+                (Err(e), _) => Err(format!("ref {}", e.code())),
+            };
+            cells.push(cell);
+        }
+        study.push((p, cells));
+    }
+
+    let md = report(&rows, &host64, &host32, &lean_rows, &study, &n_incs, &cal_notes);
+    std::fs::write(root.join("docs/performance.md"), md).unwrap();
+    std::fs::write(root.join("docs/perf-error-vs-instructions.svg"), plot(&rows)).unwrap();
+    eprintln!("perf-report: wrote docs/performance.md and docs/perf-error-vs-instructions.svg");
+}
+
+/// Series key: image + scalar.
+fn series(r: &Rec) -> String {
+    format!("{} {}", r.core, r.scalar)
+}
+
+struct Summary {
+    instr_mean: f64,
+    instr_max: f64,
+    tip_max: f64,
+    ang_max: f64,
+    fails: usize,
+    n: usize,
+}
+
+fn summarize<'a>(rows: impl Iterator<Item = &'a Row>) -> Summary {
+    let mut s = Summary { instr_mean: 0.0, instr_max: 0.0, tip_max: 0.0, ang_max: 0.0, fails: 0, n: 0 };
+    for r in rows {
+        s.n += 1;
+        s.instr_mean += r.rec.instr;
+        s.instr_max = s.instr_max.max(r.rec.instr);
+        match (r.tip_err, r.ang_err) {
+            (Some(t), Some(a)) => {
+                s.tip_max = s.tip_max.max(t);
+                s.ang_max = s.ang_max.max(a);
+            }
+            _ => s.fails += 1,
+        }
+    }
+    if s.n > 0 {
+        s.instr_mean /= s.n as f64;
+    }
+    s
+}
+
+fn methods_in_order() -> Vec<String> {
+    N_INC.iter().map(|n| format!("step{n}")).chain(std::iter::once("conv".into())).collect()
+}
+
+fn report(
+    rows: &[Row],
+    host64: &BTreeMap<(String, String), f64>,
+    host32: &BTreeMap<(String, String), f64>,
+    lean: &[(String, String, u64, u64, f64)],
+    study: &[(f64, Vec<Result<(f64, f64, f64), String>>)],
+    n_incs: &[u32],
+    cal: &[String],
+) -> String {
+    let mut o = String::new();
+    let w = &mut o;
+    writeln!(w, "# Performance: error against run time, stability, lean builds\n").unwrap();
+    writeln!(w, "Generated by `cd host-tests && cargo run --release --bin perf-report` (a few minutes; needs").unwrap();
+    writeln!(w, "`qemu-system-arm` and the rustup targets `thumbv7em-none-eabihf`, `thumbv7m-none-eabi`). Do not edit by hand.\n").unwrap();
+    writeln!(w, "## How it is measured\n").unwrap();
+    writeln!(w, "- **Scenes** (`bench/src/scenes.rs`): MODEL.md's default finger, without (`bare`) and with (`de`) DE stacks, the paper's").unwrap();
+    writeln!(w, "  loads 0.2, 0.5, 1.0 N, uniform (8 kV) and per-joint (9/5/0 kV) voltages, and two high tensions: 7 N and").unwrap();
+    writeln!(w, "  250 N (the links touch at about 300 N).").unwrap();
+    writeln!(w, "- **Instructions on the target**: the bench image (`bench/`, its own `no_std` binary, not the firmware) runs every").unwrap();
+    writeln!(w, "  scene in QEMU 7.2 with `-icount` (deterministic: one instruction, one fixed virtual time step) and reads").unwrap();
+    writeln!(w, "  SysTick around each `Finger::solve_with` (equilibrium, posture, excursion; the compliances for the scene's").unwrap();
+    writeln!(w, "  voltages are computed before, once per voltage change, and reported as *setup*). Ticks per instruction are").unwrap();
+    writeln!(w, "  calibrated in each image on a loop of 2,000,000 known instructions; the timing overhead is subtracted.").unwrap();
+    writeln!(w, "  Cortex-M4F: `netduinoplus2`, `-icount shift=0`. Cortex-M3 (no FPU): `mps2-an385`, `-icount shift=4`").unwrap();
+    writeln!(w, "  (its 25 MHz SysTick is too coarse at shift 0 for the calibration; `lm3s6965evb` stops SysTick: period zero).").unwrap();
+    writeln!(w, "  Instruction counts, not cycles: a `vdiv.f32` counts 1 (14 cycles on the silicon), a flash wait state 0.").unwrap();
+    writeln!(w, "  Calibration lines (`CAL loop_instructions ticks overhead_ticks`): {}.", cal.join("; ")).unwrap();
+    writeln!(w, "- **Errors**: tip position (mm, Euclidean) and the largest joint-angle error (degrees) against the host's f64").unwrap();
+    writeln!(w, "  converged solution at 1e-12 mm.").unwrap();
+    writeln!(w, "- **Host nanoseconds**: this command's own repeated-timing harness (not criterion): 3 warm-up calls, a batch").unwrap();
+    writeln!(w, "  size doubled until a batch takes at least 2 ms, then the median of 9 batches; release build, inputs through").unwrap();
+    writeln!(w, "  `black_box`; same `solve_with` call as on the target. Host f32 uses `{}`; micromath and fixed point are", <f32 as Real>::NAME).unwrap();
+    writeln!(w, "  measured on the targets only. Host numbers vary with the machine and its load; target counts do not.").unwrap();
+    writeln!(w, "- **Fixed point** (`bench/src/fix.rs`): `Real` for newtypes over the `fixed` crate's I16F16 and I32F32,").unwrap();
+    writeln!(w, "  saturating arithmetic (MIN/MAX act as infinity, so overflow becomes a typed error), Taylor sin/cos after").unwrap();
+    writeln!(w, "  reduction by pi/2, digit-by-digit integer sqrt. The hinge and joint compliances are computed once in f32 and").unwrap();
+    writeln!(w, "  cast (`Finger::cast`, `Compliances::cast`): E w t^3 overflows I16F16 and eps0 = 8.9e-12 is below both").unwrap();
+    writeln!(w, "  resolutions. The converged solver's tolerance is raised to the scalar's resolution.\n").unwrap();
+
+    // ---- summary
+    writeln!(w, "## Summary over the paper's scenes (0.2 to 1.0 N, 8 scenes)\n").unwrap();
+    writeln!(w, "Instructions: mean and worst over the 8 scenes; errors: worst. Host ns: mean over the same scenes.\n").unwrap();
+    writeln!(w, "| core | scalar | method | instructions (mean) | instructions (max) | tip error mm (max) | angle error deg (max) | failures | host ns |").unwrap();
+    writeln!(w, "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |").unwrap();
+    let mut keys: Vec<(String, String, String)> = Vec::new();
+    for r in rows {
+        let k = (r.rec.core.clone(), r.rec.scalar.clone(), r.rec.image.clone());
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    let mut best: Vec<(String, f64, f64)> = Vec::new();
+    for (core, scalar, image) in &keys {
+        for m in methods_in_order() {
+            let sel = rows.iter().filter(|r| {
+                &r.rec.core == core && &r.rec.scalar == scalar && &r.rec.image == image && r.rec.method == m && is_paper_scene(&r.rec.scene)
+            });
+            let s = summarize(sel);
+            if s.n == 0 {
+                continue;
+            }
+            let host = if core == "M4F" && image == "m4f-libm" {
+                let tab = if scalar.starts_with("f64") { Some(host64) } else if scalar.starts_with("f32") { Some(host32) } else { None };
+                tab.map(|t| {
+                    let v: Vec<f64> = t.iter().filter(|((sc, mm), _)| mm == &m && is_paper_scene(sc)).map(|(_, v)| *v).collect();
+                    format!("{:.0}", v.iter().sum::<f64>() / v.len().max(1) as f64)
+                })
+                .unwrap_or_default()
+            } else {
+                String::new()
+            };
+            writeln!(
+                w,
+                "| {core} | {scalar} | {} | {:.0} | {:.0} | {} | {} | {} | {host} |",
+                method_label(&m),
+                s.instr_mean,
+                s.instr_max,
+                fmt_e(s.tip_max),
+                fmt_e(s.ang_max),
+                s.fails
+            )
+            .unwrap();
+            if core == "M4F" && s.fails == 0 && s.tip_max <= 1e-3 {
+                best.push((format!("{scalar} {}", method_label(&m)), s.instr_max, s.tip_max));
+            }
+        }
+    }
+    best.sort_by(|a, b| a.1.total_cmp(&b.1));
+    writeln!(w, "\n### The target: a forward solve within 1e-3 mm of the reference in at most 5,000 M4F instructions\n").unwrap();
+    writeln!(w, "M4F variants within 1e-3 mm on every paper scene, cheapest first (worst-case instructions over the scenes):\n").unwrap();
+    for (name, instr, err) in best.iter().take(6) {
+        writeln!(w, "- {name}: {instr:.0} instructions (worst scene), tip error at most {}{}", fmt_e(*err), if *instr <= 5000.0 { " — meets the target" } else { "" }).unwrap();
+    }
+    // per scene for the converged f32 variants
+    writeln!(w, "\nConverged solver per scene (instructions of `solve_with`; *setup* = `compliances` for the scene's voltages):\n").unwrap();
+    writeln!(w, "| scene | core | scalar | instructions | setup | iterations | tip error mm | angle error deg |").unwrap();
+    writeln!(w, "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: |").unwrap();
+    for r in rows.iter().filter(|r| r.rec.method == "conv") {
+        let it = r.rec.result.as_ref().map(|x| x.2.to_string()).unwrap_or_else(|e| format!("err {e}"));
+        writeln!(
+            w,
+            "| {} | {} | {} | {:.0} | {:.0} | {} | {} | {} |",
+            r.rec.scene,
+            r.rec.core,
+            r.rec.scalar,
+            r.rec.instr,
+            r.rec.setup_instr,
+            it,
+            r.tip_err.map(fmt_e).unwrap_or_else(|| "-".into()),
+            r.ang_err.map(fmt_e).unwrap_or_else(|| "-".into())
+        )
+        .unwrap();
+    }
+    writeln!(w, "\nWhat bounds each variant (from the counts above; the floor is three 2-unknown Newton solves of one").unwrap();
+    writeln!(w, "march each per iteration, plus the posture):\n").unwrap();
+    writeln!(w, "- The converged solver runs one dual-number march per Newton iteration (value and exact 2x2 Jacobian), 2 to 3").unwrap();
+    writeln!(w, "  iterations per joint at these loads; joints with equal compliance are solved once (uniform voltages, bare").unwrap();
+    writeln!(w, "  finger), so per-joint voltages cost about three times the uniform scenes. After the solve, `assemble` marches").unwrap();
+    writeln!(w, "  each joint again (residual and tangent determinant for the `Solution`) and composes the posture with two").unwrap();
+    writeln!(w, "  sin/cos per joint; `Solution` and the joint states are fixed-capacity arrays (5 joints x 8 sub-elements)").unwrap();
+    writeln!(w, "  whose zeroing and copying is a visible share of the count (memclr/memcpy in a QEMU profile).").unwrap();
+    writeln!(w, "- f32 with libm: `sinf`/`cosf` compute in f64 on a core without a double-precision FPU (soft-float, ~1,000").unwrap();
+    writeln!(w, "  instructions a pair): every march and every posture link pays it, so libm f32 cannot reach 5,000 with the").unwrap();
+    writeln!(w, "  ~15 sin/cos a 3-joint solve needs. micromath (~40 instructions a pair) removes that bound.").unwrap();
+    writeln!(w, "- f64 on the M4F is soft-float throughout (the FPU is single precision): about 5x f32 libm.").unwrap();
+    writeln!(w, "- libm's `sqrtf` is a software routine (~50 instructions), not `vsqrt.f32`; each march takes one.\n").unwrap();
+
+    // ---- fixed vs soft float
+    writeln!(w, "## Fixed point against soft-float f32 on the Cortex-M3\n").unwrap();
+    let pick = |core: &str, scalar: &str, m: &str| {
+        summarize(rows.iter().filter(|r| r.rec.core == core && r.rec.scalar == scalar && r.rec.method == m && is_paper_scene(&r.rec.scene)))
+    };
+    writeln!(w, "| scalar (M3) | converged: instructions (mean) | tip error mm (max) | stepping n_inc=20: instructions (mean) | tip error mm (max) |").unwrap();
+    writeln!(w, "| --- | ---: | ---: | ---: | ---: |").unwrap();
+    let mut m3 = Vec::new();
+    for scalar in ["f32/libm", "f32/micromath", "i16f16", "i32f32"] {
+        let c = pick("M3", scalar, "conv");
+        let s20 = pick("M3", scalar, "step20");
+        if c.n == 0 {
+            continue;
+        }
+        writeln!(w, "| {scalar} | {:.0} | {} | {:.0} | {} |", c.instr_mean, fmt_e(c.tip_max), s20.instr_mean, fmt_e(s20.tip_max)).unwrap();
+        m3.push((scalar, c.instr_mean, c.tip_max, c.fails));
+    }
+    let get = |s: &str| m3.iter().find(|x| x.0 == s).map(|x| (x.1, x.2));
+    if let (Some(q16), Some(q32), Some(sf), Some(mm)) = (get("i16f16"), get("i32f32"), get("f32/libm"), get("f32/micromath")) {
+        writeln!(w, "\nFrom these numbers:\n").unwrap();
+        writeln!(w, "- I16F16 (32-bit words: one `smull` per multiply) takes {:.2}x the instructions of soft-float f32 with libm and", q16.0 / sf.0).unwrap();
+        writeln!(w, "  {:.2}x soft-float f32 with micromath, at a tip error of {} mm (resolution 1.5e-5; the compliances carry", q16.0 / mm.0, fmt_e(q16.1)).unwrap();
+        writeln!(w, "  3 to 4 significant digits) against {} mm for f32. Fixed point wins when 1e-2 mm is enough and the core has", fmt_e(sf.1.max(mm.1))).unwrap();
+        writeln!(w, "  no FPU: each multiply-add is 2 to 4 integer instructions against a 30 to 60 instruction soft-float call;").unwrap();
+        writeln!(w, "  the divisions (64-by-32-bit, a library call on the M3) and the integer sqrt are its expensive part.").unwrap();
+        writeln!(w, "- I32F32 (64-bit words: 128-bit products and 128-by-64 divisions in software) takes {:.2}x soft-float f32:", q32.0 / sf.0).unwrap();
+        writeln!(w, "  as accurate as f32 or better ({} mm) but it loses on speed. Where accuracy near f32's is needed on an M3,", fmt_e(q32.1)).unwrap();
+        writeln!(w, "  soft-float f32 with micromath is the better choice; on the M4F (hardware f32) fixed point never pays.").unwrap();
+    }
+
+    // ---- stepping study
+    writeln!(w, "\n## Where the paper's load stepping loses accuracy, oscillates or diverges\n").unwrap();
+    writeln!(w, "Host, f64, bare finger, 0 V: tip error of stepping against the converged equilibrium, `dx/dy` in mm (signed).\n").unwrap();
+    write!(w, "| tension N |").unwrap();
+    for n in n_incs {
+        write!(w, " n_inc={n} |").unwrap();
+    }
+    writeln!(w).unwrap();
+    write!(w, "| ---: |").unwrap();
+    for _ in n_incs {
+        write!(w, " ---: |").unwrap();
+    }
+    writeln!(w).unwrap();
+    for (p, cells) in study {
+        write!(w, "| {p} |").unwrap();
+        for c in cells {
+            match c {
+                Ok((dx, dy, _)) => write!(w, " {dx:+.3}/{dy:+.3} |").unwrap(),
+                Err(e) => write!(w, " {e} |").unwrap(),
+            }
+        }
+        writeln!(w).unwrap();
+    }
+    // classify
+    writeln!(w).unwrap();
+    for (p, cells) in study {
+        let errs: Vec<Option<f64>> = cells.iter().map(|c| c.as_ref().ok().map(|(dx, dy, _)| (dx * dx + dy * dy).sqrt())).collect();
+        let signs: Vec<f64> = cells.iter().filter_map(|c| c.as_ref().ok().map(|x| x.1.signum())).collect();
+        let flips = signs.windows(2).filter(|s| s[0] != s[1]).count();
+        let nonmono = errs.windows(2).filter(|e| matches!((e[0], e[1]), (Some(a), Some(b)) if b > a * 1.01)).count();
+        let first_ok = n_incs.iter().zip(&errs).find(|(_, e)| matches!(e, Some(x) if *x <= 1e-3)).map(|(n, _)| *n);
+        let n1 = errs[0].map(|e| format!("{e:.3}")).unwrap_or_else(|| "failed".into());
+        writeln!(
+            w,
+            "- {p} N: n_inc=1 is off by {n1} mm; error sign changes {flips} time(s) as n_inc grows{}; 1e-3 mm first reached at {}.",
+            if nonmono > 0 { ", and the error is not monotone in n_inc (oscillation between over- and undershoot)" } else { "" },
+            first_ok.map(|n| format!("n_inc = {n}")).unwrap_or_else(|| format!("none up to n_inc = {}", n_incs[n_incs.len() - 1]))
+        )
+        .unwrap();
+    }
+    writeln!(w, "\nWhy: each step applies the new load with the cable direction and moment arms of the geometry before it").unwrap();
+    writeln!(w, "(explicit, forward-Euler in the load parameter), so the error is first order in 1/n_inc (error x n_inc is").unwrap();
+    writeln!(w, "nearly constant in the table) with a constant that grows with how much the geometry turns within one step.").unwrap();
+    writeln!(w, "At low tension the straight-finger moment arm e is nearly right and n_inc = 1 is within a millimetre. At a").unwrap();
+    writeln!(w, "few newtons the joints turn tens of degrees per step: the first step applies the whole tension at the").unwrap();
+    writeln!(w, "straight finger's arm, which overestimates the moment (the span turns toward the hinge and the arm").unwrap();
+    writeln!(w, "shrinks as the joint bends), so the finger overshoots, curls past the equilibrium and the error changes").unwrap();
+    writeln!(w, "sign (tip y tens of mm low at 7 N); with a few more steps it undershoots, then converges slowly. Near").unwrap();
+    writeln!(w, "contact (hundreds of newtons) a coarse step reaches a span below the floor and the stepping stops with a").unwrap();
+    writeln!(w, "contact error although the equilibrium exists. The converged solver has none of these: it solves the").unwrap();
+    writeln!(w, "equilibrium in the deformed geometry with load continuation and a branch check.\n").unwrap();
+
+    // ---- lean
+    writeln!(w, "## Lean builds: flash and static RAM per feature set\n").unwrap();
+    writeln!(w, "The `lean` binary of `bench/` (`bench/src/lean.rs`): one converged solve of the bare 1.0 N scene (with DE:").unwrap();
+    writeln!(w, "the same scene on a finger with stacks), result out over semihosting as raw bits, no float formatting.").unwrap();
+    writeln!(w, "Flash: allocated sections with contents (vectors, text, rodata, data's load image); RAM: data + bss").unwrap();
+    writeln!(w, "(+ uninit), the stack not included. Model features: `de` (DE stacks; without it `Finger::new` refuses").unwrap();
+    writeln!(w, "`layers > 0` and the DE code is left out), `micromath` (f32 trig); fixed point is the bench's `fixed` feature.").unwrap();
+    writeln!(w, "The firmware's console and defmt are the firmware's features (not measured here).\n").unwrap();
+    writeln!(w, "| image | bench features | flash bytes | static RAM bytes | tip y mm (QEMU) |").unwrap();
+    writeln!(w, "| --- | --- | ---: | ---: | ---: |").unwrap();
+    for (label, feats, flash, ram, y) in lean {
+        writeln!(w, "| {label} | `{}` | {flash} | {ram} | {y:.4} |", if feats.is_empty() { "(none)" } else { feats }).unwrap();
+    }
+
+    // ---- full table
+    writeln!(w, "\n## Every scene and variant\n").unwrap();
+    writeln!(w, "Target instructions of `solve_with`; host ns for the M4F libm image's scalars.\n").unwrap();
+    writeln!(w, "| scene | image | scalar | method | instructions | tip error mm | angle error deg | host ns |").unwrap();
+    writeln!(w, "| --- | --- | --- | --- | ---: | ---: | ---: | ---: |").unwrap();
+    for r in rows {
+        let host = if r.rec.image == "m4f-libm" {
+            let t = if r.rec.scalar.starts_with("f64") { host64 } else { host32 };
+            t.get(&(r.rec.scene.clone(), r.rec.method.clone())).map(|v| format!("{v:.0}")).unwrap_or_default()
+        } else {
+            String::new()
+        };
+        let (te, ae) = match (&r.rec.result, r.tip_err, r.ang_err) {
+            (Ok(_), Some(t), Some(a)) => (fmt_e(t), fmt_e(a)),
+            (Err(e), _, _) => (format!("error: {e}"), "-".into()),
+            _ => ("-".into(), "-".into()),
+        };
+        writeln!(w, "| {} | {} | {} | {} | {:.0} | {te} | {ae} | {host} |", r.rec.scene, r.rec.image, r.rec.scalar, r.rec.method, r.rec.instr).unwrap();
+    }
+    writeln!(w, "\n![tip error against instructions](perf-error-vs-instructions.svg)").unwrap();
+    o
+}
+
+/// Log-log plot: per series (core + scalar), the paper scenes' mean instructions against their
+/// worst tip error, stepping points joined by a line (n_inc growing to the right), the
+/// converged solver as a ring.
+fn plot(rows: &[Row]) -> String {
+    let (w, h, ml, mr, mt, mb) = (820.0, 560.0, 80.0, 230.0, 30.0, 60.0);
+    let (x0, x1, y0, y1) = (2.0f64, 8.0f64, -7.0f64, 2.0f64); // log10 ranges
+    let px = |x: f64| ml + (x.log10().clamp(x0, x1) - x0) / (x1 - x0) * (w - ml - mr);
+    let py = |y: f64| mt + (y1 - y.max(1e-7).log10().clamp(y0, y1)) / (y1 - y0) * (h - mt - mb);
+    let colors = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
+    let mut s = String::new();
+    writeln!(s, r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="12">"#).unwrap();
+    writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#).unwrap();
+    for e in (x0 as i32)..=(x1 as i32) {
+        let x = px(10f64.powi(e));
+        writeln!(s, r##"<line x1="{x}" y1="{mt}" x2="{x}" y2="{}" stroke="#ddd"/><text x="{x}" y="{}" text-anchor="middle">1e{e}</text>"##, h - mb, h - mb + 16.0).unwrap();
+    }
+    for e in (y0 as i32)..=(y1 as i32) {
+        let y = py(10f64.powi(e));
+        writeln!(s, r##"<line x1="{ml}" y1="{y}" x2="{}" y2="{y}" stroke="#ddd"/><text x="{}" y="{}" text-anchor="end">1e{e}</text>"##, w - mr, ml - 6.0, y + 4.0).unwrap();
+    }
+    let (tx, ty) = (px(5000.0), py(1e-3));
+    writeln!(s, r##"<line x1="{tx}" y1="{mt}" x2="{tx}" y2="{}" stroke="#999" stroke-dasharray="4 3"/><line x1="{ml}" y1="{ty}" x2="{}" y2="{ty}" stroke="#999" stroke-dasharray="4 3"/>"##, h - mb, w - mr).unwrap();
+    writeln!(s, r##"<text x="{}" y="{}" fill="#666">target: 1e-3 mm, 5,000 M4F instructions</text>"##, tx + 4.0, ty - 4.0).unwrap();
+    writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">instructions per solve (mean over the paper scenes, QEMU -icount)</text>"#, (ml + w - mr) / 2.0, h - 15.0).unwrap();
+    writeln!(s, r#"<text transform="translate(18 {}) rotate(-90)" text-anchor="middle">worst tip error, mm (0 drawn at 1e-7)</text>"#, (mt + h - mb) / 2.0).unwrap();
+    let mut names: Vec<String> = Vec::new();
+    for r in rows {
+        let k = series(&r.rec);
+        if !names.contains(&k) {
+            names.push(k);
+        }
+    }
+    for (i, name) in names.iter().enumerate() {
+        let col = colors[i % colors.len()];
+        let mut pts = Vec::new();
+        let mut conv = None;
+        for m in methods_in_order() {
+            let sm = summarize(rows.iter().filter(|r| &series(&r.rec) == name && r.rec.method == m && is_paper_scene(&r.rec.scene)));
+            if sm.n == 0 || sm.fails > 0 {
+                continue;
+            }
+            let p = (px(sm.instr_mean), py(sm.tip_max));
+            if m == "conv" {
+                conv = Some(p);
+            } else {
+                pts.push(p);
+            }
+        }
+        let poly: Vec<String> = pts.iter().map(|(x, y)| format!("{x:.1},{y:.1}")).collect();
+        writeln!(s, r#"<polyline class="stepping" points="{}" fill="none" stroke="{col}" stroke-width="1.5"/>"#, poly.join(" ")).unwrap();
+        for (x, y) in &pts {
+            writeln!(s, r#"<circle cx="{x:.1}" cy="{y:.1}" r="2.5" fill="{col}"/>"#).unwrap();
+        }
+        if let Some((x, y)) = conv {
+            writeln!(s, r#"<circle class="converged" cx="{x:.1}" cy="{y:.1}" r="6" fill="none" stroke="{col}" stroke-width="2"/>"#).unwrap();
+        }
+        let ly = mt + 10.0 + 18.0 * i as f64;
+        writeln!(s, r#"<line x1="{}" y1="{ly}" x2="{}" y2="{ly}" stroke="{col}" stroke-width="2"/><text x="{}" y="{}">{}</text>"#, w - mr + 10.0, w - mr + 30.0, w - mr + 35.0, ly + 4.0, name).unwrap();
+    }
+    let ly = mt + 10.0 + 18.0 * names.len() as f64 + 10.0;
+    writeln!(s, r##"<circle cx="{}" cy="{ly}" r="6" fill="none" stroke="#333" stroke-width="2"/><text x="{}" y="{}">converged</text>"##, w - mr + 20.0, w - mr + 35.0, ly + 4.0).unwrap();
+    writeln!(s, r##"<circle cx="{}" cy="{}" r="2.5" fill="#333"/><text x="{}" y="{}">stepping, n_inc 1..200</text>"##, w - mr + 20.0, ly + 18.0, w - mr + 35.0, ly + 22.0).unwrap();
+    writeln!(s, "</svg>").unwrap();
+    s
+}
