@@ -561,9 +561,14 @@ this 20 mm × 1.5 mm hinge. The DE layers keep E_de (MODEL.md).\n",
         w,
         "The reference's span-closing tension (`continuum::closing_tension`: the first span at the \
 0.1 mm floor) against the model's `Finger::fmax` (the first joint whose span closes or whose \
-equilibrium tangent turns singular), flexible links. No limit point occurs before contact in any \
-scene. The model refuses any tension past its fmax (`Error::Contact` / `Error::LimitPoint` from the \
-solver; `limits` reports fmax at the console and `force` refuses past it).\n"
+equilibrium tangent turns singular), flexible links. {} The model refuses any tension past its fmax (`Error::Contact` / `Error::LimitPoint` from the \
+solver; `limits` reports fmax at the console and `force` refuses past it).\n",
+        if fmax.values().any(|f| matches!(f, Ok((_, BranchEnd::LimitPoint, _)))) {
+            "In some configurations the model's branch ends at a limit point (marked below)."
+        } else {
+            "The model's branch ends by contact (or, for m = 1, not below the search bound) in every \
+scene and configuration: no limit point comes first; the reference's ends by contact too."
+        }
     );
     let _ = writeln!(w, "| scene | modulus | reference closes at (N) | m = 1 | m = 2 | m = 4 | m = 8 |");
     let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- | --- |");
