@@ -5,20 +5,26 @@
 //!
 //! Tolerances (stated in docs/inverse.md): f64, joint angles within 1e-9 rad of the target
 //! after a converged forward solve at the returned tension and voltages; f32 (the target's
-//! scalar), within 2e-5 rad (about 1e-3 degree).
+//! scalar), within 2e-5 rad (about 1e-3 degree). The same for every parameter set the forward
+//! model accepts: hinges of m = 1, 4, 8 sub-elements, plate modulus on/off, flexible links
+//! on/off (the `general` path of the inverse for m > 1 or flexible links).
 
 use finger_model::inverse::{self, contact_force, solve_pose, solve_pose_with, stiffness_range, Options};
 use finger_model::{Error, Finger, Method, Params, Real};
 
 /// Reachable postures: the forward model's own postures over a grid of tensions and voltages.
 fn grid<R: Real>(f: &Finger<R>, tensions: &[f64]) -> Vec<(f64, [f64; 3], Vec<R>)> {
+    grid_with(f, tensions, &[0.0, 0.5, 0.95])
+}
+
+fn grid_with<R: Real>(f: &Finger<R>, tensions: &[f64], fr: &[f64]) -> Vec<(f64, [f64; 3], Vec<R>)> {
     let ceil = f.voltage_ceiling().to_f64();
-    let fr = [0.0, 0.5, 0.95];
+    let fr = fr.to_vec();
     let mut out = Vec::new();
     for &p in tensions {
-        for a in fr {
-            for b in fr {
-                for c in fr {
+        for &a in &fr {
+            for &b in &fr {
+                for &c in &fr {
                     let v = [a * ceil, b * ceil, c * ceil];
                     let vr: Vec<R> = v.iter().map(|&x| R::from_f64(x)).collect();
                     let s = f.solve(R::from_f64(p), &vr, Method::converged()).unwrap();
@@ -32,10 +38,15 @@ fn grid<R: Real>(f: &Finger<R>, tensions: &[f64]) -> Vec<(f64, [f64; 3], Vec<R>)
 
 fn round_trip<R: Real>(params: Params<R>, tol: f64) -> usize {
     let f = Finger::new(params).unwrap();
+    round_trip_over(&f, grid(&f, &[0.2, 0.5, 1.0, 2.0, 4.0]), tol)
+}
+
+fn round_trip_over<R: Real>(f: &Finger<R>, postures: Vec<(f64, [f64; 3], Vec<R>)>, tol: f64) -> usize {
+    let f = *f;
     let mut count = 0;
-    for (p, _v, angles) in grid(&f, &[0.2, 0.5, 1.0, 2.0, 4.0]) {
+    for (p, _v, angles) in postures {
         for given in [None, Some(R::from_f64(p))] {
-            let s = solve_pose(&f, &angles, given).unwrap_or_else(|e| panic!("P={p} {angles:?}: {e}"));
+            let s = solve_pose(&f, &angles, given).unwrap_or_else(|e| panic!("{}: P={p} {angles:?}: {e}", label(f.params())));
             // the tension the grid posture was made with lies in the interval
             // (to the forward solve's precision: f32 postures carry ~1e-6 relative error)
             let rt = 1e-6_f64.max(1000.0 * R::EPS);
@@ -51,12 +62,86 @@ fn round_trip<R: Real>(params: Params<R>, tol: f64) -> usize {
             let back = f.solve(s.tension, &s.volts[..3], Method::converged()).unwrap();
             for k in 0..3 {
                 let err = (back.joint_angle[k] - angles[k]).abs().to_f64();
-                assert!(err <= tol, "P={p} joint {k}: {err:e} rad > {tol:e}");
+                assert!(err <= tol, "{}: P={p} joint {k}: {err:e} rad > {tol:e}", label(f.params()));
             }
             count += 1;
         }
     }
     count
+}
+
+/// Every hinge model the forward solver offers: m = 1, 4, 8 sub-elements, plate modulus off
+/// and on, rigid and flexible links, on the default parameters and the paper preset.
+fn variants<R: Real>() -> Vec<Params<R>> {
+    let mut out = Vec::new();
+    for base in [Params::<R>::default(), Params::<R>::paper()] {
+        for m in [1, 4, 8] {
+            for plate in [false, true] {
+                for flex_links in [false, true] {
+                    out.push(Params { m, plate, flex_links, ..base });
+                }
+            }
+        }
+    }
+    out
+}
+
+fn label<R: Real>(p: &Params<R>) -> String {
+    format!("{:?} m={} plate={} flex_links={}", p.de_rule, p.m, p.plate, p.flex_links)
+}
+
+#[test]
+fn forward_of_inverse_returns_the_angles_every_hinge_model() {
+    // 24 parameter sets x 3 tensions x 8 voltage corners, tension free and given
+    let mut total = 0;
+    for params in variants::<f64>() {
+        let f = Finger::new(params).unwrap();
+        let postures = grid_with(&f, &[0.2, 1.0, 4.0], &[0.0, 0.95]);
+        assert_eq!(postures.len(), 24);
+        total += round_trip_over(&f, postures, 1e-9);
+    }
+    assert_eq!(total, 24 * 48);
+}
+
+#[test]
+fn forward_of_inverse_returns_the_angles_every_hinge_model_f32() {
+    for params in variants::<f32>().into_iter().filter(|p| p.m != 1 || p.flex_links) {
+        let f = Finger::new(params).unwrap();
+        let postures = grid_with(&f, &[0.5, 2.0], &[0.0, 0.95]);
+        assert_eq!(round_trip_over(&f, postures, 2e-5), 32, "{}", label(&params));
+    }
+}
+
+#[test]
+fn given_tension_gives_back_the_voltages_every_hinge_model() {
+    for params in variants::<f64>() {
+        let f = Finger::new(params).unwrap();
+        let v = [3000.0, 6000.0, 9000.0];
+        let s = f.solve(1.0, &v, Method::converged()).unwrap();
+        let inv = solve_pose(&f, s.joint_angles(), Some(1.0)).unwrap();
+        // a joint angle resolves the voltage to ~1e-6 of the range the stack spans
+        for k in 0..3 {
+            assert!((inv.volts[k] - v[k]).abs() < 0.1, "{}: {:?}", label(&params), inv.volts);
+        }
+        // the posture the inverse reports is the forward one, sub-element by sub-element
+        let mine = inv.to_solution(&f).unwrap();
+        for k in 0..3 {
+            for j in 0..params.m {
+                for i in 0..3 {
+                    assert!((mine.q[k][j][i] - s.q[k][j][i]).abs() < 1e-8, "{}", label(&params));
+                }
+            }
+            assert!((mine.links[k][2] - s.links[k][2]).abs() < 1e-12);
+            assert!((mine.joint_angle[k] - s.joint_angle[k]).abs() < 1e-9);
+        }
+        assert!((mine.tip().x - s.tip().x).abs() < 1e-7 && (mine.tip().y - s.tip().y).abs() < 1e-7);
+        // the flexible link's rotation P e L/(E I) is part of the joint angle
+        if params.flex_links {
+            assert!(mine.links[0][2] > 0.0);
+        } else {
+            assert_eq!(mine.links[0][2], 0.0);
+        }
+    }
 }
 
 #[test]
@@ -154,13 +239,92 @@ fn bad_input_is_a_typed_error() {
     assert!(matches!(solve_pose(&f, &[0.1; 3], Some(f64::INFINITY)), Err(Error::NonFinite { .. })));
     let bad = Options { top: 1.0, ..Options::default() };
     assert!(matches!(solve_pose_with(&f, &[0.1; 3], None, &bad), Err(Error::Input { .. })));
-    let m2 = Finger::new(Params::<f64> { m: 2, ..Params::default() }).unwrap();
-    assert!(matches!(solve_pose(&m2, &[0.1; 3], None), Err(Error::Input { input: "m", .. })));
+    for params in variants::<f64>() {
+        let f = Finger::new(params).unwrap();
+        assert!(matches!(solve_pose(&f, &[f64::NAN, 0.1, 0.1], None), Err(Error::NonFinite { .. })));
+        assert!(matches!(solve_pose(&f, &[0.1, 0.1], None), Err(Error::Input { .. })));
+        assert!(matches!(solve_pose(&f, &[0.1; 3], Some(-1.0)), Err(Error::Input { .. })));
+    }
+}
+
+#[test]
+fn unreachable_postures_are_refused_every_hinge_model() {
+    for params in variants::<f64>().into_iter().filter(|p| p.m != 1 || p.flex_links) {
+        let f = Finger::new(params).unwrap();
+        let l = label(&params);
+        match solve_pose(&f, &[0.2, 0.1, 0.1], None) {
+            Err(Error::Unreachable { joint, needed, min, max }) => {
+                assert_eq!(joint, 1, "{l}");
+                assert!(min < max && needed > max, "{l}: {needed} {min} {max}");
+            }
+            other => panic!("{l}: expected unreachable, got {other:?}"),
+        }
+        match solve_pose(&f, &[0.1, 0.1, 0.05], None) {
+            Err(Error::Unreachable { joint, needed, min, .. }) => {
+                assert_eq!(joint, 3, "{l}");
+                assert!(needed < min, "{l}");
+            }
+            other => panic!("{l}: expected unreachable, got {other:?}"),
+        }
+        let s = f.solve(1.0, &[5000.0; 3], Method::converged()).unwrap();
+        let ok = solve_pose(&f, s.joint_angles(), None).unwrap();
+        assert!(ok.interval[0] < 1.0 && 1.0 < ok.interval[1], "{l}: {:?}", ok.interval);
+        for p_out in [ok.interval[1] * 1.01, ok.interval[0] * 0.99] {
+            assert!(matches!(solve_pose(&f, s.joint_angles(), Some(p_out)), Err(Error::Unreachable { .. })), "{l}");
+        }
+        assert!(matches!(solve_pose(&f, &[-0.05, 0.1, 0.1], None), Err(Error::Unreachable { joint: 1, .. })), "{l}");
+        assert!(matches!(solve_pose(&f, &[-0.05; 3], None), Err(Error::Unreachable { .. })), "{l}");
+        let z = solve_pose(&f, &[0.0; 3], None).unwrap();
+        assert_eq!(z.tension, 0.0);
+        assert_eq!(&z.volts[..3], &[0.0; 3]);
+        // past the end of the equilibrium branch (contact or limit point at either end of the
+        // voltage range): refused, not answered
+        let top = f.voltage_ceiling() * (1.0 - 1e-3);
+        let mut reach: f64 = 0.0;
+        for v in [0.0, top] {
+            let end = f.fmax(&[v; 3]).unwrap();
+            let s = f.solve(end.tension * 0.99, &[v; 3], Method::converged()).unwrap();
+            reach = reach.max(s.joint_angle[0]);
+        }
+        match solve_pose(&f, &[1.3 * reach; 3], None) {
+            Err(Error::Contact { .. } | Error::LimitPoint { .. }) => {}
+            other => panic!("{l}: {} rad past the branch end: {other:?}", 1.3 * reach),
+        }
+    }
+}
+
+#[test]
+fn without_stacks_only_consistent_postures_every_hinge_model() {
+    for m in [4, 8] {
+        for flex_links in [false, true] {
+            let params = Params::<f64> { m, plate: true, flex_links, ..Params::default() }.without_stacks();
+            let f = Finger::new(params).unwrap();
+            for p in [0.1, 0.7, 2.5] {
+                let s = f.solve(p, &[0.0; 3], Method::converged()).unwrap();
+                let inv = solve_pose(&f, s.joint_angles(), None).unwrap();
+                assert!((inv.tension - p).abs() < 1e-9 * p.max(1.0), "{} vs {p}", inv.tension);
+                let back = f.solve(inv.tension, &[0.0; 3], Method::converged()).unwrap();
+                for k in 0..3 {
+                    assert!((back.joint_angle[k] - s.joint_angle[k]).abs() < 1e-9);
+                }
+                let mut a = s.joint_angles().to_vec();
+                a[1] += 10.0 * Options::<f64>::default().angle_tol;
+                match solve_pose(&f, &a, None) {
+                    Err(Error::Unreachable { needed, min, max, .. }) => {
+                        assert_eq!(min, max);
+                        assert!(needed != min);
+                    }
+                    other => panic!("expected unreachable, got {other:?}"),
+                }
+            }
+        }
+    }
 }
 
 #[test]
 fn tensions_across_the_interval_give_different_stiffnesses() {
-    for params in [Params::<f64>::default(), Params::<f64>::paper()] {
+    // every hinge model; the stiffness interval means the same for every m
+    for params in variants::<f64>() {
         let f = Finger::new(params).unwrap();
         let s = f.solve(1.0, &[4000.0, 5000.0, 6000.0], Method::converged()).unwrap();
         let pose = solve_pose(&f, s.joint_angles(), None).unwrap();

@@ -73,6 +73,8 @@ use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
+mod general;
+
 /// Tuning of the inverse solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Options<R> {
@@ -106,8 +108,15 @@ pub struct PoseSolution<R> {
     pub volts: [R; MAX_JOINTS],
     /// Stack thickness per joint, mm (0 without stacks).
     pub thickness: [R; MAX_JOINTS],
-    /// Hinge distal-end displacement per joint (δax mm, δtr mm, θ rad), m = 1.
+    /// Hinge distal-end displacement per joint (δax mm, δtr mm, θ rad) in the joint's proximal
+    /// frame: the hinge's end pose less its nominal length (for m = 1 the sub-element's q).
     pub q: [[R; 3]; MAX_JOINTS],
+    /// Sub-elements per hinge the solution is for.
+    pub m: usize,
+    /// Sub-element displacements q = (δax, δtr, Δθ), `sub_q[k][j]` (as `Solution::q`).
+    pub sub_q: [[[R; 3]; MAX_SUB]; MAX_JOINTS],
+    /// Link deflections (as `Solution::links`; zero for rigid links).
+    pub links: [[R; 3]; MAX_JOINTS],
     /// The tensions that can hold the posture, [low, high], N.
     pub interval: [R; 2],
     /// Newton iterations spent in all.
@@ -183,12 +192,6 @@ struct Wrench<R> {
 impl<'a, R: Real> Ctx<'a, R> {
     fn new(f: &'a Finger<R>, opts: &Options<R>) -> Result<Self, Error> {
         let p = f.params();
-        if p.m != 1 {
-            return Err(Error::Input { input: "m", reason: "the inverse model is for m = 1 (the paper's hinge model)" });
-        }
-        if p.flex_links {
-            return Err(Error::Input { input: "flex_links", reason: "the inverse model is for rigid links" });
-        }
         let k_hinge = mat3::inverse(&f.hinge_compliance(0)).ok_or(Error::Singular { what: "hinge compliance" })?;
         let rel = R::from_f64(1e-11_f64.max(64.0 * R::EPS));
         Ok(Ctx { p, k_hinge, lh: p.hinge_len(), max_iter: opts.max_iter.max(1), rel })
@@ -378,12 +381,6 @@ pub fn solve_pose_with<R: Real>(
     if !(opts.angle_tol.is_finite() && opts.angle_tol > R::zero()) {
         return Err(Error::Input { input: "angle_tol", reason: "must be positive" });
     }
-    let ctx = Ctx::new(f, opts)?;
-    let mut ang = [Angle { theta: R::zero(), s: R::zero(), c: R::one() }; MAX_JOINTS];
-    for k in 0..n {
-        let (s, c) = angles[k].sin_cos();
-        ang[k] = Angle { theta: angles[k], s, c };
-    }
     let mut out = PoseSolution {
         n,
         angles: [R::zero(); MAX_JOINTS],
@@ -392,13 +389,47 @@ pub fn solve_pose_with<R: Real>(
         volts: [R::zero(); MAX_JOINTS],
         thickness: [R::zero(); MAX_JOINTS],
         q: [[R::zero(); 3]; MAX_JOINTS],
+        m: p.m,
+        sub_q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+        links: [[R::zero(); 3]; MAX_JOINTS],
         interval: [R::zero(); 2],
         iterations: 0,
     };
     out.angles[..n].copy_from_slice(angles);
-    if p.layers == 0 {
-        return no_stacks(&ctx, &ang, tension, opts, out);
+    if p.m != 1 || p.flex_links {
+        // sub-divided hinges or flexible links: bracketed root finding around the forward
+        // per-joint equilibrium (`general`)
+        return general::solve(f, angles, tension, opts, out);
     }
+    let ctx = Ctx::new(f, opts)?;
+    let mut ang = [Angle { theta: R::zero(), s: R::zero(), c: R::one() }; MAX_JOINTS];
+    for k in 0..n {
+        let (s, c) = angles[k].sin_cos();
+        ang[k] = Angle { theta: angles[k], s, c };
+    }
+    let out = if p.layers == 0 { no_stacks(&ctx, &ang, tension, opts, out)? } else { fast(f, &ctx, &ang, tension, opts, out)? };
+    Ok(fill_sub(out))
+}
+
+/// The m = 1 fast path: the sub-element q is the hinge's q.
+fn fill_sub<R: Real>(mut out: PoseSolution<R>) -> PoseSolution<R> {
+    for k in 0..out.n {
+        out.sub_q[k][0] = out.q[k];
+    }
+    out
+}
+
+/// The m = 1, rigid-link solve with stacks (module documentation, steps 1-4).
+fn fast<R: Real>(
+    f: &Finger<R>,
+    ctx: &Ctx<'_, R>,
+    ang: &[Angle<R>; MAX_JOINTS],
+    tension: Option<R>,
+    opts: &Options<R>,
+    mut out: PoseSolution<R>,
+) -> Result<PoseSolution<R>, Error> {
+    let p = f.params();
+    let n = out.n;
 
     // 1. every joint's tension range: stiffest stack (0 V) and softest (top voltage)
     let t0 = R::from_f64(p.layers as f64) * p.z0;
@@ -573,19 +604,20 @@ impl<R: Real> PoseSolution<R> {
     /// `residual` is 0 and `tangent_det` 1 (not evaluated here; the inverse checked dP/dθ > 0).
     pub fn to_solution(&self, f: &Finger<R>) -> Result<Solution<R>, Error> {
         let p = f.params();
-        if p.m != 1 || p.flex_links || self.n != p.n {
+        if p.m != self.m || self.n != p.n {
             return Err(Error::Input { input: "pose solution", reason: "computed for other parameters" });
         }
         let n = self.n;
         let lh = p.hinge_len();
+        let sub_len = lh / R::from_f64(p.m as f64);
         let link = p.l - lh;
         let mut sol = Solution {
             n,
-            m: 1,
+            m: p.m,
             tension: self.tension,
             tip_force: [R::zero(); 2],
-            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
-            links: [[R::zero(); 3]; MAX_JOINTS],
+            q: self.sub_q,
+            links: self.links,
             joint_angle: [R::zero(); MAX_JOINTS],
             nodes: [Pose::origin(); MAX_JOINTS + 1],
             span: [R::zero(); MAX_JOINTS],
@@ -597,15 +629,17 @@ impl<R: Real> PoseSolution<R> {
             tangent_det: [R::one(); MAX_JOINTS],
         };
         for k in 0..n {
-            let q = self.q[k];
-            sol.q[k][0] = q;
-            sol.joint_angle[k] = q[2];
-            let end = Pose::origin().then(lh + q[0], q[1], q[2]);
+            let mut end = Pose::origin();
+            for q in self.sub_q[k].iter().take(p.m) {
+                end = end.then(sub_len + q[0], q[1], q[2]);
+            }
+            let l = self.links[k];
+            sol.joint_angle[k] = end.theta + l[2];
             let hole = end.point(R::zero(), p.e);
             let span = (hole[0].sq() + (hole[1] - p.e).sq()).sqrt();
             sol.span[k] = span;
             sol.cable_excursion += lh - span;
-            sol.nodes[k + 1] = sol.nodes[k].then(lh + q[0], q[1], q[2]).then(link, R::zero(), R::zero());
+            sol.nodes[k + 1] = sol.nodes[k].then(end.x, end.y, end.theta).then(link + l[0], l[1], l[2]);
         }
         Ok(sol)
     }
