@@ -142,8 +142,8 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 fn main() -> ! {
     let cp = cortex_m::Peripherals::take().unwrap();
     cycles::start(cp.SYST);
-    let (ticks, overhead) = cycles::calibrate(1_000_000);
-    hprintln!("CAL {} {} {}", 2_000_000u32, ticks, overhead);
+    let (ticks, overhead) = cycles::calibrate(if cfg!(feature = "quick") { 1000 } else { 1_000_000 });
+    hprintln!("CAL {} {} {}", if cfg!(feature = "quick") { 2000u32 } else { 2_000_000 }, ticks, overhead);
     // `quick`: one scene (bare finger, 1.0 N)
     let scenes = if cfg!(feature = "quick") { &SCENES[2..3] } else { SCENES };
     for s in scenes.iter() {

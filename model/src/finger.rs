@@ -933,6 +933,8 @@ impl<R: Real> Finger<R> {
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
         let tip = [nodes[n].x, nodes[n].y];
         let mut res2 = R::zero();
+        // residual and tangent determinant of the joint before (tension alone)
+        let mut prev: Option<([R; 2], R)> = None;
         for k in 0..n {
             let st = &states[k];
             sol.q[k] = st.q;
@@ -946,6 +948,23 @@ impl<R: Real> Finger<R> {
             sol.span[k] = span;
             sol.cable_excursion += self.p.hinge_len() - span;
             let tl = if loaded { Some(Self::tip_in_frame(&nodes[k], tip_force, tip)) } else { None };
+            // tension alone: one dual march gives the residual and the exact tangent; a joint
+            // equal to the one before (same compliance, same hole) has the same ones
+            let same = k > 0 && c.c[k][..self.p.m] == c.c[k - 1][..self.p.m] && st.hole == states[k - 1].hole;
+            let dual = match (loaded, same, prev) {
+                (true, _, _) => None,
+                (false, true, Some(p)) => Some(p),
+                (false, _, _) => self
+                    .eval_dual(&c.c[k], tension, st.hole)
+                    .ok()
+                    .map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
+            };
+            prev = dual;
+            if let Some((r, det)) = dual {
+                res2 += r[0] * r[0] + r[1] * r[1];
+                sol.tangent_det[k] = det;
+                continue;
+            }
             match self.hole_residual(&c.c[k], tension, st.hole, tl) {
                 Ok((r, _)) => {
                     res2 += r[0] * r[0] + r[1] * r[1];

@@ -178,14 +178,18 @@ pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
 
 impl<R: Real> Finger<R> {
     /// `Finger::march` in the scalar `T` (R itself, or dual numbers over R); parameters and
-    /// compliances stay in R. Same operations in the same order as `march`.
+    /// compliances stay in R. Same operations in the same order as `march`. Returns the hinge
+    /// end and the hole in T; the sub-element displacements go to `q_out` as values (`val`),
+    /// which keeps the fixed-capacity array out of T (no zeroing and copying of dual arrays).
     pub(super) fn march_t<T>(
         &self,
         c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b_hole: [T; 2],
         tip: Option<TipLoad<R>>,
-    ) -> Result<JointState<T>, MarchError>
+        q_out: &mut [[R; 3]; MAX_SUB],
+        val: impl Fn(T) -> R,
+    ) -> Result<(Pose<T>, [T; 2]), MarchError>
     where
         T: Real + Mul<R, Output = T> + Add<R, Output = T> + Sub<R, Output = T>,
     {
@@ -204,7 +208,6 @@ impl<R: Real> Finger<R> {
         let ftot = [fc[0] + ft[0], fc[1] + ft[1]];
         let mut pose: Pose<T> = Pose::origin();
         let (mut s, mut co) = (T::zero(), T::one());
-        let mut q = [[T::zero(); 3]; MAX_SUB];
         for j in 0..self.p.m {
             let cj = &c[j];
             let d0 = [pose.x + co * self.sub_len, pose.y + s * self.sub_len];
@@ -224,7 +227,7 @@ impl<R: Real> Finger<R> {
             }
             let sm = (-f[1] * q0[0] + f[0] * q0[1]) / den;
             let qj = [q0[0] + sm * cj[0][2], q0[1] + sm * cj[1][2], q0[2] + sm * cj[2][2]];
-            q[j] = qj;
+            q_out[j] = [val(qj[0]), val(qj[1]), val(qj[2])];
             pose = Pose {
                 x: pose.x + co * (qj[0] + self.sub_len) - s * qj[1],
                 y: pose.y + s * (qj[0] + self.sub_len) + co * qj[1],
@@ -238,25 +241,19 @@ impl<R: Real> Finger<R> {
         if !(hole[0].is_finite() && hole[1].is_finite() && pose.theta.is_finite()) {
             return Err(MarchError::Singular);
         }
-        Ok(JointState { q, end: pose, hole })
+        Ok((pose, hole))
     }
 
     /// One dual march at hole guess `b` (tension alone): state, residual, Jacobian.
     pub(super) fn eval_dual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2]) -> Result<Eval<R>, MarchError> {
         let (z, o) = (R::zero(), R::one());
         let bd = [D { v: b[0], d: [o, z] }, D { v: b[1], d: [z, o] }];
-        let sd = self.march_t::<D<R>>(c, tension, bd, None)?;
         let mut q = [[z; 3]; MAX_SUB];
-        for (qj, qd) in q.iter_mut().zip(sd.q.iter()).take(self.p.m) {
-            *qj = [qd[0].v, qd[1].v, qd[2].v];
-        }
-        let end = Pose { x: sd.end.x.v, y: sd.end.y.v, theta: sd.end.theta.v };
-        let hole = [sd.hole[0].v, sd.hole[1].v];
+        let (end_d, hole_d) = self.march_t::<D<R>>(c, tension, bd, None, &mut q, |x| x.v)?;
+        let end = Pose { x: end_d.x.v, y: end_d.y.v, theta: end_d.theta.v };
+        let hole = [hole_d[0].v, hole_d[1].v];
         let r = [b[0] - hole[0], b[1] - hole[1]];
-        let jac = [
-            [o - sd.hole[0].d[0], z - sd.hole[0].d[1]],
-            [z - sd.hole[1].d[0], o - sd.hole[1].d[1]],
-        ];
+        let jac = [[o - hole_d[0].d[0], z - hole_d[0].d[1]], [z - hole_d[1].d[0], o - hole_d[1].d[1]]];
         Ok((JointState { q, end, hole }, r, jac))
     }
 
@@ -342,10 +339,11 @@ mod tests {
                 for b in [[10.0, 5.0], [9.3, 6.1], [8.0, 7.5]] {
                     for tip in tips {
                         let a = f.march(&c.c[0], tension, b, tip).ok().unwrap();
-                        let t = f.march_t::<f64>(&c.c[0], tension, b, tip).ok().unwrap();
-                        assert_eq!(a.hole, t.hole);
-                        assert_eq!(a.end, t.end);
-                        assert_eq!(a.q, t.q);
+                        let mut q = [[0.0; 3]; MAX_SUB];
+                        let t = f.march_t::<f64>(&c.c[0], tension, b, tip, &mut q, |x| x).ok().unwrap();
+                        assert_eq!(a.hole, t.1);
+                        assert_eq!(a.end, t.0);
+                        assert_eq!(a.q, q);
                         let d = f.eval_dual(&c.c[0], tension, b).ok().unwrap();
                         let plain = f.march(&c.c[0], tension, b, None).ok().unwrap();
                         assert_eq!(d.0.hole, plain.hole, "dual value part equals the plain march");
@@ -357,8 +355,9 @@ mod tests {
         let f = Finger::new(Params::<f32>::default()).unwrap();
         let c = f.compliances(&[0.0; 3]).unwrap();
         let a = f.march(&c.c[0], 1.0, [9.5, 5.5], None).ok().unwrap();
-        let t = f.march_t::<f32>(&c.c[0], 1.0, [9.5, 5.5], None).ok().unwrap();
-        assert_eq!(a.hole, t.hole);
+        let mut q = [[0.0; 3]; MAX_SUB];
+        let t = f.march_t::<f32>(&c.c[0], 1.0, [9.5, 5.5], None, &mut q, |x| x).ok().unwrap();
+        assert_eq!(a.hole, t.1);
     }
 
     #[test]
