@@ -33,14 +33,17 @@ pub const M3: &str = "thumbv7m-none-eabi";
 pub const IMAGES: &[Image] = &[
     Image { name: "m4f-libm", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,f64" },
     Image { name: "m4f-micromath", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,micromath" },
+    Image { name: "m4f-fasttrig", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,fast-trig" },
     Image { name: "m3-softfloat", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32" },
     Image { name: "m3-micromath", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32,micromath" },
+    Image { name: "m3-fasttrig", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32,fast-trig" },
     Image { name: "m3-fixed", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,fixed" },
 ];
 
-/// The quick image for the CI smoke test: one scene, converged solver, f32 with libm, M4F.
+/// The quick image for the CI smoke test: one scene, converged solver, f32 with the model's
+/// `fast-trig` sin/cos, M4F.
 pub const QUICK: Image =
-    Image { name: "m4f-quick", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,quick" };
+    Image { name: "m4f-quick", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,fast-trig,quick" };
 
 pub fn bench_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("bench")

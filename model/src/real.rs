@@ -123,7 +123,7 @@ impl Real for f64 {
 #[cfg(not(feature = "micromath"))]
 impl Real for f32 {
     const EPS: f64 = f32::EPSILON as f64;
-    const NAME: &'static str = "f32/libm";
+    const NAME: &'static str = if cfg!(feature = "fast-trig") { "f32/fast-trig" } else { "f32/libm" };
     #[inline(always)]
     fn from_f64(x: f64) -> Self {
         x as f32
@@ -138,14 +138,23 @@ impl Real for f32 {
     }
     #[inline(always)]
     fn sin(self) -> Self {
+        #[cfg(feature = "fast-trig")]
+        return fast_trig::sin_cos(self).0;
+        #[cfg(not(feature = "fast-trig"))]
         libm::sinf(self)
     }
     #[inline(always)]
     fn cos(self) -> Self {
+        #[cfg(feature = "fast-trig")]
+        return fast_trig::sin_cos(self).1;
+        #[cfg(not(feature = "fast-trig"))]
         libm::cosf(self)
     }
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
+        #[cfg(feature = "fast-trig")]
+        return fast_trig::sin_cos(self);
+        #[cfg(not(feature = "fast-trig"))]
         libm::sincosf(self)
     }
     #[inline(always)]
@@ -191,5 +200,53 @@ impl Real for f32 {
     #[inline(always)]
     fn is_finite(self) -> bool {
         f32::is_finite(self)
+    }
+}
+
+/// f32 sine and cosine computed in f32 (issue 5, feature `fast-trig`): libm's `sinf`/`cosf`
+/// reduce and evaluate in f64, which a Cortex-M4F (single-precision FPU) runs in software
+/// (~1,000 instructions a call). Here: Cody-Waite reduction by pi/2 with a three-part pi/2
+/// (exact for |x| < 2^13 · pi/2, beyond that libm), then the Cephes minimax polynomials on
+/// [-pi/4, pi/4] (error about 1 ulp, like libm's f32 results); ~40 instructions for both.
+#[cfg(all(feature = "fast-trig", not(feature = "micromath")))]
+mod fast_trig {
+    pub fn sin_cos(x: f32) -> (f32, f32) {
+        if !(x.abs() < 12868.0) {
+            return libm::sincosf(x);
+        }
+        // nearest multiple of pi/2 (round half away from zero)
+        let kf = x * core::f32::consts::FRAC_2_PI;
+        let k = (kf + if kf < 0.0 { -0.5 } else { 0.5 }) as i32;
+        let kf = k as f32;
+        // pi/2 = P1 + P2 + P3, P1 and P2 with few significant bits so k·P1, k·P2 are exact
+        const P1: f32 = 1.5703125;
+        const P2: f32 = 4.837512969970703125e-4;
+        const P3: f32 = 7.549_789_954_891_882e-8;
+        let r = ((x - kf * P1) - kf * P2) - kf * P3;
+        let z = r * r;
+        let s = r + r * z * (-1.666_665_5e-1 + z * (8.332_161e-3 + z * -1.951_529_6e-4));
+        let c = 1.0 - 0.5 * z + z * z * (4.166_664_6e-2 + z * (-1.388_731_6e-3 + z * 2.443_315_7e-5));
+        match k & 3 {
+            0 => (s, c),
+            1 => (c, -s),
+            2 => (-s, -c),
+            _ => (-c, s),
+        }
+    }
+
+    #[cfg(test)]
+    #[test]
+    fn matches_f64_sine_and_cosine() {
+        let mut x = -12000.0f32;
+        while x < 12000.0 {
+            for d in [0.0f32, 0.123, 0.785, 1.5707964, 3.1415927] {
+                let v = x + d;
+                let (s, c) = sin_cos(v);
+                let (s64, c64) = libm::sincos(v as f64);
+                assert!((s as f64 - s64).abs() <= 2.5e-7, "sin {v}: {s} vs {s64}");
+                assert!((c as f64 - c64).abs() <= 2.5e-7, "cos {v}: {c} vs {c64}");
+            }
+            x += 0.37 + x.abs() * 0.01;
+        }
     }
 }
