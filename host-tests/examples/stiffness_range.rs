@@ -43,6 +43,10 @@ fn main() {
         ("thinner layers z0 0.1 mm, 20 layers", Params { z0: 0.1, layers: 20, ..d }),
         ("G 0.2 MPa, z0 0.25 mm, 30 kV", Params { g: 0.2, z0: 0.25, v_supply: 30_000.0, ..d }),
         ("paper preset (E_de 0.201 MPa)", Params::paper()),
+        ("default, m = 4, plate modulus", Params { m: 4, plate: true, ..d }),
+        ("default, m = 8, plate modulus", Params { m: 8, plate: true, ..d }),
+        ("default, m = 8, plate modulus, flexible links", Params { m: 8, plate: true, flex_links: true, ..d }),
+        ("supply 30 kV, m = 8, plate modulus", Params { m: 8, plate: true, v_supply: 30_000.0, ..d }),
     ];
     for (name, p) in &cases {
         let f = Finger::new(*p).unwrap();
@@ -148,12 +152,64 @@ fn main() {
         "`inverse::solve_pose` on one posture (Newton iterations in all: {} in f64, {it32} in f32): \
          {us64:.2} µs (f64) and {us32:.2} µs (f32) per solve on the host that generated this file (release build, mean of {n}; \
          checksum {:.3}/{:.3}). Instructions on the Cortex-M4F are measured in QEMU with the other \
-         performance figures.",
+         performance figures.\n",
         it,
         acc / n as f64,
         acc32 / n as f32
     )
     .unwrap();
+    writeln!(
+        o,
+        "Every hinge model, the same posture (the default finger's at P = 1 N, 3/6/9 kV), tension free. \
+         m = 1 with rigid links is the closed fast path; every other row the general path (root finding \
+         on the forward per-joint equilibrium). Forward = one converged `Finger::solve` at the same \
+         parameters, for scale. Host µs, release build, mean of the count shown.\n"
+    )
+    .unwrap();
+    writeln!(o, "| m | plate | flexible links | path | Newton iterations f64 / f32 | inverse µs f64 | inverse µs f32 | forward µs f64 | inverse / forward |").unwrap();
+    writeln!(o, "| --- | --- | --- | --- | --- | --- | --- | --- | --- |").unwrap();
+    for m in [1usize, 4, 8] {
+        for (plate, flex_links) in [(false, false), (true, false), (true, true)] {
+            let p = Params { m, plate, flex_links, ..d };
+            let f = Finger::new(p).unwrap();
+            let v = [3000.0, 6000.0, 9000.0];
+            let s = f.solve(1.0, &v, Method::converged()).unwrap();
+            let a = s.joint_angles().to_vec();
+            let f32f = Finger::new(Params { m, plate, flex_links, ..Params::<f32>::default() }).unwrap();
+            let a32: Vec<f32> = a.iter().map(|&x| x as f32).collect();
+            let fast = m == 1 && !flex_links;
+            let reps = if fast { 20_000 } else { 2_000 };
+            let t = Instant::now();
+            let mut acc = 0.0;
+            for _ in 0..reps {
+                acc += solve_pose(&f, std::hint::black_box(&a), None).unwrap().tension;
+            }
+            let inv64 = t.elapsed().as_secs_f64() / reps as f64 * 1e6;
+            let t = Instant::now();
+            let mut acc32 = 0.0f32;
+            for _ in 0..reps {
+                acc32 += solve_pose(&f32f, std::hint::black_box(&a32), None).unwrap().tension;
+            }
+            let inv32 = t.elapsed().as_secs_f64() / reps as f64 * 1e6;
+            let t = Instant::now();
+            for _ in 0..reps {
+                acc += f.solve(1.0, std::hint::black_box(&v), Method::converged()).unwrap().tension;
+            }
+            let fw = t.elapsed().as_secs_f64() / reps as f64 * 1e6;
+            std::hint::black_box((acc, acc32));
+            let it = solve_pose(&f, &a, None).unwrap().iterations;
+            let it32 = solve_pose(&f32f, &a32, None).unwrap().iterations;
+            writeln!(
+                o,
+                "| {m} | {} | {} | {} | {it} / {it32} | {inv64:.1} | {inv32:.1} | {fw:.1} | {:.1} |",
+                plate as u8,
+                flex_links as u8,
+                if fast { "fast" } else { "general" },
+                inv64 / fw
+            )
+            .unwrap();
+        }
+    }
     std::fs::write(&path, o).unwrap();
     println!("wrote {path}");
 }
