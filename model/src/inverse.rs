@@ -3,6 +3,10 @@
 //! stiffness range); and the contact force of a tip held at a point (the paper's second
 //! conclusion). docs/inverse.md has the algorithm with its reasons and the figures.
 //!
+//! For m > 1 sub-elements per hinge or flexible links the closed solves below do not apply;
+//! `general` (inverse/general.rs) does the same steps by bracketed root finding on the forward
+//! per-joint equilibrium. m = 1 with rigid links keeps this fast path.
+//!
 //! What it is: closed per-joint Newton solves on the joint equilibrium with the joint angle
 //! fixed, no trigonometry inside the loops, cheap enough for the target (issue 4: at most
 //! 20,000 instructions per `solve_pose` on the Cortex-M4F). What it is not: a forward solver

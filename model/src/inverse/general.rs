@@ -98,8 +98,8 @@ impl<'a, R: Real> Gen<'a, R> {
     /// Sub-element compliances at stack thickness t, as `Finger::compliances` computes them.
     fn comp(&self, t: R) -> Result<[Mat3<R>; MAX_SUB], Error> {
         let mut c = [mat3::zero(); MAX_SUB];
-        for j in 0..self.p.m {
-            c[j] = if self.p.layers == 0 {
+        for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
+            *cj = if self.p.layers == 0 {
                 self.f.hinge_compliance(j)
             } else {
                 let k_de = de::stack_stiffness(self.p, self.sub_len, t);
