@@ -382,3 +382,19 @@ fn flexible_links_bend_under_the_eccentric_cable() {
     let c = flex.solve_loaded(p, &[0.0; 3], [1e-12, 0.0], conv()).unwrap();
     assert!((c.tip().y - b.tip().y).abs() < 1e-6);
 }
+
+#[test]
+fn tip_stiffness_in_f32_is_not_singular() {
+    // C_tip mixes mm/N and rad/(N·mm) and spans decades: the inverse must judge conditioning,
+    // not units (f32 used to report it singular at ordinary loads).
+    let f64m = Finger::new(Params::<f64>::default()).unwrap();
+    let f32m = Finger::new(Params::<f32>::default()).unwrap();
+    for p in [0.0, 0.2, 0.5, 1.0, 3.0] {
+        let a = f64m.tip_stiffness(&f64m.solve(p, &[0.0; 3], conv()).unwrap()).unwrap();
+        let b = f32m.tip_stiffness(&f32m.solve(p as f32, &[0.0; 3], Method::converged()).unwrap()).unwrap();
+        for i in 0..3 {
+            let rel = ((a[i][i] - b[i][i] as f64) / a[i][i]).abs();
+            assert!(rel < 1e-3, "P={p} k{i}{i}: f64 {} f32 {}", a[i][i], b[i][i]);
+        }
+    }
+}

@@ -53,9 +53,41 @@ pub fn det<R: Real>(m: &Mat3<R>) -> R {
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
-/// Inverse by cofactors; `None` if the matrix is singular to working precision (its
-/// determinant is small against the product of its row norms) or not finite.
+/// Inverse; `None` if the matrix is singular to working precision or not finite.
+///
+/// Compliance and stiffness matrices mix units (mm/N next to rad/(N·mm)) and their diagonal
+/// spans decades, so a positive-diagonal matrix is first scaled symmetrically to a unit
+/// diagonal, `M' = S M S` with `S = diag(1/√m_ii)`, and `M⁻¹ = S M'⁻¹ S`: the singularity test
+/// then measures the matrix's conditioning, not its units.
 pub fn inverse<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
+    let mut s = [R::one(); 3];
+    if m[0][0] > R::zero() && m[1][1] > R::zero() && m[2][2] > R::zero() {
+        for i in 0..3 {
+            s[i] = R::one() / m[i][i].sqrt();
+        }
+    }
+    let mut ms = *m;
+    for i in 0..3 {
+        for j in 0..3 {
+            ms[i][j] = s[i] * m[i][j] * s[j];
+        }
+    }
+    let mut inv = inverse_unscaled(&ms)?;
+    for i in 0..3 {
+        for j in 0..3 {
+            inv[i][j] = s[i] * inv[i][j] * s[j];
+        }
+    }
+    if inv.iter().flatten().all(|x| x.is_finite()) {
+        Some(inv)
+    } else {
+        None
+    }
+}
+
+/// Inverse by cofactors; `None` if the determinant is small against the product of the row
+/// norms (Hadamard's bound) or not finite.
+fn inverse_unscaled<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
     let d = det(m);
     let mut scale = R::one();
     for row in m {
