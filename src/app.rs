@@ -680,6 +680,11 @@ impl<B: Board> App<B> {
         let [p] = args else { return Err(err("usage", format_args!("force <P>"))) };
         let p = tension(number(p, "P")?)?;
         self.require_armed("force")?;
+        // the end of the equilibrium branch, as `limits` reports it (issue 7): nothing past it
+        let end = self.finger.fmax(&self.target_v).map_err(model_err)?;
+        if p > end.tension {
+            return Err(model_err(ModelError::ForceLimit { tension: p as f64, fmax: end.tension as f64 }));
+        }
         let (cable, deg) = self.plan_servo(&self.finger, &self.fw, p, &self.target_v)?;
         self.force = p;
         self.cable = cable;

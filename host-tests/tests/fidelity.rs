@@ -128,3 +128,53 @@ fn console_fidelity_parameters_exist_with_their_ranges() {
     assert!(matches!(p.set("nu_b", f64::NAN), Err(Error::NonFinite { .. })));
     assert_eq!(p, before, "a refused set changes nothing");
 }
+
+/// The console on the simulated board: the fidelity parameters by name, `limits` reporting
+/// `Finger::fmax`, and `force` refusing a tension past it (`err limit`, naming fmax).
+#[test]
+fn console_limits_reports_fmax_and_force_refuses_past_it() {
+    use finger_fw::sim::SimBoard;
+    use finger_fw::App;
+    struct Out(String);
+    impl std::fmt::Write for Out {
+        fn write_str(&mut self, s: &str) -> std::fmt::Result {
+            self.0.push_str(s);
+            Ok(())
+        }
+    }
+    let mut a = App::new(SimBoard::default());
+    let mut cmd = |line: &str| -> String {
+        let mut out = Out(String::new());
+        for &b in format!("{line}\n").as_bytes() {
+            a.input_byte(b, &mut out);
+            while a.busy() {
+                a.tick(1, &mut out);
+            }
+        }
+        out.0.lines().last().unwrap_or("").to_string()
+    };
+    assert!(cmd("param m 9").starts_with("err usage: "));
+    assert!(cmd("param nu_b 0.5").starts_with("err usage: "));
+    for set in ["param layers 0", "param m 8", "param plate 1", "param nu_b 0.45", "param flex_links 1"] {
+        let r = cmd(set);
+        assert!(r.starts_with("ok "), "{set} -> {r}");
+    }
+    let lim = cmd("limits");
+    let field = |key: &str| -> String {
+        lim.split_whitespace().find_map(|kv| kv.strip_prefix(key)).unwrap_or_else(|| panic!("no {key} in {lim}")).to_string()
+    };
+    let fmax: f64 = field("fmax=").parse().unwrap();
+    assert_eq!(field("fmax_end="), "contact,1");
+    // the model's own fmax for these parameters (f32 on the board, f64 here)
+    let f = Finger::new(params(M, true, true)).unwrap();
+    let b = f.fmax(&[0.0; 3]).unwrap();
+    assert!((fmax - b.tension).abs() < 2e-3 * b.tension, "limits fmax {fmax} vs model {}", b.tension);
+
+    assert!(cmd("arm").starts_with("ok "));
+    let r = cmd("force 1");
+    assert!(r.starts_with("ok force="), "{r}");
+    let r = cmd(&format!("force {}", 1.01 * fmax));
+    assert!(r.starts_with("err limit: ") && r.contains("fmax"), "{r}");
+    let st = cmd("status");
+    assert!(st.contains(" force=1.000 "), "a refused force changes nothing: {st}");
+}
