@@ -173,7 +173,8 @@ fn kind_name(k: BranchEnd) -> &'static str {
 /// Bench results: (image, config name, case) -> record.
 type Bench = BTreeMap<(String, String, String), perf::Rec>;
 
-const IMAGES: &[(&str, &str)] = &[("m4f-libm", "de,f32"), ("m4f-micromath", "de,f32,micromath")];
+const IMAGES: &[(&str, &str)] =
+    &[("m4f-libm", "de,f32"), ("m4f-fast-trig", "de,f32,fast-trig"), ("m4f-micromath", "de,f32,micromath")];
 
 fn run_bench() -> Result<Bench, String> {
     let mut out = Bench::new();
@@ -408,7 +409,7 @@ cases (below); only the paper's and the real-structure configurations are in the
     );
     let _ = writeln!(
         w,
-        "| modulus | links | m | joint ≤ {l} N | where | max deg ≤ {l} N | tip ≤ {l} N (mm) | joint to the end | tip to the end (mm) | refused | fmax no-stacks: model / reference | M4F instr. solve (libm / micromath) | setup (libm) |",
+        "| modulus | links | m | joint ≤ {l} N | where | max deg ≤ {l} N | tip ≤ {l} N (mm) | joint to the end | tip to the end (mm) | refused | fmax no-stacks: model / reference | M4F instr. solve (libm / fast-trig / micromath) | setup (libm) |",
         l = fmt_t(LIMIT_TENSION)
     );
     let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
@@ -420,8 +421,8 @@ cases (below); only the paper's and the real-structure configurations are in the
             (Ok(f), None) => format!("{:.3} / none", f.0),
             (Err(e), _) => format!("error: {e}"),
         };
-        let (ins, setup) = match (worst_instr("m4f-libm", c), worst_instr("m4f-micromath", c)) {
-            (Some(a), Some(b)) => (format!("{:.0} / {:.0}", a.0, b.0), format!("{:.0}", a.1)),
+        let (ins, setup) = match (worst_instr("m4f-libm", c), worst_instr("m4f-fast-trig", c), worst_instr("m4f-micromath", c)) {
+            (Some(a), Some(f), Some(b)) => (format!("{:.0} / {:.0} / {:.0}", a.0, f.0, b.0), format!("{:.0}", a.1)),
             _ => ("—".into(), "—".into()),
         };
         let mark = if wp.abs() <= TOL_PCT { " ✓" } else { "" };
@@ -469,14 +470,15 @@ reference up to {} N on every scene (plate modulus and flexible links on): worst
         w,
         "\n**Run time: no m meets the {BUDGET:.0}-instruction budget** with the current solver{}. One \
 forward solve costs {:.0} (m = 1) to {:.0} (m = 8) M4F instructions with libm's f32 trig (the firmware's \
-build), {:.0} to {:.0} with micromath's; m's own share is about {:.0} (libm) or {:.0} (micromath) \
+build), {:.0} to {:.0} with the model's `fast-trig` feature (f32 sin/cos, ~1 ulp), {:.0} to {:.0} with micromath's; m's own share is about {:.0} (libm) or {:.0} (micromath) \
 instructions per sub-element per distinct joint, the rest is the solver's fixed cost (continuation, \
 dual-number Newton iterations, the posture and the tangent determinant of every joint in \
 `assemble`). What bounds it: trig and the number of marches per solve, not the model's arithmetic. \
 Each sub-element of each march (every Newton iteration, the dual-number tangent, the posture) \
 evaluates a sine and a cosine; libm's f32 `sincosf` reduces its argument and evaluates its \
 polynomials in f64 (musl's algorithm), which the M4F's single-precision FPU runs in software, \
-so a libm sub-element costs {:.1} times a micromath one. The per-joint case (three different \
+so a libm sub-element costs {:.1} times a micromath one (`fast-trig` keeps libm's accuracy at \
+close to micromath's cost). The per-joint case (three different \
 joints, no reuse of a solved joint) is the worst case.",
         if budget_ok.is_empty() && budget_ok_mm.is_empty() {
             String::new()
@@ -485,6 +487,8 @@ joints, no reuse of a solved joint) is the worst case.",
         },
         cost("m4f-libm", 1),
         cost("m4f-libm", 8),
+        cost("m4f-fast-trig", 1),
+        cost("m4f-fast-trig", 8),
         cost("m4f-micromath", 1),
         cost("m4f-micromath", 8),
         (cost("m4f-libm", 8) - cost("m4f-libm", 1)) / 7.0 / 3.0,
@@ -605,8 +609,8 @@ posture, excursion, tangent); \"setup\": `Finger::compliances` (once per voltage
 error\": the target's own f32 answer against the continuum reference: model and numerics together, \
 what a user of the board sees.\n"
     );
-    let _ = writeln!(w, "| case | modulus, links | m | solve libm | solve micromath | setup libm | total error libm: joint / tip | total error micromath: joint / tip |");
-    let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- | --- | --- |");
+    let _ = writeln!(w, "| case | modulus, links | m | solve libm | solve fast-trig | solve micromath | setup libm | total error libm: joint / tip | total error micromath: joint / tip |");
+    let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     for &(case, si, t) in CASES {
         for &(plate, flex) in BENCH_CFGS {
             for m in MS {
@@ -628,10 +632,11 @@ what a user of the board sees.\n"
                 };
                 let _ = writeln!(
                     w,
-                    "| {case} | {}, {} | {m} | {} | {} | {} | {} | {} |",
+                    "| {case} | {}, {} | {m} | {} | {} | {} | {} | {} | {} |",
                     if plate { "plate" } else { "E_b" },
                     if flex { "flexible" } else { "rigid" },
                     n("m4f-libm", false),
+                    n("m4f-fast-trig", false),
                     n("m4f-micromath", false),
                     n("m4f-libm", true),
                     tot("m4f-libm"),
@@ -734,10 +739,12 @@ a rejected command changes nothing.\n"
     let cf = Finger::new(params(&SCENES[1], cc)).expect("valid parameters");
     let cb = cf.fmax(&SCENES[1].volts).expect("fmax of the default finger");
     let past = 1.1 * cb.tension;
-    let refusal = match cf.solve(past, &SCENES[1].volts, Method::converged()) {
-        Err(e) => format!("err {}: {e}", e.code()),
-        Ok(_) => "ok (not refused!)".to_string(),
+    // what `force` answers (src/app.rs: the tension against `Finger::fmax`, f32 on the board)
+    let refusal = {
+        let e = finger_model::Error::ForceLimit { tension: past as f32 as f64, fmax: cb.tension as f32 as f64 };
+        format!("err {}: {e}", e.code())
     };
+    assert!(cf.solve(past, &SCENES[1].volts, Method::converged()).is_err(), "the solver refuses past fmax too");
     let _ = writeln!(
         w,
         "\nExamples (the finger with 4 layers at 0 V, m = {}, plate = 1, flex_links = 1; numbers from the model):\n\n```\n\
@@ -759,9 +766,10 @@ a rejected command changes nothing.\n"
         w,
         "`limits` reports `fmax` and `fmax_end=<contact|limit-point|search-bound>,<joint>` from \
 `Finger::fmax` for the target voltages: the lowest tension at which a span closes to `span_floor` \
-(contact) or a joint's equilibrium tangent turns singular (limit point). `force` must refuse a \
-tension past it with `err limit`; the converged solver refuses it by itself (its continuation \
-cannot pass the branch end: `Error::Contact` / `Error::LimitPoint`, code `limit`). With m = 1 and \
+(contact) or a joint's equilibrium tangent turns singular (limit point). `force` refuses a tension \
+past it with `err limit` naming fmax (`Error::ForceLimit`), and changes nothing; `solve` and the \
+other commands that solve are refused by the converged solver itself, whose continuation cannot \
+pass the branch end (`Error::Contact` / `Error::LimitPoint`, code `limit`). With m = 1 and \
 no stacks the span never closes below the search bound (50 × the tension that turns the softest \
 joint by 1 rad linearly), so fmax is that bound (`search-bound`): one more reason not to use m = 1."
     );
