@@ -7,12 +7,13 @@
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::debug;
-use finger_model::{Finger, Method, Params, Real};
+#[cfg(not(feature = "fixed"))]
+use finger_model::Finger;
+use finger_model::{Method, Params, Real};
 
 #[cfg(feature = "fixed")]
 #[allow(dead_code)]
 mod fix;
-#[cfg(feature = "fixed")]
 #[allow(dead_code)]
 #[path = "scenes.rs"]
 mod scenes;
@@ -24,9 +25,8 @@ mod cycles_stub {
 }
 #[cfg(feature = "fixed")]
 use cycles_stub as cycles;
-#[cfg(feature = "fixed")]
 fn params(s: &scenes::Scene) -> Params<f64> {
-    Params { layers: s.layers, ..Params::default() }
+    scenes::params(s)
 }
 
 #[panic_handler]
@@ -56,14 +56,17 @@ fn main() -> ! {
     let tension = core::hint::black_box(1.0f64);
     #[cfg(not(feature = "fixed"))]
     let y = {
-        let f = Finger::new(Params::<f32> { layers: layers(), ..Params::default() });
+        let s = scenes::Scene { name: "", layers: layers(), tension, volts: [0.0; 3], fidelity: false };
+        let f = Finger::new(params(&s).cast::<f32>());
         f.and_then(|f| f.solve(tension as f32, &[0.0; 3], Method::converged())).map(|s| s.tip().y.to_f64())
     };
     #[cfg(feature = "fixed")]
     let y = {
-        let s = scenes::Scene { name: "", layers: layers(), tension, volts: [0.0; 3] };
+        let s = scenes::Scene { name: "", layers: layers(), tension, volts: [0.0; 3], fidelity: false };
         fix::prep::<fix::Q16>(&s).and_then(|(f, c, _)| {
-            f.solve_with(&c, fix::Q16::from_f64(tension), [fix::Q16::from_f64(0.0); 2], Method::converged())
+            // the tolerance at the scalar's resolution (the default 1e-9 mm is 0 in I16F16)
+            let m = Method::Converged { tol: fix::Q16::from_f64(<fix::Q16 as Real>::EPS), max_iter: 200 };
+            f.solve_with(&c, fix::Q16::from_f64(tension), [fix::Q16::from_f64(0.0); 2], m)
                 .map(|s| s.tip().y.to_f64())
         })
     };

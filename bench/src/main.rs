@@ -67,8 +67,8 @@ fn cast_method<S: Real>(m: Method<f64>) -> Method<S> {
     }
 }
 
-fn params(s: &Scene) -> Params<f64> {
-    Params { layers: s.layers, ..Params::default() }
+pub(crate) fn params(s: &Scene) -> Params<f64> {
+    scenes::params(s)
 }
 
 /// Run one scene with scalar `S`. `prep` builds the finger and its compliances (in `S`, or in

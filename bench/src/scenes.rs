@@ -1,7 +1,10 @@
 //! The fixed scene set of the performance report, shared by the bench image (target) and
-//! perf-report (host reference) through `#[path]` includes. Plain data, no dependencies.
+//! perf-report (host reference) through `#[path]` includes.
 //!
-//! MODEL.md's default finger (3 joints, corrected DE modulus), with (`layers` = 4) and without
+//! MODEL.md's finger (3 joints, corrected DE modulus) in the paper's model, pinned here (one
+//! compliance per hinge, m = 1, the body modulus, rigid links) so that the report does not move
+//! with the library's defaults; two scenes (`-fid`) use the fidelity model (m = 8 sub-elements,
+//! plate modulus, flexible links) to show its cost. With (`layers` = 4) and without
 //! (`layers` = 0) DE stacks. Loads are the paper's 0.2, 0.5 and 1.0 N, uniform and per-joint
 //! voltages, and two high tensions: 7 N (where the paper's stepping at n_inc = 1 is off by
 //! tens of mm) and 250 N (near contact: the links touch at about 300 N).
@@ -13,10 +16,22 @@ pub struct Scene {
     pub layers: u32,
     pub tension: f64,
     pub volts: [f64; 3],
+    /// The fidelity model (m = 8, plate modulus, flexible links) instead of the paper's.
+    pub fidelity: bool,
 }
 
 const fn sc(name: &'static str, layers: u32, tension: f64, volts: [f64; 3]) -> Scene {
-    Scene { name, layers, tension, volts }
+    Scene { name, layers, tension, volts, fidelity: false }
+}
+
+const fn fid(name: &'static str, layers: u32, tension: f64, volts: [f64; 3]) -> Scene {
+    Scene { name, layers, tension, volts, fidelity: true }
+}
+
+/// The scene's parameters: MODEL.md's values with the hinge model pinned.
+pub fn params(s: &Scene) -> finger_model::Params<f64> {
+    let (m, plate, flex_links) = if s.fidelity { (8, true, true) } else { (1, false, false) };
+    finger_model::Params { layers: s.layers, m, plate, flex_links, ..finger_model::Params::default() }
 }
 
 pub const SCENES: &[Scene] = &[
@@ -30,6 +45,8 @@ pub const SCENES: &[Scene] = &[
     sc("de-1.0N-per9/5/0kV", 4, 1.0, [9000.0, 5000.0, 0.0]),
     sc("bare-7N", 0, 7.0, [0.0; 3]),
     sc("bare-250N-contact", 0, 250.0, [0.0; 3]),
+    fid("bare-1.0N-fid", 0, 1.0, [0.0; 3]),
+    fid("de-1.0N-per9/5/0kV-fid", 4, 1.0, [9000.0, 5000.0, 0.0]),
 ];
 
 /// The paper's stepping at these increment counts; plus the converged solver.

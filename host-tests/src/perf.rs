@@ -175,7 +175,7 @@ pub fn parse(image: &Image, out: &str) -> Result<Vec<Rec>, String> {
 }
 
 pub fn scene_params(s: &Scene) -> Params<f64> {
-    Params { layers: s.layers, ..Params::default() }
+    scenes::params(s)
 }
 
 /// The reference: f64, converged solver at 1e-12 mm. Tip (x, y) mm and joint angles rad.
