@@ -538,7 +538,7 @@ fn plot(rows: &[Row]) -> String {
     let (x0, x1, y0, y1) = (2.0f64, 8.0f64, -7.0f64, 2.0f64); // log10 ranges
     let px = |x: f64| ml + (x.log10().clamp(x0, x1) - x0) / (x1 - x0) * (w - ml - mr);
     let py = |y: f64| mt + (y1 - y.max(1e-7).log10().clamp(y0, y1)) / (y1 - y0) * (h - mt - mb);
-    let colors = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf"];
+    let colors = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"];
     let mut s = String::new();
     writeln!(s, r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="12">"#).unwrap();
     writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#).unwrap();
