@@ -491,6 +491,20 @@ fn report(
     writeln!(w, "continuation and a branch check. Note also the cost: stepping at n_inc = 1 takes about as many").unwrap();
     writeln!(w, "instructions as the converged solve (table above), so it never pays on the target.\n").unwrap();
 
+    // ---- stability
+    writeln!(w, "## Stability tests\n").unwrap();
+    writeln!(w, "`cd host-tests && cargo test --test stability --test proptest_model` (part of the regular suite):").unwrap();
+    writeln!(w, "stiff (E_b = 3,500 MPa) and soft (1 MPa) bodies, very thin and very thick hinges, tension raised until the").unwrap();
+    writeln!(w, "branch ends (contact or limit point, a typed error), voltages at the ceiling (refused) and just below").unwrap();
+    writeln!(w, "(solved), n_inc = 1 at every tension, tiny and huge geometry at the ends of the documented ranges in f32").unwrap();
+    writeln!(w, "and f64, and NaN/infinite inputs; proptest over the valid domain (f32 and f64, 1..5 joints, m = 1..3,").unwrap();
+    writeln!(w, "E_b 1..3,500 MPa, stacks, voltages below the ceiling, tensions to 2 kN): every Ok result finite, every").unwrap();
+    writeln!(w, "failure a typed error, the converged solver converging or ending in contact, limit point or").unwrap();
+    writeln!(w, "non-convergence. The model's own unit tests (`cd model && cargo test`, and `--features fast-trig`)").unwrap();
+    writeln!(w, "check the dual-number march against the plain one bit for bit, its Jacobian against central").unwrap();
+    writeln!(w, "differences, and the f32 sine/cosine against f64. The bench image path is exercised once by").unwrap();
+    writeln!(w, "`host-tests/tests/perf_bench.rs` (one scene in QEMU against the host reference).\n").unwrap();
+
     // ---- lean
     writeln!(w, "## Lean builds: flash and static RAM per feature set\n").unwrap();
     writeln!(w, "The `lean` binary of `bench/` (`bench/src/lean.rs`): one converged solve of the bare 1.0 N scene (with DE:").unwrap();
