@@ -567,7 +567,6 @@ fn prepare(spec: &FingerSpec) -> Result<Prepared, SceneError> {
 /// The centreline polyline of a solution: node 0, each hinge's sub-element ends, each node.
 pub fn posture_points(params: &Params<f64>, sol: &Solution<f64>) -> Vec<[f64; 2]> {
     let sub = params.hinge_len() / sol.m as f64;
-    let link = params.l - params.hinge_len();
     let mut pts = vec![[sol.nodes[0].x, sol.nodes[0].y]];
     for k in 0..sol.n {
         let mut pose = sol.nodes[k];
@@ -576,8 +575,8 @@ pub fn posture_points(params: &Params<f64>, sol: &Solution<f64>) -> Vec<[f64; 2]
             pose = pose.then(sub + q[0], q[1], q[2]);
             pts.push([pose.x, pose.y]);
         }
-        let node = pose.then(link, 0.0, 0.0);
-        pts.push([node.x, node.y]);
+        // the node as solved (a flexible link bends between the hinge's end and the node)
+        pts.push([sol.nodes[k + 1].x, sol.nodes[k + 1].y]);
     }
     pts
 }

@@ -643,18 +643,27 @@ impl<R: Real> Finger<R> {
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
         let mut nodes = [Pose::origin(); MAX_JOINTS + 1];
         let mut links = [[R::zero(); 3]; MAX_JOINTS];
-        // with a tip load on flexible links the tip point enters the links' loads: two passes
-        let passes = if loaded && self.p.flex_links { 2 } else { 1 };
+        // with a tip load on flexible links the tip point enters the links' loads: a fixed
+        // point on the tip, from the rigid-link tip (the links are stiff: it converges fast)
+        let n = self.p.n;
+        let passes = if loaded && self.p.flex_links { 8 } else { 1 };
+        let mut tip_point: Option<[R; 2]> = None;
         for _ in 0..passes {
-            let n = self.p.n;
-            let tip = if loaded { Some((tip_force, [nodes[n].x, nodes[n].y])) } else { None };
+            let tip = if loaded { tip_point.map(|t| (tip_force, t)) } else { None };
             for k in 0..n {
                 let e = states[k].end;
                 let hinge_end = nodes[k].then(e.x, e.y, e.theta);
-                links[k] = self.link_q(tension, &hinge_end, tip);
+                links[k] = if loaded && tip.is_none() { [R::zero(); 3] } else { self.link_q(tension, &hinge_end, tip) };
                 let q = links[k];
                 nodes[k + 1] = hinge_end.then(self.link_len + q[0], q[1], q[2]);
             }
+            let new_tip = [nodes[n].x, nodes[n].y];
+            if let Some(t) = tip_point {
+                if (new_tip[0] - t[0]).abs() + (new_tip[1] - t[1]).abs() <= self.resolution() {
+                    break;
+                }
+            }
+            tip_point = Some(new_tip);
         }
         (nodes, links)
     }
@@ -1021,7 +1030,7 @@ impl<R: Real> Finger<R> {
     /// The end of the equilibrium branch under tension alone for these voltages: the lowest
     /// tension at which a joint's span closes to its floor (contact) or its equilibrium tangent
     /// turns singular (a limit point), whichever comes first, found by load continuation to
-    /// 1e-4 relative. If neither happens below a search bound (50 times the tension that would
+    /// 1e-4 relative. If neither happens below a search bound (1000 times the tension that would
     /// turn the softest joint by 1 rad linearly), that bound is returned as `SearchBound`.
     /// The converged solver refuses tensions past this end (its continuation cannot pass it).
     pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
@@ -1030,8 +1039,8 @@ impl<R: Real> Finger<R> {
         let tol = self.resolution().max(R::from_f64(1e-9));
         for k in 0..self.p.n {
             let c33 = c.c[k][..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
-            let p_hi = R::from_f64(50.0) / (self.p.e * c33);
-            let min_step = p_hi * R::from_f64(1e-4 / 50.0);
+            let p_hi = R::from_f64(1000.0) / (self.p.e * c33);
+            let min_step = p_hi * R::from_f64(1e-4 / 1000.0);
             let end = match self.newton_joint(k, &c.c[k], p_hi, tol, 20_000, min_step) {
                 Ok(_) => BranchLimit { tension: p_hi, joint: k + 1, kind: BranchEnd::SearchBound },
                 Err(Error::Contact { tension, .. }) => {
