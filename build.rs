@@ -1,5 +1,5 @@
 //! Linker setup for the firmware binary (target only): memory.x, cortex-m-rt's link.x and
-//! defmt's defmt.x. Host builds of the library (host-tests) need none of it.
+//! defmt's defmt.x (feature `log`). Host builds of the library (host-tests) need none of it.
 use std::{env, fs, path::PathBuf};
 
 fn main() {
@@ -13,5 +13,7 @@ fn main() {
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rustc-link-arg-bins=--nmagic");
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
-    println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    if env::var_os("CARGO_FEATURE_LOG").is_some() {
+        println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    }
 }

@@ -12,16 +12,18 @@
 //!   drops the enable at once, releases the cable and disarms.
 //! - The HV enable is low from [`App::new`] until `arm`.
 
+use core::cell::Cell;
 use core::fmt::{self, Write};
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
 use finger_model::params::PARAMS;
-use finger_model::{Error as ModelError, Finger, Method, Params, Solution};
+use finger_model::{BranchLimit, Error as ModelError, Finger, Method, Params, Solution};
 use heapless::String;
 
 use crate::board::{Board, HV_CHANNELS};
 use crate::console::{self, Line, LineBuf, NumError};
+use crate::num::{self, Exp, Fixed, List, Short};
 
 /// Number of HV channels / joints the board drives.
 pub const CHANNELS: usize = HV_CHANNELS;
@@ -111,14 +113,31 @@ pub struct CmdError {
     pub msg: String<160>,
 }
 
+impl CmdError {
+    /// A console error with a fixed message.
+    pub fn new(code: &'static str, msg: &str) -> Self {
+        let mut m = String::new();
+        for c in msg.chars() {
+            if m.push(c).is_err() {
+                break;
+            }
+        }
+        CmdError { code, msg: m }
+    }
+}
+
 fn err(code: &'static str, args: fmt::Arguments) -> CmdError {
     let mut msg = String::new();
     let _ = msg.write_fmt(args);
     CmdError { code, msg }
 }
 
-fn model_err(e: ModelError) -> CmdError {
-    err(e.code(), format_args!("{e}"))
+/// A model error as a console error: its code, and a message written from its fields by
+/// [`num::write_model_error`] (never the model's `Display`: it links core's float formatting).
+pub(crate) fn model_err(e: ModelError) -> CmdError {
+    let mut msg = String::new();
+    let _ = num::write_model_error(&mut msg, &e);
+    CmdError { code: e.code(), msg }
 }
 
 /// The refusal of [`App::write_hv_duty`].
@@ -157,6 +176,10 @@ pub struct App<B: Board> {
     wait_s: f32,
     /// Control-loop time, ms.
     now_ms: u64,
+    /// `Finger::fmax` at the setpoints it was computed for ([`App::fmax`]), and how many
+    /// times it was computed.
+    fmax_cache: Cell<Option<([f32; CHANNELS], Result<BranchLimit<f32>, ModelError>)>>,
+    fmax_computed: Cell<u32>,
 }
 
 impl<B: Board> App<B> {
@@ -166,7 +189,11 @@ impl<B: Board> App<B> {
         for (ch, m) in hv_max.iter_mut().enumerate() {
             *m = board.hv(ch).max_duty_cycle();
         }
-        let finger = Finger::new(Params::default()).expect("default parameters are valid");
+        // the defaults are valid (a model test); no Debug formatting of the error on the target
+        let finger = match Finger::new(preset(Params::default())) {
+            Ok(f) => f,
+            Err(_) => panic!("default parameters"),
+        };
         let mut app = App {
             board,
             finger,
@@ -188,6 +215,8 @@ impl<B: Board> App<B> {
             wait_ms: 0,
             wait_s: 0.0,
             now_ms: 0,
+            fmax_cache: Cell::new(None),
+            fmax_computed: Cell::new(0),
         };
         app.hv_off_now();
         app.recompute();
@@ -332,10 +361,56 @@ impl<B: Board> App<B> {
         if !(deg <= fw.servo_range) {
             return Err(err(
                 "limit",
-                format_args!("cable excursion {cable:.2} mm needs {deg:.1} deg, past the servo travel {:.0} deg", fw.servo_range),
+                format_args!(
+                    "cable excursion {} mm needs {} deg, past the servo travel {} deg",
+                    Fixed(cable as f64, 2),
+                    Fixed(deg as f64, 1),
+                    Fixed(fw.servo_range as f64, 0)
+                ),
             ));
         }
         Ok((cable, deg))
+    }
+
+    /// The end of the equilibrium branch at the HV setpoints `volts` (`Finger::fmax`),
+    /// cached: computed once per model and set of setpoints (the cache is keyed by the
+    /// setpoints and cleared when a parameter changes, [`App::set_finger`]).
+    fn fmax(&self, volts: &[f32; CHANNELS]) -> Result<BranchLimit<f32>, ModelError> {
+        if let Some((key, r)) = self.fmax_cache.get() {
+            if key == *volts {
+                return r;
+            }
+        }
+        let r = self.finger.fmax(volts);
+        self.fmax_cache.set(Some((*volts, r)));
+        self.fmax_computed.set(self.fmax_computed.get() + 1);
+        r
+    }
+
+    /// How many times `Finger::fmax` ran (the cache's misses), for the tests.
+    pub fn fmax_evaluations(&self) -> u32 {
+        self.fmax_computed.get()
+    }
+
+    /// A new model (parameter or preset change): the fmax cache no longer holds.
+    fn set_finger(&mut self, f: Finger<f32>) {
+        self.finger = f;
+        self.fmax_cache.set(None);
+    }
+
+    /// The checks every setpoint change passes (`volt`, `force`, an armed `pose`): the HV
+    /// setpoints below the ceilings, the tension at most fmax at those setpoints (issue 7:
+    /// nothing past the end of the branch), the servo within its travel. Nothing moves;
+    /// returns where the servo must go (excursion mm, deg).
+    fn plan_setpoints(&self, force: f32, volts: &[f32; CHANNELS]) -> Result<(f32, f32), CmdError> {
+        self.check_volts(&volts.map(|v| v as f64))?;
+        if force > 0.0 {
+            let end = self.fmax(volts).map_err(model_err)?;
+            if force > end.tension {
+                return Err(model_err(ModelError::ForceLimit { tension: force as f64, fmax: end.tension as f64 }));
+            }
+        }
+        self.plan_servo(&self.finger, &self.fw, force, volts)
     }
 
     /// Emergency stop: HV off at once, cable released, disarmed. Clears a latched fault.
@@ -381,7 +456,7 @@ impl<B: Board> App<B> {
             self.wait_ms = self.wait_ms.saturating_sub(dt_ms);
             if self.wait_ms == 0 {
                 let nl = self.board.newline();
-                let _ = write!(out, "ok waited={}{}", self.wait_s, nl);
+                let _ = write!(out, "ok waited={}{}", Short(self.wait_s), nl);
             }
         }
     }
@@ -440,7 +515,7 @@ impl<B: Board> App<B> {
         }
     }
 
-    /// Ok(true): the reply comes later (wait).
+    /// Ok(true): the reply is written already (pose, contact) or comes later (wait).
     fn dispatch<W: Write>(&mut self, t: &[&[u8]], r: &mut Reply, out: &mut W) -> Result<bool, CmdError> {
         let args = &t[1..];
         match t[0] {
@@ -486,14 +561,27 @@ impl<B: Board> App<B> {
             }
             b"volt" => self.cmd_volt(args, r)?,
             b"force" => self.cmd_force(args, r)?,
-            b"pose" => self.cmd_pose(args, r)?,
+            #[cfg(feature = "pose")]
+            b"pose" => {
+                self.cmd_pose(args, out)?;
+                return Ok(true);
+            }
+            #[cfg(feature = "contact")]
+            b"contact" => {
+                self.cmd_contact(args, out)?;
+                return Ok(true);
+            }
+            #[cfg(not(feature = "pose"))]
+            b"pose" => return Err(err("unknown", format_args!("pose is not in this build (feature pose)"))),
+            #[cfg(not(feature = "contact"))]
+            b"contact" => return Err(err("unknown", format_args!("contact is not in this build (feature contact)"))),
             b"param" => self.cmd_param(args, r, out)?,
             b"preset" => self.cmd_preset(args, r)?,
             b"wait" => {
                 let [s] = args else { return Err(err("usage", format_args!("wait <seconds>"))) };
                 let s = number(s, "seconds")?;
                 if !(s >= 0.0 && s <= WAIT_MAX_S) {
-                    return Err(err("usage", format_args!("wait: 0..{WAIT_MAX_S} s")));
+                    return Err(err("usage", format_args!("wait: 0..{} s", Short(WAIT_MAX_S as f32))));
                 }
                 let ms = (s * 1000.0 + 0.5) as u32;
                 if ms == 0 {
@@ -512,7 +600,7 @@ impl<B: Board> App<B> {
     }
 
     fn cmd_status(&self, r: &mut Reply) {
-        let _ = write!(r, "armed={} force={:.3} volts=", self.armed as u8, self.force);
+        let _ = write!(r, "armed={} force={} volts=", self.armed as u8, Fixed(self.force as f64, 3));
         list(r, &self.volts, 1);
         let mut thick = [0.0f32; CHANNELS];
         for ch in 0..CHANNELS {
@@ -527,14 +615,20 @@ impl<B: Board> App<B> {
                 let _ = write!(r, " joints=");
                 joints(r, &s);
                 let tip = s.tip();
-                let _ = write!(r, " tip={:.3},{:.3},{:.2}", tip.x, tip.y, tip.theta * DEG);
+                let _ = write!(r, " tip={}", Tip(&tip));
             }
             Err(_) => {
                 let _ = write!(r, " joints=-,-,- tip=-,-,-");
                 fault = fault.or(Some("model"));
             }
         }
-        let _ = write!(r, " cable={:.3} servo={:.2} fault={}", self.cable, self.servo_deg, fault.unwrap_or("none"));
+        let _ = write!(
+            r,
+            " cable={} servo={} fault={}",
+            Fixed(self.cable as f64, 3),
+            Fixed(self.servo_deg as f64, 2),
+            fault.unwrap_or("none")
+        );
         let _ = write!(r, " enable={} target=", self.enable as u8);
         list(r, &self.target_v, 1);
     }
@@ -543,15 +637,21 @@ impl<B: Board> App<B> {
         let _ = write!(r, "vmax=");
         list(r, &self.vmax, 1);
         let p = self.finger.params();
-        let _ = write!(r, " vpullin={:.1} supply={:.1} margin={}", self.finger.pull_in_voltage(), p.v_supply, p.margin);
-        match self.finger.fmax(&self.target_v) {
+        let _ = write!(
+            r,
+            " vpullin={} supply={} margin={}",
+            Fixed(self.finger.pull_in_voltage() as f64, 1),
+            Fixed(p.v_supply as f64, 1),
+            Short(p.margin)
+        );
+        match self.fmax(&self.target_v) {
             Ok(b) => {
                 let kind = match b.kind {
                     finger_model::BranchEnd::Contact => "contact",
                     finger_model::BranchEnd::LimitPoint => "limit-point",
                     finger_model::BranchEnd::SearchBound => "search-bound",
                 };
-                let _ = write!(r, " fmax={:.4} fmax_end={},{}", b.tension, kind, b.joint);
+                let _ = write!(r, " fmax={} fmax_end={},{}", Fixed(b.tension as f64, 4), kind, b.joint);
             }
             Err(_) => {
                 let _ = write!(r, " fmax=- fmax_end=error");
@@ -559,10 +659,10 @@ impl<B: Board> App<B> {
         }
         let _ = write!(
             r,
-            " slew={} servo=0,{} cable_max={:.2} dutymax=",
-            self.fw.slew,
-            self.fw.servo_range,
-            self.fw.servo_range / DEG * self.fw.spool_r
+            " slew={} servo=0,{} cable_max={} dutymax=",
+            Short(self.fw.slew),
+            Short(self.fw.servo_range),
+            Fixed((self.fw.servo_range / DEG * self.fw.spool_r) as f64, 2)
         );
         let d = self.duty_max;
         let _ = write!(r, "{},{},{}", d[0], d[1], d[2]);
@@ -578,10 +678,10 @@ impl<B: Board> App<B> {
                 return Err(err(
                     "limit",
                     format_args!(
-                        "channel {}: {:.1} V is at or past the ceiling {:.1} V (33 % pull-in limit with margin, supply)",
+                        "channel {}: {} V is at or past the ceiling {} V (33 % pull-in limit with margin, supply)",
                         ch + 1,
-                        v[ch],
-                        self.vmax[ch]
+                        Fixed(v[ch], 1),
+                        Fixed(self.vmax[ch] as f64, 1)
                     ),
                 ));
             }
@@ -600,9 +700,16 @@ impl<B: Board> App<B> {
         let _ = write!(r, "joints=");
         joints(r, &sol);
         let tip = sol.tip();
-        let _ = write!(r, " tip={:.3},{:.3},{:.2} cable={:.4} thick=", tip.x, tip.y, tip.theta * DEG, sol.cable_excursion);
+        let _ = write!(r, " tip={} cable={} thick=", Tip(&tip), Fixed(sol.cable_excursion as f64, 4));
         list(r, &sol.thickness[..CHANNELS], 4);
-        let _ = write!(r, " stiffness={:.4e},{:.4e},{:.4e} iters={}", k[0][0], k[1][1], k[2][2], sol.iterations);
+        let _ = write!(
+            r,
+            " stiffness={},{},{} iters={}",
+            Exp(k[0][0] as f64, 4),
+            Exp(k[1][1] as f64, 4),
+            Exp(k[2][2] as f64, 4),
+            sol.iterations
+        );
         Ok(())
     }
 
@@ -657,7 +764,7 @@ impl<B: Board> App<B> {
         }
         self.check_volts(&req)?;
         let target = req.map(|x| x as f32);
-        let (cable, deg) = self.plan_servo(&self.finger, &self.fw, self.force, &target)?;
+        let (cable, deg) = self.plan_setpoints(self.force, &target)?;
         self.target_v = target;
         self.cable = cable;
         self.set_servo(deg);
@@ -680,65 +787,83 @@ impl<B: Board> App<B> {
         let [p] = args else { return Err(err("usage", format_args!("force <P>"))) };
         let p = tension(number(p, "P")?)?;
         self.require_armed("force")?;
-        // the end of the equilibrium branch, as `limits` reports it (issue 7): nothing past it
-        let end = self.finger.fmax(&self.target_v).map_err(model_err)?;
-        if p > end.tension {
-            return Err(model_err(ModelError::ForceLimit { tension: p as f64, fmax: end.tension as f64 }));
-        }
-        let (cable, deg) = self.plan_servo(&self.finger, &self.fw, p, &self.target_v)?;
+        let (cable, deg) = self.plan_setpoints(p, &self.target_v)?;
         self.force = p;
         self.cable = cable;
         self.set_servo(deg);
-        let _ = write!(r, "force={:.3} cable={:.3} servo={:.2}", self.force, self.cable, self.servo_deg);
+        let _ = write!(
+            r,
+            "force={} cable={} servo={}",
+            Fixed(self.force as f64, 3),
+            Fixed(self.cable as f64, 3),
+            Fixed(self.servo_deg as f64, 2)
+        );
         Ok(())
     }
 
-    /// `pose d1 d2 d3 [P]`: the inverse model (issue 4). Parses and checks the arguments, then
-    /// hands them to [`crate::app::App::pose_hook`].
-    fn cmd_pose(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
+    #[cfg(feature = "pose")]
+    /// `pose d1 d2 d3 [P]`: the inverse model (issue 4, [`crate::inverse_cmds::pose`]).
+    /// Writes its reply line itself. Armed, the solution goes through the checks of `volt`
+    /// and `force` ([`App::plan_setpoints`]) and then moves the outputs; disarmed it answers
+    /// and moves nothing; refused or unreachable, nothing moves.
+    fn cmd_pose<W: Write>(&mut self, args: &[&[u8]], out: &mut W) -> Result<(), CmdError> {
         if args.len() != 3 && args.len() != 4 {
             return Err(err("usage", format_args!("pose <d1> <d2> <d3> [<P>]")));
         }
-        let mut deg = [0.0f32; CHANNELS];
+        let mut deg = [0.0f64; CHANNELS];
         for ch in 0..CHANNELS {
             let d = number(args[ch], "angle")?;
             if !(d.abs() <= 360.0) {
                 return Err(err("usage", format_args!("pose: joint angles are degrees, |d| <= 360")));
             }
-            deg[ch] = d as f32;
+            deg[ch] = d;
         }
         let p = match args.get(3) {
-            Some(t) => Some(tension(number(t, "P")?)?),
+            Some(t) => Some(tension(number(t, "P")?)? as f64),
             None => None,
         };
-        self.pose_hook(deg, p, r)
-    }
-
-    /// The inverse model's hook: joint angles in degrees and an optional tension to the
-    /// tension and voltages (issue 4). Moves the outputs only when armed, through the same
-    /// checks as `volt` and `force`.
-    fn pose_hook(&mut self, deg: [f32; CHANNELS], p: Option<f32>, r: &mut Reply) -> Result<(), CmdError> {
-        let rad = deg.map(|d| d / DEG);
-        let sol = finger_model::solve_pose(&self.finger, &rad, p).map_err(model_err)?;
-        let mut v = [0.0f64; CHANNELS];
-        for ch in 0..CHANNELS {
-            v[ch] = sol.volts[ch] as f64;
-        }
-        self.check_volts(&v)?;
-        let target = v.map(|x| x as f32);
-        if self.armed {
-            let (cable, sdeg) = self.plan_servo(&self.finger, &self.fw, sol.tension, &target)?;
+        let armed = self.armed;
+        let mut plan = None;
+        let mut line: String<240> = String::new();
+        let this = &*self;
+        let _ = crate::inverse_cmds::pose(&mut line, &this.finger, &deg, p, |t, v| {
+            if !armed {
+                return Ok(());
+            }
+            this.require_armed("pose")?;
+            let target = [v[0], v[1], v[2]];
+            let (cable, sdeg) = this.plan_setpoints(t, &target)?;
+            plan = Some((t, target, cable, sdeg));
+            Ok(())
+        });
+        if let Some((t, target, cable, sdeg)) = plan {
             self.target_v = target;
-            self.force = sol.tension;
+            self.force = t;
             self.cable = cable;
             self.set_servo(sdeg);
         }
-        let _ = write!(r, "force={:.4} volts=", sol.tension);
-        list(r, &target, 1);
-        let _ = write!(r, " joints=");
-        let j = sol.angles.map(|a| a * DEG);
-        list(r, &j[..CHANNELS], 3);
-        let _ = write!(r, " interval={:.4},{:.4} moved={}", sol.interval[0], sol.interval[1], self.armed as u8);
+        let _ = write!(out, "{line}{}", self.board.newline());
+        Ok(())
+    }
+
+    #[cfg(feature = "contact")]
+    /// `contact <P0> <P> [<V1> <V2> <V3>]`: model only ([`crate::inverse_cmds::contact`]);
+    /// the voltages are checked against the ceilings as `solve` does. Writes its reply line.
+    fn cmd_contact<W: Write>(&self, args: &[&[u8]], out: &mut W) -> Result<(), CmdError> {
+        if args.len() != 2 && args.len() != 2 + CHANNELS {
+            return Err(err("usage", format_args!("contact <P0> <P> [<V1> <V2> <V3>]")));
+        }
+        let p0 = tension(number(args[0], "P0")?)? as f64;
+        let p = tension(number(args[1], "P")?)? as f64;
+        let mut v = [0.0f64; CHANNELS];
+        if args.len() > 2 {
+            v = [number(args[2], "V1")?, number(args[3], "V2")?, number(args[4], "V3")?];
+        }
+        self.check_volts(&v)?;
+        let mut line: String<240> = String::new();
+        let volts: &[f64] = if args.len() > 2 { &v } else { &[] };
+        let _ = crate::inverse_cmds::contact(&mut line, &self.finger, p0, p, volts);
+        let _ = write!(out, "{line}{}", self.board.newline());
         Ok(())
     }
 
@@ -760,10 +885,10 @@ impl<B: Board> App<B> {
                 let p = self.finger.params();
                 for i in PARAMS {
                     let v = p.get(i.name).unwrap_or(f64::NAN) as f32;
-                    let _ = write!(out, "{}={} ({}){nl}", i.name, v, i.range);
+                    let _ = write!(out, "{}={} ({}){nl}", i.name, Short(v), i.range);
                 }
                 for i in FW_PARAMS {
-                    let _ = write!(out, "{}={} ({}){nl}", i.name, self.fw.get(i.name).unwrap_or(0.0), i.range);
+                    let _ = write!(out, "{}={} ({}){nl}", i.name, Short(self.fw.get(i.name).unwrap_or(0.0)), i.range);
                 }
                 let _ = write!(r, "params={}", PARAMS.len() + FW_PARAMS.len());
                 return Ok(());
@@ -787,7 +912,7 @@ impl<B: Board> App<B> {
                 p.set(name, v).map_err(model_err)?;
                 let f = Finger::new(p).map_err(model_err)?;
                 let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
-                self.finger = f;
+                self.set_finger(f);
                 self.cable = cable;
                 self.set_servo(deg);
             } else {
@@ -804,26 +929,35 @@ impl<B: Board> App<B> {
             Some(v) => v as f32,
             None => self.fw.get(name).unwrap_or(0.0),
         };
-        let _ = write!(r, "{name}={v}");
+        let _ = write!(r, "{name}={}", Short(v));
         Ok(())
     }
 
     fn cmd_preset(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let [which] = args else { return Err(err("usage", format_args!("preset <default|paper>"))) };
         let (p, name) = match *which {
-            b"default" => (Params::<f32>::default(), "default"),
-            b"paper" => (Params::<f32>::paper(), "paper"),
+            b"default" => (preset(Params::<f32>::default()), "default"),
+            b"paper" => (preset(Params::<f32>::paper()), "paper"),
             w => return Err(err("usage", format_args!("preset {} is not default or paper", console::printable(w)))),
         };
         self.require_disarmed("preset")?;
         let f = Finger::new(p).map_err(model_err)?;
         let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
-        self.finger = f;
+        self.set_finger(f);
         self.cable = cable;
         self.set_servo(deg);
         self.recompute();
         let _ = write!(r, "preset={name}");
         Ok(())
+    }
+}
+
+/// A preset as this build can hold it: without the `de` feature the finger has no stacks.
+fn preset(p: Params<f32>) -> Params<f32> {
+    if cfg!(feature = "de") {
+        p
+    } else {
+        p.without_stacks()
     }
 }
 
@@ -837,7 +971,10 @@ const HELP: &[&str] = &[
     "stop                      emergency stop: HV off at once, cable released, disarmed",
     "volt <1|2|3|all> <V>      HV channel setpoint, slewed; needs arm",
     "force <P>                 cable tension: the servo pulls the model's excursion; needs arm",
-    "pose <d1> <d2> <d3> [<P>] inverse: tension and voltages for these joint angles (deg)",
+    #[cfg(feature = "pose")]
+    "pose <d1> <d2> <d3> [<P>] inverse: tension and voltages for these joint angles (deg); moves only when armed",
+    #[cfg(feature = "contact")]
+    "contact <P0> <P> [<V1> <V2> <V3>]  model only: force the tip presses with, stopped at the free tip of P0",
     "param [<name> [<value>]]  list, read or set a parameter; only while disarmed",
     "preset <default|paper>    model parameters back to a preset; only while disarmed",
     "wait <s>                  run the control loop for s seconds, then reply",
@@ -864,7 +1001,7 @@ fn tension(p: f64) -> Result<f32, CmdError> {
         return Err(err("usage", format_args!("tension must be >= 0 (a cable cannot push)")));
     }
     if p > 1e6 {
-        return Err(err("limit", format_args!("tension {p:.3e} N is past fmax")));
+        return Err(err("limit", format_args!("tension {} N is past fmax", Exp(p, 3))));
     }
     Ok(p as f32)
 }
@@ -898,8 +1035,16 @@ fn tip_stiffness(f: &Finger<f32>, sol: &Solution<f32>) -> Result<[[f32; 3]; 3], 
 }
 
 fn list(r: &mut Reply, v: &[f32], prec: usize) {
-    for (i, x) in v.iter().enumerate() {
-        let _ = if i == 0 { write!(r, "{x:.prec$}") } else { write!(r, ",{x:.prec$}") };
+    let _ = write!(r, "{}", List(v, prec));
+}
+
+/// A tip pose as `x,y,deg` (mm, mm, degrees).
+struct Tip<'a>(&'a finger_model::Pose<f32>);
+
+impl fmt::Display for Tip<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let t = self.0;
+        write!(f, "{},{},{}", Fixed(t.x as f64, 3), Fixed(t.y as f64, 3), Fixed((t.theta * DEG) as f64, 2))
     }
 }
 

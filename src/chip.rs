@@ -30,9 +30,9 @@ compile_error!("features `qemu` and `hw` are exclusive: build the board with --n
 #[cfg(not(any(feature = "qemu", feature = "hw")))]
 compile_error!("choose a build: feature `qemu` (default) or `hw` (--no-default-features --features hw)");
 
-#[cfg(feature = "hw")]
+#[cfg(all(feature = "log", feature = "hw"))]
 use defmt_rtt as _;
-#[cfg(feature = "qemu")]
+#[cfg(all(feature = "log", feature = "qemu"))]
 use defmt_semihosting as _;
 
 /// SysTick counts per millisecond (core clock 168 MHz on the board and in QEMU).
@@ -61,11 +61,14 @@ fn force_hv_off() {
     }
 }
 
+/// HV off first (raw register writes), then halt: no message formatting (the PanicInfo is
+/// not read, so core's panic formatting is not linked). On the board the IWDG, no longer
+/// fed, resets the chip, which boots disarmed with the HV enable low.
 #[panic_handler]
 fn panic(_info: &PanicInfo) -> ! {
     force_hv_off();
+    #[cfg(feature = "log")]
     defmt::error!("panic: HV forced off");
-    // On the board the IWDG resets the chip (nothing feeds it any more).
     loop {
         cortex_m::asm::nop();
     }
@@ -184,6 +187,7 @@ fn main() -> ! {
     cp.SYST.enable_interrupt();
     cp.SYST.enable_counter();
 
+    #[cfg(feature = "log")]
     defmt::info!("finger-fw {=str} up, board {=str}", finger_fw::VERSION, app.board().name());
 
     // Boot banner: not a reply; tells a client that input is now received (QEMU drops bytes

@@ -84,51 +84,69 @@ pub enum NumError {
 
 /// Parse a decimal number: optional sign, digits with an optional fraction, optional
 /// exponent. Everything else (NaN, infinity, hex, trailing garbage, non-ASCII) is refused.
+/// No core float parsing (flash): the digits are gathered into a u64 mantissa (19
+/// significant digits kept) and a decimal exponent, see [`crate::num::decimal_to_f64`].
 pub fn parse_number(tok: &[u8]) -> Result<f64, NumError> {
-    let mut i = 0;
     let n = tok.len();
+    let mut i = 0;
+    let neg = i < n && tok[i] == b'-';
     if i < n && (tok[i] == b'+' || tok[i] == b'-') {
         i += 1;
     }
-    let mut digits = 0;
-    while i < n && tok[i].is_ascii_digit() {
-        i += 1;
-        digits += 1;
-    }
-    if i < n && tok[i] == b'.' {
-        i += 1;
-        while i < n && tok[i].is_ascii_digit() {
-            i += 1;
+    let (mut mant, mut sig, mut exp10, mut digits) = (0u64, 0u32, 0i64, 0u32);
+    let mut frac = false;
+    while i < n {
+        let c = tok[i];
+        if c == b'.' && !frac {
+            frac = true;
+        } else if c.is_ascii_digit() {
+            let d = (c - b'0') as u64;
             digits += 1;
+            if mant == 0 && d == 0 {
+                // a leading zero: no significant digit yet
+                if frac {
+                    exp10 -= 1;
+                }
+            } else if sig < 19 {
+                mant = mant * 10 + d;
+                sig += 1;
+                if frac {
+                    exp10 -= 1;
+                }
+            } else if !frac {
+                exp10 += 1; // an integer digit past the 19 kept
+            }
+        } else {
+            break;
         }
+        i += 1;
     }
     if digits == 0 {
         return Err(NumError::Syntax);
     }
     if i < n && (tok[i] == b'e' || tok[i] == b'E') {
         i += 1;
+        let eneg = i < n && tok[i] == b'-';
         if i < n && (tok[i] == b'+' || tok[i] == b'-') {
             i += 1;
         }
-        let mut exp_digits = 0;
+        let (mut e, mut exp_digits) = (0i64, 0);
         while i < n && tok[i].is_ascii_digit() {
+            e = (e * 10 + (tok[i] - b'0') as i64).min(1_000_000);
             i += 1;
             exp_digits += 1;
         }
         if exp_digits == 0 {
             return Err(NumError::Syntax);
         }
+        exp10 += if eneg { -e } else { e };
     }
     if i != n {
         return Err(NumError::Syntax);
     }
-    let s = core::str::from_utf8(tok).map_err(|_| NumError::Syntax)?;
-    let v: f64 = s.parse().map_err(|_| NumError::Syntax)?;
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(NumError::Overflow)
-    }
+    let exp10 = exp10.clamp(-100_000, 100_000) as i32;
+    let v = crate::num::decimal_to_f64(mant, exp10).ok_or(NumError::Overflow)?;
+    Ok(if neg { -v } else { v })
 }
 
 /// A token as text for messages: itself when printable ASCII, else a placeholder.

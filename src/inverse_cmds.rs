@@ -1,13 +1,14 @@
 //! Console commands of the inverse model (issue 4): `pose` (CONSOLE.md) and `contact` (an
 //! addition, docs/inverse.md). Each handler takes the already parsed arguments, runs the model
-//! and writes the one final reply line (without the line ending); the dispatcher owns parsing,
-//! the armed state and the outputs.
+//! and writes the one final reply line (without the line ending); the dispatcher
+//! ([`crate::App`]) owns parsing, the armed state and the outputs.
 //!
 //! - `pose <d1> <d2> <d3> [<P>]` (degrees, N): the tension and voltages that hold the joint
 //!   angles. Reply `ok force=<N> volts=<v1,v2,v3> joints=<d1,d2,d3> range=<lo,hi>` (`range`,
 //!   the tensions that can hold the posture, is an addition). The outputs move only through
-//!   the `apply` callback, which the dispatcher makes a no-op while disarmed; if `apply`
-//!   refuses (a limit, a fault), its error is the reply and nothing has moved. Unreachable:
+//!   the `apply` callback: the dispatcher checks there what `volt` and `force` check (fault,
+//!   ceilings, fmax, servo travel) and moves nothing while disarmed; if `apply` refuses, its
+//!   error is the reply and nothing has moved. Unreachable:
 //!   `err unreachable: joint k: needs compliance ..., the ceiling allows ...`, `apply` is not
 //!   called.
 //! - `contact <P0> <P> [<V1> <V2> <V3>]` (N, V): model only, nothing moves. The tip stops at
@@ -15,15 +16,24 @@
 //!   with. Reply `ok fx=<N> fy=<N> force=<N> point=<x,y>`: (fx, fy) the force of the finger
 //!   on the object (base frame), force its magnitude, point the contact point (mm).
 //!
-//! no_std, no allocation: replies go to any `core::fmt::Write`.
+//! no_std, no allocation, no core float formatting (crate::num): replies go to any
+//! `core::fmt::Write`.
 
 use core::fmt::{self, Write};
-use finger_model::inverse::{contact_force, solve_pose};
+#[cfg(feature = "contact")]
+use finger_model::inverse::contact_force;
+#[cfg(feature = "pose")]
+use finger_model::inverse::solve_pose;
 use finger_model::{Error, Finger, Real, MAX_JOINTS};
+
+#[cfg(feature = "pose")]
+use crate::app::CmdError;
+use crate::num::{write_model_error, Fixed};
 
 /// Write `err <code>: <message>` for a model error.
 fn write_err<W: Write>(out: &mut W, e: &Error) -> fmt::Result {
-    write!(out, "err {}: {}", e.code(), e)
+    write!(out, "err {}: ", e.code())?;
+    write_model_error(out, e)
 }
 
 /// Write a comma-separated list with `prec` decimals.
@@ -32,15 +42,16 @@ fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f64>, prec: usize) 
         if i > 0 {
             out.write_char(',')?;
         }
-        write!(out, "{:.*}", prec, x)?;
+        write!(out, "{}", Fixed(x, prec))?;
     }
     Ok(())
 }
 
+#[cfg(feature = "pose")]
 /// `pose <d1> .. <dn> [<P>]`. `degrees`: the joint angles as parsed (one per joint);
-/// `tension`: the optional fourth argument. `apply(tension, volts)` moves the outputs (the
-/// dispatcher passes a no-op while disarmed) or refuses with (code, message).
-/// Returns whether the command succeeded (and `apply` was called).
+/// `tension`: the optional fourth argument. `apply(tension, volts)` moves the outputs (or,
+/// disarmed, nothing) or refuses with a console error.
+/// Returns whether the command succeeded (and `apply` was called and accepted).
 pub fn pose<R, W, F>(
     out: &mut W,
     finger: &Finger<R>,
@@ -51,7 +62,7 @@ pub fn pose<R, W, F>(
 where
     R: Real,
     W: Write,
-    F: FnOnce(R, &[R]) -> Result<(), (&'static str, &'static str)>,
+    F: FnOnce(R, &[R]) -> Result<(), CmdError>,
 {
     let n = finger.params().n;
     if degrees.len() != n {
@@ -73,12 +84,12 @@ where
             return Ok(false);
         }
     };
-    if let Err((code, msg)) = apply(sol.tension, &sol.volts[..n]) {
-        write!(out, "err {code}: {msg}")?;
+    if let Err(e) = apply(sol.tension, &sol.volts[..n]) {
+        write!(out, "err {}: {}", e.code, e.msg)?;
         return Ok(false);
     }
-    write!(out, "ok force={:.4} volts=", sol.tension.to_f64())?;
-    write_list(out, sol.volts[..n].iter().map(|v| v.to_f64()), 0)?;
+    write!(out, "ok force={} volts=", Fixed(sol.tension.to_f64(), 4))?;
+    write_list(out, sol.volts[..n].iter().map(|v| v.to_f64()), 1)?;
     out.write_str(" joints=")?;
     write_list(out, sol.angles[..n].iter().map(|a| a.to_f64() * 180.0 / core::f64::consts::PI), 3)?;
     out.write_str(" range=")?;
@@ -86,6 +97,7 @@ where
     Ok(true)
 }
 
+#[cfg(feature = "contact")]
 /// `contact <P0> <P> [<V1> .. <Vn>]`: model only. `volts` empty (0 V) or one per joint.
 pub fn contact<R, W>(out: &mut W, finger: &Finger<R>, p0: f64, p: f64, volts: &[f64]) -> Result<bool, fmt::Error>
 where
@@ -112,10 +124,12 @@ where
             let (fx, fy) = (-c.force[0].to_f64(), -c.force[1].to_f64());
             write!(
                 out,
-                "ok fx={fx:.4} fy={fy:.4} force={:.4} point={:.3},{:.3}",
-                c.magnitude().to_f64(),
-                c.point[0].to_f64(),
-                c.point[1].to_f64()
+                "ok fx={} fy={} force={} point={},{}",
+                Fixed(fx, 4),
+                Fixed(fy, 4),
+                Fixed(c.magnitude().to_f64(), 4),
+                Fixed(c.point[0].to_f64(), 3),
+                Fixed(c.point[1].to_f64(), 3)
             )?;
             Ok(true)
         }

@@ -16,6 +16,9 @@
 pub mod app;
 pub mod board;
 pub mod console;
+#[cfg(any(feature = "pose", feature = "contact"))]
+pub mod inverse_cmds;
+pub mod num;
 pub mod sim;
 
 pub use app::{App, FwParams, CHANNELS};

@@ -1,9 +1,10 @@
-//! The `pose` and `contact` console handlers (src/inverse_cmds.rs, compiled here on the host):
-//! reply format, outputs moved only through `apply` and never on an error.
+//! The `pose` and `contact` console handlers (finger-fw's src/inverse_cmds.rs): reply format,
+//! outputs moved only through `apply` and never on an error; and the same commands through
+//! the firmware's console on the simulated board (finger-sim's application): `pose` moves
+//! the outputs only when armed, through the checks of `volt` and `force`.
 
-#[path = "../../src/inverse_cmds.rs"]
-#[allow(dead_code)]
-mod inverse_cmds;
+use finger_fw::app::CmdError;
+use finger_fw::inverse_cmds;
 
 use finger_model::{Finger, Method, Params};
 
@@ -65,7 +66,7 @@ fn pose_unreachable_or_refused_moves_nothing() {
     assert!(out.starts_with("err usage:"), "{out}");
     // the dispatcher's apply refuses (e.g. a force limit): its error is the reply
     out.clear();
-    let ok = inverse_cmds::pose(&mut out, &f, &[5.0, 5.0, 5.0], None, |_, _| Err(("limit", "force past fmax"))).unwrap();
+    let ok = inverse_cmds::pose(&mut out, &f, &[5.0, 5.0, 5.0], None, |_, _| Err(CmdError::new("limit", "force past fmax"))).unwrap();
     assert!(!ok);
     assert_eq!(out, "err limit: force past fmax");
     // a negative tension
