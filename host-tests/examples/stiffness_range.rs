@@ -33,7 +33,7 @@ fn main() {
     writeln!(o, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |").unwrap();
     let d = Params::<f64>::default();
     let cases: Vec<(&str, Params<f64>)> = vec![
-        ("default (VHB 4905, G 0.6 MPa, 4 x 0.5 mm, 10 kV)", d),
+        ("default (VHB 4905, G 0.6 MPa, 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)", d),
         ("supply 20 kV", Params { v_supply: 20_000.0, ..d }),
         ("supply 30 kV", Params { v_supply: 30_000.0, ..d }),
         ("softer elastomer G 0.2 MPa", Params { g: 0.2, ..d }),
@@ -43,10 +43,10 @@ fn main() {
         ("thinner layers z0 0.1 mm, 20 layers", Params { z0: 0.1, layers: 20, ..d }),
         ("G 0.2 MPa, z0 0.25 mm, 30 kV", Params { g: 0.2, z0: 0.25, v_supply: 30_000.0, ..d }),
         ("paper preset (E_de 0.201 MPa)", Params::paper()),
-        ("default, m = 4, plate modulus", Params { m: 4, plate: true, ..d }),
-        ("default, m = 8, plate modulus", Params { m: 8, plate: true, ..d }),
-        ("default, m = 8, plate modulus, flexible links", Params { m: 8, plate: true, flex_links: true, ..d }),
-        ("supply 30 kV, m = 8, plate modulus", Params { m: 8, plate: true, v_supply: 30_000.0, ..d }),
+        ("the paper's model (m = 1, E_b, rigid links)", Params::paper_model()),
+        ("m = 4, plate modulus, rigid links", Params { m: 4, plate: true, flex_links: false, ..d }),
+        ("m = 8, plate modulus, rigid links", Params { m: 8, plate: true, flex_links: false, ..d }),
+        ("supply 30 kV, paper's model (m = 1)", Params { v_supply: 30_000.0, ..Params::paper_model() }),
     ];
     for (name, p) in &cases {
         let f = Finger::new(*p).unwrap();
