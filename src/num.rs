@@ -122,8 +122,8 @@ impl fmt::Display for Fixed {
     }
 }
 
-/// The shortest fixed notation that reads back as the same f32 (`{}` of an f32 for the
-/// console's values: at most 12 decimals).
+/// The shortest fixed notation that reads back as the same f32 (`{}` of an f32; the same
+/// text as core's for the console's values, 1e-6 <= |x| < 1e9 and 0).
 pub struct Short(pub f32);
 
 impl fmt::Display for Short {
@@ -133,14 +133,16 @@ impl fmt::Display for Short {
             return non_finite(f, x as f64);
         }
         let a = if x < 0.0 { -(x as f64) } else { x as f64 };
-        for prec in 0..=12usize {
+        for prec in 0..=17usize {
             let scale = pow10(prec as u32);
             let y = a * scale;
             if y >= FIXED_MAX {
                 return Exp(x as f64, 6).fmt(f);
             }
-            let r = round_even(y);
-            if (r as f64 / scale) as f32 == a as f32 || prec == 12 {
+            // an exact tie: core's shortest digits round it up
+            let t = y as u64;
+            let r = if y - t as f64 >= 0.5 { t + 1 } else { t };
+            if (r as f64 / scale) as f32 == a as f32 || prec == 17 {
                 return write_scaled(f, x.is_sign_negative(), r, prec);
             }
         }

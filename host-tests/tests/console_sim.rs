@@ -492,3 +492,122 @@ fn finger_sim_binary() {
     assert_eq!(lines[9], "ok stopped");
     assert!(lines[10].starts_with("err unknown:"));
 }
+
+/// The firmware's own number parsing and formatting (src/num.rs, src/console.rs; core's
+/// dec2flt and flt2dec are too big for the flash) against core's, over many values.
+#[test]
+fn own_number_parsing_and_formatting_match_core() {
+    use finger_fw::console::{parse_number, NumError};
+    use finger_fw::num::{Exp, Fixed, Short};
+    // a deterministic spread of f32 values over the console's range, both signs
+    let mut vals: Vec<f32> = vec![0.0, 1.0, 0.5, 0.1, 0.9, 27.0, 2000.0, 10_000.0, 39_900.0, 1e-6, 0.201, 0.45, 0.499, 1e5, 123_456.78];
+    let mut x: u32 = 12345;
+    for _ in 0..4000 {
+        x = x.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        let mant = (x >> 8) as f32 / (1u32 << 24) as f32;
+        let e = (x % 13) as i32 - 6;
+        vals.push(mant * 10f32.powi(e));
+    }
+    for &v in &vals {
+        for w in [v, -v] {
+            for p in 0..=4 {
+                assert_eq!(Fixed(w as f64, p).to_string(), format!("{w:.p$}"), "{w:e} .{p}");
+            }
+            assert_eq!(Short(w).to_string(), format!("{w}"), "{w:e}");
+            if w != 0.0 {
+                // exponent notation: the same up to the last digit (the scaling is not exact)
+                let (a, b) = (Exp(w as f64, 4).to_string(), format!("{w:.4e}"));
+                let (ma, ea) = a.split_once('e').unwrap();
+                let (mb, eb) = b.split_once('e').unwrap();
+                let da: f64 = ma.parse::<f64>().unwrap() * 10f64.powi(ea.parse().unwrap());
+                let db: f64 = mb.parse::<f64>().unwrap() * 10f64.powi(eb.parse().unwrap());
+                assert!(((da - db) / db).abs() <= 1.1e-4, "{a} vs {b}");
+            }
+            // parsing the printed text gives the value back, as core's parse does
+            let s = format!("{w:e}");
+            assert_eq!(parse_number(s.as_bytes()).unwrap(), s.parse::<f64>().unwrap(), "{s}");
+            let s = format!("{w}");
+            let (ours, core) = (parse_number(s.as_bytes()).unwrap(), s.parse::<f64>().unwrap());
+            assert!(ours == core || ((ours - core) / core).abs() < 1e-15, "{s}");
+        }
+    }
+    // decimals within Clinger's fast path are exact
+    for s in ["0.1", "0.3", "2.5e3", "-0.5", "+7", "1e22", "123456789012345", "0.000001", "5e-1", ".5", "5.", "00012.50"] {
+        assert_eq!(parse_number(s.as_bytes()), Ok(s.parse::<f64>().unwrap()), "{s}");
+    }
+    // long mantissas (digits past the 19 kept), leading zeros, big and small exponents
+    let long = format!("{}.{}", "9".repeat(40), "1".repeat(40));
+    let r = parse_number(long.as_bytes()).unwrap();
+    assert!((r / 1e40 - 1.0).abs() < 1e-14);
+    assert_eq!(parse_number(format!("0.{}1e400", "0".repeat(399)).as_bytes()), Ok(1.0));
+    assert_eq!(parse_number(b"1e-400"), Ok(0.0));
+    assert!((parse_number(b"1.5e308").unwrap() / 1.5e308 - 1.0).abs() < 1e-14);
+    for s in ["1e309", "1e999", "-1e999", "1e99999999999", &format!("1{}", "0".repeat(400))] {
+        assert_eq!(parse_number(s.as_bytes()), Err(NumError::Overflow), "{s}");
+    }
+    for s in ["", "nan", "inf", "-inf", "infinity", "0x10", "1.5abc", "1e", "1e+", "--1", "+", "-", ".", "1,5", "1.2.3", "e5", " 1", "1 ", "١"] {
+        assert_eq!(parse_number(s.as_bytes()), Err(NumError::Syntax), "{s:?}");
+    }
+}
+
+/// `limits` computes fmax once per model and set of HV setpoints; a new setpoint or parameter
+/// recomputes it; `force` refuses a tension past it.
+#[test]
+fn fmax_cached_and_enforced() {
+    let mut a = app();
+    let n0 = a.fmax_evaluations();
+    let l = ok(&mut a, "limits");
+    assert_eq!(a.fmax_evaluations(), n0 + 1);
+    let fmax: f64 = val(&l, "fmax").parse().unwrap();
+    let model = a.finger().fmax(&[0.0; 3]).unwrap();
+    assert!((fmax - model.tension as f64).abs() < 1e-3, "{l}");
+    for _ in 0..3 {
+        assert_eq!(ok(&mut a, "limits"), l);
+    }
+    assert_eq!(a.fmax_evaluations(), n0 + 1, "cached");
+    ok(&mut a, "arm");
+    ok(&mut a, "force 0.5"); // same setpoints: the cached value
+    assert_eq!(a.fmax_evaluations(), n0 + 1);
+    ok(&mut a, "volt 1 3000"); // a new setpoint
+    let l2 = ok(&mut a, "limits");
+    assert_eq!(a.fmax_evaluations(), n0 + 2);
+    let f2: f64 = val(&l2, "fmax").parse().unwrap();
+    assert!((f2 - a.finger().fmax(&[3000.0, 0.0, 0.0]).unwrap().tension as f64).abs() < 1e-3, "{l2}");
+    let r = err(&mut a, &format!("force {}", f2 * 1.01 + 0.01), "limit");
+    assert!(r.contains("fmax="), "{r}");
+    ok(&mut a, "stop");
+    ok(&mut a, "param margin 0.8"); // a new model
+    ok(&mut a, "limits");
+    assert_eq!(a.fmax_evaluations(), n0 + 3);
+}
+
+/// The fidelity parameters of issue 7 (`m`, `plate`, `nu_b`, `flex_links`) through `param`:
+/// read, set, refused outside their ranges, and the model the console solves with follows.
+#[test]
+fn fidelity_parameters() {
+    use finger_model::{Finger, Method};
+    let mut a = app();
+    for (n, v) in [("m", "8"), ("plate", "1"), ("nu_b", "0.3"), ("flex_links", "1"), ("m", "1"), ("plate", "0"), ("flex_links", "0"), ("m", "4")] {
+        assert_eq!(ok(&mut a, &format!("param {n} {v}")), format!("ok {n}={v}"));
+        assert_eq!(ok(&mut a, &format!("param {n}")), format!("ok {n}={v}"));
+        assert_eq!(a.finger().params().get(n), Some(v.parse::<f32>().unwrap() as f64));
+    }
+    for bad in ["param m 9", "param m 0", "param m 2.5", "param plate 2", "param plate 0.5", "param flex_links -1", "param nu_b 0.6", "param nu_b nan"] {
+        let before = a.finger().params().clone();
+        let r = cmd(&mut a, bad);
+        assert!(r.starts_with("err usage:") || r.starts_with("err bad-number:"), "{bad} -> {r}");
+        assert_eq!(a.finger().params(), &before);
+    }
+    // the console's solve is the model's at these parameters (m = 4, nu_b = 0.3)
+    let s = ok(&mut a, "solve 1 0 2000 4000");
+    let f = Finger::new(*a.finger().params()).unwrap();
+    let sol = f.solve(1.0, &[0.0, 2000.0, 4000.0], Method::converged()).unwrap();
+    let j = nums(val(&s, "joints"));
+    for k in 0..3 {
+        assert!((j[k] - (sol.joint_angle[k] as f64).to_degrees()).abs() < 1e-3, "{s}");
+    }
+    let p = feed(&mut a, b"param\n");
+    for n in ["m", "plate", "nu_b", "flex_links"] {
+        assert!(p.iter().any(|l| l.starts_with(&format!("{n}="))), "param list lacks {n}");
+    }
+}

@@ -93,3 +93,149 @@ fn contact_reply() {
     assert!(!inverse_cmds::contact(&mut out, &f, 1.0, 1.5, &[20000.0, 0.0, 0.0]).unwrap());
     assert!(out.starts_with("err limit:"), "{out}");
 }
+
+mod console {
+    //! `pose` and `contact` through the firmware's console on the simulated board.
+    use finger_fw::sim::SimBoard;
+    use finger_fw::App;
+    use finger_model::Method;
+
+    struct Out(String);
+    impl std::fmt::Write for Out {
+        fn write_str(&mut self, s: &str) -> std::fmt::Result {
+            self.0.push_str(s);
+            Ok(())
+        }
+    }
+
+    fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
+        let mut out = Out(String::new());
+        a.input(format!("{line}\n").as_bytes(), &mut out);
+        while a.busy() {
+            a.tick(1, &mut out);
+        }
+        let lines: Vec<&str> = out.0.lines().collect();
+        assert_eq!(lines.iter().filter(|l| l.starts_with("ok") || l.starts_with("err ")).count(), 1, "{line} -> {lines:?}");
+        lines.last().unwrap().to_string()
+    }
+
+    fn outputs(a: &mut App<SimBoard>) -> String {
+        let st = cmd(a, "status");
+        let b = a.board();
+        format!("{st} | {:?} servo={} hv={:?} en={}", a.targets(), b.servo.duty, b.hv.map(|h| h.duty), b.enable.high)
+    }
+
+    fn kv(reply: &str, key: &str) -> Vec<f64> {
+        super::kv(reply, key)
+    }
+
+    /// A posture of the model itself (forward solve at the console's parameters), in degrees
+    /// with 6 decimals as a user would type them.
+    fn posture(a: &App<SimBoard>, p: f32, v: [f32; 3]) -> (String, [f64; 3]) {
+        let s = a.finger().solve(p, &v, Method::converged()).unwrap();
+        let d = [0, 1, 2].map(|k| format!("{:.6}", (s.joint_angle[k] as f64).to_degrees()).parse::<f64>().unwrap());
+        (format!("{} {} {}", d[0], d[1], d[2]), d)
+    }
+
+    #[test]
+    fn pose_moves_only_when_armed() {
+        let mut a = App::new(SimBoard::default());
+        let (angles, deg) = posture(&a, 1.0, [2000.0, 5000.0, 8000.0]);
+        // the model's answer for the same input
+        let rad = deg.map(|d| (d * std::f64::consts::PI / 180.0) as f32);
+        let want = finger_model::solve_pose(a.finger(), &rad, None).unwrap();
+        // disarmed: the answer, nothing moves
+        let before = outputs(&mut a);
+        let r = cmd(&mut a, &format!("pose {angles}"));
+        assert!(r.starts_with("ok force="), "{r}");
+        assert!((kv(&r, "force")[0] - want.tension as f64).abs() < 1e-3, "{r}");
+        let volts = kv(&r, "volts");
+        for k in 0..3 {
+            assert!((volts[k] - want.volts[k] as f64).abs() < 0.06, "{r}");
+            assert!((kv(&r, "joints")[k] - deg[k]).abs() < 1e-3, "{r}");
+        }
+        let range = kv(&r, "range");
+        assert!(range[0] <= kv(&r, "force")[0] && kv(&r, "force")[0] <= range[1], "{r}");
+        assert_eq!(outputs(&mut a), before, "disarmed pose moved something");
+        assert!(!a.board().enable.high_ever);
+        // armed: the setpoints are the model's, the cable holds its tension
+        assert_eq!(cmd(&mut a, "arm"), "ok armed=1");
+        let r2 = cmd(&mut a, &format!("pose {angles}"));
+        assert_eq!(r2, r);
+        assert_eq!(a.targets(), [want.volts[0], want.volts[1], want.volts[2]]);
+        let st = cmd(&mut a, "status");
+        assert!((kv(&st, "force")[0] - want.tension as f64).abs() < 1e-3, "{st}");
+        assert!(kv(&st, "servo")[0] > 0.0, "{st}");
+        // after the slew, the posture the console reports is the requested one
+        cmd(&mut a, "wait 10");
+        let st = cmd(&mut a, "status");
+        for k in 0..3 {
+            assert!((kv(&st, "joints")[k] - deg[k]).abs() < 0.01, "{st}");
+        }
+        // a given tension (inside the range) is kept
+        let p = (range[0] + range[1]) / 2.0;
+        let r3 = cmd(&mut a, &format!("pose {angles} {p}"));
+        assert!((kv(&r3, "force")[0] - p).abs() < 1e-3, "{r3}");
+        cmd(&mut a, "stop");
+    }
+
+    #[test]
+    fn pose_refused_moves_nothing() {
+        let mut a = App::new(SimBoard::default());
+        assert_eq!(cmd(&mut a, "arm"), "ok armed=1");
+        assert!(cmd(&mut a, "volt all 1000").starts_with("ok"));
+        cmd(&mut a, "wait 1");
+        let before = outputs(&mut a);
+        let r = cmd(&mut a, "pose 20 5 5");
+        assert!(r.starts_with("err unreachable: joint 1"), "{r}");
+        for (bad, code) in [
+            ("pose 1 2", "usage"),
+            ("pose 1 2 3 4 5", "usage"),
+            ("pose nan 1 1", "bad-number"),
+            ("pose 1 1 1 -1", "usage"),
+            ("pose 1 1 1 1e30", "limit"),
+            ("pose 400 1 1", "usage"),
+        ] {
+            let r = cmd(&mut a, bad);
+            assert!(r.starts_with(&format!("err {code}:")), "{bad} -> {r}");
+        }
+        assert_eq!(outputs(&mut a), before);
+        // a latched fault: armed pose refuses through the same check as volt
+        let d = a.duty_ceiling()[0];
+        assert!(a.write_hv_duty(0, d + 1).is_err());
+        let (angles, _) = posture(&a, 0.5, [0.0; 3]);
+        let before = outputs(&mut a);
+        assert!(cmd(&mut a, &format!("pose {angles}")).starts_with("err fault:"));
+        assert_eq!(outputs(&mut a), before);
+    }
+
+    #[test]
+    fn contact_command() {
+        let mut a = App::new(SimBoard::default());
+        let before = outputs(&mut a);
+        let r = cmd(&mut a, "contact 1 1.5");
+        // the handler's own reply on the console's model
+        let mut want = String::new();
+        assert!(super::inverse_cmds::contact(&mut want, a.finger(), 1.0, 1.5, &[]).unwrap());
+        assert_eq!(r, want);
+        let (fx, fy, f) = (kv(&r, "fx")[0], kv(&r, "fy")[0], kv(&r, "force")[0]);
+        assert!(((fx * fx + fy * fy).sqrt() - f).abs() < 2e-3 && f > 0.0, "{r}");
+        // the contact point is the free tip at P0 (0 V)
+        let free = a.finger().solve(1.0, &[0.0; 3], Method::converged()).unwrap();
+        let pt = kv(&r, "point");
+        assert!((pt[0] - free.tip().x as f64).abs() < 2e-3 && (pt[1] - free.tip().y as f64).abs() < 2e-3, "{r}");
+        let r = cmd(&mut a, "contact 1 1.5 3000 3000 3000");
+        assert!(r.starts_with("ok fx="), "{r}");
+        for (bad, code) in [("contact 1", "usage"), ("contact 1 2 3", "usage"), ("contact nan 1", "bad-number"), ("contact 1 1.5 20000 0 0", "limit"), ("contact -1 1", "usage")] {
+            let r = cmd(&mut a, bad);
+            assert!(r.starts_with(&format!("err {code}:")), "{bad} -> {r}");
+        }
+        assert_eq!(outputs(&mut a), before, "contact is model only");
+        let help = {
+            let mut out = Out(String::new());
+            a.input(b"help\n", &mut out);
+            out.0
+        };
+        assert!(help.lines().any(|l| l.starts_with("contact ")) && help.lines().any(|l| l.starts_with("pose ")));
+    }
+}

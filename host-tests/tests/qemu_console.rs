@@ -179,6 +179,19 @@ fn qemu_console_commands_and_bad_inputs() {
     let s = expect(&mut q, "status", "ok armed=1 ");
     assert!(s.contains(" volts=1000.0,1000.0,1000.0 ") && s.contains(" enable=1"), "{s}");
     expect(&mut q, "force 0.5", "ok force=0.500 cable=");
+    // pose (the inverse model on the target, armed: it sets the tension and the voltages) at a
+    // posture of the host's model; the answer agrees with the host's inverse
+    let f = finger_model::Finger::new(finger_model::Params::<f32>::default()).unwrap();
+    let s = f.solve(0.8, &[1000.0, 3000.0, 5000.0], finger_model::Method::converged()).unwrap();
+    let deg = [0, 1, 2].map(|k| format!("{:.6}", (s.joint_angle[k] as f64).to_degrees()).parse::<f64>().unwrap());
+    let want = finger_model::solve_pose(&f, &deg.map(|d| (d * std::f64::consts::PI / 180.0) as f32), None).unwrap();
+    let r = expect(&mut q, &format!("pose {} {} {}", deg[0], deg[1], deg[2]), "ok force=");
+    let force: f64 = r.split_whitespace().find_map(|w| w.strip_prefix("force=")).unwrap().parse().unwrap();
+    assert!((force - want.tension as f64).abs() < 2e-3, "{r} vs {want:?}");
+    let s = expect(&mut q, "status", "ok armed=1 ");
+    assert!(s.contains(&format!(" force={:.3} ", want.tension)), "{s}");
+    expect(&mut q, "pose 20 5 5", "err unreachable:");
+    expect(&mut q, "contact 1 1.5", "ok fx=");
     expect(&mut q, "stop", "ok stopped");
     let s = expect(&mut q, "status", "ok armed=0 force=0.000 volts=0.0,0.0,0.0 ");
     assert!(s.contains(" servo=0.00 ") && s.contains(" enable=0"), "{s}");
