@@ -37,6 +37,7 @@ fn write_err<W: Write>(out: &mut W, e: &Error) -> fmt::Result {
 }
 
 /// Write a comma-separated list with `prec` decimals.
+#[cfg(feature = "pose")]
 fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f64>, prec: usize) -> fmt::Result {
     for (i, x) in v.enumerate() {
         if i > 0 {
