@@ -398,12 +398,12 @@ impl<B: Board> App<B> {
         self.fmax_cache.set(None);
     }
 
-    /// The checks every setpoint change passes (`volt`, `force`, an armed `pose`): the HV
-    /// setpoints below the ceilings, the tension at most fmax at those setpoints (issue 7:
-    /// nothing past the end of the branch), the servo within its travel. Nothing moves;
-    /// returns where the servo must go (excursion mm, deg).
+    /// The checks every setpoint change passes (`volt`, `force`, an armed `pose`), after
+    /// the caller checked new voltages against the ceilings ([`App::check_volts`]): the
+    /// tension at most fmax at those setpoints (issue 7: nothing past the end of the branch),
+    /// the servo within its travel. Nothing moves; returns where the servo must go
+    /// (excursion mm, deg).
     fn plan_setpoints(&self, force: f32, volts: &[f32; CHANNELS]) -> Result<(f32, f32), CmdError> {
-        self.check_volts(&volts.map(|v| v as f64))?;
         if force > 0.0 {
             let end = self.fmax(volts).map_err(model_err)?;
             if force > end.tension {
@@ -670,7 +670,16 @@ impl<B: Board> App<B> {
 
     /// Check channel voltages against the ceilings: `limit` at or past.
     fn check_volts(&self, v: &[f64; CHANNELS]) -> Result<(), CmdError> {
+        self.check_volts_of(v, false)
+    }
+
+    /// As [`App::check_volts`]; with `zero_is_off`, a channel at 0 V passes whatever its
+    /// ceiling (a computed answer, such as `pose`'s on a finger without stacks).
+    fn check_volts_of(&self, v: &[f64; CHANNELS], zero_is_off: bool) -> Result<(), CmdError> {
         for ch in 0..CHANNELS {
+            if zero_is_off && v[ch] == 0.0 {
+                continue;
+            }
             if v[ch] < 0.0 {
                 return Err(err("usage", format_args!("channel {}: voltage must be >= 0", ch + 1)));
             }
@@ -832,6 +841,8 @@ impl<B: Board> App<B> {
             }
             this.require_armed("pose")?;
             let target = [v[0], v[1], v[2]];
+            // the ceilings as `volt` checks them; 0 V (a joint without stacks) is off, not a request
+            this.check_volts_of(&target.map(|x| x as f64), true)?;
             let (cable, sdeg) = this.plan_setpoints(t, &target)?;
             plan = Some((t, target, cable, sdeg));
             Ok(())

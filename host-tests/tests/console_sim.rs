@@ -579,6 +579,11 @@ fn fmax_cached_and_enforced() {
     ok(&mut a, "param margin 0.8"); // a new model
     ok(&mut a, "limits");
     assert_eq!(a.fmax_evaluations(), n0 + 3);
+    // a finger without stacks (ceiling 0 V): the cable still works, 0 V is no request
+    ok(&mut a, "param layers 0");
+    ok(&mut a, "arm");
+    err(&mut a, "volt 1 0", "limit");
+    assert!(ok(&mut a, "force 0.5").starts_with("ok force=0.500"));
 }
 
 /// The fidelity parameters of issue 7 (`m`, `plate`, `nu_b`, `flex_links`) through `param`:
