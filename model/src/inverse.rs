@@ -400,9 +400,11 @@ pub fn solve_pose_with<R: Real>(
         iterations: 0,
     };
     out.angles[..n].copy_from_slice(angles);
-    if p.m != 1 || p.flex_links {
+    if !cfg!(feature = "inverse-fast") || p.m != 1 || p.flex_links {
         // sub-divided hinges or flexible links: bracketed root finding around the forward
-        // per-joint equilibrium (`general`)
+        // per-joint equilibrium (`general`). A build without `inverse-fast` (the firmware,
+        // whose default model is m = 8) takes this path for m = 1 too and leaves the fast
+        // path's code out of the image.
         return general::solve(f, angles, tension, opts, out);
     }
     let ctx = Ctx::new(f, opts)?;
