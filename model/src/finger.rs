@@ -230,6 +230,9 @@ struct JointState<R> {
     end: Pose<R>,
     /// Link k's proximal guide hole, as the march arrives at it (proximal frame).
     hole: [R; 2],
+    /// From Newton's last dual march (tension alone): the hole residual and the tangent
+    /// determinant at the guess that gave this state, so `assemble` need not march again.
+    tangent: Option<([R; 2], R)>,
 }
 
 enum MarchError {
@@ -396,25 +399,116 @@ impl<R: Real> Finger<R> {
                 if loaded {
                     self.newton_coupled(c, tension, tip_force, tol, max_iter)?
                 } else {
-                    let mut states = [self.straight(); MAX_JOINTS];
-                    let mut iters = 0;
-                    for k in 0..self.p.n {
-                        // joints decouple under tension alone: a joint with the same
-                        // compliance as the one before has the same state (no work)
-                        if k > 0 && c.c[k][..self.p.m] == c.c[k - 1][..self.p.m] {
-                            states[k] = states[k - 1];
-                            continue;
-                        }
-                        let min_step = tension / R::from_f64(4096.0);
-                        let (s, it) = self.newton_joint(k, &c.c[k], tension, tol, max_iter, min_step)?;
-                        states[k] = s;
-                        iters += it;
-                    }
-                    (states, iters)
+                    return self.solve_tension_alone(c, tension, tol, max_iter);
                 }
             }
         };
         self.assemble(c, tension, tip_force, &states, iterations)
+    }
+
+    /// The converged solve under tension alone: the joints decouple, each solved by Newton on
+    /// its own; the solution is written in place (no joint-state arrays, no second march for
+    /// the residual and tangent: Newton's last dual march gives them).
+    fn solve_tension_alone(&self, c: &Compliances<R>, tension: R, tol: R, max_iter: u32) -> Result<Solution<R>, Error> {
+        let mut out = Ok(Solution {
+            n: self.p.n,
+            m: self.p.m,
+            tension,
+            tip_force: [R::zero(); 2],
+            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            links: [[R::zero(); 3]; MAX_JOINTS],
+            joint_angle: [R::zero(); MAX_JOINTS],
+            nodes: [Pose::origin(); MAX_JOINTS + 1],
+            span: [R::zero(); MAX_JOINTS],
+            thickness: c.thickness,
+            volts: c.volts,
+            cable_excursion: R::zero(),
+            iterations: 0,
+            residual: R::zero(),
+            tangent_det: [R::one(); MAX_JOINTS],
+        });
+        if let Ok(sol) = &mut out {
+            if let Err(e) = self.fill_tension_alone(c, tension, tol, max_iter, sol) {
+                out = Err(e);
+            }
+        }
+        out
+    }
+
+    fn fill_tension_alone(
+        &self,
+        c: &Compliances<R>,
+        tension: R,
+        tol: R,
+        max_iter: u32,
+        sol: &mut Solution<R>,
+    ) -> Result<(), Error> {
+        let (n, m) = (self.p.n, self.p.m);
+        let mut ends = [Pose::origin(); MAX_JOINTS];
+        let mut holes = [[R::zero(); 2]; MAX_JOINTS];
+        let mut res2 = R::zero();
+        let mut r2_prev = R::zero();
+        let mut iters = 0;
+        for k in 0..n {
+            // a joint with the same compliance as the one before has the same state (no work)
+            if k > 0 && c.c[k][..m] == c.c[k - 1][..m] {
+                let (done, rest) = sol.q.split_at_mut(k);
+                rest[0][..m].copy_from_slice(&done[k - 1][..m]);
+                ends[k] = ends[k - 1];
+                holes[k] = holes[k - 1];
+                sol.tangent_det[k] = sol.tangent_det[k - 1];
+                res2 += r2_prev;
+                continue;
+            }
+            let min_step = tension / R::from_f64(4096.0);
+            let (st, it) = self.newton_joint(k, &c.c[k], tension, tol, max_iter, min_step)?;
+            iters += it;
+            sol.q[k][..m].copy_from_slice(&st.q[..m]);
+            ends[k] = st.end;
+            holes[k] = st.hole;
+            let tangent = match st.tangent {
+                Some(t) => Some(t),
+                None => self
+                    .eval_dual(&c.c[k], tension, st.hole)
+                    .ok()
+                    .map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
+            };
+            let r2 = match tangent {
+                Some((r, det)) => {
+                    sol.tangent_det[k] = det;
+                    r[0] * r[0] + r[1] * r[1]
+                }
+                None => match self.hole_residual(&c.c[k], tension, st.hole, None) {
+                    Ok((r, _)) => r[0] * r[0] + r[1] * r[1],
+                    Err(_) => return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() }),
+                },
+            };
+            r2_prev = r2;
+            res2 += r2;
+        }
+        let (nodes, links) = self.chain_ends(&ends, tension, [R::zero(); 2]);
+        sol.nodes = nodes;
+        sol.links = links;
+        sol.iterations = iters;
+        for k in 0..n {
+            sol.joint_angle[k] = ends[k].theta + links[k][2];
+            // the span as the final geometry has it (not the one the loads came from)
+            let span = norm2([holes[k][0], holes[k][1] - self.p.e]);
+            if !(span >= self.p.span_floor) {
+                return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() });
+            }
+            sol.span[k] = span;
+            sol.cable_excursion += self.p.hinge_len() - span;
+        }
+        sol.residual = res2.sqrt();
+        let all_finite = nodes.iter().take(n + 1).all(|p| p.x.is_finite() && p.y.is_finite() && p.theta.is_finite())
+            && sol.residual.is_finite()
+            && sol.cable_excursion.is_finite()
+            && sol.tangent_det[..n].iter().all(|d| d.is_finite());
+        if !all_finite {
+            return Err(Error::Singular { what: "solution (non-finite)" });
+        }
+        Ok(())
     }
 
     /// The finest hole-position residual the scalar type can resolve, mm.
@@ -428,6 +522,7 @@ impl<R: Real> Finger<R> {
             q: [[R::zero(); 3]; MAX_SUB],
             end: Pose { x: lh, y: R::zero(), theta: R::zero() },
             hole: [lh, self.p.e],
+            tangent: None,
         }
     }
 
@@ -490,7 +585,7 @@ impl<R: Real> Finger<R> {
         if !(hole[0].is_finite() && hole[1].is_finite() && pose.theta.is_finite()) {
             return Err(MarchError::Singular);
         }
-        Ok(JointState { q, end: pose, hole })
+        Ok(JointState { q, end: pose, hole, tangent: None })
     }
 
     /// Residual of the hole guess: guess - arrived.
@@ -536,7 +631,8 @@ impl<R: Real> Finger<R> {
             let st = self.march(c, tension, b, None).map_err(|_| Error::Singular { what: "joint" })?;
             return Ok((st, 0));
         }
-        let mut last = self.march(c, R::zero(), b, None).map_err(|_| Error::Singular { what: "joint" })?;
+        // the unloaded joint is straight (the march at zero tension gives exactly this)
+        let mut last = self.straight();
         let mut why_failed = None;
         let mut attempts = 0u32;
         // secant predictor: the hole's rate of change with tension over the last accepted step
@@ -640,6 +736,20 @@ impl<R: Real> Finger<R> {
         tension: R,
         tip_force: [R; 2],
     ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
+        let mut ends = [Pose::origin(); MAX_JOINTS];
+        for k in 0..self.p.n {
+            ends[k] = states[k].end;
+        }
+        self.chain_ends(&ends, tension, tip_force)
+    }
+
+    /// `chain` from each joint's hinge end pose alone.
+    fn chain_ends(
+        &self,
+        ends: &[Pose<R>; MAX_JOINTS],
+        tension: R,
+        tip_force: [R; 2],
+    ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
         let mut nodes = [Pose::origin(); MAX_JOINTS + 1];
         let mut links = [[R::zero(); 3]; MAX_JOINTS];
@@ -651,7 +761,7 @@ impl<R: Real> Finger<R> {
         for _ in 0..passes {
             let tip = if loaded { tip_point.map(|t| (tip_force, t)) } else { None };
             for k in 0..n {
-                let e = states[k].end;
+                let e = ends[k];
                 let hinge_end = nodes[k].then(e.x, e.y, e.theta);
                 links[k] = if loaded && tip.is_none() { [R::zero(); 3] } else { self.link_q(tension, &hinge_end, tip) };
                 let q = links[k];
@@ -908,7 +1018,7 @@ impl<R: Real> Finger<R> {
         if !(hole[0].is_finite() && hole[1].is_finite()) {
             return Err(MarchError::Singular);
         }
-        Ok(JointState { q, end, hole })
+        Ok(JointState { q, end, hole, tangent: None })
     }
 
     /// Collect the solution: nodes, joint angles, spans, excursion, residual, tangents.

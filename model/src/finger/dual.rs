@@ -246,20 +246,36 @@ impl<R: Real> Finger<R> {
 
     /// One dual march at hole guess `b` (tension alone): state, residual, Jacobian.
     pub(super) fn eval_dual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2]) -> Result<Eval<R>, MarchError> {
+        let mut q = [[R::zero(); 3]; MAX_SUB];
+        let (end, hole, r, jac) = self.eval_dual_into(c, tension, b, &mut q)?;
+        Ok((JointState { q, end, hole, tangent: None }, r, jac))
+    }
+
+    /// `eval_dual` with the sub-element displacements written to `q` (its first m rows).
+    #[inline(always)]
+    fn eval_dual_into(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        q: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<(Pose<R>, [R; 2], [R; 2], [[R; 2]; 2]), MarchError> {
         let (z, o) = (R::zero(), R::one());
         let bd = [D { v: b[0], d: [o, z] }, D { v: b[1], d: [z, o] }];
-        let mut q = [[z; 3]; MAX_SUB];
-        let (end_d, hole_d) = self.march_t::<D<R>>(c, tension, bd, None, &mut q, |x| x.v)?;
+        let (end_d, hole_d) = self.march_t::<D<R>>(c, tension, bd, None, q, |x| x.v)?;
         let end = Pose { x: end_d.x.v, y: end_d.y.v, theta: end_d.theta.v };
         let hole = [hole_d[0].v, hole_d[1].v];
         let r = [b[0] - hole[0], b[1] - hole[1]];
         let jac = [[o - hole_d[0].d[0], z - hole_d[0].d[1]], [z - hole_d[1].d[0], o - hole_d[1].d[1]]];
-        Ok((JointState { q, end, hole }, r, jac))
+        Ok((end, hole, r, jac))
     }
 
     /// Newton at one tension from a starting hole guess, with the exact Jacobian of each
     /// dual march and backtracking (accept the first halving that lowers the residual). On
     /// failure returns why (contact on the way, or plain non-convergence) and the iterations.
+    /// The returned state carries the residual and tangent determinant of its last march.
+    /// Norms are compared squared (no square root per iteration); the sub-element
+    /// displacements of the accepted and the trial march live in two buffers, swapped by index.
     pub(super) fn newton_dual(
         &self,
         c: &[Mat3<R>; MAX_SUB],
@@ -268,12 +284,24 @@ impl<R: Real> Finger<R> {
         tol: R,
         max_iter: u32,
     ) -> Result<(JointState<R>, u32), (Option<MarchError>, u32)> {
-        let (mut st, mut r, mut jac) = self.eval_dual(c, tension, b).map_err(|e| (Some(e), 0))?;
-        let mut rn = norm2(r);
+        let mut qs = [[[R::zero(); 3]; MAX_SUB]; 2];
+        let mut cur = 0usize;
+        let (mut end, mut hole, mut r, mut jac) =
+            self.eval_dual_into(c, tension, b, &mut qs[0]).map_err(|e| (Some(e), 0))?;
+        // squared norms where the type resolves the square of its resolution (floats); fixed
+        // point would lose the small residuals to its quantum, so it keeps the root
+        let squared = R::from_f64(R::EPS * R::EPS) > R::zero();
+        let metric = |r: [R; 2]| if squared { r[0] * r[0] + r[1] * r[1] } else { norm2(r) };
+        let mut rn2 = metric(r);
         let floor = self.resolution();
+        let (tol2, floor2) = if squared { (tol * tol, floor * floor) } else { (tol, floor) };
+        let done = |qs: &[[[R; 3]; MAX_SUB]; 2], cur: usize, end, hole, r: [R; 2], jac: [[R; 2]; 2]| {
+            let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+            JointState { q: qs[cur], end, hole, tangent: Some((r, det)) }
+        };
         for it in 0..max_iter {
-            if rn <= tol {
-                return Ok((st, it));
+            if rn2 <= tol2 {
+                return Ok((done(&qs, cur, end, hole, r, jac), it));
             }
             let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
             if !(det.abs() > R::from_f64(1e-12)) {
@@ -286,14 +314,16 @@ impl<R: Real> Finger<R> {
             let mut last_err = None;
             for _ in 0..12 {
                 let bt = [b[0] + lambda * db[0], b[1] + lambda * db[1]];
-                match self.eval_dual(c, tension, bt) {
-                    Ok((stt, rt, jt)) => {
-                        let rtn = norm2(rt);
-                        if rtn < rn {
+                match self.eval_dual_into(c, tension, bt, &mut qs[1 - cur]) {
+                    Ok((et, ht, rt, jt)) => {
+                        let rtn2 = metric(rt);
+                        if rtn2 < rn2 {
                             b = bt;
                             r = rt;
-                            rn = rtn;
-                            st = stt;
+                            rn2 = rtn2;
+                            cur = 1 - cur;
+                            end = et;
+                            hole = ht;
                             jac = jt;
                             accepted = true;
                             break;
@@ -305,14 +335,14 @@ impl<R: Real> Finger<R> {
             }
             if !accepted {
                 // at the scalar's resolution the residual stops falling: that is convergence
-                if rn <= floor {
-                    return Ok((st, it + 1));
+                if rn2 <= floor2 {
+                    return Ok((done(&qs, cur, end, hole, r, jac), it + 1));
                 }
                 return Err((last_err, it + 1));
             }
         }
-        if rn <= tol {
-            Ok((st, max_iter))
+        if rn2 <= tol2 {
+            Ok((done(&qs, cur, end, hole, r, jac), max_iter))
         } else {
             Err((None, max_iter))
         }
