@@ -1,0 +1,93 @@
+//! Bench image for the inverse model's cost on the target (issue 4, docs/inverse-cost.md):
+//! instructions of one `inverse::solve_pose` (joint angles, optionally a tension, to the
+//! tension and the three voltages), f32, for the paper's model (m = 1, rigid links, E_b) and
+//! the default model (m = 8, plate modulus, flexible links). Prints `CAL`, then one line per
+//! case `I <case> ok <ticks> <tension N> <v1> <v2> <v3>` (or `I <case> err <ticks> <code>`),
+//! then `END`. Every parameter that matters is set explicitly. Driven by
+//! `cargo run --release --example inverse_cost` in host-tests.
+#![no_std]
+#![no_main]
+
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use finger_model::inverse::solve_pose;
+use finger_model::{Finger, Params};
+
+#[path = "../cycles.rs"]
+mod cycles;
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("PANIC {}", info);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}
+
+const DEG: f32 = core::f32::consts::PI / 180.0;
+
+fn run(name: &str, p: Params<f32>, deg: [f32; 3], tension: Option<f32>) {
+    let f = match Finger::new(p) {
+        Ok(f) => f,
+        Err(e) => {
+            hprintln!("I {} err 0 {}", name, e.code());
+            return;
+        }
+    };
+    let angles = core::hint::black_box([deg[0] * DEG, deg[1] * DEG, deg[2] * DEG]);
+    let t0 = cycles::now();
+    let r = solve_pose(&f, &angles, core::hint::black_box(tension));
+    let t1 = cycles::now();
+    match core::hint::black_box(r) {
+        Ok(s) => hprintln!("I {} ok {} {} {} {} {}", name, t1 - t0, s.tension, s.volts[0], s.volts[1], s.volts[2]),
+        Err(e) => hprintln!("I {} err {} {}", name, t1 - t0, e.code()),
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let cp = cortex_m::Peripherals::take().unwrap();
+    cycles::start(cp.SYST);
+    let (ticks, overhead) = cycles::calibrate(1_000_000);
+    hprintln!("CAL {} {} {}", 2_000_000u32, ticks, overhead);
+    let paper = Params::<f32> { m: 1, plate: false, flex_links: false, ..Params::default() };
+    let real = Params::<f32> { m: 8, plate: true, flex_links: true, ..Params::default() };
+    for (cfg, p) in [("m1-rigid", paper), ("m8-plate-flex", real)] {
+        for (case, deg) in [("10-10-10", [10.0, 10.0, 10.0]), ("10.05-10-9.95", [10.05, 10.0, 9.95])] {
+            let mut name: heapless_name::Name = heapless_name::Name::new();
+            name.push(cfg);
+            name.push("/");
+            name.push(case);
+            run(name.as_str(), p, deg, None);
+        }
+    }
+    // a given tension inside the interval of the uniform posture
+    run("m1-rigid/10-10-10@1.548N", paper, [10.0; 3], Some(1.548));
+    run("m8-plate-flex/10-10-10@1.90N", real, [10.0; 3], Some(1.90));
+    hprintln!("END");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {}
+}
+
+/// A tiny fixed-capacity string for case names (no allocation, no extra crate).
+mod heapless_name {
+    pub struct Name {
+        buf: [u8; 48],
+        len: usize,
+    }
+    impl Name {
+        pub fn new() -> Self {
+            Name { buf: [0; 48], len: 0 }
+        }
+        pub fn push(&mut self, s: &str) {
+            for &b in s.as_bytes() {
+                if self.len < self.buf.len() {
+                    self.buf[self.len] = b;
+                    self.len += 1;
+                }
+            }
+        }
+        pub fn as_str(&self) -> &str {
+            core::str::from_utf8(&self.buf[..self.len]).unwrap_or("?")
+        }
+    }
+}
