@@ -330,14 +330,16 @@ impl<R: Real> Finger<R> {
         out.volts[..p.n].copy_from_slice(volts);
         for (k, &v) in volts.iter().enumerate() {
             de::check_voltage(p, k + 1, v)?;
-            if p.layers == 0 {
+            // a build without the `de` feature refuses stacks in `new`, and leaves the stack's
+            // code (thinning, stack stiffness) out of the image
+            if p.layers == 0 || cfg!(not(feature = "de")) {
                 out.c[k][..p.m].copy_from_slice(&self.hinge_c[..p.m]);
                 continue;
             }
             let t = de::stack_thickness(p, k + 1, v)?;
             out.thickness[k] = t;
+            let k_de = de::stack_stiffness(p, self.sub_len, t);
             for j in 0..p.m {
-                let k_de = de::stack_stiffness(p, self.sub_len, t);
                 let k_sum = mat3::add(&self.hinge_k[j], &k_de);
                 out.c[k][j] = mat3::inverse(&k_sum).ok_or(Error::Singular { what: "joint stiffness" })?;
             }
