@@ -235,6 +235,14 @@ struct JointState<R> {
     tangent: Option<([R; 2], R)>,
 }
 
+/// The loads `Finger::span_loads` finds: cable force, tip force and its point, their sum.
+struct SpanLoads<R> {
+    fc: [R; 2],
+    ft: [R; 2],
+    tp: [R; 2],
+    ftot: [R; 2],
+}
+
 enum MarchError {
     Contact,
     Singular,
@@ -528,6 +536,23 @@ impl<R: Real> Finger<R> {
         }
     }
 
+    /// The loads on a joint's distal chain for a guide-hole position `b_hole` (the joint's
+    /// proximal frame): the cable's force P along the span toward the hole at the proximal node,
+    /// the tip load if any, and their sum. A span at its floor is contact.
+    fn span_loads(&self, tension: R, b_hole: [R; 2], tip: Option<TipLoad<R>>) -> Result<SpanLoads<R>, MarchError> {
+        let span_v = [b_hole[0], b_hole[1] - self.p.e];
+        let span = norm2(span_v);
+        if !(span >= self.p.span_floor) {
+            return Err(MarchError::Contact);
+        }
+        let fc = [-tension * span_v[0] / span, -tension * span_v[1] / span];
+        let (ft, tp) = match tip {
+            Some(t) => (t.force, t.point),
+            None => ([R::zero(); 2], [R::zero(); 2]),
+        };
+        Ok(SpanLoads { fc, ft, tp, ftot: [fc[0] + ft[0], fc[1] + ft[1]] })
+    }
+
     /// March through joint k's sub-elements for a guessed guide-hole position `b_hole` (the
     /// joint's proximal frame): cable force P along the span from `b_hole` to the hole at the
     /// proximal node, plus an optional tip load. Each sub-element's deflection is the closed
@@ -541,18 +566,7 @@ impl<R: Real> Finger<R> {
         tip: Option<TipLoad<R>>,
     ) -> Result<JointState<R>, MarchError> {
         let e = self.p.e;
-        let span_v = [b_hole[0], b_hole[1] - e];
-        let span = norm2(span_v);
-        if !(span >= self.p.span_floor) {
-            return Err(MarchError::Contact);
-        }
-        // force of the cable on the distal chain, toward the proximal hole
-        let fc = [-tension * span_v[0] / span, -tension * span_v[1] / span];
-        let (ft, tp) = match tip {
-            Some(t) => (t.force, t.point),
-            None => ([R::zero(); 2], [R::zero(); 2]),
-        };
-        let ftot = [fc[0] + ft[0], fc[1] + ft[1]];
+        let SpanLoads { fc, ft, tp, ftot } = self.span_loads(tension, b_hole, tip)?;
         let mut pose: Pose<R> = Pose::origin();
         let (mut s, mut co) = (R::zero(), R::one());
         let mut q = [[R::zero(); 3]; MAX_SUB];
@@ -982,17 +996,7 @@ impl<R: Real> Finger<R> {
     ) -> Result<JointState<R>, MarchError> {
         let e = self.p.e;
         let b = prev.hole;
-        let span_v = [b[0], b[1] - e];
-        let span = norm2(span_v);
-        if !(span >= self.p.span_floor) {
-            return Err(MarchError::Contact);
-        }
-        let fc = [-tension * span_v[0] / span, -tension * span_v[1] / span];
-        let (ft, tp) = match tip {
-            Some(t) => (t.force, t.point),
-            None => ([R::zero(); 2], [R::zero(); 2]),
-        };
-        let ftot = [fc[0] + ft[0], fc[1] + ft[1]];
+        let SpanLoads { fc, ft, tp, ftot } = self.span_loads(tension, b, tip)?;
         let mut pose: Pose<R> = Pose::origin();
         let mut q = [[R::zero(); 3]; MAX_SUB];
         for j in 0..self.p.m {
