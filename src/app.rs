@@ -30,7 +30,7 @@ pub const CHANNELS: usize = HV_CHANNELS;
 
 const DEG: f32 = 180.0 / core::f32::consts::PI;
 /// Longest `wait`, s.
-const WAIT_MAX_S: f64 = 600.0;
+const WAIT_MAX_S: f32 = 600.0;
 
 /// Firmware-only parameters (not in the model).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,8 +58,8 @@ impl Default for FwParams {
 /// A firmware parameter's name and range (as the console reports it).
 pub struct FwParamInfo {
     pub name: &'static str,
-    pub min: f64,
-    pub max: f64,
+    pub min: f32,
+    pub max: f32,
     pub range: &'static str,
 }
 
@@ -86,13 +86,13 @@ impl FwParams {
     }
 
     /// Set by name; on error nothing changes.
-    fn set(&mut self, name: &str, v: f64) -> Result<(), CmdError> {
+    fn set(&mut self, name: &str, v: f32) -> Result<(), CmdError> {
         let info = FW_PARAMS.iter().find(|i| i.name == name).ok_or_else(|| err("unknown", format_args!("no parameter {name}")))?;
         let bad = || err("usage", format_args!("parameter {} out of range: {}", info.name, info.range));
         if !(v >= info.min && v <= info.max) {
             return Err(bad());
         }
-        let f = v as f32;
+        let f = v;
         match name {
             "slew" => self.slew = f,
             "spool_r" => self.spool_r = f,
@@ -351,6 +351,7 @@ impl<B: Board> App<B> {
 
     /// Where the servo must go to hold `force` at the HV setpoints `volts`: (excursion mm,
     /// servo deg). Checks the servo travel; nothing moves.
+    #[inline(never)]
     fn plan_servo(&self, finger: &Finger<f32>, fw: &FwParams, force: f32, volts: &[f32; CHANNELS]) -> Result<(f32, f32), CmdError> {
         if force == 0.0 {
             return Ok((0.0, 0.0));
@@ -363,9 +364,9 @@ impl<B: Board> App<B> {
                 "limit",
                 format_args!(
                     "cable excursion {} mm needs {} deg, past the servo travel {} deg",
-                    Fixed(cable as f64, 2),
-                    Fixed(deg as f64, 1),
-                    Fixed(fw.servo_range as f64, 0)
+                    Fixed(cable, 2),
+                    Fixed(deg, 1),
+                    Fixed(fw.servo_range, 0)
                 ),
             ));
         }
@@ -403,11 +404,12 @@ impl<B: Board> App<B> {
     /// tension at most fmax at those setpoints (issue 7: nothing past the end of the branch),
     /// the servo within its travel. Nothing moves; returns where the servo must go
     /// (excursion mm, deg).
+    #[inline(never)]
     fn plan_setpoints(&self, force: f32, volts: &[f32; CHANNELS]) -> Result<(f32, f32), CmdError> {
         if force > 0.0 {
             let end = self.fmax(volts).map_err(model_err)?;
             if force > end.tension {
-                return Err(model_err(ModelError::ForceLimit { tension: force as f64, fmax: end.tension as f64 }));
+                return Err(model_err(ModelError::ForceLimit { tension: force.into(), fmax: end.tension.into() }));
             }
         }
         self.plan_servo(&self.finger, &self.fw, force, volts)
@@ -581,7 +583,7 @@ impl<B: Board> App<B> {
                 let [s] = args else { return Err(err("usage", format_args!("wait <seconds>"))) };
                 let s = number(s, "seconds")?;
                 if !(s >= 0.0 && s <= WAIT_MAX_S) {
-                    return Err(err("usage", format_args!("wait: 0..{} s", Short(WAIT_MAX_S as f32))));
+                    return Err(err("usage", format_args!("wait: 0..{} s", Short(WAIT_MAX_S))));
                 }
                 let ms = (s * 1000.0 + 0.5) as u32;
                 if ms == 0 {
@@ -589,7 +591,7 @@ impl<B: Board> App<B> {
                     return Ok(false);
                 }
                 self.wait_ms = ms;
-                self.wait_s = s as f32;
+                self.wait_s = s;
                 return Ok(true);
             }
             w => {
@@ -599,8 +601,9 @@ impl<B: Board> App<B> {
         Ok(false)
     }
 
+    #[inline(never)]
     fn cmd_status(&self, r: &mut Reply) {
-        let _ = write!(r, "armed={} force={} volts=", self.armed as u8, Fixed(self.force as f64, 3));
+        let _ = write!(r, "armed={} force={} volts=", self.armed as u8, Fixed(self.force, 3));
         list(r, &self.volts, 1);
         let mut thick = [0.0f32; CHANNELS];
         for ch in 0..CHANNELS {
@@ -625,14 +628,15 @@ impl<B: Board> App<B> {
         let _ = write!(
             r,
             " cable={} servo={} fault={}",
-            Fixed(self.cable as f64, 3),
-            Fixed(self.servo_deg as f64, 2),
+            Fixed(self.cable, 3),
+            Fixed(self.servo_deg, 2),
             fault.unwrap_or("none")
         );
         let _ = write!(r, " enable={} target=", self.enable as u8);
         list(r, &self.target_v, 1);
     }
 
+    #[inline(never)]
     fn cmd_limits(&self, r: &mut Reply) {
         let _ = write!(r, "vmax=");
         list(r, &self.vmax, 1);
@@ -640,8 +644,8 @@ impl<B: Board> App<B> {
         let _ = write!(
             r,
             " vpullin={} supply={} margin={}",
-            Fixed(self.finger.pull_in_voltage() as f64, 1),
-            Fixed(p.v_supply as f64, 1),
+            Fixed(self.finger.pull_in_voltage(), 1),
+            Fixed(p.v_supply, 1),
             Short(p.margin)
         );
         match self.fmax(&self.target_v) {
@@ -651,7 +655,7 @@ impl<B: Board> App<B> {
                     finger_model::BranchEnd::LimitPoint => "limit-point",
                     finger_model::BranchEnd::SearchBound => "search-bound",
                 };
-                let _ = write!(r, " fmax={} fmax_end={},{}", Fixed(b.tension as f64, 4), kind, b.joint);
+                let _ = write!(r, " fmax={} fmax_end={},{}", Fixed(b.tension, 4), kind, b.joint);
             }
             Err(_) => {
                 let _ = write!(r, " fmax=- fmax_end=error");
@@ -662,20 +666,21 @@ impl<B: Board> App<B> {
             " slew={} servo=0,{} cable_max={} dutymax=",
             Short(self.fw.slew),
             Short(self.fw.servo_range),
-            Fixed((self.fw.servo_range / DEG * self.fw.spool_r) as f64, 2)
+            Fixed(self.fw.servo_range / DEG * self.fw.spool_r, 2)
         );
         let d = self.duty_max;
         let _ = write!(r, "{},{},{}", d[0], d[1], d[2]);
     }
 
     /// Check channel voltages against the ceilings: `limit` at or past.
-    fn check_volts(&self, v: &[f64; CHANNELS]) -> Result<(), CmdError> {
+    fn check_volts(&self, v: &[f32; CHANNELS]) -> Result<(), CmdError> {
         self.check_volts_of(v, false)
     }
 
     /// As [`App::check_volts`]; with `zero_is_off`, a channel at 0 V passes whatever its
     /// ceiling (a computed answer, such as `pose`'s on a finger without stacks).
-    fn check_volts_of(&self, v: &[f64; CHANNELS], zero_is_off: bool) -> Result<(), CmdError> {
+    #[inline(never)]
+    fn check_volts_of(&self, v: &[f32; CHANNELS], zero_is_off: bool) -> Result<(), CmdError> {
         for ch in 0..CHANNELS {
             if zero_is_off && v[ch] == 0.0 {
                 continue;
@@ -683,14 +688,14 @@ impl<B: Board> App<B> {
             if v[ch] < 0.0 {
                 return Err(err("usage", format_args!("channel {}: voltage must be >= 0", ch + 1)));
             }
-            if v[ch] >= self.vmax[ch] as f64 {
+            if v[ch] >= self.vmax[ch] {
                 return Err(err(
                     "limit",
                     format_args!(
                         "channel {}: {} V is at or past the ceiling {} V (33 % pull-in limit with margin, supply)",
                         ch + 1,
                         Fixed(v[ch], 1),
-                        Fixed(self.vmax[ch] as f64, 1)
+                        Fixed(self.vmax[ch], 1)
                     ),
                 ));
             }
@@ -698,6 +703,7 @@ impl<B: Board> App<B> {
         Ok(())
     }
 
+    #[inline(never)]
     fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let [p, v1, v2, v3] = args else { return Err(err("usage", format_args!("solve <P> <V1> <V2> <V3>"))) };
         let p = tension(number(p, "P")?)?;
@@ -709,19 +715,20 @@ impl<B: Board> App<B> {
         let _ = write!(r, "joints=");
         joints(r, &sol);
         let tip = sol.tip();
-        let _ = write!(r, " tip={} cable={} thick=", Tip(&tip), Fixed(sol.cable_excursion as f64, 4));
+        let _ = write!(r, " tip={} cable={} thick=", Tip(&tip), Fixed(sol.cable_excursion, 4));
         list(r, &sol.thickness[..CHANNELS], 4);
         let _ = write!(
             r,
             " stiffness={},{},{} iters={}",
-            Exp(k[0][0] as f64, 4),
-            Exp(k[1][1] as f64, 4),
-            Exp(k[2][2] as f64, 4),
+            Exp(k[0][0], 4),
+            Exp(k[1][1], 4),
+            Exp(k[2][2], 4),
             sol.iterations
         );
         Ok(())
     }
 
+    #[inline(never)]
     fn cmd_disarm(&mut self) -> Result<(), CmdError> {
         if !self.armed {
             return Ok(());
@@ -753,6 +760,7 @@ impl<B: Board> App<B> {
         Ok(())
     }
 
+    #[inline(never)]
     fn cmd_volt(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let [ch, v] = args else { return Err(err("usage", format_args!("volt <1|2|3|all> <V>"))) };
         let chans: &[usize] = match *ch {
@@ -767,12 +775,12 @@ impl<B: Board> App<B> {
             return Err(err("usage", format_args!("volt: voltage must be >= 0")));
         }
         self.require_armed("volt")?;
-        let mut req = self.target_v.map(|x| x as f64);
+        let mut req = self.target_v;
         for &c in chans {
             req[c] = v;
         }
         self.check_volts(&req)?;
-        let target = req.map(|x| x as f32);
+        let target = req;
         let (cable, deg) = self.plan_setpoints(self.force, &target)?;
         self.target_v = target;
         self.cable = cable;
@@ -792,6 +800,7 @@ impl<B: Board> App<B> {
         Ok(())
     }
 
+    #[inline(never)]
     fn cmd_force(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let [p] = args else { return Err(err("usage", format_args!("force <P>"))) };
         let p = tension(number(p, "P")?)?;
@@ -803,9 +812,9 @@ impl<B: Board> App<B> {
         let _ = write!(
             r,
             "force={} cable={} servo={}",
-            Fixed(self.force as f64, 3),
-            Fixed(self.cable as f64, 3),
-            Fixed(self.servo_deg as f64, 2)
+            Fixed(self.force, 3),
+            Fixed(self.cable, 3),
+            Fixed(self.servo_deg, 2)
         );
         Ok(())
     }
@@ -815,20 +824,21 @@ impl<B: Board> App<B> {
     /// Writes its reply line itself. Armed, the solution goes through the checks of `volt`
     /// and `force` ([`App::plan_setpoints`]) and then moves the outputs; disarmed it answers
     /// and moves nothing; refused or unreachable, nothing moves.
+    #[inline(never)]
     fn cmd_pose<W: Write>(&mut self, args: &[&[u8]], out: &mut W) -> Result<(), CmdError> {
         if args.len() != 3 && args.len() != 4 {
             return Err(err("usage", format_args!("pose <d1> <d2> <d3> [<P>]")));
         }
-        let mut deg = [0.0f64; CHANNELS];
+        let mut deg = [0.0f64; CHANNELS]; // inverse_cmds takes f64 (converted back to f32 there, no f64 arithmetic)
         for ch in 0..CHANNELS {
             let d = number(args[ch], "angle")?;
             if !(d.abs() <= 360.0) {
                 return Err(err("usage", format_args!("pose: joint angles are degrees, |d| <= 360")));
             }
-            deg[ch] = d;
+            deg[ch] = d.into();
         }
         let p = match args.get(3) {
-            Some(t) => Some(tension(number(t, "P")?)? as f64),
+            Some(t) => Some(tension(number(t, "P")?)?.into()),
             None => None,
         };
         let armed = self.armed;
@@ -842,7 +852,7 @@ impl<B: Board> App<B> {
             this.require_armed("pose")?;
             let target = [v[0], v[1], v[2]];
             // the ceilings as `volt` checks them; 0 V (a joint without stacks) is off, not a request
-            this.check_volts_of(&target.map(|x| x as f64), true)?;
+            this.check_volts_of(&target, true)?;
             let (cable, sdeg) = this.plan_setpoints(t, &target)?;
             plan = Some((t, target, cable, sdeg));
             Ok(())
@@ -860,20 +870,22 @@ impl<B: Board> App<B> {
     #[cfg(feature = "contact")]
     /// `contact <P0> <P> [<V1> <V2> <V3>]`: model only ([`crate::inverse_cmds::contact`]);
     /// the voltages are checked against the ceilings as `solve` does. Writes its reply line.
+    #[inline(never)]
     fn cmd_contact<W: Write>(&self, args: &[&[u8]], out: &mut W) -> Result<(), CmdError> {
         if args.len() != 2 && args.len() != 2 + CHANNELS {
             return Err(err("usage", format_args!("contact <P0> <P> [<V1> <V2> <V3>]")));
         }
-        let p0 = tension(number(args[0], "P0")?)? as f64;
-        let p = tension(number(args[1], "P")?)? as f64;
-        let mut v = [0.0f64; CHANNELS];
+        let p0 = tension(number(args[0], "P0")?)?;
+        let p = tension(number(args[1], "P")?)?;
+        let mut v = [0.0f32; CHANNELS];
         if args.len() > 2 {
             v = [number(args[2], "V1")?, number(args[3], "V2")?, number(args[4], "V3")?];
         }
         self.check_volts(&v)?;
         let mut line: String<240> = String::new();
-        let volts: &[f64] = if args.len() > 2 { &v } else { &[] };
-        let _ = crate::inverse_cmds::contact(&mut line, &self.finger, p0, p, volts);
+        let vf = v.map(f64::from);
+        let volts: &[f64] = if args.len() > 2 { &vf } else { &[] };
+        let _ = crate::inverse_cmds::contact(&mut line, &self.finger, p0.into(), p.into(), volts);
         let _ = write!(out, "{line}{}", self.board.newline());
         Ok(())
     }
@@ -888,6 +900,7 @@ impl<B: Board> App<B> {
         Ok(())
     }
 
+    #[inline(never)]
     fn cmd_param<W: Write>(&mut self, args: &[&[u8]], r: &mut Reply, out: &mut W) -> Result<(), CmdError> {
         self.require_disarmed("param")?;
         let name = match args.first() {
@@ -916,11 +929,11 @@ impl<B: Board> App<B> {
         if let Some(v) = args.get(1) {
             let v = number(v, name)?;
             if PARAMS.iter().any(|i| i.name == name) {
-                if name == "n" && v != CHANNELS as f64 {
+                if name == "n" && v != CHANNELS as f32 {
                     return Err(err("usage", format_args!("parameter n: the board drives {CHANNELS} joints")));
                 }
                 let mut p = *self.finger.params();
-                p.set(name, v).map_err(model_err)?;
+                p.set(name, v.into()).map_err(model_err)?;
                 let f = Finger::new(p).map_err(model_err)?;
                 let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
                 self.set_finger(f);
@@ -944,6 +957,7 @@ impl<B: Board> App<B> {
         Ok(())
     }
 
+    #[inline(never)]
     fn cmd_preset(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let [which] = args else { return Err(err("usage", format_args!("preset <default|paper>"))) };
         let (p, name) = match *which {
@@ -999,7 +1013,7 @@ fn no_args(args: &[&[u8]], cmd: &str) -> Result<(), CmdError> {
     }
 }
 
-fn number(tok: &[u8], what: &str) -> Result<f64, CmdError> {
+fn number(tok: &[u8], what: &str) -> Result<f32, CmdError> {
     console::parse_number(tok).map_err(|e| match e {
         NumError::Syntax => err("bad-number", format_args!("{what}: {} is not a decimal number", console::printable(tok))),
         NumError::Overflow => err("bad-number", format_args!("{what}: {} is out of range", console::printable(tok))),
@@ -1007,14 +1021,14 @@ fn number(tok: &[u8], what: &str) -> Result<f64, CmdError> {
 }
 
 /// A cable tension: >= 0 (usage), representable (limit: far past any fmax).
-fn tension(p: f64) -> Result<f32, CmdError> {
+fn tension(p: f32) -> Result<f32, CmdError> {
     if p < 0.0 {
         return Err(err("usage", format_args!("tension must be >= 0 (a cable cannot push)")));
     }
     if p > 1e6 {
         return Err(err("limit", format_args!("tension {} N is past fmax", Exp(p, 3))));
     }
-    Ok(p as f32)
+    Ok(p)
 }
 
 /// K_tip = C_tip^-1, inverted with diagonal scaling: C_tip's diagonal spans many decades
@@ -1055,7 +1069,7 @@ struct Tip<'a>(&'a finger_model::Pose<f32>);
 impl fmt::Display for Tip<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let t = self.0;
-        write!(f, "{},{},{}", Fixed(t.x as f64, 3), Fixed(t.y as f64, 3), Fixed((t.theta * DEG) as f64, 2))
+        write!(f, "{},{},{}", Fixed(t.x, 3), Fixed(t.y, 3), Fixed(t.theta * DEG, 2))
     }
 }
 

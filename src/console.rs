@@ -78,43 +78,47 @@ pub fn tokens(line: &[u8]) -> Option<Vec<&[u8], MAX_TOKENS>> {
 pub enum NumError {
     /// Not of the form `[+-]digits[.digits][e[+-]digits]` (NaN, inf, hex, garbage...).
     Syntax,
-    /// Well formed but beyond f64's range.
+    /// Well formed but beyond f32's range (|x| > 3.4e38).
     Overflow,
 }
 
-/// Parse a decimal number: optional sign, digits with an optional fraction, optional
+/// Significant digits kept (u32 mantissa; f32 holds ~7.2).
+const SIG_DIGITS: u32 = 9;
+
+/// Parse a decimal number to f32: optional sign, digits with an optional fraction, optional
 /// exponent. Everything else (NaN, infinity, hex, trailing garbage, non-ASCII) is refused.
-/// No core float parsing (flash): the digits are gathered into a u64 mantissa (19
-/// significant digits kept) and a decimal exponent, see [`crate::num::decimal_to_f64`].
-pub fn parse_number(tok: &[u8]) -> Result<f64, NumError> {
+/// No core float parsing and no f64 (flash): the digits are gathered into a u32 mantissa (9
+/// significant digits kept, the rest truncated) and a decimal exponent, see
+/// [`crate::num::decimal_to_f32`]. Values below f32's range read as 0.
+pub fn parse_number(tok: &[u8]) -> Result<f32, NumError> {
     let n = tok.len();
     let mut i = 0;
     let neg = i < n && tok[i] == b'-';
     if i < n && (tok[i] == b'+' || tok[i] == b'-') {
         i += 1;
     }
-    let (mut mant, mut sig, mut exp10, mut digits) = (0u64, 0u32, 0i64, 0u32);
+    let (mut mant, mut sig, mut exp10, mut digits) = (0u32, 0u32, 0i32, 0u32);
     let mut frac = false;
     while i < n {
         let c = tok[i];
         if c == b'.' && !frac {
             frac = true;
         } else if c.is_ascii_digit() {
-            let d = (c - b'0') as u64;
+            let d = (c - b'0') as u32;
             digits += 1;
             if mant == 0 && d == 0 {
                 // a leading zero: no significant digit yet
                 if frac {
-                    exp10 -= 1;
+                    exp10 = exp10.saturating_sub(1);
                 }
-            } else if sig < 19 {
+            } else if sig < SIG_DIGITS {
                 mant = mant * 10 + d;
                 sig += 1;
                 if frac {
                     exp10 -= 1;
                 }
             } else if !frac {
-                exp10 += 1; // an integer digit past the 19 kept
+                exp10 = exp10.saturating_add(1); // an integer digit past the ones kept
             }
         } else {
             break;
@@ -130,22 +134,22 @@ pub fn parse_number(tok: &[u8]) -> Result<f64, NumError> {
         if i < n && (tok[i] == b'+' || tok[i] == b'-') {
             i += 1;
         }
-        let (mut e, mut exp_digits) = (0i64, 0);
+        let (mut e, mut exp_digits) = (0i32, 0);
         while i < n && tok[i].is_ascii_digit() {
-            e = (e * 10 + (tok[i] - b'0') as i64).min(1_000_000);
+            e = (e * 10 + (tok[i] - b'0') as i32).min(1_000_000);
             i += 1;
             exp_digits += 1;
         }
         if exp_digits == 0 {
             return Err(NumError::Syntax);
         }
-        exp10 += if eneg { -e } else { e };
+        exp10 = exp10.saturating_add(if eneg { -e } else { e });
     }
     if i != n {
         return Err(NumError::Syntax);
     }
-    let exp10 = exp10.clamp(-100_000, 100_000) as i32;
-    let v = crate::num::decimal_to_f64(mant, exp10).ok_or(NumError::Overflow)?;
+    let exp10 = exp10.clamp(-100_000, 100_000);
+    let v = crate::num::decimal_to_f32(mant, exp10).ok_or(NumError::Overflow)?;
     Ok(if neg { -v } else { v })
 }
 

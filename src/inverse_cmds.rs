@@ -30,6 +30,12 @@ use finger_model::{Error, Finger, Real, MAX_JOINTS};
 use crate::app::CmdError;
 use crate::num::{write_model_error, Fixed};
 
+/// `x` as f32 for printing (for R = f32 the round trip through f64 folds away: no f64
+/// arithmetic is linked).
+fn f32_of<R: Real>(x: R) -> f32 {
+    x.to_f64() as f32
+}
+
 /// Write `err <code>: <message>` for a model error.
 fn write_err<W: Write>(out: &mut W, e: &Error) -> fmt::Result {
     write!(out, "err {}: ", e.code())?;
@@ -38,7 +44,7 @@ fn write_err<W: Write>(out: &mut W, e: &Error) -> fmt::Result {
 
 /// Write a comma-separated list with `prec` decimals.
 #[cfg(feature = "pose")]
-fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f64>, prec: usize) -> fmt::Result {
+fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f32>, prec: usize) -> fmt::Result {
     for (i, x) in v.enumerate() {
         if i > 0 {
             out.write_char(',')?;
@@ -76,7 +82,7 @@ where
             write!(out, "err bad-number: angle is not a finite number")?;
             return Ok(false);
         }
-        *a = R::from_f64(d * core::f64::consts::PI / 180.0);
+        *a = R::from_f64(d) * R::from_f64(core::f64::consts::PI / 180.0);
     }
     let sol = match solve_pose(finger, &angles[..n], tension.map(R::from_f64)) {
         Ok(s) => s,
@@ -89,12 +95,12 @@ where
         write!(out, "err {}: {}", e.code, e.msg)?;
         return Ok(false);
     }
-    write!(out, "ok force={} volts=", Fixed(sol.tension.to_f64(), 4))?;
-    write_list(out, sol.volts[..n].iter().map(|v| v.to_f64()), 1)?;
+    write!(out, "ok force={} volts=", Fixed(f32_of(sol.tension), 4))?;
+    write_list(out, sol.volts[..n].iter().map(|&v| f32_of(v)), 1)?;
     out.write_str(" joints=")?;
-    write_list(out, sol.angles[..n].iter().map(|a| a.to_f64() * 180.0 / core::f64::consts::PI), 3)?;
+    write_list(out, sol.angles[..n].iter().map(|&a| f32_of(a * R::from_f64(180.0 / core::f64::consts::PI))), 3)?;
     out.write_str(" range=")?;
-    write_list(out, sol.interval.iter().map(|p| p.to_f64()), 4)?;
+    write_list(out, sol.interval.iter().map(|&p| f32_of(p)), 4)?;
     Ok(true)
 }
 
@@ -122,15 +128,15 @@ where
     match contact_force(finger, R::from_f64(p0), &zero[..n], R::from_f64(p), &v[..n]) {
         Ok(c) => {
             // the finger presses on the object with minus the object's force on the tip
-            let (fx, fy) = (-c.force[0].to_f64(), -c.force[1].to_f64());
+            let (fx, fy) = (f32_of(-c.force[0]), f32_of(-c.force[1]));
             write!(
                 out,
                 "ok fx={} fy={} force={} point={},{}",
                 Fixed(fx, 4),
                 Fixed(fy, 4),
-                Fixed(c.magnitude().to_f64(), 4),
-                Fixed(c.point[0].to_f64(), 3),
-                Fixed(c.point[1].to_f64(), 3)
+                Fixed(f32_of(c.magnitude()), 4),
+                Fixed(f32_of(c.point[0]), 3),
+                Fixed(f32_of(c.point[1]), 3)
             )?;
             Ok(true)
         }

@@ -1,50 +1,79 @@
-//! Numbers to and from text without core's float parsing and formatting (issue 3: flash).
+//! Numbers to and from text without core's float parsing and formatting, and without f64
+//! (issue 3: flash).
 //!
 //! core's `f64::from_str` (dec2flt, ~13 KB with its tables) and float `Display` (grisu and
-//! dragon, ~10 KB) do not fit the 64 KiB image. The console needs much less: decimals of a few
-//! significant digits in, fixed or exponent notation of an f32 out.
+//! dragon, ~10 KB) do not fit the 64 KiB image, and f64 arithmetic links ~5 KB of soft-float
+//! on the Cortex-M4F (its FPU is single precision). The console needs much less: decimals of
+//! a few significant digits in, fixed or exponent notation of an f32 out. Everything here is
+//! f32 and u32 arithmetic (u64 only for products and shifts, never a u64 division).
 //!
-//! - [`decimal_to_f64`]: mantissa digits and a decimal exponent to f64. Correctly rounded for
-//!   up to 15 significant digits and exponents within ±22 (Clinger's fast path: one exact
-//!   product or quotient), within a few ulp beyond; overflow is reported, not infinity.
+//! - [`decimal_to_f32`]: mantissa digits and a decimal exponent to f32. Correctly rounded for
+//!   decimal exponents -16..=10 of the (9-digit) mantissa: Clinger's fast path in f32, else
+//!   the f32 estimate corrected against the exact decimal with u64 products; a few ulp beyond.
 //! - [`Fixed`], [`Short`], [`Exp`]: `Display` wrappers printing like core's `{:.p}`, `{}` and
-//!   `{:.pe}` for the values the console shows. Finite values only matter here; NaN prints
-//!   `NaN` and infinities `inf` / `-inf` as core does.
+//!   `{:.pe}` of an f32. [`Fixed`] is exact (integer arithmetic on the f32's bits), so it
+//!   prints as core does up to 1e18; [`Short`] as core's `{}` for 1e-8 <= |x| < 1e18 (and
+//!   exponent notation with 9 significant digits outside); [`Exp`] scales in f32, its last digit
+//!   may differ from core's. NaN prints `NaN` and infinities `inf` / `-inf` as core does.
 
 use core::fmt::{self, Write};
 
-/// 10^e as f64 (exact for e <= 22), infinity past f64's range.
-pub fn pow10(e: u32) -> f64 {
-    let mut p = 1.0f64;
-    let mut i = 0;
-    while i < e {
-        p *= 10.0;
-        if p > f64::MAX {
-            return f64::INFINITY;
+/// 10^e, exact in f32 for e <= 10.
+const POW10: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
+/// 10^e as u32, e <= 9.
+const POW10U: [u32; 10] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000, 100_000_000, 1_000_000_000];
+
+/// `v` x 10^`e` in f32 steps of at most 10^10 (one rounding when |e| <= 10).
+fn scale10(mut v: f32, mut e: i32) -> f32 {
+    while e > 10 {
+        v *= 1e10;
+        e -= 10;
+        if !v.is_finite() {
+            return v;
         }
-        i += 1;
     }
-    p
+    while e < -10 {
+        v /= 1e10;
+        e += 10;
+        if v == 0.0 {
+            return v;
+        }
+    }
+    if e >= 0 {
+        v * POW10[e as usize]
+    } else {
+        v / POW10[(-e) as usize]
+    }
 }
 
-/// `mant` x 10^`exp10`, `None` when it overflows f64.
-pub fn decimal_to_f64(mant: u64, exp10: i32) -> Option<f64> {
+/// `mant` x 10^`exp10` as f32; `None` when it overflows f32. Correctly rounded for
+/// -16 <= exp10 <= 10 (the f32 estimate is corrected against the decimal's exact value with
+/// u64 products), within a few ulp beyond.
+pub fn decimal_to_f32(mant: u32, exp10: i32) -> Option<f32> {
     if mant == 0 {
         return Some(0.0);
     }
-    let m = mant as f64;
-    let v = if exp10 >= 0 {
-        m * pow10(exp10 as u32)
-    } else {
-        // two steps keep 10^-e finite down to the subnormals
-        let mut e = -(exp10 as i64);
-        let mut v = m;
-        while e > 300 {
-            v /= 1e300;
-            e -= 300;
+    let mut v = scale10(mant as f32, exp10);
+    let exact = mant <= 1 << 24 && (-10..=10).contains(&exp10);
+    if !exact && (-16..=10).contains(&exp10) && v.is_finite() && v > 0.0 {
+        for _ in 0..3 {
+            let b = v.to_bits();
+            let be = (b >> 23) as i32;
+            let (m, e) = if be == 0 { (b & 0x7f_ffff, -149) } else { ((b & 0x7f_ffff) | 0x80_0000, be - 150) };
+            let odd = m & 1 == 1;
+            // the midpoints to the neighbours: (2m+1) 2^(e-1) above, (2m-1) 2^(e-1) below
+            // ((4m-1) 2^(e-2) at a power of two)
+            let up = cmp_decimal(mant, exp10, 2 * m as u64 + 1, e - 1);
+            let down = if m == 0x80_0000 && be > 1 { cmp_decimal(mant, exp10, 4 * m as u64 - 1, e - 2) } else { cmp_decimal(mant, exp10, 2 * m as u64 - 1, e - 1) };
+            if up == Greater || (up == Equal && odd) {
+                v = f32::from_bits(b + 1);
+            } else if m > 0 && (down == Less || (down == Equal && odd)) {
+                v = f32::from_bits(b - 1);
+            } else {
+                break;
+            }
         }
-        v / pow10(e as u32)
-    };
+    }
     if v.is_finite() {
         Some(v)
     } else {
@@ -52,8 +81,36 @@ pub fn decimal_to_f64(mant: u64, exp10: i32) -> Option<f64> {
     }
 }
 
+use core::cmp::Ordering::{self, Equal, Greater, Less};
+
+/// `mant` x 10^`exp10` against `k` x 2^`e` (exactly; -16 <= exp10 <= 10, k < 2^26).
+fn cmp_decimal(mant: u32, exp10: i32, k: u64, e: i32) -> Ordering {
+    // mant 5^j 2^j vs k 2^e  <=>  mant 5^j vs k 2^(e-j)          (exp10 = j >= 0)
+    // mant 2^-j 5^-j vs k 2^e  <=>  mant vs k 5^j 2^(e+j)         (exp10 = -j < 0)
+    let (a, b, t) = if exp10 >= 0 {
+        (mant as u64 * POW5[exp10 as usize], k, e - exp10)
+    } else {
+        let j = (-exp10) as usize;
+        (mant as u64, k * POW5[j], e + j as i32)
+    };
+    // a vs b 2^t
+    if t >= 0 {
+        let t = t as u32;
+        if t >= 64 || b.leading_zeros() < t {
+            return Less;
+        }
+        a.cmp(&(b << t))
+    } else {
+        let t = (-t) as u32;
+        if t >= 64 || a.leading_zeros() < t {
+            return Greater;
+        }
+        (a << t).cmp(&b)
+    }
+}
+
 /// Decimal digits of `v` into the end of `buf`, at least `min_digits`; the start index.
-fn digits(mut v: u64, buf: &mut [u8; 24], min_digits: usize) -> usize {
+fn digits(mut v: u32, buf: &mut [u8; 20], min_digits: usize) -> usize {
     let mut i = buf.len();
     while v > 0 || buf.len() - i < min_digits.max(1) {
         i -= 1;
@@ -63,18 +120,16 @@ fn digits(mut v: u64, buf: &mut [u8; 24], min_digits: usize) -> usize {
     i
 }
 
-/// Round a non-negative f64 below 2^64 to an integer, half to even (as core's formatting).
-fn round_even(y: f64) -> u64 {
-    let t = y as u64;
-    let frac = y - t as f64;
-    if frac > 0.5 || (frac == 0.5 && t & 1 == 1) {
-        t + 1
-    } else {
-        t
+fn write_u32(f: &mut fmt::Formatter<'_>, v: u32, min_digits: usize) -> fmt::Result {
+    let mut buf = [0u8; 20];
+    let s = digits(v, &mut buf, min_digits);
+    for &c in &buf[s..] {
+        f.write_char(c as char)?;
     }
+    Ok(())
 }
 
-fn non_finite(f: &mut fmt::Formatter<'_>, x: f64) -> fmt::Result {
+fn non_finite(f: &mut fmt::Formatter<'_>, x: f32) -> fmt::Result {
     f.write_str(if x.is_nan() {
         "NaN"
     } else if x > 0.0 {
@@ -84,29 +139,112 @@ fn non_finite(f: &mut fmt::Formatter<'_>, x: f64) -> fmt::Result {
     })
 }
 
-/// Write `r` / 10^`prec` with exactly `prec` decimals.
-fn write_scaled(f: &mut fmt::Formatter<'_>, neg: bool, r: u64, prec: usize) -> fmt::Result {
-    let mut buf = [0u8; 24];
-    let s = digits(r, &mut buf, prec + 1);
+/// 5^e, e <= 17 (5^17 < 2^40: times a 24-bit mantissa it fits a u64).
+const POW5: [u64; 18] = {
+    let mut t = [1u64; 18];
+    let mut i = 1;
+    while i < 18 {
+        t[i] = t[i - 1] * 5;
+        i += 1;
+    }
+    t
+};
+
+/// |x| rounded to `prec` (<= 17) decimals, exactly (half to even as core's `{:.p}`, or half
+/// up with `tie_up`): the
+/// integer part in two base-1e9 limbs (high, low) and the decimals as an integer below
+/// 10^prec, plus whether the decimal reads back as x (its error under half an ulp).
+/// `None` past 1e18 or when the decimals do not fit a u32 (only past 9 decimals).
+struct Rounded {
+    hi: u32,
+    lo: u32,
+    frac: u32,
+    exact_back: bool,
+}
+
+fn round_fixed(x: f32, prec: usize, tie_up: bool) -> Option<Rounded> {
+    let bits = x.to_bits() & 0x7fff_ffff;
+    let be = (bits >> 23) as i32;
+    let m = bits & 0x7f_ffff;
+    let (m, e) = if be == 0 { (m, -149) } else { (m | 0x80_0000, be - 150) };
+    if e >= 0 {
+        // an integer: m x 2^e in base-1e9 limbs (m < 2^24 < 1e9)
+        let (mut hi, mut lo) = (0u32, m);
+        for _ in 0..e {
+            hi *= 2;
+            lo *= 2;
+            if lo >= 1_000_000_000 {
+                lo -= 1_000_000_000;
+                hi += 1;
+            }
+            if hi >= 1_000_000_000 {
+                return None;
+            }
+        }
+        return Some(Rounded { hi, lo, frac: 0, exact_back: true });
+    }
+    let s = (-e) as u32;
+    let int = if s >= 32 { 0 } else { m >> s };
+    let fr = if s >= 32 { m } else { m & ((1u32 << s) - 1) };
+    // fr / 2^s x 10^p = fr x 5^p / 2^(s - p): a u64 product, no division
+    let prod = fr as u64 * POW5[prec];
+    let sp = s as i32 - prec as i32;
+    let (q, err, below) = if sp <= 0 {
+        // exact: the decimals are an integer
+        let sh = (-sp) as u32;
+        if sh >= 32 || prod >> (32 - sh) != 0 {
+            return None;
+        }
+        (prod << sh, 0, false)
+    } else if sp >= 64 {
+        (0, u64::MAX, true) // far below 10^-prec / 2: rounds to 0, does not read back
+    } else {
+        let sp = sp as u32;
+        let q = prod >> sp;
+        let rem = prod & ((1u64 << sp) - 1);
+        let half = 1u64 << (sp - 1);
+        // the last digit: of the decimals, or of the integer part at 0 decimals
+        let odd = if prec == 0 { int & 1 == 1 } else { q & 1 == 1 };
+        let up = rem > half || (rem == half && (tie_up || odd));
+        // |decimal - x| in units of 2^-s / 5^prec
+        (q + up as u64, if up { (1u64 << sp) - rem } else { rem }, !up)
+    };
+    if q > u32::MAX as u64 {
+        return None;
+    }
+    // it reads back when under half an ulp of x (2^-s; a quarter of it below a power of two)
+    let k: u64 = if m == 0x80_0000 && below && be > 1 { 4 } else { 2 };
+    let exact_back = m == 0 || err == 0 || (err < u64::MAX / 4 && k * err < POW5[prec]);
+    let (mut lo, mut frac) = (int, q as u32);
+    if prec <= 9 && frac >= POW10U[prec] {
+        frac -= POW10U[prec];
+        lo += 1;
+    } else if prec > 9 && int == 0 && q >= 10u64.pow(prec as u32) {
+        return None; // 1 at this precision: shorter ones read back first
+    }
+    Some(Rounded { hi: 0, lo, frac, exact_back })
+}
+
+fn write_rounded(f: &mut fmt::Formatter<'_>, neg: bool, r: &Rounded, prec: usize) -> fmt::Result {
     if neg {
         f.write_char('-')?;
     }
-    let dot = buf.len() - prec;
-    // ASCII digits only
-    f.write_str(core::str::from_utf8(&buf[s..dot]).unwrap_or("?"))?;
+    if r.hi > 0 {
+        write_u32(f, r.hi, 1)?;
+        write_u32(f, r.lo, 9)?;
+    } else {
+        write_u32(f, r.lo, 1)?;
+    }
     if prec > 0 {
         f.write_char('.')?;
-        f.write_str(core::str::from_utf8(&buf[dot..]).unwrap_or("?"))?;
+        write_u32(f, r.frac, prec)?;
     }
     Ok(())
 }
 
-/// Largest value printed in fixed notation; beyond it [`Fixed`] falls back to [`Exp`].
-const FIXED_MAX: f64 = 1.0e18;
-
-/// `x` with `prec` decimals (`{:.prec}`), `prec` <= 9. Exact for f32 inputs (the product of a
-/// 24-bit mantissa and 10^prec is exact in f64), so it prints as core does.
-pub struct Fixed(pub f64, pub usize);
+/// `x` with `prec` decimals (`{:.prec}`), `prec` <= 9; exact, as core prints it. Past 1e18
+/// in exponent notation ([`Exp`]).
+pub struct Fixed(pub f32, pub usize);
 
 impl fmt::Display for Fixed {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -114,77 +252,82 @@ impl fmt::Display for Fixed {
         if !x.is_finite() {
             return non_finite(f, x);
         }
-        let y = if x < 0.0 { -x } else { x } * pow10(prec as u32);
-        if y >= FIXED_MAX {
-            return Exp(x, prec).fmt(f);
+        match round_fixed(x, prec, false) {
+            Some(r) => write_rounded(f, x.is_sign_negative(), &r, prec),
+            None => Exp(x, prec).fmt(f),
         }
-        write_scaled(f, x.is_sign_negative(), round_even(y), prec)
     }
 }
 
 /// The shortest fixed notation that reads back as the same f32 (`{}` of an f32; the same
-/// text as core's for the console's values, 1e-6 <= |x| < 1e9 and 0).
+/// text as core's for 1e-8 <= |x| < 1e18 and 0; otherwise exponent notation with 9 digits).
 pub struct Short(pub f32);
 
 impl fmt::Display for Short {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let x = self.0;
         if !x.is_finite() {
-            return non_finite(f, x as f64);
+            return non_finite(f, x);
         }
-        let a = if x < 0.0 { -(x as f64) } else { x as f64 };
         for prec in 0..=17usize {
-            let scale = pow10(prec as u32);
-            let y = a * scale;
-            if y >= FIXED_MAX {
-                return Exp(x as f64, 6).fmt(f);
-            }
             // an exact tie: core's shortest digits round it up
-            let t = y as u64;
-            let r = if y - t as f64 >= 0.5 { t + 1 } else { t };
-            if (r as f64 / scale) as f32 == a as f32 || prec == 17 {
-                return write_scaled(f, x.is_sign_negative(), r, prec);
+            if let Some(r) = round_fixed(x, prec, true) {
+                if r.exact_back {
+                    return write_rounded(f, x.is_sign_negative(), &r, prec);
+                }
             }
         }
-        Ok(())
+        Exp(x, 8).fmt(f)
     }
 }
 
-/// `x` in exponent notation with `prec` decimals (`{:.prec e}`: `1.2345e3`, `-5.0000e-4`).
-pub struct Exp(pub f64, pub usize);
+/// `x` in exponent notation with `prec` (<= 9) decimals (`{:.prec e}`: `1.2345e3`,
+/// `-5.0000e-4`). Scaled in f32: the last digit may differ from core's.
+pub struct Exp(pub f32, pub usize);
 
 impl fmt::Display for Exp {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let (x, prec) = (self.0, self.1.min(9));
+        let (x, prec) = (self.0, self.1.min(8));
         if !x.is_finite() {
             return non_finite(f, x);
         }
-        let mut a = if x < 0.0 { -x } else { x };
+        let a = if x < 0.0 { -x } else { x };
         let mut e: i32 = 0;
         if a != 0.0 {
-            while a >= 10.0 {
-                a /= 10.0;
+            // the decimal exponent from the binary one (log10(2) ~ 0.30103), then corrected
+            let be = ((a.to_bits() >> 23) as i32 - 127).max(-149);
+            e = (be * 30103).div_euclid(100_000);
+            while scale10(a, -e) >= 10.0 {
                 e += 1;
             }
-            while a < 1.0 {
-                a *= 10.0;
+            while scale10(a, -e) < 1.0 {
                 e -= 1;
             }
         }
-        let scale = pow10(prec as u32);
-        let mut r = round_even(a * scale);
-        if r as f64 >= 10.0 * scale {
-            r = round_even(r as f64 / 10.0);
+        let y = scale10(a, prec as i32 - e); // 10^prec <= y < 10^(prec+1), below 2^32
+        let mut r = y as u32;
+        let fr = y - r as f32;
+        if fr > 0.5 || (fr == 0.5 && r & 1 == 1) {
+            r += 1;
+        }
+        if r >= POW10U[prec] * 10 {
+            r /= 10;
             e += 1;
         }
-        write_scaled(f, x.is_sign_negative(), r, prec)?;
+        if x.is_sign_negative() {
+            f.write_char('-')?;
+        }
+        let p = POW10U[prec];
+        write_u32(f, r / p, 1)?;
+        if prec > 0 {
+            f.write_char('.')?;
+            write_u32(f, r % p, prec)?;
+        }
         f.write_char('e')?;
         if e < 0 {
             f.write_char('-')?;
         }
-        let mut buf = [0u8; 24];
-        let s = digits(e.unsigned_abs() as u64, &mut buf, 1);
-        f.write_str(core::str::from_utf8(&buf[s..]).unwrap_or("?"))
+        write_u32(f, e.unsigned_abs(), 1)
     }
 }
 
@@ -197,7 +340,7 @@ impl fmt::Display for List<'_> {
             if i > 0 {
                 f.write_char(',')?;
             }
-            Fixed(*x as f64, self.1).fmt(f)?;
+            Fixed(*x, self.1).fmt(f)?;
         }
         Ok(())
     }
@@ -214,37 +357,37 @@ pub fn write_model_error<W: Write>(w: &mut W, e: &finger_model::Error) -> fmt::R
         E::VoltageCeiling { joint, volts, ceiling } => write!(
             w,
             "joint {joint}: {} V is at or past the ceiling {} V (33 % pull-in limit with margin, or supply)",
-            Fixed(volts, 0),
-            Fixed(ceiling, 0)
+            Fixed(volts as f32, 0),
+            Fixed(ceiling as f32, 0)
         ),
         E::ThicknessLimit { joint, requested_mm, limit_mm } => write!(
             w,
             "joint {joint}: stack thickness {} mm is past the 33 % pull-in limit ({} mm)",
-            Fixed(requested_mm, 3),
-            Fixed(limit_mm, 3)
+            Fixed(requested_mm as f32, 3),
+            Fixed(limit_mm as f32, 3)
         ),
         E::Contact { joint, tension } => {
-            write!(w, "joint {joint}: links in contact (cable span at its floor) at {} N", Fixed(tension, 3))
+            write!(w, "joint {joint}: links in contact (cable span at its floor) at {} N", Fixed(tension as f32, 3))
         }
         E::LimitPoint { joint, tension } => {
-            write!(w, "joint {joint}: equilibrium limit point (singular tangent) at {} N", Fixed(tension, 3))
+            write!(w, "joint {joint}: equilibrium limit point (singular tangent) at {} N", Fixed(tension as f32, 3))
         }
         E::ForceLimit { tension, fmax } => write!(
             w,
             "tension {} N is past the end of the equilibrium branch fmax={} N",
-            Fixed(tension, 3),
-            Fixed(fmax, 3)
+            Fixed(tension as f32, 3),
+            Fixed(fmax as f32, 3)
         ),
         E::NotConverged { iterations, residual } => {
-            write!(w, "solver did not converge: {iterations} iterations, residual {}", Exp(residual, 3))
+            write!(w, "solver did not converge: {iterations} iterations, residual {}", Exp(residual as f32, 3))
         }
         E::Singular { what } => write!(w, "singular {what}"),
         E::Unreachable { joint, needed, min, max } => write!(
             w,
             "joint {joint}: needs compliance {} rad/Nmm, the ceiling allows {}..{}",
-            Exp(needed, 4),
-            Exp(min, 4),
-            Exp(max, 4)
+            Exp(needed as f32, 4),
+            Exp(min as f32, 4),
+            Exp(max as f32, 4)
         ),
         #[allow(unreachable_patterns)]
         _ => write!(w, "model error"),

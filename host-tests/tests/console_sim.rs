@@ -178,7 +178,8 @@ fn bad_numbers() {
     err(&mut a, "solve 0.5 -1 0 0", "usage");
     err(&mut a, "param l nan", "bad-number");
     err(&mut a, "param l -5", "usage");
-    err(&mut a, "param l 1e300", "usage");
+    err(&mut a, "param l 1e30", "usage");
+    err(&mut a, "param l 1e300", "bad-number"); // past f32
     err(&mut a, "wait inf", "bad-number");
     err(&mut a, "wait -1", "usage");
     ok(&mut a, "arm");
@@ -511,12 +512,12 @@ fn own_number_parsing_and_formatting_match_core() {
     for &v in &vals {
         for w in [v, -v] {
             for p in 0..=4 {
-                assert_eq!(Fixed(w as f64, p).to_string(), format!("{w:.p$}"), "{w:e} .{p}");
+                assert_eq!(Fixed(w, p).to_string(), format!("{w:.p$}"), "{w:e} .{p}");
             }
             assert_eq!(Short(w).to_string(), format!("{w}"), "{w:e}");
             if w != 0.0 {
                 // exponent notation: the same up to the last digit (the scaling is not exact)
-                let (a, b) = (Exp(w as f64, 4).to_string(), format!("{w:.4e}"));
+                let (a, b) = (Exp(w, 4).to_string(), format!("{w:.4e}"));
                 let (ma, ea) = a.split_once('e').unwrap();
                 let (mb, eb) = b.split_once('e').unwrap();
                 let da: f64 = ma.parse::<f64>().unwrap() * 10f64.powi(ea.parse().unwrap());
@@ -525,24 +526,24 @@ fn own_number_parsing_and_formatting_match_core() {
             }
             // parsing the printed text gives the value back, as core's parse does
             let s = format!("{w:e}");
-            assert_eq!(parse_number(s.as_bytes()).unwrap(), s.parse::<f64>().unwrap(), "{s}");
+            assert_eq!(parse_number(s.as_bytes()).unwrap(), s.parse::<f32>().unwrap(), "{s}");
             let s = format!("{w}");
-            let (ours, core) = (parse_number(s.as_bytes()).unwrap(), s.parse::<f64>().unwrap());
-            assert!(ours == core || ((ours - core) / core).abs() < 1e-15, "{s}");
+            let (ours, core) = (parse_number(s.as_bytes()).unwrap(), s.parse::<f32>().unwrap());
+            assert!(ours == core || ((ours - core) / core).abs() < 2.5e-7, "{s}");
         }
     }
-    // decimals within Clinger's fast path are exact
-    for s in ["0.1", "0.3", "2.5e3", "-0.5", "+7", "1e22", "123456789012345", "0.000001", "5e-1", ".5", "5.", "00012.50"] {
-        assert_eq!(parse_number(s.as_bytes()), Ok(s.parse::<f64>().unwrap()), "{s}");
+    // decimals within Clinger's fast path (in f32) are exact
+    for s in ["0.1", "0.3", "2.5e3", "-0.5", "+7", "1e10", "1234567", "0.000001", "5e-1", ".5", "5.", "00012.50", "8.854e-12", "1e-45"] {
+        assert_eq!(parse_number(s.as_bytes()), Ok(s.parse::<f32>().unwrap()), "{s}");
     }
-    // long mantissas (digits past the 19 kept), leading zeros, big and small exponents
-    let long = format!("{}.{}", "9".repeat(40), "1".repeat(40));
+    // long mantissas (digits past the 9 kept), leading zeros, big and small exponents
+    let long = format!("{}.{}", "9".repeat(30), "1".repeat(40));
     let r = parse_number(long.as_bytes()).unwrap();
-    assert!((r / 1e40 - 1.0).abs() < 1e-14);
+    assert!((r / 1e30 - 1.0).abs() < 1e-6);
     assert_eq!(parse_number(format!("0.{}1e400", "0".repeat(399)).as_bytes()), Ok(1.0));
     assert_eq!(parse_number(b"1e-400"), Ok(0.0));
-    assert!((parse_number(b"1.5e308").unwrap() / 1.5e308 - 1.0).abs() < 1e-14);
-    for s in ["1e309", "1e999", "-1e999", "1e99999999999", &format!("1{}", "0".repeat(400))] {
+    assert!((parse_number(b"3.4e38").unwrap() / 3.4e38 - 1.0).abs() < 1e-6);
+    for s in ["3.5e38", "1e39", "1e309", "1e999", "-1e999", "1e99999999999", &format!("1{}", "0".repeat(400))] {
         assert_eq!(parse_number(s.as_bytes()), Err(NumError::Overflow), "{s}");
     }
     for s in ["", "nan", "inf", "-inf", "infinity", "0x10", "1.5abc", "1e", "1e+", "--1", "+", "-", ".", "1,5", "1.2.3", "e5", " 1", "1 ", "١"] {

@@ -134,6 +134,39 @@ impl ParamInfo {
             v >= self.min - slack(self.min) && v <= self.max + slack(self.max)
         }
     }
+
+    /// [`ParamInfo::contains`] computed in `R` (the same for f64; in f32 no f64 arithmetic
+    /// is linked, which the firmware's flash budget needs).
+    pub fn contains_in<R: Real>(&self, v: R) -> bool {
+        let (min, max) = (R::from_f64(self.min), R::from_f64(self.max));
+        let slack = |b: R| R::from_f64(1e-6) * b.abs();
+        if self.open {
+            v > min && v < max
+        } else {
+            v >= min - slack(min) && v <= max + slack(max)
+        }
+    }
+}
+
+/// `v` as an integer in 0..2^31 when it is one (from its bits: no f64 arithmetic).
+fn small_uint(v: f64) -> Option<u32> {
+    let bits = v.to_bits();
+    if bits << 1 == 0 {
+        return Some(0); // +-0
+    }
+    if bits >> 63 != 0 {
+        return None;
+    }
+    let e = ((bits >> 52) & 0x7ff) as i32 - 1023;
+    if !(0..31).contains(&e) {
+        return None;
+    }
+    let m = (bits & ((1u64 << 52) - 1)) | (1u64 << 52);
+    let shift = 52 - e as u32;
+    if m & ((1u64 << shift) - 1) != 0 {
+        return None;
+    }
+    Some((m >> shift) as u32)
 }
 
 const fn info(name: &'static str, min: f64, max: f64, open: bool, range: &'static str) -> ParamInfo {
@@ -256,14 +289,15 @@ impl<R: Real> Params<R> {
         if info.read_only {
             return Err(bad);
         }
-        let inside = info.contains(value);
-        if !inside || (is_integer_name(name) && value != libm::trunc(value)) {
+        let r = R::from_f64(value);
+        let int = small_uint(value);
+        if !info.contains_in(r) || (is_integer_name(name) && int.is_none()) {
             return Err(bad);
         }
+        let k = int.unwrap_or(0);
         let mut p = *self;
-        let r = R::from_f64(value);
         match name {
-            "n" => p.n = value as usize,
+            "n" => p.n = k as usize,
             "l" => p.l = r,
             "b" => p.b = r,
             "w" => p.w = r,
@@ -271,19 +305,19 @@ impl<R: Real> Params<R> {
             "a" => p.a = r,
             "e_b" => p.e_b = r,
             "e" => p.e = r,
-            "layers" => p.layers = value as u32,
+            "layers" => p.layers = k,
             "z0" => p.z0 = r,
             "g" => p.g = r,
             "nu" => p.nu = r,
             "eps_r" => p.eps_r = r,
             "margin" => p.margin = r,
             "v_supply" => p.v_supply = r,
-            "n_inc" => p.n_inc = value as u32,
-            "m" => p.m = value as usize,
-            "plate" => p.plate = value != 0.0,
+            "n_inc" => p.n_inc = k,
+            "m" => p.m = k as usize,
+            "plate" => p.plate = k != 0,
             "nu_b" => p.nu_b = r,
             "span_floor" => p.span_floor = r,
-            "flex_links" => p.flex_links = value != 0.0,
+            "flex_links" => p.flex_links = k != 0,
             _ => return Err(bad),
         }
         p.validate()?;
@@ -300,26 +334,26 @@ impl<R: Real> Params<R> {
             if !v.is_finite() {
                 return Err(Error::NonFinite { input: info.name });
             }
-            let inside = info.contains(v);
-            if !inside {
+            if !info.contains_in(R::from_f64(v)) {
                 return Err(Error::Param { name: info.name, range: info.range });
             }
         }
-        let f = |x: R| x.to_f64();
-        if f(self.t_min) >= f(self.b) {
+        // compared in R (no f64 arithmetic on the target)
+        let two = R::from_f64(2.0);
+        if self.t_min >= self.b {
             return Err(Error::Param { name: "t_min", range: "t_min < b" });
         }
-        if 2.0 * f(self.a) >= f(self.l) {
+        if two * self.a >= self.l {
             return Err(Error::Param { name: "a", range: "hinge length 2a < pitch l" });
         }
-        if f(self.e) > 0.5 * f(self.b) {
+        if self.e > R::from_f64(0.5) * self.b {
             return Err(Error::Param { name: "e", range: "cable inside the link: 0 < e <= b/2" });
         }
-        if f(self.span_floor) >= 2.0 * f(self.a) {
+        if self.span_floor >= two * self.a {
             return Err(Error::Param { name: "span_floor", range: "span_floor < hinge length 2a" });
         }
-        let e_de = f(self.e_de());
-        if self.layers > 0 && !(e_de > 1e-6 && e_de.is_finite()) {
+        let e_de = self.e_de();
+        if self.layers > 0 && !(e_de > R::from_f64(1e-6) && e_de.is_finite()) {
             return Err(Error::Param { name: "e_de", range: "E_de > 0 (from g, nu)" });
         }
         Ok(())
