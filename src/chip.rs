@@ -9,6 +9,9 @@
 //! Time: SysTick counts the core clock. QEMU's SysTick runs at 168 MHz whatever the RCC says,
 //! so a 1 ms tick is 168 000 counts in both builds.
 
+#[path = "mem.rs"]
+mod mem;
+
 use core::panic::PanicInfo;
 use core::ptr::write_volatile;
 use core::sync::atomic::{AtomicU32, Ordering};

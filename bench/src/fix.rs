@@ -114,6 +114,7 @@ macro_rules! fixed_real {
 
         impl Real for $name {
             const EPS: f64 = 1.0 / ((1u64 << $frac) as f64);
+            const SQRT_EPS: f64 = 1.0 / ((1u64 << ($frac / 2)) as f64);
             const NAME: &'static str = $label;
             #[inline(always)]
             fn from_f64(x: f64) -> Self {
@@ -121,6 +122,13 @@ macro_rules! fixed_real {
                     Some(v) => $name(v),
                     None if x < 0.0 => Self::MIN,
                     None => Self::MAX, // too large, or NaN: "not finite"
+                }
+            }
+            #[inline(always)]
+            fn from_u32(n: u32) -> Self {
+                match <$fx>::checked_from_num(n) {
+                    Some(v) => $name(v),
+                    None => Self::MAX,
                 }
             }
             #[inline(always)]

@@ -88,7 +88,7 @@ pub fn layer_thickness_ratio<R: Real>(p: &Params<R>, joint: usize, volts: R) -> 
 pub fn stack_thickness<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<R, Error> {
     check_voltage(p, joint, volts)?;
     let s = layer_thickness_ratio(p, joint, volts)?;
-    Ok(R::from_f64(p.layers as f64) * p.z0 * s)
+    Ok(R::from_u32(p.layers as u32) * p.z0 * s)
 }
 
 /// The voltage that thins the stack to `thickness_mm`, V. Refuses a thickness at or past the
@@ -98,7 +98,7 @@ pub fn voltage_for_thickness<R: Real>(p: &Params<R>, joint: usize, thickness_mm:
     if !thickness_mm.is_finite() {
         return Err(Error::NonFinite { input: "thickness" });
     }
-    let t0 = R::from_f64(p.layers as f64) * p.z0;
+    let t0 = R::from_u32(p.layers as u32) * p.z0;
     if p.layers == 0 || thickness_mm > t0 || thickness_mm <= R::zero() {
         return Err(Error::Input { input: "thickness", reason: "must lie in (0, N_L z0]" });
     }

@@ -271,7 +271,7 @@ impl<R: Real> Finger<R> {
                 return Err(Error::Singular { what: "hinge compliance" });
             }
         }
-        let sub_len = p.hinge_len() / R::from_f64(p.m as f64);
+        let sub_len = p.hinge_len() / R::from_u32(p.m as u32);
         let link_len = p.l - p.hinge_len();
         let link_c = if p.flex_links { uniform_beam_compliance(e, p.w, p.b, link_len) } else { mat3::zero() };
         Ok(Finger { p, hinge_c, hinge_k, sub_len, link_len, link_c })
@@ -854,12 +854,12 @@ impl<R: Real> Finger<R> {
             x[2 * k] = self.p.hinge_len();
             x[2 * k + 1] = self.p.e;
         }
-        x[2 * n] = R::from_f64(n as f64) * self.p.l;
+        x[2 * n] = R::from_u32(n as u32) * self.p.l;
         let mut done = R::zero();
         let mut step = R::one();
         let mut iters = 0u32;
-        let h = R::from_f64(R::EPS.sqrt()) * (self.p.hinge_len() + self.p.e);
-        let floor = self.resolution() * R::from_f64(n as f64);
+        let h = R::from_f64(R::SQRT_EPS) * (self.p.hinge_len() + self.p.e);
+        let floor = self.resolution() * R::from_u32(n as u32);
         let mut last_contact = false;
         loop {
             let lam = (done + step).min(R::one());
@@ -969,7 +969,7 @@ impl<R: Real> Finger<R> {
         let mut states = [self.straight(); MAX_JOINTS];
         let loaded = force[0] != R::zero() || force[1] != R::zero();
         for step in 1..=n_inc {
-            let lam = R::from_f64(step as f64 / n_inc as f64);
+            let lam = R::from_u32(step as u32) / R::from_u32(n_inc as u32);
             let p = tension * lam;
             let f = [force[0] * lam, force[1] * lam];
             let (nodes, _) = self.chain(&states, p, f);

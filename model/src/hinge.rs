@@ -51,14 +51,14 @@ pub fn stretch_compliance<R: Real>(b: R, t_min: R, a: R, e: R, w: R, x0: R, x1: 
     let span = p1 - p0;
     // panels of at most 0.2 rad, at least 2
     let mut panels = 2u32;
-    while R::from_f64(panels as f64 * 0.2) < span && panels < 64 {
+    while R::from_u32(panels as u32) * R::from_f64(0.2) < span && panels < 64 {
         panels += 1;
     }
-    let h = span / R::from_f64(panels as f64);
+    let h = span / R::from_u32(panels as u32);
     let twelve = R::from_f64(12.0);
     let (mut cx, mut cyy, mut cym, mut cmm) = (R::zero(), R::zero(), R::zero(), R::zero());
     for p in 0..panels {
-        let mid = p0 + h * R::from_f64(p as f64 + 0.5);
+        let mid = p0 + h * (R::from_u32(p as u32) + R::from_f64(0.5));
         for &(node, weight) in GL8.iter() {
             for sign in [-1.0, 1.0] {
                 let phi = mid + h * R::from_f64(0.5 * sign * node);
@@ -81,6 +81,6 @@ pub fn stretch_compliance<R: Real>(b: R, t_min: R, a: R, e: R, w: R, x0: R, x1: 
 
 /// The end points of sub-element j of m along the hinge (equal lengths in x).
 pub fn sub_element_bounds<R: Real>(a: R, m: usize, j: usize) -> (R, R) {
-    let len = (a + a) / R::from_f64(m as f64);
-    (len * R::from_f64(j as f64), len * R::from_f64(j as f64 + 1.0))
+    let len = (a + a) / R::from_u32(m as u32);
+    (len * R::from_u32(j as u32), len * R::from_u32(j as u32 + 1))
 }

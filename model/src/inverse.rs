@@ -438,7 +438,7 @@ fn fast<R: Real>(
     let n = out.n;
 
     // 1. every joint's tension range: stiffest stack (0 V) and softest (top voltage)
-    let t0 = R::from_f64(p.layers as f64) * p.z0;
+    let t0 = R::from_u32(p.layers as u32) * p.z0;
     let v_top = f.voltage_ceiling() * opts.top;
     let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
     let mut hi = [ctx.hold_tension(1, &ang[0], t0, [R::zero(); 2])?; MAX_JOINTS];
@@ -615,7 +615,7 @@ impl<R: Real> PoseSolution<R> {
         }
         let n = self.n;
         let lh = p.hinge_len();
-        let sub_len = lh / R::from_f64(p.m as f64);
+        let sub_len = lh / R::from_u32(p.m as u32);
         let link = p.l - lh;
         let mut sol = Solution {
             n,
@@ -676,7 +676,7 @@ pub fn contact_force<R: Real>(
     let free0 = f.solve(p0, volts0, Method::converged())?;
     let x0 = [free0.tip().x, free0.tip().y];
     let c = f.compliances(volts)?;
-    let scale = f.params().l * R::from_f64(f.params().n as f64);
+    let scale = f.params().l * R::from_u32(f.params().n as u32);
     let tol = R::from_f64(1e-9_f64.max(R::EPS * 256.0)) * scale;
     let max_iter = 40u32;
     let tip_res = |force: [R; 2]| -> Result<([R; 2], R, Solution<R>), Error> {
@@ -687,7 +687,7 @@ pub fn contact_force<R: Real>(
     let mut force = [R::zero(); 2];
     let (mut r, mut rn, mut sol) = tip_res(force)?;
     // finite-difference step, N: relative to a force that moves the tip by ~1 mm
-    let h0 = R::from_f64(R::EPS.sqrt());
+    let h0 = R::from_f64(R::SQRT_EPS);
     for it in 0..max_iter {
         if rn <= tol {
             return Ok(Contact { point: x0, force, solution: sol, iterations: it });

@@ -33,7 +33,12 @@ pub trait Real:
     const EPS: f64;
     /// Name for reports.
     const NAME: &'static str;
+    /// Square root of `EPS` (a constant: no f64 arithmetic at run time on the target).
+    const SQRT_EPS: f64;
     fn from_f64(x: f64) -> Self;
+    /// An integer as a scalar (counts, indices): converted directly, never through f64, so an
+    /// f32 build on the target does no double-precision arithmetic.
+    fn from_u32(n: u32) -> Self;
     fn to_f64(self) -> f64;
     fn sqrt(self) -> Self;
     fn sin(self) -> Self;
@@ -85,10 +90,15 @@ pub trait Real:
 
 impl Real for f64 {
     const EPS: f64 = f64::EPSILON;
+    const SQRT_EPS: f64 = 1.4901161193847656e-8;
     const NAME: &'static str = "f64/libm";
     #[inline(always)]
     fn from_f64(x: f64) -> Self {
         x
+    }
+    #[inline(always)]
+    fn from_u32(n: u32) -> Self {
+        n as f64
     }
     #[inline(always)]
     fn to_f64(self) -> f64 {
@@ -123,10 +133,15 @@ impl Real for f64 {
 #[cfg(not(feature = "micromath"))]
 impl Real for f32 {
     const EPS: f64 = f32::EPSILON as f64;
+    const SQRT_EPS: f64 = 3.4526698300124393e-4;
     const NAME: &'static str = if cfg!(feature = "fast-trig") { "f32/fast-trig" } else { "f32/libm" };
     #[inline(always)]
     fn from_f64(x: f64) -> Self {
         x as f32
+    }
+    #[inline(always)]
+    fn from_u32(n: u32) -> Self {
+        n as f32
     }
     #[inline(always)]
     fn to_f64(self) -> f64 {
@@ -170,10 +185,15 @@ impl Real for f32 {
 #[cfg(feature = "micromath")]
 impl Real for f32 {
     const EPS: f64 = f32::EPSILON as f64;
+    const SQRT_EPS: f64 = 3.4526698300124393e-4;
     const NAME: &'static str = "f32/micromath";
     #[inline(always)]
     fn from_f64(x: f64) -> Self {
         x as f32
+    }
+    #[inline(always)]
+    fn from_u32(n: u32) -> Self {
+        n as f32
     }
     #[inline(always)]
     fn to_f64(self) -> f64 {
@@ -206,13 +226,19 @@ impl Real for f32 {
 /// f32 sine and cosine computed in f32 (issue 5, feature `fast-trig`): libm's `sinf`/`cosf`
 /// reduce and evaluate in f64, which a Cortex-M4F (single-precision FPU) runs in software
 /// (~1,000 instructions a call). Here: Cody-Waite reduction by pi/2 with a three-part pi/2
-/// (exact for |x| < 2^13 · pi/2, beyond that libm), then the Cephes minimax polynomials on
-/// [-pi/4, pi/4] (error about 1 ulp, like libm's f32 results); ~40 instructions for both.
+/// (exact for |x| < 2^13 · pi/2), then the Cephes minimax polynomials on [-pi/4, pi/4]
+/// (error about 1 ulp, like libm's f32 results); ~40 instructions for both.
+///
+/// Beyond |x| = 12868 (2^13 · pi/2, about 2,000 turns) the result is NaN, not libm's: the
+/// model's angles are joint and chain angles (a few radians); only a diverging iterate gets
+/// there, and the solvers' finiteness checks turn its NaN into a typed error. Leaving libm's
+/// reduction out keeps its f64 code (and the soft-float kernels under it, ~6 KB) out of the
+/// firmware image (issue 3).
 #[cfg(all(feature = "fast-trig", not(feature = "micromath")))]
 mod fast_trig {
     pub fn sin_cos(x: f32) -> (f32, f32) {
         if !(x.abs() < 12868.0) {
-            return libm::sincosf(x);
+            return (f32::NAN, f32::NAN);
         }
         // nearest multiple of pi/2 (round half away from zero)
         let kf = x * core::f32::consts::FRAC_2_PI;
@@ -232,6 +258,16 @@ mod fast_trig {
             2 => (-s, -c),
             _ => (-c, s),
         }
+    }
+
+    #[cfg(test)]
+    #[test]
+    fn nan_beyond_the_reduction_range() {
+        for x in [12868.0f32, -2.0e4, 1.0e30, f32::INFINITY, f32::NEG_INFINITY, f32::NAN] {
+            let (s, c) = sin_cos(x);
+            assert!(s.is_nan() && c.is_nan(), "{x}: {s} {c}");
+        }
+        assert!(sin_cos(12867.0).0.is_finite());
     }
 
     #[cfg(test)]

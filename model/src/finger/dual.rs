@@ -127,10 +127,15 @@ impl<R: Real> DivAssign for D<R> {
 
 impl<R: Real> Real for D<R> {
     const EPS: f64 = R::EPS;
+    const SQRT_EPS: f64 = R::SQRT_EPS;
     const NAME: &'static str = "dual";
     #[inline(always)]
     fn from_f64(x: f64) -> Self {
         D::c(R::from_f64(x))
+    }
+    #[inline(always)]
+    fn from_u32(n: u32) -> Self {
+        D::c(R::from_u32(n))
     }
     #[inline(always)]
     fn to_f64(self) -> f64 {

@@ -85,7 +85,7 @@ impl<'a, R: Real> Gen<'a, R> {
             f,
             p,
             hinge_k,
-            sub_len: lh / R::from_f64(p.m as f64),
+            sub_len: lh / R::from_u32(p.m as u32),
             link_rot,
             tol_hole: R::from_f64(1e-12) * (lh + p.e),
             tol_angle: R::from_f64(1e-12_f64.max(32.0 * R::EPS)),
@@ -403,7 +403,7 @@ pub(super) fn solve<R: Real>(
         return no_stacks(&mut g, angles, tension, opts, out);
     }
     // 1. every joint's tension range: stiffest stack (0 V) and softest (top voltage)
-    let t0 = R::from_f64(p.layers as f64) * p.z0;
+    let t0 = R::from_u32(p.layers as u32) * p.z0;
     let v_top = f.voltage_ceiling() * opts.top;
     let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
     let c0 = g.comp(t0)?;
