@@ -13,7 +13,7 @@
 //! - The HV enable is low from [`App::new`] until `arm`.
 
 use core::cell::Cell;
-use core::fmt::{self, Write};
+use core::fmt::Write;
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
@@ -24,6 +24,17 @@ use heapless::String;
 use crate::board::{Board, HV_CHANNELS};
 use crate::console::{self, Line, LineBuf, NumError};
 use crate::num::{self, Exp, Fixed, List, Short};
+use crate::out::Emit;
+
+/// `err!(code; pieces...)`: a console error with a message written from pieces
+/// ([`crate::out::Emit`]).
+macro_rules! err {
+    ($code:expr; $($x:expr),+ $(,)?) => {{
+        let mut msg: String<160> = String::new();
+        let _ = w!(&mut msg; $($x),+);
+        CmdError { code: $code, msg }
+    }};
+}
 
 /// Number of HV channels / joints the board drives.
 pub const CHANNELS: usize = HV_CHANNELS;
@@ -87,8 +98,8 @@ impl FwParams {
 
     /// Set by name; on error nothing changes.
     fn set(&mut self, name: &str, v: f32) -> Result<(), CmdError> {
-        let info = FW_PARAMS.iter().find(|i| i.name == name).ok_or_else(|| err("unknown", format_args!("no parameter {name}")))?;
-        let bad = || err("usage", format_args!("parameter {} out of range: {}", info.name, info.range));
+        let info = FW_PARAMS.iter().find(|i| i.name == name).ok_or_else(|| err!("unknown"; "no parameter ", name))?;
+        let bad = || err!("usage"; "parameter ", info.name, " out of range: ", info.range);
         if !(v >= info.min && v <= info.max) {
             return Err(bad());
         }
@@ -124,12 +135,6 @@ impl CmdError {
         }
         CmdError { code, msg: m }
     }
-}
-
-fn err(code: &'static str, args: fmt::Arguments) -> CmdError {
-    let mut msg = String::new();
-    let _ = msg.write_fmt(args);
-    CmdError { code, msg }
 }
 
 /// A model error as a console error: its code, and a message written from its fields by
@@ -360,15 +365,7 @@ impl<B: Board> App<B> {
         let cable = sol.cable_excursion.max(0.0);
         let deg = cable / fw.spool_r * DEG;
         if !(deg <= fw.servo_range) {
-            return Err(err(
-                "limit",
-                format_args!(
-                    "cable excursion {} mm needs {} deg, past the servo travel {} deg",
-                    Fixed(cable, 2),
-                    Fixed(deg, 1),
-                    Fixed(fw.servo_range, 0)
-                ),
-            ));
+            return Err(err!("limit"; "cable excursion ", Fixed(cable, 2), " mm needs ", Fixed(deg, 1), " deg, past the servo travel ", Fixed(fw.servo_range, 0), " deg"));
         }
         Ok((cable, deg))
     }
@@ -458,7 +455,7 @@ impl<B: Board> App<B> {
             self.wait_ms = self.wait_ms.saturating_sub(dt_ms);
             if self.wait_ms == 0 {
                 let nl = self.board.newline();
-                let _ = write!(out, "ok waited={}{}", Short(self.wait_s), nl);
+                let _ = w!(out; "ok waited=", Short(self.wait_s), nl);
             }
         }
     }
@@ -484,7 +481,7 @@ impl<B: Board> App<B> {
         };
         let nl = self.board.newline();
         if too_long {
-            let _ = write!(out, "err too-long: line longer than {} bytes discarded{}", console::LINE_MAX, nl);
+            let _ = w!(out; "err too-long: line longer than ", console::LINE_MAX, " bytes discarded", nl);
             return;
         }
         self.execute(&copy, out);
@@ -497,7 +494,7 @@ impl<B: Board> App<B> {
         let toks = match console::tokens(line) {
             Some(t) => t,
             None => {
-                let _ = write!(out, "err usage: too many arguments{nl}");
+                let _ = w!(out; "err usage: too many arguments", nl);
                 return;
             }
         };
@@ -509,10 +506,10 @@ impl<B: Board> App<B> {
         match r {
             Ok(true) => {}
             Ok(false) => {
-                let _ = if reply.is_empty() { write!(out, "ok{nl}") } else { write!(out, "ok {reply}{nl}") };
+                let _ = if reply.is_empty() { w!(out; "ok", nl) } else { w!(out; "ok ", reply, nl) };
             }
             Err(e) => {
-                let _ = write!(out, "err {}: {}{nl}", e.code, e.msg);
+                let _ = w!(out; "err ", e.code, ": ", e.msg, nl);
             }
         }
     }
@@ -525,12 +522,12 @@ impl<B: Board> App<B> {
                 no_args(args, "help")?;
                 let nl = self.board.newline();
                 for l in HELP {
-                    let _ = write!(out, "{l}{nl}");
+                    let _ = w!(out; l, nl);
                 }
             }
             b"version" => {
                 no_args(args, "version")?;
-                let _ = write!(r, "version={} name={} board={}", crate::VERSION, crate::NAME, self.board.name());
+                let _ = w!(r; "version=", crate::VERSION, " name=", crate::NAME, " board=", self.board.name());
             }
             b"status" => {
                 no_args(args, "status")?;
@@ -544,22 +541,22 @@ impl<B: Board> App<B> {
             b"arm" => {
                 no_args(args, "arm")?;
                 if let Some(f) = self.fault {
-                    return Err(err("fault", format_args!("fault {f} latched; send stop to clear it")));
+                    return Err(err!("fault"; "fault ", f, " latched; send stop to clear it"));
                 }
                 self.armed = true;
                 self.ramping_down = false;
                 self.set_enable(true);
-                let _ = write!(r, "armed=1");
+                let _ = w!(r; "armed=1");
             }
             b"disarm" => {
                 no_args(args, "disarm")?;
                 self.cmd_disarm()?;
-                let _ = write!(r, "armed=0");
+                let _ = w!(r; "armed=0");
             }
             b"stop" => {
                 no_args(args, "stop")?;
                 self.emergency_stop();
-                let _ = write!(r, "stopped");
+                let _ = w!(r; "stopped");
             }
             b"volt" => self.cmd_volt(args, r)?,
             b"force" => self.cmd_force(args, r)?,
@@ -574,20 +571,20 @@ impl<B: Board> App<B> {
                 return Ok(true);
             }
             #[cfg(not(feature = "pose"))]
-            b"pose" => return Err(err("unknown", format_args!("pose is not in this build (feature pose)"))),
+            b"pose" => return Err(err!("unknown"; "pose is not in this build (feature pose)")),
             #[cfg(not(feature = "contact"))]
-            b"contact" => return Err(err("unknown", format_args!("contact is not in this build (feature contact)"))),
+            b"contact" => return Err(err!("unknown"; "contact is not in this build (feature contact)")),
             b"param" => self.cmd_param(args, r, out)?,
             b"preset" => self.cmd_preset(args, r)?,
             b"wait" => {
-                let [s] = args else { return Err(err("usage", format_args!("wait <seconds>"))) };
+                let [s] = args else { return Err(err!("usage"; "wait <seconds>")) };
                 let s = number(s, "seconds")?;
                 if !(s >= 0.0 && s <= WAIT_MAX_S) {
-                    return Err(err("usage", format_args!("wait: 0..{} s", Short(WAIT_MAX_S))));
+                    return Err(err!("usage"; "wait: 0..", Short(WAIT_MAX_S), " s"));
                 }
                 let ms = (s * 1000.0 + 0.5) as u32;
                 if ms == 0 {
-                    let _ = write!(r, "waited=0");
+                    let _ = w!(r; "waited=0");
                     return Ok(false);
                 }
                 self.wait_ms = ms;
@@ -595,7 +592,7 @@ impl<B: Board> App<B> {
                 return Ok(true);
             }
             w => {
-                return Err(err("unknown", format_args!("unknown command {}; try help", console::printable(w))));
+                return Err(err!("unknown"; "unknown command ", (console::printable(w)), "; try help"));
             }
         }
         Ok(false)
@@ -603,51 +600,39 @@ impl<B: Board> App<B> {
 
     #[inline(never)]
     fn cmd_status(&self, r: &mut Reply) {
-        let _ = write!(r, "armed={} force={} volts=", self.armed as u8, Fixed(self.force, 3));
+        let _ = w!(r; "armed=", self.armed as u8, " force=", Fixed(self.force, 3), " volts=");
         list(r, &self.volts, 1);
         let mut thick = [0.0f32; CHANNELS];
         for ch in 0..CHANNELS {
             thick[ch] = self.finger.stack_thickness(self.volts[ch]).unwrap_or(0.0);
         }
-        let _ = write!(r, " thick=");
+        let _ = w!(r; " thick=");
         list(r, &thick, 4);
         let sol = self.finger.solve(self.force, &self.volts, Method::converged());
         let mut fault = self.fault;
         match sol {
             Ok(s) => {
-                let _ = write!(r, " joints=");
+                let _ = w!(r; " joints=");
                 joints(r, &s);
                 let tip = s.tip();
-                let _ = write!(r, " tip={}", Tip(&tip));
+                let _ = w!(r; " tip=", Tip(&tip));
             }
             Err(_) => {
-                let _ = write!(r, " joints=-,-,- tip=-,-,-");
+                let _ = w!(r; " joints=-,-,- tip=-,-,-");
                 fault = fault.or(Some("model"));
             }
         }
-        let _ = write!(
-            r,
-            " cable={} servo={} fault={}",
-            Fixed(self.cable, 3),
-            Fixed(self.servo_deg, 2),
-            fault.unwrap_or("none")
-        );
-        let _ = write!(r, " enable={} target=", self.enable as u8);
+        let _ = w!(r; " cable=", Fixed(self.cable, 3), " servo=", Fixed(self.servo_deg, 2), " fault=", fault.unwrap_or("none"));
+        let _ = w!(r; " enable=", self.enable as u8, " target=");
         list(r, &self.target_v, 1);
     }
 
     #[inline(never)]
     fn cmd_limits(&self, r: &mut Reply) {
-        let _ = write!(r, "vmax=");
+        let _ = w!(r; "vmax=");
         list(r, &self.vmax, 1);
         let p = self.finger.params();
-        let _ = write!(
-            r,
-            " vpullin={} supply={} margin={}",
-            Fixed(self.finger.pull_in_voltage(), 1),
-            Fixed(p.v_supply, 1),
-            Short(p.margin)
-        );
+        let _ = w!(r; " vpullin=", Fixed(self.finger.pull_in_voltage(), 1), " supply=", Fixed(p.v_supply, 1), " margin=", Short(p.margin));
         match self.fmax(&self.target_v) {
             Ok(b) => {
                 let kind = match b.kind {
@@ -655,21 +640,15 @@ impl<B: Board> App<B> {
                     finger_model::BranchEnd::LimitPoint => "limit-point",
                     finger_model::BranchEnd::SearchBound => "search-bound",
                 };
-                let _ = write!(r, " fmax={} fmax_end={},{}", Fixed(b.tension, 4), kind, b.joint);
+                let _ = w!(r; " fmax=", Fixed(b.tension, 4), " fmax_end=", kind, ",", b.joint);
             }
             Err(_) => {
-                let _ = write!(r, " fmax=- fmax_end=error");
+                let _ = w!(r; " fmax=- fmax_end=error");
             }
         }
-        let _ = write!(
-            r,
-            " slew={} servo=0,{} cable_max={} dutymax=",
-            Short(self.fw.slew),
-            Short(self.fw.servo_range),
-            Fixed(self.fw.servo_range / DEG * self.fw.spool_r, 2)
-        );
+        let _ = w!(r; " slew=", Short(self.fw.slew), " servo=0,", Short(self.fw.servo_range), " cable_max=", Fixed(self.fw.servo_range / DEG * self.fw.spool_r, 2), " dutymax=");
         let d = self.duty_max;
-        let _ = write!(r, "{},{},{}", d[0], d[1], d[2]);
+        let _ = w!(r; d[0], ",", d[1], ",", d[2]);
     }
 
     /// Check channel voltages against the ceilings: `limit` at or past.
@@ -686,18 +665,10 @@ impl<B: Board> App<B> {
                 continue;
             }
             if v[ch] < 0.0 {
-                return Err(err("usage", format_args!("channel {}: voltage must be >= 0", ch + 1)));
+                return Err(err!("usage"; "channel ", (ch + 1), ": voltage must be >= 0"));
             }
             if v[ch] >= self.vmax[ch] {
-                return Err(err(
-                    "limit",
-                    format_args!(
-                        "channel {}: {} V is at or past the ceiling {} V (33 % pull-in limit with margin, supply)",
-                        ch + 1,
-                        Fixed(v[ch], 1),
-                        Fixed(self.vmax[ch], 1)
-                    ),
-                ));
+                return Err(err!("limit"; "channel ", (ch + 1), ": ", Fixed(v[ch], 1), " V is at or past the ceiling ", Fixed(self.vmax[ch], 1), " V (33 % pull-in limit with margin, supply)"));
             }
         }
         Ok(())
@@ -705,26 +676,19 @@ impl<B: Board> App<B> {
 
     #[inline(never)]
     fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        let [p, v1, v2, v3] = args else { return Err(err("usage", format_args!("solve <P> <V1> <V2> <V3>"))) };
+        let [p, v1, v2, v3] = args else { return Err(err!("usage"; "solve <P> <V1> <V2> <V3>")) };
         let p = tension(number(p, "P")?)?;
         let v = [number(v1, "V1")?, number(v2, "V2")?, number(v3, "V3")?];
         self.check_volts(&v)?;
         let vf = v.map(|x| x as f32);
         let sol = self.finger.solve(p, &vf, Method::converged()).map_err(model_err)?;
         let k = tip_stiffness(&self.finger, &sol).map_err(model_err)?;
-        let _ = write!(r, "joints=");
+        let _ = w!(r; "joints=");
         joints(r, &sol);
         let tip = sol.tip();
-        let _ = write!(r, " tip={} cable={} thick=", Tip(&tip), Fixed(sol.cable_excursion, 4));
+        let _ = w!(r; " tip=", Tip(&tip), " cable=", Fixed(sol.cable_excursion, 4), " thick=");
         list(r, &sol.thickness[..CHANNELS], 4);
-        let _ = write!(
-            r,
-            " stiffness={},{},{} iters={}",
-            Exp(k[0][0], 4),
-            Exp(k[1][1], 4),
-            Exp(k[2][2], 4),
-            sol.iterations
-        );
+        let _ = w!(r; " stiffness=", Exp(k[0][0], 4), ",", Exp(k[1][1], 4), ",", Exp(k[2][2], 4), " iters=", sol.iterations);
         Ok(())
     }
 
@@ -762,17 +726,17 @@ impl<B: Board> App<B> {
 
     #[inline(never)]
     fn cmd_volt(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        let [ch, v] = args else { return Err(err("usage", format_args!("volt <1|2|3|all> <V>"))) };
+        let [ch, v] = args else { return Err(err!("usage"; "volt <1|2|3|all> <V>")) };
         let chans: &[usize] = match *ch {
             b"1" => &[0],
             b"2" => &[1],
             b"3" => &[2],
             b"all" => &[0, 1, 2],
-            c => return Err(err("usage", format_args!("volt: channel {} is not 1, 2, 3 or all", console::printable(c)))),
+            c => return Err(err!("usage"; "volt: channel ", (console::printable(c)), " is not 1, 2, 3 or all")),
         };
         let v = number(v, "V")?;
         if v < 0.0 {
-            return Err(err("usage", format_args!("volt: voltage must be >= 0")));
+            return Err(err!("usage"; "volt: voltage must be >= 0"));
         }
         self.require_armed("volt")?;
         let mut req = self.target_v;
@@ -785,37 +749,31 @@ impl<B: Board> App<B> {
         self.target_v = target;
         self.cable = cable;
         self.set_servo(deg);
-        let _ = write!(r, "volts=");
+        let _ = w!(r; "volts=");
         list(r, &self.target_v, 1);
         Ok(())
     }
 
     fn require_armed(&self, what: &str) -> Result<(), CmdError> {
         if let Some(f) = self.fault {
-            return Err(err("fault", format_args!("fault {f} latched; send stop to clear it")));
+            return Err(err!("fault"; "fault ", f, " latched; send stop to clear it"));
         }
         if !self.armed {
-            return Err(err("not-armed", format_args!("{what} needs arm")));
+            return Err(err!("not-armed"; what, " needs arm"));
         }
         Ok(())
     }
 
     #[inline(never)]
     fn cmd_force(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        let [p] = args else { return Err(err("usage", format_args!("force <P>"))) };
+        let [p] = args else { return Err(err!("usage"; "force <P>")) };
         let p = tension(number(p, "P")?)?;
         self.require_armed("force")?;
         let (cable, deg) = self.plan_setpoints(p, &self.target_v)?;
         self.force = p;
         self.cable = cable;
         self.set_servo(deg);
-        let _ = write!(
-            r,
-            "force={} cable={} servo={}",
-            Fixed(self.force, 3),
-            Fixed(self.cable, 3),
-            Fixed(self.servo_deg, 2)
-        );
+        let _ = w!(r; "force=", Fixed(self.force, 3), " cable=", Fixed(self.cable, 3), " servo=", Fixed(self.servo_deg, 2));
         Ok(())
     }
 
@@ -827,13 +785,13 @@ impl<B: Board> App<B> {
     #[inline(never)]
     fn cmd_pose<W: Write>(&mut self, args: &[&[u8]], out: &mut W) -> Result<(), CmdError> {
         if args.len() != 3 && args.len() != 4 {
-            return Err(err("usage", format_args!("pose <d1> <d2> <d3> [<P>]")));
+            return Err(err!("usage"; "pose <d1> <d2> <d3> [<P>]"));
         }
         let mut deg = [0.0f64; CHANNELS]; // inverse_cmds takes f64 (converted back to f32 there, no f64 arithmetic)
         for ch in 0..CHANNELS {
             let d = number(args[ch], "angle")?;
             if !(d.abs() <= 360.0) {
-                return Err(err("usage", format_args!("pose: joint angles are degrees, |d| <= 360")));
+                return Err(err!("usage"; "pose: joint angles are degrees, |d| <= 360"));
             }
             deg[ch] = d.into();
         }
@@ -863,7 +821,7 @@ impl<B: Board> App<B> {
             self.cable = cable;
             self.set_servo(sdeg);
         }
-        let _ = write!(out, "{line}{}", self.board.newline());
+        let _ = w!(out; line, self.board.newline());
         Ok(())
     }
 
@@ -873,7 +831,7 @@ impl<B: Board> App<B> {
     #[inline(never)]
     fn cmd_contact<W: Write>(&self, args: &[&[u8]], out: &mut W) -> Result<(), CmdError> {
         if args.len() != 2 && args.len() != 2 + CHANNELS {
-            return Err(err("usage", format_args!("contact <P0> <P> [<V1> <V2> <V3>]")));
+            return Err(err!("usage"; "contact <P0> <P> [<V1> <V2> <V3>]"));
         }
         let p0 = tension(number(args[0], "P0")?)?;
         let p = tension(number(args[1], "P")?)?;
@@ -886,16 +844,16 @@ impl<B: Board> App<B> {
         let vf = v.map(f64::from);
         let volts: &[f64] = if args.len() > 2 { &vf } else { &[] };
         let _ = crate::inverse_cmds::contact(&mut line, &self.finger, p0.into(), p.into(), volts);
-        let _ = write!(out, "{line}{}", self.board.newline());
+        let _ = w!(out; line, self.board.newline());
         Ok(())
     }
 
     fn require_disarmed(&self, what: &str) -> Result<(), CmdError> {
         if self.armed {
-            return Err(err("armed", format_args!("{what} only while disarmed")));
+            return Err(err!("armed"; what, " only while disarmed"));
         }
         if self.volts.iter().any(|&v| v != 0.0) || self.enable {
-            return Err(err("armed", format_args!("{what}: HV still ramping down, wait")));
+            return Err(err!("armed"; what, ": HV still ramping down, wait"));
         }
         Ok(())
     }
@@ -909,28 +867,28 @@ impl<B: Board> App<B> {
                 let p = self.finger.params();
                 for i in PARAMS {
                     let v = p.get(i.name).unwrap_or(f64::NAN) as f32;
-                    let _ = write!(out, "{}={} ({}){nl}", i.name, Short(v), i.range);
+                    let _ = w!(out; i.name, "=", Short(v), " (", i.range, ")", nl);
                 }
                 for i in FW_PARAMS {
-                    let _ = write!(out, "{}={} ({}){nl}", i.name, Short(self.fw.get(i.name).unwrap_or(0.0)), i.range);
+                    let _ = w!(out; i.name, "=", Short(self.fw.get(i.name).unwrap_or(0.0)), " (", i.range, ")", nl);
                 }
-                let _ = write!(r, "params={}", PARAMS.len() + FW_PARAMS.len());
+                let _ = w!(r; "params=", PARAMS.len() + FW_PARAMS.len());
                 return Ok(());
             }
             Some(n) => *n,
         };
         if args.len() > 2 {
-            return Err(err("usage", format_args!("param [<name> [<value>]]")));
+            return Err(err!("usage"; "param [<name> [<value>]]"));
         }
         let name = core::str::from_utf8(name).ok().filter(|_| PARAMS.iter().any(|i| i.name.as_bytes() == name) || FW_PARAMS.iter().any(|i| i.name.as_bytes() == name));
         let Some(name) = name else {
-            return Err(err("usage", format_args!("no parameter {}; param lists them", console::printable(args[0]))));
+            return Err(err!("usage"; "no parameter ", (console::printable(args[0])), "; param lists them"));
         };
         if let Some(v) = args.get(1) {
             let v = number(v, name)?;
             if PARAMS.iter().any(|i| i.name == name) {
                 if name == "n" && v != CHANNELS as f32 {
-                    return Err(err("usage", format_args!("parameter n: the board drives {CHANNELS} joints")));
+                    return Err(err!("usage"; "parameter n: the board drives ", CHANNELS, " joints"));
                 }
                 let mut p = *self.finger.params();
                 p.set(name, v.into()).map_err(model_err)?;
@@ -953,17 +911,17 @@ impl<B: Board> App<B> {
             Some(v) => v as f32,
             None => self.fw.get(name).unwrap_or(0.0),
         };
-        let _ = write!(r, "{name}={}", Short(v));
+        let _ = w!(r; name, "=", Short(v));
         Ok(())
     }
 
     #[inline(never)]
     fn cmd_preset(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        let [which] = args else { return Err(err("usage", format_args!("preset <default|paper>"))) };
+        let [which] = args else { return Err(err!("usage"; "preset <default|paper>")) };
         let (p, name) = match *which {
             b"default" => (preset(Params::<f32>::default()), "default"),
             b"paper" => (preset(Params::<f32>::paper()), "paper"),
-            w => return Err(err("usage", format_args!("preset {} is not default or paper", console::printable(w)))),
+            w => return Err(err!("usage"; "preset ", (console::printable(w)), " is not default or paper")),
         };
         self.require_disarmed("preset")?;
         let f = Finger::new(p).map_err(model_err)?;
@@ -972,7 +930,7 @@ impl<B: Board> App<B> {
         self.cable = cable;
         self.set_servo(deg);
         self.recompute();
-        let _ = write!(r, "preset={name}");
+        let _ = w!(r; "preset=", name);
         Ok(())
     }
 }
@@ -1009,24 +967,24 @@ fn no_args(args: &[&[u8]], cmd: &str) -> Result<(), CmdError> {
     if args.is_empty() {
         Ok(())
     } else {
-        Err(err("usage", format_args!("{cmd} takes no arguments")))
+        Err(err!("usage"; cmd, " takes no arguments"))
     }
 }
 
 fn number(tok: &[u8], what: &str) -> Result<f32, CmdError> {
     console::parse_number(tok).map_err(|e| match e {
-        NumError::Syntax => err("bad-number", format_args!("{what}: {} is not a decimal number", console::printable(tok))),
-        NumError::Overflow => err("bad-number", format_args!("{what}: {} is out of range", console::printable(tok))),
+        NumError::Syntax => err!("bad-number"; what, ": ", (console::printable(tok)), " is not a decimal number"),
+        NumError::Overflow => err!("bad-number"; what, ": ", (console::printable(tok)), " is out of range"),
     })
 }
 
 /// A cable tension: >= 0 (usage), representable (limit: far past any fmax).
 fn tension(p: f32) -> Result<f32, CmdError> {
     if p < 0.0 {
-        return Err(err("usage", format_args!("tension must be >= 0 (a cable cannot push)")));
+        return Err(err!("usage"; "tension must be >= 0 (a cable cannot push)"));
     }
     if p > 1e6 {
-        return Err(err("limit", format_args!("tension {} N is past fmax", Exp(p, 3))));
+        return Err(err!("limit"; "tension ", Exp(p, 3), " N is past fmax"));
     }
     Ok(p)
 }
@@ -1060,16 +1018,16 @@ fn tip_stiffness(f: &Finger<f32>, sol: &Solution<f32>) -> Result<[[f32; 3]; 3], 
 }
 
 fn list(r: &mut Reply, v: &[f32], prec: usize) {
-    let _ = write!(r, "{}", List(v, prec));
+    let _ = w!(r; List(v, prec));
 }
 
 /// A tip pose as `x,y,deg` (mm, mm, degrees).
 struct Tip<'a>(&'a finger_model::Pose<f32>);
 
-impl fmt::Display for Tip<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl Emit for Tip<'_> {
+    fn emit(&self, f: &mut dyn Write) {
         let t = self.0;
-        write!(f, "{},{},{}", Fixed(t.x, 3), Fixed(t.y, 3), Fixed(t.theta * DEG, 2))
+        let _ = w!(f; Fixed(t.x, 3), ",", Fixed(t.y, 3), ",", Fixed(t.theta * DEG, 2));
     }
 }
 

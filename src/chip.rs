@@ -195,7 +195,7 @@ fn main() -> ! {
 
     // Boot banner: not a reply; tells a client that input is now received (QEMU drops bytes
     // sent before the USART is enabled, a real UART too).
-    let _ = core::fmt::Write::write_fmt(&mut out, format_args!("# finger-fw {} ready\r\n", finger_fw::VERSION));
+    let _ = finger_fw::w!(&mut out; "# finger-fw ", finger_fw::VERSION, " ready\r\n");
 
     let mut last = MILLIS.load(Ordering::Relaxed);
     loop {

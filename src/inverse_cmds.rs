@@ -16,7 +16,7 @@
 //!   with. Reply `ok fx=<N> fy=<N> force=<N> point=<x,y>`: (fx, fy) the force of the finger
 //!   on the object (base frame), force its magnitude, point the contact point (mm).
 //!
-//! no_std, no allocation, no core float formatting (crate::num): replies go to any
+//! no_std, no allocation, no core formatting (crate::num, crate::out): replies go to any
 //! `core::fmt::Write`.
 
 use core::fmt::{self, Write};
@@ -37,8 +37,8 @@ fn f32_of<R: Real>(x: R) -> f32 {
 }
 
 /// Write `err <code>: <message>` for a model error.
-fn write_err<W: Write>(out: &mut W, e: &Error) -> fmt::Result {
-    write!(out, "err {}: ", e.code())?;
+fn write_err(out: &mut dyn Write, e: &Error) -> fmt::Result {
+    w!(out; "err ", e.code(), ": ")?;
     write_model_error(out, e)
 }
 
@@ -49,7 +49,7 @@ fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f32>, prec: usize) 
         if i > 0 {
             out.write_char(',')?;
         }
-        write!(out, "{}", Fixed(x, prec))?;
+        Fixed(x, prec).write(out)?;
     }
     Ok(())
 }
@@ -73,13 +73,13 @@ where
 {
     let n = finger.params().n;
     if degrees.len() != n {
-        write!(out, "err usage: pose <d1> .. <d{n}> [<P>] (degrees, N)")?;
+        w!(out; "err usage: pose <d1> .. <d", n, "> [<P>] (degrees, N)")?;
         return Ok(false);
     }
     let mut angles = [R::zero(); MAX_JOINTS];
     for (a, &d) in angles.iter_mut().zip(degrees) {
         if !d.is_finite() {
-            write!(out, "err bad-number: angle is not a finite number")?;
+            w!(out; "err bad-number: angle is not a finite number")?;
             return Ok(false);
         }
         *a = R::from_f64(d) * R::from_f64(core::f64::consts::PI / 180.0);
@@ -92,10 +92,10 @@ where
         }
     };
     if let Err(e) = apply(sol.tension, &sol.volts[..n]) {
-        write!(out, "err {}: {}", e.code, e.msg)?;
+        w!(out; "err ", e.code, ": ", e.msg)?;
         return Ok(false);
     }
-    write!(out, "ok force={} volts=", Fixed(f32_of(sol.tension), 4))?;
+    w!(out; "ok force=", Fixed(f32_of(sol.tension), 4), " volts=")?;
     write_list(out, sol.volts[..n].iter().map(|&v| f32_of(v)), 1)?;
     out.write_str(" joints=")?;
     write_list(out, sol.angles[..n].iter().map(|&a| f32_of(a * R::from_f64(180.0 / core::f64::consts::PI))), 3)?;
@@ -113,11 +113,11 @@ where
 {
     let n = finger.params().n;
     if !(volts.is_empty() || volts.len() == n) {
-        write!(out, "err usage: contact <P0> <P> [<V1> .. <V{n}>] (N, V)")?;
+        w!(out; "err usage: contact <P0> <P> [<V1> .. <V", n, ">] (N, V)")?;
         return Ok(false);
     }
     if !(p0.is_finite() && p.is_finite() && volts.iter().all(|v| v.is_finite())) {
-        write!(out, "err bad-number: not a finite number")?;
+        w!(out; "err bad-number: not a finite number")?;
         return Ok(false);
     }
     let zero = [R::zero(); MAX_JOINTS];
@@ -129,15 +129,7 @@ where
         Ok(c) => {
             // the finger presses on the object with minus the object's force on the tip
             let (fx, fy) = (f32_of(-c.force[0]), f32_of(-c.force[1]));
-            write!(
-                out,
-                "ok fx={} fy={} force={} point={},{}",
-                Fixed(fx, 4),
-                Fixed(fy, 4),
-                Fixed(f32_of(c.magnitude()), 4),
-                Fixed(f32_of(c.point[0]), 3),
-                Fixed(f32_of(c.point[1]), 3)
-            )?;
+            w!(out; "ok fx=", Fixed(fx, 4), " fy=", Fixed(fy, 4), " force=", Fixed(f32_of(c.magnitude()), 4), " point=", Fixed(f32_of(c.point[0]), 3), ",", Fixed(f32_of(c.point[1]), 3))?;
             Ok(true)
         }
         Err(e) => {

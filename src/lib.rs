@@ -11,8 +11,11 @@
 //!   an HV duty, the slewed control loop, the servo.
 //! - [`board`]: the board trait.
 //! - [`sim`]: a simulated board (records every output).
+//! - [`out`], [`num`]: console text and numbers without core's formatting machinery.
 #![no_std]
 
+#[macro_use]
+pub mod out;
 pub mod app;
 pub mod board;
 pub mod console;

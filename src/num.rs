@@ -18,6 +18,8 @@
 
 use core::fmt::{self, Write};
 
+use crate::out::Emit;
+
 /// 10^e, exact in f32 for e <= 10.
 const POW10: [f32; 11] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
 /// 10^e as u32, e <= 9.
@@ -120,7 +122,7 @@ fn digits(mut v: u32, buf: &mut [u8; 20], min_digits: usize) -> usize {
     i
 }
 
-fn write_u32(f: &mut fmt::Formatter<'_>, v: u32, min_digits: usize) -> fmt::Result {
+fn write_u32(f: &mut dyn Write, v: u32, min_digits: usize) -> fmt::Result {
     let mut buf = [0u8; 20];
     let s = digits(v, &mut buf, min_digits);
     for &c in &buf[s..] {
@@ -129,7 +131,7 @@ fn write_u32(f: &mut fmt::Formatter<'_>, v: u32, min_digits: usize) -> fmt::Resu
     Ok(())
 }
 
-fn non_finite(f: &mut fmt::Formatter<'_>, x: f32) -> fmt::Result {
+fn non_finite(f: &mut dyn Write, x: f32) -> fmt::Result {
     f.write_str(if x.is_nan() {
         "NaN"
     } else if x > 0.0 {
@@ -225,7 +227,7 @@ fn round_fixed(x: f32, prec: usize, tie_up: bool) -> Option<Rounded> {
     Some(Rounded { hi: 0, lo, frac, exact_back })
 }
 
-fn write_rounded(f: &mut fmt::Formatter<'_>, neg: bool, r: &Rounded, prec: usize) -> fmt::Result {
+fn write_rounded(f: &mut dyn Write, neg: bool, r: &Rounded, prec: usize) -> fmt::Result {
     if neg {
         f.write_char('-')?;
     }
@@ -246,15 +248,16 @@ fn write_rounded(f: &mut fmt::Formatter<'_>, neg: bool, r: &Rounded, prec: usize
 /// in exponent notation ([`Exp`]).
 pub struct Fixed(pub f32, pub usize);
 
-impl fmt::Display for Fixed {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl Fixed {
+    /// Write it (the `Display` and [`Emit`] impls below call this).
+    pub fn write(&self, f: &mut dyn Write) -> fmt::Result {
         let (x, prec) = (self.0, self.1.min(9));
         if !x.is_finite() {
             return non_finite(f, x);
         }
         match round_fixed(x, prec, false) {
             Some(r) => write_rounded(f, x.is_sign_negative(), &r, prec),
-            None => Exp(x, prec).fmt(f),
+            None => Exp(x, prec).write(f),
         }
     }
 }
@@ -263,8 +266,9 @@ impl fmt::Display for Fixed {
 /// text as core's for 1e-8 <= |x| < 1e18 and 0; otherwise exponent notation with 9 digits).
 pub struct Short(pub f32);
 
-impl fmt::Display for Short {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl Short {
+    /// Write it (the `Display` and [`Emit`] impls below call this).
+    pub fn write(&self, f: &mut dyn Write) -> fmt::Result {
         let x = self.0;
         if !x.is_finite() {
             return non_finite(f, x);
@@ -277,7 +281,7 @@ impl fmt::Display for Short {
                 }
             }
         }
-        Exp(x, 8).fmt(f)
+        Exp(x, 8).write(f)
     }
 }
 
@@ -285,8 +289,9 @@ impl fmt::Display for Short {
 /// `-5.0000e-4`). Scaled in f32: the last digit may differ from core's.
 pub struct Exp(pub f32, pub usize);
 
-impl fmt::Display for Exp {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl Exp {
+    /// Write it (the `Display` and [`Emit`] impls below call this).
+    pub fn write(&self, f: &mut dyn Write) -> fmt::Result {
         let (x, prec) = (self.0, self.1.min(8));
         if !x.is_finite() {
             return non_finite(f, x);
@@ -334,13 +339,14 @@ impl fmt::Display for Exp {
 /// A comma-separated list of `v` with `prec` decimals.
 pub struct List<'a>(pub &'a [f32], pub usize);
 
-impl fmt::Display for List<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl List<'_> {
+    /// Write it (the `Display` and [`Emit`] impls below call this).
+    pub fn write(&self, f: &mut dyn Write) -> fmt::Result {
         for (i, x) in self.0.iter().enumerate() {
             if i > 0 {
                 f.write_char(',')?;
             }
-            Fixed(*x, self.1).fmt(f)?;
+            Fixed(*x, self.1).write(f)?;
         }
         Ok(())
     }
@@ -348,48 +354,76 @@ impl fmt::Display for List<'_> {
 
 /// The model's error as a console message, from its public fields, with the formatters above
 /// (the model's own `Display` formats f64 with core and would link core's float formatting).
-pub fn write_model_error<W: Write>(w: &mut W, e: &finger_model::Error) -> fmt::Result {
+pub fn write_model_error(w: &mut dyn Write, e: &finger_model::Error) -> fmt::Result {
     use finger_model::Error as E;
     match *e {
-        E::Param { name, range } => write!(w, "parameter {name} out of range: {range}"),
-        E::NonFinite { input } => write!(w, "{input} is not a finite number"),
-        E::Input { input, reason } => write!(w, "{input}: {reason}"),
-        E::VoltageCeiling { joint, volts, ceiling } => write!(
-            w,
-            "joint {joint}: {} V is at or past the ceiling {} V (33 % pull-in limit with margin, or supply)",
-            Fixed(volts as f32, 0),
-            Fixed(ceiling as f32, 0)
-        ),
-        E::ThicknessLimit { joint, requested_mm, limit_mm } => write!(
-            w,
-            "joint {joint}: stack thickness {} mm is past the 33 % pull-in limit ({} mm)",
-            Fixed(requested_mm as f32, 3),
-            Fixed(limit_mm as f32, 3)
-        ),
+        E::Param { name, range } => w!(w; "parameter ", name, " out of range: ", range),
+        E::NonFinite { input } => w!(w; input, " is not a finite number"),
+        E::Input { input, reason } => w!(w; input, ": ", reason),
+        E::VoltageCeiling { joint, volts, ceiling } => w!(w; "joint ", joint, ": ", Fixed(volts as f32, 0), " V is at or past the ceiling ", Fixed(ceiling as f32, 0), " V (33 % pull-in limit with margin, or supply)"),
+        E::ThicknessLimit { joint, requested_mm, limit_mm } => w!(w; "joint ", joint, ": stack thickness ", Fixed(requested_mm as f32, 3), " mm is past the 33 % pull-in limit (", Fixed(limit_mm as f32, 3), " mm)"),
         E::Contact { joint, tension } => {
-            write!(w, "joint {joint}: links in contact (cable span at its floor) at {} N", Fixed(tension as f32, 3))
+            w!(w; "joint ", joint, ": links in contact (cable span at its floor) at ", Fixed(tension as f32, 3), " N")
         }
         E::LimitPoint { joint, tension } => {
-            write!(w, "joint {joint}: equilibrium limit point (singular tangent) at {} N", Fixed(tension as f32, 3))
+            w!(w; "joint ", joint, ": equilibrium limit point (singular tangent) at ", Fixed(tension as f32, 3), " N")
         }
-        E::ForceLimit { tension, fmax } => write!(
-            w,
-            "tension {} N is past the end of the equilibrium branch fmax={} N",
-            Fixed(tension as f32, 3),
-            Fixed(fmax as f32, 3)
-        ),
+        E::ForceLimit { tension, fmax } => w!(w; "tension ", Fixed(tension as f32, 3), " N is past the end of the equilibrium branch fmax=", Fixed(fmax as f32, 3), " N"),
         E::NotConverged { iterations, residual } => {
-            write!(w, "solver did not converge: {iterations} iterations, residual {}", Exp(residual as f32, 3))
+            w!(w; "solver did not converge: ", iterations, " iterations, residual ", Exp(residual as f32, 3))
         }
-        E::Singular { what } => write!(w, "singular {what}"),
-        E::Unreachable { joint, needed, min, max } => write!(
-            w,
-            "joint {joint}: needs compliance {} rad/Nmm, the ceiling allows {}..{}",
-            Exp(needed as f32, 4),
-            Exp(min as f32, 4),
-            Exp(max as f32, 4)
-        ),
+        E::Singular { what } => w!(w; "singular ", what),
+        E::Unreachable { joint, needed, min, max } => w!(w; "joint ", joint, ": needs compliance ", Exp(needed as f32, 4), " rad/Nmm, the ceiling allows ", Exp(min as f32, 4), "..", Exp(max as f32, 4)),
         #[allow(unreachable_patterns)]
-        _ => write!(w, "model error"),
+        _ => w!(w; "model error"),
+    }
+}
+
+
+impl Emit for Fixed {
+    fn emit(&self, o: &mut dyn Write) {
+        let _ = self.write(o);
+    }
+}
+
+impl fmt::Display for Fixed {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write(f)
+    }
+}
+
+impl Emit for Short {
+    fn emit(&self, o: &mut dyn Write) {
+        let _ = self.write(o);
+    }
+}
+
+impl fmt::Display for Short {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write(f)
+    }
+}
+
+impl Emit for Exp {
+    fn emit(&self, o: &mut dyn Write) {
+        let _ = self.write(o);
+    }
+}
+
+impl fmt::Display for Exp {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write(f)
+    }
+}
+
+impl Emit for List<'_> {
+    fn emit(&self, o: &mut dyn Write) {
+        let _ = self.write(o);
+    }
+}
+
+impl fmt::Display for List<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write(f)
     }
 }

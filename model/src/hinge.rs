@@ -60,12 +60,16 @@ pub fn stretch_compliance<R: Real>(b: R, t_min: R, a: R, e: R, w: R, x0: R, x1: 
     for p in 0..panels {
         let mid = p0 + h * (R::from_u32(p as u32) + R::from_f64(0.5));
         for &(node, weight) in GL8.iter() {
-            for sign in [-1.0, 1.0] {
-                let phi = mid + h * R::from_f64(0.5 * sign * node);
+            // half the node and weight (exact in binary); the pair ±node, in R (no f64
+            // arithmetic at run time)
+            let half = R::from_f64(0.5);
+            let off = h * (R::from_f64(node) * half);
+            let half_weight = R::from_f64(weight) * half;
+            for phi in [mid - off, mid + off] {
                 let (s, c) = phi.sin_cos();
                 let x = a * (one + s);
                 let t = t_min + (b - t_min) * (one - c);
-                let dx = a * c * h * R::from_f64(0.5 * weight);
+                let dx = a * c * h * half_weight;
                 let arm = x1 - x;
                 let inv_ei = twelve / (e * w * t * t * t);
                 cx += dx / (e * w * t);

@@ -149,7 +149,7 @@ impl Real for f32 {
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        libm::sqrtf(self)
+        sqrt_f32(self)
     }
     #[inline(always)]
     fn sin(self) -> Self {
@@ -201,9 +201,8 @@ impl Real for f32 {
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        // The M4F has a hardware square root; libm's sqrtf compiles to it there, and it is
-        // exact. micromath's sqrt is an approximation, so keep libm for sqrt.
-        libm::sqrtf(self)
+        // micromath's sqrt is an approximation; the correctly rounded one is cheap.
+        sqrt_f32(self)
     }
     #[inline(always)]
     fn sin(self) -> Self {
@@ -220,6 +219,48 @@ impl Real for f32 {
     #[inline(always)]
     fn is_finite(self) -> bool {
         f32::is_finite(self)
+    }
+}
+
+/// The correctly rounded f32 square root. On a Cortex-M with a single-precision FPU (the
+/// M4F) it is the one `vsqrt.f32` instruction (14 cycles); stable Rust has no intrinsic for
+/// it in `no_std`, and libm's `sqrtf` is a software routine there (~600 bytes, ~100
+/// instructions). IEEE 754 requires sqrt correctly rounded, so both give the same bits and the
+/// host (libm) and the target compute the same numbers. NaN for x < 0, as libm.
+#[inline(always)]
+fn sqrt_f32(x: f32) -> f32 {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    return fpu_sqrt::sqrt(x);
+    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+    return libm::sqrtf(x);
+}
+
+/// `vsqrt.f32` as a leaf function (the argument and the result in s0, hard-float ABI).
+/// Inline `asm!` cannot name the FPU registers on this target in stable Rust (its `sreg`
+/// class needs the double-precision `vfp2` feature, which the M4F's FPU does not have), so
+/// the instruction lives in a two-instruction function the assembler builds for fpv4-sp-d16.
+#[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+#[allow(unsafe_code)]
+mod fpu_sqrt {
+    core::arch::global_asm!(
+        ".section .text.finger_model_vsqrtf,\"ax\",%progbits",
+        ".global finger_model_vsqrtf",
+        ".type finger_model_vsqrtf,%function",
+        ".fpu fpv4-sp-d16",
+        ".thumb_func",
+        "finger_model_vsqrtf:",
+        "    vsqrt.f32 s0, s0",
+        "    bx lr",
+        ".size finger_model_vsqrtf, . - finger_model_vsqrtf",
+    );
+    extern "C" {
+        fn finger_model_vsqrtf(x: f32) -> f32;
+    }
+    #[inline(always)]
+    pub fn sqrt(x: f32) -> f32 {
+        // SAFETY: a leaf function of two instructions, FPU registers only (s0 in and out, as
+        // the eabihf calling convention passes f32), no memory, no stack.
+        unsafe { finger_model_vsqrtf(x) }
     }
 }
 
