@@ -682,7 +682,7 @@ impl<B: Board> App<B> {
         self.check_volts(&v)?;
         let vf = v.map(|x| x as f32);
         let sol = self.finger.solve(p, &vf, Method::converged()).map_err(model_err)?;
-        let k = tip_stiffness(&self.finger, &sol).map_err(model_err)?;
+        let k = self.finger.tip_stiffness(&sol).map_err(model_err)?;
         let _ = w!(r; "joints=");
         joints(r, &sol);
         let tip = sol.tip();
@@ -987,34 +987,6 @@ fn tension(p: f32) -> Result<f32, CmdError> {
         return Err(err!("limit"; "tension ", Exp(p, 3), " N is past fmax"));
     }
     Ok(p)
-}
-
-/// K_tip = C_tip^-1, inverted with diagonal scaling: C_tip's diagonal spans many decades
-/// (axial vs bending), which the model's plain 3x3 inverse refuses as singular in f32.
-fn tip_stiffness(f: &Finger<f32>, sol: &Solution<f32>) -> Result<[[f32; 3]; 3], ModelError> {
-    use finger_model::mat3;
-    let c = f.compliances(&sol.volts[..sol.n])?;
-    let ct = f.tip_compliance(&c, sol);
-    let mut d = [0.0f32; 3];
-    for i in 0..3 {
-        if !(ct[i][i] > 0.0) {
-            return Err(ModelError::Singular { what: "tip compliance" });
-        }
-        d[i] = 1.0 / <f32 as finger_model::Real>::sqrt(ct[i][i]);
-    }
-    let mut cs = ct;
-    for i in 0..3 {
-        for j in 0..3 {
-            cs[i][j] = ct[i][j] * d[i] * d[j];
-        }
-    }
-    let mut k = mat3::inverse(&cs).ok_or(ModelError::Singular { what: "tip compliance" })?;
-    for i in 0..3 {
-        for j in 0..3 {
-            k[i][j] *= d[i] * d[j];
-        }
-    }
-    Ok(k)
 }
 
 fn list(r: &mut Reply, v: &[f32], prec: usize) {

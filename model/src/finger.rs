@@ -356,12 +356,18 @@ impl<R: Real> Finger<R> {
     }
 
     /// Solve under cable tension alone (N) with one voltage per joint (V).
+    ///
+    /// `solve`, `solve_loaded` and `solve_with` are inlined into their callers so that a
+    /// constant `method` (the firmware only ever asks for `Method::converged()`) selects one
+    /// solver at compile time and the other is left out of the image (issue 3: flash).
+    #[inline(always)]
     pub fn solve(&self, tension: R, volts: &[R], method: Method<R>) -> Result<Solution<R>, Error> {
         let c = self.compliances(volts)?;
         self.solve_with(&c, tension, [R::zero(); 2], method)
     }
 
     /// Solve with an external tip force too (N, base frame): the joints couple.
+    #[inline(always)]
     pub fn solve_loaded(
         &self,
         tension: R,
@@ -374,6 +380,7 @@ impl<R: Real> Finger<R> {
     }
 
     /// Solve with precomputed compliances (see `compliances`).
+    #[inline(always)]
     pub fn solve_with(
         &self,
         c: &Compliances<R>,
@@ -381,6 +388,14 @@ impl<R: Real> Finger<R> {
         tip_force: [R; 2],
         method: Method<R>,
     ) -> Result<Solution<R>, Error> {
+        match method {
+            Method::Stepping { n_inc } => self.solve_stepping(c, tension, tip_force, n_inc),
+            Method::Converged { tol, max_iter } => self.solve_converged(c, tension, tip_force, tol, max_iter),
+        }
+    }
+
+    /// The inputs every solve checks first.
+    fn check_load(&self, c: &Compliances<R>, tension: R, tip_force: [R; 2]) -> Result<(), Error> {
         if !tension.is_finite() {
             return Err(Error::NonFinite { input: "tension" });
         }
@@ -393,27 +408,32 @@ impl<R: Real> Finger<R> {
         if c.n != self.p.n || c.m != self.p.m {
             return Err(Error::Input { input: "compliances", reason: "computed for other parameters" });
         }
-        let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
-        let (states, iterations) = match method {
-            Method::Stepping { n_inc } => {
-                if n_inc == 0 {
-                    return Err(Error::Input { input: "n_inc", reason: "at least one load step" });
-                }
-                (self.stepping(c, tension, tip_force, n_inc)?, n_inc)
-            }
-            Method::Converged { tol, max_iter } => {
-                if !tol.is_finite() || tol <= R::zero() {
-                    return Err(Error::Input { input: "tol", reason: "tolerance must be positive" });
-                }
-                let tol = tol.max(self.resolution());
-                if loaded {
-                    self.newton_coupled(c, tension, tip_force, tol, max_iter)?
-                } else {
-                    return self.solve_tension_alone(c, tension, tol, max_iter);
-                }
-            }
-        };
-        self.assemble(c, tension, tip_force, &states, iterations)
+        Ok(())
+    }
+
+    /// The paper's explicit load stepping (Eq. 29), `n_inc` steps.
+    fn solve_stepping(&self, c: &Compliances<R>, tension: R, tip_force: [R; 2], n_inc: u32) -> Result<Solution<R>, Error> {
+        self.check_load(c, tension, tip_force)?;
+        if n_inc == 0 {
+            return Err(Error::Input { input: "n_inc", reason: "at least one load step" });
+        }
+        let states = self.stepping(c, tension, tip_force, n_inc)?;
+        self.assemble(c, tension, tip_force, &states, n_inc)
+    }
+
+    /// The converged equilibrium (Newton to `tol` mm on the guide holes).
+    fn solve_converged(&self, c: &Compliances<R>, tension: R, tip_force: [R; 2], tol: R, max_iter: u32) -> Result<Solution<R>, Error> {
+        self.check_load(c, tension, tip_force)?;
+        if !tol.is_finite() || tol <= R::zero() {
+            return Err(Error::Input { input: "tol", reason: "tolerance must be positive" });
+        }
+        let tol = tol.max(self.resolution());
+        if tip_force[0] != R::zero() || tip_force[1] != R::zero() {
+            let (states, iterations) = self.newton_coupled(c, tension, tip_force, tol, max_iter)?;
+            self.assemble(c, tension, tip_force, &states, iterations)
+        } else {
+            self.solve_tension_alone(c, tension, tol, max_iter)
+        }
     }
 
     /// The converged solve under tension alone: the joints decouple, each solved by Newton on
