@@ -382,7 +382,8 @@ fn report(
     writeln!(w, "- f32 with micromath: as fast as `fast-trig` but its sin/cos error (~1e-4 to 1e-3 relative) moves the").unwrap();
     writeln!(w, "  equilibrium by a few hundredths of a millimetre: it cannot meet 1e-3 mm at any step count.").unwrap();
     writeln!(w, "- f64 on the M4F: soft-float throughout (the FPU is single precision), several times f32.").unwrap();
-    writeln!(w, "- libm's `sqrtf` is a software routine (tens of instructions), not `vsqrt.f32`: one per march.").unwrap();
+    writeln!(w, "- Square roots: the M4F's `vsqrt.f32` (one instruction in a two-instruction leaf, model `real.rs`); libm's").unwrap();
+    writeln!(w, "  `sqrtf` is a software routine there (~100 instructions), so every f32 figure here uses the instruction.").unwrap();
     writeln!(w, "- Stepping: n_inc explicit steps, each a march per joint plus the posture, and first-order error: reaching").unwrap();
     writeln!(w, "  1e-3 mm at 1 N takes thousands of steps (see the stepping study below); it never competes.\n").unwrap();
 
