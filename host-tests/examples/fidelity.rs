@@ -469,8 +469,8 @@ reference up to {} N on every scene (plate modulus and flexible links on): worst
     let _ = writeln!(
         w,
         "\n**Run time: no m meets the {BUDGET:.0}-instruction budget** with the current solver{}. One \
-forward solve costs {:.0} (m = 1) to {:.0} (m = 8) M4F instructions with libm's f32 trig (the firmware's \
-build), {:.0} to {:.0} with the model's `fast-trig` feature (f32 sin/cos, ~1 ulp), {:.0} to {:.0} with micromath's; m's own share is about {:.0} (libm) or {:.0} (micromath) \
+forward solve costs {:.0} (m = 1) to {:.0} (m = 8) M4F instructions with libm's f32 trig, {:.0} to {:.0} with the model's `fast-trig` feature (f32 \
+sin/cos, ~1 ulp; the firmware's build), {:.0} to {:.0} with micromath's; m's own share is about {:.0} (libm) or {:.0} (micromath) \
 instructions per sub-element per distinct joint, the rest is the solver's fixed cost (continuation, \
 dual-number Newton iterations, the posture and the tangent determinant of every joint in \
 `assemble`). What bounds it: trig and the number of marches per solve, not the model's arithmetic. \
@@ -500,15 +500,16 @@ joints, no reuse of a solved joint) is the worst case.",
             w,
             "\n**Recommended defaults: `m = {}`, `plate = 1` (ν_b = {NU_B}), `flex_links = 1`.** Accuracy is \
 the requirement that can be met, and the cost is affordable for what the firmware does with a solve \
-(a console command or a setpoint change, not a control loop): {:.0} libm instructions are about {:.1} ms \
+(a console command or a setpoint change, not a control loop): {:.0} instructions (the firmware's \
+`fast-trig` build) are about {:.2} ms \
 at 168 MHz (QEMU counts instructions, not wait states; the real M4F at 168 MHz with flash wait states \
 and the ART accelerator is within a small factor of that). The paper's m = 1 costs {:.0} and is \
 {} off at {} N. To reach the {BUDGET:.0}-instruction budget the solver itself has to get cheaper (see \
 docs/performance.md for where the instructions go); m is not the lever.",
             c.m,
-            cost("m4f-libm", c.m),
-            cost("m4f-libm", c.m) / 168e3,
-            cost("m4f-libm", 1),
+            cost("m4f-fast-trig", c.m),
+            cost("m4f-fast-trig", c.m) / 168e3,
+            cost("m4f-fast-trig", 1),
             pct(worst(Config { plate: false, flex: false, m: 1 }, LIMIT_TENSION).map_or(f64::NAN, |x| x.0)),
             fmt_t(LIMIT_TENSION)
         );
