@@ -880,7 +880,8 @@ impl<B: Board> App<B> {
         if args.len() > 2 {
             return Err(err!("usage"; "param [<name> [<value>]]"));
         }
-        let name = core::str::from_utf8(name).ok().filter(|_| PARAMS.iter().any(|i| i.name.as_bytes() == name) || FW_PARAMS.iter().any(|i| i.name.as_bytes() == name));
+        // the parameter's own name (a &'static str), found by its bytes
+        let name = PARAMS.iter().map(|i| i.name).chain(FW_PARAMS.iter().map(|i| i.name)).find(|n| n.as_bytes() == name);
         let Some(name) = name else {
             return Err(err!("usage"; "no parameter ", (console::printable(args[0])), "; param lists them"));
         };

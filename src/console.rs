@@ -153,10 +153,29 @@ pub fn parse_number(tok: &[u8]) -> Result<f32, NumError> {
     Ok(if neg { -v } else { v })
 }
 
-/// A token as text for messages: itself when printable ASCII, else a placeholder.
-pub fn printable(tok: &[u8]) -> &str {
-    match core::str::from_utf8(tok) {
-        Ok(s) if tok.len() <= 24 && tok.iter().all(|c| (0x21..0x7f).contains(c)) => s,
-        _ => "(non-printable)",
+/// A token as text for messages: itself when printable ASCII (at most 24 bytes), else
+/// `(non-printable)`. Written byte by byte from a table of the printable characters, so the
+/// image needs no UTF-8 validation (issue 3: flash).
+pub fn printable(tok: &[u8]) -> Printable<'_> {
+    Printable(tok)
+}
+
+/// See [`printable`].
+pub struct Printable<'a>(&'a [u8]);
+
+/// The printable ASCII characters 0x21..=0x7e, in order.
+const ASCII: &str = "!\"#$%&'()*+,-./0123456789:;<=>?@ABCDEFGHIJKLMNOPQRSTUVWXYZ[\\]^_`abcdefghijklmnopqrstuvwxyz{|}~";
+
+impl crate::out::Emit for Printable<'_> {
+    fn emit(&self, o: &mut dyn core::fmt::Write) {
+        let t = self.0;
+        if !(t.len() <= 24 && t.iter().all(|c| (0x21..0x7f).contains(c))) {
+            let _ = o.write_str("(non-printable)");
+            return;
+        }
+        for &c in t {
+            let i = (c - 0x21) as usize;
+            let _ = o.write_str(ASCII.get(i..i + 1).unwrap_or("?"));
+        }
     }
 }

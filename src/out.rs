@@ -57,7 +57,9 @@ impl<const N: usize> Emit for heapless::String<N> {
     }
 }
 
-/// Decimal digits of `v`.
+const DIGITS: &str = "0123456789";
+
+/// Decimal digits of `v` (no UTF-8 validation: each digit is a slice of `DIGITS`).
 pub fn emit_u32(o: &mut dyn Write, v: u32) {
     let mut buf = [0u8; 10];
     let mut i = buf.len();
@@ -70,8 +72,10 @@ pub fn emit_u32(o: &mut dyn Write, v: u32) {
             break;
         }
     }
-    // only ASCII digits were written
-    let _ = o.write_str(core::str::from_utf8(&buf[i..]).unwrap_or("?"));
+    for &d in &buf[i..] {
+        let k = (d - b'0') as usize;
+        let _ = o.write_str(DIGITS.get(k..k + 1).unwrap_or("?"));
+    }
 }
 
 macro_rules! emit_unsigned {

@@ -199,6 +199,17 @@ pub struct JointEquilibrium<R> {
     pub iterations: u32,
 }
 
+/// One march of a joint without Newton (`Finger::joint_march`): where it arrives.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JointMarch<R> {
+    pub end: Pose<R>,
+    /// The hole the march arrives at (the residual is the guess minus this), mm.
+    pub hole: [R; 2],
+    pub link: [R; 3],
+    /// end.theta + the link's rotation, rad.
+    pub angle: R,
+}
+
 /// A prepared finger: validated parameters and the hinge compliances, computed once.
 #[derive(Clone, Copy, Debug)]
 pub struct Finger<R> {
@@ -266,7 +277,7 @@ impl<R: Real> Finger<R> {
         for j in 0..p.m {
             let (x0, x1) = hinge::sub_element_bounds(p.a, p.m, j);
             hinge_c[j] = hinge::stretch_compliance(p.b, p.t_min, p.a, e, p.w, x0, x1);
-            hinge_k[j] = mat3::inverse(&hinge_c[j]).ok_or(Error::Singular { what: "hinge compliance" })?;
+            hinge_k[j] = mat3::inverse_spd(&hinge_c[j]).ok_or(Error::Singular { what: "hinge compliance" })?;
             if !hinge_c[j].iter().flatten().all(|x| x.is_finite()) {
                 return Err(Error::Singular { what: "hinge compliance" });
             }
@@ -349,7 +360,7 @@ impl<R: Real> Finger<R> {
             let k_de = de::stack_stiffness(p, self.sub_len, t);
             for j in 0..p.m {
                 let k_sum = mat3::add(&self.hinge_k[j], &k_de);
-                out.c[k][j] = mat3::inverse(&k_sum).ok_or(Error::Singular { what: "joint stiffness" })?;
+                out.c[k][j] = mat3::inverse_spd(&k_sum).ok_or(Error::Singular { what: "joint stiffness" })?;
             }
         }
         Ok(out)
@@ -1163,6 +1174,35 @@ impl<R: Real> Finger<R> {
         Ok(JointEquilibrium { q: st.q, end: st.end, hole: st.hole, link, angle: st.end.theta + link[2], iterations })
     }
 
+    /// One march of joint `joint` (1-based) under tension alone from the hole guess `b` (no
+    /// Newton): the state it arrives at, with `hole` the hole it arrives at (the residual is
+    /// `b - hole`) and `angle` the joint angle (hinge and flexible link). For the inverse
+    /// model's quasi-Newton solves (inverse/general.rs); `iterations` is 0.
+    /// The sub-element displacements go to `q`.
+    pub(crate) fn joint_march(
+        &self,
+        joint: usize,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        q: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<JointMarch<R>, Error> {
+        // `march` (the forward solver's, one copy of the code in the image), q copied out
+        let st = self.march(c, tension, b, None).map_err(|e| match e {
+            MarchError::Contact => Error::Contact { joint, tension: tension.to_f64() },
+            MarchError::Singular => Error::Singular { what: "joint march" },
+        })?;
+        *q = st.q;
+        let (end, hole) = (st.end, st.hole);
+        let link = self.link_q(tension, &end, None);
+        Ok(JointMarch { end, hole, link, angle: end.theta + link[2] })
+    }
+
+    /// The finest hole-position residual the scalar type can resolve, mm (crate-visible).
+    pub(crate) fn hole_resolution(&self) -> R {
+        self.resolution()
+    }
+
     /// The end of the equilibrium branch under tension alone for these voltages: the lowest
     /// tension at which a joint's span closes to its floor (contact) or its equilibrium tangent
     /// turns singular (a limit point), whichever comes first, found by load continuation to
@@ -1230,7 +1270,9 @@ impl<R: Real> Finger<R> {
     pub fn tip_stiffness(&self, sol: &Solution<R>) -> Result<Mat3<R>, Error> {
         let c = self.compliances(&sol.volts[..sol.n])?;
         let ct = self.tip_compliance(&c, sol);
-        mat3::inverse(&ct).ok_or(Error::Singular { what: "tip compliance" })
+        // C_tip is symmetric positive definite (Σ J C Jᵀ): the cofactor inverse with a
+        // scale-free singularity test
+        mat3::inverse_spd(&ct).ok_or(Error::Singular { what: "tip compliance" })
     }
 }
 

@@ -444,8 +444,17 @@ fn fast<R: Real>(
     let mut hi = [ctx.hold_tension(1, &ang[0], t0, [R::zero(); 2])?; MAX_JOINTS];
     let mut lo = hi;
     for k in 0..n {
+        // a joint at the same angle as the one before holds it the same way (no work)
+        if k > 0 && ang[k].theta == ang[k - 1].theta {
+            hi[k] = hi[k - 1];
+            lo[k] = lo[k - 1];
+            continue;
+        }
         if k > 0 {
-            hi[k] = ctx.hold_tension(k + 1, &ang[k], t0, [R::zero(); 2])?;
+            // first guess: the previous joint's deflection scaled by the angle ratio
+            let g = if ang[k - 1].theta != R::zero() { ang[k].theta / ang[k - 1].theta } else { R::zero() };
+            let guess = [hi[k - 1].delta[0] * g, hi[k - 1].delta[1] * g];
+            hi[k] = ctx.hold_tension(k + 1, &ang[k], t0, guess)?;
         }
         lo[k] = ctx.hold_tension(k + 1, &ang[k], t_top, hi[k].delta)?;
         out.iterations += hi[k].iters + lo[k].iters;
@@ -500,6 +509,12 @@ fn fast<R: Real>(
         if pt == R::zero() {
             out.thickness[k] = t0;
             out.q[k] = [hi[k].delta[0], hi[k].delta[1], ang[k].theta];
+            continue;
+        }
+        if k > 0 && ang[k].theta == ang[k - 1].theta {
+            out.thickness[k] = out.thickness[k - 1];
+            out.volts[k] = out.volts[k - 1];
+            out.q[k] = out.q[k - 1];
             continue;
         }
         let span = hi[k].tension - lo[k].tension;

@@ -53,6 +53,30 @@ pub fn det<R: Real>(m: &Mat3<R>) -> R {
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
+/// Inverse of a symmetric positive-definite matrix (a stiffness or a compliance), from the
+/// upper triangle by cofactors: no square roots, ~30 operations against ~150 for `inverse`.
+/// `None` unless det > 64 ε Π m_ii (for a positive-definite matrix det ≤ Π m_ii, so this is
+/// the scale-free singularity test, as the diagonal scaling gives `inverse`) and finite.
+pub fn inverse_spd<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
+    let (a, b, c, d, e, f) = (m[0][0], m[0][1], m[0][2], m[1][1], m[1][2], m[2][2]);
+    let ca = d * f - e * e;
+    let cb = c * e - b * f;
+    let cc = b * e - c * d;
+    let det = a * ca + b * cb + c * cc;
+    let diag = a * d * f;
+    if !(a > R::zero() && d > R::zero() && f > R::zero() && det > diag * R::from_f64(64.0 * R::EPS) && det.is_finite()) {
+        return None;
+    }
+    let inv = R::one() / det;
+    let (cd, ce, cf) = (a * f - c * c, b * c - a * e, a * d - b * b);
+    let o = [[ca * inv, cb * inv, cc * inv], [cb * inv, cd * inv, ce * inv], [cc * inv, ce * inv, cf * inv]];
+    if o.iter().flatten().all(|x| x.is_finite()) {
+        Some(o)
+    } else {
+        None
+    }
+}
+
 /// Inverse; `None` if the matrix is singular to working precision or not finite.
 ///
 /// Compliance and stiffness matrices mix units (mm/N next to rad/(N·mm)) and their diagonal
@@ -86,8 +110,9 @@ pub fn inverse<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
 }
 
 /// Inverse by cofactors; `None` if the determinant is small against the product of the row
-/// norms (Hadamard's bound) or not finite.
-fn inverse_unscaled<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
+/// norms (Hadamard's bound) or not finite. For matrices whose rows are already of comparable
+/// scale (the inverse model's Jacobians in scaled unknowns); `inverse` scales first.
+pub fn inverse_unscaled<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
     let d = det(m);
     let mut scale = R::one();
     for row in m {
@@ -103,4 +128,36 @@ fn inverse_unscaled<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
         [-c(1, 0, 2, 2) * inv_d, c(0, 0, 2, 2) * inv_d, -c(0, 0, 1, 2) * inv_d],
         [c(1, 0, 2, 1) * inv_d, -c(0, 0, 2, 1) * inv_d, c(0, 0, 1, 1) * inv_d],
     ])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_spd_matches_the_scaled_inverse() {
+        // a stiffness-like matrix (axial decades above bending, coupled) and a compliance
+        let ms: [Mat3<f64>; 2] = [
+            [[2.0e4, 0.0, 150.0], [0.0, 30.0, -40.0], [150.0, -40.0, 300.0]],
+            [[1.0e-4, 2.0e-6, 3.0e-5], [2.0e-6, 0.5, 0.02], [3.0e-5, 0.02, 0.004]],
+        ];
+        for m in ms {
+            let a = inverse_spd(&m).unwrap();
+            let b = inverse(&m).unwrap();
+            for i in 0..3 {
+                for j in 0..3 {
+                    assert!((a[i][j] - b[i][j]).abs() <= 1e-12 * b[i][i].abs().max(b[j][j].abs()), "{i}{j}: {} {}", a[i][j], b[i][j]);
+                }
+            }
+            // and it is the inverse
+            let id = mul(&m, &a);
+            for i in 0..3 {
+                assert!((id[i][i] - 1.0).abs() < 1e-12);
+            }
+        }
+        // singular, indefinite and non-finite matrices are refused
+        assert!(inverse_spd(&[[1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]).is_none());
+        assert!(inverse_spd(&[[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]).is_none());
+        assert!(inverse_spd(&[[f64::NAN, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]).is_none());
+    }
 }

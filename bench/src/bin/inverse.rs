@@ -52,7 +52,11 @@ fn main() -> ! {
     let paper = Params::<f32> { m: 1, plate: false, flex_links: false, ..Params::default() };
     let real = Params::<f32> { m: 8, plate: true, flex_links: true, ..Params::default() };
     for (cfg, p) in [("m1-rigid", paper), ("m8-plate-flex", real)] {
-        for (case, deg) in [("10-10-10", [10.0, 10.0, 10.0]), ("10.05-10-9.95", [10.05, 10.0, 9.95])] {
+        for (case, deg) in [
+            ("10-10-10", [10.0, 10.0, 10.0]),
+            ("10.03-10-9.97", [10.03, 10.0, 9.97]),
+            ("10.05-10-9.95", [10.05, 10.0, 9.95]),
+        ] {
             let mut name: heapless_name::Name = heapless_name::Name::new();
             name.push(cfg);
             name.push("/");
