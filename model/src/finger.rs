@@ -596,43 +596,11 @@ impl<R: Real> Finger<R> {
         b_hole: [R; 2],
         tip: Option<TipLoad<R>>,
     ) -> Result<JointState<R>, MarchError> {
-        let e = self.p.e;
-        let SpanLoads { fc, ft, tp, ftot } = self.span_loads(tension, b_hole, tip)?;
-        let mut pose: Pose<R> = Pose::origin();
-        let (mut s, mut co) = (R::zero(), R::one());
+        // the arithmetic is `march_t`'s in R (one copy of the march in the image; the test
+        // `march_t_matches_march` keeps the two entry points bit-equal)
         let mut q = [[R::zero(); 3]; MAX_SUB];
-        for j in 0..self.p.m {
-            let cj = &c[j];
-            // nominal distal end (no own deflection)
-            let d0 = [pose.x + co * self.sub_len, pose.y + s * self.sub_len];
-            let mut m0 = (b_hole[0] - d0[0]) * fc[1] - (b_hole[1] - d0[1]) * fc[0];
-            if tip.is_some() {
-                m0 += (tp[0] - d0[0]) * ft[1] - (tp[1] - d0[1]) * ft[0];
-            }
-            // total force in the sub-element's proximal frame
-            let f = [co * ftot[0] + s * ftot[1], -s * ftot[0] + co * ftot[1]];
-            let q0 = mat3::mul_vec(cj, &[f[0], f[1], m0]);
-            let den = R::one() + f[1] * cj[0][2] - f[0] * cj[1][2];
-            if !(den.abs() > R::from_f64(1e-6)) {
-                return Err(MarchError::Singular);
-            }
-            let sm = (-f[1] * q0[0] + f[0] * q0[1]) / den;
-            let qj = [q0[0] + cj[0][2] * sm, q0[1] + cj[1][2] * sm, q0[2] + cj[2][2] * sm];
-            q[j] = qj;
-            pose = Pose {
-                x: pose.x + co * (self.sub_len + qj[0]) - s * qj[1],
-                y: pose.y + s * (self.sub_len + qj[0]) + co * qj[1],
-                theta: pose.theta + qj[2],
-            };
-            let sc = pose.theta.sin_cos();
-            s = sc.0;
-            co = sc.1;
-        }
-        let hole = [pose.x - s * e, pose.y + co * e];
-        if !(hole[0].is_finite() && hole[1].is_finite() && pose.theta.is_finite()) {
-            return Err(MarchError::Singular);
-        }
-        Ok(JointState { q, end: pose, hole, tangent: None })
+        let (end, hole) = self.march_t::<R>(c, tension, b_hole, tip, &mut q, |x| x)?;
+        Ok(JointState { q, end, hole, tangent: None })
     }
 
     /// Residual of the hole guess: guess - arrived.
@@ -1187,13 +1155,10 @@ impl<R: Real> Finger<R> {
         b: [R; 2],
         q: &mut [[R; 3]; MAX_SUB],
     ) -> Result<JointMarch<R>, Error> {
-        // `march` (the forward solver's, one copy of the code in the image), q copied out
-        let st = self.march(c, tension, b, None).map_err(|e| match e {
+        let (end, hole) = self.march_t::<R>(c, tension, b, None, q, |x| x).map_err(|e| match e {
             MarchError::Contact => Error::Contact { joint, tension: tension.to_f64() },
             MarchError::Singular => Error::Singular { what: "joint march" },
         })?;
-        *q = st.q;
-        let (end, hole) = (st.end, st.hole);
         let link = self.link_q(tension, &end, None);
         Ok(JointMarch { end, hole, link, angle: end.theta + link[2] })
     }

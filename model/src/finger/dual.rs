@@ -4,9 +4,9 @@
 //! marches per iteration and a step size that limits the Jacobian to half the digits): one
 //! march per Newton iteration, quadratic convergence to the scalar's resolution (issue 5).
 //!
-//! `march_t::<R>` is the same arithmetic, operation by operation, as `Finger::march`; the
-//! host test `march_t_matches_march` checks bit equality, so a change to one must be made to
-//! the other.
+//! `Finger::march` is `march_t::<R>` (one copy of the march in the image); the test
+//! `march_t_matches_march` checks that the dual march's value part is the plain march, bit
+//! for bit.
 
 use super::{norm2, Finger, JointState, MarchError, Pose, TipLoad};
 use crate::mat3::Mat3;

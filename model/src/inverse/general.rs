@@ -100,6 +100,12 @@ impl<'a, R: Real> Gen<'a, R> {
     /// Sub-element compliances at stack thickness t, as `Finger::compliances` computes them.
     fn comp(&self, t: R) -> Result<[Mat3<R>; MAX_SUB], Error> {
         let mut c = [mat3::zero(); MAX_SUB];
+        self.comp_into(t, &mut c)?;
+        Ok(c)
+    }
+
+    /// `comp` into `c` (its first m entries; no array returned by value in the hot loop).
+    fn comp_into(&self, t: R, c: &mut [Mat3<R>; MAX_SUB]) -> Result<(), Error> {
         let k_de = if self.p.layers == 0 { mat3::zero() } else { de::stack_stiffness(self.p, self.sub_len, t) };
         for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
             *cj = if self.p.layers == 0 {
@@ -108,7 +114,7 @@ impl<'a, R: Real> Gen<'a, R> {
                 mat3::inverse_spd(&mat3::add(&self.hinge_k[j], &k_de)).ok_or(Error::Singular { what: "joint stiffness" })?
             };
         }
-        Ok(c)
+        Ok(())
     }
 
     /// dθ/dP at P = 0 (straight joint: every sub-element sees the axial force -P and the
@@ -377,11 +383,12 @@ impl<'a, R: Real> Gen<'a, R> {
                 None => (mat3::zero(), [true; 3]),
             };
             let me: &Self = self;
+            let mut c = [mat3::zero(); MAX_SUB];
             let mut ev = |x: [R; 3], q: &mut [[R; 3]; MAX_SUB]| {
                 if !(x[2] > R::zero()) {
                     return Err(Error::Input { input: "thickness", reason: "trial below zero" });
                 }
-                let c = me.comp(x[2])?;
+                me.comp_into(x[2], &mut c)?;
                 me.f.joint_march(joint, &c, pt, [x[0], x[1]], q)
             };
             let (q, n) = self.broyden(&mut ev, [guess[0], guess[1], x0], [lh, lh, t0], jac, fd, theta);
@@ -665,21 +672,27 @@ pub(super) fn solve<R: Real>(
     out.tension = pt;
     // 4. every joint's thickness at that tension, then its voltage (0 V for the straight
     //    finger at zero tension)
-    let mut held = [straight; MAX_JOINTS];
     for k in 0..n {
-        if pt == R::zero() {
-            held[k] = straight;
-        } else if k > 0 && angles[k] == angles[k - 1] {
-            held[k] = held[k - 1];
-        } else if t0 - t_top <= g.rel * t0 {
-            held[k] = hi[k];
-        } else {
-            held[k] = g.hold_thickness(k + 1, angles[k], pt, &lo[k], &hi[k])?;
+        if k > 0 && angles[k] == angles[k - 1] {
+            // the joint before, recorded already: the same state
+            out.thickness[k] = out.thickness[k - 1];
+            out.volts[k] = out.volts[k - 1];
+            out.q[k] = out.q[k - 1];
+            out.sub_q[k] = out.sub_q[k - 1];
+            out.links[k] = out.links[k - 1];
+            continue;
         }
-        let t = held[k].thickness.max(t_top).min(t0);
+        let held = if pt == R::zero() {
+            straight
+        } else if t0 - t_top <= g.rel * t0 {
+            hi[k]
+        } else {
+            g.hold_thickness(k + 1, angles[k], pt, &lo[k], &hi[k])?
+        };
+        let t = held.thickness.max(t_top).min(t0);
         out.thickness[k] = t;
         out.volts[k] = if t >= t0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, t)?.min(v_top) };
-        record(&mut out, k, lh, &held[k]);
+        record(&mut out, k, lh, &held);
     }
     out.iterations = g.iters;
     Ok(out)
