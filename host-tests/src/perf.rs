@@ -228,3 +228,74 @@ pub fn elf_sizes(path: &Path) -> Result<(u64, u64), String> {
     }
     Ok((flash, ram))
 }
+
+/// Instructions per inverse solve on the Cortex-M4F (issue 4): builds `bench/src/bin/inverse.rs`
+/// in four variants (libm and fast-trig trig, with and without the m = 1 fast path; fast-trig
+/// without it is the firmware's build), runs each in QEMU netduinoplus2 with `-icount
+/// shift=0`, and returns the markdown table (one row per case, one column per variant).
+/// `cargo run --release --example inverse_cost` writes it to docs/inverse-cost.md; the
+/// performance report (`perf-report`) includes it.
+pub fn inverse_cost_table() -> String {
+    use std::fmt::Write as _;
+    let variants = [
+        ("libm, fast path", "de,inverse-fast"),
+        ("fast-trig, fast path", "de,inverse-fast,fast-trig"),
+        ("libm, general path", "de"),
+        ("fast-trig, general path (the firmware)", "de,fast-trig"),
+    ];
+    let mut rows: Vec<(String, Vec<(String, String)>)> = Vec::new();
+    for (label, features) in variants {
+        let name = format!("inverse-{}", features.replace(',', "-"));
+        let elf = build("inverse", M4F, features, &name).unwrap_or_else(|e| panic!("{e}"));
+        let out = run_qemu(&elf, "netduinoplus2", 0).unwrap_or_else(|e| panic!("{e}"));
+        let mut per_instr = None;
+        let mut overhead = 0.0;
+        let mut cells = Vec::new();
+        let mut ended = false;
+        for line in out.lines() {
+            let f: Vec<&str> = line.split_whitespace().collect();
+            match f.first() {
+                Some(&"CAL") => {
+                    let n: f64 = f[1].parse().unwrap();
+                    let t: f64 = f[2].parse().unwrap();
+                    overhead = f[3].parse().unwrap();
+                    per_instr = Some(t / n);
+                }
+                Some(&"I") => {
+                    let k = per_instr.expect("I before CAL");
+                    let ticks: f64 = f[3].parse().unwrap();
+                    let instr = ((ticks - overhead).max(0.0) / k).round();
+                    let cell = if f[2] == "ok" {
+                        let t: f64 = f[4].parse().unwrap();
+                        let v: Vec<f64> = f[5..8].iter().map(|s| s.parse().unwrap()).collect();
+                        format!("{instr:.0} (P {t:.4} N; V {:.0}, {:.0}, {:.0})", v[0], v[1], v[2])
+                    } else {
+                        format!("{instr:.0} (err {})", f[4])
+                    };
+                    cells.push((f[1].to_string(), cell));
+                }
+                Some(&"END") => ended = true,
+                Some(&"PANIC") => panic!("image panicked: {line}"),
+                _ => {}
+            }
+        }
+        assert!(ended, "image did not finish:\n{out}");
+        rows.push((label.to_string(), cells));
+    }
+    let mut doc = String::new();
+    let cases: Vec<String> = rows[0].1.iter().map(|(c, _)| c.clone()).collect();
+    write!(doc, "| case |").unwrap();
+    for (label, _) in &rows {
+        write!(doc, " {label} |").unwrap();
+    }
+    writeln!(doc).unwrap();
+    writeln!(doc, "|{}", " --- |".repeat(rows.len() + 1)).unwrap();
+    for (i, case) in cases.iter().enumerate() {
+        write!(doc, "| {case} |").unwrap();
+        for (_, cells) in &rows {
+            write!(doc, " {} |", cells.get(i).map(|c| c.1.as_str()).unwrap_or("-")).unwrap();
+        }
+        writeln!(doc).unwrap();
+    }
+    doc
+}

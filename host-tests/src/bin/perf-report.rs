@@ -195,7 +195,24 @@ fn main() {
         study.push((p, cells));
     }
 
-    let md = report(&rows, &host64, &host32, &lean_rows, &study, &n_incs, &cal_notes);
+    // ---- the inverse (issue 4): the same table as docs/inverse-cost.md
+    eprintln!("perf-report: inverse images");
+    let inverse_table = perf::inverse_cost_table();
+
+    let mut md = report(&rows, &host64, &host32, &lean_rows, &study, &n_incs, &cal_notes);
+    let section = format!(
+        "## The inverse model on the Cortex-M4F (issue 4)\n\n\
+         Instructions per `inverse::solve_pose` in f32 (joint angles, optionally a tension, to the tension \
+         and three voltages; without a tension also both ends of the feasible tension interval), QEMU \
+         netduinoplus2 with `-icount shift=0`, bench image `bench/src/bin/inverse.rs`; the same table as \
+         docs/inverse-cost.md (`cargo run --release --example inverse_cost`), docs/inverse.md (\"Cost on the \
+         target\") says what bounds it. `m1-rigid`: the paper's model (m = 1, E_b, rigid links); \
+         `m8-plate-flex`: the default (m = 8, plate modulus, flexible links). Target: at most 20,000.\n\n{inverse_table}\n"
+    );
+    match md.find("## Stability tests") {
+        Some(i) => md.insert_str(i, &section),
+        None => md.push_str(&section),
+    }
     std::fs::write(root.join("docs/performance.md"), md).unwrap();
     std::fs::write(root.join("docs/perf-error-vs-instructions.svg"), plot(&rows)).unwrap();
     eprintln!("perf-report: wrote docs/performance.md and docs/perf-error-vs-instructions.svg");
