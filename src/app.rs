@@ -668,7 +668,7 @@ impl<B: Board> App<B> {
                 return Err(err!("usage"; "channel ", (ch + 1), ": voltage must be >= 0"));
             }
             if v[ch] >= self.vmax[ch] {
-                return Err(err!("limit"; "channel ", (ch + 1), ": ", Fixed(v[ch], 1), " V is at or past the ceiling ", Fixed(self.vmax[ch], 1), " V (33 % pull-in limit with margin, supply)"));
+                return Err(err!("limit"; "channel ", (ch + 1), ": ", Fixed(v[ch], 1), " V is at or past the ceiling ", Fixed(self.vmax[ch], 1), " V (see limits)"));
             }
         }
         Ok(())
@@ -946,22 +946,22 @@ fn preset(p: Params<f32>) -> Params<f32> {
 }
 
 const HELP: &[&str] = &[
-    "help                      this list",
-    "version                   firmware name and version",
-    "status                    outputs, setpoints, model state, fault",
-    "limits                    ceilings in force (vmax, pull-in, supply, fmax, servo)",
-    "solve <P> <V1> <V2> <V3>  model only, nothing moves",
-    "arm | disarm              allow HV / ramp HV to 0, then drop the enable",
-    "stop                      emergency stop: HV off at once, cable released, disarmed",
-    "volt <1|2|3|all> <V>      HV channel setpoint, slewed; needs arm",
-    "force <P>                 cable tension: the servo pulls the model's excursion; needs arm",
+    "help - this list",
+    "version - firmware name and version",
+    "status - outputs, setpoints, model state, fault",
+    "limits - ceilings in force",
+    "solve <P> <V1> <V2> <V3> - model only, nothing moves",
+    "arm | disarm - allow HV / ramp HV to 0, then drop the enable",
+    "stop - emergency stop: HV off at once, cable released, disarmed",
+    "volt <1|2|3|all> <V> - HV channel setpoint, slewed; needs arm",
+    "force <P> - cable tension (servo); needs arm",
     #[cfg(feature = "pose")]
-    "pose <d1> <d2> <d3> [<P>] inverse: tension and voltages for these joint angles (deg); moves only when armed",
+    "pose <d1> <d2> <d3> [<P>] - inverse: tension and voltages for these joint angles (deg); moves only when armed",
     #[cfg(feature = "contact")]
-    "contact <P0> <P> [<V1> <V2> <V3>]  model only: force the tip presses with, stopped at the free tip of P0",
-    "param [<name> [<value>]]  list, read or set a parameter; only while disarmed",
-    "preset <default|paper>    model parameters back to a preset; only while disarmed",
-    "wait <s>                  run the control loop for s seconds, then reply",
+    "contact <P0> <P> [<V1> <V2> <V3>] - model only: tip force on a stop at the free tip of P0",
+    "param [<name> [<value>]] - list, read or set a parameter; only while disarmed",
+    "preset <default|paper> - model parameters back to a preset; only while disarmed",
+    "wait <s> - run the control loop for s seconds, then reply",
 ];
 
 fn no_args(args: &[&[u8]], cmd: &str) -> Result<(), CmdError> {

@@ -465,11 +465,16 @@ fn fast<R: Real>(
         }
     }
     // 2. the feasible interval
-    let mut p_lo = lo[0].tension;
-    let mut p_hi = hi[0].tension;
+    // each joint's range of tensions, [min, max] of its two ends: thinning the stack
+    // usually softens the joint (the 0 V end needs the most tension), but where the stack's
+    // axial-bending coupling dominates (a small cable offset) it stiffens it, and the ends
+    // swap (found by the property test `inverse_of_a_reachable_posture_holds_it`)
+    let range = |k: usize| (lo[k].tension.min(hi[k].tension), lo[k].tension.max(hi[k].tension));
+    let mut p_lo = range(0).0;
+    let mut p_hi = range(0).1;
     for k in 1..n {
-        p_lo = p_lo.max(lo[k].tension);
-        p_hi = p_hi.min(hi[k].tension);
+        p_lo = p_lo.max(range(k).0);
+        p_hi = p_hi.min(range(k).1);
     }
     out.interval = [p_lo, p_hi];
     // 3. the tension
@@ -489,7 +494,7 @@ fn fast<R: Real>(
     let slack = R::from_f64(1e-8_f64.max(256.0 * R::EPS)) * (pt.abs() + ctx.rel);
     let mut worst: Option<(usize, R)> = None;
     for k in 0..n {
-        let v = (lo[k].tension - pt).max(pt - hi[k].tension);
+        let v = (range(k).0 - pt).max(pt - range(k).1);
         if v > slack && worst.map_or(true, |(_, w)| v > w) {
             worst = Some((k, v));
         }
@@ -498,8 +503,8 @@ fn fast<R: Real>(
         return Err(Error::Unreachable {
             joint: k + 1,
             needed: ctx.compliance(&ang[k], pt, hi[k].wm, t0),
-            min: ctx.compliance(&ang[k], hi[k].tension, hi[k].wm, t0),
-            max: ctx.compliance(&ang[k], lo[k].tension, lo[k].wm, t_top),
+            min: ctx.compliance(&ang[k], hi[k].tension, hi[k].wm, t0).min(ctx.compliance(&ang[k], lo[k].tension, lo[k].wm, t_top)),
+            max: ctx.compliance(&ang[k], hi[k].tension, hi[k].wm, t0).max(ctx.compliance(&ang[k], lo[k].tension, lo[k].wm, t_top)),
         });
     }
     out.tension = pt;
@@ -518,7 +523,7 @@ fn fast<R: Real>(
             continue;
         }
         let span = hi[k].tension - lo[k].tension;
-        let frac = if span > R::zero() { ((pt - lo[k].tension) / span).max(R::zero()).min(R::one()) } else { R::one() };
+        let frac = if span != R::zero() { ((pt - lo[k].tension) / span).max(R::zero()).min(R::one()) } else { R::one() };
         let lerp = |a: R, b: R| a + (b - a) * frac;
         let guess = Hold {
             delta: [lerp(lo[k].delta[0], hi[k].delta[0]), lerp(lo[k].delta[1], hi[k].delta[1])],

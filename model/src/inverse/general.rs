@@ -362,7 +362,7 @@ impl<'a, R: Real> Gen<'a, R> {
             return Ok(*hi);
         }
         let span = hi.tension - lo.tension;
-        let frac = if span > R::zero() { ((pt - lo.tension) / span).max(R::zero()).min(R::one()) } else { R::one() };
+        let frac = if span != R::zero() { ((pt - lo.tension) / span).max(R::zero()).min(R::one()) } else { R::one() };
         let x0 = t_top + (t0 - t_top) * frac;
         let guess = [
             lo.eq.hole[0] + (hi.eq.hole[0] - lo.eq.hole[0]) * frac,
@@ -370,10 +370,13 @@ impl<'a, R: Real> Gen<'a, R> {
         ];
         let dt = t0 - t_top;
         // dh/dt, h = θ* - θ: dθ/dP times the tension the range of t trades for
-        let mut slope = (lo.slope + hi.slope) / R::from_f64(2.0) * span / dt;
+        let mut slope = ((lo.slope + hi.slope) / R::from_f64(2.0) * span / dt).abs();
         if !(slope > R::zero() && slope.is_finite()) {
             slope = theta * R::from_f64(0.01) / t0;
         }
+        // θ falls with t where thinning softens the joint (the 0 V end needs the most
+        // tension), rises where it stiffens it
+        let sign = if hi.tension >= lo.tension { -R::one() } else { R::one() };
         // quasi-Newton on (b, t) first: the hole columns of the tension solve's Jacobian,
         // the thickness column by a forward difference
         {
@@ -404,7 +407,7 @@ impl<'a, R: Real> Gen<'a, R> {
         let me: &Self = self;
         let mut ev = |x: R, g: Option<[R; 2]>| f_eval(me, joint, x, pt, g);
         let mut it = 0;
-        let res = self.root(&mut it, theta, -R::one(), &mut ev, t_top, Some(t0), None, x0, Some(guess), slope, false);
+        let res = self.root(&mut it, theta, sign, &mut ev, t_top, Some(t0), None, x0, Some(guess), slope, false);
         self.iters += it;
         let (p1, _) = res?;
         Ok(Held { tension: pt, thickness: p1.x, eq: p1.eq, slope: hi.slope, jac: None })
@@ -628,11 +631,16 @@ pub(super) fn solve<R: Real>(
         lo[k] = g.hold_tension(k + 1, angles[k], &c_top, t_top, s_top, hint, hi[k].jac)?;
     }
     // 2. the feasible interval; a negative angle is outside every tension's reach
-    let mut p_lo = lo[0].tension;
-    let mut p_hi = hi[0].tension;
+    // each joint's range of tensions, [min, max] of its two ends: thinning the stack
+    // usually softens the joint (the 0 V end needs the most tension), but where the stack's
+    // axial-bending coupling dominates (a small cable offset) it stiffens it, and the ends
+    // swap (found by the property test `inverse_of_a_reachable_posture_holds_it`)
+    let range = |k: usize| (lo[k].tension.min(hi[k].tension), lo[k].tension.max(hi[k].tension));
+    let mut p_lo = range(0).0;
+    let mut p_hi = range(0).1;
     for k in 1..n {
-        p_lo = p_lo.max(lo[k].tension);
-        p_hi = p_hi.min(hi[k].tension);
+        p_lo = p_lo.max(range(k).0);
+        p_hi = p_hi.min(range(k).1);
     }
     let negative = (0..n).filter(|&k| angles[k] < R::zero()).min_by(|&a, &b| {
         angles[a].partial_cmp(&angles[b]).unwrap_or(core::cmp::Ordering::Equal)
@@ -654,7 +662,7 @@ pub(super) fn solve<R: Real>(
     let mut worst: Option<(usize, R)> = negative.map(|k| (k, R::from_f64(1e30)));
     if worst.is_none() {
         for k in 0..n {
-            let v = (lo[k].tension - pt).max(pt - hi[k].tension);
+            let v = (range(k).0 - pt).max(pt - range(k).1);
             if v > slack && worst.map_or(true, |(_, w)| v > w) {
                 worst = Some((k, v));
             }
@@ -662,11 +670,13 @@ pub(super) fn solve<R: Real>(
     }
     if let Some((k, _)) = worst {
         let (cl0, cl_top) = (s0 / p.e, s_top / p.e);
+        // the range the ceiling allows, whichever end is the more compliant
+        let (c_hi, c_lo) = (g.compliance(angles[k], hi[k].tension, &hi[k].eq, cl0), g.compliance(angles[k], lo[k].tension, &lo[k].eq, cl_top));
         return Err(Error::Unreachable {
             joint: k + 1,
             needed: g.compliance(angles[k], pt, &hi[k].eq, cl0),
-            min: g.compliance(angles[k], hi[k].tension, &hi[k].eq, cl0),
-            max: g.compliance(angles[k], lo[k].tension, &lo[k].eq, cl_top),
+            min: if c_hi <= c_lo { c_hi } else { c_lo },
+            max: if c_hi <= c_lo { c_lo } else { c_hi },
         });
     }
     out.tension = pt;
