@@ -379,51 +379,21 @@ pub fn write_model_error(w: &mut dyn Write, e: &finger_model::Error) -> fmt::Res
     }
 }
 
+/// `Emit` (the console) and `Display` (host tests, against core's formatting) for a number
+/// format, both through its `write`.
+macro_rules! emit_and_display {
+    ($($t:ty),*) => {$(
+        impl Emit for $t {
+            fn emit(&self, o: &mut dyn Write) {
+                let _ = self.write(o);
+            }
+        }
 
-impl Emit for Fixed {
-    fn emit(&self, o: &mut dyn Write) {
-        let _ = self.write(o);
-    }
+        impl fmt::Display for $t {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                self.write(f)
+            }
+        }
+    )*};
 }
-
-impl fmt::Display for Fixed {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.write(f)
-    }
-}
-
-impl Emit for Short {
-    fn emit(&self, o: &mut dyn Write) {
-        let _ = self.write(o);
-    }
-}
-
-impl fmt::Display for Short {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.write(f)
-    }
-}
-
-impl Emit for Exp {
-    fn emit(&self, o: &mut dyn Write) {
-        let _ = self.write(o);
-    }
-}
-
-impl fmt::Display for Exp {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.write(f)
-    }
-}
-
-impl Emit for List<'_> {
-    fn emit(&self, o: &mut dyn Write) {
-        let _ = self.write(o);
-    }
-}
-
-impl fmt::Display for List<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.write(f)
-    }
-}
+emit_and_display!(Fixed, Short, Exp, List<'_>);

@@ -123,6 +123,17 @@ pub struct Rec {
     pub setup_instr: f64,
 }
 
+/// A bench image's `CAL <instructions> <ticks> <overhead>` line (a loop of known length):
+/// SysTick ticks per instruction and the timing overhead in ticks.
+pub fn calibration(f: &[&str]) -> Result<(f64, f64), String> {
+    let num = |i: usize| -> Result<f64, String> { f.get(i).and_then(|x| x.parse().ok()).ok_or_else(|| format!("bad CAL line: {f:?}")) };
+    let (n, t, overhead) = (num(1)?, num(2)?, num(3)?);
+    if !(t > 0.0 && t < 1e12) {
+        return Err(format!("calibration failed: {f:?}"));
+    }
+    Ok((t / n, overhead))
+}
+
 /// Parse a bench image's output: the `CAL` line gives ticks per instruction (a loop of known
 /// length) and the timing overhead, which is subtracted.
 pub fn parse(image: &Image, out: &str) -> Result<Vec<Rec>, String> {
@@ -134,13 +145,9 @@ pub fn parse(image: &Image, out: &str) -> Result<Vec<Rec>, String> {
         let f: Vec<&str> = line.split_whitespace().collect();
         match f.first() {
             Some(&"CAL") if f.len() == 4 => {
-                let n: f64 = f[1].parse().map_err(|_| "CAL")?;
-                let t: f64 = f[2].parse().map_err(|_| "CAL")?;
-                overhead = f[3].parse().map_err(|_| "CAL")?;
-                if !(t > 0.0 && t < 1e12) {
-                    return Err(format!("calibration failed: {line}"));
-                }
-                per_instr = Some(t / n);
+                let (k, o) = calibration(&f)?;
+                per_instr = Some(k);
+                overhead = o;
             }
             Some(&"R") if f.len() >= 8 => {
                 let k = per_instr.ok_or("R before CAL")?;
@@ -256,10 +263,9 @@ pub fn inverse_cost_table() -> String {
             let f: Vec<&str> = line.split_whitespace().collect();
             match f.first() {
                 Some(&"CAL") => {
-                    let n: f64 = f[1].parse().unwrap();
-                    let t: f64 = f[2].parse().unwrap();
-                    overhead = f[3].parse().unwrap();
-                    per_instr = Some(t / n);
+                    let (k, o) = calibration(&f).unwrap_or_else(|e| panic!("{e}"));
+                    per_instr = Some(k);
+                    overhead = o;
                 }
                 Some(&"I") => {
                     let k = per_instr.expect("I before CAL");

@@ -500,11 +500,13 @@ fn fast<R: Real>(
         }
     }
     if let Some((k, _)) = worst {
+        // the range the ceiling allows, whichever end is the more compliant
+        let (c_hi, c_lo) = (ctx.compliance(&ang[k], hi[k].tension, hi[k].wm, t0), ctx.compliance(&ang[k], lo[k].tension, lo[k].wm, t_top));
         return Err(Error::Unreachable {
             joint: k + 1,
             needed: ctx.compliance(&ang[k], pt, hi[k].wm, t0),
-            min: ctx.compliance(&ang[k], hi[k].tension, hi[k].wm, t0).min(ctx.compliance(&ang[k], lo[k].tension, lo[k].wm, t_top)),
-            max: ctx.compliance(&ang[k], hi[k].tension, hi[k].wm, t0).max(ctx.compliance(&ang[k], lo[k].tension, lo[k].wm, t_top)),
+            min: c_hi.min(c_lo),
+            max: c_hi.max(c_lo),
         });
     }
     out.tension = pt;
