@@ -464,42 +464,14 @@ fn fast<R: Real>(
             }
         }
     }
-    // 2. the feasible interval
-    // each joint's range of tensions, [min, max] of its two ends: thinning the stack
-    // usually softens the joint (the 0 V end needs the most tension), but where the stack's
-    // axial-bending coupling dominates (a small cable offset) it stiffens it, and the ends
-    // swap (found by the property test `inverse_of_a_reachable_posture_holds_it`)
-    let range = |k: usize| (lo[k].tension.min(hi[k].tension), lo[k].tension.max(hi[k].tension));
-    let mut p_lo = range(0).0;
-    let mut p_hi = range(0).1;
-    for k in 1..n {
-        p_lo = p_lo.max(range(k).0);
-        p_hi = p_hi.min(range(k).1);
-    }
-    out.interval = [p_lo, p_hi];
-    // 3. the tension
-    let pt = match tension {
-        Some(t) => t,
-        None if p_lo <= p_hi => (p_lo + p_hi) / R::from_f64(2.0),
-        None => {
-            // infeasible: the reference tension is the median of the joints' mid-range tensions
-            let mut mids = [R::zero(); MAX_JOINTS];
-            for k in 0..n {
-                mids[k] = (lo[k].tension + hi[k].tension) / R::from_f64(2.0);
-            }
-            median(&mut mids[..n])
-        }
-    };
-    // a given tension on an end of the interval (as printed by an earlier reply) is accepted
-    let slack = R::from_f64(1e-8_f64.max(256.0 * R::EPS)) * (pt.abs() + ctx.rel);
-    let mut worst: Option<(usize, R)> = None;
+    // 2-3. the feasible interval and the tension (`choose_tension`)
+    let mut ends = [[R::zero(); 2]; MAX_JOINTS];
     for k in 0..n {
-        let v = (range(k).0 - pt).max(pt - range(k).1);
-        if v > slack && worst.map_or(true, |(_, w)| v > w) {
-            worst = Some((k, v));
-        }
+        ends[k] = [lo[k].tension, hi[k].tension];
     }
-    if let Some((k, _)) = worst {
+    let (interval, pt, worst) = choose_tension(&ends[..n], tension, None, ctx.rel);
+    out.interval = interval;
+    if let Some(k) = worst {
         // the range the ceiling allows, whichever end is the more compliant
         let (c_hi, c_lo) = (ctx.compliance(&ang[k], hi[k].tension, hi[k].wm, t0), ctx.compliance(&ang[k], lo[k].tension, lo[k].wm, t_top));
         return Err(Error::Unreachable {
@@ -605,6 +577,49 @@ fn no_stacks<R: Real>(
     }
     out.tension = pt;
     Ok(out)
+}
+
+/// Steps 2-3, the same for both paths. `ends[k]`: joint k's tensions at the softest and the
+/// stiffest stack (top voltage, 0 V). Each joint's range is the [min, max] of its two ends:
+/// thinning the stack usually softens the joint (the 0 V end needs the most tension), but
+/// where the stack's axial-bending coupling dominates (a small cable offset) it stiffens it
+/// and the ends swap (found by the property test `inverse_of_a_reachable_posture_holds_it`).
+/// The feasible interval is the ranges' intersection; the tension the one `given`, else the
+/// interval's midpoint, else (infeasible, or `refuse` set) the median of the mid-range
+/// tensions. Returns the interval, the tension and the joint to report as unreachable: `refuse`,
+/// else the one furthest outside its range (a tension on an end, within a relative slack of
+/// max(1e-8, 256 eps), is accepted).
+fn choose_tension<R: Real>(ends: &[[R; 2]], given: Option<R>, refuse: Option<usize>, rel: R) -> ([R; 2], R, Option<usize>) {
+    let range = |e: &[R; 2]| (e[0].min(e[1]), e[0].max(e[1]));
+    let mut p_lo = range(&ends[0]).0;
+    let mut p_hi = range(&ends[0]).1;
+    for e in &ends[1..] {
+        p_lo = p_lo.max(range(e).0);
+        p_hi = p_hi.min(range(e).1);
+    }
+    let pt = match given {
+        Some(t) => t,
+        None if p_lo <= p_hi && refuse.is_none() => (p_lo + p_hi) / R::from_f64(2.0),
+        None => {
+            let mut mids = [R::zero(); MAX_JOINTS];
+            for (m, e) in mids.iter_mut().zip(ends) {
+                *m = (e[0] + e[1]) / R::from_f64(2.0);
+            }
+            median(&mut mids[..ends.len()])
+        }
+    };
+    if refuse.is_some() {
+        return ([p_lo, p_hi], pt, refuse);
+    }
+    let slack = R::from_f64(1e-8_f64.max(256.0 * R::EPS)) * (pt.abs() + rel);
+    let mut worst: Option<(usize, R)> = None;
+    for (k, e) in ends.iter().enumerate() {
+        let v = (range(e).0 - pt).max(pt - range(e).1);
+        if v > slack && worst.map_or(true, |(_, w)| v > w) {
+            worst = Some((k, v));
+        }
+    }
+    ([p_lo, p_hi], pt, worst.map(|(k, _)| k))
 }
 
 /// Median of a short slice (sorted in place; insertion sort, no allocation).

@@ -22,7 +22,7 @@
 //! Steps 2-3 (the interval, the tension rule, the unreachable report) are the parent's, with
 //! the same meaning for every m.
 
-use super::{median, Options, PoseSolution};
+use super::{choose_tension, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
 use crate::finger::{uniform_beam_compliance, Finger, JointEquilibrium, JointMarch, Pose};
@@ -630,45 +630,18 @@ pub(super) fn solve<R: Real>(
         let hint = Some((hi[k].tension * s0 / s_top, hi[k].eq.hole));
         lo[k] = g.hold_tension(k + 1, angles[k], &c_top, t_top, s_top, hint, hi[k].jac)?;
     }
-    // 2. the feasible interval; a negative angle is outside every tension's reach
-    // each joint's range of tensions, [min, max] of its two ends: thinning the stack
-    // usually softens the joint (the 0 V end needs the most tension), but where the stack's
-    // axial-bending coupling dominates (a small cable offset) it stiffens it, and the ends
-    // swap (found by the property test `inverse_of_a_reachable_posture_holds_it`)
-    let range = |k: usize| (lo[k].tension.min(hi[k].tension), lo[k].tension.max(hi[k].tension));
-    let mut p_lo = range(0).0;
-    let mut p_hi = range(0).1;
-    for k in 1..n {
-        p_lo = p_lo.max(range(k).0);
-        p_hi = p_hi.min(range(k).1);
-    }
+    // 2-3. the feasible interval and the tension (`choose_tension`); a negative angle is
+    //      outside every tension's reach
     let negative = (0..n).filter(|&k| angles[k] < R::zero()).min_by(|&a, &b| {
         angles[a].partial_cmp(&angles[b]).unwrap_or(core::cmp::Ordering::Equal)
     });
-    out.interval = [p_lo, p_hi];
-    // 3. the tension
-    let pt = match tension {
-        Some(t) => t,
-        None if p_lo <= p_hi && negative.is_none() => (p_lo + p_hi) / R::from_f64(2.0),
-        None => {
-            let mut mids = [R::zero(); MAX_JOINTS];
-            for k in 0..n {
-                mids[k] = (lo[k].tension + hi[k].tension) / R::from_f64(2.0);
-            }
-            median(&mut mids[..n])
-        }
-    };
-    let slack = R::from_f64(1e-8_f64.max(256.0 * R::EPS)) * (pt.abs() + g.rel);
-    let mut worst: Option<(usize, R)> = negative.map(|k| (k, R::from_f64(1e30)));
-    if worst.is_none() {
-        for k in 0..n {
-            let v = (range(k).0 - pt).max(pt - range(k).1);
-            if v > slack && worst.map_or(true, |(_, w)| v > w) {
-                worst = Some((k, v));
-            }
-        }
+    let mut ends = [[R::zero(); 2]; MAX_JOINTS];
+    for k in 0..n {
+        ends[k] = [lo[k].tension, hi[k].tension];
     }
-    if let Some((k, _)) = worst {
+    let (interval, pt, worst) = choose_tension(&ends[..n], tension, negative, g.rel);
+    out.interval = interval;
+    if let Some(k) = worst {
         let (cl0, cl_top) = (s0 / p.e, s_top / p.e);
         // the range the ceiling allows, whichever end is the more compliant
         let (c_hi, c_lo) = (g.compliance(angles[k], hi[k].tension, &hi[k].eq, cl0), g.compliance(angles[k], lo[k].tension, &lo[k].eq, cl_top));
