@@ -185,6 +185,11 @@ pub struct App<B: Board> {
     /// times it was computed.
     fmax_cache: Cell<Option<([f32; CHANNELS], Result<BranchLimit<f32>, ModelError>)>>,
     fmax_computed: Cell<u32>,
+    /// The inverse's branch table for the current model (`pose`), built at the first `pose`
+    /// after a model change (~0.85 M instructions for the default model, about 5 ms at
+    /// 168 MHz) and cleared by [`App::set_finger`]. None also for a finger without stacks.
+    #[cfg(feature = "pose")]
+    inv_table: Option<finger_model::inverse::BranchTable<f32>>,
 }
 
 impl<B: Board> App<B> {
@@ -222,6 +227,8 @@ impl<B: Board> App<B> {
             now_ms: 0,
             fmax_cache: Cell::new(None),
             fmax_computed: Cell::new(0),
+            #[cfg(feature = "pose")]
+            inv_table: None,
         };
         app.hv_off_now();
         app.recompute();
@@ -394,6 +401,10 @@ impl<B: Board> App<B> {
     fn set_finger(&mut self, f: Finger<f32>) {
         self.finger = f;
         self.fmax_cache.set(None);
+        #[cfg(feature = "pose")]
+        {
+            self.inv_table = None;
+        }
     }
 
     /// The checks every setpoint change passes (`volt`, `force`, an armed `pose`), after
@@ -787,23 +798,26 @@ impl<B: Board> App<B> {
         if args.len() != 3 && args.len() != 4 {
             return Err(err!("usage"; "pose <d1> <d2> <d3> [<P>]"));
         }
-        let mut deg = [0.0f64; CHANNELS]; // inverse_cmds takes f64 (converted back to f32 there, no f64 arithmetic)
+        let mut deg = [0.0f32; CHANNELS];
         for ch in 0..CHANNELS {
             let d = number(args[ch], "angle")?;
             if !(d.abs() <= 360.0) {
                 return Err(err!("usage"; "pose: joint angles are degrees, |d| <= 360"));
             }
-            deg[ch] = d.into();
+            deg[ch] = d;
         }
         let p = match args.get(3) {
-            Some(t) => Some(tension(number(t, "P")?)?.into()),
+            Some(t) => Some(tension(number(t, "P")?)?),
             None => None,
         };
+        if self.inv_table.is_none() && self.finger.params().layers > 0 {
+            self.inv_table = finger_model::inverse::BranchTable::new(&self.finger, &Default::default()).ok();
+        }
         let armed = self.armed;
         let mut plan = None;
         let mut line: String<240> = String::new();
         let this = &*self;
-        let _ = crate::inverse_cmds::pose(&mut line, &this.finger, &deg, p, |t, v| {
+        let _ = crate::inverse_cmds::pose(&mut line, &this.finger, this.inv_table.as_ref(), &deg, p, |t, v| {
             if !armed {
                 return Ok(());
             }
@@ -841,9 +855,8 @@ impl<B: Board> App<B> {
         }
         self.check_volts(&v)?;
         let mut line: String<240> = String::new();
-        let vf = v.map(f64::from);
-        let volts: &[f64] = if args.len() > 2 { &vf } else { &[] };
-        let _ = crate::inverse_cmds::contact(&mut line, &self.finger, p0.into(), p.into(), volts);
+        let volts: &[f32] = if args.len() > 2 { &v } else { &[] };
+        let _ = crate::inverse_cmds::contact(&mut line, &self.finger, p0, p, volts);
         let _ = w!(out; line, self.board.newline());
         Ok(())
     }

@@ -23,13 +23,15 @@ use core::fmt::{self, Write};
 #[cfg(feature = "contact")]
 use finger_model::inverse::contact_force;
 #[cfg(feature = "pose")]
-use finger_model::inverse::solve_pose;
+use finger_model::inverse::{solve_pose_with_table, BranchTable, Options};
 use finger_model::{Error, Finger, Real, MAX_JOINTS};
 
 #[cfg(feature = "pose")]
 use crate::app::CmdError;
 use crate::num::{write_model_error, Fixed};
 
+/// Arguments come as f32 (the console's numbers); `R::from_f64(f64::from(x))` folds to x for
+/// R = f32 (no f64 conversion code is linked).
 /// `x` as f32 for printing (for R = f32 the round trip through f64 folds away: no f64
 /// arithmetic is linked).
 fn f32_of<R: Real>(x: R) -> f32 {
@@ -55,15 +57,18 @@ fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f32>, prec: usize) 
 }
 
 #[cfg(feature = "pose")]
-/// `pose <d1> .. <dn> [<P>]`. `degrees`: the joint angles as parsed (one per joint);
+#[inline(never)]
+/// `pose <d1> .. <dn> [<P>]`. `table`: the finger's branch table (built for `finger` and the
+/// default options; None solves without it). `degrees`: the joint angles as parsed (one per joint);
 /// `tension`: the optional fourth argument. `apply(tension, volts)` moves the outputs (or,
 /// disarmed, nothing) or refuses with a console error.
 /// Returns whether the command succeeded (and `apply` was called and accepted).
 pub fn pose<R, W, F>(
     out: &mut W,
     finger: &Finger<R>,
-    degrees: &[f64],
-    tension: Option<f64>,
+    table: Option<&BranchTable<R>>,
+    degrees: &[f32],
+    tension: Option<f32>,
     apply: F,
 ) -> Result<bool, fmt::Error>
 where
@@ -82,9 +87,9 @@ where
             w!(out; "err bad-number: angle is not a finite number")?;
             return Ok(false);
         }
-        *a = R::from_f64(d) * R::from_f64(core::f64::consts::PI / 180.0);
+        *a = R::from_f64(f64::from(d)) * R::from_f64(core::f64::consts::PI / 180.0);
     }
-    let sol = match solve_pose(finger, &angles[..n], tension.map(R::from_f64)) {
+    let sol = match solve_pose_with_table(finger, table, &angles[..n], tension.map(|t| R::from_f64(f64::from(t))), &Options::default()) {
         Ok(s) => s,
         Err(e) => {
             write_err(out, &e)?;
@@ -106,7 +111,7 @@ where
 
 #[cfg(feature = "contact")]
 /// `contact <P0> <P> [<V1> .. <Vn>]`: model only. `volts` empty (0 V) or one per joint.
-pub fn contact<R, W>(out: &mut W, finger: &Finger<R>, p0: f64, p: f64, volts: &[f64]) -> Result<bool, fmt::Error>
+pub fn contact<R, W>(out: &mut W, finger: &Finger<R>, p0: f32, p: f32, volts: &[f32]) -> Result<bool, fmt::Error>
 where
     R: Real,
     W: Write,
@@ -123,9 +128,9 @@ where
     let zero = [R::zero(); MAX_JOINTS];
     let mut v = [R::zero(); MAX_JOINTS];
     for (x, &y) in v.iter_mut().zip(volts) {
-        *x = R::from_f64(y);
+        *x = R::from_f64(f64::from(y));
     }
-    match contact_force(finger, R::from_f64(p0), &zero[..n], R::from_f64(p), &v[..n]) {
+    match contact_force(finger, R::from_f64(f64::from(p0)), &zero[..n], R::from_f64(f64::from(p)), &v[..n]) {
         Ok(c) => {
             // the finger presses on the object with minus the object's force on the tip
             let (fx, fy) = (f32_of(-c.force[0]), f32_of(-c.force[1]));

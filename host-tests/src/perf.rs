@@ -248,9 +248,11 @@ pub fn inverse_cost_table() -> String {
         ("libm, fast path", "de,inverse-fast"),
         ("fast-trig, fast path", "de,inverse-fast,fast-trig"),
         ("libm, general path", "de"),
-        ("fast-trig, general path (the firmware)", "de,fast-trig"),
+        ("fast-trig, general path", "de,fast-trig"),
+        ("fast-trig, general path, branch table (the firmware)", "de,fast-trig,table"),
     ];
     let mut rows: Vec<(String, Vec<(String, String)>)> = Vec::new();
+    let mut table_builds: Vec<String> = Vec::new();
     for (label, features) in variants {
         let name = format!("inverse-{}", features.replace(',', "-"));
         let elf = build("inverse", M4F, features, &name).unwrap_or_else(|e| panic!("{e}"));
@@ -259,6 +261,7 @@ pub fn inverse_cost_table() -> String {
         let mut overhead = 0.0;
         let mut cells = Vec::new();
         let mut ended = false;
+        let mut builds: Vec<String> = Vec::new();
         for line in out.lines() {
             let f: Vec<&str> = line.split_whitespace().collect();
             match f.first() {
@@ -280,12 +283,20 @@ pub fn inverse_cost_table() -> String {
                     };
                     cells.push((f[1].to_string(), cell));
                 }
+                Some(&"T") => {
+                    let k = per_instr.expect("T before CAL");
+                    let ticks: f64 = f[2].parse().unwrap();
+                    builds.push(format!("{} {:.0} instructions ({} samples per branch)", f[1], ((ticks - overhead).max(0.0) / k).round(), f[3]));
+                }
                 Some(&"END") => ended = true,
                 Some(&"PANIC") => panic!("image panicked: {line}"),
                 _ => {}
             }
         }
         assert!(ended, "image did not finish:\n{out}");
+        if !builds.is_empty() {
+            table_builds = builds;
+        }
         rows.push((label.to_string(), cells));
     }
     let mut doc = String::new();
@@ -302,6 +313,15 @@ pub fn inverse_cost_table() -> String {
             write!(doc, " {} |", cells.get(i).map(|c| c.1.as_str()).unwrap_or("-")).unwrap();
         }
         writeln!(doc).unwrap();
+    }
+    if !table_builds.is_empty() {
+        writeln!(doc).unwrap();
+        writeln!(
+            doc,
+            "Building the branch table (`inverse::BranchTable::new`, once per parameter set; the firmware at the first `pose` after a change), same image: {}.",
+            table_builds.join("; ")
+        )
+        .unwrap();
     }
     doc
 }

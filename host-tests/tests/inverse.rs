@@ -402,3 +402,97 @@ fn cost_entry_point_is_generic_over_the_scalar() {
     let inv = inverse::solve_pose(&f, s.joint_angles(), None).unwrap();
     assert!(inv.iterations > 0 && inv.tension > 0.9 && inv.tension < 1.1);
 }
+
+/// The branch table (model inverse/table.rs) changes where the general path's solves start,
+/// not what they return: over the round-trip grid, for every general-path hinge model of both
+/// presets, the tabled inverse returns the untabled one's tension and interval (1e-9 relative),
+/// its voltages hold the angles in a forward solve (1e-9 rad), and it refuses what the untabled
+/// one refuses, naming the same joint.
+#[test]
+fn branch_table_gives_the_untabled_answers() {
+    let opts = Options::default();
+    for params in variants::<f64>().into_iter().filter(|p| p.m > 1 || p.flex_links) {
+        let f = Finger::new(params).unwrap();
+        let table = inverse::BranchTable::new(&f, &opts).unwrap();
+        let mut postures: Vec<Vec<f64>> = grid(&f, &[0.2, 1.0, 4.0]).into_iter().map(|g| g.2).collect();
+        postures.push(vec![0.3, 0.2, 0.05]);
+        postures.push(vec![0.1, 0.9, 0.1]);
+        for angles in postures {
+            let a = solve_pose(&f, &angles, None);
+            let b = inverse::solve_pose_with_table(&f, Some(&table), &angles, None, &opts);
+            match (a, b) {
+                (Ok(a), Ok(b)) => {
+                    let rel = |x: f64, y: f64| (x - y).abs() / y.abs().max(1e-9);
+                    assert!(rel(b.tension, a.tension) < 1e-9, "{}: {angles:?}: P {} vs {}", label(&params), b.tension, a.tension);
+                    for e in 0..2 {
+                        assert!(rel(b.interval[e], a.interval[e]) < 1e-9, "{}: {angles:?}: {:?} vs {:?}", label(&params), b.interval, a.interval);
+                    }
+                    let back = f.solve(b.tension, &b.volts[..3], Method::converged()).unwrap();
+                    for k in 0..3 {
+                        assert!((back.joint_angle[k] - angles[k]).abs() < 1e-9, "{}: {angles:?} joint {k}", label(&params));
+                    }
+                }
+                (Err(Error::Unreachable { joint: ja, .. }), Err(Error::Unreachable { joint: jb, .. })) => assert_eq!(ja, jb),
+                (a, b) => panic!("{}: {angles:?}: untabled {a:?}, tabled {b:?}", label(&params)),
+            }
+        }
+    }
+}
+
+/// In f32 (the firmware) the tabled inverse holds the default model's grid postures within
+/// the f32 round-trip tolerance, and its interval agrees with the untabled one's.
+#[test]
+fn branch_table_round_trip_f32() {
+    let opts = Options::default();
+    let f = Finger::new(Params::<f32>::default()).unwrap();
+    let table = inverse::BranchTable::new(&f, &opts).unwrap();
+    for (p, _v, angles) in grid(&f, &[0.2, 0.5, 1.0, 2.0, 4.0]) {
+        let s = inverse::solve_pose_with_table(&f, Some(&table), &angles, None, &opts).unwrap();
+        let u = solve_pose(&f, &angles, None).unwrap();
+        assert!(s.interval[0] <= p as f32 * 1.001 && p as f32 <= s.interval[1] * 1.001, "P={p} outside {:?}", s.interval);
+        assert!((s.tension - u.tension).abs() <= 1e-4 * u.tension, "{} vs {}", s.tension, u.tension);
+        let back = f.solve(s.tension, &s.volts[..3], Method::converged()).unwrap();
+        for k in 0..3 {
+            assert!((back.joint_angle[k] - angles[k]).abs() < 2e-5, "P={p} joint {k}");
+        }
+    }
+}
+
+/// The table's interpolation (a cubic through four samples, 1.5° apart) reads a stack end's
+/// tension off to better than 1e-5 relative (far inside the band `TABLE_BAND` = 1e-3 within
+/// which the inverse solves an end instead of trusting it): checked against the untabled
+/// inverse's interval ends (solved) at angles between the samples.
+#[test]
+fn branch_table_interpolation_error() {
+    let opts = Options::default();
+    let f = Finger::new(Params::<f64>::default()).unwrap();
+    let table = inverse::BranchTable::new(&f, &opts).unwrap();
+    assert_eq!(table.len(), [inverse::TABLE_LEN; 3], "the default model's branches reach the table's end");
+    let mut worst: f64 = 0.0;
+    for i in 1..80 {
+        let theta = (0.7 + 0.999 * i as f64) * std::f64::consts::PI / 180.0;
+        let Some(t) = table.tensions(theta) else { continue };
+        let s = solve_pose(&f, &[theta; 3], None).unwrap();
+        let (lo, hi) = (s.interval[0], s.interval[1]);
+        worst = worst.max(((t[0] - lo) / lo).abs()).max(((t[1] - hi) / hi).abs());
+    }
+    assert!(worst < 1e-5, "table error {worst:e}");
+    assert!(worst < inverse::TABLE_BAND / 100.0);
+}
+
+/// A table built for other parameters (or another `top`) is refused, and nothing is solved.
+#[test]
+fn branch_table_of_other_parameters_is_refused() {
+    let opts = Options::default();
+    let f = Finger::new(Params::<f64>::default()).unwrap();
+    let other = Finger::new(Params::<f64> { l: 28.0, ..Params::default() }).unwrap();
+    let table = inverse::BranchTable::new(&other, &opts).unwrap();
+    let r = inverse::solve_pose_with_table(&f, Some(&table), &[0.1; 3], None, &opts);
+    assert!(matches!(r, Err(Error::Input { input: "table", .. })), "{r:?}");
+    let top = Options { top: 0.9, ..opts };
+    let table = inverse::BranchTable::new(&f, &top).unwrap();
+    assert!(matches!(inverse::solve_pose_with_table(&f, Some(&table), &[0.1; 3], None, &opts), Err(Error::Input { .. })));
+    // a finger without stacks has no table
+    let bare = Finger::new(Params::<f64> { layers: 0, ..Params::default() }).unwrap();
+    assert!(inverse::BranchTable::new(&bare, &opts).is_err());
+}

@@ -20,10 +20,10 @@ fn kv(reply: &str, key: &str) -> Vec<f64> {
 fn pose_replies_and_applies_once() {
     let f = Finger::new(Params::<f32>::default()).unwrap();
     let s = f.solve(1.0, &[2000.0, 5000.0, 8000.0], Method::converged()).unwrap();
-    let deg: Vec<f64> = s.joint_angles().iter().map(|a| (*a as f64).to_degrees()).collect();
+    let deg: Vec<f32> = s.joint_angles().iter().map(|a| a.to_degrees()).collect();
     let mut out = String::new();
     let mut applied = None;
-    let ok = inverse_cmds::pose(&mut out, &f, &deg, None, |p, v| {
+    let ok = inverse_cmds::pose(&mut out, &f, None, &deg, None, |p, v| {
         applied = Some((p, v.to_vec()));
         Ok(())
     })
@@ -36,7 +36,7 @@ fn pose_replies_and_applies_once() {
     assert_eq!(volts.len(), 3);
     assert!(range[0] <= force && force <= range[1]);
     for k in 0..3 {
-        assert!((joints[k] - deg[k]).abs() < 1e-3);
+        assert!((joints[k] - deg[k] as f64).abs() < 1e-3);
     }
     let (p, v) = applied.expect("apply called");
     assert!((p as f64 - force).abs() < 1e-3 && (v[1] as f64 - volts[1]).abs() < 1.0);
@@ -44,7 +44,7 @@ fn pose_replies_and_applies_once() {
     let vv: Vec<f32> = volts.iter().map(|&x| x as f32).collect();
     let back = f.solve(force as f32, &vv, Method::converged()).unwrap();
     for k in 0..3 {
-        assert!(((back.joint_angle[k] as f64).to_degrees() - deg[k]).abs() < 0.01);
+        assert!((back.joint_angle[k].to_degrees() - deg[k]).abs() < 0.01);
     }
 }
 
@@ -53,7 +53,7 @@ fn pose_unreachable_or_refused_moves_nothing() {
     let f = Finger::new(Params::<f32>::default()).unwrap();
     let mut out = String::new();
     let mut called = false;
-    let ok = inverse_cmds::pose(&mut out, &f, &[20.0, 5.0, 5.0], None, |_, _| {
+    let ok = inverse_cmds::pose(&mut out, &f, None, &[20.0, 5.0, 5.0], None, |_, _| {
         called = true;
         Ok(())
     })
@@ -62,16 +62,16 @@ fn pose_unreachable_or_refused_moves_nothing() {
     assert!(out.starts_with("err unreachable: joint 1"), "{out}");
     // wrong number of angles
     out.clear();
-    assert!(!inverse_cmds::pose(&mut out, &f, &[5.0, 5.0], None, |_, _| panic!("moved")).unwrap());
+    assert!(!inverse_cmds::pose(&mut out, &f, None, &[5.0, 5.0], None, |_, _| panic!("moved")).unwrap());
     assert!(out.starts_with("err usage:"), "{out}");
     // the dispatcher's apply refuses (e.g. a force limit): its error is the reply
     out.clear();
-    let ok = inverse_cmds::pose(&mut out, &f, &[5.0, 5.0, 5.0], None, |_, _| Err(CmdError::new("limit", "force past fmax"))).unwrap();
+    let ok = inverse_cmds::pose(&mut out, &f, None, &[5.0, 5.0, 5.0], None, |_, _| Err(CmdError::new("limit", "force past fmax"))).unwrap();
     assert!(!ok);
     assert_eq!(out, "err limit: force past fmax");
     // a negative tension
     out.clear();
-    assert!(!inverse_cmds::pose(&mut out, &f, &[5.0, 5.0, 5.0], Some(-1.0), |_, _| panic!("moved")).unwrap());
+    assert!(!inverse_cmds::pose(&mut out, &f, None, &[5.0, 5.0, 5.0], Some(-1.0), |_, _| panic!("moved")).unwrap());
     assert!(out.starts_with("err usage:"), "{out}");
 }
 
@@ -146,7 +146,10 @@ mod console {
         // ill-conditioned in the angle (1 ulp of angle moves them ~0.1 V at a 1 % stiffness
         // range), so the comparison needs the same input, not a nearby one
         let rad = deg.map(|d| (d as f32) * (std::f64::consts::PI / 180.0) as f32);
-        let want = finger_model::solve_pose(a.finger(), &rad, None).unwrap();
+        // the firmware solves with the finger's branch table (built at the first `pose`)
+        let opts = finger_model::inverse::Options::default();
+        let table = finger_model::inverse::BranchTable::new(a.finger(), &opts).unwrap();
+        let want = finger_model::inverse::solve_pose_with_table(a.finger(), Some(&table), &rad, None, &opts).unwrap();
         // disarmed: the answer, nothing moves
         let before = outputs(&mut a);
         let r = cmd(&mut a, &format!("pose {angles}"));

@@ -184,7 +184,11 @@ fn qemu_console_commands_and_bad_inputs() {
     let f = finger_model::Finger::new(finger_model::Params::<f32>::default()).unwrap();
     let s = f.solve(0.8, &[1000.0, 3000.0, 5000.0], finger_model::Method::converged()).unwrap();
     let deg = [0, 1, 2].map(|k| format!("{:.6}", (s.joint_angle[k] as f64).to_degrees()).parse::<f64>().unwrap());
-    let want = finger_model::solve_pose(&f, &deg.map(|d| (d * std::f64::consts::PI / 180.0) as f32), None).unwrap();
+    // the firmware solves with the finger's branch table
+    let opts = finger_model::inverse::Options::default();
+    let table = finger_model::inverse::BranchTable::new(&f, &opts).unwrap();
+    let rad = deg.map(|d| (d * std::f64::consts::PI / 180.0) as f32);
+    let want = finger_model::inverse::solve_pose_with_table(&f, Some(&table), &rad, None, &opts).unwrap();
     let r = expect(&mut q, &format!("pose {} {} {}", deg[0], deg[1], deg[2]), "ok force=");
     let force: f64 = r.split_whitespace().find_map(|w| w.strip_prefix("force=")).unwrap().parse().unwrap();
     assert!((force - want.tension as f64).abs() < 2e-3, "{r} vs {want:?}");

@@ -599,8 +599,22 @@ impl<R: Real> Finger<R> {
         // the arithmetic is `march_t`'s in R (one copy of the march in the image; the test
         // `march_t_matches_march` keeps the two entry points bit-equal)
         let mut q = [[R::zero(); 3]; MAX_SUB];
-        let (end, hole) = self.march_t::<R>(c, tension, b_hole, tip, &mut q, |x| x)?;
+        let (end, hole) = self.march_into(c, tension, b_hole, tip, &mut q)?;
         Ok(JointState { q, end, hole, tangent: None })
+    }
+
+    /// `march_t` in R: the one plain march in the image (`march` and `joint_march` share it;
+    /// issue 3: flash).
+    #[inline(never)]
+    fn march_into(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b_hole: [R; 2],
+        tip: Option<TipLoad<R>>,
+        q: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<(Pose<R>, [R; 2]), MarchError> {
+        self.march_t::<R>(c, tension, b_hole, tip, q, |x| x)
     }
 
     /// Residual of the hole guess: guess - arrived.
@@ -1155,12 +1169,17 @@ impl<R: Real> Finger<R> {
         b: [R; 2],
         q: &mut [[R; 3]; MAX_SUB],
     ) -> Result<JointMarch<R>, Error> {
-        let (end, hole) = self.march_t::<R>(c, tension, b, None, q, |x| x).map_err(|e| match e {
+        let (end, hole) = self.march_into(c, tension, b, None, q).map_err(|e| match e {
             MarchError::Contact => Error::Contact { joint, tension: tension.to_f64() },
             MarchError::Singular => Error::Singular { what: "joint march" },
         })?;
         let link = self.link_q(tension, &end, None);
         Ok(JointMarch { end, hole, link, angle: end.theta + link[2] })
+    }
+
+    /// Hinge sub-element j's stiffness (the inverse of its compliance, computed in `new`).
+    pub(crate) fn hinge_stiffness(&self, j: usize) -> &Mat3<R> {
+        &self.hinge_k[j]
     }
 
     /// The finest hole-position residual the scalar type can resolve, mm (crate-visible).

@@ -78,6 +78,9 @@ use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
 mod general;
+mod table;
+
+pub use table::{BranchTable, TABLE_BAND, TABLE_LEN, TABLE_STEP_DEG};
 
 /// Tuning of the inverse solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -363,6 +366,31 @@ pub fn solve_pose_with<R: Real>(
     tension: Option<R>,
     opts: &Options<R>,
 ) -> Result<PoseSolution<R>, Error> {
+    solve_pose_with_table(f, None, angles, tension, opts)
+}
+
+/// The options' own checks.
+fn check_options<R: Real>(opts: &Options<R>) -> Result<(), Error> {
+    if !(opts.top.is_finite() && opts.top > R::zero() && opts.top < R::one()) {
+        return Err(Error::Input { input: "top", reason: "fraction of the ceiling in (0, 1)" });
+    }
+    if !(opts.angle_tol.is_finite() && opts.angle_tol > R::zero()) {
+        return Err(Error::Input { input: "angle_tol", reason: "must be positive" });
+    }
+    Ok(())
+}
+
+/// `solve_pose_with` using the finger's branch table (table.rs), built for the same parameters
+/// and `opts.top` (else `Error::Input`): step 1's tension ranges are read off the table and
+/// only the ends that bound the feasible interval are solved. The same answers to the same
+/// tolerance, at a fraction of the cost (issue 4). The m = 1 fast path does not use it.
+pub fn solve_pose_with_table<R: Real>(
+    f: &Finger<R>,
+    table: Option<&BranchTable<R>>,
+    angles: &[R],
+    tension: Option<R>,
+    opts: &Options<R>,
+) -> Result<PoseSolution<R>, Error> {
     let p = f.params();
     let n = p.n;
     if angles.len() != n {
@@ -379,11 +407,11 @@ pub fn solve_pose_with<R: Real>(
             return Err(Error::Input { input: "tension", reason: "a cable cannot push: tension must be >= 0" });
         }
     }
-    if !(opts.top.is_finite() && opts.top > R::zero() && opts.top < R::one()) {
-        return Err(Error::Input { input: "top", reason: "fraction of the ceiling in (0, 1)" });
-    }
-    if !(opts.angle_tol.is_finite() && opts.angle_tol > R::zero()) {
-        return Err(Error::Input { input: "angle_tol", reason: "must be positive" });
+    check_options(opts)?;
+    if let Some(tb) = table {
+        if !tb.fits(p, opts) {
+            return Err(Error::Input { input: "table", reason: "built for another parameter set or top" });
+        }
     }
     let mut out = PoseSolution {
         n,
@@ -405,7 +433,8 @@ pub fn solve_pose_with<R: Real>(
         // per-joint equilibrium (`general`). A build without `inverse-fast` (the firmware,
         // whose default model is m = 8) takes this path for m = 1 too and leaves the fast
         // path's code out of the image.
-        return general::solve(f, angles, tension, opts, out);
+        general::solve(f, table, angles, tension, opts, &mut out)?;
+        return Ok(out);
     }
     let ctx = Ctx::new(f, opts)?;
     let mut ang = [Angle { theta: R::zero(), s: R::zero(), c: R::one() }; MAX_JOINTS];

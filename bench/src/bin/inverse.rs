@@ -10,7 +10,7 @@
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use finger_model::inverse::solve_pose;
+use finger_model::inverse::{solve_pose_with_table, BranchTable, Options};
 use finger_model::{Finger, Params};
 
 #[path = "../cycles.rs"]
@@ -25,6 +25,16 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 
 const DEG: f32 = core::f32::consts::PI / 180.0;
 
+/// The branch table of `f` when the image is built with the `table` feature (its build is
+/// not part of a solve's count; `T` lines report it once per model).
+fn table(f: &Finger<f32>) -> Option<BranchTable<f32>> {
+    if cfg!(feature = "table") {
+        BranchTable::new(f, &Options::default()).ok()
+    } else {
+        None
+    }
+}
+
 fn run(name: &str, p: Params<f32>, deg: [f32; 3], tension: Option<f32>) {
     let f = match Finger::new(p) {
         Ok(f) => f,
@@ -33,9 +43,10 @@ fn run(name: &str, p: Params<f32>, deg: [f32; 3], tension: Option<f32>) {
             return;
         }
     };
+    let tb = table(&f);
     let angles = core::hint::black_box([deg[0] * DEG, deg[1] * DEG, deg[2] * DEG]);
     let t0 = cycles::now();
-    let r = solve_pose(&f, &angles, core::hint::black_box(tension));
+    let r = solve_pose_with_table(&f, tb.as_ref(), &angles, core::hint::black_box(tension), &Options::default());
     let t1 = cycles::now();
     match core::hint::black_box(r) {
         Ok(s) => hprintln!("I {} ok {} {} {} {} {}", name, t1 - t0, s.tension, s.volts[0], s.volts[1], s.volts[2]),
@@ -43,6 +54,39 @@ fn run(name: &str, p: Params<f32>, deg: [f32; 3], tension: Option<f32>) {
     }
 }
 
+/// Profiling markers (`--features profile`): the execution trace between the two calls is one
+/// solve (`cargo run --release --example inverse_profile` in host-tests).
+#[inline(never)]
+#[no_mangle]
+pub extern "C" fn profile_start() {
+    core::hint::black_box(());
+}
+#[inline(never)]
+#[no_mangle]
+pub extern "C" fn profile_stop() {
+    core::hint::black_box(());
+}
+
+#[cfg(feature = "profile")]
+#[entry]
+fn main() -> ! {
+    let p = Params::<f32> { m: 8, plate: true, flex_links: true, ..Params::default() };
+    let f = Finger::new(p).unwrap();
+    let tb = table(&f);
+    let deg = core::hint::black_box([10.03f32, 10.0, 9.97]);
+    let angles = [deg[0] * DEG, deg[1] * DEG, deg[2] * DEG];
+    profile_start();
+    let r = solve_pose_with_table(&f, tb.as_ref(), &angles, core::hint::black_box(None), &Options::default());
+    profile_stop();
+    match core::hint::black_box(r) {
+        Ok(s) => hprintln!("P ok {} {} {} {}", s.tension, s.volts[0], s.volts[1], s.volts[2]),
+        Err(e) => hprintln!("P err {}", e.code()),
+    }
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {}
+}
+
+#[cfg(not(feature = "profile"))]
 #[entry]
 fn main() -> ! {
     let cp = cortex_m::Peripherals::take().unwrap();
@@ -52,6 +96,18 @@ fn main() -> ! {
     let paper = Params::<f32> { m: 1, plate: false, flex_links: false, ..Params::default() };
     let real = Params::<f32> { m: 8, plate: true, flex_links: true, ..Params::default() };
     for (cfg, p) in [("m1-rigid", paper), ("m8-plate-flex", real)] {
+        // the branch table's build, once per model
+        if cfg!(feature = "table") {
+            if let Ok(f) = Finger::new(p) {
+                let t0 = cycles::now();
+                let r = BranchTable::new(&f, &Options::default());
+                let t1 = cycles::now();
+                if let Ok(tb) = core::hint::black_box(r) {
+                    let len = tb.len();
+                    hprintln!("T {} {} {} {} {}", cfg, t1 - t0, len[0], len[1], len[2]);
+                }
+            }
+        }
         for (case, deg) in [
             ("10-10-10", [10.0, 10.0, 10.0]),
             ("10.03-10-9.97", [10.03, 10.0, 9.97]),

@@ -22,6 +22,7 @@
 //! Steps 2-3 (the interval, the tension rule, the unreachable report) are the parent's, with
 //! the same meaning for every m.
 
+use super::table::{BranchTable, TableEnd, TABLE_BAND};
 use super::{choose_tension, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
@@ -40,21 +41,24 @@ struct Pt<R> {
 
 /// A joint held at its target angle.
 #[derive(Clone, Copy)]
-struct Held<R> {
-    tension: R,
+pub(super) struct Held<R> {
+    pub(super) tension: R,
     thickness: R,
-    eq: JointEquilibrium<R>,
+    /// The joint's state (the sub-element displacements go to the caller's buffer).
+    pub(super) st: JointMarch<R>,
     /// dθ/dP at the solution (secant estimate), rad/N.
-    slope: R,
+    pub(super) slope: R,
     /// The quasi-Newton solve's last Jacobian in (b, P) or (b, t), when it converged.
-    jac: Option<Mat3<R>>,
+    pub(super) jac: Option<Mat3<R>>,
+    /// Whether `st` is a solved state; a tension end read off the `BranchTable` has only its
+    /// hole (and `tension`, `slope`) until it is verified.
+    exact: bool,
 }
 
 /// What the root finds need, prepared once per solve.
-struct Gen<'a, R> {
+pub(super) struct Gen<'a, R> {
     f: &'a Finger<R>,
     p: &'a Params<R>,
-    hinge_k: [Mat3<R>; MAX_SUB],
     sub_len: R,
     /// The link's linear rotation per newton of tension (0 for rigid links), rad/N.
     link_rot: R,
@@ -70,12 +74,9 @@ struct Gen<'a, R> {
 }
 
 impl<'a, R: Real> Gen<'a, R> {
-    fn new(f: &'a Finger<R>, opts: &Options<R>) -> Result<Self, Error> {
+    #[inline(never)]
+    pub(super) fn new(f: &'a Finger<R>, opts: &Options<R>) -> Result<Self, Error> {
         let p = f.params();
-        let mut hinge_k = [mat3::zero(); MAX_SUB];
-        for (j, k) in hinge_k.iter_mut().enumerate().take(p.m) {
-            *k = mat3::inverse_spd(&f.hinge_compliance(j)).ok_or(Error::Singular { what: "hinge compliance" })?;
-        }
         let lh = p.hinge_len();
         let link_rot = if p.flex_links {
             let lc = uniform_beam_compliance(p.hinge_modulus(), p.w, p.b, p.l - lh);
@@ -86,7 +87,6 @@ impl<'a, R: Real> Gen<'a, R> {
         Ok(Gen {
             f,
             p,
-            hinge_k,
             sub_len: lh / R::from_u32(p.m as u32),
             link_rot,
             tol_hole: R::from_f64(1e-12) * (lh + p.e),
@@ -98,28 +98,61 @@ impl<'a, R: Real> Gen<'a, R> {
     }
 
     /// Sub-element compliances at stack thickness t, as `Finger::compliances` computes them.
-    fn comp(&self, t: R) -> Result<[Mat3<R>; MAX_SUB], Error> {
+    #[inline(never)]
+    pub(super) fn comp(&self, t: R) -> Result<[Mat3<R>; MAX_SUB], Error> {
         let mut c = [mat3::zero(); MAX_SUB];
         self.comp_into(t, &mut c)?;
         Ok(c)
     }
 
     /// `comp` into `c` (its first m entries; no array returned by value in the hot loop).
+    #[inline(never)]
     fn comp_into(&self, t: R, c: &mut [Mat3<R>; MAX_SUB]) -> Result<(), Error> {
         let k_de = if self.p.layers == 0 { mat3::zero() } else { de::stack_stiffness(self.p, self.sub_len, t) };
         for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
             *cj = if self.p.layers == 0 {
                 self.f.hinge_compliance(j)
             } else {
-                mat3::inverse_spd(&mat3::add(&self.hinge_k[j], &k_de)).ok_or(Error::Singular { what: "joint stiffness" })?
+                mat3::inverse_spd(&mat3::add(self.f.hinge_stiffness(j), &k_de)).ok_or(Error::Singular { what: "joint stiffness" })?
             };
         }
         Ok(())
     }
 
+    /// Scale the angle tolerance of the solves (the branch table's samples).
+    pub(super) fn tighten(&mut self, k: R) {
+        self.tol_angle = self.tol_angle * k;
+    }
+
+    /// The stack's range: (t0 at 0 V, t_top at `top` x the ceiling, the top voltage).
+    #[inline(never)]
+    pub(super) fn stack_ends(&self, opts: &Options<R>) -> Result<(R, R, R), Error> {
+        let p = self.p;
+        let t0 = R::from_u32(p.layers as u32) * p.z0;
+        let v_top = self.f.voltage_ceiling() * opts.top;
+        let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
+        Ok((t0, t_top, v_top))
+    }
+
+    /// The state of a held end: its own if solved, else one march at its tension and hole.
+    #[inline(never)]
+    fn state(&self, joint: usize, c: &[Mat3<R>; MAX_SUB], h: &Held<R>) -> Result<JointMarch<R>, Error> {
+        if h.exact || h.tension == R::zero() {
+            return Ok(h.st);
+        }
+        let mut q = [[R::zero(); 3]; MAX_SUB];
+        self.f.joint_march(joint, c, h.tension, h.st.hole, &mut q)
+    }
+
+    /// The unloaded joint's state.
+    fn straight_st(&self) -> JointMarch<R> {
+        march_of(&self.straight())
+    }
+
     /// dθ/dP at P = 0 (straight joint: every sub-element sees the axial force -P and the
     /// moment P e), rad/N.
-    fn slope0(&self, c: &[Mat3<R>; MAX_SUB]) -> R {
+    #[inline(never)]
+    pub(super) fn slope0(&self, c: &[Mat3<R>; MAX_SUB]) -> R {
         let e = self.p.e;
         c.iter().take(self.p.m).fold(self.link_rot, |a, cj| a + cj[2][2] * e - cj[2][0])
     }
@@ -291,8 +324,11 @@ impl<'a, R: Real> Gen<'a, R> {
     }
 
     /// Joint `joint` held at θ* with compliances `c` (thickness t): the tension, by a root in P
-    /// from the straight joint at P = 0. `hint`: a first tension and hole to try.
-    fn hold_tension(
+    /// from the straight joint at P = 0. `hint`: a first tension and hole to try; `jac_hint` a
+    /// Jacobian in (b, P) to start from; `slope_hint` dθ/dP there (used when the hint itself
+    /// is converged and no Jacobian was formed).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn hold_tension(
         &mut self,
         joint: usize,
         theta: R,
@@ -301,10 +337,13 @@ impl<'a, R: Real> Gen<'a, R> {
         s_lin: R,
         hint: Option<(R, [R; 2])>,
         jac_hint: Option<Mat3<R>>,
+        slope_hint: Option<R>,
+        q_out: &mut [[R; 3]; MAX_SUB],
     ) -> Result<Held<R>, Error> {
         if !(theta > R::zero()) {
             // the straight joint (θ* = 0) at P = 0; a negative angle is refused by the caller
-            return Ok(Held { tension: R::zero(), thickness: t, eq: self.straight(), slope: s_lin, jac: None });
+            *q_out = [[R::zero(); 3]; MAX_SUB];
+            return Ok(Held { tension: R::zero(), thickness: t, st: self.straight_st(), slope: s_lin, jac: None, exact: true });
         }
         if !(s_lin > R::zero() && s_lin.is_finite()) {
             return Err(Error::Singular { what: "joint compliance" });
@@ -329,14 +368,21 @@ impl<'a, R: Real> Gen<'a, R> {
                 }
                 f.joint_march(joint, c, x[2], [x[0], x[1]], q)
             };
-            let (q, n) = self.broyden(&mut ev, [b0[0], b0[1], x0], scale, jac, fd, theta);
+            let (q, n) = self.broyden(&mut ev, [b0[0], b0[1], x0], scale, jac, fd, theta, q_out);
             self.iters += n;
             if let Some(q) = q {
-                let slope = Self::slope_of(&q.jac);
+                // converged at the first march (a guess from the table): the guess's slope
+                let slope = match q.jac {
+                    Some(j) => Self::slope_of(&j),
+                    None => slope_hint.unwrap_or(R::zero()),
+                };
                 if q.x[2] > R::zero() && slope > R::zero() && slope.is_finite() {
-                    return Ok(Held { tension: q.x[2], thickness: t, eq: q.eq, slope, jac: Some(q.jac) });
+                    return Ok(Held { tension: q.x[2], thickness: t, st: q.st, slope, jac: q.jac, exact: true });
                 }
             }
+        }
+        if !cfg!(feature = "inverse-fallback") {
+            return Err(Error::NotConverged { iterations: self.iters, residual: f64::INFINITY });
         }
         let left = Pt { x: R::zero(), h: -theta, eq: self.straight() };
         let tol = self.tol_hole;
@@ -348,26 +394,51 @@ impl<'a, R: Real> Gen<'a, R> {
         if !(s > R::zero()) {
             return Err(Error::LimitPoint { joint, tension: pt.x.to_f64() });
         }
-        Ok(Held { tension: pt.x, thickness: t, eq: pt.eq, slope: s, jac: None })
+        *q_out = pt.eq.q;
+        Ok(Held { tension: pt.x, thickness: t, st: march_of(&pt.eq), slope: s, jac: None, exact: true })
     }
 
     /// Joint held at θ* under tension `pt`: the stack thickness in [t_top, t0], by a root in t.
     #[inline(never)]
-    fn hold_thickness(&mut self, joint: usize, theta: R, pt: R, lo: &Held<R>, hi: &Held<R>) -> Result<Held<R>, Error> {
+    /// `mid`: a third point (P, t, hole) of the joint held at θ* between the two, if known.
+    /// The sub-element displacements go to `q_out`.
+    #[allow(clippy::too_many_arguments)]
+    fn hold_thickness(
+        &mut self,
+        joint: usize,
+        theta: R,
+        pt: R,
+        lo: &Held<R>,
+        hi: &Held<R>,
+        mid: Option<(R, R, [R; 2])>,
+        q_out: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<Held<R>, Error> {
         let (t_top, t0) = (lo.thickness, hi.thickness);
-        if pt == lo.tension {
-            return Ok(*lo);
-        }
-        if pt == hi.tension {
-            return Ok(*hi);
-        }
         let span = hi.tension - lo.tension;
         let frac = if span != R::zero() { ((pt - lo.tension) / span).max(R::zero()).min(R::one()) } else { R::one() };
-        let x0 = t_top + (t0 - t_top) * frac;
-        let guess = [
-            lo.eq.hole[0] + (hi.eq.hole[0] - lo.eq.hole[0]) * frac,
-            lo.eq.hole[1] + (hi.eq.hole[1] - lo.eq.hole[1]) * frac,
+        // the first guess along the level curve θ(P, t) = θ*: linear between the two ends, or
+        // quadratic through a third point of it (the branch table's middle thickness), which
+        // takes the guess inside the solve's tolerance for the default stacks
+        let mut x0 = t_top + (t0 - t_top) * frac;
+        let mut guess = [
+            lo.st.hole[0] + (hi.st.hole[0] - lo.st.hole[0]) * frac,
+            lo.st.hole[1] + (hi.st.hole[1] - lo.st.hole[1]) * frac,
         ];
+        if let Some((pm, tm, bm)) = mid {
+            let (p0, p1, p2) = (lo.tension, pm, hi.tension);
+            let (d01, d02, d12) = (p0 - p1, p0 - p2, p1 - p2);
+            if d01 != R::zero() && d02 != R::zero() && d12 != R::zero() {
+                let w = [(pt - p1) * (pt - p2) / (d01 * d02), -(pt - p0) * (pt - p2) / (d01 * d12), (pt - p0) * (pt - p1) / (d02 * d12)];
+                let q = w[0] * t_top + w[1] * tm + w[2] * t0;
+                if q.is_finite() {
+                    x0 = q.max(t_top).min(t0);
+                    guess = [
+                        w[0] * lo.st.hole[0] + w[1] * bm[0] + w[2] * hi.st.hole[0],
+                        w[0] * lo.st.hole[1] + w[1] * bm[1] + w[2] * hi.st.hole[1],
+                    ];
+                }
+            }
+        }
         let dt = t0 - t_top;
         // dh/dt, h = θ* - θ: dθ/dP times the tension the range of t trades for
         let mut slope = ((lo.slope + hi.slope) / R::from_f64(2.0) * span / dt).abs();
@@ -387,22 +458,32 @@ impl<'a, R: Real> Gen<'a, R> {
             };
             let me: &Self = self;
             let mut c = [mat3::zero(); MAX_SUB];
+            // the compliances of the last thickness tried (the hole columns' differences
+            // keep t)
+            let mut c_at: Option<R> = None;
             let mut ev = |x: [R; 3], q: &mut [[R; 3]; MAX_SUB]| {
                 if !(x[2] > R::zero()) {
                     return Err(Error::Input { input: "thickness", reason: "trial below zero" });
                 }
-                me.comp_into(x[2], &mut c)?;
+                if c_at != Some(x[2]) {
+                    c_at = None;
+                    me.comp_into(x[2], &mut c)?;
+                    c_at = Some(x[2]);
+                }
                 me.f.joint_march(joint, &c, pt, [x[0], x[1]], q)
             };
-            let (q, n) = self.broyden(&mut ev, [guess[0], guess[1], x0], [lh, lh, t0], jac, fd, theta);
+            let (q, n) = self.broyden(&mut ev, [guess[0], guess[1], x0], [lh, lh, t0], jac, fd, theta, q_out);
             self.iters += n;
             if let Some(q) = q {
                 // inside the stack's range (a root outside it is the bracket's to refuse)
                 let slack = R::from_f64(1e-6) * t0;
                 if q.x[2] >= t_top - slack && q.x[2] <= t0 + slack {
-                    return Ok(Held { tension: pt, thickness: q.x[2], eq: q.eq, slope: hi.slope, jac: Some(q.jac) });
+                    return Ok(Held { tension: pt, thickness: q.x[2], st: q.st, slope: hi.slope, jac: q.jac, exact: true });
                 }
             }
+        }
+        if !cfg!(feature = "inverse-fallback") {
+            return Err(Error::NotConverged { iterations: self.iters, residual: f64::INFINITY });
         }
         let me: &Self = self;
         let mut ev = |x: R, g: Option<[R; 2]>| f_eval(me, joint, x, pt, g);
@@ -410,12 +491,14 @@ impl<'a, R: Real> Gen<'a, R> {
         let res = self.root(&mut it, theta, sign, &mut ev, t_top, Some(t0), None, x0, Some(guess), slope, false);
         self.iters += it;
         let (p1, _) = res?;
-        Ok(Held { tension: pt, thickness: p1.x, eq: p1.eq, slope: hi.slope, jac: None })
+        *q_out = p1.eq.q;
+        Ok(Held { tension: pt, thickness: p1.x, st: march_of(&p1.eq), slope: hi.slope, jac: None, exact: true })
     }
 
     /// The joint's effective compliance θ/M (M the cable's moment about the hinge's distal
     /// end) when held with tension P in state `eq`, or its linear limit when P M vanishes.
-    fn compliance(&self, theta: R, p: R, eq: &JointEquilibrium<R>, c_lin: R) -> f64 {
+    #[inline(never)]
+    fn compliance(&self, theta: R, p: R, eq: &JointMarch<R>, c_lin: R) -> R {
         let e = self.p.e;
         let v = [eq.hole[0], eq.hole[1] - e];
         let rho = (v[0].sq() + v[1].sq()).sqrt();
@@ -427,12 +510,12 @@ impl<'a, R: Real> Gen<'a, R> {
         };
         let m = p * wm;
         if theta > R::zero() && m.abs() > R::from_f64(1e-30_f64.max(R::EPS * 1e-20)) {
-            return (theta / m).to_f64();
+            return theta / m;
         }
         if theta < R::zero() {
-            -c_lin.to_f64()
+            -c_lin
         } else {
-            c_lin.to_f64()
+            c_lin
         }
     }
 }
@@ -442,11 +525,13 @@ impl<'a, R: Real> Gen<'a, R> {
 #[derive(Clone, Copy)]
 struct Qn<R> {
     x: [R; 3],
-    eq: JointEquilibrium<R>,
-    jac: Mat3<R>,
+    st: JointMarch<R>,
+    /// None when the first guess was converged and no Jacobian was given.
+    jac: Option<Mat3<R>>,
 }
 
 impl<'a, R: Real> Gen<'a, R> {
+    #[inline(never)]
     /// The hole of a joint bent to θ as a circular arc (the first guess of a quasi-Newton
     /// solve): hinge end (L_h sin θ/θ, L_h (1 - cos θ)/θ), link k's proximal hole e above it.
     fn arc_hole(&self, theta: R) -> [R; 2] {
@@ -469,67 +554,91 @@ impl<'a, R: Real> Gen<'a, R> {
     /// (One instance for both solves: `ev` is a trait object, which keeps the firmware image
     /// small.)
     #[allow(clippy::too_many_arguments)]
-    fn broyden(&self, ev: &mut dyn FnMut([R; 3], &mut [[R; 3]; MAX_SUB]) -> Result<JointMarch<R>, Error>, x0: [R; 3], scale: [R; 3], jac_x: Mat3<R>, fd: [bool; 3], theta: R) -> (Option<Qn<R>>, u32) {
+    fn broyden(
+        &self,
+        ev: &mut dyn FnMut([R; 3], &mut [[R; 3]; MAX_SUB]) -> Result<JointMarch<R>, Error>,
+        x0: [R; 3],
+        scale: [R; 3],
+        jac_x: Mat3<R>,
+        fd: [bool; 3],
+        theta: R,
+        q_out: &mut [[R; 3]; MAX_SUB],
+    ) -> (Option<Qn<R>>, u32) {
         let mut evals = 0u32;
         let mut ev = |x: [R; 3], q: &mut [[R; 3]; MAX_SUB]| {
             evals += 1;
             ev(x, q)
         };
-        let r = self.broyden_steps(&mut ev, x0, scale, jac_x, fd, theta);
-        let r = r.map(|mut q| {
-            q.eq.iterations = evals;
-            q
-        });
+        let r = self.broyden_steps(&mut ev, x0, scale, jac_x, fd, theta, q_out);
         (r, evals)
     }
 
+    /// The iteration of `broyden`. The iterates' marches write their sub-element displacements
+    /// to `q_out` (the converged state is always the last iterate marched), the forward
+    /// differences to a scratch buffer.
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
-    fn broyden_steps<F>(&self, ev: &mut F, x0: [R; 3], scale: [R; 3], jac_x: Mat3<R>, fd: [bool; 3], theta: R) -> Option<Qn<R>>
+    fn broyden_steps<F>(
+        &self,
+        ev: &mut F,
+        x0: [R; 3],
+        scale: [R; 3],
+        jac_x: Mat3<R>,
+        fd: [bool; 3],
+        theta: R,
+        q_out: &mut [[R; 3]; MAX_SUB],
+    ) -> Option<Qn<R>>
     where
         F: FnMut([R; 3], &mut [[R; 3]; MAX_SUB]) -> Result<JointMarch<R>, Error>,
     {
         let atol = self.tol_angle * (theta.abs() + R::from_f64(0.1));
         let htol = self.tol_hole.max(self.f.hole_resolution());
         let resid = |x: &[R; 3], st: &JointMarch<R>| [x[0] - st.hole[0], x[1] - st.hole[1], st.angle - theta];
-        // the sub-element displacements of the current and the trial march, swapped by index
-        let mut qs = [[[R::zero(); 3]; MAX_SUB]; 2];
-        let mut cur = 0usize;
         let mut x = x0;
-        let mut st = ev(x, &mut qs[0]).ok()?;
+        let mut st = ev(x, q_out).ok()?;
         let mut fx = resid(&x, &st);
-        let done = |x: [R; 3], st: &JointMarch<R>, q: &[[R; 3]; MAX_SUB], j: &Mat3<R>| {
+        let unscaled = |j: &Mat3<R>| {
             let mut jx = *j;
             for row in 0..3 {
                 for col in 0..3 {
                     jx[row][col] = j[row][col] / scale[col];
                 }
             }
-            let eq = JointEquilibrium { q: *q, end: st.end, hole: st.hole, link: st.link, angle: st.angle, iterations: 0 };
-            Qn { x, eq, jac: jx }
+            jx
         };
+        let converged = |f: &[R; 3], k: R| f[0].abs() <= k * htol && f[1].abs() <= k * htol && f[2].abs() <= k * atol;
+        // a first guess already converged (from the branch table) needs no Jacobian
+        if converged(&fx, R::one()) {
+            let jac = if fd.iter().any(|&d| d) { None } else { Some(jac_x) };
+            return Some(Qn { x, st, jac });
+        }
         // the Jacobian in the scaled unknowns; columns marked `fd` by forward differences
         let mut j = jac_x;
-        for col in 0..3 {
-            if fd[col] {
-                let h = R::from_f64(R::SQRT_EPS);
-                let mut xp = x;
-                xp[col] += h * scale[col];
-                let sp = ev(xp, &mut qs[1]).ok()?;
-                let fp = resid(&xp, &sp);
-                for row in 0..3 {
-                    j[row][col] = (fp[row] - fx[row]) / h;
+        if fd.iter().any(|&d| d) {
+            let mut scratch = [[R::zero(); 3]; MAX_SUB];
+            for col in 0..3 {
+                if fd[col] {
+                    let h = R::from_f64(R::SQRT_EPS);
+                    let mut xp = x;
+                    xp[col] += h * scale[col];
+                    let sp = ev(xp, &mut scratch).ok()?;
+                    let fp = resid(&xp, &sp);
+                    for row in 0..3 {
+                        j[row][col] = (fp[row] - fx[row]) / h;
+                    }
                 }
-            } else {
+            }
+        }
+        for col in 0..3 {
+            if !fd[col] {
                 for row in 0..3 {
                     j[row][col] = jac_x[row][col] * scale[col];
                 }
             }
         }
-        let converged = |f: &[R; 3], k: R| f[0].abs() <= k * htol && f[1].abs() <= k * htol && f[2].abs() <= k * atol;
         for _ in 0..16 {
             if converged(&fx, R::one()) {
-                return Some(done(x, &st, &qs[cur], &j));
+                return Some(Qn { x, st, jac: Some(unscaled(&j)) });
             }
             let inv = mat3::inverse_unscaled(&j)?;
             let dy = mat3::mul_vec(&inv, &fx);
@@ -537,7 +646,7 @@ impl<'a, R: Real> Gen<'a, R> {
             let xn = [x[0] + dy[0] * scale[0], x[1] + dy[1] * scale[1], x[2] + dy[2] * scale[2]];
             // a step below the scalar's resolution: converged as far as it can be
             let tiny = (0..3).all(|i| (xn[i] - x[i]).abs() <= R::from_f64(4.0 * R::EPS) * x[i].abs().max(scale[i]));
-            let sn = ev(xn, &mut qs[1 - cur]).ok()?;
+            let sn = ev(xn, q_out).ok()?;
             let fnew = resid(&xn, &sn);
             if !(fnew[0].is_finite() && fnew[1].is_finite() && fnew[2].is_finite()) {
                 return None;
@@ -556,9 +665,8 @@ impl<'a, R: Real> Gen<'a, R> {
             x = xn;
             st = sn;
             fx = fnew;
-            cur = 1 - cur;
             if tiny {
-                return if converged(&fx, R::from_f64(16.0)) { Some(done(x, &st, &qs[cur], &j)) } else { None };
+                return if converged(&fx, R::from_f64(16.0)) { Some(Qn { x, st, jac: Some(unscaled(&j)) }) } else { None };
             }
         }
         None
@@ -580,22 +688,30 @@ fn f_eval<R: Real>(g: &Gen<'_, R>, joint: usize, t: R, p: R, guess: Option<[R; 2
     g.f.joint_equilibrium(joint, &c, p, guess, g.tol_hole)
 }
 
-fn record<R: Real>(out: &mut PoseSolution<R>, k: usize, lh: R, h: &Held<R>) {
-    let eq = &h.eq;
-    out.q[k] = [eq.end.x - lh, eq.end.y, eq.end.theta];
-    out.sub_q[k] = eq.q;
-    out.links[k] = eq.link;
+/// A march's state of a solved equilibrium.
+fn march_of<R: Real>(eq: &JointEquilibrium<R>) -> JointMarch<R> {
+    JointMarch { end: eq.end, hole: eq.hole, link: eq.link, angle: eq.angle }
 }
 
-/// `solve_pose_with` for m > 1 or flexible links (module documentation).
+/// The hinge end and link deflection of joint k (its sub-element displacements are written
+/// to `out.sub_q[k]` by the solve itself).
+fn record<R: Real>(out: &mut PoseSolution<R>, k: usize, lh: R, h: &Held<R>) {
+    let st = &h.st;
+    out.q[k] = [st.end.x - lh, st.end.y, st.end.theta];
+    out.links[k] = st.link;
+}
+
+/// `solve_pose_with` for m > 1 or flexible links (module documentation), with the branch
+/// table when one is given (table.rs). Fills `out` (zeroed by the caller).
 #[inline(never)]
 pub(super) fn solve<R: Real>(
     f: &Finger<R>,
+    table: Option<&BranchTable<R>>,
     angles: &[R],
     tension: Option<R>,
     opts: &Options<R>,
-    mut out: PoseSolution<R>,
-) -> Result<PoseSolution<R>, Error> {
+    out: &mut PoseSolution<R>,
+) -> Result<(), Error> {
     let mut g = Gen::new(f, opts)?;
     let p = f.params();
     let n = p.n;
@@ -604,31 +720,91 @@ pub(super) fn solve<R: Real>(
         return no_stacks(&mut g, angles, tension, opts, out);
     }
     // 1. every joint's tension range: stiffest stack (0 V) and softest (top voltage)
-    let t0 = R::from_u32(p.layers as u32) * p.z0;
-    let v_top = f.voltage_ceiling() * opts.top;
-    let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
-    let c0 = g.comp(t0)?;
-    let c_top = g.comp(t_top)?;
-    let (s0, s_top) = (g.slope0(&c0), g.slope0(&c_top));
-    let straight = Held { tension: R::zero(), thickness: t0, eq: g.straight(), slope: s0, jac: None };
+    let (t0, t_top, v_top) = match table {
+        Some(tb) => (tb.thickness[1], tb.thickness[0], tb.v_top),
+        None => g.stack_ends(opts)?,
+    };
+    let own;
+    let cs: &[[Mat3<R>; MAX_SUB]; 2] = match table {
+        Some(tb) => &tb.comp,
+        None => {
+            own = [g.comp(t_top)?, g.comp(t0)?];
+            &own
+        }
+    };
+    let (c_top, c0) = (&cs[0], &cs[1]);
+    let (s0, s_top) = match table {
+        Some(tb) => (tb.slope0[1], tb.slope0[0]),
+        None => (g.slope0(c0), g.slope0(c_top)),
+    };
+    let straight = Held { tension: R::zero(), thickness: t0, st: g.straight_st(), slope: s0, jac: None, exact: true };
     let mut hi = [straight; MAX_JOINTS];
     let mut lo = [straight; MAX_JOINTS];
+    // the middle branch at each joint's angle (step 4's third point)
+    let mut mid: [Option<(R, R, [R; 2])>; MAX_JOINTS] = [None; MAX_JOINTS];
+    // ends the table did not give (no table, or the angle outside it)
+    let mut unknown = [false; MAX_JOINTS];
     for k in 0..n {
-        if k > 0 && angles[k] == angles[k - 1] {
-            hi[k] = hi[k - 1];
-            lo[k] = lo[k - 1];
-            continue;
+        let th = angles[k];
+        let ends = table.and_then(|tb| tb.ends(th));
+        let read = |e: Option<&TableEnd<R>>, t: R, s: R| {
+            // without the table: the linear guess (hold_tension's own first trial)
+            let (tension, hole) = match e {
+                Some(e) => (e.tension, e.hole),
+                None => (th / s, g.arc_hole(th)),
+            };
+            let st = JointMarch { hole, angle: th, ..straight.st };
+            Held { tension, thickness: t, st, slope: th / tension, jac: None, exact: false }
+        };
+        lo[k] = read(ends.as_ref().map(|e| &e[0]), t_top, s_top);
+        hi[k] = read(ends.as_ref().map(|e| &e[1]), t0, s0);
+        unknown[k] = ends.is_none();
+        if let (Some(tb), Some(e)) = (table, ends) {
+            mid[k] = Some((e[2].tension, tb.thickness[2], e[2].hole));
         }
-        // first trial: the previous joint's chord θ/P (the same nonlinearity at a similar angle)
-        let hint = (0..k)
-            .rev()
-            .find(|&j| hi[j].tension > R::zero())
-            .map(|j| (angles[k] * hi[j].tension / angles[j], hi[j].eq.hole));
-        // the previous joint's Jacobian (a similar state) spares the first forward differences
-        let jac = (0..k).rev().find_map(|j| hi[j].jac);
-        hi[k] = g.hold_tension(k + 1, angles[k], &c0, t0, s0, hint, jac)?;
-        let hint = Some((hi[k].tension * s0 / s_top, hi[k].eq.hole));
-        lo[k] = g.hold_tension(k + 1, angles[k], &c_top, t_top, s_top, hint, hi[k].jac)?;
+    }
+    // step 1's states are not kept: their sub-element displacements go here
+    let mut scratch = [[R::zero(); 3]; MAX_SUB];
+    // 1b. solve the ends the table did not give, the ends that bound the feasible interval,
+    //     and any within `TABLE_BAND` of those bounds (they might bound it instead)
+    loop {
+        // the interval's two bounds: the largest low end and the smallest high end
+        let mut bound = [R::zero(), R::from_f64(f64::MAX)];
+        for k in 0..n {
+            let (a, b) = (lo[k].tension, hi[k].tension);
+            bound = [bound[0].max(a.min(b)), bound[1].min(a.max(b))];
+        }
+        let band = R::from_f64(TABLE_BAND);
+        let mut next = None;
+        'find: for k in 0..n {
+            for e in 0..2 {
+                let h = if e == 0 { &lo[k] } else { &hi[k] };
+                let near = (h.tension - bound[0]).abs() <= band * bound[0] || (h.tension - bound[1]).abs() <= band * bound[1];
+                if !h.exact && (unknown[k] || near) {
+                    next = Some((k, e));
+                    break 'find;
+                }
+            }
+        }
+        let Some((k, e)) = next else { break };
+        let (h, c, t, s) = if e == 0 { (lo[k], c_top, t_top, s_top) } else { (hi[k], c0, t0, s0) };
+        // a solved end's Jacobian (a similar state) spares the forward differences
+        let mut jac = None;
+        for j in 0..n {
+            jac = jac.or(hi[j].jac).or(lo[j].jac);
+        }
+        let hint = if unknown[k] { None } else { Some((h.tension, h.st.hole)) };
+        let solved = g.hold_tension(k + 1, angles[k], c, t, s, hint, jac, Some(h.slope), &mut scratch)?;
+        // the same angle, the same end
+        for j in 0..n {
+            if angles[j] == angles[k] {
+                if e == 0 {
+                    lo[j] = solved;
+                } else {
+                    hi[j] = solved;
+                }
+            }
+        }
     }
     // 2-3. the feasible interval and the tension (`choose_tension`); a negative angle is
     //      outside every tension's reach
@@ -643,13 +819,15 @@ pub(super) fn solve<R: Real>(
     out.interval = interval;
     if let Some(k) = worst {
         let (cl0, cl_top) = (s0 / p.e, s_top / p.e);
+        // the states of ends read off the table (one march each)
+        let (h_hi, h_lo) = (g.state(k + 1, c0, &hi[k])?, g.state(k + 1, c_top, &lo[k])?);
         // the range the ceiling allows, whichever end is the more compliant
-        let (c_hi, c_lo) = (g.compliance(angles[k], hi[k].tension, &hi[k].eq, cl0), g.compliance(angles[k], lo[k].tension, &lo[k].eq, cl_top));
+        let (c_hi, c_lo) = (g.compliance(angles[k], hi[k].tension, &h_hi, cl0), g.compliance(angles[k], lo[k].tension, &h_lo, cl_top));
         return Err(Error::Unreachable {
             joint: k + 1,
-            needed: g.compliance(angles[k], pt, &hi[k].eq, cl0),
-            min: if c_hi <= c_lo { c_hi } else { c_lo },
-            max: if c_hi <= c_lo { c_lo } else { c_hi },
+            needed: g.compliance(angles[k], pt, &h_hi, cl0).to_f64(),
+            min: c_hi.min(c_lo).to_f64(),
+            max: c_hi.max(c_lo).to_f64(),
         });
     }
     out.tension = pt;
@@ -665,20 +843,22 @@ pub(super) fn solve<R: Real>(
             out.links[k] = out.links[k - 1];
             continue;
         }
+        let q_out = &mut out.sub_q[k];
         let held = if pt == R::zero() {
             straight
         } else if t0 - t_top <= g.rel * t0 {
-            hi[k]
+            // no stack range: the 0 V end's state
+            g.hold_tension(k + 1, angles[k], c0, t0, s0, Some((hi[k].tension, hi[k].st.hole)), hi[k].jac, Some(hi[k].slope), q_out)?
         } else {
-            g.hold_thickness(k + 1, angles[k], pt, &lo[k], &hi[k])?
+            g.hold_thickness(k + 1, angles[k], pt, &lo[k], &hi[k], mid[k], q_out)?
         };
         let t = held.thickness.max(t_top).min(t0);
         out.thickness[k] = t;
         out.volts[k] = if t >= t0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, t)?.min(v_top) };
-        record(&mut out, k, lh, &held);
+        record(out, k, lh, &held);
     }
     out.iterations = g.iters;
-    Ok(out)
+    Ok(())
 }
 
 /// The finger without stacks: only the tension is free (the parent's rule).
@@ -688,14 +868,14 @@ fn no_stacks<R: Real>(
     angles: &[R],
     tension: Option<R>,
     opts: &Options<R>,
-    mut out: PoseSolution<R>,
-) -> Result<PoseSolution<R>, Error> {
+    out: &mut PoseSolution<R>,
+) -> Result<(), Error> {
     let n = out.n;
     let z = R::zero();
     let lh = g.p.hinge_len();
     let c = g.comp(z)?;
     let s_lin = g.slope0(&c);
-    let mut h = [Held { tension: z, thickness: z, eq: g.straight(), slope: s_lin, jac: None }; MAX_JOINTS];
+    let mut h = [Held { tension: z, thickness: z, st: g.straight_st(), slope: s_lin, jac: None, exact: true }; MAX_JOINTS];
     for k in 0..n {
         if angles[k] < z {
             let cl = s_lin / g.p.e;
@@ -703,15 +883,16 @@ fn no_stacks<R: Real>(
         }
         if k > 0 && angles[k] == angles[k - 1] {
             h[k] = h[k - 1];
+            out.sub_q[k] = out.sub_q[k - 1];
         } else {
             let hint = (0..k)
                 .rev()
                 .find(|&j| h[j].tension > z)
-                .map(|j| (angles[k] * h[j].tension / angles[j], h[j].eq.hole));
+                .map(|j| (angles[k] * h[j].tension / angles[j], h[j].st.hole));
             let jac = (0..k).rev().find_map(|j| h[j].jac);
-            h[k] = g.hold_tension(k + 1, angles[k], &c, z, s_lin, hint, jac)?;
+            h[k] = g.hold_tension(k + 1, angles[k], &c, z, s_lin, hint, jac, None, &mut out.sub_q[k])?;
         }
-        record(&mut out, k, lh, &h[k]);
+        record(out, k, lh, &h[k]);
     }
     // the tensions within the tolerance for every joint (dP/dθ = 1/slope)
     let tol = opts.angle_tol;
@@ -748,10 +929,10 @@ fn no_stacks<R: Real>(
     }
     if let Some((k, _)) = worst {
         let cl = s_lin / g.p.e;
-        let have = g.compliance(angles[k], h[k].tension, &h[k].eq, cl);
+        let have = g.compliance(angles[k], h[k].tension, &h[k].st, cl).to_f64();
         return Err(Error::Unreachable {
             joint: k + 1,
-            needed: g.compliance(angles[k], pt, &h[k].eq, cl),
+            needed: g.compliance(angles[k], pt, &h[k].st, cl).to_f64(),
             min: have,
             max: have,
         });
@@ -766,13 +947,14 @@ fn no_stacks<R: Real>(
                 out.links[k] = out.links[k - 1];
                 continue;
             }
-            let eq = g.f.joint_equilibrium(k + 1, &c, pt, Some(h[k].eq.hole), g.tol_hole)?;
+            let eq = g.f.joint_equilibrium(k + 1, &c, pt, Some(h[k].st.hole), g.tol_hole)?;
             g.iters += eq.iterations;
-            record(&mut out, k, lh, &Held { eq, ..h[k] });
+            out.sub_q[k] = eq.q;
+            record(out, k, lh, &Held { st: march_of(&eq), ..h[k] });
         }
     }
     out.iterations = g.iters;
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]
@@ -796,7 +978,8 @@ mod tests {
         let p_lin = theta / g.slope0(&c0);
         let b0 = g.arc_hole(theta);
         let mut ev = |x: [f64; 3], q: &mut [[f64; 3]; MAX_SUB]| f.joint_march(1, &c0, x[2], [x[0], x[1]], q);
-        let (q, n) = g.broyden(&mut ev, [b0[0], b0[1], p_lin], [lh, lh, p_lin], mat3::zero(), [true; 3], theta);
+        let mut qb = [[0.0; 3]; MAX_SUB];
+        let (q, n) = g.broyden(&mut ev, [b0[0], b0[1], p_lin], [lh, lh, p_lin], mat3::zero(), [true; 3], theta, &mut qb);
         let q = q.expect("Broyden converges for the tension");
         assert!(n <= 12, "{n} marches");
         let eq = f.joint_equilibrium(1, &c0, q.x[2], None, 1e-12).unwrap();
@@ -808,7 +991,7 @@ mod tests {
             let c = g.comp(x[2])?;
             f.joint_march(1, &c, pt, [x[0], x[1]], qb)
         };
-        let (r, _) = g.broyden(&mut ev, [q.x[0], q.x[1], t0 * 0.995], [lh, lh, t0], q.jac, [false, false, true], theta);
+        let (r, _) = g.broyden(&mut ev, [q.x[0], q.x[1], t0 * 0.995], [lh, lh, t0], q.jac.unwrap(), [false, false, true], theta, &mut qb);
         let r = r.expect("Broyden converges for the thickness");
         assert!(r.x[2] < t0);
         let eq = f.joint_equilibrium(1, &g.comp(r.x[2]).unwrap(), pt, None, 1e-12).unwrap();

@@ -1,0 +1,206 @@
+//! The inverse's branch table: for one parameter set and one `Options::top`, the joint's
+//! equilibrium branch under tension alone at both ends of the stack's range, tabulated
+//! against the joint angle. Under tension alone every joint has the same hinge, stack and
+//! cable geometry (finger.rs: the joints decouple), so one table serves all of them:
+//!
+//! θ_i = i h (h = `TABLE_STEP_DEG`), i = 0 .. len-1  →  (P_i, b_i),
+//!
+//! P_i the tension that holds the joint at θ_i and b_i link k's proximal guide hole there,
+//! at the stiffest stack (0 V, thickness t0) and at the softest the ceiling allows (t_top).
+//! Each sample is the general path's `hold_tension` (quasi-Newton on the full model),
+//! continued from the sample before; the table ends where the branch does (contact, a limit
+//! point) or at `TABLE_LEN` samples.
+//!
+//! What it is for: `solve_pose_with_table` reads step 1's tension range of every joint off
+//! the table (a cubic through four samples) instead of solving for it, and solves (verifies)
+//! only the ends that bound the feasible interval; its step 4 starts from the interpolated
+//! ends. That takes the inverse of the default model (m = 8) from ~60,000 to ~12,000
+//! instructions on the M4F (docs/inverse-cost.md).
+//!
+//! What it is not: a reduced model. Every number `solve_pose_with_table` returns (the tension,
+//! the interval's ends, the thicknesses and voltages, the states) is a converged solve of the
+//! full model, to the same tolerance as without the table; the table only decides where the
+//! solves start and which range ends need one. Built once per parameter set (the firmware
+//! rebuilds it when a parameter changes); about 2.3 KB in f32.
+
+use super::general::Gen;
+use super::Options;
+use crate::error::Error;
+use crate::finger::Finger;
+use crate::mat3::Mat3;
+use crate::params::{Params, MAX_SUB};
+use crate::real::Real;
+
+/// The relative band around the feasible interval's bounds inside which an end read off the
+/// table is solved before the interval is decided (it might bound the interval instead). The
+/// table's interpolation error is far below it (a host test shows < 1e-5 relative).
+pub const TABLE_BAND: f64 = 1e-3;
+
+/// Samples per stack end.
+pub const TABLE_LEN: usize = 64;
+/// The angle step between samples, degrees (64 samples reach 94.5°).
+pub const TABLE_STEP_DEG: f64 = 1.5;
+
+/// A joint end read off the table: the tension and the hole.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct TableEnd<R> {
+    pub tension: R,
+    pub hole: [R; 2],
+}
+
+/// The branch table of one parameter set (module documentation). Branch 0 is the softest
+/// stack (t_top), 1 the stiffest (t0, 0 V), 2 the middle thickness (t_top + t0)/2 (a third
+/// point for step 4's first guess).
+#[derive(Clone, Copy, Debug)]
+pub struct BranchTable<R> {
+    params: Params<R>,
+    top: R,
+    /// Stack thickness of each branch, mm.
+    pub(super) thickness: [R; 3],
+    /// The top voltage (`top` x the ceiling), V.
+    pub(super) v_top: R,
+    /// Sub-element compliances at each end (the middle branch's are not kept).
+    pub(super) comp: [[Mat3<R>; MAX_SUB]; 2],
+    /// dθ/dP of the straight joint at each end, rad/N.
+    pub(super) slope0: [R; 2],
+    /// Angle step, rad.
+    step: R,
+    len: [usize; 3],
+    /// (P N, hole x mm, hole y mm) per sample.
+    x: [[[R; 3]; TABLE_LEN]; 3],
+}
+
+impl<R: Real> BranchTable<R> {
+    /// Build the table for finger `f` and the inverse options `opts` (their `top` sets the
+    /// softest end). Fails for a finger without stacks (nothing to tabulate: its inverse is
+    /// one root per joint) and for options the inverse refuses.
+    #[inline(never)]
+    pub fn new(f: &Finger<R>, opts: &Options<R>) -> Result<Self, Error> {
+        super::check_options(opts)?;
+        let p = f.params();
+        if p.layers == 0 {
+            return Err(Error::Input { input: "table", reason: "a finger without stacks has no branch table" });
+        }
+        let mut g = Gen::new(f, opts)?;
+        // samples eight times tighter than a solve's tolerance: the ends read off the table
+        // start step 4, whose first march then lands inside that tolerance
+        g.tighten(R::from_f64(0.125));
+        let (t0, t_top, v_top) = g.stack_ends(opts)?;
+        let comp = [g.comp(t_top)?, g.comp(t0)?];
+        let t_mid = (t_top + t0) / R::from_f64(2.0);
+        let c_mid = g.comp(t_mid)?;
+        let slope0 = [g.slope0(&comp[0]), g.slope0(&comp[1])];
+        let step = R::from_f64(TABLE_STEP_DEG.to_radians());
+        let lh = p.hinge_len();
+        let mut t = BranchTable {
+            params: *p,
+            top: opts.top,
+            thickness: [t_top, t0, t_mid],
+            v_top,
+            comp,
+            slope0,
+            step,
+            len: [1; 3],
+            x: [[[R::zero(), lh, p.e]; TABLE_LEN]; 3],
+        };
+        let mut scratch = [[R::zero(); 3]; MAX_SUB];
+        for e in 0..3 {
+            let th = t.thickness[e];
+            let c = if e < 2 { &t.comp[e] } else { &c_mid };
+            let s_lin = g.slope0(c);
+            let mut jac: Option<Mat3<R>> = None;
+            let mut slope = s_lin;
+            for i in 1..TABLE_LEN {
+                let theta = step * R::from_u32(i as u32);
+                let xs = &t.x[e];
+                // linear extrapolation from the two samples before (none for the first)
+                let ex = |c: usize| xs[i - 1][c] + xs[i - 1][c] - xs[i - 2][c];
+                let hint = if i > 1 { Some((ex(0), [ex(1), ex(2)])) } else { None };
+                let Ok(h) = g.hold_tension(1, theta, c, th, s_lin, hint, jac, Some(slope), &mut scratch) else {
+                    break;
+                };
+                if !(h.tension > t.x[e][i - 1][0]) {
+                    // past a limit point the branch turns back: the table ends before it
+                    break;
+                }
+                t.x[e][i] = [h.tension, h.st.hole[0], h.st.hole[1]];
+                t.len[e] = i + 1;
+                jac = h.jac.or(jac);
+                slope = h.slope;
+            }
+        }
+        Ok(t)
+    }
+
+    /// Whether the table was built for this parameter set and this `top`.
+    pub fn fits(&self, p: &Params<R>, opts: &Options<R>) -> bool {
+        self.params == *p && self.top == opts.top
+    }
+
+    /// The largest angle the table holds at both ends, rad.
+    pub fn max_angle(&self) -> R {
+        self.step * R::from_u32(self.len[0].min(self.len[1]) as u32 - 1)
+    }
+
+    /// The tensions the table reads off for joint angle θ (rad): softest stack, stiffest, middle
+    /// thickness (N). None where `solve_pose_with_table` solves instead (outside the table).
+    pub fn tensions(&self, theta: R) -> Option<[R; 3]> {
+        self.ends(theta).map(|e| [e[0].tension, e[1].tension, e[2].tension])
+    }
+
+    /// The samples (P N, hole x, hole y mm) of branch `e` (0 softest, 1 stiffest, 2 middle).
+    pub fn samples(&self, e: usize) -> &[[R; 3]] {
+        &self.x[e][..self.len[e]]
+    }
+
+    /// Samples per branch (softest end, stiffest end, middle).
+    pub fn len(&self) -> [usize; 3] {
+        self.len
+    }
+
+    /// The three branches (0 softest, 1 stiffest, 2 middle) at joint angle θ: the cubic
+    /// through the four samples around θ (one-sided at the table's ends), one set of weights
+    /// for all three (the same grid). None outside (0, last sample of the shortest branch]
+    /// or with fewer than four samples.
+    #[inline(never)]
+    pub(super) fn ends(&self, theta: R) -> Option<[TableEnd<R>; 3]> {
+        let len = self.len[0].min(self.len[1]).min(self.len[2]);
+        if len < 4 {
+            return None;
+        }
+        let u = theta / self.step;
+        if !(u > R::zero() && u <= R::from_u32(len as u32 - 1)) {
+            return None;
+        }
+        // the sample interval [i, i+1] holding u (binary search: the scalar has no floor)
+        let (mut a, mut b) = (0usize, len - 1);
+        while b - a > 1 {
+            let mid = (a + b) / 2;
+            if R::from_u32(mid as u32) <= u {
+                a = mid;
+            } else {
+                b = mid;
+            }
+        }
+        let i = a.clamp(1, len - 3);
+        let s = u - R::from_u32(i as u32);
+        // Lagrange weights on the nodes i-1, i, i+1, i+2
+        let (sm, s1, s2) = (s + R::one(), s - R::one(), s - R::from_f64(2.0));
+        let (sixth, half) = (R::from_f64(1.0 / 6.0), R::from_f64(0.5));
+        let w = [-s * s1 * s2 * sixth, sm * s1 * s2 * half, -sm * s * s2 * half, sm * s * s1 * sixth];
+        let mut out = [TableEnd { tension: R::zero(), hole: [R::zero(); 2] }; 3];
+        for (e, o) in out.iter_mut().enumerate() {
+            let mut v = [R::zero(); 3];
+            for n in 0..4 {
+                for c in 0..3 {
+                    v[c] += w[n] * self.x[e][i - 1 + n][c];
+                }
+            }
+            if !(v[0] > R::zero()) {
+                return None;
+            }
+            *o = TableEnd { tension: v[0], hole: [v[1], v[2]] };
+        }
+        Some(out)
+    }
+}
