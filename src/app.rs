@@ -186,8 +186,8 @@ pub struct App<B: Board> {
     fmax_cache: Cell<Option<([f32; CHANNELS], Result<BranchLimit<f32>, ModelError>)>>,
     fmax_computed: Cell<u32>,
     /// The inverse's branch table for the current model (`pose`), built at the first `pose`
-    /// after a model change (~0.85 M instructions for the default model, about 5 ms at
-    /// 168 MHz) and cleared by [`App::set_finger`]. None also for a finger without stacks.
+    /// after a model change (1.18 M instructions for the default model, about 7 ms at
+    /// 168 MHz; docs/inverse-cost.md) and cleared by [`App::set_finger`]. None also for a finger without stacks.
     #[cfg(feature = "pose")]
     inv_table: Option<finger_model::inverse::BranchTable<f32>>,
 }

@@ -30,8 +30,6 @@ use finger_model::{Error, Finger, Real, MAX_JOINTS};
 use crate::app::CmdError;
 use crate::num::{write_model_error, Fixed};
 
-/// Arguments come as f32 (the console's numbers); `R::from_f64(f64::from(x))` folds to x for
-/// R = f32 (no f64 conversion code is linked).
 /// `x` as f32 for printing (for R = f32 the round trip through f64 folds away: no f64
 /// arithmetic is linked).
 fn f32_of<R: Real>(x: R) -> f32 {
@@ -57,12 +55,13 @@ fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f32>, prec: usize) 
 }
 
 #[cfg(feature = "pose")]
-#[inline(never)]
 /// `pose <d1> .. <dn> [<P>]`. `table`: the finger's branch table (built for `finger` and the
 /// default options; None solves without it). `degrees`: the joint angles as parsed (one per joint);
 /// `tension`: the optional fourth argument. `apply(tension, volts)` moves the outputs (or,
-/// disarmed, nothing) or refuses with a console error.
+/// disarmed, nothing) or refuses with a console error. Arguments are the console's f32
+/// numbers (`R::from_f64(f64::from(x))` folds to x for R = f32: no f64 conversion is linked).
 /// Returns whether the command succeeded (and `apply` was called and accepted).
+#[inline(never)]
 pub fn pose<R, W, F>(
     out: &mut W,
     finger: &Finger<R>,

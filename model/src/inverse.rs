@@ -620,12 +620,7 @@ fn no_stacks<R: Real>(
 /// max(1e-8, 256 eps), is accepted).
 fn choose_tension<R: Real>(ends: &[[R; 2]], given: Option<R>, refuse: Option<usize>, rel: R) -> ([R; 2], R, Option<usize>) {
     let range = |e: &[R; 2]| (e[0].min(e[1]), e[0].max(e[1]));
-    let mut p_lo = range(&ends[0]).0;
-    let mut p_hi = range(&ends[0]).1;
-    for e in &ends[1..] {
-        p_lo = p_lo.max(range(e).0);
-        p_hi = p_hi.min(range(e).1);
-    }
+    let [p_lo, p_hi] = feasible_interval(ends.len(), |k| ends[k]);
     let pt = match given {
         Some(t) => t,
         None if p_lo <= p_hi && refuse.is_none() => (p_lo + p_hi) / R::from_f64(2.0),
@@ -649,6 +644,19 @@ fn choose_tension<R: Real>(ends: &[[R; 2]], given: Option<R>, refuse: Option<usi
         }
     }
     ([p_lo, p_hi], pt, worst.map(|(k, _)| k))
+}
+
+/// The intersection of the joints' tension ranges ([min, max] of each joint's two ends):
+/// [largest low end, smallest high end] (empty when the first exceeds the second).
+/// `end(k)`: joint k's two ends, k < n (n >= 1).
+fn feasible_interval<R: Real>(n: usize, end: impl Fn(usize) -> [R; 2]) -> [R; 2] {
+    let e = end(0);
+    let mut out = [e[0].min(e[1]), e[0].max(e[1])];
+    for k in 1..n {
+        let e = end(k);
+        out = [out[0].max(e[0].min(e[1])), out[1].min(e[0].max(e[1]))];
+    }
+    out
 }
 
 /// Median of a short slice (sorted in place; insertion sort, no allocation).

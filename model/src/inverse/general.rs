@@ -3,27 +3,32 @@
 //! modulus (`Params::plate`). The m = 1 rigid-link fast path (the parent module) fixes the
 //! hinge angle and solves the closed joint equilibrium for P or t; with m > 1 the angle is
 //! split among the sub-elements and does not fix the hinge's geometry, and with flexible links
-//! the hinge's share of the joint angle depends on P. So here the forward per-joint solve
-//! (`Finger::joint_equilibrium`, the same Newton as `Finger::solve_with`, warm-started) is
-//! the function evaluation, and the inverse is 1-D root finding on it:
+//! the hinge's share of the joint angle depends on P. So here one forward march of a joint
+//! (`Finger::joint_march`, from a guessed guide-hole position) is the function evaluation,
+//! and each joint solve is Broyden's method on (hole, P) at fixed stack thickness t (the
+//! tension range ends, step 1: `hold_tension`) or on (hole, t) at fixed tension (step 4:
+//! `hold_thickness`, then the voltage in closed form from t):
 //!
-//! - at fixed stack thickness t, the joint angle θ_k(P, t) rises monotonically with the
-//!   tension along the equilibrium branch (root in P: the tension range ends, steps 1);
-//! - at fixed tension it falls monotonically with t (thinner stack, softer joint; root in t
-//!   on [t_top, t0], then the voltage in closed form from t, step 4).
+//! - at fixed t the joint angle θ_k(P, t) rises with the tension along the equilibrium branch;
+//! - at fixed tension it falls with t where thinning softens the joint, rises where the
+//!   stack's axial-bending coupling makes thinning stiffen it.
 //!
-//! Each root: secant steps kept inside a bracket, bisection when a step leaves it or when one
-//! end has been kept three times (the Illinois failure mode), converged when the joint angle
-//! is within `angle tolerance` of the target or the bracket has shrunk to the scalar's
-//! resolution. A forward failure (contact, limit point) at a trial tension marks it as beyond
-//! the branch end; a target past the end is refused with that error. The flexible link's
-//! rotation (P e L/(E I), independent of the voltage) is part of θ_k.
+//! With the branch table (table.rs) step 1 reads the range ends off the table and solves only
+//! those that bound the feasible interval; step 4 starts from a quadratic through the table's
+//! three branches. Behind the quasi-Newton solves (model feature `inverse-fallback`), a
+//! bracketed root on the warm-started forward equilibrium (`Finger::joint_equilibrium`):
+//! secant steps kept inside a bracket, bisection when a step leaves it or when one end has
+//! been kept three times (the Illinois failure mode), converged when the joint angle is within
+//! the angle tolerance or the bracket has shrunk to the scalar's resolution. A forward failure
+//! (contact, limit point) at a trial tension marks it as beyond the branch end; a target past
+//! the end is refused with that error. The flexible link's rotation (P e L/(E I), independent
+//! of the voltage) is part of θ_k.
 //!
 //! Steps 2-3 (the interval, the tension rule, the unreachable report) are the parent's, with
 //! the same meaning for every m.
 
 use super::table::{BranchTable, TableEnd, TABLE_BAND};
-use super::{choose_tension, Options, PoseSolution};
+use super::{choose_tension, feasible_interval, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
 use crate::finger::{uniform_beam_compliance, Finger, JointEquilibrium, JointMarch, Pose};
@@ -399,9 +404,9 @@ impl<'a, R: Real> Gen<'a, R> {
     }
 
     /// Joint held at θ* under tension `pt`: the stack thickness in [t_top, t0], by a root in t.
-    #[inline(never)]
     /// `mid`: a third point (P, t, hole) of the joint held at θ* between the two, if known.
     /// The sub-element displacements go to `q_out`.
+    #[inline(never)]
     #[allow(clippy::too_many_arguments)]
     fn hold_thickness(
         &mut self,
@@ -531,9 +536,9 @@ struct Qn<R> {
 }
 
 impl<'a, R: Real> Gen<'a, R> {
-    #[inline(never)]
     /// The hole of a joint bent to θ as a circular arc (the first guess of a quasi-Newton
     /// solve): hinge end (L_h sin θ/θ, L_h (1 - cos θ)/θ), link k's proximal hole e above it.
+    #[inline(never)]
     fn arc_hole(&self, theta: R) -> [R; 2] {
         let lh = self.p.hinge_len();
         let (s, c) = theta.sin_cos();
@@ -688,6 +693,15 @@ fn f_eval<R: Real>(g: &Gen<'_, R>, joint: usize, t: R, p: R, guess: Option<[R; 2
     g.f.joint_equilibrium(joint, &c, p, guess, g.tol_hole)
 }
 
+/// Each joint's two tension ends (softest, stiffest stack), as `choose_tension` takes them.
+fn tension_ends<R: Real>(lo: &[Held<R>; MAX_JOINTS], hi: &[Held<R>; MAX_JOINTS], n: usize) -> [[R; 2]; MAX_JOINTS] {
+    let mut ends = [[R::zero(); 2]; MAX_JOINTS];
+    for k in 0..n {
+        ends[k] = [lo[k].tension, hi[k].tension];
+    }
+    ends
+}
+
 /// A march's state of a solved equilibrium.
 fn march_of<R: Real>(eq: &JointEquilibrium<R>) -> JointMarch<R> {
     JointMarch { end: eq.end, hole: eq.hole, link: eq.link, angle: eq.angle }
@@ -769,11 +783,7 @@ pub(super) fn solve<R: Real>(
     //     and any within `TABLE_BAND` of those bounds (they might bound it instead)
     loop {
         // the interval's two bounds: the largest low end and the smallest high end
-        let mut bound = [R::zero(), R::from_f64(f64::MAX)];
-        for k in 0..n {
-            let (a, b) = (lo[k].tension, hi[k].tension);
-            bound = [bound[0].max(a.min(b)), bound[1].min(a.max(b))];
-        }
+        let bound = feasible_interval(n, |k| [lo[k].tension, hi[k].tension]);
         let band = R::from_f64(TABLE_BAND);
         let mut next = None;
         'find: for k in 0..n {
@@ -811,11 +821,7 @@ pub(super) fn solve<R: Real>(
     let negative = (0..n).filter(|&k| angles[k] < R::zero()).min_by(|&a, &b| {
         angles[a].partial_cmp(&angles[b]).unwrap_or(core::cmp::Ordering::Equal)
     });
-    let mut ends = [[R::zero(); 2]; MAX_JOINTS];
-    for k in 0..n {
-        ends[k] = [lo[k].tension, hi[k].tension];
-    }
-    let (interval, pt, worst) = choose_tension(&ends[..n], tension, negative, g.rel);
+    let (interval, pt, worst) = choose_tension(&tension_ends(&lo, &hi, n)[..n], tension, negative, g.rel);
     out.interval = interval;
     if let Some(k) = worst {
         let (cl0, cl_top) = (s0 / p.e, s_top / p.e);

@@ -106,8 +106,7 @@ impl<R: Real> BranchTable<R> {
         let mut scratch = [[R::zero(); 3]; MAX_SUB];
         for e in 0..3 {
             let th = t.thickness[e];
-            let c = if e < 2 { &t.comp[e] } else { &c_mid };
-            let s_lin = g.slope0(c);
+            let (c, s_lin) = if e < 2 { (&t.comp[e], t.slope0[e]) } else { (&c_mid, g.slope0(&c_mid)) };
             let mut jac: Option<Mat3<R>> = None;
             let mut slope = s_lin;
             for i in 1..TABLE_LEN {
@@ -137,20 +136,21 @@ impl<R: Real> BranchTable<R> {
         self.params == *p && self.top == opts.top
     }
 
-    /// The largest angle the table holds at both ends, rad.
+    /// The largest angle the table holds on all three branches (what `solve_pose_with_table`
+    /// reads off it), rad.
     pub fn max_angle(&self) -> R {
-        self.step * R::from_u32(self.len[0].min(self.len[1]) as u32 - 1)
+        self.step * R::from_u32(self.covered() as u32 - 1)
+    }
+
+    /// Samples held on all three branches.
+    fn covered(&self) -> usize {
+        self.len[0].min(self.len[1]).min(self.len[2])
     }
 
     /// The tensions the table reads off for joint angle θ (rad): softest stack, stiffest, middle
     /// thickness (N). None where `solve_pose_with_table` solves instead (outside the table).
     pub fn tensions(&self, theta: R) -> Option<[R; 3]> {
         self.ends(theta).map(|e| [e[0].tension, e[1].tension, e[2].tension])
-    }
-
-    /// The samples (P N, hole x, hole y mm) of branch `e` (0 softest, 1 stiffest, 2 middle).
-    pub fn samples(&self, e: usize) -> &[[R; 3]] {
-        &self.x[e][..self.len[e]]
     }
 
     /// Samples per branch (softest end, stiffest end, middle).
@@ -164,7 +164,7 @@ impl<R: Real> BranchTable<R> {
     /// or with fewer than four samples.
     #[inline(never)]
     pub(super) fn ends(&self, theta: R) -> Option<[TableEnd<R>; 3]> {
-        let len = self.len[0].min(self.len[1]).min(self.len[2]);
+        let len = self.covered();
         if len < 4 {
             return None;
         }
