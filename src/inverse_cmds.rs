@@ -23,7 +23,7 @@ use core::fmt::{self, Write};
 #[cfg(feature = "contact")]
 use finger_model::inverse::contact_force;
 #[cfg(feature = "pose")]
-use finger_model::inverse::{solve_pose_with_table, BranchTable, Options};
+use finger_model::inverse::{solve_pose, solve_pose_tabled, BranchTable};
 use finger_model::{Error, Finger, Real, MAX_JOINTS};
 
 #[cfg(feature = "pose")]
@@ -55,7 +55,7 @@ fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f32>, prec: usize) 
 }
 
 #[cfg(feature = "pose")]
-/// `pose <d1> .. <dn> [<P>]`. `table`: the finger's branch table (built for `finger` and the
+/// `pose <d1> .. <dn> [<P>]`. `table`: the finger's branch table (built from `finger` with the
 /// default options; None solves without it). `degrees`: the joint angles as parsed (one per joint);
 /// `tension`: the optional fourth argument. `apply(tension, volts)` moves the outputs (or,
 /// disarmed, nothing) or refuses with a console error. Arguments are the console's f32
@@ -88,7 +88,8 @@ where
         }
         *a = R::from_f64(f64::from(d)) * R::from_f64(core::f64::consts::PI / 180.0);
     }
-    let sol = match solve_pose_with_table(finger, table, &angles[..n], tension.map(|t| R::from_f64(f64::from(t))), &Options::default()) {
+    let tension = tension.map(|t| R::from_f64(f64::from(t)));
+    let sol = match table.map_or_else(|| solve_pose(finger, &angles[..n], tension), |t| solve_pose_tabled(t, &angles[..n], tension)) {
         Ok(s) => s,
         Err(e) => {
             write_err(out, &e)?;

@@ -419,7 +419,7 @@ fn branch_table_gives_the_untabled_answers() {
         postures.push(vec![0.1, 0.9, 0.1]);
         for angles in postures {
             let a = solve_pose(&f, &angles, None);
-            let b = inverse::solve_pose_with_table(&f, Some(&table), &angles, None, &opts);
+            let b = inverse::solve_pose_tabled(&table, &angles, None);
             match (a, b) {
                 (Ok(a), Ok(b)) => {
                     let rel = |x: f64, y: f64| (x - y).abs() / y.abs().max(1e-9);
@@ -450,7 +450,7 @@ fn branch_table_round_trip_f32() {
     let table = inverse::BranchTable::new(&f, &opts).unwrap();
     let (mut marches_tabled, mut marches_untabled) = (0u32, 0u32);
     for (p, _v, angles) in grid(&f, &[0.2, 0.5, 1.0, 2.0, 4.0]) {
-        let s = inverse::solve_pose_with_table(&f, Some(&table), &angles, None, &opts).unwrap();
+        let s = inverse::solve_pose_tabled(&table, &angles, None).unwrap();
         let u = solve_pose(&f, &angles, None).unwrap();
         marches_tabled += s.iterations;
         marches_untabled += u.iterations;
@@ -486,19 +486,29 @@ fn branch_table_interpolation_error() {
     assert!(worst < inverse::TABLE_BAND / 100.0);
 }
 
-/// A table built for other parameters (or another `top`) is refused, and nothing is solved.
+/// A table keeps the finger and the options it was built for: solving with it answers for
+/// that finger and that `top` (it cannot be paired with another parameter set), and a finger
+/// without stacks has no table.
 #[test]
-fn branch_table_of_other_parameters_is_refused() {
+fn branch_table_keeps_its_finger_and_options() {
     let opts = Options::default();
-    let f = Finger::new(Params::<f64>::default()).unwrap();
     let other = Finger::new(Params::<f64> { l: 28.0, ..Params::default() }).unwrap();
     let table = inverse::BranchTable::new(&other, &opts).unwrap();
-    let r = inverse::solve_pose_with_table(&f, Some(&table), &[0.1; 3], None, &opts);
-    assert!(matches!(r, Err(Error::Input { input: "table", .. })), "{r:?}");
+    assert_eq!(table.finger().params(), other.params());
+    let angles = [0.1, 0.1, 0.1];
+    let (a, b) = (inverse::solve_pose_tabled(&table, &angles, None).unwrap(), solve_pose(&other, &angles, None).unwrap());
+    assert!((a.tension - b.tension).abs() < 1e-9 * b.tension, "{} vs {}", a.tension, b.tension);
+    let f = Finger::new(Params::<f64>::default()).unwrap();
     let top = Options { top: 0.9, ..opts };
     let table = inverse::BranchTable::new(&f, &top).unwrap();
-    assert!(matches!(inverse::solve_pose_with_table(&f, Some(&table), &[0.1; 3], None, &opts), Err(Error::Input { .. })));
+    assert_eq!(table.options().top, 0.9);
+    let (a, b) = (inverse::solve_pose_tabled(&table, &angles, None).unwrap(), solve_pose_with(&f, &angles, None, &top).unwrap());
+    let c = solve_pose(&f, &angles, None).unwrap();
+    for e in 0..2 {
+        assert!((a.interval[e] - b.interval[e]).abs() < 1e-9 * b.interval[e], "{:?} vs {:?}", a.interval, b.interval);
+    }
+    assert!(a.interval[0] > c.interval[0] * (1.0 + 1e-6), "a lower top leaves a higher low end: {:?} vs {:?}", a.interval, c.interval);
     // a finger without stacks has no table
     let bare = Finger::new(Params::<f64> { layers: 0, ..Params::default() }).unwrap();
-    assert!(inverse::BranchTable::new(&bare, &opts).is_err());
+    assert!(matches!(inverse::BranchTable::new(&bare, &opts), Err(Error::Input { input: "table", .. })));
 }

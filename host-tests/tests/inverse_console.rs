@@ -149,7 +149,7 @@ mod console {
         // the firmware solves with the finger's branch table (built at the first `pose`)
         let opts = finger_model::inverse::Options::default();
         let table = finger_model::inverse::BranchTable::new(a.finger(), &opts).unwrap();
-        let want = finger_model::inverse::solve_pose_with_table(a.finger(), Some(&table), &rad, None, &opts).unwrap();
+        let want = finger_model::inverse::solve_pose_tabled(&table, &rad, None).unwrap();
         // disarmed: the answer, nothing moves
         let before = outputs(&mut a);
         let r = cmd(&mut a, &format!("pose {angles}"));

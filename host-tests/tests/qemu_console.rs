@@ -188,7 +188,7 @@ fn qemu_console_commands_and_bad_inputs() {
     let opts = finger_model::inverse::Options::default();
     let table = finger_model::inverse::BranchTable::new(&f, &opts).unwrap();
     let rad = deg.map(|d| (d * std::f64::consts::PI / 180.0) as f32);
-    let want = finger_model::inverse::solve_pose_with_table(&f, Some(&table), &rad, None, &opts).unwrap();
+    let want = finger_model::inverse::solve_pose_tabled(&table, &rad, None).unwrap();
     let r = expect(&mut q, &format!("pose {} {} {}", deg[0], deg[1], deg[2]), "ok force=");
     let force: f64 = r.split_whitespace().find_map(|w| w.strip_prefix("force=")).unwrap().parse().unwrap();
     assert!((force - want.tension as f64).abs() < 2e-3, "{r} vs {want:?}");

@@ -366,7 +366,15 @@ pub fn solve_pose_with<R: Real>(
     tension: Option<R>,
     opts: &Options<R>,
 ) -> Result<PoseSolution<R>, Error> {
-    solve_pose_with_table(f, None, angles, tension, opts)
+    solve(f, None, angles, tension, opts)
+}
+
+/// The inverse with a branch table (table.rs), for the finger and the options the table was
+/// built for: step 1's tension ranges are read off the table and only the ends that bound the
+/// feasible interval are solved. The same answers to the same tolerance, at a fraction of the
+/// cost (issue 4). The m = 1 fast path does not use it.
+pub fn solve_pose_tabled<R: Real>(table: &BranchTable<R>, angles: &[R], tension: Option<R>) -> Result<PoseSolution<R>, Error> {
+    solve(table.finger(), Some(table), angles, tension, table.options())
 }
 
 /// The options' own checks.
@@ -380,11 +388,10 @@ fn check_options<R: Real>(opts: &Options<R>) -> Result<(), Error> {
     Ok(())
 }
 
-/// `solve_pose_with` using the finger's branch table (table.rs), built for the same parameters
-/// and `opts.top` (else `Error::Input`): step 1's tension ranges are read off the table and
-/// only the ends that bound the feasible interval are solved. The same answers to the same
-/// tolerance, at a fraction of the cost (issue 4). The m = 1 fast path does not use it.
-pub fn solve_pose_with_table<R: Real>(
+/// `solve_pose_with` and `solve_pose_tabled` (`table`, when given, was built for `f` and
+/// `opts`). One copy in the image for both entry points.
+#[inline(never)]
+fn solve<R: Real>(
     f: &Finger<R>,
     table: Option<&BranchTable<R>>,
     angles: &[R],
@@ -408,11 +415,6 @@ pub fn solve_pose_with_table<R: Real>(
         }
     }
     check_options(opts)?;
-    if let Some(tb) = table {
-        if !tb.fits(p, opts) {
-            return Err(Error::Input { input: "table", reason: "built for another parameter set or top" });
-        }
-    }
     let mut out = PoseSolution {
         n,
         angles: [R::zero(); MAX_JOINTS],

@@ -10,7 +10,7 @@
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use finger_model::inverse::{solve_pose_with_table, BranchTable, Options};
+use finger_model::inverse::{solve_pose, solve_pose_tabled, BranchTable, Options};
 use finger_model::{Finger, Params};
 
 #[path = "../cycles.rs"]
@@ -46,7 +46,8 @@ fn run(name: &str, p: Params<f32>, deg: [f32; 3], tension: Option<f32>) {
     let tb = table(&f);
     let angles = core::hint::black_box([deg[0] * DEG, deg[1] * DEG, deg[2] * DEG]);
     let t0 = cycles::now();
-    let r = solve_pose_with_table(&f, tb.as_ref(), &angles, core::hint::black_box(tension), &Options::default());
+    let tension = core::hint::black_box(tension);
+    let r = tb.as_ref().map_or_else(|| solve_pose(&f, &angles, tension), |t| solve_pose_tabled(t, &angles, tension));
     let t1 = cycles::now();
     match core::hint::black_box(r) {
         Ok(s) => hprintln!("I {} ok {} {} {} {} {}", name, t1 - t0, s.tension, s.volts[0], s.volts[1], s.volts[2]),
@@ -76,7 +77,7 @@ fn main() -> ! {
     let deg = core::hint::black_box([10.03f32, 10.0, 9.97]);
     let angles = [deg[0] * DEG, deg[1] * DEG, deg[2] * DEG];
     profile_start();
-    let r = solve_pose_with_table(&f, tb.as_ref(), &angles, core::hint::black_box(None), &Options::default());
+    let r = tb.as_ref().map_or_else(|| solve_pose(&f, &angles, None), |t| solve_pose_tabled(t, &angles, None));
     profile_stop();
     match core::hint::black_box(r) {
         Ok(s) => hprintln!("P ok {} {} {} {}", s.tension, s.volts[0], s.volts[1], s.volts[2]),

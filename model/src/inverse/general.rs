@@ -31,7 +31,7 @@ use super::table::{BranchTable, TableEnd, TABLE_BAND};
 use super::{choose_tension, feasible_interval, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
-use crate::finger::{uniform_beam_compliance, Finger, JointEquilibrium, JointMarch, Pose};
+use crate::finger::{uniform_beam_compliance, Finger, JointEquilibrium, JointMarch, Method, Pose};
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -944,19 +944,20 @@ fn no_stacks<R: Real>(
         });
     }
     out.tension = pt;
-    // the states at the chosen tension (the posture the forward model gives there)
+    // the states at the chosen tension: the forward model's posture there (0 V: the hinges
+    // alone)
     if pt > z {
+        let sol = g.f.solve(pt, &[z; MAX_JOINTS][..n], Method::converged())?;
+        g.iters += sol.iterations;
+        let sub_len = lh / R::from_u32(g.p.m as u32);
         for k in 0..n {
-            if k > 0 && angles[k] == angles[k - 1] {
-                out.q[k] = out.q[k - 1];
-                out.sub_q[k] = out.sub_q[k - 1];
-                out.links[k] = out.links[k - 1];
-                continue;
+            let mut end = Pose::origin();
+            for q in sol.q[k].iter().take(g.p.m) {
+                end = end.then(sub_len + q[0], q[1], q[2]);
             }
-            let eq = g.f.joint_equilibrium(k + 1, &c, pt, Some(h[k].st.hole), g.tol_hole)?;
-            g.iters += eq.iterations;
-            out.sub_q[k] = eq.q;
-            record(out, k, lh, &Held { st: march_of(&eq), ..h[k] });
+            out.q[k] = [end.x - lh, end.y, end.theta];
+            out.sub_q[k] = sol.q[k];
+            out.links[k] = sol.links[k];
         }
     }
     out.iterations = g.iters;

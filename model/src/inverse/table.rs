@@ -11,24 +11,25 @@
 //! continued from the sample before; the table ends where the branch does (contact, a limit
 //! point) or at `TABLE_LEN` samples.
 //!
-//! What it is for: `solve_pose_with_table` reads step 1's tension range of every joint off
+//! What it is for: `solve_pose_tabled` reads step 1's tension range of every joint off
 //! the table (a cubic through four samples) instead of solving for it, and solves (verifies)
 //! only the ends that bound the feasible interval; its step 4 starts from the interpolated
 //! ends. That takes the inverse of the default model (m = 8) from ~60,000 to ~12,000
 //! instructions on the M4F (docs/inverse-cost.md).
 //!
-//! What it is not: a reduced model. Every number `solve_pose_with_table` returns (the tension,
+//! What it is not: a reduced model. Every number `solve_pose_tabled` returns (the tension,
 //! the interval's ends, the thicknesses and voltages, the states) is a converged solve of the
 //! full model, to the same tolerance as without the table; the table only decides where the
 //! solves start and which range ends need one. Built once per parameter set (the firmware
-//! rebuilds it when a parameter changes); about 2.3 KB in f32.
+//! rebuilds it when a parameter changes); it keeps a copy of its finger and options, so it
+//! is never used with another parameter set. About 4.5 KB in f32 (the finger's 1.3 KB).
 
 use super::general::Gen;
 use super::Options;
 use crate::error::Error;
 use crate::finger::Finger;
 use crate::mat3::Mat3;
-use crate::params::{Params, MAX_SUB};
+use crate::params::MAX_SUB;
 use crate::real::Real;
 
 /// The relative band around the feasible interval's bounds inside which an end read off the
@@ -53,8 +54,10 @@ pub(super) struct TableEnd<R> {
 /// point for step 4's first guess).
 #[derive(Clone, Copy, Debug)]
 pub struct BranchTable<R> {
-    params: Params<R>,
-    top: R,
+    /// The finger and the options the table was built for (`solve_pose_tabled` solves with
+    /// these: a table cannot be used with another parameter set).
+    finger: Finger<R>,
+    opts: Options<R>,
     /// Stack thickness of each branch, mm.
     pub(super) thickness: [R; 3],
     /// The top voltage (`top` x the ceiling), V.
@@ -93,8 +96,8 @@ impl<R: Real> BranchTable<R> {
         let step = R::from_f64(TABLE_STEP_DEG.to_radians());
         let lh = p.hinge_len();
         let mut t = BranchTable {
-            params: *p,
-            top: opts.top,
+            finger: *f,
+            opts: *opts,
             thickness: [t_top, t0, t_mid],
             v_top,
             comp,
@@ -131,12 +134,17 @@ impl<R: Real> BranchTable<R> {
         Ok(t)
     }
 
-    /// Whether the table was built for this parameter set and this `top`.
-    pub fn fits(&self, p: &Params<R>, opts: &Options<R>) -> bool {
-        self.params == *p && self.top == opts.top
+    /// The finger the table was built for.
+    pub fn finger(&self) -> &Finger<R> {
+        &self.finger
     }
 
-    /// The largest angle the table holds on all three branches (what `solve_pose_with_table`
+    /// The inverse options the table was built for (`top` sets its softest branch).
+    pub fn options(&self) -> &Options<R> {
+        &self.opts
+    }
+
+    /// The largest angle the table holds on all three branches (what `solve_pose_tabled`
     /// reads off it), rad.
     pub fn max_angle(&self) -> R {
         self.step * R::from_u32(self.covered() as u32 - 1)
@@ -148,7 +156,7 @@ impl<R: Real> BranchTable<R> {
     }
 
     /// The tensions the table reads off for joint angle θ (rad): softest stack, stiffest, middle
-    /// thickness (N). None where `solve_pose_with_table` solves instead (outside the table).
+    /// thickness (N). None where `solve_pose_tabled` solves instead (outside the table).
     pub fn tensions(&self, theta: R) -> Option<[R; 3]> {
         self.ends(theta).map(|e| [e[0].tension, e[1].tension, e[2].tension])
     }
