@@ -1,0 +1,182 @@
+//! The console contract (shared/CONSOLE.md) seen from the host: one command line out, the
+//! lines before its final reply and the final `ok ...` or `err <code>: ...` back, typed.
+//! Not here: how bytes travel (`link.rs`).
+use std::time::Duration;
+
+use crate::link::{Link, LinkError};
+
+/// The error codes of CONSOLE.md, and any other code a newer firmware may add.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ErrorCode {
+    Unknown,
+    Usage,
+    BadNumber,
+    TooLong,
+    Limit,
+    NotArmed,
+    Armed,
+    Unreachable,
+    Fault,
+    Other(String),
+}
+
+impl ErrorCode {
+    pub fn parse(code: &str) -> ErrorCode {
+        match code {
+            "unknown" => ErrorCode::Unknown,
+            "usage" => ErrorCode::Usage,
+            "bad-number" => ErrorCode::BadNumber,
+            "too-long" => ErrorCode::TooLong,
+            "limit" => ErrorCode::Limit,
+            "not-armed" => ErrorCode::NotArmed,
+            "armed" => ErrorCode::Armed,
+            "unreachable" => ErrorCode::Unreachable,
+            "fault" => ErrorCode::Fault,
+            other => ErrorCode::Other(other.to_owned()),
+        }
+    }
+
+    pub fn as_str(&self) -> &str {
+        match self {
+            ErrorCode::Unknown => "unknown",
+            ErrorCode::Usage => "usage",
+            ErrorCode::BadNumber => "bad-number",
+            ErrorCode::TooLong => "too-long",
+            ErrorCode::Limit => "limit",
+            ErrorCode::NotArmed => "not-armed",
+            ErrorCode::Armed => "armed",
+            ErrorCode::Unreachable => "unreachable",
+            ErrorCode::Fault => "fault",
+            ErrorCode::Other(s) => s,
+        }
+    }
+}
+
+/// A successful reply: the `key=value` fields of the final `ok` line, and the lines before it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reply {
+    pub before: Vec<String>,
+    pub line: String,
+}
+
+impl Reply {
+    /// The value of `key` in the `ok` line.
+    pub fn get(&self, key: &str) -> Option<&str> {
+        self.line.split_whitespace().skip(1).find_map(|kv| kv.strip_prefix(key)?.strip_prefix('='))
+    }
+
+    /// The comma-separated numbers of `key` (`volts=1.0,2.0,3.0`).
+    pub fn numbers(&self, key: &str) -> Option<Vec<f64>> {
+        self.get(key)?.split(',').map(|v| v.parse().ok()).collect()
+    }
+
+    /// Every `key=value` field, in order.
+    pub fn fields(&self) -> impl Iterator<Item = (&str, &str)> {
+        self.line.split_whitespace().skip(1).filter_map(|kv| kv.split_once('='))
+    }
+}
+
+/// Why a command did not give a reply.
+#[derive(Debug)]
+pub enum CommandError {
+    /// The board refused: `err <code>: <message>`.
+    Board { code: ErrorCode, message: String },
+    Link(LinkError),
+}
+
+impl std::fmt::Display for CommandError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CommandError::Board { code, message } => write!(f, "err {}: {message}", code.as_str()),
+            CommandError::Link(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for CommandError {}
+
+impl From<LinkError> for CommandError {
+    fn from(e: LinkError) -> Self {
+        CommandError::Link(e)
+    }
+}
+
+/// A board's console: one command at a time, each answered within `timeout`.
+pub struct Console {
+    link: Link,
+    pub timeout: Duration,
+}
+
+/// The longest reply a `wait <s>` may take beyond its own duration.
+const WAIT_SLACK: Duration = Duration::from_secs(5);
+
+impl Console {
+    pub fn new(link: Link, timeout: Duration) -> Console {
+        Console { link, timeout }
+    }
+
+    /// Send one command line; its reply. A line with a newline inside is refused here, since
+    /// the board would answer each part.
+    pub fn command(&mut self, line: &str) -> Result<Reply, CommandError> {
+        let line = line.trim();
+        if line.contains(['\r', '\n']) {
+            return Err(CommandError::Board { code: ErrorCode::Usage, message: "one command per line".into() });
+        }
+        if line.is_empty() {
+            return Ok(Reply { before: Vec::new(), line: String::new() });
+        }
+        self.link.send(format!("{line}\r\n").as_bytes())?;
+        let timeout = self.timeout + wait_duration(line).map_or(Duration::ZERO, |w| w + WAIT_SLACK);
+        let mut before = Vec::new();
+        loop {
+            let l = self.link.line(timeout)?;
+            if l == "ok" || l.starts_with("ok ") {
+                return Ok(Reply { before, line: l });
+            }
+            if let Some(rest) = l.strip_prefix("err ") {
+                let (code, message) = rest.split_once(':').unwrap_or((rest, ""));
+                return Err(CommandError::Board { code: ErrorCode::parse(code.trim()), message: message.trim().to_owned() });
+            }
+            before.push(l);
+        }
+    }
+}
+
+/// The duration of a `wait <s>` command, which the board answers only when it ends.
+fn wait_duration(line: &str) -> Option<Duration> {
+    let mut w = line.split_whitespace();
+    if !w.next()?.eq_ignore_ascii_case("wait") {
+        return None;
+    }
+    let s: f64 = w.next()?.parse().ok()?;
+    (s.is_finite() && s >= 0.0).then(|| Duration::from_secs_f64(s.min(3600.0)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fields_and_numbers_of_an_ok_line() {
+        let r = Reply { before: vec![], line: "ok force=0.500 volts=1.0,2.0,3.0 armed=1".into() };
+        assert_eq!(r.get("force"), Some("0.500"));
+        assert_eq!(r.get("forc"), None);
+        assert_eq!(r.numbers("volts"), Some(vec![1.0, 2.0, 3.0]));
+        assert_eq!(r.fields().count(), 3);
+    }
+
+    #[test]
+    fn error_codes_round_trip() {
+        for c in ["unknown", "usage", "bad-number", "too-long", "limit", "not-armed", "armed", "unreachable", "fault", "new-one"] {
+            assert_eq!(ErrorCode::parse(c).as_str(), c);
+        }
+        assert_eq!(ErrorCode::parse("limit"), ErrorCode::Limit);
+    }
+
+    #[test]
+    fn wait_extends_the_time_out() {
+        assert_eq!(wait_duration("WAIT 2.5"), Some(Duration::from_millis(2500)));
+        assert_eq!(wait_duration("status"), None);
+        assert_eq!(wait_duration("wait nan"), None);
+    }
+}

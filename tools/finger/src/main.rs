@@ -1,0 +1,264 @@
+//! `finger`: the host client. One console contract, three ways to reach a board:
+//! `--port /dev/ttyACM0` (the real board), `--sim` (finger-sim), `--qemu` (the emulator image),
+//! or `--socket PATH` (a QEMU started by hand). Exit status: 0 ok, 1 the board refused
+//! (`err <code>: ...` on stderr), 2 the link failed or timed out.
+use std::io::{IsTerminal, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::{Args, Parser, Subcommand};
+use finger::{CommandError, Console, Link, LinkError};
+
+#[derive(Parser)]
+#[command(name = "finger", version, about = "Host client for the finger driver board (the console of shared/CONSOLE.md)")]
+struct Cli {
+    #[command(flatten)]
+    to: Target,
+    /// Seconds to wait for each reply before the board is reported as not answering.
+    #[arg(long, global = true, default_value_t = 10.0)]
+    timeout: f64,
+    /// With --qemu: where QEMU writes the defmt log (`finger log --file` decodes it).
+    #[arg(long, global = true, default_value = "target/defmt-client.bin")]
+    defmt_log: PathBuf,
+    #[command(subcommand)]
+    what: What,
+}
+
+#[derive(Args)]
+#[group(multiple = false)]
+struct Target {
+    /// The real board's serial port (115200 8N1 unless --baud).
+    #[arg(long, global = true)]
+    port: Option<String>,
+    #[arg(long, global = true, default_value_t = 115_200)]
+    baud: u32,
+    /// finger-sim, the application on a simulated board (default: the finger-sim next to
+    /// this program, else on PATH).
+    #[arg(long, global = true, num_args = 0..=1, default_missing_value = "")]
+    sim: Option<PathBuf>,
+    /// The emulator firmware image booted in QEMU netduinoplus2 (default: the release image
+    /// `cargo build --release` writes at the top of the repository).
+    #[arg(long, global = true, num_args = 0..=1, default_missing_value = "")]
+    qemu: Option<PathBuf>,
+    /// A console on a Unix socket (a QEMU started with -chardev socket,...,server=on).
+    #[arg(long, global = true)]
+    socket: Option<PathBuf>,
+}
+
+#[derive(Subcommand)]
+enum What {
+    /// Send each argument as one command line; print each reply.
+    Cmd {
+        #[arg(required = true)]
+        lines: Vec<String>,
+    },
+    /// Send each line of a script file (blank lines and `#` comments skipped); stop at the
+    /// first refusal unless --keep-going. `-` reads the script from stdin.
+    Script {
+        file: PathBuf,
+        #[arg(long)]
+        keep_going: bool,
+    },
+    /// `status` at a fixed rate as a live view.
+    Monitor {
+        /// Polls per second.
+        #[arg(long, default_value_t = 5.0)]
+        rate: f64,
+        /// Stop after this many polls (default: until Ctrl-C).
+        #[arg(long)]
+        count: Option<u64>,
+    },
+    /// The firmware's defmt log, decoded: a QEMU semihosting log file (followed as it grows),
+    /// or with --probe the board's RTT through probe-rs.
+    Log {
+        /// The firmware image whose defmt table decodes the log.
+        #[arg(long)]
+        elf: Option<PathBuf>,
+        /// The log file (default: target/defmt-qemu.bin, which scripts/run writes).
+        #[arg(long)]
+        file: Option<PathBuf>,
+        /// Decode what is there and stop, instead of following the file.
+        #[arg(long)]
+        no_follow: bool,
+        /// Read a real board's RTT through probe-rs (`probe-rs attach`).
+        #[arg(long)]
+        probe: bool,
+    },
+    /// The serial ports this machine has.
+    Ports,
+}
+
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn default_elf() -> PathBuf {
+    repo_root().join("target/thumbv7em-none-eabihf/release/finger-fw")
+}
+
+fn find_sim() -> PathBuf {
+    let next = std::env::current_exe().ok().and_then(|p| Some(p.parent()?.join("finger-sim")));
+    match next {
+        Some(p) if p.exists() => p,
+        _ => PathBuf::from("finger-sim"),
+    }
+}
+
+fn connect(t: &Target, defmt_log: &Path, timeout: Duration) -> Result<Link, LinkError> {
+    if let Some(p) = &t.port {
+        return Link::serial(p, t.baud);
+    }
+    if let Some(s) = &t.socket {
+        return Link::socket(s);
+    }
+    if let Some(elf) = &t.qemu {
+        let elf = if elf.as_os_str().is_empty() { default_elf() } else { elf.clone() };
+        let log = if defmt_log.is_absolute() { defmt_log.to_path_buf() } else { repo_root().join(defmt_log) };
+        return Link::qemu(&elf, &log, timeout.max(Duration::from_secs(20)));
+    }
+    if let Some(sim) = &t.sim {
+        let sim = if sim.as_os_str().is_empty() { find_sim() } else { sim.clone() };
+        return Link::sim(&sim);
+    }
+    Err(LinkError::Open("name a board: --port DEV, --sim, --qemu or --socket PATH".into()))
+}
+
+/// Print a reply (its lines, then the final line) or the board's refusal; true when ok.
+fn show(line: &str, r: &Result<finger::Reply, CommandError>) -> bool {
+    match r {
+        Ok(rep) => {
+            for l in &rep.before {
+                println!("{l}");
+            }
+            println!("{}", rep.line);
+            true
+        }
+        Err(e) => {
+            eprintln!("{line}: {e}");
+            false
+        }
+    }
+}
+
+fn exit_of(e: &CommandError) -> ExitCode {
+    match e {
+        CommandError::Board { .. } => ExitCode::from(1),
+        CommandError::Link(_) => ExitCode::from(2),
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let timeout = Duration::from_secs_f64(cli.timeout.clamp(0.1, 3600.0));
+    if let What::Ports = cli.what {
+        return match serialport::available_ports() {
+            Ok(ports) => {
+                for p in ports {
+                    println!("{}", p.port_name);
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("finger: {e}");
+                ExitCode::from(2)
+            }
+        };
+    }
+    if let What::Log { elf, file, no_follow, probe } = &cli.what {
+        let elf = elf.clone().unwrap_or_else(default_elf);
+        if *probe {
+            let st = std::process::Command::new("probe-rs").args(["attach", "--chip", "STM32F405RGTx"]).arg(&elf).status();
+            return match st {
+                Ok(s) if s.success() => ExitCode::SUCCESS,
+                Ok(_) => ExitCode::from(2),
+                Err(e) => {
+                    eprintln!("finger log --probe: probe-rs: {e} (install it: cargo install probe-rs-tools)");
+                    ExitCode::from(2)
+                }
+            };
+        }
+        let file = file.clone().unwrap_or_else(|| repo_root().join("target/defmt-qemu.bin"));
+        return match finger::log::follow(&elf, &file, !no_follow, &mut std::io::stdout().lock()) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("finger log: {e}");
+                ExitCode::from(2)
+            }
+        };
+    }
+    let link = match connect(&cli.to, &cli.defmt_log, timeout) {
+        Ok(l) => l,
+        Err(e) => {
+            eprintln!("finger: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut con = Console::new(link, timeout);
+    match cli.what {
+        What::Cmd { lines } => {
+            for line in &lines {
+                let r = con.command(line);
+                if !show(line, &r) {
+                    return exit_of(r.as_ref().unwrap_err());
+                }
+            }
+            ExitCode::SUCCESS
+        }
+        What::Script { file, keep_going } => {
+            let text = if file.as_os_str() == "-" {
+                let mut t = String::new();
+                std::io::stdin().read_to_string(&mut t).map(|_| t)
+            } else {
+                std::fs::read_to_string(&file)
+            };
+            let text = match text {
+                Ok(t) => t,
+                Err(e) => {
+                    eprintln!("finger: {}: {e}", file.display());
+                    return ExitCode::from(2);
+                }
+            };
+            let lines: Vec<&str> = text.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#')).collect();
+            let bar = indicatif::ProgressBar::new(lines.len() as u64);
+            if !std::io::stderr().is_terminal() || lines.len() < 20 {
+                bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+            }
+            let mut status = ExitCode::SUCCESS;
+            for line in lines {
+                println!("> {line}");
+                let r = con.command(line);
+                bar.inc(1);
+                if !show(line, &r) {
+                    let e = r.unwrap_err();
+                    if matches!(e, CommandError::Link(_)) || !keep_going {
+                        bar.abandon();
+                        return exit_of(&e);
+                    }
+                    status = ExitCode::from(1);
+                }
+            }
+            bar.finish_and_clear();
+            status
+        }
+        What::Monitor { rate, count } => {
+            if !(rate > 0.0 && rate <= 100.0) {
+                eprintln!("finger monitor: --rate must be in (0, 100] Hz");
+                return ExitCode::from(2);
+            }
+            let live = std::io::stdout().is_terminal();
+            let mut out = std::io::stdout().lock();
+            match finger::monitor::run(&mut con, rate, count, live, &mut out) {
+                Ok(()) => {
+                    let _ = out.flush();
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("finger monitor: {e}");
+                    exit_of(&e)
+                }
+            }
+        }
+        What::Log { .. } | What::Ports => unreachable!("handled above"),
+    }
+}

@@ -1,0 +1,154 @@
+//! The `finger` program as a user runs it, against finger-sim (a child process on pipes) and
+//! against the firmware's emulator image in QEMU (its console on a Unix socket): the same
+//! commands, replies and typed refusals on both, a board that stops answering reported after
+//! the time-out, and the QEMU image's defmt log decoded by `finger log`.
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().unwrap()
+}
+
+fn cargo() -> String {
+    std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
+}
+
+/// finger-sim, built once (host-tests' binary, for this machine).
+fn sim() -> &'static Path {
+    static SIM: OnceLock<PathBuf> = OnceLock::new();
+    SIM.get_or_init(|| {
+        let out = Command::new(cargo())
+            .current_dir(root().join("host-tests"))
+            .args(["build", "--quiet", "--bin", "finger-sim", "--message-format", "short"])
+            .output()
+            .expect("cargo");
+        assert!(out.status.success(), "finger-sim build failed:\n{}", String::from_utf8_lossy(&out.stderr));
+        // next to this test's own `finger` binary: same target dir and profile layout
+        let exe = PathBuf::from(env!("CARGO_BIN_EXE_finger"));
+        let p = exe.parent().unwrap().join("finger-sim");
+        assert!(p.exists(), "finger-sim not at {}", p.display());
+        p
+    })
+}
+
+/// The emulator firmware image, built once (`cargo build --release` at the top).
+fn image() -> &'static Path {
+    static IMG: OnceLock<PathBuf> = OnceLock::new();
+    IMG.get_or_init(|| {
+        let out = Command::new(cargo())
+            .current_dir(root())
+            .args(["build", "--release", "--quiet", "--bin", "finger-fw"])
+            .output()
+            .expect("cargo");
+        assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
+        let p = root().join("target/thumbv7em-none-eabihf/release/finger-fw");
+        assert!(p.exists());
+        p
+    })
+}
+
+fn finger(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_finger")).args(args).output().expect("finger")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// The console session both boards get, and what each must answer.
+fn same_session(board: &[&str]) {
+    let mut args = board.to_vec();
+    args.extend(["cmd", "version", "status", "limits", "solve 0.5 0 1000 2000", "arm", "volt all 500", "wait 0.3", "status"]);
+    let out = finger(&args);
+    let so = text(&out.stdout);
+    assert!(out.status.success(), "{board:?}: {}\n{so}", text(&out.stderr));
+    let lines: Vec<&str> = so.lines().collect();
+    assert_eq!(lines.len(), 8, "{so}");
+    assert!(lines[0].starts_with("ok version=") && lines[0].contains(" name=finger-fw"), "{so}");
+    assert!(lines[1].starts_with("ok armed=0 "), "{so}");
+    assert!(lines[2].starts_with("ok vmax="), "{so}");
+    assert!(lines[3].starts_with("ok joints="), "{so}");
+    assert_eq!(lines[4], "ok armed=1");
+    assert!(lines[7].contains(" volts=500.0,500.0,500.0 "), "{so}");
+
+    // a refusal comes back typed, with its code, and the exit status says so
+    let mut args = board.to_vec();
+    args.extend(["cmd", "volt 1 100"]);
+    let out = finger(&args);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("volt 1 100: err not-armed:"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn sim_answers_the_console_contract() {
+    same_session(&["--sim", sim().to_str().unwrap()]);
+}
+
+#[test]
+fn qemu_answers_the_same_session() {
+    let dir = std::env::temp_dir().join(format!("finger-client-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let log = dir.join("defmt.bin");
+    same_session(&["--qemu", image().to_str().unwrap(), "--defmt-log", log.to_str().unwrap()]);
+    // what that boot logged, decoded with the image's table
+    let out = finger(&["log", "--elf", image().to_str().unwrap(), "--file", log.to_str().unwrap(), "--no-follow"]);
+    let so = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(so.lines().any(|l| l.contains("finger-fw") && l.contains("qemu-netduinoplus2")), "decoded: {so}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn script_and_monitor_on_the_sim() {
+    let dir = std::env::temp_dir().join(format!("finger-script-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let script = dir.join("s.txt");
+    std::fs::write(&script, "# a comment\narm\n\nvolt 2 700\nfrobnicate\nstatus\n").unwrap();
+    let sim = sim().to_str().unwrap();
+    // stops at the first refusal
+    let out = finger(&["--sim", sim, "script", script.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let so = text(&out.stdout);
+    assert!(so.contains("> volt 2 700\nok volts=0.0,700.0,0.0") && !so.contains("> status"), "{so}");
+    assert!(text(&out.stderr).contains("frobnicate: err unknown:"));
+    // --keep-going runs the rest, and still reports the refusal in the exit status
+    let out = finger(&["--sim", sim, "script", "--keep-going", script.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stdout).contains("> status\nok armed=1 "));
+
+    let out = finger(&["--sim", sim, "monitor", "--rate", "50", "--count", "4"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let so = text(&out.stdout);
+    assert_eq!(so.lines().filter(|l| l.starts_with("ok armed=0 ")).count(), 4, "{so}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_board_that_stops_answering_is_reported_after_the_time_out() {
+    let dir = std::env::temp_dir().join(format!("finger-mute-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // reads its input and never answers
+    let mute = dir.join("mute-board");
+    std::fs::write(&mute, "#!/bin/sh\nexec sleep 30\n").unwrap();
+    std::fs::set_permissions(&mute, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let t0 = Instant::now();
+    let out = finger(&["--sim", mute.to_str().unwrap(), "--timeout", "0.5", "cmd", "status"]);
+    assert!(t0.elapsed() < Duration::from_secs(10));
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("did not answer within 0.5 s"), "{}", text(&out.stderr));
+    // and one whose link ends is reported as such, not waited on
+    let out = finger(&["--sim", "/bin/true", "cmd", "status"]);
+    assert_eq!(out.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn no_board_named_is_a_usage_error() {
+    let out = finger(&["cmd", "status"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("name a board"));
+    let out = finger(&["--sim", "--port", "/dev/null", "cmd", "status"]);
+    assert_eq!(out.status.code(), Some(2), "two boards at once are refused by the argument parser");
+}
