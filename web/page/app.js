@@ -299,6 +299,7 @@ async function drawAt(p, v, mode) {
 // ------------------------------------------------------------------ controls
 
 const sliders = () => ({ p: Number($('force').value), v: [1, 2, 3].map((k) => Number($('v' + k).value)) });
+function setSlider(id, x) { $(id).value = x; $(id + '-out').textContent = x; }
 function setSliders(p, v) {
   if (p != null) { $('force').value = p; $('force-out').textContent = p; }
   if (v) v.forEach((x, k) => { $('v' + (k + 1)).value = x; $('v' + (k + 1) + '-out').textContent = x; });
@@ -327,7 +328,7 @@ async function onSlider(id) {
   const line = id === 'force' ? `force ${x}` : `volt ${id.slice(1)} ${x}`;
   const r = showReply(line, await cmd(line, false));
   await refreshLimits();
-  if (!r.ok) await poll(true);
+  if (!r.ok) { state.held = null; await poll(true); } // back to what the board holds
 }
 
 async function refreshLimits() {
@@ -338,7 +339,12 @@ async function refreshLimits() {
   if (vmax > 0) state.vmax = vmax;
   $('limits').textContent = Object.entries(r.kv).map(([k, v]) => `${k}=${v}`).join('\n');
   // sliders reach a little past the ceilings, so that the board's refusal can be seen
-  for (const k of [1, 2, 3]) $('v' + k).max = Math.ceil(state.vmax * 1.1 / 100) * 100;
+  const vm = nums(r.kv.vmax);
+  for (const k of [1, 2, 3]) {
+    $('v' + k).max = Math.ceil(state.vmax * 1.1 / 100) * 100;
+    $('v' + k + '-ceil').textContent = `(ceiling ${vm[k - 1]} V; the slider reaches past it)`;
+  }
+  $('force-ceil').textContent = `(fmax ${r.kv.fmax} N at these setpoints)`;
   const fmax = Number(r.kv.fmax);
   if (fmax > 0 && !state.fmaxSet) { $('force').max = Math.ceil(fmax * 1.2); state.fmaxSet = true; }
 }
@@ -378,6 +384,12 @@ async function poll(force = false) {
     state.armed = armed;
     $('ctl-mode').textContent = armed ? '(armed: moves the board)' : '(disarmed: preview)';
     state.status = r.kv;
+    if (armed) {
+      // the sliders follow the board's setpoints (tension, HV targets), except one held
+      const tv = nums(r.kv.target || r.kv.volts);
+      if (state.held !== 'force') setSlider('force', Number(r.kv.force));
+      tv.forEach((x, k) => { if (state.held !== 'v' + (k + 1)) setSlider('v' + (k + 1), x); });
+    }
     if (armed || (was && !armed)) {
       const v = nums(r.kv.volts), p = Number(r.kv.force);
       const key = p + '|' + v.join(',');
@@ -447,30 +459,40 @@ function drawPlot() {
     return;
   }
   $('plot-src').textContent = `pose ${P.d.join(', ')} deg; from the ${P.src}`;
-  const names = ['kxx (N/mm)', 'kyy (N/mm)', 'kθθ (N·mm/rad)'], cols = ['#06c', '#c60', '#393'];
-  const all = P.samples.flatMap((s) => s.k.concat(s.host || [])).filter((x) => x > 0);
-  let y0 = Math.floor(Math.log10(Math.min(...all))), y1 = Math.ceil(Math.log10(Math.max(...all)));
-  if (y1 === y0) y1 = y0 + 1;
+  // each stiffness relative to its value at the low end (linear): the interval is often
+  // narrow, and the three differ by orders of magnitude
+  const names = ['kxx', 'kyy', 'kθθ'], units = ['N/mm', 'N/mm', 'N·mm/rad'], cols = ['#06c', '#c60', '#393'];
+  const base = P.samples[0].k;
+  const rel = (s, c, k) => (k || s.k)[c] / base[c];
+  const all = [];
+  for (const s of P.samples) for (let c = 0; c < 3; c++) { all.push(rel(s, c)); if (s.host) all.push(rel(s, c, s.host)); }
+  let y0 = Math.min(...all), y1 = Math.max(...all);
+  const pad = Math.max((y1 - y0) * 0.08, 1e-4);
+  y0 -= pad; y1 += pad;
   const span = P.hi - P.lo || 1;
-  const X = (t) => L + (t - P.lo) / span * (W - L - R), Y = (k) => T + (y1 - Math.log10(k)) / (y1 - y0) * (H - T - B);
+  const X = (t) => L + (t - P.lo) / span * (W - L - R), Y = (r) => T + (y1 - r) / (y1 - y0) * (H - T - B);
   el('rect', { x: L, y: T, width: W - L - R, height: H - T - B, fill: 'none', stroke: '#999' }, svg);
-  for (let e = y0; e <= y1; e++) {
-    el('line', { x1: L, x2: W - R, y1: Y(10 ** e), y2: Y(10 ** e), stroke: '#eee' }, svg);
-    el('text', { x: L - 4, y: Y(10 ** e) + 4, 'text-anchor': 'end', 'font-size': 11 }, svg).textContent = '1e' + e;
+  for (let i = 0; i <= 4; i++) {
+    const r = y0 + (y1 - y0) * i / 4;
+    el('line', { x1: L, x2: W - R, y1: Y(r), y2: Y(r), stroke: '#eee' }, svg);
+    el('text', { x: L - 4, y: Y(r) + 4, 'text-anchor': 'end', 'font-size': 11 }, svg).textContent = ((r - 1) * 100).toFixed(2) + ' %';
   }
   for (const t of [P.lo, (P.lo + P.hi) / 2, P.hi]) {
     el('text', { x: X(t), y: H - B + 14, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent = t.toFixed(4);
   }
-  el('text', { x: (L + W - R) / 2, y: H - 6, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent = 'cable tension P (N), the feasible interval';
+  el('text', { x: (L + W - R) / 2, y: H - 6, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent = 'cable tension P (N) across the feasible interval';
+  el('text', { x: L + 6, y: T + 14, 'font-size': 10, fill: '#555' }, svg).textContent = 'k / k(low end) - 1';
+  const last = P.samples[P.samples.length - 1].k;
   for (let c = 0; c < 3; c++) {
-    const pts = P.samples.map((s) => `${X(s.t).toFixed(1)},${Y(s.k[c]).toFixed(1)}`).join(' ');
+    const pts = P.samples.map((s) => `${X(s.t).toFixed(1)},${Y(rel(s, c)).toFixed(1)}`).join(' ');
     el('polyline', { points: pts, fill: 'none', stroke: cols[c], 'stroke-width': 2, class: 'k' + c }, svg);
-    P.samples.forEach((s) => el('circle', { cx: X(s.t), cy: Y(s.k[c]), r: 2.5, fill: cols[c] }, svg));
+    P.samples.forEach((s) => el('circle', { cx: X(s.t), cy: Y(rel(s, c)), r: 2.5, fill: cols[c] }, svg));
     const hs = P.samples.filter((s) => s.host);
-    if (hs.length) el('polyline', { points: hs.map((s) => `${X(s.t).toFixed(1)},${Y(s.host[c]).toFixed(1)}`).join(' '), fill: 'none', stroke: cols[c], 'stroke-dasharray': '4 3', 'stroke-width': 1 }, svg);
-    el('text', { x: W - R + 6, y: T + 14 + 16 * c, fill: cols[c], 'font-size': 11 }, svg).textContent = names[c];
+    if (hs.length) el('polyline', { points: hs.map((s) => `${X(s.t).toFixed(1)},${Y(rel(s, c, s.host)).toFixed(1)}`).join(' '), fill: 'none', stroke: cols[c], 'stroke-dasharray': '4 3', 'stroke-width': 1, class: 'host-k' + c }, svg);
+    el('text', { x: W - R + 6, y: T + 12 + 30 * c, fill: cols[c], 'font-size': 11 }, svg).textContent = `${names[c]} ${units[c]}`;
+    el('text', { x: W - R + 6, y: T + 25 + 30 * c, fill: cols[c], 'font-size': 10 }, svg).textContent = `${base[c].toPrecision(4)} → ${last[c].toPrecision(4)}`;
   }
-  el('text', { x: W - R + 6, y: T + 66, fill: '#555', 'font-size': 10 }, svg).textContent = 'dashed: host f64';
+  el('text', { x: W - R + 6, y: T + 104, fill: '#555', 'font-size': 10 }, svg).textContent = 'dashed: host f64';
 }
 
 // ------------------------------------------------------------------ connect
@@ -530,6 +552,10 @@ function wire() {
   for (const id of ['force', 'v1', 'v2', 'v3']) {
     $(id).addEventListener('input', () => { $(id + '-out').textContent = $(id).value; if (!state.armed) preview(); });
     $(id).addEventListener('change', () => onSlider(id).catch((e) => log('note', String(e))));
+    $(id).addEventListener('pointerdown', () => { state.held = id; });
+    $(id).addEventListener('pointerup', () => { state.held = null; });
+    $(id).addEventListener('focus', () => { state.held = id; });
+    $(id).addEventListener('blur', () => { state.held = null; });
   }
   $('pose').addEventListener('click', () => doPose().catch((e) => log('note', String(e))));
   $('cmd-form').addEventListener('submit', async (e) => {

@@ -1,6 +1,6 @@
 // The web view in headless Chromium (Debian's /usr/bin/chromium, driven by playwright-core;
 // no browser download). Serves web/dist (built by web/build) from a loopback port.
-// WEB_SHOTS=<dir> writes the screenshots there (web/test --shots: docs/).
+// WEB_SHOTS=<dir> writes the screenshots there (`web/test --shots`: docs/).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import http from 'node:http';
@@ -51,7 +51,7 @@ after(async () => {
 
 /** One console command through the page's console (the board the page talks to). */
 const board = (line) => page.evaluate((l) => window.finger.con.command(l, true), line);
-const shot = (name) => page.screenshot({ path: path.join(shots, `web-${name}.png`), fullPage: false });
+const shot = (name, fullPage = false) => page.screenshot({ path: path.join(shots, `web-${name}.png`), fullPage });
 const tipOf = (s) => s.split(',').slice(0, 2).map(Number);
 
 test('the page loads: simulated board connected, posture, limits and stop shown', async () => {
@@ -157,7 +157,7 @@ test('a pose shows its feasible tension interval, the stiffness at both ends, an
   const lowSolve = await board(`solve ${lo} ${lowPose.kv.volts.split(',').join(' ')}`);
   const kyy = await page.evaluate(() => window.finger.plot.samples[0].k[1]);
   assert.equal(kyy, Number(lowSolve.kv.stiffness.split(',')[1]));
-  await shot('pose');
+  await shot('pose', true);
 });
 
 test('a pose outside the range shows the board refusal', async () => {
@@ -196,6 +196,18 @@ test('stop is always reachable and stops the board at once', async () => {
   }
   await page.setViewportSize({ width: 1280, height: 900 });
   await page.evaluate(() => window.scrollTo(0, 0));
+  // armed, the sliders move the board: tension by the keyboard, a voltage past the ceiling refused
+  await page.focus('#force');
+  await page.keyboard.press('ArrowRight');
+  await page.waitForFunction(() => window.finger.status && window.finger.status.force === '1.050');
+  await page.focus('#v1');
+  await page.keyboard.press('End');
+  await page.waitForFunction(() => document.getElementById('refusal').textContent.startsWith('volt 1 '));
+  assert.ok(Number((await page.textContent('#refusal')).split(' ')[2]) >= 10000, 'the slider reaches past the ceiling');
+  assert.match(await page.textContent('#refusal'), /^volt 1 \d+ {2}-> {2}err limit: channel 1: \d+\.\d V is at or past the ceiling 10000\.0 V/);
+  assert.equal((await board('status')).kv.target, '6000.0,6000.0,6000.0', 'the refusal changed nothing');
+  await page.waitForFunction(() => document.getElementById('v1').value === '6000');
+  await page.waitForFunction(() => Number(window.finger.status.volts.split(',')[0]) >= 2000);
   await shot('armed');
   // commands queued behind each other: stop goes first
   await page.evaluate(() => { for (let i = 0; i < 5; i++) window.finger.con.command('solve 1 0 0 0', true).catch(() => {}); });
@@ -214,4 +226,67 @@ test('stop is always reachable and stops the board at once', async () => {
   assert.equal((await board('status')).kv.armed, '0');
   await shot('stopped');
   assert.deepEqual(pageErrors, []);
+});
+
+test('a board over Web Serial (a stand-in port: a second wasm board behind CRLF, without shape)', async () => {
+  const p2 = await ctx.newPage();
+  const errs = [];
+  p2.on('pageerror', (e) => errs.push(String(e)));
+  await p2.addInitScript(() => {
+    // navigator.serial with one port: bytes to a second finger-wasm instance, replies in CRLF
+    // as the board writes them, after its boot line; `shape` answered as a build without it
+    const port = {
+      async open() {
+        const bin = Uint8Array.from(atob(window.FINGER_WASM_B64), (c) => c.charCodeAt(0));
+        const e = (await WebAssembly.instantiate(bin, {})).instance.exports;
+        const enc = new TextEncoder(), dec = new TextDecoder();
+        let rx, line = '';
+        this.readable = new ReadableStream({ start(c) { rx = c; } });
+        const out = () => {
+          const p = e.out_ptr(), n = e.out_len();
+          if (!n) return;
+          const t = dec.decode(new Uint8Array(e.memory.buffer, p, n).slice());
+          e.out_clear();
+          rx.enqueue(enc.encode(t.replace(/\n/g, '\r\n')));
+        };
+        const feed = (s) => { const b = enc.encode(s); const p = e.io_buf(); new Uint8Array(e.memory.buffer, p, b.length).set(b); e.fw_input(b.length); out(); };
+        this.writable = new WritableStream({
+          write(chunk) {
+            for (const ch of dec.decode(chunk)) {
+              line += ch;
+              if (ch !== '\n') continue;
+              if (/^shape\b/i.test(line.trim())) rx.enqueue(enc.encode('err unknown: unknown command shape; try help\r\n'));
+              else feed(line);
+              line = '';
+            }
+          },
+        });
+        setInterval(() => { e.fw_tick(20); out(); }, 20);
+        window.serialLines = () => true;
+        rx.enqueue(enc.encode('# finger-fw 0.1.0 ready\r\n'));
+      },
+    };
+    Object.defineProperty(navigator, 'serial', { value: { requestPort: async () => port }, configurable: true });
+  });
+  await p2.goto(url);
+  await p2.waitForFunction(() => window.finger && window.finger.ready === true);
+  await p2.click('#use-serial');
+  await p2.waitForFunction(() => window.finger.ready === true && document.getElementById('source').textContent === 'board over Web Serial');
+  const cmd2 = (l) => p2.evaluate((x) => window.finger.con.command(x, true), l);
+  assert.match((await cmd2('version')).line, /^ok version=.* board=sim$/);
+  assert.equal(await p2.evaluate(() => window.finger.hasShape), false);
+  assert.match(await p2.textContent('#view-mode'), /board has no shape/);
+  // the drawing falls back to the host's geometry at the board's state; its tip is the board's
+  await p2.focus('#force');
+  for (let i = 0; i < 20; i++) await p2.keyboard.press('ArrowRight');
+  await p2.waitForFunction(() => document.getElementById('board-shape').dataset.p === '1' && !window.finger.busyPreview);
+  const s = await cmd2('solve 1 0 0 0');
+  const [sx, sy] = tipOf(s.kv.tip), [dx, dy] = tipOf(await p2.getAttribute('#board-shape', 'data-tip'));
+  assert.ok(Math.hypot(sx - dx, sy - dy) < 0.01, `${s.kv.tip} vs drawn ${dx},${dy}`);
+  assert.match((await cmd2('arm')).line, /^ok armed=1$/);
+  await p2.click('#stop');
+  await p2.waitForFunction(() => document.getElementById('refusal').textContent === 'stop  ->  ok stopped');
+  assert.equal((await cmd2('status')).kv.armed, '0');
+  assert.deepEqual(errs, []);
+  await p2.close();
 });
