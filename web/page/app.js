@@ -235,6 +235,14 @@ function drawShape(g, s, volts, style) {
   g.dataset.nodes = s.nodes.map((p) => f3(p.x) + ',' + f3(p.y)).join(';');
 }
 
+/** The drawing's view: the straight finger's box, grown to hold a posture that leaves it. */
+function fitView(s) {
+  const xs = s.nodes.map((p) => p.x), ys = s.nodes.map((p) => p.y), m = 14;
+  const x0 = Math.min(-20, Math.min(...xs) - m), x1 = Math.max(105, Math.max(...xs) + m);
+  const y0 = Math.min(-22, Math.min(...ys) - m), y1 = Math.max(58, Math.max(...ys) + m);
+  $('finger').setAttribute('viewBox', `${x0.toFixed(1)} ${y0.toFixed(1)} ${(x1 - x0).toFixed(1)} ${(y1 - y0).toFixed(1)}`);
+}
+
 function shapeOf(kv) {
   return { nodes: poses(kv.nodes), hinges: poses(kv.hinges), thick: nums(kv.thick) };
 }
@@ -282,6 +290,7 @@ async function drawAt(p, v, mode) {
   if (!shape && host && !host.err) shape = host; // a board without `shape`: the host's geometry
   if (shape) drawShape(g, shape, v, 'board');
   if (host && !host.err) drawShape(gh, host, v, 'host'); else gh.innerHTML = '';
+  if (shape) fitView(shape);
   state.drawn = { p, v, solve: sol.kv, shape, host };
   g.dataset.p = p;
   g.dataset.v = v.join(',');
