@@ -133,6 +133,7 @@ class Console {
     if (/^(ok|err)\b/.test(l)) {
       this.sent.shift();
       clearTimeout(c.timer);
+      if (c.quiet && l.startsWith('err')) log('tx', '> ' + c.line); // a refusal is always logged
       if (!c.quiet || l.startsWith('err')) log(l.startsWith('err') ? 'err' : 'rx', l);
       c.resolve({ ok: l.startsWith('ok'), line: l, kv: parseKv(l), lines: c.lines });
       this.pump();
@@ -165,19 +166,15 @@ function log(kind, text) {
 }
 
 /** Show the board's answer: an `err` line as the board wrote it. */
-function showReply(cmd, r) {
+function showReply(line, r) {
   const el = $('refusal');
-  if (r.ok) { el.className = 'mono'; el.textContent = cmd + '  ->  ' + r.line; } else {
-    el.className = 'mono err';
-    el.textContent = cmd + '  ->  ' + r.line;
-  }
+  el.className = r.ok ? 'mono' : 'mono err';
+  el.textContent = line + '  ->  ' + r.line;
   return r;
 }
 
-async function cmd(line, quiet = true) {
-  const r = await state.con.command(line, quiet);
-  return r;
-}
+/** One command; quiet ones (polls, previews) stay out of the console log unless refused. */
+const cmd = (line, quiet = true) => state.con.command(line, quiet);
 
 // ------------------------------------------------------------------ drawing
 

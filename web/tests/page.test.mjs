@@ -90,7 +90,7 @@ test('the WebAssembly board answers the console contract', async () => {
   assert.match((await board('solve 1 10000 0 0')).line, /^err limit: /, 'at the ceiling');
   // bytes: CRLF counts once, a blank line gets no reply, an overlong line is err too-long
   const raw = await page.evaluate(() => {
-    const b = window.finger.board, e = window.finger.wasm;
+    const b = window.finger.board;
     const prev = b.onText;
     let text = '';
     b.onText = (t) => { text += t; };
@@ -262,7 +262,6 @@ test('a board over Web Serial (a stand-in port: a second wasm board behind CRLF,
           },
         });
         setInterval(() => { e.fw_tick(20); out(); }, 20);
-        window.serialLines = () => true;
         rx.enqueue(enc.encode('# finger-fw 0.1.0 ready\r\n'));
       },
     };
