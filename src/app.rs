@@ -36,6 +36,9 @@ macro_rules! err {
     }};
 }
 
+#[cfg(feature = "shape")]
+mod shape;
+
 /// Number of HV channels / joints the board drives.
 pub const CHANNELS: usize = HV_CHANNELS;
 
@@ -549,6 +552,8 @@ impl<B: Board> App<B> {
                 self.cmd_limits(r);
             }
             b"solve" => self.cmd_solve(args, r)?,
+            #[cfg(feature = "shape")]
+            b"shape" => self.cmd_shape(args, r)?,
             b"arm" => {
                 no_args(args, "arm")?;
                 if let Some(f) = self.fault {
@@ -964,6 +969,8 @@ const HELP: &[&str] = &[
     "status - outputs, setpoints, model state, fault",
     "limits - ceilings in force",
     "solve <P> <V1> <V2> <V3> - model only, nothing moves",
+    #[cfg(feature = "shape")]
+    "shape <P> <V1> <V2> <V3> - model only: node and hinge-end poses of that solve",
     "arm | disarm - allow HV / ramp HV to 0, then drop the enable",
     "stop - emergency stop: HV off at once, cable released, disarmed",
     "volt <1|2|3|all> <V> - HV channel setpoint, slewed; needs arm",

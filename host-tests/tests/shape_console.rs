@@ -1,0 +1,80 @@
+//! `shape <P> <V1> <V2> <V3>` (console addition, docs/firmware.md): the poses it reports are
+//! the solve's: nodes as `Solution::nodes`, each hinge end as node k marched through its
+//! sub-elements (the model's posture, MODEL.md "Equilibrium"), the tip as `solve`'s.
+use finger_fw::sim::SimBoard;
+use finger_fw::App;
+use finger_model::{Finger, Method, Params, Pose};
+
+struct Out(String);
+impl std::fmt::Write for Out {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        self.0.push_str(s);
+        Ok(())
+    }
+}
+
+fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
+    let mut out = Out(String::new());
+    a.input(format!("{line}\n").as_bytes(), &mut out);
+    let lines: Vec<_> = out.0.lines().map(str::to_owned).collect();
+    assert_eq!(lines.len(), 1, "{line:?} -> {lines:?}");
+    lines[0].clone()
+}
+
+fn value<'a>(reply: &'a str, key: &str) -> &'a str {
+    reply.split_whitespace().find_map(|t| t.strip_prefix(key).and_then(|r| r.strip_prefix('='))).unwrap_or_else(|| panic!("{key} in {reply}"))
+}
+
+fn numbers(s: &str) -> Vec<f64> {
+    s.split(',').map(|x| x.parse().unwrap()).collect()
+}
+
+#[test]
+fn shape_reports_the_poses_of_the_solve() {
+    let mut a = App::new(SimBoard::default());
+    let f: Finger<f32> = Finger::new(Params::default()).unwrap();
+    let p = f.params();
+    let sub_len = p.hinge_len() / p.m as f32;
+    for (tension, volts) in [(0.0, [0.0; 3]), (1.0, [0.0; 3]), (3.0, [9000.0, 0.0, 4000.0]), (8.0, [2000.0; 3])] {
+        let args = format!("{tension} {} {} {}", volts[0], volts[1], volts[2]);
+        let r = cmd(&mut a, &format!("shape {args}"));
+        assert!(r.starts_with("ok nodes="), "{r}");
+        let (nodes, hinges) = (numbers(value(&r, "nodes")), numbers(value(&r, "hinges")));
+        assert_eq!((nodes.len(), hinges.len()), (12, 9));
+        let sol = f.solve(tension, &volts, Method::converged()).unwrap();
+        for k in 0..3 {
+            // hinge k's distal end: node k marched through its m sub-elements
+            let mut end = Pose::origin();
+            for q in &sol.q[k][..p.m] {
+                end = end.then(sub_len + q[0], q[1], q[2]);
+            }
+            let h = sol.nodes[k].then(end.x, end.y, end.theta);
+            let got = &hinges[3 * k..3 * k + 3];
+            assert!((got[0] - h.x as f64).abs() <= 2e-3 && (got[1] - h.y as f64).abs() <= 2e-3, "hinge {k}: {got:?} vs {h:?}");
+            assert!((got[2] - (h.theta as f64).to_degrees()).abs() <= 0.01);
+            let n = &nodes[3 * k + 3..3 * k + 6];
+            let s = sol.nodes[k + 1];
+            assert!((n[0] - s.x as f64).abs() <= 1e-3 && (n[1] - s.y as f64).abs() <= 1e-3, "node {}: {n:?} vs {s:?}", k + 1);
+        }
+        // the tip is solve's
+        let tip = numbers(value(&cmd(&mut a, &format!("solve {args}")), "tip"));
+        assert_eq!(&nodes[9..12], &tip[..]);
+        assert_eq!(value(&r, "thick"), value(&cmd(&mut a, &format!("solve {args}")), "thick"));
+    }
+}
+
+#[test]
+fn shape_refuses_as_solve_does() {
+    let mut a = App::new(SimBoard::default());
+    for bad in ["shape", "shape 1 0 0", "shape x 0 0 0", "shape -1 0 0 0", "shape 1 10000 0 0", "shape 1 0 0 0 0"] {
+        let solve = bad.replacen("shape", "solve", 1);
+        let (r, s) = (cmd(&mut a, bad), cmd(&mut a, &solve));
+        assert!(r.starts_with("err "), "{bad} -> {r}");
+        // the same code and message (the usage line names its own command)
+        assert_eq!(r.split(':').next(), s.split(':').next(), "{bad}");
+        if !r.starts_with("err usage: shape") {
+            assert_eq!(r, s);
+        }
+    }
+    assert!(cmd(&mut a, "status").contains("armed=0 force=0.000"), "model only: nothing moved");
+}

@@ -1,0 +1,593 @@
+// The web view of the finger: one console (shared/CONSOLE.md) over two sources, the
+// firmware's application compiled to WebAssembly (a simulated board, finger-wasm) or a real
+// board over Web Serial; a drawing of the posture from `status` / `shape` (the same solve as
+// `solve`), the controls, the limits and the board's refusals, the tip stiffness across a
+// pose's feasible tension interval, and the host's f64 model as an overlay.
+'use strict';
+
+// ------------------------------------------------------------------ console replies
+
+/** `ok a=1 b=2,3` -> {a: '1', b: '2,3'}; the first word (ok/err) is dropped. */
+function parseKv(line) {
+  const kv = {};
+  for (const tok of line.trim().split(/\s+/).slice(1)) {
+    const i = tok.indexOf('=');
+    if (i > 0) kv[tok.slice(0, i)] = tok.slice(i + 1);
+  }
+  return kv;
+}
+const nums = (s) => (s || '').split(',').map(Number);
+/** `x,y,deg,x,y,deg,...` -> [{x, y, th (rad)}] */
+function poses(s) {
+  const v = nums(s), out = [];
+  for (let i = 0; i + 2 < v.length; i += 3) out.push({ x: v[i], y: v[i + 1], th: v[i + 2] * Math.PI / 180 });
+  return out;
+}
+
+// ------------------------------------------------------------------ the two sources
+
+/** The simulated board: finger-wasm's exports (web/finger-wasm/src/lib.rs). */
+class WasmBoard {
+  constructor(exports) {
+    this.e = exports;
+    this.onText = () => {};
+    this.enc = new TextEncoder();
+    this.dec = new TextDecoder();
+    this.name = 'simulated board (WebAssembly)';
+  }
+  bytesIn(bytes) {
+    const cap = this.e.io_cap();
+    for (let i = 0; i < bytes.length; i += cap) {
+      const chunk = bytes.subarray(i, i + cap);
+      const p = this.e.io_buf(); // before touching memory.buffer: a call may grow it
+      new Uint8Array(this.e.memory.buffer, p, chunk.length).set(chunk);
+      this.e.fw_input(chunk.length);
+    }
+    this.flush();
+  }
+  write(text) { this.bytesIn(this.enc.encode(text)); }
+  flush() {
+    const p = this.e.out_ptr(), n = this.e.out_len();
+    if (n === 0) return;
+    const t = this.dec.decode(new Uint8Array(this.e.memory.buffer, p, n).slice());
+    this.e.out_clear();
+    this.onText(t);
+  }
+  advance(ms) { this.e.fw_tick(ms); this.flush(); }
+  reset() { this.e.fw_reset(); }
+}
+
+/** A real board over Web Serial (115200 8N1). */
+class SerialBoard {
+  constructor(port) {
+    this.port = port;
+    this.onText = () => {};
+    this.name = 'board over Web Serial';
+  }
+  async open() {
+    await this.port.open({ baudRate: 115200 });
+    this.writer = this.port.writable.getWriter();
+    this.enc = new TextEncoder();
+    (async () => {
+      const dec = new TextDecoder();
+      const reader = this.port.readable.getReader();
+      for (;;) {
+        const { value, done } = await reader.read();
+        if (done) break;
+        this.onText(dec.decode(value, { stream: true }));
+      }
+    })().catch((e) => log('note', 'serial: ' + e));
+  }
+  write(text) { this.writer.write(this.enc.encode(text)); }
+  advance() {}
+}
+
+/** One console: commands in order, each resolved by its final line (`ok ...` / `err ...`).
+ * `stop` jumps the queue: sent at once, the commands not yet sent are dropped. */
+class Console {
+  constructor(board) {
+    this.board = board;
+    this.buf = '';
+    this.sent = []; // commands written, waiting for their final line
+    this.queue = []; // not yet written
+    board.onText = (t) => this.receive(t);
+  }
+  command(line, quiet = false) {
+    return new Promise((resolve, reject) => {
+      this.queue.push({ line, quiet, resolve, reject, lines: [] });
+      this.pump();
+    });
+  }
+  stop() {
+    for (const c of this.queue) c.reject(new Error('dropped by stop'));
+    this.queue = [];
+    return new Promise((resolve, reject) => this.send({ line: 'stop', quiet: false, resolve, reject, lines: [] }));
+  }
+  pump() {
+    if (this.sent.length === 0 && this.queue.length > 0) this.send(this.queue.shift());
+  }
+  send(c) {
+    this.sent.push(c);
+    if (!c.quiet) log('tx', '> ' + c.line);
+    c.timer = setTimeout(() => this.timeout(c), 8000);
+    this.board.write(c.line + '\n');
+  }
+  timeout(c) {
+    const i = this.sent.indexOf(c);
+    if (i >= 0) this.sent.splice(i, 1);
+    c.reject(new Error('no reply to ' + c.line));
+    this.pump();
+  }
+  receive(text) {
+    this.buf += text;
+    let i;
+    while ((i = this.buf.search(/\r?\n|\r/)) >= 0) {
+      const line = this.buf.slice(0, i);
+      this.buf = this.buf.slice(i + (this.buf[i] === '\r' && this.buf[i + 1] === '\n' ? 2 : 1));
+      if (line.trim() !== '') this.line(line.trim());
+    }
+  }
+  line(l) {
+    const c = this.sent[0];
+    if (l.startsWith('#') || !c) { log('note', l); return; }
+    if (/^(ok|err)\b/.test(l)) {
+      this.sent.shift();
+      clearTimeout(c.timer);
+      if (c.quiet && l.startsWith('err')) log('tx', '> ' + c.line); // a refusal is always logged
+      if (!c.quiet || l.startsWith('err')) log(l.startsWith('err') ? 'err' : 'rx', l);
+      c.resolve({ ok: l.startsWith('ok'), line: l, kv: parseKv(l), lines: c.lines });
+      this.pump();
+    } else {
+      c.lines.push(l);
+      if (!c.quiet) log('rx', l);
+    }
+  }
+}
+
+// ------------------------------------------------------------------ page state
+
+const $ = (id) => document.getElementById(id);
+const state = {
+  con: null, wasm: null, board: null, armed: false, hasShape: true,
+  params: { l: 27, b: 10, t_min: 1.5, a: 5, e: 5, layers: 4 },
+  limits: {}, vmax: 10000, drawn: null, host: null, plot: null, busyPreview: false, pendingPreview: false,
+};
+window.finger = state; // for the tests and the curious
+
+function log(kind, text) {
+  const el = $('log');
+  if (!el) return;
+  const d = document.createElement('div');
+  d.className = kind;
+  d.textContent = text;
+  el.appendChild(d);
+  while (el.childNodes.length > 400) el.removeChild(el.firstChild);
+  el.scrollTop = el.scrollHeight;
+}
+
+/** Show the board's answer: an `err` line as the board wrote it. */
+function showReply(line, r) {
+  const el = $('refusal');
+  el.className = r.ok ? 'mono' : 'mono err';
+  el.textContent = line + '  ->  ' + r.line;
+  return r;
+}
+
+/** One command; quiet ones (polls, previews) stay out of the console log unless refused. */
+const cmd = (line, quiet = true) => state.con.command(line, quiet);
+
+// ------------------------------------------------------------------ drawing
+
+const NS = 'http://www.w3.org/2000/svg';
+function el(tag, attrs, parent) {
+  const e = document.createElementNS(NS, tag);
+  for (const k in attrs) e.setAttribute(k, attrs[k]);
+  if (parent) parent.appendChild(e);
+  return e;
+}
+const pt = (p, px, py) => [p.x + Math.cos(p.th) * px - Math.sin(p.th) * py, p.y + Math.sin(p.th) * px + Math.cos(p.th) * py];
+const f3 = (v) => v.toFixed(3);
+
+/** A curve from pose a to pose b (the hinge), offset by `off` along each end's normal. */
+function hingePath(a, b, off) {
+  const p0 = pt(a, 0, off), p1 = pt(b, 0, off);
+  const len = Math.hypot(p1[0] - p0[0], p1[1] - p0[1]) / 3;
+  const c0 = [p0[0] + Math.cos(a.th) * len, p0[1] + Math.sin(a.th) * len];
+  const c1 = [p1[0] - Math.cos(b.th) * len, p1[1] - Math.sin(b.th) * len];
+  return `M${f3(p0[0])},${f3(p0[1])} C${f3(c0[0])},${f3(c0[1])} ${f3(c1[0])},${f3(c1[1])} ${f3(p1[0])},${f3(p1[1])}`;
+}
+
+/** Draw a `shape` answer (nodes, hinge ends, stack thicknesses) and the volts on the stacks. */
+function drawShape(g, s, volts, style) {
+  g.innerHTML = '';
+  const P = state.params, n = s.hinges.length;
+  if (style === 'host') {
+    const line = [];
+    for (let k = 0; k < n; k++) line.push(s.nodes[k], s.hinges[k]);
+    line.push(s.nodes[n]);
+    el('polyline', { points: line.map((p) => f3(p.x) + ',' + f3(p.y)).join(' '), class: 'host-line', fill: 'none', stroke: '#0a0', 'stroke-width': 0.7, 'stroke-dasharray': '2 1.2' }, g);
+    s.nodes.forEach((p, k) => el('circle', { cx: f3(p.x), cy: f3(p.y), r: 0.9, fill: 'none', stroke: '#0a0', 'stroke-width': 0.4, id: 'host-node-' + k }, g));
+    g.dataset.tip = f3(s.nodes[n].x) + ',' + f3(s.nodes[n].y);
+    return;
+  }
+  for (let k = 0; k < n; k++) {
+    const a = s.nodes[k], h = s.hinges[k], b = s.nodes[k + 1];
+    // link k: a bar of thickness b from the hinge's end to node k
+    el('line', { x1: f3(h.x), y1: f3(h.y), x2: f3(b.x), y2: f3(b.y), stroke: '#8aa4c8', 'stroke-width': P.b, opacity: 0.85, class: 'link' }, g);
+    // DE stack on the extensor (-y) side, centroid at t_min/2 + t/2
+    const t = s.thick[k] || 0;
+    if (t > 0 && P.layers > 0) {
+      const frac = Math.min(1, (volts[k] || 0) / state.vmax);
+      const col = `rgb(${Math.round(238 - 40 * frac)},${Math.round(170 - 120 * frac)},${Math.round(60 - 40 * frac)})`;
+      el('path', { d: hingePath(a, h, -(P.t_min / 2 + t / 2)), stroke: col, 'stroke-width': t, fill: 'none', class: 'stack', 'data-thick': t }, g);
+    }
+    el('path', { d: hingePath(a, h, 0), stroke: '#345', 'stroke-width': P.t_min, fill: 'none', class: 'hinge' }, g);
+  }
+  // the cable: base hole, then each link's proximal and distal holes (y = +e), anchored at the tip
+  const holes = [pt(s.nodes[0], 0, P.e)];
+  for (let k = 0; k < n; k++) holes.push(pt(s.hinges[k], 0, P.e), pt(s.nodes[k + 1], 0, P.e));
+  el('polyline', { points: holes.map((q) => f3(q[0]) + ',' + f3(q[1])).join(' '), fill: 'none', stroke: '#c22', 'stroke-width': 0.5, class: 'cable' }, g);
+  s.nodes.forEach((p, k) => el('circle', { cx: f3(p.x), cy: f3(p.y), r: 1.1, fill: '#123', id: 'node-' + k }, g));
+  g.dataset.tip = f3(s.nodes[n].x) + ',' + f3(s.nodes[n].y);
+  g.dataset.nodes = s.nodes.map((p) => f3(p.x) + ',' + f3(p.y)).join(';');
+}
+
+/** The drawing's view: the straight finger's box, grown to hold a posture that leaves it. */
+function fitView(s) {
+  const xs = s.nodes.map((p) => p.x), ys = s.nodes.map((p) => p.y), m = 14;
+  const x0 = Math.min(-20, Math.min(...xs) - m), x1 = Math.max(105, Math.max(...xs) + m);
+  const y0 = Math.min(-22, Math.min(...ys) - m), y1 = Math.max(58, Math.max(...ys) + m);
+  $('finger').setAttribute('viewBox', `${x0.toFixed(1)} ${y0.toFixed(1)} ${(x1 - x0).toFixed(1)} ${(y1 - y0).toFixed(1)}`);
+}
+
+function shapeOf(kv) {
+  return { nodes: poses(kv.nodes), hinges: poses(kv.hinges), thick: nums(kv.thick) };
+}
+
+/** Host f64 model at (P, V): its shape, or null. */
+function hostShape(p, v) {
+  if (!state.wasm) return null;
+  const e = state.wasm;
+  e.out_clear();
+  e.host_shape(p, v[0], v[1], v[2]);
+  const t = new TextDecoder().decode(new Uint8Array(e.memory.buffer, e.out_ptr(), e.out_len()).slice()).trim();
+  e.out_clear();
+  if (!t.startsWith('ok')) return { err: t };
+  const kv = parseKv(t);
+  return { ...shapeOf(kv), kv };
+}
+
+function hostPose(d, p) {
+  const e = state.wasm;
+  e.out_clear();
+  e.host_pose(d[0], d[1], d[2], p == null ? NaN : p);
+  const t = new TextDecoder().decode(new Uint8Array(e.memory.buffer, e.out_ptr(), e.out_len()).slice()).trim();
+  e.out_clear();
+  return { ok: t.startsWith('ok'), line: t, kv: parseKv(t) };
+}
+
+/** Draw the board's posture at (P, V): `shape` (the same solve as `solve`), with `solve`'s
+ * figures in the readout, and the host f64 model's over it. */
+async function drawAt(p, v, mode) {
+  const args = `${p} ${v[0]} ${v[1]} ${v[2]}`;
+  const sol = await cmd('solve ' + args);
+  let shape = null;
+  if (state.hasShape) {
+    const r = await cmd('shape ' + args);
+    if (r.ok) shape = shapeOf(r.kv);
+    else if (/^err unknown/.test(r.line)) state.hasShape = false;
+  }
+  const host = hostShape(p, v);
+  const g = $('board-shape'), gh = $('host-shape');
+  if (!sol.ok) {
+    showReply('solve ' + args, sol);
+    $('readout').textContent = sol.line;
+    return sol;
+  }
+  if (!shape && host && !host.err) shape = host; // a board without `shape`: the host's geometry
+  if (shape) drawShape(g, shape, v, 'board');
+  if (host && !host.err) drawShape(gh, host, v, 'host'); else gh.innerHTML = '';
+  if (shape) fitView(shape);
+  state.drawn = { p, v, solve: sol.kv, shape, host };
+  g.dataset.p = p;
+  g.dataset.v = v.join(',');
+  $('view-mode').textContent = mode + (state.hasShape ? '' : ' (board has no shape: host geometry, board tip from solve)');
+  let txt = `${mode}: P=${p} N V=${v.join(',')} V\nboard:  joints=${sol.kv.joints} tip=${sol.kv.tip} stiffness=${sol.kv.stiffness} iters=${sol.kv.iters}`;
+  if (host && !host.err) {
+    const tb = nums(sol.kv.tip), th = host.nodes[host.nodes.length - 1];
+    txt += `\nhost f64: joints=${nums(host.kv.joints).map((x) => x.toFixed(3)).join(',')} stiffness=${host.kv.stiffness}` +
+      `\n  tip board - host: ${Math.hypot(tb[0] - th.x, tb[1] - th.y).toExponential(2)} mm`;
+  } else if (host) txt += '\nhost f64: ' + host.err;
+  $('readout').textContent = txt;
+  return sol;
+}
+
+// ------------------------------------------------------------------ controls
+
+const sliders = () => ({ p: Number($('force').value), v: [1, 2, 3].map((k) => Number($('v' + k).value)) });
+function setSlider(id, x) { $(id).value = x; $(id + '-out').textContent = x; }
+function setSliders(p, v) {
+  if (p != null) { $('force').value = p; $('force-out').textContent = p; }
+  if (v) v.forEach((x, k) => { $('v' + (k + 1)).value = x; $('v' + (k + 1) + '-out').textContent = x; });
+}
+
+/** Disarmed: preview the sliders' setpoints (latest wins while one is being drawn). */
+async function preview() {
+  if (state.busyPreview) { state.pendingPreview = true; return; }
+  state.busyPreview = true;
+  try {
+    do {
+      state.pendingPreview = false;
+      const s = sliders();
+      await drawAt(s.p, s.v, 'preview (disarmed, solve)');
+    } while (state.pendingPreview);
+  } catch (e) { log('note', String(e)); }
+  state.busyPreview = false;
+  state.previewDone = (state.previewDone || 0) + 1;
+}
+
+async function onSlider(id) {
+  const x = $(id).value;
+  $(id + '-out').textContent = x;
+  if (!state.armed) return preview();
+  // armed: the board moves (and refuses what it must)
+  const line = id === 'force' ? `force ${x}` : `volt ${id.slice(1)} ${x}`;
+  const r = showReply(line, await cmd(line, false));
+  await refreshLimits();
+  if (!r.ok) { state.held = null; await poll(true); } // back to what the board holds
+}
+
+async function refreshLimits() {
+  const r = await cmd('limits');
+  if (!r.ok) return;
+  state.limits = r.kv;
+  const vmax = nums(r.kv.vmax)[0];
+  if (vmax > 0) state.vmax = vmax;
+  $('limits').textContent = Object.entries(r.kv).map(([k, v]) => `${k}=${v}`).join('\n');
+  // sliders reach a little past the ceilings, so that the board's refusal can be seen
+  const vm = nums(r.kv.vmax);
+  for (const k of [1, 2, 3]) {
+    $('v' + k).max = Math.ceil(state.vmax * 1.1 / 100) * 100;
+    $('v' + k + '-ceil').textContent = `(ceiling ${vm[k - 1]} V; the slider reaches past it)`;
+  }
+  $('force-ceil').textContent = `(fmax ${r.kv.fmax} N at these setpoints)`;
+  const fmax = Number(r.kv.fmax);
+  if (fmax > 0 && !state.fmaxSet) { $('force').max = Math.ceil(fmax * 1.2); state.fmaxSet = true; }
+}
+
+async function readParams() {
+  const r = await cmd('param');
+  if (!r.ok) return;
+  if (state.wasm) state.wasm.host_reset();
+  for (const l of r.lines) {
+    const m = /^(\w+)=(\S+)/.exec(l);
+    if (!m) continue;
+    const v = Number(m[2]);
+    state.params[m[1]] = v;
+    if (state.wasm) {
+      const b = new TextEncoder().encode(m[1]);
+      const p = state.wasm.io_buf();
+      new Uint8Array(state.wasm.memory.buffer, p, b.length).set(b);
+      state.wasm.host_param(b.length, v);
+    }
+  }
+}
+
+/** Armed: the board's state now (`status`) drawn live. */
+async function poll(force = false) {
+  if (!state.con || (state.polling && !force)) return;
+  state.polling = true;
+  try {
+    const r = await cmd('status');
+    if (!r.ok) return;
+    const armed = r.kv.armed === '1';
+    const fault = r.kv.fault && r.kv.fault !== 'none' ? r.kv.fault : '';
+    $('armed-state').textContent = armed ? 'ARMED' : 'disarmed';
+    $('armed-state').className = 'pill ' + (armed ? 'on' : 'off');
+    $('fault-state').textContent = fault ? 'fault ' + fault : '';
+    $('fault-state').className = 'pill' + (fault ? ' fault' : '');
+    const was = state.armed;
+    state.armed = armed;
+    $('ctl-mode').textContent = armed ? '(armed: moves the board)' : '(disarmed: preview)';
+    state.status = r.kv;
+    if (armed) {
+      // the sliders follow the board's setpoints (tension, HV targets), except one held
+      const tv = nums(r.kv.target || r.kv.volts);
+      if (state.held !== 'force') setSlider('force', Number(r.kv.force));
+      tv.forEach((x, k) => { if (state.held !== 'v' + (k + 1)) setSlider('v' + (k + 1), x); });
+    }
+    if (armed || (was && !armed)) {
+      const v = nums(r.kv.volts), p = Number(r.kv.force);
+      const key = p + '|' + v.join(',');
+      if (key !== state.lastLive || force) {
+        state.lastLive = key;
+        await drawAt(p, v, armed ? 'live (armed, status)' : 'preview');
+      }
+    }
+  } catch (e) { log('note', String(e)); } finally { state.polling = false; }
+}
+
+async function doPose() {
+  const d = [1, 2, 3].map((k) => Number($('d' + k).value));
+  const pArg = $('dp').value.trim();
+  const line = `pose ${d.join(' ')}${pArg ? ' ' + pArg : ''}`;
+  const r = showReply(line, await cmd(line, false));
+  const out = $('pose-out');
+  if (!r.ok) { out.textContent = r.line; state.plot = null; drawPlot(); return r; }
+  const [lo, hi] = nums(r.kv.range), volts = nums(r.kv.volts), p = Number(r.kv.force);
+  setSliders(p, volts);
+  // the ends of the feasible interval: the board's inverse there (model only while disarmed),
+  // the host f64 model's while armed (an armed pose would move the board)
+  const ends = [];
+  const samples = [];
+  const N = 9;
+  const src = state.armed ? 'host f64 model (armed: board pose would move)' : 'board (pose + solve, disarmed)';
+  for (let i = 0; i < N; i++) {
+    const t = lo + (hi - lo) * i / (N - 1);
+    const s = await stiffnessAt(d, t);
+    if (s) samples.push({ t, k: s.k, host: s.host });
+    if (i === 0 || i === N - 1) ends.push(s);
+  }
+  const fmt = (s) => s ? `kxx=${s.k[0].toPrecision(4)} kyy=${s.k[1].toPrecision(4)} ktt=${s.k[2].toPrecision(4)} (volts ${s.volts.map((x) => x.toFixed(0)).join(',')})` : '-';
+  out.textContent = `force=${r.kv.force} N volts=${r.kv.volts} V\nfeasible tension ${lo} .. ${hi} N\n` +
+    `tip stiffness at ${lo} N: ${fmt(ends[0])}\ntip stiffness at ${hi} N: ${fmt(ends[1])}\n(N/mm, N/mm, N·mm/rad)`;
+  state.plot = { lo, hi, samples, src, d };
+  drawPlot();
+  if (!state.armed) await drawAt(p, volts, 'pose preview (disarmed, solve)');
+  else await poll(true);
+  return r;
+}
+
+/** Tip stiffness (kxx, kyy, kθθ) of pose d at tension t, from the board (disarmed) or the host. */
+async function stiffnessAt(d, t) {
+  let host = null;
+  if (state.wasm) {
+    const h = hostPose(d, t);
+    if (h.ok) host = nums(h.kv.stiffness);
+  }
+  if (state.armed) return host ? { k: host, host, volts: nums(hostPose(d, t).kv.volts) } : null;
+  const r = await cmd(`pose ${d.join(' ')} ${t}`);
+  if (!r.ok) return null;
+  const v = nums(r.kv.volts);
+  const s = await cmd(`solve ${t} ${v.join(' ')}`);
+  if (!s.ok) return null;
+  return { k: nums(s.kv.stiffness), host, volts: v };
+}
+
+function drawPlot() {
+  const svg = $('plot');
+  svg.innerHTML = '';
+  const P = state.plot;
+  const W = 520, H = 260, L = 60, R = 110, T = 12, B = 36;
+  if (!P || P.samples.length === 0) {
+    el('text', { x: W / 2, y: H / 2, 'text-anchor': 'middle', fill: '#888' }, svg).textContent = 'pose a target to see its stiffness range';
+    $('plot-src').textContent = '';
+    return;
+  }
+  $('plot-src').textContent = `pose ${P.d.join(', ')} deg; from the ${P.src}`;
+  // each stiffness relative to its value at the low end (linear): the interval is often
+  // narrow, and the three differ by orders of magnitude
+  const names = ['kxx', 'kyy', 'kθθ'], units = ['N/mm', 'N/mm', 'N·mm/rad'], cols = ['#06c', '#c60', '#393'];
+  const base = P.samples[0].k;
+  const rel = (s, c, k) => (k || s.k)[c] / base[c];
+  const all = [];
+  for (const s of P.samples) for (let c = 0; c < 3; c++) { all.push(rel(s, c)); if (s.host) all.push(rel(s, c, s.host)); }
+  let y0 = Math.min(...all), y1 = Math.max(...all);
+  const pad = Math.max((y1 - y0) * 0.08, 1e-4);
+  y0 -= pad; y1 += pad;
+  const span = P.hi - P.lo || 1;
+  const X = (t) => L + (t - P.lo) / span * (W - L - R), Y = (r) => T + (y1 - r) / (y1 - y0) * (H - T - B);
+  el('rect', { x: L, y: T, width: W - L - R, height: H - T - B, fill: 'none', stroke: '#999' }, svg);
+  for (let i = 0; i <= 4; i++) {
+    const r = y0 + (y1 - y0) * i / 4;
+    el('line', { x1: L, x2: W - R, y1: Y(r), y2: Y(r), stroke: '#eee' }, svg);
+    el('text', { x: L - 4, y: Y(r) + 4, 'text-anchor': 'end', 'font-size': 11 }, svg).textContent = ((r - 1) * 100).toFixed(2) + ' %';
+  }
+  for (const t of [P.lo, (P.lo + P.hi) / 2, P.hi]) {
+    el('text', { x: X(t), y: H - B + 14, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent = t.toFixed(4);
+  }
+  el('text', { x: (L + W - R) / 2, y: H - 6, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent = 'cable tension P (N) across the feasible interval';
+  el('text', { x: L + 6, y: T + 14, 'font-size': 10, fill: '#555' }, svg).textContent = 'k / k(low end) - 1';
+  const last = P.samples[P.samples.length - 1].k;
+  for (let c = 0; c < 3; c++) {
+    const pts = P.samples.map((s) => `${X(s.t).toFixed(1)},${Y(rel(s, c)).toFixed(1)}`).join(' ');
+    el('polyline', { points: pts, fill: 'none', stroke: cols[c], 'stroke-width': 2, class: 'k' + c }, svg);
+    P.samples.forEach((s) => el('circle', { cx: X(s.t), cy: Y(rel(s, c)), r: 2.5, fill: cols[c] }, svg));
+    const hs = P.samples.filter((s) => s.host);
+    if (hs.length) el('polyline', { points: hs.map((s) => `${X(s.t).toFixed(1)},${Y(rel(s, c, s.host)).toFixed(1)}`).join(' '), fill: 'none', stroke: cols[c], 'stroke-dasharray': '4 3', 'stroke-width': 1, class: 'host-k' + c }, svg);
+    el('text', { x: W - R + 6, y: T + 12 + 30 * c, fill: cols[c], 'font-size': 11 }, svg).textContent = `${names[c]} ${units[c]}`;
+    el('text', { x: W - R + 6, y: T + 25 + 30 * c, fill: cols[c], 'font-size': 10 }, svg).textContent = `${base[c].toPrecision(4)} → ${last[c].toPrecision(4)}`;
+  }
+  el('text', { x: W - R + 6, y: T + 104, fill: '#555', 'font-size': 10 }, svg).textContent = 'dashed: host f64';
+}
+
+// ------------------------------------------------------------------ connect
+
+async function connect(board) {
+  if (state.con) for (const c of state.con.queue) c.reject(new Error('source changed'));
+  state.board = board;
+  state.con = new Console(board);
+  state.hasShape = true;
+  state.fmaxSet = false;
+  $('source').textContent = board.name;
+  log('note', '# connected: ' + board.name);
+  await cmd('version', false);
+  await readParams();
+  await refreshLimits();
+  await poll(true);
+  if (!state.armed) await preview();
+  state.ready = true;
+}
+
+async function loadWasm() {
+  const b64 = window.FINGER_WASM_B64;
+  const bin = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+  const { instance } = await WebAssembly.instantiate(bin, {});
+  return instance.exports;
+}
+
+async function useSim() {
+  state.ready = false;
+  if (!state.wasm) state.wasm = await loadWasm();
+  state.wasm.fw_reset();
+  await connect(new WasmBoard(state.wasm));
+}
+
+async function useSerial() {
+  if (!('serial' in navigator)) { showReply('serial', { ok: false, line: 'Web Serial is not available in this browser (Chromium has it)' }); return; }
+  const port = await navigator.serial.requestPort();
+  const b = new SerialBoard(port);
+  await b.open();
+  state.ready = false;
+  await connect(b);
+}
+
+async function stop() {
+  if (!state.con) return;
+  const r = await state.con.stop();
+  showReply('stop', r);
+  setSliders(0, [0, 0, 0]);
+  await poll(true);
+}
+
+function wire() {
+  $('stop').addEventListener('click', () => stop().catch((e) => log('note', String(e))));
+  document.addEventListener('keydown', (e) => { if (e.key === 'Escape') stop(); });
+  $('arm').addEventListener('click', async () => { showReply('arm', await cmd('arm', false)); await refreshLimits(); await poll(true); });
+  $('disarm').addEventListener('click', async () => { showReply('disarm', await cmd('disarm', false)); await poll(true); });
+  for (const id of ['force', 'v1', 'v2', 'v3']) {
+    $(id).addEventListener('input', () => { $(id + '-out').textContent = $(id).value; if (!state.armed) preview(); });
+    $(id).addEventListener('change', () => onSlider(id).catch((e) => log('note', String(e))));
+    $(id).addEventListener('pointerdown', () => { state.held = id; });
+    $(id).addEventListener('pointerup', () => { state.held = null; });
+    $(id).addEventListener('focus', () => { state.held = id; });
+    $(id).addEventListener('blur', () => { state.held = null; });
+  }
+  $('pose').addEventListener('click', () => doPose().catch((e) => log('note', String(e))));
+  $('cmd-form').addEventListener('submit', async (e) => {
+    e.preventDefault();
+    const line = $('cmd').value.trim();
+    if (!line) return;
+    $('cmd').value = '';
+    if (/^stop$/i.test(line)) return stop();
+    const r = showReply(line, await cmd(line, false));
+    if (/^(param|preset)\b/i.test(line) && r.ok) { await readParams(); await refreshLimits(); }
+    await poll(true);
+  });
+  $('use-sim').addEventListener('click', () => useSim());
+  $('use-serial').addEventListener('click', () => useSerial().catch((e) => log('note', String(e))));
+  if (!('serial' in navigator)) $('use-serial').disabled = true;
+  // time: the simulated board's control loop follows the page's clock; status every 250 ms
+  let last = performance.now(), lastPoll = 0;
+  setInterval(() => {
+    const now = performance.now();
+    const dt = Math.min(100, Math.max(0, Math.round(now - last)));
+    last = now;
+    if (state.board && dt > 0) state.board.advance(dt);
+    if (state.ready && now - lastPoll > 250) { lastPoll = now; poll(); }
+  }, 20);
+  drawPlot();
+}
+
+wire();
+useSim().catch((e) => { log('err', 'wasm: ' + e); showReply('load', { ok: false, line: 'err: ' + e }); });

@@ -1,0 +1,291 @@
+// The web view in headless Chromium (Debian's /usr/bin/chromium, driven by playwright-core;
+// no browser download). Serves web/dist (built by web/build) from a loopback port.
+// WEB_SHOTS=<dir> writes the screenshots there (`web/test --shots`: docs/).
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import http from 'node:http';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { chromium } from 'playwright-core';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const dist = path.resolve(here, '..', 'dist');
+const shots = process.env.WEB_SHOTS || fs.mkdtempSync(path.join(os.tmpdir(), 'web-shots-'));
+const types = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css' };
+
+let server, ctx, page, url, profile;
+const pageErrors = [];
+
+before(async () => {
+  assert.ok(fs.existsSync(path.join(dist, 'index.html')), 'web/dist missing: run web/build');
+  server = http.createServer((req, res) => {
+    const f = path.join(dist, path.normalize(decodeURIComponent(req.url.split('?')[0])).replace(/^\/+$/, 'index.html'));
+    if (!f.startsWith(dist) || !fs.existsSync(f) || fs.statSync(f).isDirectory()) { res.writeHead(404); res.end(); return; }
+    res.writeHead(200, { 'content-type': types[path.extname(f)] || 'application/octet-stream' });
+    fs.createReadStream(f).pipe(res);
+  });
+  await new Promise((r) => server.listen(0, '127.0.0.1', r));
+  url = `http://127.0.0.1:${server.address().port}/index.html`;
+  profile = fs.mkdtempSync(path.join(os.tmpdir(), 'web-chromium-'));
+  ctx = await chromium.launchPersistentContext(profile, {
+    executablePath: '/usr/bin/chromium',
+    headless: true,
+    viewport: { width: 1280, height: 900 },
+    args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+      '--disable-component-update', '--disable-sync'],
+  });
+  page = ctx.pages()[0] || (await ctx.newPage());
+  page.on('pageerror', (e) => pageErrors.push(String(e)));
+  page.on('console', (m) => { if (m.type() === 'error') pageErrors.push(m.text()); });
+  await page.goto(url);
+  await page.waitForFunction(() => window.finger && window.finger.ready === true, null, { timeout: 15000 });
+});
+
+after(async () => {
+  if (ctx) await ctx.close();
+  if (server) server.close();
+  if (profile) fs.rmSync(profile, { recursive: true, force: true });
+});
+
+/** One console command through the page's console (the board the page talks to). */
+const board = (line) => page.evaluate((l) => window.finger.con.command(l, true), line);
+const shot = (name, fullPage = false) => page.screenshot({ path: path.join(shots, `web-${name}.png`), fullPage });
+const tipOf = (s) => s.split(',').slice(0, 2).map(Number);
+
+test('the page loads: simulated board connected, posture, limits and stop shown', async () => {
+  assert.equal(await page.title(), 'finger-fw: the soft finger, live');
+  assert.match(await page.textContent('#source'), /simulated board/);
+  assert.ok(await page.isVisible('#stop'));
+  assert.match(await page.textContent('#limits'), /vmax=10000\.0,10000\.0,10000\.0/);
+  assert.match(await page.textContent('#limits'), /fmax=\d/);
+  assert.equal(await page.locator('#board-shape circle').count(), 4, 'nodes 0..3 drawn');
+  assert.equal(await page.locator('#board-shape .stack').count(), 3, 'three DE stacks drawn');
+  assert.equal(await page.locator('#board-shape .cable').count(), 1);
+  assert.equal(await page.locator('#host-shape .host-line').count(), 1, 'host f64 overlay drawn');
+  assert.deepEqual(pageErrors, []);
+  await shot('loaded');
+});
+
+test('the WebAssembly board answers the console contract', async () => {
+  const v = await board('version');
+  assert.match(v.line, /^ok version=\S+ name=finger-fw board=sim$/);
+  const st = await board('status');
+  for (const k of ['armed', 'force', 'volts', 'thick', 'joints', 'tip', 'cable', 'servo', 'fault']) assert.ok(k in st.kv, `status has ${k}`);
+  assert.equal(st.kv.armed, '0');
+  assert.equal(st.kv.fault, 'none');
+  const lim = await board('limits');
+  for (const k of ['vmax', 'vpullin', 'supply', 'fmax']) assert.ok(k in lim.kv, `limits has ${k}`);
+  const s = await board('solve 1 0 0 0');
+  for (const k of ['joints', 'tip', 'cable', 'thick', 'stiffness', 'iters']) assert.ok(k in s.kv, `solve has ${k}`);
+  assert.ok(Number(s.kv.joints.split(',')[0]) > 0, 'flexes under tension');
+  const h = await board('help');
+  assert.equal(h.line, 'ok');
+  assert.ok(h.lines.some((l) => l.startsWith('solve ')) && h.lines.some((l) => l.startsWith('shape ')));
+  assert.match((await board('frobnicate')).line, /^err unknown: /);
+  assert.match((await board('solve 1 0 0 nan')).line, /^err bad-number: /);
+  assert.match((await board('solve -1 0 0 0')).line, /^err usage: /);
+  assert.match((await board('volt 1 100')).line, /^err not-armed: /);
+  assert.match((await board('solve 1 10000 0 0')).line, /^err limit: /, 'at the ceiling');
+  // bytes: CRLF counts once, a blank line gets no reply, an overlong line is err too-long
+  const raw = await page.evaluate(() => {
+    const b = window.finger.board;
+    const prev = b.onText;
+    let text = '';
+    b.onText = (t) => { text += t; };
+    b.write('version\r\n\r\n\nstatus\r' + 'x'.repeat(300) + '\nlimits\n');
+    b.onText = prev;
+    return text;
+  });
+  const lines = raw.split('\n').filter((l) => l !== '');
+  assert.equal(lines.length, 4, raw);
+  assert.match(lines[0], /^ok version=/);
+  assert.match(lines[1], /^ok armed=/);
+  assert.match(lines[2], /^err too-long: /);
+  assert.match(lines[3], /^ok vmax=/);
+  // param while armed is refused and changes nothing
+  assert.match((await board('arm')).line, /^ok armed=1$/);
+  assert.match((await board('param l 30')).line, /^err armed: /);
+  assert.match((await board('stop')).line, /^ok stopped$/);
+  assert.match((await board('param l')).line, /^ok l=27$/);
+});
+
+test('moving the tension slider draws the posture that solve returns', async () => {
+  const before = await page.getAttribute('#board-shape', 'data-tip');
+  const done0 = await page.evaluate(() => window.finger.previewDone || 0);
+  await page.focus('#force');
+  for (let i = 0; i < 40; i++) await page.keyboard.press('ArrowRight'); // 40 x 0.05 N
+  assert.equal(await page.inputValue('#force'), '2');
+  await page.waitForFunction((d) => (window.finger.previewDone || 0) > d && !window.finger.busyPreview
+    && document.getElementById('board-shape').dataset.p === '2', done0);
+  const drawn = await page.getAttribute('#board-shape', 'data-tip');
+  assert.notEqual(drawn, before, 'the drawing moved');
+  const s = await board('solve 2 0 0 0');
+  const [sx, sy] = tipOf(s.kv.tip), [dx, dy] = tipOf(drawn);
+  assert.ok(Math.abs(sx - dx) <= 1e-3 && Math.abs(sy - dy) <= 1e-3, `drawn tip ${drawn} vs solve ${s.kv.tip}`);
+  // the drawn tip is node 3's circle
+  const cx = Number(await page.getAttribute('#node-3', 'cx')), cy = Number(await page.getAttribute('#node-3', 'cy'));
+  assert.ok(Math.abs(cx - sx) <= 1e-3 && Math.abs(cy - sy) <= 1e-3);
+  // each drawn node's direction agrees with solve's joint angles: node k's angle = sum of the joints
+  const sh = await board('shape 2 0 0 0');
+  const joints = s.kv.joints.split(',').map(Number);
+  const ang = sh.kv.nodes.split(',').map(Number).filter((_, i) => i % 3 === 2);
+  let sum = 0;
+  for (let k = 0; k < 3; k++) { sum += joints[k]; assert.ok(Math.abs(ang[k + 1] - sum) <= 0.02, `node ${k + 1}: ${ang[k + 1]} vs ${sum}`); }
+  assert.ok(joints[0] > 5, 'bent');
+  // the host f64 overlay at the same tension agrees within 0.01 mm at the tip
+  const host = tipOf(await page.getAttribute('#host-shape', 'data-tip'));
+  assert.ok(Math.hypot(host[0] - sx, host[1] - sy) < 0.01, `host tip ${host}`);
+  assert.match(await page.textContent('#readout'), /board: {2}joints=/);
+  await shot('tension');
+});
+
+test('a pose shows its feasible tension interval, the stiffness at both ends, and the plot', async () => {
+  for (const [id, v] of [['d1', '10'], ['d2', '10'], ['d3', '10'], ['dp', '']]) await page.fill('#' + id, v);
+  await page.click('#pose');
+  await page.waitForFunction(() => window.finger.plot && window.finger.plot.samples.length === 9);
+  const out = await page.textContent('#pose-out');
+  const r = await board('pose 10 10 10');
+  const [lo, hi] = r.kv.range.split(',');
+  assert.ok(out.includes(`feasible tension ${lo} .. ${hi} N`), out);
+  assert.match(out, new RegExp(`tip stiffness at ${lo} N: kxx=`));
+  assert.match(out, new RegExp(`tip stiffness at ${hi} N: kxx=`));
+  assert.equal(await page.locator('#plot polyline.k1').count(), 1);
+  // the plotted low end is the board's solve at the low end's voltages
+  const lowPose = await board(`pose 10 10 10 ${lo}`);
+  const lowSolve = await board(`solve ${lo} ${lowPose.kv.volts.split(',').join(' ')}`);
+  const kyy = await page.evaluate(() => window.finger.plot.samples[0].k[1]);
+  assert.equal(kyy, Number(lowSolve.kv.stiffness.split(',')[1]));
+  await shot('pose', true);
+});
+
+test('a pose outside the range shows the board refusal', async () => {
+  for (const [id, v] of [['d1', '10'], ['d2', '10'], ['d3', '10'], ['dp', '5']]) await page.fill('#' + id, v);
+  await page.click('#pose');
+  await page.waitForFunction(() => document.getElementById('refusal').textContent.startsWith('pose 10 10 10 5'));
+  const direct = await board('pose 10 10 10 5');
+  assert.match(direct.line, /^err unreachable: /);
+  assert.equal(await page.textContent('#refusal'), `pose 10 10 10 5  ->  ${direct.line}`);
+  assert.equal(await page.getAttribute('#refusal', 'class'), 'mono err');
+  assert.equal(await page.textContent('#pose-out'), direct.line);
+  await shot('refusal');
+  // angles past the branch: the board's own limit text
+  for (const [id, v] of [['d1', '120'], ['d2', '120'], ['d3', '120'], ['dp', '']]) await page.fill('#' + id, v);
+  await page.click('#pose');
+  await page.waitForFunction(() => document.getElementById('refusal').textContent.startsWith('pose 120 120 120 '));
+  const lim = await board('pose 120 120 120');
+  assert.match(lim.line, /^err limit: /);
+  assert.ok((await page.textContent('#refusal')).endsWith(lim.line));
+});
+
+test('stop is always reachable and stops the board at once', async () => {
+  await page.click('#arm');
+  await page.waitForFunction(() => window.finger.armed === true);
+  assert.match((await board('force 1')).line, /^ok force=1\.000 /);
+  assert.match((await board('volt all 6000')).line, /^ok volts=6000\.0,6000\.0,6000\.0$/);
+  await page.waitForFunction(() => window.finger.status && Number(window.finger.status.volts.split(',')[0]) > 0);
+  // visible and on top, in a small window and scrolled to the bottom
+  for (const vp of [{ width: 1280, height: 900 }, { width: 760, height: 520 }]) {
+    await page.setViewportSize(vp);
+    await page.evaluate(() => window.scrollTo(0, document.body.scrollHeight));
+    const box = await page.locator('#stop').boundingBox();
+    assert.ok(box && box.y >= 0 && box.x >= 0 && box.x + box.width <= vp.width && box.y + box.height <= vp.height, JSON.stringify(box));
+    const top = await page.evaluate(([x, y]) => document.elementFromPoint(x, y).id, [box.x + box.width / 2, box.y + box.height / 2]);
+    assert.equal(top, 'stop');
+  }
+  await page.setViewportSize({ width: 1280, height: 900 });
+  await page.evaluate(() => window.scrollTo(0, 0));
+  // armed, the sliders move the board: tension by the keyboard, a voltage past the ceiling refused
+  await page.focus('#force');
+  await page.keyboard.press('ArrowRight');
+  await page.waitForFunction(() => window.finger.status && window.finger.status.force === '1.050');
+  await page.focus('#v1');
+  await page.keyboard.press('End');
+  await page.waitForFunction(() => document.getElementById('refusal').textContent.startsWith('volt 1 '));
+  assert.ok(Number((await page.textContent('#refusal')).split(' ')[2]) >= 10000, 'the slider reaches past the ceiling');
+  assert.match(await page.textContent('#refusal'), /^volt 1 \d+ {2}-> {2}err limit: channel 1: \d+\.\d V is at or past the ceiling 10000\.0 V/);
+  assert.equal((await board('status')).kv.target, '6000.0,6000.0,6000.0', 'the refusal changed nothing');
+  await page.waitForFunction(() => document.getElementById('v1').value === '6000');
+  await page.waitForFunction(() => Number(window.finger.status.volts.split(',')[0]) >= 2000);
+  await shot('armed');
+  // commands queued behind each other: stop goes first
+  await page.evaluate(() => { for (let i = 0; i < 5; i++) window.finger.con.command('solve 1 0 0 0', true).catch(() => {}); });
+  await page.click('#stop');
+  await page.waitForFunction(() => document.getElementById('refusal').textContent === 'stop  ->  ok stopped');
+  const st = await board('status');
+  assert.equal(st.kv.armed, '0');
+  assert.equal(st.kv.volts, '0.0,0.0,0.0', 'HV to 0 at once');
+  assert.equal(st.kv.force, '0.000');
+  assert.equal(st.kv.enable, '0');
+  await page.waitForFunction(() => document.getElementById('armed-state').textContent === 'disarmed');
+  // the keyboard's Escape is a stop too
+  assert.match((await board('arm')).line, /^ok armed=1$/);
+  await page.keyboard.press('Escape');
+  await page.waitForFunction(() => window.finger.armed === false);
+  assert.equal((await board('status')).kv.armed, '0');
+  await shot('stopped');
+  assert.deepEqual(pageErrors, []);
+});
+
+test('a board over Web Serial (a stand-in port: a second wasm board behind CRLF, without shape)', async () => {
+  const p2 = await ctx.newPage();
+  const errs = [];
+  p2.on('pageerror', (e) => errs.push(String(e)));
+  await p2.addInitScript(() => {
+    // navigator.serial with one port: bytes to a second finger-wasm instance, replies in CRLF
+    // as the board writes them, after its boot line; `shape` answered as a build without it
+    const port = {
+      async open() {
+        const bin = Uint8Array.from(atob(window.FINGER_WASM_B64), (c) => c.charCodeAt(0));
+        const e = (await WebAssembly.instantiate(bin, {})).instance.exports;
+        const enc = new TextEncoder(), dec = new TextDecoder();
+        let rx, line = '';
+        this.readable = new ReadableStream({ start(c) { rx = c; } });
+        const out = () => {
+          const p = e.out_ptr(), n = e.out_len();
+          if (!n) return;
+          const t = dec.decode(new Uint8Array(e.memory.buffer, p, n).slice());
+          e.out_clear();
+          rx.enqueue(enc.encode(t.replace(/\n/g, '\r\n')));
+        };
+        const feed = (s) => { const b = enc.encode(s); const p = e.io_buf(); new Uint8Array(e.memory.buffer, p, b.length).set(b); e.fw_input(b.length); out(); };
+        this.writable = new WritableStream({
+          write(chunk) {
+            for (const ch of dec.decode(chunk)) {
+              line += ch;
+              if (ch !== '\n') continue;
+              if (/^shape\b/i.test(line.trim())) rx.enqueue(enc.encode('err unknown: unknown command shape; try help\r\n'));
+              else feed(line);
+              line = '';
+            }
+          },
+        });
+        setInterval(() => { e.fw_tick(20); out(); }, 20);
+        rx.enqueue(enc.encode('# finger-fw 0.1.0 ready\r\n'));
+      },
+    };
+    Object.defineProperty(navigator, 'serial', { value: { requestPort: async () => port }, configurable: true });
+  });
+  await p2.goto(url);
+  await p2.waitForFunction(() => window.finger && window.finger.ready === true);
+  await p2.click('#use-serial');
+  await p2.waitForFunction(() => window.finger.ready === true && document.getElementById('source').textContent === 'board over Web Serial');
+  const cmd2 = (l) => p2.evaluate((x) => window.finger.con.command(x, true), l);
+  assert.match((await cmd2('version')).line, /^ok version=.* board=sim$/);
+  assert.equal(await p2.evaluate(() => window.finger.hasShape), false);
+  assert.match(await p2.textContent('#view-mode'), /board has no shape/);
+  // the drawing falls back to the host's geometry at the board's state; its tip is the board's
+  await p2.focus('#force');
+  for (let i = 0; i < 20; i++) await p2.keyboard.press('ArrowRight');
+  await p2.waitForFunction(() => document.getElementById('board-shape').dataset.p === '1' && !window.finger.busyPreview);
+  const s = await cmd2('solve 1 0 0 0');
+  const [sx, sy] = tipOf(s.kv.tip), [dx, dy] = tipOf(await p2.getAttribute('#board-shape', 'data-tip'));
+  assert.ok(Math.hypot(sx - dx, sy - dy) < 0.01, `${s.kv.tip} vs drawn ${dx},${dy}`);
+  assert.match((await cmd2('arm')).line, /^ok armed=1$/);
+  await p2.click('#stop');
+  await p2.waitForFunction(() => document.getElementById('refusal').textContent === 'stop  ->  ok stopped');
+  assert.equal((await cmd2('status')).kv.armed, '0');
+  assert.deepEqual(errs, []);
+  await p2.close();
+});
