@@ -186,6 +186,8 @@ pub struct Commands {
     wait: Option<Wait>,
     /// A `stop` line reached [`Commands::execute`] (see [`Commands::take_stop`]).
     stop_asked: bool,
+    /// The `timing` addition: the runtime's own measurements (set by the chip or simulator).
+    report: Option<fn(&mut dyn Write)>,
     /// `Finger::fmax` at the setpoints it was computed for ([`Commands::fmax`]), and how many
     /// times it was computed.
     fmax_cache: Cell<Option<([f32; CHANNELS], Result<BranchLimit<f32>, ModelError>)>>,
@@ -229,6 +231,7 @@ impl Commands {
             seq: 0,
             wait: None,
             stop_asked: false,
+            report: None,
             fmax_cache: Cell::new(None),
             fmax_computed: Cell::new(0),
             #[cfg(feature = "pose")]
@@ -283,6 +286,11 @@ impl Commands {
             self.servo_deg = 0.0;
             self.target_v = [0.0; CHANNELS];
         }
+    }
+
+    /// What `timing` reports (the chip's measurements, or the simulator's).
+    pub fn set_timing_report(&mut self, f: fn(&mut dyn Write)) {
+        self.report = Some(f);
     }
 
     /// A `stop` was executed as a line: the caller stops the control core.
@@ -496,6 +504,11 @@ impl Commands {
                 // acts on `stop` lines before they are queued
                 self.stop_asked = true;
                 let _ = w!(r; "stopped");
+            }
+            b"timing" => {
+                no_args(args, "timing")?;
+                let Some(f) = self.report else { return Err(err!("unknown"; "timing is not in this build")) };
+                f(r);
             }
             b"volt" => self.cmd_volt(args, r)?,
             b"force" => self.cmd_force(args, r)?,
@@ -1068,6 +1081,12 @@ impl<B: Board> App<B> {
     pub fn input_byte<W: Write>(&mut self, b: u8, out: &mut W) {
         self.receive(b, out);
         self.run_commands(out);
+    }
+
+    /// The UART lost bytes here (an overrun): the line being received is discarded at its
+    /// end and answered `err overrun` (QEMU's UART never overruns: the host tests use this).
+    pub fn input_overrun(&mut self) {
+        self.rx.overrun();
     }
 
     /// The RX interrupt's part of a byte.

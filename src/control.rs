@@ -101,6 +101,8 @@ pub struct Control<B: Board> {
     servo_released: u16,
     v_from: [f32; HV_CHANNELS],
     fault: Option<&'static str>,
+    /// Never arm (e.g. the emulator image on a real chip): the fault it reports, for good.
+    lockout: Option<&'static str>,
     seq: u32,
     epoch: u32,
     now_ms: u32,
@@ -126,6 +128,7 @@ impl<B: Board> Control<B> {
             servo_released,
             v_from: [0.0; HV_CHANNELS],
             fault: None,
+            lockout: None,
             seq: 0,
             epoch: 0,
             now_ms: 0,
@@ -212,7 +215,13 @@ impl<B: Board> Control<B> {
         self.servo_to = self.servo_released;
         self.write_servo(self.servo_released);
         self.epoch = self.epoch.wrapping_add(1);
-        self.fault = None;
+        self.fault = self.lockout;
+    }
+
+    /// Never arm from now on; `reason` is the fault reported (a stop does not clear it).
+    pub fn lock_out(&mut self, reason: &'static str) {
+        self.lockout = Some(reason);
+        self.fault_stop(reason);
     }
 
     /// A fault stop: as [`Control::stop`], the fault stays latched.
@@ -236,7 +245,7 @@ impl<B: Board> Control<B> {
             self.slew = sp.slew;
         }
         self.servo_released = sp.servo_released;
-        if sp.armed {
+        if sp.armed && self.lockout.is_none() {
             for ch in 0..HV_CHANNELS {
                 let t = sp.target_v[ch];
                 if !(t >= 0.0 && t <= HV_LIMIT_V) || hv_duty_for(t, self.hv_max[ch]) > self.ceiling[ch] {

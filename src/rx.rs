@@ -109,7 +109,11 @@ impl RxLines {
     /// One received byte.
     pub fn push(&mut self, b: u8) -> RxEvent {
         self.received = self.received.wrapping_add(1);
-        self.seen = true;
+        // input that ends a `wait`: any byte but a line ending (the LF of a `wait`'s own CRLF
+        // arrives after its line)
+        if b != b'\r' && b != b'\n' {
+            self.seen = true;
+        }
         let end = match self.line.push(b) {
             None => {
                 if b != b'\n' && b != b'\r' {
