@@ -19,24 +19,37 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..").canonicalize().unwrap()
 }
 
+fn target_dir() -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(d) if Path::new(&d).is_absolute() => PathBuf::from(d),
+        Some(d) => std::env::current_dir().unwrap().join(d),
+        None => root().join("target"),
+    }
+}
+
+/// Build the emulator image (extra `features`, its own target dir `sub` when features are
+/// given); its path.
+fn build(features: &str, tdir: PathBuf) -> PathBuf {
+    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    c.current_dir(root()).env("CARGO_TARGET_DIR", &tdir).args(["build", "--release", "--quiet", "--bin", "finger-fw"]);
+    if !features.is_empty() {
+        c.args(["--features", features]);
+    }
+    let out = c.output().expect("cargo");
+    assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
+    tdir.join("thumbv7em-none-eabihf").join("release").join("finger-fw")
+}
+
 /// Build the emulator image once per process; its path.
 pub fn image() -> &'static Path {
     static IMG: OnceLock<PathBuf> = OnceLock::new();
-    IMG.get_or_init(|| {
-        let tdir = match std::env::var_os("CARGO_TARGET_DIR") {
-            Some(d) if Path::new(&d).is_absolute() => PathBuf::from(d),
-            Some(d) => std::env::current_dir().unwrap().join(d),
-            None => root().join("target"),
-        };
-        let out = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
-            .current_dir(root())
-            .env("CARGO_TARGET_DIR", &tdir)
-            .args(["build", "--release", "--quiet", "--bin", "finger-fw"])
-            .output()
-            .expect("cargo");
-        assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
-        tdir.join("thumbv7em-none-eabihf").join("release").join("finger-fw")
-    })
+    IMG.get_or_init(|| build("", target_dir()))
+}
+
+/// The emulator image with the `fault-inject` test command (its own target dir).
+pub fn fault_image() -> &'static Path {
+    static IMG: OnceLock<PathBuf> = OnceLock::new();
+    IMG.get_or_init(|| build("fault-inject", target_dir().join("faults")))
 }
 
 /// One register access from the trace.
@@ -57,7 +70,11 @@ pub struct Qemu {
 impl Qemu {
     /// Boot the image with the register trace on; returns after the banner.
     pub fn boot(tag: &str) -> Qemu {
-        let elf = image();
+        Self::boot_image(image(), tag)
+    }
+
+    /// Boot `elf` with the register trace on.
+    pub fn boot_image(elf: &Path, tag: &str) -> Qemu {
         let dir = std::env::temp_dir().join(format!("finger-rt-{}-{tag}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
