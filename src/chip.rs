@@ -291,6 +291,9 @@ pub mod timing {
     pub static TICK_LATENCY_MIN: AtomicU32 = AtomicU32::new(u32::MAX);
     /// Control-task run time, counts.
     pub static TICK_RUN_MAX: AtomicU32 = AtomicU32::new(0);
+    /// Entry to entry of the control task, counts.
+    pub static PERIOD_MIN: AtomicU32 = AtomicU32::new(u32::MAX);
+    pub static PERIOD_MAX: AtomicU32 = AtomicU32::new(0);
     /// Stop: from the console interrupt's entry to HV off, counts.
     pub static STOP_MAX: AtomicU32 = AtomicU32::new(0);
     pub static STOPS: AtomicU32 = AtomicU32::new(0);
@@ -433,11 +436,18 @@ mod app {
     }
 
     /// The control task: every 1 ms, at the highest priority.
-    #[task(binds = SysTick, priority = 3, shared = [ctl, mailbox])]
+    #[task(binds = SysTick, priority = 3, shared = [ctl, mailbox], local = [last_entry: u64 = 0])]
     fn control(cx: control::Context) {
         let entry = systick_elapsed();
         timing::max(&timing::TICK_LATENCY_MAX, entry);
         timing::min(&timing::TICK_LATENCY_MIN, entry);
+        let at = (NOW_MS.load(Ordering::Relaxed) as u64 + 1) * SYSTICK_PER_MS as u64 + entry as u64;
+        if *cx.local.last_entry > 0 {
+            let p = (at - *cx.local.last_entry) as u32;
+            timing::max(&timing::PERIOD_MAX, p);
+            timing::min(&timing::PERIOD_MIN, p);
+        }
+        *cx.local.last_entry = at;
         let checkin = CHECKIN_MS.load(Ordering::Relaxed);
         let now = (cx.shared.ctl, cx.shared.mailbox).lock(|ctl, mb| {
             if core::mem::take(&mut mb.stop) {
@@ -538,6 +548,7 @@ mod app {
             fault_inject::run(&rec);
             let t0 = now_counts();
             cmds.run(rec, &mut out);
+            durations::record(word, (now_counts() - t0) as u32);
             let stop = cmds.take_stop();
             let sp = cmds.setpoints();
             mailbox.lock(|m| {
@@ -554,7 +565,6 @@ mod app {
                 }
                 cortex_m::asm::wfi();
             }
-            durations::record(word, (now_counts() - t0) as u32);
         }
     }
 
@@ -643,10 +653,11 @@ pub mod durations {
     }
 }
 
-/// The `timing` reply: `tick_latency_us=<min>,<max>` (control-task entry after the SysTick
+/// The `timing` reply: `tick_period_us=<min>,<max>` (control-task entry to entry),
+/// `tick_latency_us=<min>,<max>` (control-task entry after the SysTick
 /// reload: the tick's jitter), `tick_run_us=<max>`, `ticks=<n>`, `stop_us=<max>` (console
 /// interrupt entry to HV off), `stops=<n>`, `cmd_us=<word>:<max>,...` (the command side, line
-/// taken to its setpoints taken).
+/// run, replies queued).
 fn timing_report(o: &mut dyn core::fmt::Write) {
     use finger_fw::num::Fixed;
     use finger_fw::w;
@@ -654,7 +665,9 @@ fn timing_report(o: &mut dyn core::fmt::Write) {
     let ld = |a: &AtomicU32| a.load(Ordering::Relaxed);
     let min = ld(&timing::TICK_LATENCY_MIN);
     let min = if min == u32::MAX { 0 } else { min };
-    let _ = w!(o; "tick_latency_us=", us(min), ",", us(ld(&timing::TICK_LATENCY_MAX)), " tick_run_us=", us(ld(&timing::TICK_RUN_MAX)), " ticks=", ld(&timing::TICKS));
+    let pmin = ld(&timing::PERIOD_MIN);
+    let pmin = if pmin == u32::MAX { 0 } else { pmin };
+    let _ = w!(o; "tick_period_us=", us(pmin), ",", us(ld(&timing::PERIOD_MAX)), " tick_latency_us=", us(min), ",", us(ld(&timing::TICK_LATENCY_MAX)), " tick_run_us=", us(ld(&timing::TICK_RUN_MAX)), " ticks=", ld(&timing::TICKS));
     let _ = w!(o; " stop_us=", us(ld(&timing::STOP_MAX)), " stops=", ld(&timing::STOPS), " cmd_us=");
     cortex_m::interrupt::free(|cs| {
         let t = durations::TABLE.borrow(cs).borrow();
