@@ -75,6 +75,12 @@ impl Qemu {
 
     /// Boot `elf` with the register trace on.
     pub fn boot_image(elf: &Path, tag: &str) -> Qemu {
+        Self::boot_with(elf, tag, &[])
+    }
+
+    /// Boot `elf` with the register trace and `extra` QEMU arguments (e.g. `-d int`, whose
+    /// log goes into the same file: [`Qemu::finish_log`]).
+    pub fn boot_with(elf: &Path, tag: &str, extra: &[&str]) -> Qemu {
         let dir = std::env::temp_dir().join(format!("finger-rt-{}-{tag}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
@@ -88,6 +94,7 @@ impl Qemu {
             .args(["-semihosting-config", "enable=on,target=native"])
             .args(["-trace", "memory_region_ops_write", "-trace", "memory_region_ops_read", "-D"])
             .arg(dir.join("trace.log"))
+            .args(extra)
             .arg("-kernel")
             .arg(elf)
             .stdin(Stdio::null())
@@ -144,12 +151,17 @@ impl Qemu {
     }
 
     /// Stop QEMU (SIGTERM: it flushes the trace); every register access, in order.
-    pub fn finish(mut self) -> Vec<Access> {
+    pub fn finish(self) -> Vec<Access> {
+        parse_trace(&self.finish_log())
+    }
+
+    /// Stop QEMU; the whole log file (trace and any `-d` output).
+    pub fn finish_log(mut self) -> String {
         let _ = Command::new("kill").arg(self.child.id().to_string()).status();
         let _ = self.child.wait();
         let text = std::fs::read_to_string(self.dir.join("trace.log")).unwrap_or_default();
         let _ = std::fs::remove_dir_all(&self.dir);
-        parse_trace(&text)
+        text
     }
 }
 
