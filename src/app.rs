@@ -170,6 +170,7 @@ pub struct Commands {
     volts: [f32; CHANNELS],
     duty: [u16; CHANNELS],
     fault: Option<&'static str>,
+    locked_out: bool,
     now_ms: u32,
     /// HV setpoints (targets), V.
     target_v: [f32; CHANNELS],
@@ -220,6 +221,7 @@ impl Commands {
             volts: [0.0; CHANNELS],
             duty: [0; CHANNELS],
             fault: None,
+            locked_out: false,
             now_ms: 0,
             target_v: [0.0; CHANNELS],
             vmax: [0.0; CHANNELS],
@@ -277,6 +279,7 @@ impl Commands {
         self.volts = v.volts;
         self.duty = v.duty;
         self.fault = v.fault;
+        self.locked_out = v.locked_out;
         self.now_ms = v.now_ms;
         if v.epoch != self.epoch {
             self.epoch = v.epoch;
@@ -488,6 +491,9 @@ impl Commands {
             b"solve" => self.cmd_solve(args, r)?,
             b"arm" => {
                 no_args(args, "arm")?;
+                if let (true, Some(f)) = (self.locked_out, self.fault) {
+                    return Err(err!("fault"; f, ": this image never arms here"));
+                }
                 if let Some(f) = self.fault {
                     return Err(err!("fault"; "fault ", f, " latched; send stop to clear it"));
                 }

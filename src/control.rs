@@ -55,6 +55,8 @@ pub struct View {
     pub enable: bool,
     pub servo_duty: u16,
     pub fault: Option<&'static str>,
+    /// Locked out for good ([`Control::lock_out`]): never arms.
+    pub locked_out: bool,
     /// Ticks since start, ms.
     pub now_ms: u32,
 }
@@ -161,6 +163,7 @@ impl<B: Board> Control<B> {
             enable: self.enable,
             servo_duty: self.servo_duty,
             fault: self.fault,
+            locked_out: self.lockout.is_some(),
             now_ms: self.now_ms,
         }
     }

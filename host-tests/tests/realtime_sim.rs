@@ -308,4 +308,10 @@ fn locked_out_core_never_arms() {
     }
     assert!(!c.board().enable.high_ever && c.board().hv.iter().all(|h| h.duty == 0));
     assert_eq!(c.view().fault, Some("qemu image on a real chip"));
+    // the command side says why `arm` is refused
+    let mut cmds = finger_fw::Commands::new("qemu", "\n", [8400; 3], 40_000);
+    cmds.sync(&c.view());
+    let mut out = Out(String::new());
+    cmds.execute(b"arm", &mut out);
+    assert_eq!(out.0, "err fault: qemu image on a real chip: this image never arms here\n");
 }
