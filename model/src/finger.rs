@@ -29,7 +29,40 @@ use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 use crate::{de, hinge};
 
-mod dual;
+mod march;
+
+use crate::solve::continuation::{self, Step};
+use crate::solve::newton::{self as newton_solve, Equations};
+use crate::solve::{self, SolveOptions};
+
+/// Unknowns of the coupled (tip-loaded) solve: each joint's hole, then the tip position.
+const COUPLED: usize = 2 * MAX_JOINTS + 2;
+
+/// The coupled residual (`Finger::coupled_residual`) for `solve::newton`, each slot's marched
+/// joint states kept.
+struct Coupled<'a, R> {
+    f: &'a Finger<R>,
+    c: &'a Compliances<R>,
+    tension: R,
+    force: [R; 2],
+    states: [[JointState<R>; MAX_JOINTS]; 3],
+}
+
+impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
+    type Refusal = MarchError;
+    fn dim(&self) -> usize {
+        2 * self.f.p.n + 2
+    }
+    fn residual(&mut self, x: &[R; COUPLED], slot: usize) -> Result<[R; COUPLED], MarchError> {
+        let (r, st) = self.f.coupled_residual(self.c, self.tension, self.force, x)?;
+        self.states[slot] = st;
+        Ok(r)
+    }
+    fn jacobian(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], _: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
+        let h = R::from_f64(R::SQRT_EPS) * (self.f.p.hinge_len() + self.f.p.e);
+        newton_solve::forward_difference(self, x, r, &[h; COUPLED])
+    }
+}
 
 /// A planar pose: position (mm) and angle (rad, positive toward +y).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -254,6 +287,7 @@ struct SpanLoads<R> {
     ftot: [R; 2],
 }
 
+#[derive(Clone, Copy, Debug)]
 enum MarchError {
     Contact,
     Singular,
@@ -849,8 +883,9 @@ impl<R: Real> Finger<R> {
         Ok((r, states))
     }
 
-    /// Converged equilibrium with a tip load: Newton on all holes and the tip together, with
-    /// backtracking and load continuation.
+    /// Converged equilibrium with a tip load: damped Newton (`solve::newton`, forward-difference
+    /// Jacobian) on all holes and the tip together, under load continuation
+    /// (`solve::continuation`) in the load factor λ (tension and tip force together).
     fn newton_coupled(
         &self,
         c: &Compliances<R>,
@@ -859,112 +894,45 @@ impl<R: Real> Finger<R> {
         tol: R,
         max_iter: u32,
     ) -> Result<([JointState<R>; MAX_JOINTS], u32), Error> {
-        const N: usize = 2 * MAX_JOINTS + 2;
         let n = self.p.n;
-        let dim = 2 * n + 2;
-        let mut x = [R::zero(); N];
+        let mut x = [R::zero(); COUPLED];
         for k in 0..n {
             x[2 * k] = self.p.hinge_len();
             x[2 * k + 1] = self.p.e;
         }
         x[2 * n] = R::from_u32(n as u32) * self.p.l;
-        let mut done = R::zero();
-        let mut step = R::one();
+        let mut eq = Coupled { f: self, c, tension: R::zero(), force: [R::zero(); 2], states: [[self.straight(); MAX_JOINTS]; 3] };
         let mut iters = 0u32;
-        let h = R::from_f64(R::SQRT_EPS) * (self.p.hinge_len() + self.p.e);
-        let floor = self.resolution() * R::from_u32(n as u32);
-        let mut last_contact = false;
-        loop {
-            let lam = (done + step).min(R::one());
-            let (p, f) = (tension * lam, [force[0] * lam, force[1] * lam]);
+        let mut result = None;
+        let opts_for = |left: u32| SolveOptions::new(tol, self.resolution() * R::from_u32(n as u32), left);
+        let mut step = |_: R, to: R| -> Result<(), Step<Option<MarchError>>> {
+            eq.tension = tension * to;
+            eq.force = [force[0] * to, force[1] * to];
             let mut xt = x;
-            let mut ok = None;
-            let mut res = match self.coupled_residual(c, p, f, &xt) {
-                Ok(v) => Some(v),
-                Err(e) => {
-                    last_contact = matches!(e, MarchError::Contact);
-                    None
-                }
-            };
-            while let Some((r, states)) = res {
-                let rn = r[..dim].iter().fold(R::zero(), |a, &v| a + v * v).sqrt();
-                if rn <= tol {
-                    ok = Some(states);
-                    break;
-                }
-                if iters >= max_iter {
-                    break;
-                }
-                iters += 1;
-                // forward-difference Jacobian
-                let mut jac = [[R::zero(); N]; N];
-                let mut fail = false;
-                for i in 0..dim {
-                    let mut xp = xt;
-                    xp[i] += h;
-                    match self.coupled_residual(c, p, f, &xp) {
-                        Ok((rp, _)) => {
-                            for row in 0..dim {
-                                jac[row][i] = (rp[row] - r[row]) / h;
-                            }
-                        }
-                        Err(_) => fail = true,
-                    }
-                }
-                if fail {
-                    break;
-                }
-                let mut rhs = [R::zero(); N];
-                for i in 0..dim {
-                    rhs[i] = -r[i];
-                }
-                let Some(dx) = solve_dense(&mut jac, &mut rhs, dim) else { break };
-                let mut lambda = R::one();
-                let mut next = None;
-                for _ in 0..12 {
-                    let mut xn = xt;
-                    for i in 0..dim {
-                        xn[i] += lambda * dx[i];
-                    }
-                    match self.coupled_residual(c, p, f, &xn) {
-                        Ok((rt, st)) => {
-                            let rtn = rt[..dim].iter().fold(R::zero(), |a, &v| a + v * v).sqrt();
-                            if rtn < rn {
-                                xt = xn;
-                                next = Some((rt, st));
-                                break;
-                            }
-                        }
-                        Err(e) => last_contact = matches!(e, MarchError::Contact),
-                    }
-                    lambda = lambda / R::from_f64(2.0);
-                }
-                if next.is_none() && rn <= floor {
-                    ok = Some(states);
-                    break;
-                }
-                res = next;
-            }
-            match ok {
-                Some(states) => {
+            let left = max_iter.saturating_sub(iters);
+            match solve::newton::solve(&mut eq, &mut xt, &opts_for(left)) {
+                Ok((rep, slot)) => {
+                    iters += rep.iterations;
                     x = xt;
-                    done = lam;
-                    if done >= R::one() {
-                        return Ok((states, iters));
-                    }
-                    step = step + step;
+                    result = Some(eq.states[slot]);
+                    Ok(())
                 }
-                None => {
-                    step = step / R::from_f64(2.0);
-                    if iters >= max_iter || step < R::from_f64(1.0 / 4096.0) {
-                        return Err(if last_contact {
-                            Error::Contact { joint: 0, tension: (tension * lam).to_f64() }
-                        } else {
-                            Error::NotConverged { iterations: iters, residual: f64::INFINITY }
-                        });
-                    }
+                Err(fail) => {
+                    iters += fail.iterations();
+                    let why = fail.refusal().copied();
+                    if iters >= max_iter { Err(Step::Stop(why)) } else { Err(Step::Retry(why)) }
                 }
             }
+        };
+        match continuation::run(R::one(), R::from_f64(1.0 / 4096.0), None, &mut step) {
+            Ok(_) => match result {
+                Some(states) => Ok((states, iters)),
+                None => Err(Error::NotConverged { iterations: iters, residual: f64::INFINITY }),
+            },
+            Err((lam, why)) => Err(match why {
+                Some(MarchError::Contact) => Error::Contact { joint: 0, tension: (tension * lam).to_f64() },
+                _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
+            }),
         }
     }
 
@@ -1271,39 +1239,4 @@ pub fn uniform_beam_compliance<R: Real>(e: R, w: R, t: R, len: R) -> Mat3<R> {
         [z, len * len * len / (R::from_f64(3.0) * ei), len * len / (R::from_f64(2.0) * ei)],
         [z, len * len / (R::from_f64(2.0) * ei), len / ei],
     ]
-}
-
-/// Gaussian elimination with partial pivoting on the leading `dim` block; `None` if singular.
-fn solve_dense<R: Real, const N: usize>(a: &mut [[R; N]; N], b: &mut [R; N], dim: usize) -> Option<[R; N]> {
-    for col in 0..dim {
-        let mut piv = col;
-        for row in col + 1..dim {
-            if a[row][col].abs() > a[piv][col].abs() {
-                piv = row;
-            }
-        }
-        if !(a[piv][col].abs() > R::from_f64(1e-300_f64.max(R::EPS * 1e-12))) {
-            return None;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        for row in col + 1..dim {
-            let f = a[row][col] / a[col][col];
-            for k in col..dim {
-                let v = a[col][k];
-                a[row][k] -= f * v;
-            }
-            let v = b[col];
-            b[row] -= f * v;
-        }
-    }
-    let mut x = [R::zero(); N];
-    for i in (0..dim).rev() {
-        let mut s = b[i];
-        for k in i + 1..dim {
-            s -= a[i][k] * x[k];
-        }
-        x[i] = s / a[i][i];
-    }
-    Some(x)
 }
