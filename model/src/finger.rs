@@ -29,6 +29,7 @@ use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 use crate::{de, hinge};
 
+mod branch_end;
 mod march;
 
 use crate::solve::continuation::{self, Step};
@@ -1153,37 +1154,6 @@ impl<R: Real> Finger<R> {
     /// The finest hole-position residual the scalar type can resolve, mm (crate-visible).
     pub(crate) fn hole_resolution(&self) -> R {
         self.resolution()
-    }
-
-    /// The end of the equilibrium branch under tension alone for these voltages: the lowest
-    /// tension at which a joint's span closes to its floor (contact) or its equilibrium tangent
-    /// turns singular (a limit point), whichever comes first, found by load continuation to
-    /// 1e-4 relative. If neither happens below a search bound (1000 times the tension that would
-    /// turn the softest joint by 1 rad linearly), that bound is returned as `SearchBound`.
-    /// The converged solver refuses tensions past this end (its continuation cannot pass it).
-    pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
-        let c = self.compliances(volts)?;
-        let mut best: Option<BranchLimit<R>> = None;
-        let tol = self.resolution().max(R::from_f64(1e-9));
-        for k in 0..self.p.n {
-            let c33 = c.c[k][..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
-            let p_hi = R::from_f64(1000.0) / (self.p.e * c33);
-            let min_step = p_hi * R::from_f64(1e-4 / 1000.0);
-            let end = match self.newton_joint(k, &c.c[k], p_hi, tol, 20_000, min_step) {
-                Ok(_) => BranchLimit { tension: p_hi, joint: k + 1, kind: BranchEnd::SearchBound },
-                Err(Error::Contact { tension, .. }) => {
-                    BranchLimit { tension: R::from_f64(tension), joint: k + 1, kind: BranchEnd::Contact }
-                }
-                Err(Error::LimitPoint { tension, .. }) => {
-                    BranchLimit { tension: R::from_f64(tension), joint: k + 1, kind: BranchEnd::LimitPoint }
-                }
-                Err(e) => return Err(e),
-            };
-            if best.map_or(true, |b| end.tension < b.tension) {
-                best = Some(end);
-            }
-        }
-        best.ok_or(Error::Input { input: "n", reason: "no joints" })
     }
 
     /// Linearised tip compliance `C_tip = Σ J C Jᵀ` over every sub-element (MODEL.md "Tip
