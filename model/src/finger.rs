@@ -31,6 +31,7 @@ use crate::{de, hinge};
 
 mod branch_end;
 mod march;
+mod pinned;
 
 use crate::solve::continuation::{self, Step};
 use crate::solve::newton::{self as newton_solve, Equations};
@@ -464,7 +465,7 @@ impl<R: Real> Finger<R> {
             return Err(Error::Input { input: "n_inc", reason: "at least one load step" });
         }
         let states = self.stepping(c, tension, tip_force, n_inc)?;
-        self.assemble(c, tension, tip_force, &states, n_inc)
+        self.assemble(c, tension, tip_force, &states, None, n_inc)
     }
 
     /// The converged equilibrium (Newton to `tol` mm on the guide holes).
@@ -475,8 +476,8 @@ impl<R: Real> Finger<R> {
         }
         let tol = tol.max(self.resolution());
         if tip_force[0] != R::zero() || tip_force[1] != R::zero() {
-            let (states, iterations) = self.newton_coupled(c, tension, tip_force, tol, max_iter)?;
-            self.assemble(c, tension, tip_force, &states, iterations)
+            let (states, tip, iterations) = self.newton_coupled(c, tension, tip_force, tol, max_iter)?;
+            self.assemble(c, tension, tip_force, &states, Some(tip), iterations)
         } else {
             self.solve_tension_alone(c, tension, tol, max_iter)
         }
@@ -562,7 +563,7 @@ impl<R: Real> Finger<R> {
             r2_prev = r2;
             res2 += r2;
         }
-        let (nodes, links) = self.chain_ends(&ends, tension, [R::zero(); 2]);
+        let (nodes, links) = self.chain_ends(&ends, tension, [R::zero(); 2], None);
         sol.nodes = nodes;
         sol.links = links;
         sol.iterations = iters;
@@ -799,12 +800,13 @@ impl<R: Real> Finger<R> {
         states: &[JointState<R>; MAX_JOINTS],
         tension: R,
         tip_force: [R; 2],
+        tip_point: Option<[R; 2]>,
     ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
         let mut ends = [Pose::origin(); MAX_JOINTS];
         for k in 0..self.p.n {
             ends[k] = states[k].end;
         }
-        self.chain_ends(&ends, tension, tip_force)
+        self.chain_ends(&ends, tension, tip_force, tip_point)
     }
 
     /// `chain` from each joint's hinge end pose alone.
@@ -813,15 +815,18 @@ impl<R: Real> Finger<R> {
         ends: &[Pose<R>; MAX_JOINTS],
         tension: R,
         tip_force: [R; 2],
+        tip_point: Option<[R; 2]>,
     ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
         let mut nodes = [Pose::origin(); MAX_JOINTS + 1];
         let mut links = [[R::zero(); 3]; MAX_JOINTS];
-        // with a tip load on flexible links the tip point enters the links' loads: a fixed
-        // point on the tip, from the rigid-link tip (the links are stiff: it converges fast)
+        // with a tip load on flexible links the tip point enters the links' loads: the solved
+        // tip when the caller has it (the coupled and pinned solves carry it as an unknown),
+        // else a fixed point on the tip from the rigid-link tip (the load stepping)
         let n = self.p.n;
-        let passes = if loaded && self.p.flex_links { 8 } else { 1 };
-        let mut tip_point: Option<[R; 2]> = None;
+        let given = tip_point.is_some();
+        let passes = if loaded && self.p.flex_links && !given { 8 } else { 1 };
+        let mut tip_point = if loaded && self.p.flex_links { tip_point } else { None };
         for _ in 0..passes {
             let tip = if loaded { tip_point.map(|t| (tip_force, t)) } else { None };
             for k in 0..n {
@@ -832,6 +837,9 @@ impl<R: Real> Finger<R> {
                 nodes[k + 1] = hinge_end.then(self.link_len + q[0], q[1], q[2]);
             }
             let new_tip = [nodes[n].x, nodes[n].y];
+            if given {
+                break;
+            }
             if let Some(t) = tip_point {
                 if (new_tip[0] - t[0]).abs() + (new_tip[1] - t[1]).abs() <= self.resolution() {
                     break;
@@ -894,7 +902,7 @@ impl<R: Real> Finger<R> {
         force: [R; 2],
         tol: R,
         max_iter: u32,
-    ) -> Result<([JointState<R>; MAX_JOINTS], u32), Error> {
+    ) -> Result<([JointState<R>; MAX_JOINTS], [R; 2], u32), Error> {
         let n = self.p.n;
         let mut x = [R::zero(); COUPLED];
         for k in 0..n {
@@ -927,7 +935,7 @@ impl<R: Real> Finger<R> {
         };
         match continuation::run(R::one(), R::from_f64(1.0 / 4096.0), None, &mut step) {
             Ok(_) => match result {
-                Some(states) => Ok((states, iters)),
+                Some(states) => Ok((states, [x[2 * n], x[2 * n + 1]], iters)),
                 None => Err(Error::NotConverged { iterations: iters, residual: f64::INFINITY }),
             },
             Err((lam, why)) => Err(match why {
@@ -954,7 +962,7 @@ impl<R: Real> Finger<R> {
             let lam = R::from_u32(step as u32) / R::from_u32(n_inc as u32);
             let p = tension * lam;
             let f = [force[0] * lam, force[1] * lam];
-            let (nodes, _) = self.chain(&states, p, f);
+            let (nodes, _) = self.chain(&states, p, f, None);
             let tip = [nodes[n].x, nodes[n].y];
             let mut next = states;
             for k in 0..n {
@@ -1016,10 +1024,11 @@ impl<R: Real> Finger<R> {
         tension: R,
         tip_force: [R; 2],
         states: &[JointState<R>; MAX_JOINTS],
+        tip_point: Option<[R; 2]>,
         iterations: u32,
     ) -> Result<Solution<R>, Error> {
         let n = self.p.n;
-        let (nodes, links) = self.chain(states, tension, tip_force);
+        let (nodes, links) = self.chain(states, tension, tip_force, tip_point);
         let mut sol = Solution {
             n,
             m: self.p.m,
@@ -1038,8 +1047,11 @@ impl<R: Real> Finger<R> {
             tangent_det: [R::one(); MAX_JOINTS],
         };
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
-        let tip = [nodes[n].x, nodes[n].y];
-        let mut res2 = R::zero();
+        // the solved tip (the load's point in the joints' residuals), and its mismatch with
+        // the chain's tip in the residual
+        let chain_tip = [nodes[n].x, nodes[n].y];
+        let tip = tip_point.unwrap_or(chain_tip);
+        let mut res2 = (tip[0] - chain_tip[0]).sq() + (tip[1] - chain_tip[1]).sq();
         // residual and tangent determinant of the joint before (tension alone)
         let mut prev: Option<([R; 2], R)> = None;
         for k in 0..n {
@@ -1185,6 +1197,34 @@ impl<R: Real> Finger<R> {
             }
         }
         ct
+    }
+
+    /// The forward equilibrium residual of a solved posture under its own tension, voltages
+    /// and tip load (MODEL.md "Equilibrium": each guide hole where its joint's march puts it,
+    /// the tip where the chain ends), mm: the coupled system's residual, evaluated afresh from
+    /// the solution's holes and tip. An independent check of any solve (forward, pinned).
+    pub fn equilibrium_residual(&self, sol: &Solution<R>) -> Result<R, Error> {
+        let n = self.p.n;
+        if sol.n != n || sol.m != self.p.m {
+            return Err(Error::Input { input: "solution", reason: "solved for other parameters" });
+        }
+        let c = self.compliances(&sol.volts[..n])?;
+        let mut x = [R::zero(); COUPLED];
+        for k in 0..n {
+            let mut end = Pose::origin();
+            for q in sol.q[k].iter().take(self.p.m) {
+                end = end.then(self.sub_len + q[0], q[1], q[2]);
+            }
+            let hole = end.point(R::zero(), self.p.e);
+            x[2 * k] = hole[0];
+            x[2 * k + 1] = hole[1];
+        }
+        x[2 * n] = sol.tip().x;
+        x[2 * n + 1] = sol.tip().y;
+        let (r, _) = self
+            .coupled_residual(&c, sol.tension, sol.tip_force, &x)
+            .map_err(|_| Error::Contact { joint: 0, tension: sol.tension.to_f64() })?;
+        Ok(r[..2 * n + 2].iter().fold(R::zero(), |a, &v| a + v * v).sqrt())
     }
 
     /// Linearised tip stiffness K_tip = C_tip⁻¹ (rows/columns x mm, y mm, θ rad; N/mm and
