@@ -23,6 +23,8 @@ const REL: f64 = 1e-4;
 const NEAR_FOLD: f64 = 0.2;
 /// Newton iterations per point on the branch.
 const POINT_ITER: u32 = 24;
+/// A march cycle that advances the tension by less than this fraction has stalled.
+const STALL: f64 = 1e-3;
 
 /// A solved point on the branch.
 #[derive(Clone, Copy)]
@@ -114,7 +116,9 @@ impl<R: Real> Finger<R> {
         let mut step = p_lin / R::from_f64(8.0);
         let mut why: Option<MarchError> = None;
         let min_step = p_lin * R::from_f64(1e-6);
+        let mut stalled = 0u32;
         for _ in 0..64 {
+            let start_p = lo.p;
             // march: doubling steps until a refusal (or the search bound)
             let hi = loop {
                 let p = (lo.p + step).min(p_hi);
@@ -157,6 +161,19 @@ impl<R: Real> Finger<R> {
                 let contact = near_contact && !(near_fold && !matches!(why, Some(MarchError::Contact)));
                 let kind = if contact { BranchEnd::Contact } else { BranchEnd::LimitPoint };
                 return Ok(BranchLimit { tension: lo.p, joint: k + 1, kind });
+            }
+            // short steps from lo no longer advance (twice): the branch ends at lo in this
+            // scalar type (its solve stops existing there short of both criteria); named by
+            // the nearer one, the last tension with an equilibrium
+            if lo.p - start_p <= R::from_f64(STALL) * lo.p {
+                stalled += 1;
+                if stalled >= 2 {
+                    let to_floor = (lo.span - self.p.span_floor) / (lh - self.p.span_floor).max(self.p.span_floor);
+                    let kind = if to_floor <= lo.det.abs() { BranchEnd::Contact } else { BranchEnd::LimitPoint };
+                    return Ok(BranchLimit { tension: lo.p, joint: k + 1, kind });
+                }
+            } else {
+                stalled = 0;
             }
             // a step too long, not the end: march on from lo with short steps
             step = ((hi_end - lo.p) / R::from_f64(4.0)).max(min_step);
