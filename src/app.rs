@@ -288,7 +288,12 @@ impl<B: Board> App<B> {
     /// The ceilings: per channel `min(margin x V_pi, v_supply, hv_fs)` and the duty it gives.
     /// Called on every parameter change.
     fn recompute(&mut self) {
-        let v = self.finger.voltage_ceiling().min(self.fw.hv_fs);
+        let v = self.finger.ceiling_in_force(Some(self.fw.hv_fs));
+        // the inverse's branch table is built for the ceiling in force
+        #[cfg(feature = "pose")]
+        {
+            self.inv_table = None;
+        }
         for ch in 0..CHANNELS {
             self.vmax[ch] = v;
             self.duty_max[ch] = self.duty_for(ch, v);
@@ -395,6 +400,12 @@ impl<B: Board> App<B> {
     /// How many times `Finger::fmax` ran (the cache's misses), for the tests.
     pub fn fmax_evaluations(&self) -> u32 {
         self.fmax_computed.get()
+    }
+
+    /// The inverse's options on this board: its ceiling is the one in force (HV full scale too).
+    #[cfg(feature = "pose")]
+    fn inverse_options(&self) -> finger_model::inverse::Options<f32> {
+        finger_model::inverse::Options { hv_fs: Some(self.fw.hv_fs), ..Default::default() }
     }
 
     /// A new model (parameter or preset change): the fmax cache no longer holds.
@@ -687,10 +698,14 @@ impl<B: Board> App<B> {
 
     #[inline(never)]
     fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        let [p, v1, v2, v3] = args else { return Err(err!("usage"; "solve <P> <V1> <V2> <V3>")) };
-        let p = tension(number(p, "P")?)?;
-        let v = [number(v1, "V1")?, number(v2, "V2")?, number(v3, "V3")?];
-        self.check_volts(&v)?;
+        // the voltages are optional on a finger without stacks (layers = 0); 0 V is off, never a request
+        let v = match args {
+            [_, v1, v2, v3] => [number(v1, "V1")?, number(v2, "V2")?, number(v3, "V3")?],
+            [_] if self.finger.params().layers == 0 => [0.0; CHANNELS],
+            _ => return Err(err!("usage"; "solve <P> <V1> <V2> <V3> (solve <P> without stacks)")),
+        };
+        let p = tension(number(args[0], "P")?)?;
+        self.check_volts_of(&v, true)?;
         let vf = v.map(|x| x as f32);
         let sol = self.finger.solve(p, &vf, Method::converged()).map_err(model_err)?;
         let k = self.finger.tip_stiffness(&sol).map_err(model_err)?;
@@ -811,13 +826,13 @@ impl<B: Board> App<B> {
             None => None,
         };
         if self.inv_table.is_none() && self.finger.params().layers > 0 {
-            self.inv_table = finger_model::inverse::BranchTable::new(&self.finger, &Default::default()).ok();
+            self.inv_table = finger_model::inverse::BranchTable::new(&self.finger, &self.inverse_options()).ok();
         }
         let armed = self.armed;
         let mut plan = None;
         let mut line: String<240> = String::new();
         let this = &*self;
-        let _ = crate::inverse_cmds::pose(&mut line, &this.finger, this.inv_table.as_ref(), &deg, p, |t, v| {
+        let _ = crate::inverse_cmds::pose_with(&mut line, &this.finger, this.inv_table.as_ref(), &this.inverse_options(), &deg, p, |t, v| {
             if !armed {
                 return Ok(());
             }

@@ -38,6 +38,17 @@ pub fn voltage_ceiling<R: Real>(p: &Params<R>) -> R {
     (p.margin * pull_in_voltage(p)).min(p.v_supply)
 }
 
+/// The ceiling in force on a channel: min(margin x V_pi, v_supply, hv_fs) (MODEL.md
+/// "Dielectric elastomer stack", 33 % pull-in limit; the HV module's full scale `hv_fs` when the caller drives one),
+/// V. The one function the inverse, the console and the firmware take their ceiling from.
+pub fn ceiling_in_force<R: Real>(p: &Params<R>, hv_fs: Option<R>) -> R {
+    let v = voltage_ceiling(p);
+    match hv_fs {
+        Some(fs) => v.min(fs),
+        None => v,
+    }
+}
+
 /// Check one channel voltage: finite, not negative, and below the ceiling (0 V is always
 /// allowed, also without stacks).
 pub fn check_voltage<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<(), Error> {

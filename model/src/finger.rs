@@ -363,6 +363,11 @@ impl<R: Real> Finger<R> {
         de::voltage_ceiling(&self.p)
     }
 
+    /// The ceiling in force: min(margin x V_pi, v_supply, hv_fs), V (`de::ceiling_in_force`).
+    pub fn ceiling_in_force(&self, hv_fs: Option<R>) -> R {
+        de::ceiling_in_force(&self.p, hv_fs)
+    }
+
     /// Whole-stack thickness at `volts`, mm (refuses a voltage at or past the ceiling).
     pub fn stack_thickness(&self, volts: R) -> Result<R, Error> {
         de::stack_thickness(&self.p, 1, volts)

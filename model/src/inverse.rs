@@ -91,11 +91,14 @@ pub struct Options<R> {
     pub angle_tol: R,
     /// Newton iterations per joint solve. Default 30.
     pub max_iter: u32,
+    /// The HV modules' full scale, V, when a board drives them: the ceiling is then
+    /// `Finger::ceiling_in_force(hv_fs)`. Default None (the model's ceiling alone).
+    pub hv_fs: Option<R>,
 }
 
 impl<R: Real> Default for Options<R> {
     fn default() -> Self {
-        Options { top: R::from_f64(1.0 - 1e-4), angle_tol: R::from_f64(1e-4), max_iter: 30 }
+        Options { top: R::from_f64(1.0 - 1e-4), angle_tol: R::from_f64(1e-4), max_iter: 30, hv_fs: None }
     }
 }
 
@@ -360,6 +363,11 @@ fn check_options<R: Real>(opts: &Options<R>) -> Result<(), Error> {
     if !(opts.top.is_finite() && opts.top > R::zero() && opts.top < R::one()) {
         return Err(Error::Input { input: "top", reason: "fraction of the ceiling in (0, 1)" });
     }
+    if let Some(fs) = opts.hv_fs {
+        if !(fs.is_finite() && fs > R::zero()) {
+            return Err(Error::Input { input: "hv_fs", reason: "the HV full scale must be > 0 V" });
+        }
+    }
     if !(opts.angle_tol.is_finite() && opts.angle_tol > R::zero()) {
         return Err(Error::Input { input: "angle_tol", reason: "must be positive" });
     }
@@ -448,7 +456,7 @@ fn fast<R: Real>(
 
     // 1. every joint's tension range: stiffest stack (0 V) and softest (top voltage)
     let t0 = R::from_u32(p.layers as u32) * p.z0;
-    let v_top = f.voltage_ceiling() * opts.top;
+    let v_top = f.ceiling_in_force(opts.hv_fs) * opts.top;
     let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
     let mut hi = [ctx.hold_tension(1, &ang[0], t0, [R::zero(); 2])?; MAX_JOINTS];
     let mut lo = hi;

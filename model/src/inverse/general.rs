@@ -134,7 +134,7 @@ impl<'a, R: Real> Gen<'a, R> {
     pub(super) fn stack_ends(&self, opts: &Options<R>) -> Result<(R, R, R), Error> {
         let p = self.p;
         let t0 = R::from_u32(p.layers as u32) * p.z0;
-        let v_top = self.f.voltage_ceiling() * opts.top;
+        let v_top = self.f.ceiling_in_force(opts.hv_fs) * opts.top;
         let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
         Ok((t0, t_top, v_top))
     }
