@@ -5,3 +5,4 @@ pub mod scene;
 pub mod svg;
 pub mod continuum;
 pub mod perf;
+pub mod domain;
