@@ -80,7 +80,8 @@ impl<R: Real> Finger<R> {
             x[2 * k + 1] = hole[1];
         }
         let scale = self.p.l * R::from_u32(n as u32);
-        let tol = R::from_f64(1e-9_f64.max(R::EPS * 256.0)) * scale;
+        // tight: a re-march amplifies the hole residual by the march's gain (hundreds near fmax)
+        let tol = R::from_f64(1e-11_f64.max(R::EPS * 256.0)) * scale;
         let opts = SolveOptions::new(tol, self.resolution() * R::from_u32(n as u32), STEP_ITER);
         let c_at = |lam: R| -> Result<Compliances<R>, Error> {
             let mut v = [R::zero(); MAX_JOINTS];
