@@ -28,6 +28,7 @@
 //! the same meaning for every m.
 
 use super::table::{BranchTable, TableEnd, TABLE_BAND};
+use crate::solve::broyden;
 use super::{choose_tension, feasible_interval, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
@@ -600,7 +601,7 @@ impl<'a, R: Real> Gen<'a, R> {
         let htol = self.tol_hole.max(self.f.hole_resolution());
         let resid = |x: &[R; 3], st: &JointMarch<R>| [x[0] - st.hole[0], x[1] - st.hole[1], st.angle - theta];
         let mut x = x0;
-        let mut st = ev(x, q_out).ok()?;
+        let st = ev(x, q_out).ok()?;
         let mut fx = resid(&x, &st);
         let unscaled = |j: &Mat3<R>| {
             let mut jx = *j;
@@ -641,40 +642,20 @@ impl<'a, R: Real> Gen<'a, R> {
                 }
             }
         }
-        for _ in 0..16 {
-            if converged(&fx, R::one()) {
-                return Some(Qn { x, st, jac: Some(unscaled(&j)) });
-            }
-            let inv = mat3::inverse_unscaled(&j)?;
-            let dy = mat3::mul_vec(&inv, &fx);
-            let dy = [-dy[0], -dy[1], -dy[2]];
-            let xn = [x[0] + dy[0] * scale[0], x[1] + dy[1] * scale[1], x[2] + dy[2] * scale[2]];
-            // a step below the scalar's resolution: converged as far as it can be
-            let tiny = (0..3).all(|i| (xn[i] - x[i]).abs() <= R::from_f64(4.0 * R::EPS) * x[i].abs().max(scale[i]));
-            let sn = ev(xn, q_out).ok()?;
-            let fnew = resid(&xn, &sn);
-            if !(fnew[0].is_finite() && fnew[1].is_finite() && fnew[2].is_finite()) {
-                return None;
-            }
-            // J += (Δf - J Δy) Δyᵀ / |Δy|²
-            let dy2 = dy[0] * dy[0] + dy[1] * dy[1] + dy[2] * dy[2];
-            if dy2 > R::zero() {
-                let jdy = mat3::mul_vec(&j, &dy);
-                for row in 0..3 {
-                    let u = (fnew[row] - fx[row] - jdy[row]) / dy2;
-                    for col in 0..3 {
-                        j[row][col] += u * dy[col];
-                    }
-                }
-            }
-            x = xn;
-            st = sn;
-            fx = fnew;
-            if tiny {
-                return if converged(&fx, R::from_f64(16.0)) { Some(Qn { x, st, jac: Some(unscaled(&j)) }) } else { None };
-            }
-        }
-        None
+        // Broyden (`solve::broyden`) in the scaled unknowns y = x / scale; the marches write
+        // the iterate's displacements to `q_out` (no line search: the last one is the answer's)
+        let mut y = [x[0] / scale[0], x[1] / scale[1], x[2] / scale[2]];
+        let mut last = st;
+        let mut eval = |y: &[R; 3]| -> Result<[R; 3], Error> {
+            let xn = [y[0] * scale[0], y[1] * scale[1], y[2] * scale[2]];
+            let sn = ev(xn, q_out)?;
+            last = sn;
+            Ok(resid(&xn, &sn))
+        };
+        let done = broyden::solve(&mut eval, &mut y, &mut fx, &mut j, 3, &converged, 16);
+        done.ok()?;
+        x = [y[0] * scale[0], y[1] * scale[1], y[2] * scale[2]];
+        Some(Qn { x, st: last, jac: Some(unscaled(&j)) })
     }
 
     /// dθ/dP along the equilibrium at fixed t from a solve's Jacobian (unknowns (b, P)):
