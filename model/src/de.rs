@@ -17,6 +17,8 @@ use crate::error::Error;
 use crate::mat3::Mat3;
 use crate::params::{Params, EPS0};
 use crate::real::Real;
+use crate::solve::newton::{self, Equations};
+use crate::solve::SolveOptions;
 
 /// `eps0 * eps_r` in the model's units: the Maxwell pressure in MPa is this times V^2/z[mm]^2.
 fn permittivity<R: Real>(p: &Params<R>) -> R {
@@ -67,7 +69,7 @@ pub fn check_voltage<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<(
 
 /// Thickness ratio s = z/z0 of one layer at `volts`: the root of
 /// `s^2 (1 - s) = beta`, `beta = eps0 eps_r V^2 / (E_de z0^2)`, on the stable branch
-/// s in [2/3, 1] (the corrected Eq. 1-2). Newton from s = 1: the cubic is concave and
+/// s in [2/3, 1] (the corrected Eq. 1-2). Newton (`solve::newton`) from s = 1: the cubic is concave and
 /// decreasing there, so the iterates fall monotonically onto the root and never cross it.
 /// Errors past pull-in (beta >= 4/27).
 pub fn layer_thickness_ratio<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<R, Error> {
@@ -79,20 +81,29 @@ pub fn layer_thickness_ratio<R: Real>(p: &Params<R>, joint: usize, volts: R) -> 
             ceiling: pull_in_voltage(p).to_f64(),
         });
     }
-    let mut s = R::one();
-    for _ in 0..60 {
-        let f = s * s * (R::one() - s) - beta;
-        let df = s * (R::from_f64(2.0) - R::from_f64(3.0) * s);
-        if df >= R::zero() {
-            break; // at the pull-in point itself; unreachable for beta < 4/27
-        }
-        let step = f / df;
-        s -= step;
-        if step.abs() <= R::from_f64(2.0 * R::EPS) {
-            break;
-        }
+    let mut s = [R::one()];
+    let tol = R::from_f64(4.0 * R::EPS);
+    let opts = SolveOptions::new(tol, R::from_f64(16.0 * R::EPS), 60);
+    if newton::solve(&mut Thinning { beta }, &mut s, &opts).is_err() {
+        return Err(Error::NotConverged { iterations: 60, residual: f64::INFINITY });
     }
+    let s = s[0];
     Ok(s.max(R::from_f64(2.0 / 3.0)))
+}
+
+/// The layer's thinning residual s^2 (1 - s) - beta and its slope, for `solve::newton`.
+struct Thinning<R> {
+    beta: R,
+}
+
+impl<R: Real> Equations<R, 1> for Thinning<R> {
+    type Refusal = ();
+    fn residual(&mut self, s: &[R; 1], _: usize) -> Result<[R; 1], ()> {
+        Ok([s[0] * s[0] * (R::one() - s[0]) - self.beta])
+    }
+    fn jacobian(&mut self, s: &[R; 1], _: &[R; 1], _: usize) -> Result<[[R; 1]; 1], ()> {
+        Ok([[s[0] * (R::from_f64(2.0) - R::from_f64(3.0) * s[0])]])
+    }
 }
 
 /// Whole-stack thickness t_k = N_L z(V_k), mm, after checking the voltage against the ceiling.
