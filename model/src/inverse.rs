@@ -555,25 +555,43 @@ fn no_stacks<R: Real>(
         wt[k] = R::one() / h[k].dp_dtheta;
         out.q[k] = [h[k].delta[0], h[k].delta[1], ang[k].theta];
     }
-    // the tensions within the tolerance for every joint
-    let tol = opts.angle_tol;
-    let mut lo = h[0].tension - tol * h[0].dp_dtheta;
-    let mut hi = h[0].tension + tol * h[0].dp_dtheta;
-    for k in 1..n {
-        lo = lo.max(h[k].tension - tol * h[k].dp_dtheta);
-        hi = hi.min(h[k].tension + tol * h[k].dp_dtheta);
+    let mut tensions = [z; MAX_JOINTS];
+    for k in 0..n {
+        tensions[k] = h[k].tension;
     }
-    out.interval = [lo.max(z), hi.max(z)];
-    // the tension: given, or the weighted Chebyshev centre (minimises the largest angle error)
-    let pt = match tension {
+    let (interval, pt, worst) = one_tension(&tensions[..n], &wt[..n], tension, opts.angle_tol);
+    out.interval = interval;
+    if let Some(k) = worst {
+        let c = ctx.compliance(&ang[k], h[k].tension, h[k].wm, z);
+        return Err(Error::Unreachable { joint: k + 1, needed: ctx.compliance(&ang[k], pt, h[k].wm, z), min: c, max: c });
+    }
+    out.tension = pt;
+    Ok(out)
+}
+
+/// The no-stacks rule, for both paths: without stacks only the tension is free. Joint k holds
+/// its angle at tension `p[k]`, its angle moving `w[k]` rad per newton (dθ_k/dP). Returns the
+/// tensions that hold every joint within `tol` rad, the tension (`given`, else the weighted
+/// Chebyshev centre: the one that minimises the largest angle error) and the joint furthest
+/// past `tol` at it, if any (0.1 % slack: the interval's ends sit exactly on the tolerance).
+fn one_tension<R: Real>(p: &[R], w: &[R], given: Option<R>, tol: R) -> ([R; 2], R, Option<usize>) {
+    let z = R::zero();
+    let n = p.len();
+    let mut lo = p[0] - tol / w[0];
+    let mut hi = p[0] + tol / w[0];
+    for k in 1..n {
+        lo = lo.max(p[k] - tol / w[k]);
+        hi = hi.min(p[k] + tol / w[k]);
+    }
+    let pt = match given {
         Some(t) => t,
         None => {
-            let mut best = (h[0].tension, R::from_f64(-1.0));
+            let mut best = (p[0], R::from_f64(-1.0));
             for i in 0..n {
                 for j in i + 1..n {
-                    let e = wt[i] * wt[j] * (h[i].tension - h[j].tension).abs() / (wt[i] + wt[j]);
+                    let e = w[i] * w[j] * (p[i] - p[j]).abs() / (w[i] + w[j]);
                     if e > best.1 {
-                        best = ((wt[i] * h[i].tension + wt[j] * h[j].tension) / (wt[i] + wt[j]), e);
+                        best = ((w[i] * p[i] + w[j] * p[j]) / (w[i] + w[j]), e);
                     }
                 }
             }
@@ -582,18 +600,12 @@ fn no_stacks<R: Real>(
     };
     let mut worst: Option<(usize, R)> = None;
     for k in 0..n {
-        let err = (pt - h[k].tension).abs() * wt[k];
-        // 0.1 % slack: the ends of the interval sit exactly on the tolerance
-        if err > tol * R::from_f64(1.001) && worst.map_or(true, |(_, w)| err > w) {
+        let err = (pt - p[k]).abs() * w[k];
+        if err > tol * R::from_f64(1.001) && worst.map_or(true, |(_, e)| err > e) {
             worst = Some((k, err));
         }
     }
-    if let Some((k, _)) = worst {
-        let c = ctx.compliance(&ang[k], h[k].tension, h[k].wm, z);
-        return Err(Error::Unreachable { joint: k + 1, needed: ctx.compliance(&ang[k], pt, h[k].wm, z), min: c, max: c });
-    }
-    out.tension = pt;
-    Ok(out)
+    ([lo.max(z), hi.max(z)], pt, worst.map(|(k, _)| k))
 }
 
 /// Steps 2-3, the same for both paths. `ends[k]`: joint k's tensions at the softest and the
