@@ -9,20 +9,26 @@
 //! squared tangent determinant's secant through zero (det² is linear in P near a fold). A
 //! refused trial that is neither near contact nor near a limit point was a step too long: the
 //! march resumes from the last point with shorter steps.
+//!
+//! The joints go most-thinned stack first; each later one marches only up to the end found
+//! so far (reaching it, it does not end before), so fmax at mixed voltages costs little more
+//! than one joint's. A point's Newton takes few line-search halvings: on the branch the
+//! predictor's full steps converge, past its end a trial fails fast (docs/fmax-cost.md).
 
 use super::{BranchEnd, BranchLimit, Finger, JointState, MarchError};
 use crate::error::Error;
 use crate::mat3::Mat3;
-use crate::params::MAX_SUB;
+use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
-use crate::solve::bracket;
+use crate::solve::{bracket, SolveOptions};
 
 /// Relative width at which the end is known.
 const REL: f64 = 1e-4;
 /// Tangent determinant below which a solved point counts as at a limit point (1 unloaded).
 const NEAR_FOLD: f64 = 0.2;
-/// Newton iterations per point on the branch.
-const POINT_ITER: u32 = 24;
+/// Newton iterations per point on the branch, and line-search halvings per iteration.
+const POINT_ITER: u32 = 12;
+const POINT_HALVINGS: u32 = 2;
 /// A march cycle that advances the tension by less than this fraction has stalled.
 const STALL: f64 = 1e-3;
 
@@ -44,14 +50,21 @@ impl<R: Real> Finger<R> {
     pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
         let c = self.compliances(volts)?;
         let (n, m) = (self.p.n, self.p.m);
-        let mut best: Option<BranchLimit<R>> = None;
+        // the most thinned stack first (it usually ends first); each later joint marches only
+        // up to the end found so far: reaching it, it does not end before
+        let mut order = [0usize; MAX_JOINTS];
         for k in 0..n {
+            order[k] = k;
+        }
+        order[..n].sort_unstable_by(|&a, &b| c.volts[b].partial_cmp(&c.volts[a]).unwrap_or(core::cmp::Ordering::Equal).then(a.cmp(&b)));
+        let mut best: Option<BranchLimit<R>> = None;
+        for (i, &k) in order[..n].iter().enumerate() {
             // a joint with the compliances of one before it ends where that one ends
-            if (0..k).any(|i| c.c[i][..m] == c.c[k][..m]) {
+            if order[..i].iter().any(|&j| c.c[j][..m] == c.c[k][..m]) {
                 continue;
             }
-            let end = self.joint_branch_end(k, &c.c[k])?;
-            if best.map_or(true, |b| end.tension < b.tension) {
+            let Some(end) = self.joint_branch_end(k, &c.c[k], best.map(|b| b.tension))? else { continue };
+            if best.map_or(true, |b| end.tension < b.tension || (end.tension == b.tension && end.joint < b.joint)) {
                 best = Some(end);
             }
         }
@@ -68,8 +81,11 @@ impl<R: Real> Finger<R> {
             }
             _ => from.st.hole,
         };
-        let attempt = match self.newton_dual(c, p, guess, tol, POINT_ITER) {
-            Err(_) if guess != from.st.hole => self.newton_dual(c, p, from.st.hole, tol, POINT_ITER),
+        // a point on the branch converges from the predictor in full steps; past the end there
+        // is none: few halvings, so that a trial there fails fast
+        let opts = SolveOptions { max_halvings: POINT_HALVINGS, ..SolveOptions::new(tol, self.resolution(), POINT_ITER) };
+        let attempt = match self.newton_dual_with(c, p, guess, &opts) {
+            Err(_) if guess != from.st.hole => self.newton_dual_with(c, p, from.st.hole, &opts),
             other => other,
         };
         let (st, _) = attempt.map_err(|(why, _)| why)?;
@@ -105,11 +121,13 @@ impl<R: Real> Finger<R> {
         best
     }
 
-    /// Joint `k`'s branch end (see the module header).
-    fn joint_branch_end(&self, k: usize, c: &[Mat3<R>; MAX_SUB]) -> Result<BranchLimit<R>, Error> {
+    /// Joint `k`'s branch end (see the module header); None if it has an equilibrium at
+    /// `bound` (it does not end below the end found so far).
+    fn joint_branch_end(&self, k: usize, c: &[Mat3<R>; MAX_SUB], bound: Option<R>) -> Result<Option<BranchLimit<R>>, Error> {
         let c33 = c[..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
         let p_lin = R::one() / (self.p.e * c33);
-        let p_hi = R::from_f64(1000.0) * p_lin;
+        let p_search = R::from_f64(1000.0) * p_lin;
+        let p_hi = bound.map_or(p_search, |b| b.min(p_search));
         let lh = self.p.hinge_len();
         let mut lo = Pt { p: R::zero(), st: self.straight(), span: lh, det: R::one() };
         let mut prev: Option<Pt<R>> = None;
@@ -127,7 +145,10 @@ impl<R: Real> Finger<R> {
                         prev = Some(lo);
                         lo = pt;
                         if p >= p_hi {
-                            return Ok(BranchLimit { tension: p_hi, joint: k + 1, kind: BranchEnd::SearchBound });
+                            if bound.is_some_and(|b| b <= p_search) {
+                                return Ok(None);
+                            }
+                            return Ok(Some(BranchLimit { tension: p_hi, joint: k + 1, kind: BranchEnd::SearchBound }));
                         }
                         step = step + step;
                     }
@@ -160,7 +181,7 @@ impl<R: Real> Finger<R> {
                 // the last tension with an equilibrium: a forward solve at fmax answers
                 let contact = near_contact && !(near_fold && !matches!(why, Some(MarchError::Contact)));
                 let kind = if contact { BranchEnd::Contact } else { BranchEnd::LimitPoint };
-                return Ok(BranchLimit { tension: lo.p, joint: k + 1, kind });
+                return Ok(Some(BranchLimit { tension: lo.p, joint: k + 1, kind }));
             }
             // short steps from lo no longer advance (twice): the branch ends at lo in this
             // scalar type (its solve stops existing there short of both criteria); named by
@@ -168,9 +189,13 @@ impl<R: Real> Finger<R> {
             if lo.p - start_p <= R::from_f64(STALL) * lo.p {
                 stalled += 1;
                 if stalled >= 2 {
+                    // stalled just short of the end found so far: it does not end before it
+                    if bound.is_some_and(|b| lo.p >= b * (R::one() - R::from_f64(STALL))) {
+                        return Ok(None);
+                    }
                     let to_floor = (lo.span - self.p.span_floor) / (lh - self.p.span_floor).max(self.p.span_floor);
                     let kind = if to_floor <= lo.det.abs() { BranchEnd::Contact } else { BranchEnd::LimitPoint };
-                    return Ok(BranchLimit { tension: lo.p, joint: k + 1, kind });
+                    return Ok(Some(BranchLimit { tension: lo.p, joint: k + 1, kind }));
                 }
             } else {
                 stalled = 0;

@@ -126,10 +126,20 @@ impl<R: Real> Finger<R> {
         tol: R,
         max_iter: u32,
     ) -> Result<(JointState<R>, u32), (Option<MarchError>, u32)> {
+        self.newton_dual_with(c, tension, b, &SolveOptions::new(tol, self.resolution(), max_iter))
+    }
+
+    /// `newton_dual` with the solver's options (iterations, line-search halvings) given.
+    pub(super) fn newton_dual_with(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        opts: &SolveOptions<R>,
+    ) -> Result<(JointState<R>, u32), (Option<MarchError>, u32)> {
         let mut eq = JointHoles { f: self, c, tension, q: [[[R::zero(); 3]; MAX_SUB]; 2], st: [None; 2] };
         let mut x = b;
-        let opts = SolveOptions::new(tol, self.resolution(), max_iter);
-        match solve::newton::solve(&mut eq, &mut x, &opts) {
+        match solve::newton::solve(&mut eq, &mut x, opts) {
             Ok((rep, slot)) => {
                 let Some((end, hole, r, jac)) = eq.st[slot] else { return Err((None, rep.iterations)) };
                 let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
