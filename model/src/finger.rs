@@ -682,8 +682,10 @@ impl<R: Real> Finger<R> {
         self.eval_dual(c, tension, b).map(|(_, _, jac)| jac)
     }
 
-    /// Converged equilibrium of joint k under tension alone: Newton on the hole position, with
-    /// backtracking; load continuation (halving the increment) when a full step fails.
+    /// Converged equilibrium of joint k under tension alone: Newton on the hole position
+    /// (`newton_dual`, on `solve::newton`) under load continuation (`solve::continuation`: the
+    /// increment doubles on success, halves on failure, down to `min_step`), from a secant
+    /// predictor; each accepted step stays on the physical branch (`same_branch`).
     fn newton_joint(
         &self,
         k: usize,
@@ -693,27 +695,21 @@ impl<R: Real> Finger<R> {
         max_iter: u32,
         min_step: R,
     ) -> Result<(JointState<R>, u32), Error> {
-        let mut b = [self.p.hinge_len(), self.p.e];
-        let mut done = R::zero();
-        let mut step = tension;
-        let mut iters = 0u32;
         if tension == R::zero() {
-            let st = self.march(c, tension, b, None).map_err(|_| Error::Singular { what: "joint" })?;
+            let st = self.march(c, tension, [self.p.hinge_len(), self.p.e], None).map_err(|_| Error::Singular { what: "joint" })?;
             return Ok((st, 0));
         }
         // the unloaded joint is straight (the march at zero tension gives exactly this)
         let mut last = self.straight();
-        let mut why_failed = None;
+        let mut b = last.hole;
+        let mut iters = 0u32;
         let mut attempts = 0u32;
         // secant predictor: the hole's rate of change with tension over the last accepted step
         let mut rate = [R::zero(); 2];
-        loop {
-            let target = (done + step).min(tension);
+        let mut failed_at = tension;
+        let mut step = |from: R, to: R| -> Result<(), Step<Option<MarchError>>> {
+            let (done, target) = (tension * from, tension * to);
             let dp = target - done;
-            if !(dp > R::zero()) {
-                // the increment vanished against the tension reached: no further progress
-                return Err(Error::NotConverged { iterations: iters, residual: f64::INFINITY });
-            }
             let guess = [b[0] + rate[0] * dp, b[1] + rate[1] * dp];
             let attempt = match self.newton_dual(c, target, guess, tol, max_iter.saturating_sub(iters)) {
                 Err((_, it)) if done > R::zero() => {
@@ -730,32 +726,43 @@ impl<R: Real> Finger<R> {
             iters += it;
             match outcome {
                 Ok(st) => {
-                    let dp = target - done;
                     rate = [(st.hole[0] - b[0]) / dp, (st.hole[1] - b[1]) / dp];
                     b = st.hole;
                     last = st;
-                    done = target;
-                    if done >= tension {
-                        return Ok((st, iters));
-                    }
-                    step = step + step;
+                    Ok(())
                 }
                 Err(why) => {
-                    if why.is_some() {
-                        why_failed = why;
-                    }
-                    step = step / R::from_f64(2.0);
+                    failed_at = target;
                     attempts += 1;
-                    if iters >= max_iter || step <= min_step || attempts > 4 * max_iter {
-                        return Err(match why_failed {
-                            Some(MarchError::Contact) => Error::Contact { joint: k + 1, tension: target.to_f64() },
-                            _ if done > R::zero() && self.near_limit_point(c, done, &last) => {
-                                Error::LimitPoint { joint: k + 1, tension: done.to_f64() }
-                            }
-                            _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
-                        });
+                    if iters >= max_iter || attempts > 4 * max_iter {
+                        Err(Step::Stop(why))
+                    } else {
+                        Err(Step::Retry(why))
                     }
                 }
+            }
+        };
+        let mut why_failed = None;
+        let mut track = |from: R, to: R| -> Result<(), Step<Option<MarchError>>> {
+            step(from, to).map_err(|e| {
+                let (Step::Retry(w) | Step::Stop(w)) = e;
+                if w.is_some() {
+                    why_failed = w;
+                }
+                e
+            })
+        };
+        match continuation::run(R::one(), min_step / tension, None, &mut track) {
+            Ok(_) => Ok((last, iters)),
+            Err((lam, _)) => {
+                let done = tension * lam;
+                Err(match why_failed {
+                    Some(MarchError::Contact) => Error::Contact { joint: k + 1, tension: failed_at.to_f64() },
+                    _ if done > R::zero() && self.near_limit_point(c, done, &last) => {
+                        Error::LimitPoint { joint: k + 1, tension: done.to_f64() }
+                    }
+                    _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
+                })
             }
         }
     }
