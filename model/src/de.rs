@@ -40,9 +40,10 @@ pub fn voltage_ceiling<R: Real>(p: &Params<R>) -> R {
     (p.margin * pull_in_voltage(p)).min(p.v_supply)
 }
 
-/// The ceiling in force on a channel: min(margin x V_pi, v_supply, hv_fs) (MODEL.md
-/// "Dielectric elastomer stack", 33 % pull-in limit; the HV module's full scale `hv_fs` when the caller drives one),
-/// V. The one function the inverse, the console and the firmware take their ceiling from.
+/// The ceiling in force on a channel, V: `min(margin x V_pi, v_supply, hv_fs)` (MODEL.md
+/// "Dielectric elastomer stack", the 33 % pull-in limit with margin; `hv_fs` the HV modules'
+/// full scale when a board drives them). The inverse, the console and the firmware take their
+/// ceiling from it.
 pub fn ceiling_in_force<R: Real>(p: &Params<R>, hv_fs: Option<R>) -> R {
     let v = voltage_ceiling(p);
     match hv_fs {

@@ -348,7 +348,8 @@ impl<R: Real> Finger<R> {
         }
     }
 
-    /// Hinge compliance of sub-element j (no stack).
+    /// Hinge compliance of sub-element j (no stack): the Castigliano integrals of MODEL.md
+    /// "Hinge compliance".
     pub fn hinge_compliance(&self, j: usize) -> Mat3<R> {
         self.hinge_c[j.min(MAX_SUB - 1)]
     }
@@ -608,6 +609,7 @@ impl<R: Real> Finger<R> {
         }
     }
 
+    /// Cable statics, `f = -P (B - A)/|B - A|` along span k (MODEL.md "Cable", "Equilibrium").
     /// The loads on a joint's distal chain for a guide-hole position `b_hole` (the joint's
     /// proximal frame): the cable's force P along the span toward the hole at the proximal node,
     /// the tip load if any, and their sum. A span at its floor is contact.
@@ -786,6 +788,7 @@ impl<R: Real> Finger<R> {
         }
     }
 
+    /// Link compliance, `q = C_link w` (a uniform beam; the model's `flex_links`, docs/model.md).
     /// Deflection of a link (proximal frame `hinge_end`, base frame) when `flex_links` is set:
     /// the cable inside the link compresses it with P at the offset e (moment P·e about its
     /// axis), plus the tip load if any; linear, loads in the undeformed link frame.
@@ -874,6 +877,8 @@ impl<R: Real> Finger<R> {
         }
     }
 
+    /// Tip-loaded equilibrium, every hole and the tip together (MODEL.md "Equilibrium": an
+    /// external tip load couples the joints).
     /// Coupled residual for the tip-loaded case. Unknowns: each joint's hole (2 per joint),
     /// then the tip position (2). Returns the residual and the marched states.
     fn coupled_residual(

@@ -21,6 +21,8 @@ use core::ops::{Add, Mul, Sub};
 pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
 
 impl<R: Real> Finger<R> {
+    /// Joint equilibrium march, `q_j = C_j w_j` sub-element by sub-element (the paper's Eq. 7
+    /// and 15, loads in the deformed geometry: MODEL.md "Equilibrium").
     /// `Finger::march` in the scalar `T` (R itself, or dual numbers over R); parameters and
     /// compliances stay in R. Same operations in the same order as `march`. Returns the hinge
     /// end and the hole in T; the sub-element displacements go to `q_out` as values (`val`),
