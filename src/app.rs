@@ -21,7 +21,7 @@ use finger_model::params::PARAMS;
 use finger_model::{BranchLimit, Error as ModelError, Finger, Method, Params, Solution};
 use heapless::String;
 
-use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V, HV_ZERO_DUTY_PCT};
+use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_MAX_V, HV_ZERO_DUTY_PCT};
 use crate::console::{self, NumError};
 use crate::control::{hv_duty_for, Control, Setpoints, View};
 use crate::rx::{Record, RxEvent, RxLines};
@@ -358,8 +358,14 @@ impl Commands {
     /// The ceilings: per channel `min(margin x V_pi, v_supply, HV full scale, HV limit)` and
     /// the duty it gives. Called on every parameter change.
     fn recompute(&mut self) {
-        let v = self.finger.voltage_ceiling().min(HV_FULL_SCALE_V).min(HV_LIMIT_V);
+        // min(margin x V_pi, v_supply, the modules' full scale and limit); NaN-proof
+        let v = self.finger.ceiling_in_force(Some(HV_MAX_V));
         let v = if v >= 0.0 { v } else { 0.0 };
+        // the inverse's branch table is built for the ceiling in force
+        #[cfg(feature = "pose")]
+        {
+            self.inv_table = None;
+        }
         for ch in 0..CHANNELS {
             self.vmax[ch] = v;
             self.duty_max[ch] = hv_duty_for(v, self.hv_max[ch]);
@@ -411,6 +417,12 @@ impl Commands {
     /// How many times `Finger::fmax` ran (the cache's misses), for the tests.
     pub fn fmax_evaluations(&self) -> u32 {
         self.fmax_computed.get()
+    }
+
+    /// The inverse's options on this board: its ceiling is the one in force (HV full scale too).
+    #[cfg(feature = "pose")]
+    fn inverse_options(&self) -> finger_model::inverse::Options<f32> {
+        finger_model::inverse::Options { hv_fs: Some(HV_MAX_V), ..Default::default() }
     }
 
     /// A new model (parameter or preset change): the fmax cache no longer holds.
@@ -642,10 +654,14 @@ impl Commands {
 
     #[inline(never)]
     fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        let [p, v1, v2, v3] = args else { return Err(err!("usage"; "solve <P> <V1> <V2> <V3>")) };
-        let p = tension(number(p, "P")?)?;
-        let v = [number(v1, "V1")?, number(v2, "V2")?, number(v3, "V3")?];
-        self.check_volts(&v)?;
+        // the voltages are optional on a finger without stacks (layers = 0); 0 V is off, never a request
+        let v = match args {
+            [_, v1, v2, v3] => [number(v1, "V1")?, number(v2, "V2")?, number(v3, "V3")?],
+            [_] if self.finger.params().layers == 0 => [0.0; CHANNELS],
+            _ => return Err(err!("usage"; "solve <P> <V1> <V2> <V3> (solve <P> without stacks)")),
+        };
+        let p = tension(number(args[0], "P")?)?;
+        self.check_volts_of(&v, true)?;
         let vf = v.map(|x| x as f32);
         let sol = self.finger.solve(p, &vf, Method::converged()).map_err(model_err)?;
         let k = self.finger.tip_stiffness(&sol).map_err(model_err)?;
@@ -759,13 +775,13 @@ impl Commands {
             None => None,
         };
         if self.inv_table.is_none() && self.finger.params().layers > 0 {
-            self.inv_table = finger_model::inverse::BranchTable::new(&self.finger, &Default::default()).ok();
+            self.inv_table = finger_model::inverse::BranchTable::new(&self.finger, &self.inverse_options()).ok();
         }
         let armed = self.armed;
         let mut plan = None;
         let mut line: String<240> = String::new();
         let this = &*self;
-        let _ = crate::inverse_cmds::pose(&mut line, &this.finger, this.inv_table.as_ref(), &deg, p, |t, v| {
+        let _ = crate::inverse_cmds::pose_with(&mut line, &this.finger, this.inv_table.as_ref(), &this.inverse_options(), &deg, p, |t, v| {
             if !armed {
                 return Ok(());
             }

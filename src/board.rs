@@ -15,6 +15,9 @@ pub const HV_FULL_SCALE_V: f32 = 10_000.0;
 pub const HV_ZERO_DUTY_PCT: f32 = 0.0;
 /// and the most the board may ever output, V: its duty is the hard cap of the HV writer.
 pub const HV_LIMIT_V: f32 = 10_000.0;
+/// What the HV modules can be asked for at all: min(full scale, limit), V. The model's ceiling
+/// in force takes it as its `hv_fs` term, so previews and the board agree.
+pub const HV_MAX_V: f32 = if HV_FULL_SCALE_V < HV_LIMIT_V { HV_FULL_SCALE_V } else { HV_LIMIT_V };
 
 pub trait Board {
     /// Servo PWM, 50 Hz; the application sets 1.0..2.0 ms pulses.

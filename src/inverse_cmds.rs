@@ -23,7 +23,7 @@ use core::fmt::{self, Write};
 #[cfg(feature = "contact")]
 use finger_model::inverse::contact_force;
 #[cfg(feature = "pose")]
-use finger_model::inverse::{solve_pose, solve_pose_tabled, BranchTable};
+use finger_model::inverse::{solve_pose_tabled, solve_pose_with, BranchTable, Options};
 use finger_model::{Error, Finger, Real, MAX_JOINTS};
 
 #[cfg(feature = "pose")]
@@ -61,11 +61,31 @@ fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f32>, prec: usize) 
 /// disarmed, nothing) or refuses with a console error. Arguments are the console's f32
 /// numbers (`R::from_f64(f64::from(x))` folds to x for R = f32: no f64 conversion is linked).
 /// Returns whether the command succeeded (and `apply` was called and accepted).
-#[inline(never)]
 pub fn pose<R, W, F>(
     out: &mut W,
     finger: &Finger<R>,
     table: Option<&BranchTable<R>>,
+    degrees: &[f32],
+    tension: Option<f32>,
+    apply: F,
+) -> Result<bool, fmt::Error>
+where
+    R: Real,
+    W: Write,
+    F: FnOnce(R, &[R]) -> Result<(), CmdError>,
+{
+    pose_with(out, finger, table, &Options::default(), degrees, tension, apply)
+}
+
+#[cfg(feature = "pose")]
+/// [`pose`] with the inverse's options (the board's: the ceiling in force, HV full scale too);
+/// `table` must have been built with the same options.
+#[inline(never)]
+pub fn pose_with<R, W, F>(
+    out: &mut W,
+    finger: &Finger<R>,
+    table: Option<&BranchTable<R>>,
+    opts: &Options<R>,
     degrees: &[f32],
     tension: Option<f32>,
     apply: F,
@@ -89,7 +109,7 @@ where
         *a = R::from_f64(f64::from(d)) * R::from_f64(core::f64::consts::PI / 180.0);
     }
     let tension = tension.map(|t| R::from_f64(f64::from(t)));
-    let sol = match table.map_or_else(|| solve_pose(finger, &angles[..n], tension), |t| solve_pose_tabled(t, &angles[..n], tension)) {
+    let sol = match table.map_or_else(|| solve_pose_with(finger, &angles[..n], tension, opts), |t| solve_pose_tabled(t, &angles[..n], tension)) {
         Ok(s) => s,
         Err(e) => {
             write_err(out, &e)?;

@@ -6,3 +6,4 @@ pub mod svg;
 pub mod continuum;
 pub mod perf;
 pub mod qemu;
+pub mod domain;

@@ -618,3 +618,37 @@ fn fidelity_parameters() {
         assert!(p.iter().any(|l| l.starts_with(&format!("{n}="))), "param list lacks {n}");
     }
 }
+
+/// Issue 13: the inverse takes the ceiling in force (HV full scale too): a disarmed `pose`
+/// never answers a voltage the armed board would refuse.
+#[test]
+fn pose_preview_stays_below_the_hv_full_scale() {
+    let mut a = app();
+    ok(&mut a, "param v_supply 40000");
+    let fs: f64 = val(&ok(&mut a, "param hv_fs"), "hv_fs").parse().unwrap();
+    let r = cmd(&mut a, "pose 9.184 9.733 9.098");
+    if r.starts_with("ok") {
+        let v = nums(val(&r, "volts"));
+        assert!(v.iter().all(|&x| x < fs), "{r} (hv_fs {fs})");
+    } else {
+        assert!(r.starts_with("err unreachable: "), "{r}");
+    }
+    // a pose the ceiling allows answers
+    let r = ok(&mut a, "pose 10 10 10");
+    assert!(nums(val(&r, "volts")).iter().all(|&x| x < fs), "{r}");
+}
+
+/// Issue 13: a finger without stacks solves at the console: `solve <P>`, and 0 V accepted.
+#[test]
+fn solve_without_stacks_takes_no_voltages_and_accepts_zero() {
+    let mut a = app();
+    ok(&mut a, "param layers 0");
+    let one = ok(&mut a, "solve 1");
+    let zero = ok(&mut a, "solve 1 0 0 0");
+    assert_eq!(val(&one, "joints"), val(&zero, "joints"));
+    assert!(nums(val(&one, "joints")).iter().all(|&d| d > 0.0), "{one}");
+    err(&mut a, "solve 1 100 0 0", "limit");
+    // with stacks the voltages stay required
+    ok(&mut a, "preset default");
+    err(&mut a, "solve 1", "usage");
+}

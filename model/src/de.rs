@@ -17,6 +17,8 @@ use crate::error::Error;
 use crate::mat3::Mat3;
 use crate::params::{Params, EPS0};
 use crate::real::Real;
+use crate::solve::newton::{self, Equations};
+use crate::solve::SolveOptions;
 
 /// `eps0 * eps_r` in the model's units: the Maxwell pressure in MPa is this times V^2/z[mm]^2.
 fn permittivity<R: Real>(p: &Params<R>) -> R {
@@ -38,6 +40,18 @@ pub fn voltage_ceiling<R: Real>(p: &Params<R>) -> R {
     (p.margin * pull_in_voltage(p)).min(p.v_supply)
 }
 
+/// The ceiling in force on a channel, V: `min(margin x V_pi, v_supply, hv_fs)` (MODEL.md
+/// "Dielectric elastomer stack", the 33 % pull-in limit with margin; `hv_fs` the HV modules'
+/// full scale when a board drives them). The inverse, the console and the firmware take their
+/// ceiling from it.
+pub fn ceiling_in_force<R: Real>(p: &Params<R>, hv_fs: Option<R>) -> R {
+    let v = voltage_ceiling(p);
+    match hv_fs {
+        Some(fs) => v.min(fs),
+        None => v,
+    }
+}
+
 /// Check one channel voltage: finite, not negative, and below the ceiling (0 V is always
 /// allowed, also without stacks).
 pub fn check_voltage<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<(), Error> {
@@ -56,7 +70,7 @@ pub fn check_voltage<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<(
 
 /// Thickness ratio s = z/z0 of one layer at `volts`: the root of
 /// `s^2 (1 - s) = beta`, `beta = eps0 eps_r V^2 / (E_de z0^2)`, on the stable branch
-/// s in [2/3, 1] (the corrected Eq. 1-2). Newton from s = 1: the cubic is concave and
+/// s in [2/3, 1] (the corrected Eq. 1-2). Newton (`solve::newton`) from s = 1: the cubic is concave and
 /// decreasing there, so the iterates fall monotonically onto the root and never cross it.
 /// Errors past pull-in (beta >= 4/27).
 pub fn layer_thickness_ratio<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<R, Error> {
@@ -68,20 +82,29 @@ pub fn layer_thickness_ratio<R: Real>(p: &Params<R>, joint: usize, volts: R) -> 
             ceiling: pull_in_voltage(p).to_f64(),
         });
     }
-    let mut s = R::one();
-    for _ in 0..60 {
-        let f = s * s * (R::one() - s) - beta;
-        let df = s * (R::from_f64(2.0) - R::from_f64(3.0) * s);
-        if df >= R::zero() {
-            break; // at the pull-in point itself; unreachable for beta < 4/27
-        }
-        let step = f / df;
-        s -= step;
-        if step.abs() <= R::from_f64(2.0 * R::EPS) {
-            break;
-        }
+    let mut s = [R::one()];
+    let tol = R::from_f64(4.0 * R::EPS);
+    let opts = SolveOptions::new(tol, R::from_f64(16.0 * R::EPS), 60);
+    if newton::solve(&mut Thinning { beta }, &mut s, &opts).is_err() {
+        return Err(Error::NotConverged { iterations: 60, residual: f64::INFINITY });
     }
+    let s = s[0];
     Ok(s.max(R::from_f64(2.0 / 3.0)))
+}
+
+/// The layer's thinning residual s^2 (1 - s) - beta and its slope, for `solve::newton`.
+struct Thinning<R> {
+    beta: R,
+}
+
+impl<R: Real> Equations<R, 1> for Thinning<R> {
+    type Refusal = ();
+    fn residual(&mut self, s: &[R; 1], _: usize) -> Result<[R; 1], ()> {
+        Ok([s[0] * s[0] * (R::one() - s[0]) - self.beta])
+    }
+    fn jacobian(&mut self, s: &[R; 1], _: &[R; 1], _: usize) -> Result<[[R; 1]; 1], ()> {
+        Ok([[s[0] * (R::from_f64(2.0) - R::from_f64(3.0) * s[0])]])
+    }
 }
 
 /// Whole-stack thickness t_k = N_L z(V_k), mm, after checking the voltage against the ceiling.

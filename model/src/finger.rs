@@ -29,7 +29,42 @@ use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 use crate::{de, hinge};
 
-mod dual;
+mod branch_end;
+mod march;
+mod pinned;
+
+use crate::solve::continuation::{self, Step};
+use crate::solve::newton::{self as newton_solve, Equations};
+use crate::solve::{self, SolveOptions};
+
+/// Unknowns of the coupled (tip-loaded) solve: each joint's hole, then the tip position.
+const COUPLED: usize = 2 * MAX_JOINTS + 2;
+
+/// The coupled residual (`Finger::coupled_residual`) for `solve::newton`, each slot's marched
+/// joint states kept.
+struct Coupled<'a, R> {
+    f: &'a Finger<R>,
+    c: &'a Compliances<R>,
+    tension: R,
+    force: [R; 2],
+    states: [[JointState<R>; MAX_JOINTS]; 3],
+}
+
+impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
+    type Refusal = MarchError;
+    fn dim(&self) -> usize {
+        2 * self.f.p.n + 2
+    }
+    fn residual(&mut self, x: &[R; COUPLED], slot: usize) -> Result<[R; COUPLED], MarchError> {
+        let (r, st) = self.f.coupled_residual(self.c, self.tension, self.force, x)?;
+        self.states[slot] = st;
+        Ok(r)
+    }
+    fn jacobian(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], _: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
+        let h = R::from_f64(R::SQRT_EPS) * (self.f.p.hinge_len() + self.f.p.e);
+        newton_solve::forward_difference(self, x, r, &[h; COUPLED])
+    }
+}
 
 /// A planar pose: position (mm) and angle (rad, positive toward +y).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -254,6 +289,7 @@ struct SpanLoads<R> {
     ftot: [R; 2],
 }
 
+#[derive(Clone, Copy, Debug)]
 enum MarchError {
     Contact,
     Singular,
@@ -312,7 +348,8 @@ impl<R: Real> Finger<R> {
         }
     }
 
-    /// Hinge compliance of sub-element j (no stack).
+    /// Hinge compliance of sub-element j (no stack): the Castigliano integrals of MODEL.md
+    /// "Hinge compliance".
     pub fn hinge_compliance(&self, j: usize) -> Mat3<R> {
         self.hinge_c[j.min(MAX_SUB - 1)]
     }
@@ -325,6 +362,11 @@ impl<R: Real> Finger<R> {
     /// The ceiling every channel stays below: min(margin x V_pi, supply), V.
     pub fn voltage_ceiling(&self) -> R {
         de::voltage_ceiling(&self.p)
+    }
+
+    /// The ceiling in force: min(margin x V_pi, v_supply, hv_fs), V (`de::ceiling_in_force`).
+    pub fn ceiling_in_force(&self, hv_fs: Option<R>) -> R {
+        de::ceiling_in_force(&self.p, hv_fs)
     }
 
     /// Whole-stack thickness at `volts`, mm (refuses a voltage at or past the ceiling).
@@ -429,7 +471,7 @@ impl<R: Real> Finger<R> {
             return Err(Error::Input { input: "n_inc", reason: "at least one load step" });
         }
         let states = self.stepping(c, tension, tip_force, n_inc)?;
-        self.assemble(c, tension, tip_force, &states, n_inc)
+        self.assemble(c, tension, tip_force, &states, None, n_inc)
     }
 
     /// The converged equilibrium (Newton to `tol` mm on the guide holes).
@@ -440,8 +482,8 @@ impl<R: Real> Finger<R> {
         }
         let tol = tol.max(self.resolution());
         if tip_force[0] != R::zero() || tip_force[1] != R::zero() {
-            let (states, iterations) = self.newton_coupled(c, tension, tip_force, tol, max_iter)?;
-            self.assemble(c, tension, tip_force, &states, iterations)
+            let (states, tip, iterations) = self.newton_coupled(c, tension, tip_force, tol, max_iter)?;
+            self.assemble(c, tension, tip_force, &states, Some(tip), iterations)
         } else {
             self.solve_tension_alone(c, tension, tol, max_iter)
         }
@@ -527,7 +569,7 @@ impl<R: Real> Finger<R> {
             r2_prev = r2;
             res2 += r2;
         }
-        let (nodes, links) = self.chain_ends(&ends, tension, [R::zero(); 2]);
+        let (nodes, links) = self.chain_ends(&ends, tension, [R::zero(); 2], None);
         sol.nodes = nodes;
         sol.links = links;
         sol.iterations = iters;
@@ -567,6 +609,7 @@ impl<R: Real> Finger<R> {
         }
     }
 
+    /// Cable statics, `f = -P (B - A)/|B - A|` along span k (MODEL.md "Cable", "Equilibrium").
     /// The loads on a joint's distal chain for a guide-hole position `b_hole` (the joint's
     /// proximal frame): the cable's force P along the span toward the hole at the proximal node,
     /// the tip load if any, and their sum. A span at its floor is contact.
@@ -641,8 +684,10 @@ impl<R: Real> Finger<R> {
         self.eval_dual(c, tension, b).map(|(_, _, jac)| jac)
     }
 
-    /// Converged equilibrium of joint k under tension alone: Newton on the hole position, with
-    /// backtracking; load continuation (halving the increment) when a full step fails.
+    /// Converged equilibrium of joint k under tension alone: Newton on the hole position
+    /// (`newton_dual`, on `solve::newton`) under load continuation (`solve::continuation`: the
+    /// increment doubles on success, halves on failure, down to `min_step`), from a secant
+    /// predictor; each accepted step stays on the physical branch (`same_branch`).
     fn newton_joint(
         &self,
         k: usize,
@@ -652,27 +697,21 @@ impl<R: Real> Finger<R> {
         max_iter: u32,
         min_step: R,
     ) -> Result<(JointState<R>, u32), Error> {
-        let mut b = [self.p.hinge_len(), self.p.e];
-        let mut done = R::zero();
-        let mut step = tension;
-        let mut iters = 0u32;
         if tension == R::zero() {
-            let st = self.march(c, tension, b, None).map_err(|_| Error::Singular { what: "joint" })?;
+            let st = self.march(c, tension, [self.p.hinge_len(), self.p.e], None).map_err(|_| Error::Singular { what: "joint" })?;
             return Ok((st, 0));
         }
         // the unloaded joint is straight (the march at zero tension gives exactly this)
         let mut last = self.straight();
-        let mut why_failed = None;
+        let mut b = last.hole;
+        let mut iters = 0u32;
         let mut attempts = 0u32;
         // secant predictor: the hole's rate of change with tension over the last accepted step
         let mut rate = [R::zero(); 2];
-        loop {
-            let target = (done + step).min(tension);
+        let mut failed_at = tension;
+        let mut step = |from: R, to: R| -> Result<(), Step<Option<MarchError>>> {
+            let (done, target) = (tension * from, tension * to);
             let dp = target - done;
-            if !(dp > R::zero()) {
-                // the increment vanished against the tension reached: no further progress
-                return Err(Error::NotConverged { iterations: iters, residual: f64::INFINITY });
-            }
             let guess = [b[0] + rate[0] * dp, b[1] + rate[1] * dp];
             let attempt = match self.newton_dual(c, target, guess, tol, max_iter.saturating_sub(iters)) {
                 Err((_, it)) if done > R::zero() => {
@@ -689,32 +728,43 @@ impl<R: Real> Finger<R> {
             iters += it;
             match outcome {
                 Ok(st) => {
-                    let dp = target - done;
                     rate = [(st.hole[0] - b[0]) / dp, (st.hole[1] - b[1]) / dp];
                     b = st.hole;
                     last = st;
-                    done = target;
-                    if done >= tension {
-                        return Ok((st, iters));
-                    }
-                    step = step + step;
+                    Ok(())
                 }
                 Err(why) => {
-                    if why.is_some() {
-                        why_failed = why;
-                    }
-                    step = step / R::from_f64(2.0);
+                    failed_at = target;
                     attempts += 1;
-                    if iters >= max_iter || step <= min_step || attempts > 4 * max_iter {
-                        return Err(match why_failed {
-                            Some(MarchError::Contact) => Error::Contact { joint: k + 1, tension: target.to_f64() },
-                            _ if done > R::zero() && self.near_limit_point(c, done, &last) => {
-                                Error::LimitPoint { joint: k + 1, tension: done.to_f64() }
-                            }
-                            _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
-                        });
+                    if iters >= max_iter || attempts > 4 * max_iter {
+                        Err(Step::Stop(why))
+                    } else {
+                        Err(Step::Retry(why))
                     }
                 }
+            }
+        };
+        let mut why_failed = None;
+        let mut track = |from: R, to: R| -> Result<(), Step<Option<MarchError>>> {
+            step(from, to).map_err(|e| {
+                let (Step::Retry(w) | Step::Stop(w)) = e;
+                if w.is_some() {
+                    why_failed = w;
+                }
+                e
+            })
+        };
+        match continuation::run(R::one(), min_step / tension, None, &mut track) {
+            Ok(_) => Ok((last, iters)),
+            Err((lam, _)) => {
+                let done = tension * lam;
+                Err(match why_failed {
+                    Some(MarchError::Contact) => Error::Contact { joint: k + 1, tension: failed_at.to_f64() },
+                    _ if done > R::zero() && self.near_limit_point(c, done, &last) => {
+                        Error::LimitPoint { joint: k + 1, tension: done.to_f64() }
+                    }
+                    _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
+                })
             }
         }
     }
@@ -738,6 +788,7 @@ impl<R: Real> Finger<R> {
         }
     }
 
+    /// Link compliance, `q = C_link w` (a uniform beam; the model's `flex_links`, docs/model.md).
     /// Deflection of a link (proximal frame `hinge_end`, base frame) when `flex_links` is set:
     /// the cable inside the link compresses it with P at the offset e (moment P·e about its
     /// axis), plus the tip load if any; linear, loads in the undeformed link frame.
@@ -764,12 +815,13 @@ impl<R: Real> Finger<R> {
         states: &[JointState<R>; MAX_JOINTS],
         tension: R,
         tip_force: [R; 2],
+        tip_point: Option<[R; 2]>,
     ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
         let mut ends = [Pose::origin(); MAX_JOINTS];
         for k in 0..self.p.n {
             ends[k] = states[k].end;
         }
-        self.chain_ends(&ends, tension, tip_force)
+        self.chain_ends(&ends, tension, tip_force, tip_point)
     }
 
     /// `chain` from each joint's hinge end pose alone.
@@ -778,15 +830,18 @@ impl<R: Real> Finger<R> {
         ends: &[Pose<R>; MAX_JOINTS],
         tension: R,
         tip_force: [R; 2],
+        tip_point: Option<[R; 2]>,
     ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
         let mut nodes = [Pose::origin(); MAX_JOINTS + 1];
         let mut links = [[R::zero(); 3]; MAX_JOINTS];
-        // with a tip load on flexible links the tip point enters the links' loads: a fixed
-        // point on the tip, from the rigid-link tip (the links are stiff: it converges fast)
+        // with a tip load on flexible links the tip point enters the links' loads: the solved
+        // tip when the caller has it (the coupled and pinned solves carry it as an unknown),
+        // else a fixed point on the tip from the rigid-link tip (the load stepping)
         let n = self.p.n;
-        let passes = if loaded && self.p.flex_links { 8 } else { 1 };
-        let mut tip_point: Option<[R; 2]> = None;
+        let given = tip_point.is_some();
+        let passes = if loaded && self.p.flex_links && !given { 8 } else { 1 };
+        let mut tip_point = if loaded && self.p.flex_links { tip_point } else { None };
         for _ in 0..passes {
             let tip = if loaded { tip_point.map(|t| (tip_force, t)) } else { None };
             for k in 0..n {
@@ -797,6 +852,9 @@ impl<R: Real> Finger<R> {
                 nodes[k + 1] = hinge_end.then(self.link_len + q[0], q[1], q[2]);
             }
             let new_tip = [nodes[n].x, nodes[n].y];
+            if given {
+                break;
+            }
             if let Some(t) = tip_point {
                 if (new_tip[0] - t[0]).abs() + (new_tip[1] - t[1]).abs() <= self.resolution() {
                     break;
@@ -819,6 +877,8 @@ impl<R: Real> Finger<R> {
         }
     }
 
+    /// Tip-loaded equilibrium, every hole and the tip together (MODEL.md "Equilibrium": an
+    /// external tip load couples the joints).
     /// Coupled residual for the tip-loaded case. Unknowns: each joint's hole (2 per joint),
     /// then the tip position (2). Returns the residual and the marched states.
     fn coupled_residual(
@@ -849,8 +909,9 @@ impl<R: Real> Finger<R> {
         Ok((r, states))
     }
 
-    /// Converged equilibrium with a tip load: Newton on all holes and the tip together, with
-    /// backtracking and load continuation.
+    /// Converged equilibrium with a tip load: damped Newton (`solve::newton`, forward-difference
+    /// Jacobian) on all holes and the tip together, under load continuation
+    /// (`solve::continuation`) in the load factor λ (tension and tip force together).
     fn newton_coupled(
         &self,
         c: &Compliances<R>,
@@ -858,113 +919,46 @@ impl<R: Real> Finger<R> {
         force: [R; 2],
         tol: R,
         max_iter: u32,
-    ) -> Result<([JointState<R>; MAX_JOINTS], u32), Error> {
-        const N: usize = 2 * MAX_JOINTS + 2;
+    ) -> Result<([JointState<R>; MAX_JOINTS], [R; 2], u32), Error> {
         let n = self.p.n;
-        let dim = 2 * n + 2;
-        let mut x = [R::zero(); N];
+        let mut x = [R::zero(); COUPLED];
         for k in 0..n {
             x[2 * k] = self.p.hinge_len();
             x[2 * k + 1] = self.p.e;
         }
         x[2 * n] = R::from_u32(n as u32) * self.p.l;
-        let mut done = R::zero();
-        let mut step = R::one();
+        let mut eq = Coupled { f: self, c, tension: R::zero(), force: [R::zero(); 2], states: [[self.straight(); MAX_JOINTS]; 3] };
         let mut iters = 0u32;
-        let h = R::from_f64(R::SQRT_EPS) * (self.p.hinge_len() + self.p.e);
-        let floor = self.resolution() * R::from_u32(n as u32);
-        let mut last_contact = false;
-        loop {
-            let lam = (done + step).min(R::one());
-            let (p, f) = (tension * lam, [force[0] * lam, force[1] * lam]);
+        let mut result = None;
+        let opts_for = |left: u32| SolveOptions::new(tol, self.resolution() * R::from_u32(n as u32), left);
+        let mut step = |_: R, to: R| -> Result<(), Step<Option<MarchError>>> {
+            eq.tension = tension * to;
+            eq.force = [force[0] * to, force[1] * to];
             let mut xt = x;
-            let mut ok = None;
-            let mut res = match self.coupled_residual(c, p, f, &xt) {
-                Ok(v) => Some(v),
-                Err(e) => {
-                    last_contact = matches!(e, MarchError::Contact);
-                    None
-                }
-            };
-            while let Some((r, states)) = res {
-                let rn = r[..dim].iter().fold(R::zero(), |a, &v| a + v * v).sqrt();
-                if rn <= tol {
-                    ok = Some(states);
-                    break;
-                }
-                if iters >= max_iter {
-                    break;
-                }
-                iters += 1;
-                // forward-difference Jacobian
-                let mut jac = [[R::zero(); N]; N];
-                let mut fail = false;
-                for i in 0..dim {
-                    let mut xp = xt;
-                    xp[i] += h;
-                    match self.coupled_residual(c, p, f, &xp) {
-                        Ok((rp, _)) => {
-                            for row in 0..dim {
-                                jac[row][i] = (rp[row] - r[row]) / h;
-                            }
-                        }
-                        Err(_) => fail = true,
-                    }
-                }
-                if fail {
-                    break;
-                }
-                let mut rhs = [R::zero(); N];
-                for i in 0..dim {
-                    rhs[i] = -r[i];
-                }
-                let Some(dx) = solve_dense(&mut jac, &mut rhs, dim) else { break };
-                let mut lambda = R::one();
-                let mut next = None;
-                for _ in 0..12 {
-                    let mut xn = xt;
-                    for i in 0..dim {
-                        xn[i] += lambda * dx[i];
-                    }
-                    match self.coupled_residual(c, p, f, &xn) {
-                        Ok((rt, st)) => {
-                            let rtn = rt[..dim].iter().fold(R::zero(), |a, &v| a + v * v).sqrt();
-                            if rtn < rn {
-                                xt = xn;
-                                next = Some((rt, st));
-                                break;
-                            }
-                        }
-                        Err(e) => last_contact = matches!(e, MarchError::Contact),
-                    }
-                    lambda = lambda / R::from_f64(2.0);
-                }
-                if next.is_none() && rn <= floor {
-                    ok = Some(states);
-                    break;
-                }
-                res = next;
-            }
-            match ok {
-                Some(states) => {
+            let left = max_iter.saturating_sub(iters);
+            match solve::newton::solve(&mut eq, &mut xt, &opts_for(left)) {
+                Ok((rep, slot)) => {
+                    iters += rep.iterations;
                     x = xt;
-                    done = lam;
-                    if done >= R::one() {
-                        return Ok((states, iters));
-                    }
-                    step = step + step;
+                    result = Some(eq.states[slot]);
+                    Ok(())
                 }
-                None => {
-                    step = step / R::from_f64(2.0);
-                    if iters >= max_iter || step < R::from_f64(1.0 / 4096.0) {
-                        return Err(if last_contact {
-                            Error::Contact { joint: 0, tension: (tension * lam).to_f64() }
-                        } else {
-                            Error::NotConverged { iterations: iters, residual: f64::INFINITY }
-                        });
-                    }
+                Err(fail) => {
+                    iters += fail.iterations();
+                    let why = fail.refusal().copied();
+                    if iters >= max_iter { Err(Step::Stop(why)) } else { Err(Step::Retry(why)) }
                 }
             }
+        };
+        match continuation::run(R::one(), R::from_f64(1.0 / 4096.0), None, &mut step) {
+            Ok(_) => match result {
+                Some(states) => Ok((states, [x[2 * n], x[2 * n + 1]], iters)),
+                None => Err(Error::NotConverged { iterations: iters, residual: f64::INFINITY }),
+            },
+            Err((lam, why)) => Err(match why {
+                Some(MarchError::Contact) => Error::Contact { joint: 0, tension: (tension * lam).to_f64() },
+                _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
+            }),
         }
     }
 
@@ -985,7 +979,7 @@ impl<R: Real> Finger<R> {
             let lam = R::from_u32(step as u32) / R::from_u32(n_inc as u32);
             let p = tension * lam;
             let f = [force[0] * lam, force[1] * lam];
-            let (nodes, _) = self.chain(&states, p, f);
+            let (nodes, _) = self.chain(&states, p, f, None);
             let tip = [nodes[n].x, nodes[n].y];
             let mut next = states;
             for k in 0..n {
@@ -1047,10 +1041,11 @@ impl<R: Real> Finger<R> {
         tension: R,
         tip_force: [R; 2],
         states: &[JointState<R>; MAX_JOINTS],
+        tip_point: Option<[R; 2]>,
         iterations: u32,
     ) -> Result<Solution<R>, Error> {
         let n = self.p.n;
-        let (nodes, links) = self.chain(states, tension, tip_force);
+        let (nodes, links) = self.chain(states, tension, tip_force, tip_point);
         let mut sol = Solution {
             n,
             m: self.p.m,
@@ -1069,8 +1064,11 @@ impl<R: Real> Finger<R> {
             tangent_det: [R::one(); MAX_JOINTS],
         };
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
-        let tip = [nodes[n].x, nodes[n].y];
-        let mut res2 = R::zero();
+        // the solved tip (the load's point in the joints' residuals), and its mismatch with
+        // the chain's tip in the residual
+        let chain_tip = [nodes[n].x, nodes[n].y];
+        let tip = tip_point.unwrap_or(chain_tip);
+        let mut res2 = (tip[0] - chain_tip[0]).sq() + (tip[1] - chain_tip[1]).sq();
         // residual and tangent determinant of the joint before (tension alone)
         let mut prev: Option<([R; 2], R)> = None;
         for k in 0..n {
@@ -1187,37 +1185,6 @@ impl<R: Real> Finger<R> {
         self.resolution()
     }
 
-    /// The end of the equilibrium branch under tension alone for these voltages: the lowest
-    /// tension at which a joint's span closes to its floor (contact) or its equilibrium tangent
-    /// turns singular (a limit point), whichever comes first, found by load continuation to
-    /// 1e-4 relative. If neither happens below a search bound (1000 times the tension that would
-    /// turn the softest joint by 1 rad linearly), that bound is returned as `SearchBound`.
-    /// The converged solver refuses tensions past this end (its continuation cannot pass it).
-    pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
-        let c = self.compliances(volts)?;
-        let mut best: Option<BranchLimit<R>> = None;
-        let tol = self.resolution().max(R::from_f64(1e-9));
-        for k in 0..self.p.n {
-            let c33 = c.c[k][..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
-            let p_hi = R::from_f64(1000.0) / (self.p.e * c33);
-            let min_step = p_hi * R::from_f64(1e-4 / 1000.0);
-            let end = match self.newton_joint(k, &c.c[k], p_hi, tol, 20_000, min_step) {
-                Ok(_) => BranchLimit { tension: p_hi, joint: k + 1, kind: BranchEnd::SearchBound },
-                Err(Error::Contact { tension, .. }) => {
-                    BranchLimit { tension: R::from_f64(tension), joint: k + 1, kind: BranchEnd::Contact }
-                }
-                Err(Error::LimitPoint { tension, .. }) => {
-                    BranchLimit { tension: R::from_f64(tension), joint: k + 1, kind: BranchEnd::LimitPoint }
-                }
-                Err(e) => return Err(e),
-            };
-            if best.map_or(true, |b| end.tension < b.tension) {
-                best = Some(end);
-            }
-        }
-        best.ok_or(Error::Input { input: "n", reason: "no joints" })
-    }
-
     /// Linearised tip compliance `C_tip = Σ J C Jᵀ` over every sub-element (MODEL.md "Tip
     /// stiffness"), J mapping a sub-element's distal-end displacement (its proximal frame,
     /// rotation about its distal end) to the tip's (x, y, θ) in the base frame.
@@ -1249,6 +1216,34 @@ impl<R: Real> Finger<R> {
         ct
     }
 
+    /// The forward equilibrium residual of a solved posture under its own tension, voltages
+    /// and tip load (MODEL.md "Equilibrium": each guide hole where its joint's march puts it,
+    /// the tip where the chain ends), mm: the coupled system's residual, evaluated afresh from
+    /// the solution's holes and tip. An independent check of any solve (forward, pinned).
+    pub fn equilibrium_residual(&self, sol: &Solution<R>) -> Result<R, Error> {
+        let n = self.p.n;
+        if sol.n != n || sol.m != self.p.m {
+            return Err(Error::Input { input: "solution", reason: "solved for other parameters" });
+        }
+        let c = self.compliances(&sol.volts[..n])?;
+        let mut x = [R::zero(); COUPLED];
+        for k in 0..n {
+            let mut end = Pose::origin();
+            for q in sol.q[k].iter().take(self.p.m) {
+                end = end.then(self.sub_len + q[0], q[1], q[2]);
+            }
+            let hole = end.point(R::zero(), self.p.e);
+            x[2 * k] = hole[0];
+            x[2 * k + 1] = hole[1];
+        }
+        x[2 * n] = sol.tip().x;
+        x[2 * n + 1] = sol.tip().y;
+        let (r, _) = self
+            .coupled_residual(&c, sol.tension, sol.tip_force, &x)
+            .map_err(|_| Error::Contact { joint: 0, tension: sol.tension.to_f64() })?;
+        Ok(r[..2 * n + 2].iter().fold(R::zero(), |a, &v| a + v * v).sqrt())
+    }
+
     /// Linearised tip stiffness K_tip = C_tip⁻¹ (rows/columns x mm, y mm, θ rad; N/mm and
     /// N·mm/rad) at a solved posture (with the channel voltages it was solved with).
     pub fn tip_stiffness(&self, sol: &Solution<R>) -> Result<Mat3<R>, Error> {
@@ -1271,39 +1266,4 @@ pub fn uniform_beam_compliance<R: Real>(e: R, w: R, t: R, len: R) -> Mat3<R> {
         [z, len * len * len / (R::from_f64(3.0) * ei), len * len / (R::from_f64(2.0) * ei)],
         [z, len * len / (R::from_f64(2.0) * ei), len / ei],
     ]
-}
-
-/// Gaussian elimination with partial pivoting on the leading `dim` block; `None` if singular.
-fn solve_dense<R: Real, const N: usize>(a: &mut [[R; N]; N], b: &mut [R; N], dim: usize) -> Option<[R; N]> {
-    for col in 0..dim {
-        let mut piv = col;
-        for row in col + 1..dim {
-            if a[row][col].abs() > a[piv][col].abs() {
-                piv = row;
-            }
-        }
-        if !(a[piv][col].abs() > R::from_f64(1e-300_f64.max(R::EPS * 1e-12))) {
-            return None;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        for row in col + 1..dim {
-            let f = a[row][col] / a[col][col];
-            for k in col..dim {
-                let v = a[col][k];
-                a[row][k] -= f * v;
-            }
-            let v = b[col];
-            b[row] -= f * v;
-        }
-    }
-    let mut x = [R::zero(); N];
-    for i in (0..dim).rev() {
-        let mut s = b[i];
-        for k in i + 1..dim {
-            s -= a[i][k] * x[k];
-        }
-        x[i] = s / a[i][i];
-    }
-    Some(x)
 }

@@ -62,23 +62,21 @@
 //! the joints' mid-range tensions (so that the odd joint out is the one named). The joint with
 //! the largest violation (relative to the reference tension) is reported.
 //!
-//! ## Contact force (`contact_force`)
-//! The tip stops at a point X0, the tip of the free posture at (P0, V0). At (P, V) the tip load
-//! F that holds the tip at X0 solves `tip(F) = X0`, with `tip(F)` from `Finger::solve_loaded`
-//! (the load couples the joints). Newton on F with the 2x2 tangent d tip/dF by forward
-//! differences (the linearised `Finger::tip_compliance` leaves out the stiffening by the
-//! cable's follower load, so it is a poor Jacobian), with backtracking. F is the force the object exerts on the tip; the finger presses on the object
-//! with -F. The tip is taken as pinned at the point (no slip, no separation test).
+//! ## Contact force
+//! `contact` (inverse/contact.rs): the tip pinned at a stop, by continuation from the free posture.
 
 use crate::de;
 use crate::error::Error;
-use crate::finger::{Finger, Method, Pose, Solution};
+use crate::finger::{Finger, Pose, Solution};
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
+mod contact;
 mod general;
 mod table;
+
+pub use contact::{contact_force, Contact};
 
 pub use table::{BranchTable, TABLE_BAND, TABLE_LEN, TABLE_STEP_DEG};
 
@@ -93,11 +91,14 @@ pub struct Options<R> {
     pub angle_tol: R,
     /// Newton iterations per joint solve. Default 30.
     pub max_iter: u32,
+    /// The HV modules' full scale, V, when a board drives them: the ceiling is then
+    /// `Finger::ceiling_in_force(hv_fs)`. Default None (the model's ceiling alone).
+    pub hv_fs: Option<R>,
 }
 
 impl<R: Real> Default for Options<R> {
     fn default() -> Self {
-        Options { top: R::from_f64(1.0 - 1e-4), angle_tol: R::from_f64(1e-4), max_iter: 30 }
+        Options { top: R::from_f64(1.0 - 1e-4), angle_tol: R::from_f64(1e-4), max_iter: 30, hv_fs: None }
     }
 }
 
@@ -138,26 +139,6 @@ pub struct StiffnessRange<R> {
     pub ends: [PoseSolution<R>; 2],
     /// K_tip at each end (x mm, y mm, θ rad; N/mm, N·mm/rad).
     pub stiffness: [Mat3<R>; 2],
-}
-
-/// The contact force of a tip held at a point.
-#[derive(Clone, Copy, Debug)]
-pub struct Contact<R> {
-    /// The contact point (base frame), mm: the free tip at (P0, V0).
-    pub point: [R; 2],
-    /// The force the object exerts on the tip (base frame), N. The finger presses with -force.
-    pub force: [R; 2],
-    /// The loaded equilibrium that holds the tip at the point.
-    pub solution: Solution<R>,
-    /// Newton iterations on the force.
-    pub iterations: u32,
-}
-
-impl<R: Real> Contact<R> {
-    /// |force|, N.
-    pub fn magnitude(&self) -> R {
-        (self.force[0].sq() + self.force[1].sq()).sqrt()
-    }
 }
 
 /// One joint held at its angle: the Newton result.
@@ -382,6 +363,11 @@ fn check_options<R: Real>(opts: &Options<R>) -> Result<(), Error> {
     if !(opts.top.is_finite() && opts.top > R::zero() && opts.top < R::one()) {
         return Err(Error::Input { input: "top", reason: "fraction of the ceiling in (0, 1)" });
     }
+    if let Some(fs) = opts.hv_fs {
+        if !(fs.is_finite() && fs > R::zero()) {
+            return Err(Error::Input { input: "hv_fs", reason: "the HV full scale must be > 0 V" });
+        }
+    }
     if !(opts.angle_tol.is_finite() && opts.angle_tol > R::zero()) {
         return Err(Error::Input { input: "angle_tol", reason: "must be positive" });
     }
@@ -470,7 +456,7 @@ fn fast<R: Real>(
 
     // 1. every joint's tension range: stiffest stack (0 V) and softest (top voltage)
     let t0 = R::from_u32(p.layers as u32) * p.z0;
-    let v_top = f.voltage_ceiling() * opts.top;
+    let v_top = f.ceiling_in_force(opts.hv_fs) * opts.top;
     let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
     let mut hi = [ctx.hold_tension(1, &ang[0], t0, [R::zero(); 2])?; MAX_JOINTS];
     let mut lo = hi;
@@ -569,25 +555,43 @@ fn no_stacks<R: Real>(
         wt[k] = R::one() / h[k].dp_dtheta;
         out.q[k] = [h[k].delta[0], h[k].delta[1], ang[k].theta];
     }
-    // the tensions within the tolerance for every joint
-    let tol = opts.angle_tol;
-    let mut lo = h[0].tension - tol * h[0].dp_dtheta;
-    let mut hi = h[0].tension + tol * h[0].dp_dtheta;
-    for k in 1..n {
-        lo = lo.max(h[k].tension - tol * h[k].dp_dtheta);
-        hi = hi.min(h[k].tension + tol * h[k].dp_dtheta);
+    let mut tensions = [z; MAX_JOINTS];
+    for k in 0..n {
+        tensions[k] = h[k].tension;
     }
-    out.interval = [lo.max(z), hi.max(z)];
-    // the tension: given, or the weighted Chebyshev centre (minimises the largest angle error)
-    let pt = match tension {
+    let (interval, pt, worst) = one_tension(&tensions[..n], &wt[..n], tension, opts.angle_tol);
+    out.interval = interval;
+    if let Some(k) = worst {
+        let c = ctx.compliance(&ang[k], h[k].tension, h[k].wm, z);
+        return Err(Error::Unreachable { joint: k + 1, needed: ctx.compliance(&ang[k], pt, h[k].wm, z), min: c, max: c });
+    }
+    out.tension = pt;
+    Ok(out)
+}
+
+/// The no-stacks rule, for both paths: without stacks only the tension is free. Joint k holds
+/// its angle at tension `p[k]`, its angle moving `w[k]` rad per newton (dθ_k/dP). Returns the
+/// tensions that hold every joint within `tol` rad, the tension (`given`, else the weighted
+/// Chebyshev centre: the one that minimises the largest angle error) and the joint furthest
+/// past `tol` at it, if any (0.1 % slack: the interval's ends sit exactly on the tolerance).
+fn one_tension<R: Real>(p: &[R], w: &[R], given: Option<R>, tol: R) -> ([R; 2], R, Option<usize>) {
+    let z = R::zero();
+    let n = p.len();
+    let mut lo = p[0] - tol / w[0];
+    let mut hi = p[0] + tol / w[0];
+    for k in 1..n {
+        lo = lo.max(p[k] - tol / w[k]);
+        hi = hi.min(p[k] + tol / w[k]);
+    }
+    let pt = match given {
         Some(t) => t,
         None => {
-            let mut best = (h[0].tension, R::from_f64(-1.0));
+            let mut best = (p[0], R::from_f64(-1.0));
             for i in 0..n {
                 for j in i + 1..n {
-                    let e = wt[i] * wt[j] * (h[i].tension - h[j].tension).abs() / (wt[i] + wt[j]);
+                    let e = w[i] * w[j] * (p[i] - p[j]).abs() / (w[i] + w[j]);
                     if e > best.1 {
-                        best = ((wt[i] * h[i].tension + wt[j] * h[j].tension) / (wt[i] + wt[j]), e);
+                        best = ((w[i] * p[i] + w[j] * p[j]) / (w[i] + w[j]), e);
                     }
                 }
             }
@@ -596,18 +600,12 @@ fn no_stacks<R: Real>(
     };
     let mut worst: Option<(usize, R)> = None;
     for k in 0..n {
-        let err = (pt - h[k].tension).abs() * wt[k];
-        // 0.1 % slack: the ends of the interval sit exactly on the tolerance
-        if err > tol * R::from_f64(1.001) && worst.map_or(true, |(_, w)| err > w) {
+        let err = (pt - p[k]).abs() * w[k];
+        if err > tol * R::from_f64(1.001) && worst.map_or(true, |(_, e)| err > e) {
             worst = Some((k, err));
         }
     }
-    if let Some((k, _)) = worst {
-        let c = ctx.compliance(&ang[k], h[k].tension, h[k].wm, z);
-        return Err(Error::Unreachable { joint: k + 1, needed: ctx.compliance(&ang[k], pt, h[k].wm, z), min: c, max: c });
-    }
-    out.tension = pt;
-    Ok(out)
+    ([lo.max(z), hi.max(z)], pt, worst.map(|(k, _)| k))
 }
 
 /// Steps 2-3, the same for both paths. `ends[k]`: joint k's tensions at the softest and the
@@ -736,79 +734,4 @@ pub fn stiffness_range<R: Real>(f: &Finger<R>, sol: &PoseSolution<R>) -> Result<
     let ka = f.tip_stiffness(&a.to_solution(f)?)?;
     let kb = f.tip_stiffness(&b.to_solution(f)?)?;
     Ok(StiffnessRange { ends: [a, b], stiffness: [ka, kb] })
-}
-
-/// The contact force: the tip stops at the free tip of (p0, volts0); at tension `p` and
-/// `volts` the tip load that holds it there. Newton on the 2-D force with the linearised tip
-/// tangent by finite differences, with backtracking; converged when the tip is within `tol` (mm, raised to the
-/// scalar's resolution) of the point.
-pub fn contact_force<R: Real>(
-    f: &Finger<R>,
-    p0: R,
-    volts0: &[R],
-    p: R,
-    volts: &[R],
-) -> Result<Contact<R>, Error> {
-    let free0 = f.solve(p0, volts0, Method::converged())?;
-    let x0 = [free0.tip().x, free0.tip().y];
-    let c = f.compliances(volts)?;
-    let scale = f.params().l * R::from_u32(f.params().n as u32);
-    let tol = R::from_f64(1e-9_f64.max(R::EPS * 256.0)) * scale;
-    let max_iter = 40u32;
-    let tip_res = |force: [R; 2]| -> Result<([R; 2], R, Solution<R>), Error> {
-        let sol = f.solve_with(&c, p, force, Method::converged())?;
-        let r = [sol.tip().x - x0[0], sol.tip().y - x0[1]];
-        Ok((r, (r[0].sq() + r[1].sq()).sqrt(), sol))
-    };
-    let mut force = [R::zero(); 2];
-    let (mut r, mut rn, mut sol) = tip_res(force)?;
-    // finite-difference step, N: relative to a force that moves the tip by ~1 mm
-    let h0 = R::from_f64(R::SQRT_EPS);
-    for it in 0..max_iter {
-        if rn <= tol {
-            return Ok(Contact { point: x0, force, solution: sol, iterations: it });
-        }
-        // Jacobian d tip / dF by forward differences (the tip load couples the joints and the
-        // cable's follower load stiffens the finger: the linearised C_tip is not the tangent)
-        let ct = f.tip_compliance(&c, &sol);
-        let fscale = (force[0].abs() + force[1].abs()).max(R::one() / (ct[0][0].abs() + ct[1][1].abs()));
-        let h = h0 * fscale;
-        let mut jac = [[R::zero(); 2]; 2];
-        for i in 0..2 {
-            let mut fp = force;
-            fp[i] += h;
-            let (rp, _, _) = tip_res(fp)?;
-            jac[0][i] = (rp[0] - r[0]) / h;
-            jac[1][i] = (rp[1] - r[1]) / h;
-        }
-        let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
-        if !(det.abs() > R::zero() && det.is_finite()) {
-            return Err(Error::Singular { what: "tip tangent" });
-        }
-        let df = [-(jac[1][1] * r[0] - jac[0][1] * r[1]) / det, -(-jac[1][0] * r[0] + jac[0][0] * r[1]) / det];
-        // backtracking: the first step length that lowers the tip error
-        let mut lambda = R::one();
-        let mut accepted = false;
-        for _ in 0..16 {
-            let ft = [force[0] + lambda * df[0], force[1] + lambda * df[1]];
-            if let Ok((rt, rtn, st)) = tip_res(ft) {
-                if rtn < rn {
-                    force = ft;
-                    r = rt;
-                    rn = rtn;
-                    sol = st;
-                    accepted = true;
-                    break;
-                }
-            }
-            lambda = lambda / R::from_f64(2.0);
-        }
-        if !accepted {
-            break;
-        }
-    }
-    if rn <= tol {
-        return Ok(Contact { point: x0, force, solution: sol, iterations: max_iter });
-    }
-    Err(Error::NotConverged { iterations: max_iter, residual: rn.to_f64() })
 }

@@ -17,6 +17,7 @@
 #![deny(unsafe_code)]
 
 pub mod de;
+pub mod dual;
 pub mod error;
 pub mod finger;
 pub mod hinge;
@@ -24,6 +25,7 @@ pub mod inverse;
 pub mod mat3;
 pub mod params;
 pub mod real;
+pub mod solve;
 
 pub use error::Error;
 pub use finger::{BranchEnd, BranchLimit, Compliances, Finger, JointEquilibrium, Method, Pose, Solution};

@@ -27,14 +27,15 @@
 //! Steps 2-3 (the interval, the tension rule, the unreachable report) are the parent's, with
 //! the same meaning for every m.
 
-use super::table::{BranchTable, TableEnd, TABLE_BAND};
-use super::{choose_tension, feasible_interval, Options, PoseSolution};
+use super::table::{BranchTable, TableEnd, TABLE_BAND, TABLE_LEN, TABLE_STEP_DEG};
+use super::{choose_tension, feasible_interval, one_tension, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
 use crate::finger::{uniform_beam_compliance, Finger, JointEquilibrium, JointMarch, Method, Pose};
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
+use crate::solve::broyden;
 
 /// One evaluated point of a root find: the parameter x (P or t), h = sign (θ - θ*), the state.
 #[derive(Clone, Copy)]
@@ -134,7 +135,7 @@ impl<'a, R: Real> Gen<'a, R> {
     pub(super) fn stack_ends(&self, opts: &Options<R>) -> Result<(R, R, R), Error> {
         let p = self.p;
         let t0 = R::from_u32(p.layers as u32) * p.z0;
-        let v_top = self.f.voltage_ceiling() * opts.top;
+        let v_top = self.f.ceiling_in_force(opts.hv_fs) * opts.top;
         let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
         Ok((t0, t_top, v_top))
     }
@@ -600,7 +601,7 @@ impl<'a, R: Real> Gen<'a, R> {
         let htol = self.tol_hole.max(self.f.hole_resolution());
         let resid = |x: &[R; 3], st: &JointMarch<R>| [x[0] - st.hole[0], x[1] - st.hole[1], st.angle - theta];
         let mut x = x0;
-        let mut st = ev(x, q_out).ok()?;
+        let st = ev(x, q_out).ok()?;
         let mut fx = resid(&x, &st);
         let unscaled = |j: &Mat3<R>| {
             let mut jx = *j;
@@ -641,40 +642,20 @@ impl<'a, R: Real> Gen<'a, R> {
                 }
             }
         }
-        for _ in 0..16 {
-            if converged(&fx, R::one()) {
-                return Some(Qn { x, st, jac: Some(unscaled(&j)) });
-            }
-            let inv = mat3::inverse_unscaled(&j)?;
-            let dy = mat3::mul_vec(&inv, &fx);
-            let dy = [-dy[0], -dy[1], -dy[2]];
-            let xn = [x[0] + dy[0] * scale[0], x[1] + dy[1] * scale[1], x[2] + dy[2] * scale[2]];
-            // a step below the scalar's resolution: converged as far as it can be
-            let tiny = (0..3).all(|i| (xn[i] - x[i]).abs() <= R::from_f64(4.0 * R::EPS) * x[i].abs().max(scale[i]));
-            let sn = ev(xn, q_out).ok()?;
-            let fnew = resid(&xn, &sn);
-            if !(fnew[0].is_finite() && fnew[1].is_finite() && fnew[2].is_finite()) {
-                return None;
-            }
-            // J += (Δf - J Δy) Δyᵀ / |Δy|²
-            let dy2 = dy[0] * dy[0] + dy[1] * dy[1] + dy[2] * dy[2];
-            if dy2 > R::zero() {
-                let jdy = mat3::mul_vec(&j, &dy);
-                for row in 0..3 {
-                    let u = (fnew[row] - fx[row] - jdy[row]) / dy2;
-                    for col in 0..3 {
-                        j[row][col] += u * dy[col];
-                    }
-                }
-            }
-            x = xn;
-            st = sn;
-            fx = fnew;
-            if tiny {
-                return if converged(&fx, R::from_f64(16.0)) { Some(Qn { x, st, jac: Some(unscaled(&j)) }) } else { None };
-            }
-        }
-        None
+        // Broyden (`solve::broyden`) in the scaled unknowns y = x / scale; the marches write
+        // the iterate's displacements to `q_out` (no line search: the last one is the answer's)
+        let mut y = [x[0] / scale[0], x[1] / scale[1], x[2] / scale[2]];
+        let mut last = st;
+        let mut eval = |y: &[R; 3]| -> Result<[R; 3], Error> {
+            let xn = [y[0] * scale[0], y[1] * scale[1], y[2] * scale[2]];
+            let sn = ev(xn, q_out)?;
+            last = sn;
+            Ok(resid(&xn, &sn))
+        };
+        let done = broyden::solve(&mut eval, &mut y, &mut fx, &mut j, 3, &converged, 16);
+        done.ok()?;
+        x = [y[0] * scale[0], y[1] * scale[1], y[2] * scale[2]];
+        Some(Qn { x, st: last, jac: Some(unscaled(&j)) })
     }
 
     /// dθ/dP along the equilibrium at fixed t from a solve's Jacobian (unknowns (b, P)):
@@ -900,40 +881,16 @@ fn no_stacks<R: Real>(
         }
         record(out, k, lh, &h[k]);
     }
-    // the tensions within the tolerance for every joint (dP/dθ = 1/slope)
-    let tol = opts.angle_tol;
-    let dp = |k: usize| R::one() / h[k].slope;
-    let mut lo = h[0].tension - tol * dp(0);
-    let mut hi = h[0].tension + tol * dp(0);
-    for k in 1..n {
-        lo = lo.max(h[k].tension - tol * dp(k));
-        hi = hi.min(h[k].tension + tol * dp(k));
-    }
-    out.interval = [lo.max(z), hi.max(z)];
-    let pt = match tension {
-        Some(t) => t,
-        None => {
-            let mut best = (h[0].tension, R::from_f64(-1.0));
-            for i in 0..n {
-                for j in i + 1..n {
-                    let (wi, wj) = (h[i].slope, h[j].slope);
-                    let e = wi * wj * (h[i].tension - h[j].tension).abs() / (wi + wj);
-                    if e > best.1 {
-                        best = ((wi * h[i].tension + wj * h[j].tension) / (wi + wj), e);
-                    }
-                }
-            }
-            best.0.max(z)
-        }
-    };
-    let mut worst: Option<(usize, R)> = None;
+    // the rule (the parent's `one_tension`), dθ/dP = slope
+    let mut tensions = [z; MAX_JOINTS];
+    let mut slopes = [z; MAX_JOINTS];
     for k in 0..n {
-        let err = (pt - h[k].tension).abs() * h[k].slope;
-        if err > tol * R::from_f64(1.001) && worst.map_or(true, |(_, w)| err > w) {
-            worst = Some((k, err));
-        }
+        tensions[k] = h[k].tension;
+        slopes[k] = h[k].slope;
     }
-    if let Some((k, _)) = worst {
+    let (interval, pt, worst) = one_tension(&tensions[..n], &slopes[..n], tension, opts.angle_tol);
+    out.interval = interval;
+    if let Some(k) = worst {
         let cl = s_lin / g.p.e;
         let have = g.compliance(angles[k], h[k].tension, &h[k].st, cl).to_f64();
         return Err(Error::Unreachable {
@@ -962,6 +919,68 @@ fn no_stacks<R: Real>(
     }
     out.iterations = g.iters;
     Ok(())
+}
+
+impl<R: Real> BranchTable<R> {
+    /// Build the table for finger `f` and the inverse options `opts` (their `top` sets the
+    /// softest end). Fails for a finger without stacks (nothing to tabulate: its inverse is
+    /// one root per joint) and for options the inverse refuses.
+    #[inline(never)]
+    pub fn new(f: &Finger<R>, opts: &Options<R>) -> Result<Self, Error> {
+        super::check_options(opts)?;
+        let p = f.params();
+        if p.layers == 0 {
+            return Err(Error::Input { input: "table", reason: "a finger without stacks has no branch table" });
+        }
+        let mut g = Gen::new(f, opts)?;
+        // samples eight times tighter than a solve's tolerance: the ends read off the table
+        // start step 4, whose first march then lands inside that tolerance
+        g.tighten(R::from_f64(0.125));
+        let (t0, t_top, v_top) = g.stack_ends(opts)?;
+        let comp = [g.comp(t_top)?, g.comp(t0)?];
+        let t_mid = (t_top + t0) / R::from_f64(2.0);
+        let c_mid = g.comp(t_mid)?;
+        let slope0 = [g.slope0(&comp[0]), g.slope0(&comp[1])];
+        let step = R::from_f64(TABLE_STEP_DEG.to_radians());
+        let lh = p.hinge_len();
+        let mut t = BranchTable {
+            finger: *f,
+            opts: *opts,
+            thickness: [t_top, t0, t_mid],
+            v_top,
+            comp,
+            slope0,
+            step,
+            len: [1; 3],
+            x: [[[R::zero(), lh, p.e]; TABLE_LEN]; 3],
+        };
+        let mut scratch = [[R::zero(); 3]; MAX_SUB];
+        for e in 0..3 {
+            let th = t.thickness[e];
+            let (c, s_lin) = if e < 2 { (&t.comp[e], t.slope0[e]) } else { (&c_mid, g.slope0(&c_mid)) };
+            let mut jac: Option<Mat3<R>> = None;
+            let mut slope = s_lin;
+            for i in 1..TABLE_LEN {
+                let theta = step * R::from_u32(i as u32);
+                let xs = &t.x[e];
+                // linear extrapolation from the two samples before (none for the first)
+                let ex = |c: usize| xs[i - 1][c] + xs[i - 1][c] - xs[i - 2][c];
+                let hint = if i > 1 { Some((ex(0), [ex(1), ex(2)])) } else { None };
+                let Ok(h) = g.hold_tension(1, theta, c, th, s_lin, hint, jac, Some(slope), &mut scratch) else {
+                    break;
+                };
+                if !(h.tension > t.x[e][i - 1][0]) {
+                    // past a limit point the branch turns back: the table ends before it
+                    break;
+                }
+                t.x[e][i] = [h.tension, h.st.hole[0], h.st.hole[1]];
+                t.len[e] = i + 1;
+                jac = h.jac.or(jac);
+                slope = h.slope;
+            }
+        }
+        Ok(t)
+    }
 }
 
 #[cfg(test)]

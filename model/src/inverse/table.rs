@@ -9,7 +9,8 @@
 //! at the stiffest stack (0 V, thickness t0) and at the softest the ceiling allows (t_top).
 //! Each sample is the general path's `hold_tension` (quasi-Newton on the full model),
 //! continued from the sample before; the table ends where the branch does (contact, a limit
-//! point) or at `TABLE_LEN` samples.
+//! point) or at `TABLE_LEN` samples. Built by `BranchTable::new` in general.rs (the general
+//! path's solves); this module holds the table and reads it, and imports nothing of the solves.
 //!
 //! What it is for: `solve_pose_tabled` reads step 1's tension range of every joint off
 //! the table (a cubic through four samples) instead of solving for it, and solves (verifies)
@@ -24,9 +25,7 @@
 //! rebuilds it when a parameter changes); it keeps a copy of its finger and options, so it
 //! is never used with another parameter set. About 4.5 KB in f32 (the finger's 1.3 KB).
 
-use super::general::Gen;
 use super::Options;
-use crate::error::Error;
 use crate::finger::Finger;
 use crate::mat3::Mat3;
 use crate::params::MAX_SUB;
@@ -56,8 +55,8 @@ pub(super) struct TableEnd<R> {
 pub struct BranchTable<R> {
     /// The finger and the options the table was built for (`solve_pose_tabled` solves with
     /// these: a table cannot be used with another parameter set).
-    finger: Finger<R>,
-    opts: Options<R>,
+    pub(super) finger: Finger<R>,
+    pub(super) opts: Options<R>,
     /// Stack thickness of each branch, mm.
     pub(super) thickness: [R; 3],
     /// The top voltage (`top` x the ceiling), V.
@@ -67,73 +66,13 @@ pub struct BranchTable<R> {
     /// dθ/dP of the straight joint at each end, rad/N.
     pub(super) slope0: [R; 2],
     /// Angle step, rad.
-    step: R,
-    len: [usize; 3],
+    pub(super) step: R,
+    pub(super) len: [usize; 3],
     /// (P N, hole x mm, hole y mm) per sample.
-    x: [[[R; 3]; TABLE_LEN]; 3],
+    pub(super) x: [[[R; 3]; TABLE_LEN]; 3],
 }
 
 impl<R: Real> BranchTable<R> {
-    /// Build the table for finger `f` and the inverse options `opts` (their `top` sets the
-    /// softest end). Fails for a finger without stacks (nothing to tabulate: its inverse is
-    /// one root per joint) and for options the inverse refuses.
-    #[inline(never)]
-    pub fn new(f: &Finger<R>, opts: &Options<R>) -> Result<Self, Error> {
-        super::check_options(opts)?;
-        let p = f.params();
-        if p.layers == 0 {
-            return Err(Error::Input { input: "table", reason: "a finger without stacks has no branch table" });
-        }
-        let mut g = Gen::new(f, opts)?;
-        // samples eight times tighter than a solve's tolerance: the ends read off the table
-        // start step 4, whose first march then lands inside that tolerance
-        g.tighten(R::from_f64(0.125));
-        let (t0, t_top, v_top) = g.stack_ends(opts)?;
-        let comp = [g.comp(t_top)?, g.comp(t0)?];
-        let t_mid = (t_top + t0) / R::from_f64(2.0);
-        let c_mid = g.comp(t_mid)?;
-        let slope0 = [g.slope0(&comp[0]), g.slope0(&comp[1])];
-        let step = R::from_f64(TABLE_STEP_DEG.to_radians());
-        let lh = p.hinge_len();
-        let mut t = BranchTable {
-            finger: *f,
-            opts: *opts,
-            thickness: [t_top, t0, t_mid],
-            v_top,
-            comp,
-            slope0,
-            step,
-            len: [1; 3],
-            x: [[[R::zero(), lh, p.e]; TABLE_LEN]; 3],
-        };
-        let mut scratch = [[R::zero(); 3]; MAX_SUB];
-        for e in 0..3 {
-            let th = t.thickness[e];
-            let (c, s_lin) = if e < 2 { (&t.comp[e], t.slope0[e]) } else { (&c_mid, g.slope0(&c_mid)) };
-            let mut jac: Option<Mat3<R>> = None;
-            let mut slope = s_lin;
-            for i in 1..TABLE_LEN {
-                let theta = step * R::from_u32(i as u32);
-                let xs = &t.x[e];
-                // linear extrapolation from the two samples before (none for the first)
-                let ex = |c: usize| xs[i - 1][c] + xs[i - 1][c] - xs[i - 2][c];
-                let hint = if i > 1 { Some((ex(0), [ex(1), ex(2)])) } else { None };
-                let Ok(h) = g.hold_tension(1, theta, c, th, s_lin, hint, jac, Some(slope), &mut scratch) else {
-                    break;
-                };
-                if !(h.tension > t.x[e][i - 1][0]) {
-                    // past a limit point the branch turns back: the table ends before it
-                    break;
-                }
-                t.x[e][i] = [h.tension, h.st.hole[0], h.st.hole[1]];
-                t.len[e] = i + 1;
-                jac = h.jac.or(jac);
-                slope = h.slope;
-            }
-        }
-        Ok(t)
-    }
-
     /// The finger the table was built for.
     pub fn finger(&self) -> &Finger<R> {
         &self.finger

@@ -1,6 +1,7 @@
-//! The hot path of the converged solver: the joint march in any scalar (`march_t`), run on
-//! dual numbers to get a joint's hole residual and its exact 2x2 Jacobian in one pass, and
-//! Newton on that (`newton_dual`). Replaces the forward-difference Jacobian (two extra
+//! The joint march (the paper's Eq. 7/15 per sub-element, loads in the deformed geometry) in
+//! any scalar (`march_t`), run on dual numbers (`crate::dual`) to get a joint's hole residual
+//! and its exact 2x2 Jacobian in one pass, and damped Newton (`crate::solve::newton`) on that
+//! (`newton_dual`). Replaces the forward-difference Jacobian (two extra
 //! marches per iteration and a step size that limits the Jacobian to half the digits): one
 //! march per Newton iteration, quadratic convergence to the scalar's resolution (issue 5).
 //!
@@ -9,179 +10,19 @@
 //! for bit.
 
 use super::{norm2, Finger, JointState, MarchError, Pose, TipLoad};
+use crate::dual::D;
 use crate::mat3::Mat3;
 use crate::params::MAX_SUB;
 use crate::real::Real;
-use core::cmp::Ordering;
-use core::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
-
-/// A dual number: value and its derivatives with respect to the two hole coordinates.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct D<R> {
-    pub v: R,
-    pub d: [R; 2],
-}
-
-impl<R: Real> D<R> {
-    #[inline(always)]
-    fn c(v: R) -> Self {
-        D { v, d: [R::zero(); 2] }
-    }
-}
-
-impl<R: Real> PartialEq for D<R> {
-    fn eq(&self, o: &Self) -> bool {
-        self.v == o.v
-    }
-}
-impl<R: Real> PartialOrd for D<R> {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        self.v.partial_cmp(&o.v)
-    }
-}
-impl<R: Real> Add for D<R> {
-    type Output = Self;
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        D { v: self.v + o.v, d: [self.d[0] + o.d[0], self.d[1] + o.d[1]] }
-    }
-}
-impl<R: Real> Sub for D<R> {
-    type Output = Self;
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        D { v: self.v - o.v, d: [self.d[0] - o.d[0], self.d[1] - o.d[1]] }
-    }
-}
-impl<R: Real> Mul for D<R> {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, o: Self) -> Self {
-        D {
-            v: self.v * o.v,
-            d: [self.v * o.d[0] + self.d[0] * o.v, self.v * o.d[1] + self.d[1] * o.v],
-        }
-    }
-}
-impl<R: Real> Div for D<R> {
-    type Output = Self;
-    #[inline(always)]
-    fn div(self, o: Self) -> Self {
-        let v = self.v / o.v;
-        let inv = R::one() / o.v;
-        D { v, d: [(self.d[0] - v * o.d[0]) * inv, (self.d[1] - v * o.d[1]) * inv] }
-    }
-}
-impl<R: Real> Neg for D<R> {
-    type Output = Self;
-    #[inline(always)]
-    fn neg(self) -> Self {
-        D { v: -self.v, d: [-self.d[0], -self.d[1]] }
-    }
-}
-impl<R: Real> Mul<R> for D<R> {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, o: R) -> Self {
-        D { v: self.v * o, d: [self.d[0] * o, self.d[1] * o] }
-    }
-}
-impl<R: Real> Add<R> for D<R> {
-    type Output = Self;
-    #[inline(always)]
-    fn add(self, o: R) -> Self {
-        D { v: self.v + o, d: self.d }
-    }
-}
-impl<R: Real> Sub<R> for D<R> {
-    type Output = Self;
-    #[inline(always)]
-    fn sub(self, o: R) -> Self {
-        D { v: self.v - o, d: self.d }
-    }
-}
-impl<R: Real> AddAssign for D<R> {
-    #[inline(always)]
-    fn add_assign(&mut self, o: Self) {
-        *self = *self + o;
-    }
-}
-impl<R: Real> SubAssign for D<R> {
-    #[inline(always)]
-    fn sub_assign(&mut self, o: Self) {
-        *self = *self - o;
-    }
-}
-impl<R: Real> MulAssign for D<R> {
-    #[inline(always)]
-    fn mul_assign(&mut self, o: Self) {
-        *self = *self * o;
-    }
-}
-impl<R: Real> DivAssign for D<R> {
-    #[inline(always)]
-    fn div_assign(&mut self, o: Self) {
-        *self = *self / o;
-    }
-}
-
-impl<R: Real> Real for D<R> {
-    const EPS: f64 = R::EPS;
-    const SQRT_EPS: f64 = R::SQRT_EPS;
-    const NAME: &'static str = "dual";
-    #[inline(always)]
-    fn from_f64(x: f64) -> Self {
-        D::c(R::from_f64(x))
-    }
-    #[inline(always)]
-    fn from_u32(n: u32) -> Self {
-        D::c(R::from_u32(n))
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self.v.to_f64()
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        let s = self.v.sqrt();
-        if !(s > R::zero()) {
-            return D::c(s);
-        }
-        let k = R::one() / (s + s);
-        D { v: s, d: [self.d[0] * k, self.d[1] * k] }
-    }
-    #[inline(always)]
-    fn sin(self) -> Self {
-        self.sin_cos().0
-    }
-    #[inline(always)]
-    fn cos(self) -> Self {
-        self.sin_cos().1
-    }
-    #[inline(always)]
-    fn sin_cos(self) -> (Self, Self) {
-        let (s, c) = self.v.sin_cos();
-        (D { v: s, d: [c * self.d[0], c * self.d[1]] }, D { v: c, d: [-s * self.d[0], -s * self.d[1]] })
-    }
-    fn atan2(self, x: Self) -> Self {
-        let v = self.v.atan2(x.v);
-        let r2 = x.v * x.v + self.v * self.v;
-        if !(r2 > R::zero()) {
-            return D::c(v);
-        }
-        let k = R::one() / r2;
-        D { v, d: [(x.v * self.d[0] - self.v * x.d[0]) * k, (x.v * self.d[1] - self.v * x.d[1]) * k] }
-    }
-    #[inline(always)]
-    fn is_finite(self) -> bool {
-        self.v.is_finite() && self.d[0].is_finite() && self.d[1].is_finite()
-    }
-}
+use crate::solve::{self, newton::Equations, SolveOptions};
+use core::ops::{Add, Mul, Sub};
 
 /// A joint state, its hole residual `b - hole` and the residual's Jacobian `I - ∂hole/∂b`.
 pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
 
 impl<R: Real> Finger<R> {
+    /// Joint equilibrium march, `q_j = C_j w_j` sub-element by sub-element (the paper's Eq. 7
+    /// and 15, loads in the deformed geometry: MODEL.md "Equilibrium").
     /// `Finger::march` in the scalar `T` (R itself, or dual numbers over R); parameters and
     /// compliances stay in R. Same operations in the same order as `march`. Returns the hinge
     /// end and the hole in T; the sub-element displacements go to `q_out` as values (`val`),
@@ -275,82 +116,64 @@ impl<R: Real> Finger<R> {
         Ok((end, hole, r, jac))
     }
 
-    /// Newton at one tension from a starting hole guess, with the exact Jacobian of each
-    /// dual march and backtracking (accept the first halving that lowers the residual). On
-    /// failure returns why (contact on the way, or plain non-convergence) and the iterations.
-    /// The returned state carries the residual and tangent determinant of its last march.
-    /// Norms are compared squared (no square root per iteration); the sub-element
-    /// displacements of the accepted and the trial march live in two buffers, swapped by index.
+    /// Newton at one tension from a starting hole guess: `solve::newton` on the hole residual
+    /// with the exact Jacobian of each dual march. On failure returns why (contact on the way,
+    /// or plain non-convergence) and the iterations. The returned state carries the residual
+    /// and tangent determinant of its last march.
     pub(super) fn newton_dual(
         &self,
         c: &[Mat3<R>; MAX_SUB],
         tension: R,
-        mut b: [R; 2],
+        b: [R; 2],
         tol: R,
         max_iter: u32,
     ) -> Result<(JointState<R>, u32), (Option<MarchError>, u32)> {
-        let mut qs = [[[R::zero(); 3]; MAX_SUB]; 2];
-        let mut cur = 0usize;
-        let (mut end, mut hole, mut r, mut jac) =
-            self.eval_dual_into(c, tension, b, &mut qs[0]).map_err(|e| (Some(e), 0))?;
-        // squared norms where the type resolves the square of its resolution (floats); fixed
-        // point would lose the small residuals to its quantum, so it keeps the root
-        let squared = R::from_f64(R::EPS * R::EPS) > R::zero();
-        let metric = |r: [R; 2]| if squared { r[0] * r[0] + r[1] * r[1] } else { norm2(r) };
-        let mut rn2 = metric(r);
-        let floor = self.resolution();
-        let (tol2, floor2) = if squared { (tol * tol, floor * floor) } else { (tol, floor) };
-        let done = |qs: &[[[R; 3]; MAX_SUB]; 2], cur: usize, end, hole, r: [R; 2], jac: [[R; 2]; 2]| {
-            let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
-            JointState { q: qs[cur], end, hole, tangent: Some((r, det)) }
-        };
-        for it in 0..max_iter {
-            if rn2 <= tol2 {
-                return Ok((done(&qs, cur, end, hole, r, jac), it));
+        self.newton_dual_with(c, tension, b, &SolveOptions::new(tol, self.resolution(), max_iter))
+    }
+
+    /// `newton_dual` with the solver's options (iterations, line-search halvings) given.
+    pub(super) fn newton_dual_with(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        opts: &SolveOptions<R>,
+    ) -> Result<(JointState<R>, u32), (Option<MarchError>, u32)> {
+        let mut eq = JointHoles { f: self, c, tension, q: [[[R::zero(); 3]; MAX_SUB]; 2], st: [None; 2] };
+        let mut x = b;
+        match solve::newton::solve(&mut eq, &mut x, opts) {
+            Ok((rep, slot)) => {
+                let Some((end, hole, r, jac)) = eq.st[slot] else { return Err((None, rep.iterations)) };
+                let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+                Ok((JointState { q: eq.q[slot], end, hole, tangent: Some((r, det)) }, rep.iterations))
             }
-            let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
-            if !(det.abs() > R::from_f64(1e-12)) {
-                return Err((None, it));
-            }
-            let inv = R::one() / det;
-            let db = [(jac[0][1] * r[1] - jac[1][1] * r[0]) * inv, (jac[1][0] * r[0] - jac[0][0] * r[1]) * inv];
-            let mut lambda = R::one();
-            let mut accepted = false;
-            let mut last_err = None;
-            for _ in 0..12 {
-                let bt = [b[0] + lambda * db[0], b[1] + lambda * db[1]];
-                match self.eval_dual_into(c, tension, bt, &mut qs[1 - cur]) {
-                    Ok((et, ht, rt, jt)) => {
-                        let rtn2 = metric(rt);
-                        if rtn2 < rn2 {
-                            b = bt;
-                            r = rt;
-                            rn2 = rtn2;
-                            cur = 1 - cur;
-                            end = et;
-                            hole = ht;
-                            jac = jt;
-                            accepted = true;
-                            break;
-                        }
-                    }
-                    Err(e) => last_err = Some(e),
-                }
-                lambda = lambda / R::from_f64(2.0);
-            }
-            if !accepted {
-                // at the scalar's resolution the residual stops falling: that is convergence
-                if rn2 <= floor2 {
-                    return Ok((done(&qs, cur, end, hole, r, jac), it + 1));
-                }
-                return Err((last_err, it + 1));
-            }
+            Err(fail) => Err((fail.refusal().copied(), fail.iterations())),
         }
-        if rn2 <= tol2 {
-            Ok((done(&qs, cur, end, hole, r, jac), max_iter))
-        } else {
-            Err((None, max_iter))
-        }
+    }
+}
+
+/// One joint's hole residual under tension alone, for `solve::newton`: each evaluation is one
+/// dual march, whose state (sub-element q, end, hole, residual, Jacobian) stays in its slot.
+struct JointHoles<'a, R> {
+    f: &'a Finger<R>,
+    c: &'a [Mat3<R>; MAX_SUB],
+    tension: R,
+    q: [[[R; 3]; MAX_SUB]; 2],
+    #[allow(clippy::type_complexity)]
+    st: [Option<(Pose<R>, [R; 2], [R; 2], [[R; 2]; 2])>; 2],
+}
+
+impl<R: Real> Equations<R, 2> for JointHoles<'_, R> {
+    type Refusal = MarchError;
+    fn residual(&mut self, x: &[R; 2], slot: usize) -> Result<[R; 2], MarchError> {
+        let slot = slot.min(1);
+        let ev = self.f.eval_dual_into(self.c, self.tension, *x, &mut self.q[slot])?;
+        self.st[slot] = Some(ev);
+        Ok(ev.2)
+    }
+    fn jacobian(&mut self, _: &[R; 2], _: &[R; 2], slot: usize) -> Result<[[R; 2]; 2], MarchError> {
+        // the dual march at this point gave it
+        Ok(self.st[slot.min(1)].map_or([[R::one(), R::zero()], [R::zero(), R::one()]], |s| s.3))
     }
 }
 

@@ -1,0 +1,73 @@
+//! Bench image for the cost of `Finger::fmax` on the target (issue 13, docs/fmax-cost.md):
+//! instructions of one fmax (the end of the equilibrium branch at given voltages), f32, for
+//! the paper's model (m = 1, rigid links, E_b) and the default model (m = 8, plate modulus,
+//! flexible links), at 0 V, uniform and mixed voltages and a tiny span floor. Prints `CAL`,
+//! then `F <case> ok <ticks> <fmax N> <joint> <kind>` (or `F <case> err <ticks> <code>`),
+//! then `END`. Driven by `cargo run --example fmax_cost` in host-tests.
+#![no_std]
+#![no_main]
+
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use finger_model::{BranchEnd, Finger, Params};
+
+#[path = "../cycles.rs"]
+mod cycles;
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("PANIC {}", info);
+    debug::exit(debug::EXIT_FAILURE);
+    loop {}
+}
+
+fn run(name: &str, p: Params<f32>, frac: [f32; 3]) {
+    let f = match Finger::new(p) {
+        Ok(f) => f,
+        Err(e) => {
+            hprintln!("F {} err 0 {}", name, e.code());
+            return;
+        }
+    };
+    let top = f.voltage_ceiling() * (1.0 - 1e-4);
+    let v = core::hint::black_box([frac[0] * top, frac[1] * top, frac[2] * top]);
+    let t0 = cycles::now();
+    let r = f.fmax(&v);
+    let t1 = cycles::now();
+    match core::hint::black_box(r) {
+        Ok(b) => {
+            let kind = match b.kind {
+                BranchEnd::LimitPoint => "limit-point",
+                BranchEnd::Contact => "contact",
+                BranchEnd::SearchBound => "search-bound",
+            };
+            hprintln!("F {} ok {} {} {} {}", name, t1 - t0, b.tension, b.joint, kind)
+        }
+        Err(e) => hprintln!("F {} err {} {}", name, t1 - t0, e.code()),
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let cp = cortex_m::Peripherals::take().unwrap();
+    cycles::start(cp.SYST);
+    let (ticks, overhead) = cycles::calibrate(1_000_000);
+    hprintln!("CAL {} {} {}", 2_000_000u32, ticks, overhead);
+    let paper = Params::<f32> { m: 1, plate: false, flex_links: false, ..Params::default() };
+    let real = Params::<f32> { m: 8, plate: true, flex_links: true, ..Params::default() };
+    let tiny = Params::<f32> { span_floor: 1e-6, ..real };
+    for (cfg, p) in [("m1-rigid", paper), ("m8-plate-flex", real), ("m8-plate-flex-floor1e-6", tiny)] {
+        for (case, frac) in [("0V", [0.0; 3]), ("half", [0.5; 3]), ("top", [1.0; 3]), ("mixed", [0.0, 0.5, 1.0])] {
+            let mut buf = [0u8; 48];
+            let mut len = 0;
+            for &b in cfg.as_bytes().iter().chain(b"/").chain(case.as_bytes()) {
+                buf[len] = b;
+                len += 1;
+            }
+            run(core::str::from_utf8(&buf[..len]).unwrap_or("?"), p, frac);
+        }
+    }
+    hprintln!("END");
+    debug::exit(debug::EXIT_SUCCESS);
+    loop {}
+}

@@ -1,0 +1,88 @@
+//! The contact force by continuation (model inverse/contact.rs, finger/pinned.rs) on the
+//! default finger: a grid of P0 0.05-5 N, P up to fmax at the voltages, voltages 0 to the
+//! ceiling. Every request answers or is refused with a typed reason (past fmax, links
+//! touching, limit point); none faults, and every answer holds: a forward solve with that tip
+//! load puts the tip on the stop.
+
+use finger_model::inverse::contact_force;
+use finger_model::{Error, Finger, Method, Params};
+
+fn grid_volts(ceiling: f64) -> Vec<[f64; 3]> {
+    let top = ceiling * (1.0 - 1e-4);
+    vec![[0.0; 3], [top / 3.0; 3], [2.0 * top / 3.0; 3], [top; 3], [0.0, top / 2.0, top], [top, 0.0, top / 2.0]]
+}
+
+#[test]
+fn contact_grid_on_the_default_finger_answers_or_refuses_and_every_answer_holds_the_tip() {
+    let f = Finger::new(Params::<f64>::default()).unwrap();
+    let ceiling = f.voltage_ceiling();
+    let (mut answers, mut refused, mut cases) = (0, 0, 0);
+    let mut worst = 0.0f64;
+    let (mut agree, mut elsewhere) = (0, 0);
+    let (mut worst_fwd, mut small_off) = (0.0f64, 0.0f64);
+    for v in grid_volts(ceiling) {
+        let fmax = f.fmax(&v).unwrap().tension;
+        for i in 0..8 {
+            let p0 = 0.05 + (5.0 - 0.05) * i as f64 / 7.0;
+            for j in 0..=8 {
+                let p = fmax * j as f64 / 8.0;
+                cases += 1;
+                match contact_force(&f, p0, &[0.0; 3], p, &v) {
+                    Ok(c) => {
+                        answers += 1;
+                        assert!(c.force.iter().all(|x| x.is_finite()), "P0={p0} P={p} V={v:?}: {:?}", c.force);
+                        // the answer is a forward equilibrium under that tip load: the forward
+                        // residual evaluated afresh from its holes and tip (1e-7 of the finger's length: a re-march amplifies the
+                        // hole residual by the march's gain), with the tip on the stop
+                        let sol = &c.solution;
+                        let on = ((sol.tip().x - c.point[0]).powi(2) + (sol.tip().y - c.point[1]).powi(2)).sqrt();
+                        let fwd = f.equilibrium_residual(sol).unwrap();
+                        assert!(sol.residual < 1e-7 && fwd < 1e-7 * 81.0 && on < 1e-6, "P0={p0} P={p} V={v:?}: residual {:.2e} (afresh {fwd:.2e}), tip {on:.2e} mm off", sol.residual);
+                        worst_fwd = worst_fwd.max(fwd);
+                        // a forward solve with that tip load by load continuation from the straight
+                        // finger: the same equilibrium where the loaded branch is unique (a large
+                        // tip load on the bent finger has several; then it may find another)
+                        match f.solve_loaded(p, &v, c.force, Method::converged()) {
+                            Ok(s) => {
+                                let d = ((s.tip().x - c.point[0]).powi(2) + (s.tip().y - c.point[1]).powi(2)).sqrt();
+                                if d < 1e-5 * 81.0 {
+                                    agree += 1;
+                                    worst = worst.max(d);
+                                } else {
+                                    elsewhere += 1;
+                                    small_off = small_off.max(if c.magnitude() < 0.5 { d } else { 0.0 });
+                                }
+                            }
+                            Err(_) => {
+                                elsewhere += 1;
+                                small_off = small_off.max(if c.magnitude() < 0.5 { f64::INFINITY } else { 0.0 });
+                            }
+                        }
+                        if p == p0 && v == [0.0; 3] {
+                            assert!(c.magnitude() < 1e-9, "P = P0 at 0 V: no force, got {:?}", c.force);
+                        }
+                    }
+                    Err(e @ (Error::ForceLimit { .. } | Error::Contact { .. } | Error::LimitPoint { .. })) => {
+                        refused += 1;
+                        eprintln!("P0={p0} P={p} V={v:?}: refused: {e}");
+                    }
+                    Err(e) => panic!("P0={p0} P={p} V={v:?}: fault {e:?}"),
+                }
+            }
+        }
+    }
+    eprintln!("{cases} requests: {answers} answers (forward residual at most {worst_fwd:.2e} mm; {agree} also reached by a forward solve from straight, at most {worst:.2e} mm off, {elsewhere} not), {refused} typed refusals");
+    assert!(small_off < 1e-5 * 81.0, "a contact force under 0.5 N that the forward solve from straight does not reproduce: {small_off:.2e} mm");
+    assert!(agree > 0);
+    assert_eq!(answers + refused, cases);
+    assert!(answers >= cases * 9 / 10, "{answers} of {cases} answered");
+}
+
+/// The pair: the fourth digit does not decide between an answer and a fault.
+#[test]
+fn contact_is_continuous_in_its_arguments() {
+    let f = Finger::new(Params::<f32>::default()).unwrap();
+    let a = contact_force(&f, 2.2188, &[0.0; 3], 3.8999, &[0.0; 3]).unwrap();
+    let b = contact_force(&f, 2.219, &[0.0; 3], 3.9, &[0.0; 3]).unwrap();
+    assert!((a.magnitude() - b.magnitude()).abs() < 1e-2 * a.magnitude(), "{} vs {}", a.magnitude(), b.magnitude());
+}

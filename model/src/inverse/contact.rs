@@ -1,0 +1,55 @@
+//! The contact force (the paper's second conclusion): the tip stops at a point X0, the free
+//! tip at (P0, V0); at (P, V) the load F the stop exerts to hold the tip at X0. The pinned
+//! equilibrium is reached by continuation from the free posture (`Finger::pinned_tip`,
+//! finger/pinned.rs), so every request inside the branch answers or is refused with a typed
+//! reason: a tension past fmax (`ForceLimit`, at P0 with V0 or at P with V), the links
+//! touching on the way (`Contact`), the stop not holdable (`LimitPoint` of the pinned
+//! equilibrium). F is the force the object exerts on the tip; the finger presses with -F. The
+//! tip is pinned (no slip, no separation test).
+
+use crate::error::Error;
+use crate::finger::{Finger, Method, Solution};
+use crate::real::Real;
+
+/// The contact force of a tip held at a point.
+#[derive(Clone, Copy, Debug)]
+pub struct Contact<R> {
+    /// The contact point (base frame), mm: the free tip at (P0, V0).
+    pub point: [R; 2],
+    /// The force the object exerts on the tip (base frame), N. The finger presses with -force.
+    pub force: [R; 2],
+    /// The loaded equilibrium that holds the tip at the point.
+    pub solution: Solution<R>,
+    /// Newton iterations on the force.
+    pub iterations: u32,
+}
+
+impl<R: Real> Contact<R> {
+    /// |force|, N.
+    pub fn magnitude(&self) -> R {
+        (self.force[0].sq() + self.force[1].sq()).sqrt()
+    }
+}
+
+/// The contact force: the tip stops at the free tip of (`p0`, `volts0`); at tension `p` and
+/// `volts` the tip load that holds it there (see the module header).
+pub fn contact_force<R: Real>(f: &Finger<R>, p0: R, volts0: &[R], p: R, volts: &[R]) -> Result<Contact<R>, Error> {
+    for (t, name) in [(p0, "P0"), (p, "P")] {
+        if !t.is_finite() {
+            return Err(Error::NonFinite { input: name });
+        }
+        if t < R::zero() {
+            return Err(Error::Input { input: name, reason: "a cable cannot push: tension must be >= 0" });
+        }
+    }
+    for (t, v) in [(p0, volts0), (p, volts)] {
+        let end = f.fmax(v)?;
+        if t > end.tension {
+            return Err(Error::ForceLimit { tension: t.to_f64(), fmax: end.tension.to_f64() });
+        }
+    }
+    let free0 = f.solve(p0, volts0, Method::converged())?;
+    let pin = f.pinned_tip(&free0, p, volts)?;
+    let point = [free0.tip().x, free0.tip().y];
+    Ok(Contact { point, force: pin.force, solution: pin.solution, iterations: pin.iterations })
+}
