@@ -846,12 +846,12 @@ pub fn run_file(path: &std::path::Path, reference: Option<&dyn ReferenceSolver>)
 /// discretisation. Its joint angle is the rotation node to node (hinge and link together), the
 /// quantity the three-element model's joint angle stands for.
 pub struct ContinuumReference {
-    pub disc: crate::continuum::Discretisation,
+    pub disc: continuum::Discretisation,
 }
 
 /// The continuum model's parameters for a finger of the model's parameters.
-pub fn continuum_params(p: &Params<f64>) -> crate::continuum::ContinuumParams {
-    crate::continuum::ContinuumParams {
+pub fn continuum_params(p: &Params<f64>) -> continuum::ContinuumParams {
+    continuum::ContinuumParams {
         n: p.n,
         l: p.l,
         b: p.b,
@@ -874,7 +874,7 @@ impl ReferenceSolver for ContinuumReference {
     fn solve(&self, params: &Params<f64>, tension: f64, _volts: &[f64], thickness: &[f64]) -> Result<RefPosture, String> {
         let cp = continuum_params(params);
         let stacks: Vec<f64> = if params.layers == 0 { Vec::new() } else { thickness.to_vec() };
-        let s = crate::continuum::solve(&cp, tension, &stacks, [0.0, 0.0], self.disc).map_err(|e| e.to_string())?;
+        let s = continuum::solve(&cp, tension, &stacks, [0.0, 0.0], self.disc).map_err(|e| e.to_string())?;
         Ok(RefPosture {
             points: s.centreline.iter().map(|c| [c[1], c[2]]).collect(),
             joint_angles: s.joint_angles.clone(),
@@ -885,5 +885,5 @@ impl ReferenceSolver for ContinuumReference {
 
 /// The continuum reference, for scenes that say `reference = continuum`.
 pub fn reference_solver() -> Option<Box<dyn ReferenceSolver>> {
-    Some(Box::new(ContinuumReference { disc: crate::continuum::Discretisation::default() }))
+    Some(Box::new(ContinuumReference { disc: continuum::Discretisation::default() }))
 }

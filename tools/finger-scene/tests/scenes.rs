@@ -3,11 +3,11 @@
 //! well-formed with one polyline per posture.
 
 use finger_model::{de, Error, Finger, Method, Params};
-use host_tests::scene::{self, Drive, Kind, Reference, SceneResult, SolverSpec};
+use finger_scene::scene::{self, Drive, Kind, Reference, SceneResult, SolverSpec};
 use std::path::{Path, PathBuf};
 
 fn top() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 fn shipped(dir: &Path) -> Vec<PathBuf> {
@@ -395,7 +395,7 @@ fn svg_is_well_formed_with_one_polyline_per_posture() {
     let reference = scene::reference_solver();
     for name in ["paper-no-de", "paper-de-uniform"] {
         let r = scene::run_file(&top().join(format!("scenes/{name}.scene")), reference.as_deref()).unwrap();
-        let svg = host_tests::svg::plot(&r);
+        let svg = finger_scene::svg::plot(&r);
         check_xml(&svg).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(svg.contains("<svg xmlns=\"http://www.w3.org/2000/svg\""));
         let polys: Vec<&str> = svg.lines().filter(|l| l.contains("<polyline class=\"posture\"")).collect();
@@ -411,11 +411,11 @@ fn svg_is_well_formed_with_one_polyline_per_posture() {
         }
         // a legend entry for each posture, and the axes in mm
         for p in &r.postures {
-            assert!(svg.contains(&host_tests::svg::escape(&p.label)));
+            assert!(svg.contains(&finger_scene::svg::escape(&p.label)));
         }
         assert!(svg.contains("x (mm)") && svg.contains("y (mm)"));
         // one colour per posture
-        let cols = host_tests::svg::colours(&r);
+        let cols = finger_scene::svg::colours(&r);
         let mut uniq = cols.clone();
         uniq.sort();
         uniq.dedup();
@@ -428,7 +428,7 @@ fn svg_has_equal_aspect() {
     // the straight finger (0 N) spans n*l mm along x; the plotted polyline must span the same
     // number of pixels per mm as a vertical segment of the grid
     let r = run_text("[drive]\ntensions = 0, 2\n").unwrap();
-    let svg = host_tests::svg::plot(&r);
+    let svg = finger_scene::svg::plot(&r);
     let line = svg.lines().find(|l| l.contains("class=\"posture\"")).unwrap();
     let pts: Vec<[f64; 2]> = line
         .split("points=\"")
@@ -525,7 +525,6 @@ fn the_reference_is_solved_only_when_asked() {
 
 #[test]
 fn continuum_overlay_is_the_continuum_models_solution() {
-    use host_tests::continuum;
     let path = top().join("scenes/paper-de-joint1-thin.scene");
     let r = scene::run_file(&path, scene::reference_solver().as_deref()).unwrap();
     assert_eq!(r.scene.output.reference, Reference::Continuum);

@@ -10,14 +10,14 @@
 //! A scene the model refuses prints `path:line: message` to stderr, exits with status 1 and
 //! writes nothing. Usage errors exit with 2.
 
-use host_tests::scene::{self, Reference, SceneResult};
+use finger_scene::scene::{self, Reference, SceneResult};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 const USAGE: &str = "usage: finger-scene SCENE... [--out DIR]\n       finger-scene --all [--scenes DIR] [--out DIR]";
 
 fn repo_top() -> PathBuf {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     p.canonicalize().unwrap_or(p)
 }
 
