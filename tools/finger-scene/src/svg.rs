@@ -6,7 +6,7 @@
 //!
 //! What it is not: a plotting library. No dependency; the output is plain SVG 1.1.
 
-use crate::scene::{Kind, SceneResult};
+use crate::run::{Kind, SceneResult};
 use std::fmt::Write;
 
 /// Colours for the scene's tensions, in order (the paper's purple and green are kept for the
