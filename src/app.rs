@@ -1,28 +1,30 @@
-//! The application: every command of shared/CONSOLE.md, the HV ceilings and the control loop.
+//! The application's command side: every command of shared/CONSOLE.md, the HV ceilings, the
+//! model calls, and [`App`], the whole application on one board for the host.
 //!
 //! Safety rules, each in one place:
-//! - The ceiling per channel, `vmax = min(margin x V_pi, v_supply, hv_fs)`, and its duty are
-//!   recomputed by [`App::recompute`], called on every parameter change.
-//! - [`App::write_hv_duty`] is the only code that writes an HV duty; it refuses any duty above
-//!   the ceiling's duty, whoever calls it, and latches the fault `hv-refused`.
+//! - The ceiling per channel, `vmax = min(margin x V_pi, v_supply, HV full scale, HV limit)`
+//!   (the last two compiled board constants, `crate::board`), and its duty are recomputed by
+//!   [`Commands::recompute`], called on every parameter change.
+//! - The outputs belong to the control core ([`crate::control::Control`]): the one writer of
+//!   the HV duties, the slew, the servo, the watchdog. The command side plans
+//!   [`Setpoints`]; the core takes them unless a stop came meanwhile.
 //! - A request at or past the ceiling is `err limit` and changes nothing: every command checks
-//!   everything first and changes state only when all checks passed.
-//! - The HV setpoints move at `slew` V/s in [`App::tick`], the control loop, which alone feeds
-//!   the watchdog. `disarm` ramps to 0, then drops the enable; `stop` zeroes the duties and
-//!   drops the enable at once, releases the cable and disarms.
-//! - The HV enable is low from [`App::new`] until `arm`.
-
+//!   everything first and changes state only when all checks passed. Comparisons are written
+//!   so that NaN fails them.
+//! - `stop` (any case, any arguments) is acted on where the bytes arrive ([`crate::rx`]), not
+//!   here.
 use core::cell::Cell;
 use core::fmt::Write;
 
-use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
 use finger_model::params::PARAMS;
 use finger_model::{BranchLimit, Error as ModelError, Finger, Method, Params, Solution};
 use heapless::String;
 
-use crate::board::{Board, HV_CHANNELS};
-use crate::console::{self, Line, LineBuf, NumError};
+use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V, HV_ZERO_DUTY_PCT};
+use crate::console::{self, NumError};
+use crate::control::{hv_duty_for, Control, Setpoints, View};
+use crate::rx::{Record, RxEvent, RxLines};
 use crate::num::{self, Exp, Fixed, List, Short};
 use crate::out::Emit;
 
@@ -57,15 +59,11 @@ pub struct FwParams {
     pub servo_range: f32,
     /// Servo direction: +1 (cable pulled in as the pulse grows from 1.0 ms) or -1.
     pub servo_dir: f32,
-    /// HV calibration: module output at 100 % control duty (5 V control input), V.
-    pub hv_fs: f32,
-    /// HV calibration: control duty that gives 0 V, percent.
-    pub hv_zero: f32,
 }
 
 impl Default for FwParams {
     fn default() -> Self {
-        FwParams { slew: 2000.0, spool_r: 10.0, servo_range: 180.0, servo_dir: 1.0, hv_fs: 10_000.0, hv_zero: 0.0 }
+        FwParams { slew: 2000.0, spool_r: 10.0, servo_range: 180.0, servo_dir: 1.0 }
     }
 }
 
@@ -82,8 +80,9 @@ pub const FW_PARAMS: &[FwParamInfo] = &[
     FwParamInfo { name: "spool_r", min: 0.5, max: 100.0, range: "0.5..100 mm" },
     FwParamInfo { name: "servo_range", min: 10.0, max: 360.0, range: "10..360 deg (1.0..2.0 ms)" },
     FwParamInfo { name: "servo_dir", min: -1.0, max: 1.0, range: "1 or -1" },
-    FwParamInfo { name: "hv_fs", min: 100.0, max: 1e5, range: "100..1e5 V at 100 % duty" },
-    FwParamInfo { name: "hv_zero", min: 0.0, max: 50.0, range: "0..50 % duty at 0 V" },
+    // read-only: the HV module's calibration is compiled in (crate::board); a set is refused
+    FwParamInfo { name: "hv_fs", min: 1.0, max: 0.0, range: "read-only: V at 100 % duty, a board constant (a different HV module is a different build)" },
+    FwParamInfo { name: "hv_zero", min: 1.0, max: 0.0, range: "read-only: % duty at 0 V, a board constant (a different HV module is a different build)" },
 ];
 
 impl FwParams {
@@ -93,8 +92,8 @@ impl FwParams {
             "spool_r" => self.spool_r,
             "servo_range" => self.servo_range,
             "servo_dir" => self.servo_dir,
-            "hv_fs" => self.hv_fs,
-            "hv_zero" => self.hv_zero,
+            "hv_fs" => HV_FULL_SCALE_V,
+            "hv_zero" => HV_ZERO_DUTY_PCT,
             _ => return None,
         })
     }
@@ -112,8 +111,6 @@ impl FwParams {
             "spool_r" => self.spool_r = f,
             "servo_range" => self.servo_range = f,
             "servo_dir" if v == 1.0 || v == -1.0 => self.servo_dir = f,
-            "hv_fs" => self.hv_fs = f,
-            "hv_zero" => self.hv_zero = f,
             _ => return Err(bad()),
         }
         Ok(())
@@ -148,103 +145,107 @@ pub(crate) fn model_err(e: ModelError) -> CmdError {
     CmdError { code: e.code(), msg }
 }
 
-/// The refusal of [`App::write_hv_duty`].
-#[derive(Debug, PartialEq, Eq, Clone, Copy)]
-pub struct HvRefused;
+pub use crate::control::HvRefused;
 
 type Reply = String<400>;
 
-/// The application on a board `B`.
-pub struct App<B: Board> {
-    board: B,
+/// A running `wait`: start (control ms), length (ms), length as asked (s).
+#[derive(Clone, Copy)]
+struct Wait {
+    start_ms: u32,
+    ms: u32,
+    s: f32,
+}
+
+/// The command side: console lines in, replies and [`Setpoints`] out. Owns no output; runs
+/// at the lowest priority on the chip (RTIC's idle), inside [`App`] on the host.
+pub struct Commands {
     finger: Finger<f32>,
     fw: FwParams,
-    line: LineBuf,
+    board_name: &'static str,
+    nl: &'static str,
+    /// Full-scale duty of each HV PWM and of the servo PWM.
+    hv_max: [u16; CHANNELS],
+    servo_max: u16,
     armed: bool,
-    /// `disarm` given, HV still ramping down; the enable drops at 0.
-    ramping_down: bool,
+    /// From the control core's [`View`]: HV enable, slewed values, duties, fault, time.
     enable: bool,
-    /// HV setpoints (targets) and the slewed values now, V.
-    target_v: [f32; CHANNELS],
     volts: [f32; CHANNELS],
-    /// Duty written last per channel.
     duty: [u16; CHANNELS],
+    fault: Option<&'static str>,
+    locked_out: bool,
+    now_ms: u32,
+    /// HV setpoints (targets), V.
+    target_v: [f32; CHANNELS],
     /// Ceiling per channel, V, and its duty.
     vmax: [f32; CHANNELS],
     duty_max: [u16; CHANNELS],
-    /// Full-scale duty of each HV PWM (read once from the board).
-    hv_max: [u16; CHANNELS],
     /// Cable tension target, N; the excursion and servo angle it gives.
     force: f32,
     cable: f32,
     servo_deg: f32,
-    fault: Option<&'static str>,
-    /// Remaining time of a `wait`, ms, and its length for the reply.
-    wait_ms: u32,
-    wait_s: f32,
-    /// Control-loop time, ms.
-    now_ms: u64,
-    /// `Finger::fmax` at the setpoints it was computed for ([`App::fmax`]), and how many
+    /// Stops seen, setpoints sent.
+    epoch: u32,
+    seq: u32,
+    wait: Option<Wait>,
+    /// A `stop` line reached [`Commands::execute`] (see [`Commands::take_stop`]).
+    stop_asked: bool,
+    /// The `timing` addition: the runtime's own measurements (set by the chip or simulator).
+    report: Option<fn(&mut dyn Write)>,
+    /// `Finger::fmax` at the setpoints it was computed for ([`Commands::fmax`]), and how many
     /// times it was computed.
     fmax_cache: Cell<Option<([f32; CHANNELS], Result<BranchLimit<f32>, ModelError>)>>,
     fmax_computed: Cell<u32>,
     /// The inverse's branch table for the current model (`pose`), built at the first `pose`
     /// after a model change (1.18 M instructions for the default model, about 7 ms at
-    /// 168 MHz; docs/inverse-cost.md) and cleared by [`App::set_finger`]. None also for a finger without stacks.
+    /// 168 MHz; docs/inverse-cost.md) and cleared by [`Commands::set_finger`]. None also for a finger without stacks.
     #[cfg(feature = "pose")]
     inv_table: Option<finger_model::inverse::BranchTable<f32>>,
 }
 
-impl<B: Board> App<B> {
-    /// Take the board: HV enable low, every HV duty 0, cable released. Default parameters.
-    pub fn new(mut board: B) -> Self {
-        let mut hv_max = [0u16; CHANNELS];
-        for (ch, m) in hv_max.iter_mut().enumerate() {
-            *m = board.hv(ch).max_duty_cycle();
-        }
+impl Commands {
+    /// Default parameters, disarmed. `board_name` and `nl` (line ending) from the board,
+    /// `hv_max` / `servo_max` its PWMs' full-scale duties.
+    pub fn new(board_name: &'static str, nl: &'static str, hv_max: [u16; CHANNELS], servo_max: u16) -> Self {
         // the defaults are valid (a model test); no Debug formatting of the error on the target
         let finger = match Finger::new(preset(Params::default())) {
             Ok(f) => f,
             Err(_) => panic!("default parameters"),
         };
-        let mut app = App {
-            board,
+        let mut c = Commands {
             finger,
             fw: FwParams::default(),
-            line: LineBuf::new(),
+            board_name,
+            nl,
+            hv_max,
+            servo_max,
             armed: false,
-            ramping_down: false,
             enable: false,
-            target_v: [0.0; CHANNELS],
             volts: [0.0; CHANNELS],
             duty: [0; CHANNELS],
+            fault: None,
+            locked_out: false,
+            now_ms: 0,
+            target_v: [0.0; CHANNELS],
             vmax: [0.0; CHANNELS],
             duty_max: [0; CHANNELS],
-            hv_max,
             force: 0.0,
             cable: 0.0,
             servo_deg: 0.0,
-            fault: None,
-            wait_ms: 0,
-            wait_s: 0.0,
-            now_ms: 0,
+            epoch: 0,
+            seq: 0,
+            wait: None,
+            stop_asked: false,
+            report: None,
             fmax_cache: Cell::new(None),
             fmax_computed: Cell::new(0),
             #[cfg(feature = "pose")]
             inv_table: None,
         };
-        app.hv_off_now();
-        app.recompute();
-        app.set_servo(0.0);
-        app
+        c.recompute();
+        c
     }
 
-    pub fn board(&self) -> &B {
-        &self.board
-    }
-    pub fn board_mut(&mut self) -> &mut B {
-        &mut self.board
-    }
     pub fn finger(&self) -> &Finger<f32> {
         &self.finger
     }
@@ -253,13 +254,6 @@ impl<B: Board> App<B> {
     }
     pub fn armed(&self) -> bool {
         self.armed
-    }
-    pub fn hv_enabled(&self) -> bool {
-        self.enable
-    }
-    /// Slewed HV values now, V.
-    pub fn volts(&self) -> [f32; CHANNELS] {
-        self.volts
     }
     pub fn targets(&self) -> [f32; CHANNELS] {
         self.target_v
@@ -272,100 +266,119 @@ impl<B: Board> App<B> {
     pub fn duty_ceiling(&self) -> [u16; CHANNELS] {
         self.duty_max
     }
-    pub fn duties(&self) -> [u16; CHANNELS] {
-        self.duty
+    /// The line ending of the replies.
+    pub fn newline(&self) -> &'static str {
+        self.nl
     }
-    pub fn fault(&self) -> Option<&'static str> {
-        self.fault
-    }
-    /// A `wait` is running: the caller keeps calling `tick` and sends no input until it ends.
+    /// A `wait` is running: no line is taken until it ends ([`Commands::poll_wait`]).
     pub fn busy(&self) -> bool {
-        self.wait_ms > 0
-    }
-    pub fn now_ms(&self) -> u64 {
-        self.now_ms
+        self.wait.is_some()
     }
 
-    // ---------------------------------------------------------------- outputs, safety
+    /// Take the control core's report. A stop since the last one (a new epoch): disarmed,
+    /// tension 0, targets 0, as the core already is.
+    pub fn sync(&mut self, v: &View) {
+        self.enable = v.enable;
+        self.volts = v.volts;
+        self.duty = v.duty;
+        self.fault = v.fault;
+        self.locked_out = v.locked_out;
+        self.now_ms = v.now_ms;
+        if v.epoch != self.epoch {
+            self.epoch = v.epoch;
+            self.armed = false;
+            self.force = 0.0;
+            self.cable = 0.0;
+            self.servo_deg = 0.0;
+            self.target_v = [0.0; CHANNELS];
+        }
+    }
 
-    /// The ceilings: per channel `min(margin x V_pi, v_supply, hv_fs)` and the duty it gives.
-    /// Called on every parameter change.
+    /// What `timing` reports (the chip's measurements, or the simulator's).
+    pub fn set_timing_report(&mut self, f: fn(&mut dyn Write)) {
+        self.report = Some(f);
+    }
+
+    /// A `stop` was executed as a line: the caller stops the control core.
+    pub fn take_stop(&mut self) -> bool {
+        core::mem::take(&mut self.stop_asked)
+    }
+
+    /// What the outputs should do now (a new `seq` each call).
+    pub fn setpoints(&mut self) -> Setpoints {
+        self.seq = self.seq.wrapping_add(1);
+        Setpoints {
+            seq: self.seq,
+            epoch: self.epoch,
+            armed: self.armed,
+            target_v: self.target_v,
+            servo_duty: self.servo_duty(self.servo_deg),
+            servo_released: self.servo_duty(0.0),
+            duty_ceiling: self.duty_max,
+            slew: self.fw.slew,
+        }
+    }
+
+    /// Run one queued line; its reply (or, for `wait`, nothing yet) goes to `out`.
+    pub fn run<W: Write>(&mut self, rec: Record, out: &mut W) {
+        let nl = self.nl;
+        match rec {
+            Record::Line(l) => self.execute(&l, out),
+            Record::TooLong => {
+                let _ = w!(out; "err too-long: line longer than ", console::LINE_MAX, " bytes discarded", nl);
+            }
+            Record::Overrun(n) => {
+                for _ in 0..n {
+                    let _ = w!(out; "err overrun: bytes lost while receiving (line discarded); send it again", nl);
+                }
+            }
+        }
+    }
+
+    /// A running `wait` ends when its time is up, or early when input arrived (`input`);
+    /// writes its reply `ok waited=<s>` (early: `ok waited=<s elapsed> early=input`). True
+    /// when it ended.
+    pub fn poll_wait<W: Write>(&mut self, input: bool, out: &mut W) -> bool {
+        let Some(w) = self.wait else { return false };
+        let nl = self.nl;
+        let el = self.now_ms.wrapping_sub(w.start_ms);
+        if el >= w.ms {
+            let _ = w!(out; "ok waited=", Short(w.s), nl);
+        } else if input {
+            let _ = w!(out; "ok waited=", Short(el as f32 / 1000.0), " early=input", nl);
+        } else {
+            return false;
+        }
+        self.wait = None;
+        true
+    }
+
+    // ---------------------------------------------------------------- ceilings, servo
+
+    /// The ceilings: per channel `min(margin x V_pi, v_supply, HV full scale, HV limit)` and
+    /// the duty it gives. Called on every parameter change.
     fn recompute(&mut self) {
-        let v = self.finger.voltage_ceiling().min(self.fw.hv_fs);
+        let v = self.finger.voltage_ceiling().min(HV_FULL_SCALE_V).min(HV_LIMIT_V);
+        let v = if v >= 0.0 { v } else { 0.0 };
         for ch in 0..CHANNELS {
             self.vmax[ch] = v;
-            self.duty_max[ch] = self.duty_for(ch, v);
+            self.duty_max[ch] = hv_duty_for(v, self.hv_max[ch]);
         }
     }
 
-    /// Control duty that makes channel `ch`'s module output `v` volts (linear calibration:
-    /// duty% = hv_zero + (100 - hv_zero) v / hv_fs), rounded down.
-    fn duty_for(&self, ch: usize, v: f32) -> u16 {
-        let max = self.board_hv_max(ch) as f32;
-        let z = self.fw.hv_zero / 100.0;
-        let frac = z + (1.0 - z) * (v / self.fw.hv_fs);
-        let d = frac * max;
-        if !(d > 0.0) {
-            0
-        } else if d >= max {
-            max as u16
-        } else {
-            d as u16
-        }
-    }
-
-    fn board_hv_max(&self, ch: usize) -> u16 {
-        self.hv_max[ch]
-    }
-
-    /// The one function that writes an HV duty. Refuses (writes nothing, latches the fault
-    /// `hv-refused`) any duty above the channel's ceiling duty, whoever calls it.
-    pub fn write_hv_duty(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
-        if ch >= CHANNELS || duty > self.duty_max[ch] {
-            self.fault = Some("hv-refused");
-            return Err(HvRefused);
-        }
-        if self.board.hv(ch).set_duty_cycle(duty).is_err() {
-            self.fault = Some("pwm");
-            return Err(HvRefused);
-        }
-        self.duty[ch] = duty;
-        Ok(())
-    }
-
-    fn set_enable(&mut self, on: bool) {
-        let r = if on { self.board.hv_enable().set_high() } else { self.board.hv_enable().set_low() };
-        if r.is_err() {
-            self.fault = Some("enable");
-        }
-        self.enable = on && r.is_ok();
-    }
-
-    /// HV off at once: every duty 0, enable low, setpoints 0.
-    fn hv_off_now(&mut self) {
-        self.set_enable(false);
-        for ch in 0..CHANNELS {
-            let _ = self.write_hv_duty(ch, 0);
-        }
-        self.volts = [0.0; CHANNELS];
-        self.target_v = [0.0; CHANNELS];
-        self.ramping_down = false;
-    }
-
-    /// Servo to `deg` (0 = cable released).
-    fn set_servo(&mut self, deg: f32) {
-        let max = self.board.servo().max_duty_cycle() as f32;
-        let frac = (deg / self.fw.servo_range).max(0.0).min(1.0);
+    /// Servo duty for `deg` (0 = cable released): 1.0..2.0 ms over `servo_range`.
+    fn servo_duty(&self, deg: f32) -> u16 {
+        let max = self.servo_max as f32;
+        let frac = deg / self.fw.servo_range;
+        let frac = if frac > 0.0 { frac.min(1.0) } else { 0.0 };
         let pulse_ms = if self.fw.servo_dir > 0.0 { 1.0 + frac } else { 2.0 - frac };
-        let duty = (pulse_ms / 20.0 * max) as u16;
-        if self.board.servo().set_duty_cycle(duty).is_err() {
-            self.fault = Some("pwm");
-        }
+        (pulse_ms / 20.0 * max) as u16
+    }
+
+    /// Servo target `deg` (the control core moves it as the voltages slew).
+    fn set_servo(&mut self, deg: f32) {
         self.servo_deg = deg;
     }
-
-    /// Where the servo must go to hold `force` at the HV setpoints `volts`: (excursion mm,
-    /// servo deg). Checks the servo travel; nothing moves.
     #[inline(never)]
     fn plan_servo(&self, finger: &Finger<f32>, fw: &FwParams, force: f32, volts: &[f32; CHANNELS]) -> Result<(f32, f32), CmdError> {
         if force == 0.0 {
@@ -382,7 +395,7 @@ impl<B: Board> App<B> {
 
     /// The end of the equilibrium branch at the HV setpoints `volts` (`Finger::fmax`),
     /// cached: computed once per model and set of setpoints (the cache is keyed by the
-    /// setpoints and cleared when a parameter changes, [`App::set_finger`]).
+    /// setpoints and cleared when a parameter changes, [`Commands::set_finger`]).
     fn fmax(&self, volts: &[f32; CHANNELS]) -> Result<BranchLimit<f32>, ModelError> {
         if let Some((key, r)) = self.fmax_cache.get() {
             if key == *volts {
@@ -411,7 +424,7 @@ impl<B: Board> App<B> {
     }
 
     /// The checks every setpoint change passes (`volt`, `force`, an armed `pose`), after
-    /// the caller checked new voltages against the ceilings ([`App::check_volts`]): the
+    /// the caller checked new voltages against the ceilings ([`Commands::check_volts`]): the
     /// tension at most fmax at those setpoints (issue 7: nothing past the end of the branch),
     /// the servo within its travel. Nothing moves; returns where the servo must go
     /// (excursion mm, deg).
@@ -419,92 +432,19 @@ impl<B: Board> App<B> {
     fn plan_setpoints(&self, force: f32, volts: &[f32; CHANNELS]) -> Result<(f32, f32), CmdError> {
         if force > 0.0 {
             let end = self.fmax(volts).map_err(model_err)?;
-            if force > end.tension {
+            if !(force <= end.tension) {
                 return Err(model_err(ModelError::ForceLimit { tension: force.into(), fmax: end.tension.into() }));
             }
         }
         self.plan_servo(&self.finger, &self.fw, force, volts)
     }
 
-    /// Emergency stop: HV off at once, cable released, disarmed. Clears a latched fault.
-    pub fn emergency_stop(&mut self) {
-        self.hv_off_now();
-        self.armed = false;
-        self.force = 0.0;
-        self.cable = 0.0;
-        self.set_servo(0.0);
-        self.wait_ms = 0;
-        self.fault = None;
-    }
-
-    /// The control loop, every `dt_ms`: slews the HV values toward their setpoints, drops the
-    /// enable once a disarm ramp reached 0, feeds the watchdog, finishes a `wait`.
-    pub fn tick<W: Write>(&mut self, dt_ms: u32, out: &mut W) {
-        self.now_ms += dt_ms as u64;
-        let step = self.fw.slew * dt_ms as f32 / 1000.0;
-        for ch in 0..CHANNELS {
-            let (v, t) = (self.volts[ch], self.target_v[ch]);
-            if v != t {
-                let nv = if t > v { (v + step).min(t) } else { (v - step).max(t) };
-                let d = self.duty_for(ch, nv);
-                if self.write_hv_duty(ch, d).is_err() {
-                    // cannot happen with targets below the ceiling; never go on
-                    let f = self.fault;
-                    self.emergency_stop();
-                    self.fault = f;
-                    break;
-                }
-                self.volts[ch] = nv;
-            }
-        }
-        if self.ramping_down && self.volts.iter().all(|&v| v == 0.0) {
-            for ch in 0..CHANNELS {
-                let _ = self.write_hv_duty(ch, 0);
-            }
-            self.set_enable(false);
-            self.ramping_down = false;
-        }
-        self.board.feed_watchdog();
-        if self.wait_ms > 0 {
-            self.wait_ms = self.wait_ms.saturating_sub(dt_ms);
-            if self.wait_ms == 0 {
-                let nl = self.board.newline();
-                let _ = w!(out; "ok waited=", Short(self.wait_s), nl);
-            }
-        }
-    }
 
     // ---------------------------------------------------------------- console
-
-    /// Feed received bytes; replies go to `out`. Stop feeding while `busy()`.
-    pub fn input<W: Write>(&mut self, bytes: &[u8], out: &mut W) {
-        for &b in bytes {
-            self.input_byte(b, out);
-        }
-    }
-
-    pub fn input_byte<W: Write>(&mut self, b: u8, out: &mut W) {
-        let mut copy: heapless::Vec<u8, { console::LINE_MAX }> = heapless::Vec::new();
-        let too_long = match self.line.push(b) {
-            None => return,
-            Some(Line::TooLong) => true,
-            Some(Line::Text(t)) => {
-                let _ = copy.extend_from_slice(t);
-                false
-            }
-        };
-        let nl = self.board.newline();
-        if too_long {
-            let _ = w!(out; "err too-long: line longer than ", console::LINE_MAX, " bytes discarded", nl);
-            return;
-        }
-        self.execute(&copy, out);
-    }
-
     /// Run one line (without terminator); writes exactly one final reply line (none for a
     /// blank line, and for `wait` the reply comes from `tick` when the time is up).
     pub fn execute<W: Write>(&mut self, line: &[u8], out: &mut W) {
-        let nl = self.board.newline();
+        let nl = self.nl;
         let toks = match console::tokens(line) {
             Some(t) => t,
             None => {
@@ -534,14 +474,14 @@ impl<B: Board> App<B> {
         match t[0] {
             b"help" => {
                 no_args(args, "help")?;
-                let nl = self.board.newline();
+                let nl = self.nl;
                 for l in HELP {
                     let _ = w!(out; l, nl);
                 }
             }
             b"version" => {
                 no_args(args, "version")?;
-                let _ = w!(r; "version=", crate::VERSION, " name=", crate::NAME, " board=", self.board.name());
+                let _ = w!(r; "version=", crate::VERSION, " name=", crate::NAME, " board=", self.board_name);
             }
             b"status" => {
                 no_args(args, "status")?;
@@ -556,12 +496,13 @@ impl<B: Board> App<B> {
             b"shape" => self.cmd_shape(args, r)?,
             b"arm" => {
                 no_args(args, "arm")?;
+                if let (true, Some(f)) = (self.locked_out, self.fault) {
+                    return Err(err!("fault"; f, ": this image never arms here"));
+                }
                 if let Some(f) = self.fault {
                     return Err(err!("fault"; "fault ", f, " latched; send stop to clear it"));
                 }
                 self.armed = true;
-                self.ramping_down = false;
-                self.set_enable(true);
                 let _ = w!(r; "armed=1");
             }
             b"disarm" => {
@@ -570,9 +511,15 @@ impl<B: Board> App<B> {
                 let _ = w!(r; "armed=0");
             }
             b"stop" => {
-                no_args(args, "stop")?;
-                self.emergency_stop();
+                // reached only when a line is executed directly (App::execute): the RX part
+                // acts on `stop` lines before they are queued
+                self.stop_asked = true;
                 let _ = w!(r; "stopped");
+            }
+            b"timing" => {
+                no_args(args, "timing")?;
+                let Some(f) = self.report else { return Err(err!("unknown"; "timing is not in this build")) };
+                f(r);
             }
             b"volt" => self.cmd_volt(args, r)?,
             b"force" => self.cmd_force(args, r)?,
@@ -603,8 +550,7 @@ impl<B: Board> App<B> {
                     let _ = w!(r; "waited=0");
                     return Ok(false);
                 }
-                self.wait_ms = ms;
-                self.wait_s = s;
+                self.wait = Some(Wait { start_ms: self.now_ms, ms, s });
                 return Ok(true);
             }
             w => {
@@ -672,7 +618,7 @@ impl<B: Board> App<B> {
         self.check_volts_of(v, false)
     }
 
-    /// As [`App::check_volts`]; with `zero_is_off`, a channel at 0 V passes whatever its
+    /// As [`Commands::check_volts`]; with `zero_is_off`, a channel at 0 V passes whatever its
     /// ceiling (a computed answer, such as `pose`'s on a finger without stacks).
     #[inline(never)]
     fn check_volts_of(&self, v: &[f32; CHANNELS], zero_is_off: bool) -> Result<(), CmdError> {
@@ -680,10 +626,14 @@ impl<B: Board> App<B> {
             if zero_is_off && v[ch] == 0.0 {
                 continue;
             }
-            if v[ch] < 0.0 {
+            // NaN-proof: every comparison is written so that NaN fails it
+            if !v[ch].is_finite() {
+                return Err(err!("limit"; "channel ", (ch + 1), ": voltage is not a finite number"));
+            }
+            if !(v[ch] >= 0.0) {
                 return Err(err!("usage"; "channel ", (ch + 1), ": voltage must be >= 0"));
             }
-            if v[ch] >= self.vmax[ch] {
+            if !(v[ch] < self.vmax[ch]) {
                 return Err(err!("limit"; "channel ", (ch + 1), ": ", Fixed(v[ch], 1), " V is at or past the ceiling ", Fixed(self.vmax[ch], 1), " V (see limits)"));
             }
         }
@@ -727,16 +677,9 @@ impl<B: Board> App<B> {
                 self.set_servo(0.0);
             }
         }
+        // the control core ramps the HV to 0, then drops the enable
         self.armed = false;
         self.target_v = zero;
-        self.ramping_down = true;
-        if self.volts.iter().all(|&v| v == 0.0) {
-            for ch in 0..CHANNELS {
-                let _ = self.write_hv_duty(ch, 0);
-            }
-            self.set_enable(false);
-            self.ramping_down = false;
-        }
         Ok(())
     }
 
@@ -751,7 +694,7 @@ impl<B: Board> App<B> {
             c => return Err(err!("usage"; "volt: channel ", (console::printable(c)), " is not 1, 2, 3 or all")),
         };
         let v = number(v, "V")?;
-        if v < 0.0 {
+        if !(v >= 0.0) {
             return Err(err!("usage"; "volt: voltage must be >= 0"));
         }
         self.require_armed("volt")?;
@@ -796,7 +739,7 @@ impl<B: Board> App<B> {
     #[cfg(feature = "pose")]
     /// `pose d1 d2 d3 [P]`: the inverse model (issue 4, [`crate::inverse_cmds::pose`]).
     /// Writes its reply line itself. Armed, the solution goes through the checks of `volt`
-    /// and `force` ([`App::plan_setpoints`]) and then moves the outputs; disarmed it answers
+    /// and `force` ([`Commands::plan_setpoints`]) and then moves the outputs; disarmed it answers
     /// and moves nothing; refused or unreachable, nothing moves.
     #[inline(never)]
     fn cmd_pose<W: Write>(&mut self, args: &[&[u8]], out: &mut W) -> Result<(), CmdError> {
@@ -840,7 +783,7 @@ impl<B: Board> App<B> {
             self.cable = cable;
             self.set_servo(sdeg);
         }
-        let _ = w!(out; line, self.board.newline());
+        let _ = w!(out; line, self.nl);
         Ok(())
     }
 
@@ -862,7 +805,7 @@ impl<B: Board> App<B> {
         let mut line: String<240> = String::new();
         let volts: &[f32] = if args.len() > 2 { &v } else { &[] };
         let _ = crate::inverse_cmds::contact(&mut line, &self.finger, p0, p, volts);
-        let _ = w!(out; line, self.board.newline());
+        let _ = w!(out; line, self.nl);
         Ok(())
     }
 
@@ -881,7 +824,7 @@ impl<B: Board> App<B> {
         self.require_disarmed("param")?;
         let name = match args.first() {
             None => {
-                let nl = self.board.newline();
+                let nl = self.nl;
                 let p = self.finger.params();
                 for i in PARAMS {
                     let v = p.get(i.name).unwrap_or(f64::NAN) as f32;
@@ -1001,10 +944,10 @@ fn number(tok: &[u8], what: &str) -> Result<f32, CmdError> {
 
 /// A cable tension: >= 0 (usage), representable (limit: far past any fmax).
 fn tension(p: f32) -> Result<f32, CmdError> {
-    if p < 0.0 {
+    if !(p >= 0.0) {
         return Err(err!("usage"; "tension must be >= 0 (a cable cannot push)"));
     }
-    if p > 1e6 {
+    if !(p <= 1e6) {
         return Err(err!("limit"; "tension ", Exp(p, 3), " N is past fmax"));
     }
     Ok(p)
@@ -1030,4 +973,173 @@ fn joints(r: &mut Reply, s: &Solution<f32>) {
         d[ch] = s.joint_angle[ch] * DEG;
     }
     list(r, &d, 3);
+}
+
+
+/// The whole application on one board, without threads: the RX part ([`RxLines`], `stop`
+/// at once), the command side ([`Commands`]) and the control core ([`Control`]), run in turn.
+/// The host's API (finger-sim, the host tests, the browser view): bytes in, replies out,
+/// [`App::tick`] for each millisecond. `sim::VirtualSim` runs the same parts with commands
+/// that take time.
+pub struct App<B: Board> {
+    pub(crate) cmds: Commands,
+    pub(crate) ctl: Control<B>,
+    pub(crate) rx: RxLines,
+}
+
+impl<B: Board> App<B> {
+    /// Take the board: HV enable low, every HV duty 0, cable released. Default parameters.
+    pub fn new(mut board: B) -> Self {
+        let mut hv_max = [0u16; CHANNELS];
+        for (ch, m) in hv_max.iter_mut().enumerate() {
+            *m = board.hv(ch).max_duty_cycle();
+        }
+        let servo_max = board.servo().max_duty_cycle();
+        let mut cmds = Commands::new(board.name(), board.newline(), hv_max, servo_max);
+        let sp = cmds.setpoints();
+        let mut ctl = Control::new(board, sp.servo_released, sp.slew);
+        ctl.apply(&sp);
+        cmds.sync(&ctl.view());
+        App { cmds, ctl, rx: RxLines::new() }
+    }
+
+    pub fn board(&self) -> &B {
+        self.ctl.board()
+    }
+    /// The board itself, past the control core (tests and the simulator only: feature `sim`).
+    #[cfg(feature = "sim")]
+    pub fn board_mut(&mut self) -> &mut B {
+        self.ctl.board_mut()
+    }
+    pub fn commands(&self) -> &Commands {
+        &self.cmds
+    }
+    pub fn control(&self) -> &Control<B> {
+        &self.ctl
+    }
+    pub fn finger(&self) -> &Finger<f32> {
+        self.cmds.finger()
+    }
+    pub fn fw_params(&self) -> &FwParams {
+        self.cmds.fw_params()
+    }
+    pub fn armed(&self) -> bool {
+        self.cmds.armed()
+    }
+    pub fn hv_enabled(&self) -> bool {
+        self.ctl.view().enable
+    }
+    /// Slewed HV values now, V.
+    pub fn volts(&self) -> [f32; CHANNELS] {
+        self.ctl.view().volts
+    }
+    pub fn targets(&self) -> [f32; CHANNELS] {
+        self.cmds.targets()
+    }
+    pub fn vmax(&self) -> [f32; CHANNELS] {
+        self.cmds.vmax()
+    }
+    pub fn duty_ceiling(&self) -> [u16; CHANNELS] {
+        self.cmds.duty_ceiling()
+    }
+    pub fn duties(&self) -> [u16; CHANNELS] {
+        self.ctl.view().duty
+    }
+    pub fn fault(&self) -> Option<&'static str> {
+        self.ctl.view().fault
+    }
+    /// A `wait` is running: call `tick` until it ends (input meanwhile ends it early).
+    pub fn busy(&self) -> bool {
+        self.cmds.busy()
+    }
+    pub fn now_ms(&self) -> u32 {
+        self.ctl.now_ms()
+    }
+    pub fn fmax_evaluations(&self) -> u32 {
+        self.cmds.fmax_evaluations()
+    }
+
+    /// The single HV writer itself (its refusals are what the tests show).
+    pub fn write_hv_duty(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
+        let r = self.ctl.write_hv_duty(ch, duty);
+        self.cmds.sync(&self.ctl.view());
+        r
+    }
+
+    /// Emergency stop: HV off at once, cable released, disarmed. Clears a latched fault.
+    pub fn emergency_stop(&mut self) {
+        self.ctl.stop();
+        self.cmds.sync(&self.ctl.view());
+    }
+
+    /// `dt_ms` control ticks, then the command side's turn (a `wait` may end).
+    pub fn tick<W: Write>(&mut self, dt_ms: u32, out: &mut W) {
+        for _ in 0..dt_ms {
+            // the command side is idle between calls: it checks in every tick
+            let now = self.ctl.now_ms();
+            self.ctl.tick(now);
+        }
+        self.run_commands(out);
+    }
+
+    /// Feed received bytes; replies go to `out`.
+    pub fn input<W: Write>(&mut self, bytes: &[u8], out: &mut W) {
+        for &b in bytes {
+            self.input_byte(b, out);
+        }
+    }
+
+    /// One received byte: the RX part (a `stop` acts here), then the command side runs
+    /// what is queued (nothing while a `wait` runs; input ends a `wait` early).
+    pub fn input_byte<W: Write>(&mut self, b: u8, out: &mut W) {
+        self.receive(b, out);
+        self.run_commands(out);
+    }
+
+    /// The UART lost bytes here (an overrun): the line being received is discarded at its
+    /// end and answered `err overrun` (QEMU's UART never overruns: the host tests use this).
+    pub fn input_overrun(&mut self) {
+        self.rx.overrun();
+    }
+
+    /// The RX interrupt's part of a byte.
+    pub(crate) fn receive<W: Write>(&mut self, b: u8, out: &mut W) {
+        if self.rx.push(b) == RxEvent::Stop {
+            self.ctl.stop();
+            let _ = w!(out; "ok stopped", self.cmds.nl);
+        }
+    }
+
+    /// The command side: every queued line in turn, each one's setpoints to the core.
+    pub(crate) fn run_commands<W: Write>(&mut self, out: &mut W) {
+        loop {
+            self.cmds.sync(&self.ctl.view());
+            if self.cmds.busy() {
+                let input = self.rx.take_input_seen();
+                if !self.cmds.poll_wait(input, out) {
+                    return;
+                }
+            }
+            let Some(rec) = self.rx.pop() else { return };
+            self.cmds.run(rec, out);
+            if self.cmds.take_stop() {
+                self.ctl.stop();
+                self.cmds.sync(&self.ctl.view());
+            }
+            let sp = self.cmds.setpoints();
+            self.ctl.apply(&sp);
+        }
+    }
+
+    /// Run one line (without terminator) on the command side; its setpoints to the core.
+    pub fn execute<W: Write>(&mut self, line: &[u8], out: &mut W) {
+        self.cmds.sync(&self.ctl.view());
+        self.cmds.execute(line, out);
+        if self.cmds.take_stop() {
+            self.ctl.stop();
+            self.cmds.sync(&self.ctl.view());
+        }
+        let sp = self.cmds.setpoints();
+        self.ctl.apply(&sp);
+    }
 }

@@ -7,6 +7,15 @@ use embedded_hal::pwm::SetDutyCycle;
 /// Number of HV channels (DE stacks) the board drives.
 pub const HV_CHANNELS: usize = 3;
 
+/// Board constants of the HV modules, compiled in (a different module is a different build;
+/// no console parameter changes them):
+/// the module's output at 100 % control duty, V,
+pub const HV_FULL_SCALE_V: f32 = 10_000.0;
+/// the control duty that gives 0 V, percent,
+pub const HV_ZERO_DUTY_PCT: f32 = 0.0;
+/// and the most the board may ever output, V: its duty is the hard cap of the HV writer.
+pub const HV_LIMIT_V: f32 = 10_000.0;
+
 pub trait Board {
     /// Servo PWM, 50 Hz; the application sets 1.0..2.0 ms pulses.
     type Servo: SetDutyCycle;

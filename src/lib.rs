@@ -7,8 +7,11 @@
 //!
 //! - [`console`]: line assembly (CR/LF/CRLF, bounded buffer, overlong lines), tokens, strict
 //!   number parsing.
-//! - [`app`]: the commands of shared/CONSOLE.md, the HV ceilings, the one function that writes
-//!   an HV duty, the slewed control loop, the servo.
+//! - [`app`]: the commands of shared/CONSOLE.md, the HV ceilings, the model calls; [`App`], the
+//!   whole application on one board for the host.
+//! - [`control`]: the control core, the one owner of the outputs: the single HV-duty writer,
+//!   the slew, the servo, the stop, the watchdog feed.
+//! - [`rx`]: console input at interrupt level: lines, `stop` at once, a bounded ring of lines.
 //! - [`board`]: the board trait.
 //! - [`sim`]: a simulated board (records every output).
 //! - [`out`], [`num`]: console text and numbers without core's formatting machinery.
@@ -19,12 +22,14 @@ pub mod out;
 pub mod app;
 pub mod board;
 pub mod console;
+pub mod control;
 #[cfg(any(feature = "pose", feature = "contact"))]
 pub mod inverse_cmds;
 pub mod num;
+pub mod rx;
 pub mod sim;
 
-pub use app::{App, FwParams, CHANNELS};
+pub use app::{App, Commands, FwParams, CHANNELS};
 pub use board::Board;
 
 /// Firmware name, as `version` reports it.

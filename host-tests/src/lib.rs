@@ -4,6 +4,7 @@
 
 pub mod paper;
 pub mod perf;
+pub mod qemu;
 pub use continuum;
 pub use finger_scene::svg;
 /// The scene runner (tools/finger-scene).

@@ -6,7 +6,7 @@
 
 use super::*;
 
-impl<B: Board> App<B> {
+impl Commands {
     #[inline(never)]
     pub(super) fn cmd_shape(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let [p, v1, v2, v3] = args else { return Err(err!("usage"; "shape <P> <V1> <V2> <V3>")) };

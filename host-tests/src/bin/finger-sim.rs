@@ -1,10 +1,17 @@
 //! finger-sim: the firmware's application (finger-fw's lib) on a simulated board.
 //! Reads console lines from stdin, answers on stdout (the grammar of shared/CONSOLE.md),
-//! exits at end of input. Time passes only through `wait <s>` (the control loop runs in
-//! 1 ms steps), so runs are deterministic.
+//! exits at end of input.
+//!
+//! - default: a script, line by line: each line is read when the previous one is answered,
+//!   commands take no time and time passes only through `wait <s>` (1 ms control ticks), so
+//!   runs are deterministic and independent of the machine.
+//! - `--virtual`: the real-time core in virtual time (`finger_fw::sim::VirtualSim`): all of
+//!   stdin goes onto the wire at once and arrives at 115200 baud, the control core ticks every
+//!   1 ms while commands run, each command takes its modelled time (`sim::default_cost`), a
+//!   `stop` acts the moment its line ends. At the end it prints `# t=<ms> ticks=<n>` on stderr.
 use std::io::{Read, Write};
 
-use finger_fw::sim::SimBoard;
+use finger_fw::sim::{default_cost, SimBoard, VirtualSim};
 use finger_fw::App;
 
 struct Out<W: Write>(W);
@@ -16,10 +23,30 @@ impl<W: Write> std::fmt::Write for Out<W> {
 }
 
 fn main() {
-    let mut app = App::new(SimBoard::default());
+    let virtual_time = std::env::args().skip(1).any(|a| a == "--virtual");
     let stdout = std::io::stdout();
     let mut out = Out(std::io::BufWriter::new(stdout.lock()));
     let mut stdin = std::io::stdin().lock();
+    if virtual_time {
+        let mut input = Vec::new();
+        if let Err(e) = stdin.read_to_end(&mut input) {
+            eprintln!("finger-sim: {e}");
+            std::process::exit(1);
+        }
+        let mut sim = VirtualSim::new(default_cost);
+        let mut ticks = 0u64;
+        for chunk in input.chunks(8192) {
+            while !sim.send(chunk) {
+                let t = sim.t_us + 1000;
+                sim.run_until(t, &mut out, &mut |_, _| ticks += 1);
+            }
+        }
+        sim.run_idle(3_600_000_000, &mut out, &mut |_, _| ticks += 1);
+        let _ = out.0.flush();
+        eprintln!("# t={} ticks={ticks}", sim.t_us / 1000);
+        return;
+    }
+    let mut app = App::new(SimBoard::default());
     let mut buf = [0u8; 4096];
     loop {
         let n = match stdin.read(&mut buf) {

@@ -1,0 +1,291 @@
+//! The firmware's emulator image in QEMU netduinoplus2 with `-icount shift=0` and a register
+//! trace (`-trace memory_region_ops_write/read -D FILE`): boot, talk to the console over a
+//! Unix socket, read back every register access in order. Used by tests/qemu_realtime.rs and
+//! the `realtime_report` example (docs/firmware.md's real-time figures).
+use std::io::{BufRead, BufReader, Write};
+use std::os::unix::net::UnixStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+/// TIM4 compare registers (HV channels 1..3) and the control tick's trace marker (CCR4).
+pub const TIM4_CCR: [u64; 3] = [0x4000_0834, 0x4000_0838, 0x4000_083c];
+pub const TIM4_ARR: u64 = 0x4000_082c;
+pub const TICK_MARKER: u64 = 0x4000_0840;
+pub const USART1_DR: u64 = 0x4001_1004;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").canonicalize().unwrap()
+}
+
+fn target_dir() -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(d) if Path::new(&d).is_absolute() => PathBuf::from(d),
+        Some(d) => std::env::current_dir().unwrap().join(d),
+        None => root().join("target"),
+    }
+}
+
+/// Build the emulator image (extra `features`, its own target dir `sub` when features are
+/// given); its path.
+fn build(features: &str, tdir: PathBuf) -> PathBuf {
+    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    c.current_dir(root()).env("CARGO_TARGET_DIR", &tdir).args(["build", "--release", "--quiet", "--bin", "finger-fw"]);
+    if !features.is_empty() {
+        c.args(["--features", features]);
+    }
+    let out = c.output().expect("cargo");
+    assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
+    tdir.join("thumbv7em-none-eabihf").join("release").join("finger-fw")
+}
+
+/// Build the emulator image once per process; its path.
+pub fn image() -> &'static Path {
+    static IMG: OnceLock<PathBuf> = OnceLock::new();
+    IMG.get_or_init(|| build("", target_dir()))
+}
+
+/// The emulator image with the `fault-inject` test command (its own target dir).
+pub fn fault_image() -> &'static Path {
+    static IMG: OnceLock<PathBuf> = OnceLock::new();
+    IMG.get_or_init(|| build("fault-inject", target_dir().join("faults")))
+}
+
+/// One register access from the trace.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Access {
+    pub write: bool,
+    pub addr: u64,
+    pub value: u64,
+}
+
+pub struct Qemu {
+    child: Child,
+    con: BufReader<UnixStream>,
+    tx: UnixStream,
+    dir: PathBuf,
+}
+
+impl Qemu {
+    /// Boot the image with the register trace on; returns after the banner.
+    pub fn boot(tag: &str) -> Qemu {
+        Self::boot_image(image(), tag)
+    }
+
+    /// Boot `elf` with the register trace on.
+    pub fn boot_image(elf: &Path, tag: &str) -> Qemu {
+        Self::boot_with(elf, tag, &[])
+    }
+
+    /// Boot `elf` with the register trace and `extra` QEMU arguments (e.g. `-d int`, whose
+    /// log goes into the same file: [`Qemu::finish_log`]).
+    pub fn boot_with(elf: &Path, tag: &str, extra: &[&str]) -> Qemu {
+        let dir = std::env::temp_dir().join(format!("finger-rt-{}-{tag}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let sock = dir.join("con.sock");
+        let child = Command::new("qemu-system-arm")
+            .args(["-machine", "netduinoplus2", "-cpu", "cortex-m4", "-display", "none", "-monitor", "none"])
+            .arg("-chardev")
+            .arg(format!("socket,id=con,path={},server=on,wait=on", sock.display()))
+            .args(["-serial", "chardev:con"])
+            .args(["-icount", "shift=0,sleep=off"])
+            .args(["-semihosting-config", "enable=on,target=native"])
+            .args(["-trace", "memory_region_ops_write", "-trace", "memory_region_ops_read", "-D"])
+            .arg(dir.join("trace.log"))
+            .args(extra)
+            .arg("-kernel")
+            .arg(elf)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("qemu-system-arm: run scripts/setup");
+        let t0 = Instant::now();
+        let stream = loop {
+            match UnixStream::connect(&sock) {
+                Ok(s) => break s,
+                Err(_) if t0.elapsed() < Duration::from_secs(20) => std::thread::sleep(Duration::from_millis(20)),
+                Err(e) => panic!("QEMU console socket: {e}"),
+            }
+        };
+        stream.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
+        let tx = stream.try_clone().unwrap();
+        let mut q = Qemu { child, con: BufReader::new(stream), tx, dir };
+        let banner = q.line();
+        assert!(banner.starts_with("# finger-fw ") && banner.ends_with("ready"), "banner: {banner:?}");
+        q
+    }
+
+    pub fn line(&mut self) -> String {
+        let mut s = String::new();
+        self.con.read_line(&mut s).expect("console read (timeout?)");
+        assert!(!s.is_empty(), "console closed");
+        s.trim_end_matches(['\r', '\n']).to_owned()
+    }
+
+    /// Send raw bytes.
+    pub fn write(&mut self, bytes: &[u8]) {
+        self.tx.write_all(bytes).unwrap();
+    }
+
+    /// Read lines until `n` final replies (ok/err); all lines read.
+    pub fn finals(&mut self, n: usize) -> Vec<String> {
+        let mut lines = Vec::new();
+        let mut k = 0;
+        while k < n {
+            let l = self.line();
+            if l.starts_with("ok") || l.starts_with("err ") {
+                k += 1;
+            }
+            lines.push(l);
+        }
+        lines
+    }
+
+    /// One command, its final reply.
+    pub fn cmd(&mut self, line: &str) -> String {
+        self.write(format!("{line}\r\n").as_bytes());
+        self.finals(1).pop().unwrap()
+    }
+
+    /// Stop QEMU (SIGTERM: it flushes the trace); every register access, in order.
+    pub fn finish(self) -> Vec<Access> {
+        parse_trace(&self.finish_log())
+    }
+
+    /// Stop QEMU; the whole log file (trace and any `-d` output).
+    pub fn finish_log(mut self) -> String {
+        let _ = Command::new("kill").arg(self.child.id().to_string()).status();
+        let _ = self.child.wait();
+        let text = std::fs::read_to_string(self.dir.join("trace.log")).unwrap_or_default();
+        let _ = std::fs::remove_dir_all(&self.dir);
+        text
+    }
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+    }
+}
+
+/// `memory_region_ops_{write,read} cpu 0 mr .. addr 0x.. value 0x.. size ..` lines.
+pub fn parse_trace(text: &str) -> Vec<Access> {
+    let mut v = Vec::new();
+    for l in text.lines() {
+        let write = l.starts_with("memory_region_ops_write");
+        if !write && !l.starts_with("memory_region_ops_read") {
+            continue;
+        }
+        let field = |k: &str| -> Option<u64> {
+            let mut it = l.split_whitespace();
+            while let Some(w) = it.next() {
+                if w == k {
+                    return u64::from_str_radix(it.next()?.trim_start_matches("0x"), 16).ok();
+                }
+            }
+            None
+        };
+        if let (Some(addr), Some(value)) = (field("addr"), field("value")) {
+            v.push(Access { write, addr, value });
+        }
+    }
+    v
+}
+
+/// The HV duties at every control tick: (tick number, duties before the tick's marker).
+pub fn duties_per_tick(trace: &[Access]) -> Vec<[u64; 3]> {
+    let mut d = [0u64; 3];
+    let mut out = Vec::new();
+    for a in trace.iter().filter(|a| a.write) {
+        if let Some(ch) = TIM4_CCR.iter().position(|&r| r == a.addr) {
+            d[ch] = a.value;
+        } else if a.addr == TICK_MARKER {
+            out.push(d);
+        }
+    }
+    out
+}
+
+/// The largest duty step between consecutive ticks, any channel.
+pub fn max_step(ticks: &[[u64; 3]]) -> u64 {
+    ticks.windows(2).flat_map(|w| (0..3).map(move |c| w[0][c].abs_diff(w[1][c]))).max().unwrap_or(0)
+}
+
+/// TIM4's full-scale duty (ARR + 1), from the trace.
+pub fn hv_full_scale(trace: &[Access]) -> u64 {
+    trace.iter().rev().find(|a| a.write && a.addr == TIM4_ARR).map(|a| a.value + 1).expect("TIM4 ARR written")
+}
+
+/// Each `stop` line read from USART1 (its terminating CR/LF read): how many control ticks ran
+/// from that read until all three duties were written 0 (0: within the same tick), and
+/// whether any duty was written non-zero after it (before `until` accesses).
+pub fn stop_latencies(trace: &[Access]) -> Vec<(usize, bool)> {
+    let mut res = Vec::new();
+    let mut last: Vec<u8> = Vec::new();
+    for (i, a) in trace.iter().enumerate() {
+        if a.write || a.addr != USART1_DR {
+            continue;
+        }
+        let b = a.value as u8;
+        if b == b'\r' || b == b'\n' {
+            let word: String = String::from_utf8_lossy(&last).trim().to_lowercase();
+            if word.split_whitespace().next() == Some("stop") {
+                let mut ticks = 0;
+                let mut zero = [false; 3];
+                let mut j = i + 1;
+                while j < trace.len() && !zero.iter().all(|&z| z) {
+                    let w = trace[j];
+                    if w.write && w.addr == TICK_MARKER {
+                        ticks += 1;
+                    }
+                    if let Some(ch) = TIM4_CCR.iter().position(|&r| r == w.addr && w.write) {
+                        zero[ch] = w.value == 0;
+                    }
+                    j += 1;
+                }
+                // after the stop: any non-zero duty written in the next 50 ticks?
+                let mut later_nonzero = false;
+                let mut t = 0;
+                for w in &trace[j..] {
+                    if w.write && w.addr == TICK_MARKER {
+                        t += 1;
+                        if t > 50 {
+                            break;
+                        }
+                    }
+                    if w.write && TIM4_CCR.contains(&w.addr) && w.value != 0 {
+                        later_nonzero = true;
+                    }
+                }
+                res.push((ticks, later_nonzero));
+            }
+            last.clear();
+        } else {
+            last.push(b);
+        }
+    }
+    res
+}
+
+/// Bytes written to USART1 after the first `stop` line was read.
+pub fn tx_bytes_after_stop(trace: &[Access]) -> usize {
+    let mut last: Vec<u8> = Vec::new();
+    for (i, a) in trace.iter().enumerate() {
+        if a.write || a.addr != USART1_DR {
+            continue;
+        }
+        let b = a.value as u8;
+        if b == b'\r' || b == b'\n' {
+            if String::from_utf8_lossy(&last).trim().to_lowercase().starts_with("stop") {
+                return trace[i..].iter().filter(|w| w.write && w.addr == USART1_DR).count();
+            }
+            last.clear();
+        } else {
+            last.push(b);
+        }
+    }
+    0
+}

@@ -1,0 +1,335 @@
+//! The control core: the one owner of the outputs. Runs every 1 ms tick at the highest
+//! priority (the chip's SysTick task; `App::tick` on the host).
+//!
+//! What it is: the single writer of the HV duties ([`Control::write_hv_duty`]), the slew of the
+//! HV values toward the command side's setpoints (at most `slew` x 1 ms per tick, whatever
+//! else runs), the servo following the slewed voltages, the disarm ramp, the emergency stop
+//! and the watchdog feed (only while the command side has checked in within
+//! [`CHECKIN_BOUND_MS`]).
+//!
+//! What it is not: the console or the model. The command side ([`crate::app::Commands`])
+//! plans [`Setpoints`]; the core takes them ([`Control::apply`]) unless a stop came after the
+//! command began (its `epoch` is stale), and reports back a [`View`].
+
+use embedded_hal::digital::OutputPin;
+use embedded_hal::pwm::SetDutyCycle;
+
+use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V, HV_ZERO_DUTY_PCT};
+
+/// The watchdog is fed only when the command side checked in at most this long ago, ms. The
+/// longest command (a first armed `pose`, ~10 M instructions: ~60 ms at 168 MHz) stays far
+/// inside; a stuck solve or console stops the feed and the IWDG (1 s) resets the board.
+pub const CHECKIN_BOUND_MS: u32 = 250;
+
+/// What the command side asks of the outputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Setpoints {
+    /// Numbered by the command side; the view reports the last one taken.
+    pub seq: u32,
+    /// The stop count the command side had seen when it planned these: a stop since then
+    /// makes them stale, and they are dropped.
+    pub epoch: u32,
+    /// HV enable wanted. False with the enable up: ramp to 0, then drop it (disarm).
+    pub armed: bool,
+    /// HV targets, V (each finite, >= 0, inside the ceiling: else refused).
+    pub target_v: [f32; HV_CHANNELS],
+    /// Servo duty holding the tension at the targets; reached as the voltages arrive.
+    pub servo_duty: u16,
+    /// Servo duty with the cable released (where `stop` sends it).
+    pub servo_released: u16,
+    /// The command side's ceiling per channel, as a duty (the core caps it further).
+    pub duty_ceiling: [u16; HV_CHANNELS],
+    /// HV slew, V/s.
+    pub slew: f32,
+}
+
+/// What the core reports back.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    /// Last setpoints taken.
+    pub seq: u32,
+    /// Stops so far.
+    pub epoch: u32,
+    pub volts: [f32; HV_CHANNELS],
+    pub duty: [u16; HV_CHANNELS],
+    pub enable: bool,
+    pub servo_duty: u16,
+    pub fault: Option<&'static str>,
+    /// Locked out for good ([`Control::lock_out`]): never arms.
+    pub locked_out: bool,
+    /// Ticks since start, ms.
+    pub now_ms: u32,
+}
+
+/// The refusal of [`Control::write_hv_duty`].
+#[derive(Debug, PartialEq, Eq, Clone, Copy)]
+pub struct HvRefused;
+
+/// Control duty that makes the HV module output `v` volts, from the compiled calibration
+/// (duty% = zero + (100 - zero) v / full scale), rounded down; 0 for NaN or v <= 0.
+pub fn hv_duty_for(v: f32, max_duty: u16) -> u16 {
+    let z = HV_ZERO_DUTY_PCT / 100.0;
+    let d = (z + (1.0 - z) * (v / HV_FULL_SCALE_V)) * max_duty as f32;
+    if !(d > 0.0) || !(v > 0.0) {
+        0
+    } else if d >= max_duty as f32 {
+        max_duty
+    } else {
+        d as u16
+    }
+}
+
+/// The hard duty cap of the image: the duty of [`HV_LIMIT_V`]. No parameter moves it.
+pub fn hv_duty_cap(max_duty: u16) -> u16 {
+    hv_duty_for(HV_LIMIT_V, max_duty)
+}
+
+/// The control core on a board `B`.
+pub struct Control<B: Board> {
+    board: B,
+    hv_max: [u16; HV_CHANNELS],
+    /// Refusal threshold per channel: min(compiled cap, command side's ceiling).
+    ceiling: [u16; HV_CHANNELS],
+    volts: [f32; HV_CHANNELS],
+    target: [f32; HV_CHANNELS],
+    duty: [u16; HV_CHANNELS],
+    slew: f32,
+    enable: bool,
+    ramping_down: bool,
+    /// Servo: from where and to where it moves as the voltages go from `v_from` to `target`.
+    servo_from: u16,
+    servo_to: u16,
+    servo_duty: u16,
+    servo_released: u16,
+    v_from: [f32; HV_CHANNELS],
+    fault: Option<&'static str>,
+    /// Never arm (e.g. the emulator image on a real chip): the fault it reports, for good.
+    lockout: Option<&'static str>,
+    seq: u32,
+    epoch: u32,
+    now_ms: u32,
+}
+
+impl<B: Board> Control<B> {
+    /// Take the board: enable low, every HV duty 0, servo at `servo_released`. The ceilings
+    /// start at 0 (nothing above 0 V until the command side sends its ceilings).
+    pub fn new(board: B, servo_released: u16, slew: f32) -> Self {
+        let mut c = Control {
+            board,
+            hv_max: [0; HV_CHANNELS],
+            ceiling: [0; HV_CHANNELS],
+            volts: [0.0; HV_CHANNELS],
+            target: [0.0; HV_CHANNELS],
+            duty: [0; HV_CHANNELS],
+            slew,
+            enable: false,
+            ramping_down: false,
+            servo_from: servo_released,
+            servo_to: servo_released,
+            servo_duty: servo_released,
+            servo_released,
+            v_from: [0.0; HV_CHANNELS],
+            fault: None,
+            lockout: None,
+            seq: 0,
+            epoch: 0,
+            now_ms: 0,
+        };
+        for ch in 0..HV_CHANNELS {
+            c.hv_max[ch] = c.board.hv(ch).max_duty_cycle();
+        }
+        c.hv_off_now();
+        c.write_servo(servo_released);
+        c
+    }
+
+    pub fn board(&self) -> &B {
+        &self.board
+    }
+    #[cfg(feature = "sim")]
+    pub fn board_mut(&mut self) -> &mut B {
+        &mut self.board
+    }
+    /// Full-scale duty of each HV PWM.
+    pub fn hv_max(&self) -> [u16; HV_CHANNELS] {
+        self.hv_max
+    }
+    pub fn view(&self) -> View {
+        View {
+            seq: self.seq,
+            epoch: self.epoch,
+            volts: self.volts,
+            duty: self.duty,
+            enable: self.enable,
+            servo_duty: self.servo_duty,
+            fault: self.fault,
+            locked_out: self.lockout.is_some(),
+            now_ms: self.now_ms,
+        }
+    }
+
+    /// The one function that writes an HV duty. Refuses (writes nothing, latches the fault
+    /// `hv-refused`) a duty above the channel's ceiling or the image's hard cap.
+    pub fn write_hv_duty(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
+        if ch >= HV_CHANNELS || (duty > 0 && (duty > self.ceiling[ch] || duty > hv_duty_cap(self.hv_max[ch]))) {
+            self.fault = Some("hv-refused");
+            return Err(HvRefused);
+        }
+        if self.board.hv(ch).set_duty_cycle(duty).is_err() {
+            self.fault = Some("pwm");
+            return Err(HvRefused);
+        }
+        self.duty[ch] = duty;
+        Ok(())
+    }
+
+    fn set_enable(&mut self, on: bool) {
+        let r = if on { self.board.hv_enable().set_high() } else { self.board.hv_enable().set_low() };
+        if r.is_err() {
+            self.fault = Some("enable");
+        }
+        self.enable = on && r.is_ok();
+    }
+
+    fn write_servo(&mut self, duty: u16) {
+        if self.board.servo().set_duty_cycle(duty).is_err() {
+            self.fault = Some("pwm");
+        }
+        self.servo_duty = duty;
+    }
+
+    /// HV off at once: enable low, every duty 0, values and targets 0.
+    fn hv_off_now(&mut self) {
+        self.set_enable(false);
+        for ch in 0..HV_CHANNELS {
+            let _ = self.write_hv_duty(ch, 0);
+        }
+        self.volts = [0.0; HV_CHANNELS];
+        self.target = [0.0; HV_CHANNELS];
+        self.v_from = [0.0; HV_CHANNELS];
+        self.ramping_down = false;
+    }
+
+    /// Emergency stop: HV off at once, cable released, a new epoch (setpoints planned before
+    /// it are dropped). Clears a latched fault.
+    pub fn stop(&mut self) {
+        self.hv_off_now();
+        self.servo_from = self.servo_released;
+        self.servo_to = self.servo_released;
+        self.write_servo(self.servo_released);
+        self.epoch = self.epoch.wrapping_add(1);
+        self.fault = self.lockout;
+    }
+
+    /// Never arm from now on; `reason` is the fault reported (a stop does not clear it).
+    pub fn lock_out(&mut self, reason: &'static str) {
+        self.lockout = Some(reason);
+        self.fault_stop(reason);
+    }
+
+    /// A fault stop: as [`Control::stop`], the fault stays latched.
+    fn fault_stop(&mut self, f: &'static str) {
+        self.stop();
+        self.fault = Some(f);
+    }
+
+    /// Take the command side's setpoints. Dropped (false) when a stop came after they were
+    /// planned. A target that is not finite, negative or past the ceiling is refused: fault
+    /// stop (the command side checks first, so this is a second line).
+    pub fn apply(&mut self, sp: &Setpoints) -> bool {
+        if sp.epoch != self.epoch {
+            return false;
+        }
+        self.seq = sp.seq;
+        for ch in 0..HV_CHANNELS {
+            self.ceiling[ch] = sp.duty_ceiling[ch].min(hv_duty_cap(self.hv_max[ch]));
+        }
+        if sp.slew > 0.0 && sp.slew <= 1e6 {
+            self.slew = sp.slew;
+        }
+        self.servo_released = sp.servo_released;
+        if sp.armed && self.lockout.is_none() {
+            for ch in 0..HV_CHANNELS {
+                let t = sp.target_v[ch];
+                if !(t >= 0.0 && t <= HV_LIMIT_V) || hv_duty_for(t, self.hv_max[ch]) > self.ceiling[ch] {
+                    self.fault_stop("hv-refused");
+                    return true;
+                }
+            }
+            if self.fault.is_none() && !self.enable {
+                self.set_enable(true);
+            }
+            self.ramping_down = false;
+            self.target = sp.target_v;
+        } else {
+            self.target = [0.0; HV_CHANNELS];
+            self.ramping_down = self.enable;
+        }
+        self.v_from = self.volts;
+        self.servo_from = self.servo_duty;
+        self.servo_to = sp.servo_duty;
+        self.follow_servo();
+        self.finish_ramp_down();
+        true
+    }
+
+    /// The servo between `servo_from` and `servo_to` in proportion to how far the slowest
+    /// channel has come from `v_from` to its target (at once when no channel moves).
+    fn follow_servo(&mut self) {
+        let mut progress = 1.0f32;
+        for ch in 0..HV_CHANNELS {
+            let span = self.target[ch] - self.v_from[ch];
+            if span != 0.0 {
+                let p = (self.volts[ch] - self.v_from[ch]) / span;
+                progress = progress.min(if p >= 0.0 { p } else { 0.0 });
+            }
+        }
+        let (a, b) = (self.servo_from as f32, self.servo_to as f32);
+        let d = a + (b - a) * progress;
+        let d = if progress >= 1.0 { self.servo_to } else { (d + 0.5) as u16 };
+        if d != self.servo_duty {
+            self.write_servo(d);
+        }
+    }
+
+    fn finish_ramp_down(&mut self) {
+        if self.ramping_down && self.volts.iter().all(|&v| v == 0.0) {
+            for ch in 0..HV_CHANNELS {
+                let _ = self.write_hv_duty(ch, 0);
+            }
+            self.set_enable(false);
+            self.ramping_down = false;
+        }
+    }
+
+    /// One 1 ms control tick: each HV value moves at most `slew` x 1 ms toward its target
+    /// and its duty is written; the servo follows; a disarm ramp that reached 0 drops the
+    /// enable; the watchdog is fed if the command side checked in at `last_checkin_ms`
+    /// within [`CHECKIN_BOUND_MS`].
+    pub fn tick(&mut self, last_checkin_ms: u32) {
+        self.now_ms = self.now_ms.wrapping_add(1);
+        let step = self.slew * 0.001;
+        for ch in 0..HV_CHANNELS {
+            let (v, t) = (self.volts[ch], self.target[ch]);
+            if v != t {
+                let nv = if t > v { (v + step).min(t) } else { (v - step).max(t) };
+                let d = hv_duty_for(nv, self.hv_max[ch]);
+                if self.write_hv_duty(ch, d).is_err() {
+                    let f = self.fault.unwrap_or("hv-refused");
+                    self.fault_stop(f);
+                    break;
+                }
+                self.volts[ch] = nv;
+            }
+        }
+        self.follow_servo();
+        self.finish_ramp_down();
+        if self.now_ms.wrapping_sub(last_checkin_ms) <= CHECKIN_BOUND_MS {
+            self.board.feed_watchdog();
+        }
+    }
+
+    pub fn now_ms(&self) -> u32 {
+        self.now_ms
+    }
+}
