@@ -163,6 +163,13 @@ fn exit_of(e: &CommandError) -> ExitCode {
 /// `finger run`: the scene on the board, its CSV and SVG written only when the run succeeded.
 fn run_scene(con: &mut Console, path: &Path, host: finger_scene::SceneResult, drive: bool, out: &Path) -> ExitCode {
     let name = host.scene.name.clone();
+    // Ctrl-C: the run stops at its next command and a driven board still gets `stop`; a
+    // second Ctrl-C quits at once
+    let _ = ctrlc::set_handler(|| {
+        if finger::run::interrupt() {
+            std::process::exit(130);
+        }
+    });
     let bar = indicatif::ProgressBar::new(0);
     if !std::io::stderr().is_terminal() {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
@@ -178,6 +185,7 @@ fn run_scene(con: &mut Console, path: &Path, host: finger_scene::SceneResult, dr
             eprintln!("finger run: {}: {e}", path.display());
             return match e {
                 finger::run::RunError::Command { error: CommandError::Link(_), .. } => ExitCode::from(2),
+                finger::run::RunError::Interrupted => ExitCode::from(130),
                 _ => ExitCode::from(1),
             };
         }

@@ -6,6 +6,7 @@
 //! The board first gets the scene's finger: `disarm`, `preset`, then `param` for each value
 //! that differs. Not here: the scene format and the host model run (tools/finger-scene), the
 //! console grammar (`console.rs`).
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use finger_model::params::PARAMS;
@@ -23,6 +24,24 @@ pub enum RunError {
     Command { line: String, error: CommandError },
     /// The board answered something this client cannot read, or cannot run this scene.
     Board(String),
+    /// [`interrupt`] was called (Ctrl-C): the run stopped between two commands.
+    Interrupted,
+}
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Ask a run to stop at its next command (a Ctrl-C handler calls this); a driven run still
+/// ends with `stop`. True if it had been asked already.
+pub fn interrupt() -> bool {
+    INTERRUPTED.swap(true, Ordering::SeqCst)
+}
+
+fn check_interrupt() -> Result<(), RunError> {
+    if INTERRUPTED.load(Ordering::SeqCst) {
+        Err(RunError::Interrupted)
+    } else {
+        Ok(())
+    }
 }
 
 impl std::fmt::Display for RunError {
@@ -31,6 +50,7 @@ impl std::fmt::Display for RunError {
             RunError::Scene(e) => write!(f, "{e}"),
             RunError::Command { line, error } => write!(f, "{line}: {error}"),
             RunError::Board(s) => write!(f, "{s}"),
+            RunError::Interrupted => write!(f, "interrupted"),
         }
     }
 }
@@ -85,6 +105,7 @@ fn three(v: Vec<f64>, key: &str) -> Result<[f64; 3], RunError> {
 }
 
 fn cmd(con: &mut Console, line: &str) -> Result<Reply, RunError> {
+    check_interrupt()?;
     con.command(line).map_err(|error| RunError::Command { line: line.to_string(), error })
 }
 
@@ -262,7 +283,7 @@ pub fn run(con: &mut Console, host: SceneResult, drive: bool, mut progress: impl
             }
             Ok(())
         });
-        let stopped = cmd(con, "stop");
+        let stopped = con.command("stop").map_err(|error| RunError::Command { line: "stop".into(), error });
         driven?;
         stopped?;
     }

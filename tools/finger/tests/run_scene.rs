@@ -211,3 +211,43 @@ fn a_refused_scene_never_reaches_a_board() {
     assert!(!out_dir.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn ctrl_c_during_a_driven_run_still_stops_the_board() {
+    let dir = scratch("interrupt");
+    let scene = dir.join("drive.toml");
+    std::fs::write(&scene, DRIVE_SCENE).unwrap();
+    // a slow board: each line reaches finger-sim 0.2 s late; what finger sends is logged first
+    let log = dir.join("in.log");
+    let board = dir.join("slow-board.sh");
+    std::fs::write(
+        &board,
+        format!("#!/bin/sh\ntee {} | while IFS= read -r l; do sleep 0.2; printf '%s\\n' \"$l\"; done | {}\n", log.display(), sim().display()),
+    )
+    .unwrap();
+    std::fs::set_permissions(&board, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let out_dir = dir.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_finger"))
+        .args(["--sim", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // once the board is armed, Ctrl-C
+    let t0 = std::time::Instant::now();
+    while !std::fs::read_to_string(&log).unwrap_or_default().lines().any(|l| l.trim() == "arm") {
+        assert!(t0.elapsed() < std::time::Duration::from_secs(30), "never armed");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("interrupted"));
+    let sent = std::fs::read_to_string(&log).unwrap();
+    let lines: Vec<&str> = sent.lines().map(str::trim).collect();
+    assert_eq!(lines.last(), Some(&"stop"), "{sent}");
+    assert!(!lines.iter().any(|l| *l == "force 0.8"), "the run went on after Ctrl-C: {sent}");
+    assert!(!out_dir.exists(), "an interrupted run wrote its files");
+    let _ = std::fs::remove_dir_all(&dir);
+}
