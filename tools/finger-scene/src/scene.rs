@@ -432,14 +432,13 @@ pub fn parse(name: &str, text: &str) -> Result<Scene, SceneError> {
             }
         }
     }
-    let mut tensions = None;
+    let mut tensions: Option<(Pos, Vec<f64>)> = None;
     if let Some(t) = &file.drive {
         for (k, v) in in_file_order(t.get_ref()) {
             match k {
                 "tensions" | "tension" => {
                     let at = key_at(text, &v.span());
                     if let Some((first, _)) = &tensions {
-                        let first: &Pos = first;
                         return Err(SceneError::at(at, format!("{k}: the tensions are already given on line {}", first.line)));
                     }
                     let list = numbers(text, k, v)?;

@@ -97,6 +97,7 @@ fn errors_name_their_line_and_column() {
         ("[finger]\nvolts = [0,0,0]\nthickness = [2,2,2]\n[drive]\ntensions = 1\n", 3, 1, "already given on line 2"),
         ("[finger]\n  volts = [0, 0]\n[drive]\ntensions = 1\n", 2, 3, "2 values for 3 joints"),
         ("[drive]\ntensions = [0.5, -1]\n", 2, 1, "cannot push"),
+        ("[drive]\ntensions = 1\ntension = 2\n", 3, 1, "tensions are already given on line 2"),
         ("[drive]\ntensions = [1, nan]\n", 2, 1, "not a finite number"),
         ("[drive]\ntensions = 1\n[solver]\nn_inc = 10\n", 4, 1, "only for method = \"stepping\""),
         ("[drive]\ntensions = 1\n[solver]\nmethod = \"newton\"\n", 4, 10, "unknown variant `newton`, expected `converged` or `stepping`"),
