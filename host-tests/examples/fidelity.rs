@@ -789,8 +789,8 @@ fn fmt_t(t: f64) -> String {
 fn scene_text(title: &str, s: &SceneDef, c: Config, tensions: &[f64]) -> String {
     let v = s.volts.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ");
     format!(
-        "title = {title}\n[finger]\npreset = {}\nlayers = {}\nm = {}\nplate = {}\nflex_links = {}\nnu_b = {NU_B}\nvolts = {v}\n\
-[drive]\ntensions = {}\n[output]\npostures = yes\nreference = continuum\n",
+        "title = {title:?}\n[finger]\npreset = \"{}\"\nlayers = {}\nm = {}\nplate = {}\nflex_links = {}\nnu_b = {NU_B}\nvolts = [{v}]\n\
+[drive]\ntensions = [{}]\n[output]\npostures = true\nreference = \"continuum\"\n",
         if s.paper { "paper" } else { "default" },
         s.layers,
         c.m,

@@ -3,7 +3,7 @@
 //! they print over semihosting, and compare against the host's f64 reference. Used by the
 //! `perf-report` binary (docs/performance.md) and by the quick test `tests/perf_bench.rs`.
 //!
-//! What it is not: a benchmark harness for host nanoseconds (that is in `perf-report`).
+//! What it is not: a benchmark harness for host nanoseconds (that is criterion, `benches/host_solve.rs`).
 
 use finger_model::{Finger, Method, Params};
 use std::path::{Path, PathBuf};
@@ -324,4 +324,20 @@ pub fn inverse_cost_table() -> String {
         .unwrap();
     }
     doc
+}
+
+/// The methods timed on the host (benches/host_solve.rs): `step<n>` for each of [`scenes::N_INC`],
+/// then `conv`.
+pub fn host_methods() -> Vec<String> {
+    scenes::N_INC.iter().map(|n| format!("step{n}")).chain(std::iter::once("conv".to_string())).collect()
+}
+
+/// A criterion benchmark's id for a scene and method (a scene name's `/` would be a path).
+pub fn bench_id(scene: &str, method: &str) -> String {
+    format!("{}.{method}", scene.replace('/', "_"))
+}
+
+/// The criterion group of a scalar's host timings.
+pub fn bench_group(scalar: &str) -> String {
+    format!("solve_with_{scalar}")
 }

@@ -8,58 +8,19 @@
 //!   and the Cortex-M3 (mps2-an385), run in QEMU with `-icount` (see host_tests::perf).
 //! - Errors: tip position (mm) and joint angles (degrees) against the host's f64 converged
 //!   solution at 1e-12 mm.
-//! - Host nanoseconds: a repeated-timing harness here (`time_ns`): warm-up, batches of at
-//!   least 2 ms, the median of 9 batches per variant; release build, inputs through
-//!   `black_box`.
+//! - Host nanoseconds: criterion (benches/host_solve.rs, run from here), its median estimate
+//!   per variant; bench profile (the release settings), inputs through `black_box`.
 
 use finger_model::{Finger, Method, Params, Real};
 use host_tests::perf::{self, scenes::SCENES, scenes::N_INC, Rec, IMAGES};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::hint::black_box;
 use std::path::Path;
-use std::time::Instant;
 
 /// The paper's scenes (0.2..1.0 N, paper's model): the error and instruction summaries use
 /// these; the two high-tension scenes and the fidelity-model scenes are reported separately.
 fn is_paper_scene(name: &str) -> bool {
     !(name.starts_with("bare-7N") || name.starts_with("bare-250N") || name.ends_with("-fid"))
-}
-
-/// Median time per call in ns: warm-up, then batches of at least 2 ms, median of 9.
-fn time_ns(mut f: impl FnMut()) -> f64 {
-    for _ in 0..3 {
-        f();
-    }
-    let mut n = 1u64;
-    loop {
-        let t = Instant::now();
-        for _ in 0..n {
-            f();
-        }
-        if t.elapsed().as_secs_f64() >= 2e-3 || n >= 1 << 24 {
-            break;
-        }
-        n *= 2;
-    }
-    let mut v: Vec<f64> = (0..9)
-        .map(|_| {
-            let t = Instant::now();
-            for _ in 0..n {
-                f();
-            }
-            t.elapsed().as_secs_f64() * 1e9 / n as f64
-        })
-        .collect();
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[4]
-}
-
-fn method_of(name: &str) -> Method<f64> {
-    match name.strip_prefix("step") {
-        Some(n) => Method::Stepping { n_inc: n.parse().unwrap() },
-        None => Method::converged(),
-    }
 }
 
 fn method_label(m: &str) -> String {
@@ -69,32 +30,33 @@ fn method_label(m: &str) -> String {
     }
 }
 
-fn cast_method<S: Real>(m: Method<f64>) -> Method<S> {
-    match m {
-        Method::Converged { tol, max_iter } => Method::Converged { tol: S::from_f64(tol), max_iter },
-        Method::Stepping { n_inc } => Method::Stepping { n_inc },
-    }
-}
-
-/// Host ns per solve (`solve_with`, compliances precomputed, as on the target) per scene and
-/// method, for scalar S.
-fn host_times<S: Real>() -> BTreeMap<(String, String), f64> {
-    let mut out = BTreeMap::new();
-    for s in SCENES {
-        let Ok(f) = Finger::new(perf::scene_params(s).cast::<S>()) else { continue };
-        let v = s.volts.map(S::from_f64);
-        let Ok(c) = f.compliances(&v) else { continue };
-        let methods = N_INC.iter().map(|n| format!("step{n}")).chain(std::iter::once("conv".to_string()));
-        for m in methods {
-            let method = cast_method::<S>(method_of(&m));
-            let p = S::from_f64(s.tension);
-            let ns = time_ns(|| {
-                let _ = black_box(f.solve_with(black_box(&c), black_box(p), [S::zero(); 2], method));
-            });
-            out.insert((s.name.to_string(), m), ns);
+/// Host ns per solve per scalar, (scene, method): criterion's median estimate from
+/// benches/host_solve.rs, which this runs (`cargo bench`; estimates under target/criterion).
+fn host_times(root: &Path) -> [BTreeMap<(String, String), f64>; 2] {
+    let home = root.join("target").join("criterion");
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let st = std::process::Command::new(cargo)
+        .current_dir(root.join("host-tests"))
+        .env("CRITERION_HOME", &home)
+        .args(["bench", "--quiet", "--bench", "host_solve"])
+        .stdout(std::process::Stdio::null())
+        .status()
+        .expect("cargo bench");
+    assert!(st.success(), "cargo bench --bench host_solve failed");
+    ["f64", "f32"].map(|scalar| {
+        let mut out = BTreeMap::new();
+        for s in SCENES {
+            for m in perf::host_methods() {
+                let f = home.join(perf::bench_group(scalar)).join(perf::bench_id(s.name, &m)).join("new/estimates.json");
+                let Ok(text) = std::fs::read_to_string(&f) else { continue };
+                let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+                if let Some(ns) = v["median"]["point_estimate"].as_f64() {
+                    out.insert((s.name.to_string(), m), ns);
+                }
+            }
         }
-    }
-    out
+        out
+    })
 }
 
 struct Row {
@@ -142,8 +104,7 @@ fn main() {
 
     // ---- host timings
     eprintln!("perf-report: host timings");
-    let host64 = host_times::<f64>();
-    let host32 = host_times::<f32>();
+    let [host64, host32] = host_times(&root);
 
     // ---- lean images
     eprintln!("perf-report: lean images");
@@ -286,9 +247,9 @@ fn report(
     writeln!(w, "  Calibration lines (`CAL loop_instructions ticks overhead_ticks`): {}.", cal.join("; ")).unwrap();
     writeln!(w, "- **Errors**: tip position (mm, Euclidean) and the largest joint-angle error (degrees) against the host's f64").unwrap();
     writeln!(w, "  converged solution at 1e-12 mm.").unwrap();
-    writeln!(w, "- **Host nanoseconds**: this command's own repeated-timing harness (not criterion): 3 warm-up calls, a batch").unwrap();
-    writeln!(w, "  size doubled until a batch takes at least 2 ms, then the median of 9 batches; release build, inputs through").unwrap();
-    writeln!(w, "  `black_box`; same `solve_with` call as on the target. Host f32 uses `{}`; micromath and fixed point are", <f32 as Real>::NAME).unwrap();
+    writeln!(w, "- **Host nanoseconds**: criterion (`host-tests/benches/host_solve.rs`, which this command runs with `cargo bench`),").unwrap();
+    writeln!(w, "  the median estimate per variant (30 samples over 0.3 s after 0.1 s of warm-up); bench profile (the release").unwrap();
+    writeln!(w, "  settings), inputs through `black_box`; same `solve_with` call as on the target. Host f32 uses `{}`; micromath and fixed point are", <f32 as Real>::NAME).unwrap();
     writeln!(w, "  measured on the targets only. Host numbers vary with the machine and its load; target counts do not.").unwrap();
     writeln!(w, "- **Fixed point** (`bench/src/fix.rs`): `Real` for newtypes over the `fixed` crate's I16F16 and I32F32,").unwrap();
     writeln!(w, "  saturating arithmetic (MIN/MAX act as infinity, so overflow becomes a typed error), Taylor sin/cos after").unwrap();

@@ -5,6 +5,7 @@ pub mod console;
 pub mod link;
 pub mod log;
 pub mod monitor;
+pub mod run;
 
 pub use console::{CommandError, Console, ErrorCode, Reply};
 pub use link::{Link, LinkError};

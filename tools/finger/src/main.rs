@@ -60,6 +60,18 @@ enum What {
         #[arg(long)]
         keep_going: bool,
     },
+    /// Run a scene file (docs/scenes.md) on the board: every posture through `solve` (model
+    /// only), and with --drive also armed through `volt` and `force` (`stop` at the end);
+    /// writes NAME-board.csv and NAME-board.svg: the board's answers next to the host's f64 model.
+    Run {
+        scene: PathBuf,
+        /// Also drive the outputs: arm, `volt` and `force` to each posture, `status`, then `stop`.
+        #[arg(long)]
+        drive: bool,
+        /// Where to write the CSV and SVG.
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+    },
     /// `status` at a fixed rate as a live view.
     Monitor {
         /// Polls per second.
@@ -148,6 +160,63 @@ fn exit_of(e: &CommandError) -> ExitCode {
     }
 }
 
+/// `finger run`: the scene on the board, its CSV and SVG written only when the run succeeded.
+fn run_scene(con: &mut Console, path: &Path, host: finger_scene::SceneResult, drive: bool, out: &Path) -> ExitCode {
+    let name = host.scene.name.clone();
+    // Ctrl-C: the run stops at its next command and a driven board still gets `stop`; a
+    // second Ctrl-C quits at once
+    let _ = ctrlc::set_handler(|| {
+        if finger::run::interrupt() {
+            std::process::exit(130);
+        }
+    });
+    let bar = indicatif::ProgressBar::new(0);
+    if !std::io::stderr().is_terminal() {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let r = finger::run::run(con, host, drive, |i, n| {
+        bar.set_length(n as u64);
+        bar.set_position(i as u64);
+    });
+    bar.finish_and_clear();
+    let r = match r {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("finger run: {}: {e}", path.display());
+            return match e {
+                finger::run::RunError::Command { error: CommandError::Link(_), .. } => ExitCode::from(2),
+                finger::run::RunError::Interrupted => ExitCode::from(130),
+                _ => ExitCode::from(1),
+            };
+        }
+    };
+    if let Err(e) = std::fs::create_dir_all(out) {
+        eprintln!("finger run: {}: {e}", out.display());
+        return ExitCode::from(2);
+    }
+    for (name, text) in [
+        (format!("{name}-board.csv"), finger::run::csv(&r)),
+        (format!("{name}-board.svg"), finger::run::svg(&r)),
+    ] {
+        let p = out.join(name);
+        if let Err(e) = std::fs::write(&p, text) {
+            eprintln!("finger run: {}: {e}", p.display());
+            return ExitCode::from(2);
+        }
+        println!("wrote {}", p.display());
+    }
+    let worst = r
+        .host
+        .postures
+        .iter()
+        .filter(|p| p.kind != finger_scene::Kind::MatchTarget)
+        .zip(&r.board)
+        .flat_map(|(h, b)| h.joint_angles().iter().zip(&b.joints_deg).map(|(a, d)| (d - a.to_degrees()).abs()))
+        .fold(0.0, f64::max);
+    println!("{} postures; board minus host model: joints within {worst:.4} deg", r.board.len());
+    ExitCode::SUCCESS
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let timeout = Duration::from_secs_f64(cli.timeout.clamp(0.1, 3600.0));
@@ -187,6 +256,17 @@ fn main() -> ExitCode {
             }
         };
     }
+    // a scene is read and run on the host model (and refused) before any board is touched
+    let scene = match &cli.what {
+        What::Run { scene, .. } => match finger_scene::read_file(scene).map_err(finger::run::RunError::Scene).and_then(|s| finger::run::host(&s)) {
+            Ok(s) => Some(s),
+            Err(e) => {
+                eprintln!("finger run: {}: {e}", scene.display());
+                return ExitCode::from(1);
+            }
+        },
+        _ => None,
+    };
     let link = match connect(&cli.to, &cli.defmt_log, timeout) {
         Ok(l) => l,
         Err(e) => {
@@ -259,6 +339,7 @@ fn main() -> ExitCode {
                 }
             }
         }
+        What::Run { scene: path, drive, out } => run_scene(&mut con, &path, scene.expect("read above"), drive, &out),
         What::Log { .. } | What::Ports => unreachable!("handled above"),
     }
 }

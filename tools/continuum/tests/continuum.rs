@@ -1,7 +1,7 @@
-//! Tests of the independent planar continuum reference (host-tests/src/continuum.rs).
+//! Tests of the independent planar continuum reference (tools/continuum/src/lib.rs).
 //! Each test fails if the physics it names breaks.
 
-use host_tests::continuum::*;
+use continuum::*;
 
 fn max_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))

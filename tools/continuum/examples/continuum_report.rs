@@ -4,7 +4,7 @@
 //! model's (finger-model) joint-angle error against this reference for m = 1, 2, 4, 8.
 //! Run: cargo run --release --example continuum_report
 use finger_model::{Finger, Method, Params};
-use host_tests::continuum::*;
+use continuum::*;
 
 fn deg(v: &[f64]) -> String {
     v.iter().map(|a| format!("{:8.4}", a.to_degrees())).collect::<Vec<_>>().join(" ")

@@ -6,7 +6,7 @@
 //!
 //! What it is not: a plotting library. No dependency; the output is plain SVG 1.1.
 
-use crate::scene::{Kind, SceneResult};
+use crate::run::{Kind, SceneResult};
 use std::fmt::Write;
 
 /// Colours for the scene's tensions, in order (the paper's purple and green are kept for the
@@ -58,8 +58,15 @@ pub fn colours(r: &SceneResult) -> Vec<&'static str> {
         .collect()
 }
 
-/// Draw a run scene's postures.
+/// Draw a run scene's postures, with the continuum reference when the scene asked for it.
 pub fn plot(r: &SceneResult) -> String {
+    plot_overlay(r, "continuum reference")
+}
+
+/// Draw a run scene's postures; each posture's `reference` (another model's or a board's
+/// answer) dashed in its colour, named `overlay` in the legend. An overlay of one point (a
+/// tip alone) is drawn as a ring.
+pub fn plot_overlay(r: &SceneResult, overlay: &str) -> String {
     let mut xs = vec![0.0f64];
     let mut ys = vec![0.0f64];
     for p in &r.postures {
@@ -153,7 +160,15 @@ pub fn plot(r: &SceneResult) -> String {
     let cols = colours(r);
     let pts = |v: &[[f64; 2]]| v.iter().map(|p| format!("{:.3},{:.3}", px(p[0]), py(p[1]))).collect::<Vec<_>>().join(" ");
     for (p, c) in r.postures.iter().zip(&cols) {
-        if let Some(rf) = &p.reference {
+        if let Some(rf) = p.reference.as_ref().filter(|rf| rf.points.len() == 1) {
+            let _ = writeln!(
+                s,
+                r#"<circle class="reference-tip" data-tension="{}" cx="{:.3}" cy="{:.3}" r="5" fill="none" stroke="{c}" stroke-width="1.5"/>"#,
+                p.tension,
+                px(rf.points[0][0]),
+                py(rf.points[0][1])
+            );
+        } else if let Some(rf) = &p.reference {
             let _ = writeln!(
                 s,
                 r#"<polyline class="reference" data-tension="{}" points="{}" fill="none" stroke="{c}" stroke-width="1.5" stroke-dasharray="6 4"/>"#,
@@ -205,7 +220,7 @@ pub fn plot(r: &SceneResult) -> String {
             lx + 28.0,
             ly - 4.0
         );
-        let _ = writeln!(s, r#"<text x="{:.1}" y="{ly:.1}">continuum reference</text>"#, lx + 36.0);
+        let _ = writeln!(s, r#"<text x="{:.1}" y="{ly:.1}">{}</text>"#, lx + 36.0, escape(overlay));
     }
     let _ = writeln!(s, "</g>");
     let _ = writeln!(s, "</svg>");

@@ -3,18 +3,18 @@
 //! well-formed with one polyline per posture.
 
 use finger_model::{de, Error, Finger, Method, Params};
-use host_tests::scene::{self, Drive, Kind, Reference, SceneResult, SolverSpec};
+use finger_scene::{self as scene, Drive, Kind, Pos, Reference, SceneResult, SolverSpec};
 use std::path::{Path, PathBuf};
 
 fn top() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 fn shipped(dir: &Path) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "scene"))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
         .collect();
     v.sort();
     v
@@ -22,7 +22,7 @@ fn shipped(dir: &Path) -> Vec<PathBuf> {
 
 /// A shipped scene run without its continuum overlay (for tests of the model's side only).
 fn without_reference(name: &str) -> SceneResult {
-    let text = std::fs::read_to_string(top().join(format!("scenes/{name}.scene"))).unwrap();
+    let text = std::fs::read_to_string(top().join(format!("scenes/{name}.toml"))).unwrap();
     let mut s = scene::parse(name, &text).unwrap();
     s.output.reference = Reference::None;
     scene::run(&s, None).unwrap()
@@ -47,16 +47,16 @@ fn col(head: &[String], name: &str) -> usize {
 
 #[test]
 fn parses_every_section() {
-    let text = "# comment\ntitle = \"Hello\"\n[finger]\npreset = paper\nlayers = 4   # trailing comment\nw = 18\n\
-                thickness = 1.9, 2.0, 1.95\n[drive]\ntensions = 0, 0.25,1\n[solver]\nmethod = stepping\nn_inc = 7\n\
-                [output]\npostures = no\ntip_stiffness = yes\ncable_excursion = no\nreference = none\n";
+    let text = "# comment\ntitle = \"Hello\"\n[finger]\npreset = \"paper\"\nlayers = 4   # trailing comment\nw = 18\n\
+                thickness = [1.9, 2.0, 1.95]\n[drive]\ntensions = [0, 0.25,1]\n[solver]\nmethod = \"stepping\"\nn_inc = 7\n\
+                [output]\npostures = false\ntip_stiffness = true\ncable_excursion = false\nreference = \"none\"\n";
     let s = scene::parse("x", text).unwrap();
     assert_eq!(s.title, "Hello");
     assert_eq!(s.finger.params.de_rule, Params::<f64>::paper().de_rule);
     assert_eq!(s.finger.params.layers, 4);
     assert_eq!(s.finger.params.w, 18.0);
     assert_eq!(s.finger.drive, Drive::Thickness(vec![1.9, 2.0, 1.95]));
-    assert_eq!(s.finger.drive_line, 7);
+    assert_eq!(s.finger.drive_at, Pos { line: 7, column: 1 });
     assert_eq!(s.tensions, vec![0.0, 0.25, 1.0]);
     assert_eq!(s.solver, SolverSpec::Stepping { n_inc: 7 });
     assert!(!s.output.postures && s.output.tip_stiffness && !s.output.cable_excursion);
@@ -70,51 +70,76 @@ fn parses_every_section() {
     assert!(d.output.postures && d.output.cable_excursion && !d.output.tip_stiffness);
 
     // one value for every joint
-    let u = scene::parse("u", "[finger]\nvolts = 500\n[drive]\ntensions = 1\n").unwrap();
+    let u = scene::parse("u", "[finger]\nvolts = 500\n[drive]\ntensions = [1]\n").unwrap();
     assert_eq!(u.finger.drive, Drive::Volts(vec![500.0; 3]));
 }
 
 #[test]
 fn overrides_apply_whatever_their_order() {
     // `a = 15` alone breaks 2a < l = 27; with `l = 40` after it the set is valid.
-    let s = scene::parse("o", "[finger]\na = 15\nl = 40\n[drive]\ntensions = 0.1\n").unwrap();
+    let s = scene::parse("o", "[finger]\na = 15\nl = 40\n[drive]\ntensions = [0.1]\n").unwrap();
     assert_eq!((s.finger.params.a, s.finger.params.l), (15.0, 40.0));
     // alone, it is refused at its line, naming the parameter
-    let e = scene::parse("o", "[finger]\nb = 12\na = 15\n[drive]\ntensions = 0.1\n").unwrap_err();
-    assert_eq!(e.line, 3, "{e}");
+    let e = scene::parse("o", "[finger]\nb = 12\n  a = 15\n[drive]\ntensions = 0.1\n").unwrap_err();
+    assert_eq!((e.line, e.column), (3, 3), "{e}");
     assert!(matches!(e.model, Some(Error::Param { name: "a", .. })), "{e:?}");
 }
 
 #[test]
-fn errors_name_their_line() {
-    let cases: &[(&str, usize, &str)] = &[
-        ("[drive]\ntensions = 1\n[bogus]\n", 3, "unknown section"),
-        ("[drive]\ntensions = 1\ncolour = red\n", 3, "unknown key `colour`"),
-        ("[finger]\nlayers = four\n[drive]\ntensions = 1\n", 2, "not a number"),
-        ("[finger]\nlayers = 4\nlayers = 3\n[drive]\ntensions = 1\n", 3, "already given on line 2"),
-        ("[drive]\ntensions = 1\njust words\n", 3, "expected `key = value`"),
-        ("[finger]\nvolts = 0,0,0\nthickness = 2,2,2\n[drive]\ntensions = 1\n", 3, "already given on line 2"),
-        ("[finger]\nvolts = 0, 0\n[drive]\ntensions = 1\n", 2, "2 values for 3 joints"),
-        ("[drive]\ntensions = 0.5, -1\n", 2, "cannot push"),
-        ("[drive]\ntensions = 1, nan\n", 2, "not a finite number"),
-        ("[drive]\ntensions = 1\n[solver]\nn_inc = 10\n", 4, "only for method = stepping"),
-        ("[drive]\ntensions = 1\n[solver]\nmethod = newton\n", 4, "not converged or stepping"),
-        ("[finger]\nt_min = 20\n[drive]\ntensions = 1\n", 2, "t_min"),
-        ("[finger]\nnu = 0.7\n[drive]\ntensions = 1\n", 2, "nu"),
-        ("[drive]\ntensions = 1\n[drive]\n", 3, "already opened on line 1"),
-        ("[drive]\ntensions = 1\n[output]\npostures = maybe\n", 4, "not yes/no"),
-        ("[drive]\ntensions = 1\n[match]\nlayers = 0\n", 3, "needs `tension"),
-        ("[finger]\npreset = fancy\n[drive]\ntensions = 1\n", 2, "not default or paper"),
-        ("title = x\n", 0, "no tensions"),
+fn errors_name_their_line_and_column() {
+    // (text, line, column, what): toml's errors at toml's span, ours at the key
+    let cases: &[(&str, usize, usize, &str)] = &[
+        ("[drive]\ntensions = 1\n[bogus]\n", 3, 2, "unknown section [bogus]"),
+        ("[drive]\ntensions = 1\ncolour = \"red\"\n", 3, 1, "unknown key `colour` in [drive]"),
+        ("[finger]\nlayers = \"four\"\n[drive]\ntensions = 1\n", 2, 1, "not a number"),
+        ("[finger]\nlayers = 4\nlayers = 3\n[drive]\ntensions = 1\n", 3, 1, "duplicate key `layers` (first on line 2)"),
+        ("[drive]\ntensions = 1\njust words\n", 3, 6, "expected"),
+        ("[finger]\nvolts = [0,0,0]\nthickness = [2,2,2]\n[drive]\ntensions = 1\n", 3, 1, "already given on line 2"),
+        ("[finger]\n  volts = [0, 0]\n[drive]\ntensions = 1\n", 2, 3, "2 values for 3 joints"),
+        ("[drive]\ntensions = [0.5, -1]\n", 2, 1, "cannot push"),
+        ("[drive]\ntensions = 1\ntension = 2\n", 3, 1, "tensions are already given on line 2"),
+        ("[drive]\ntensions = [1, nan]\n", 2, 1, "not a finite number"),
+        ("[drive]\ntensions = 1\n[solver]\nn_inc = 10\n", 4, 1, "only for method = \"stepping\""),
+        ("[drive]\ntensions = 1\n[solver]\nmethod = \"newton\"\n", 4, 10, "unknown variant `newton`, expected `converged` or `stepping`"),
+        ("[finger]\nt_min = 20\n[drive]\ntensions = 1\n", 2, 1, "t_min"),
+        ("[finger]\nnu = 0.7\n[drive]\ntensions = 1\n", 2, 1, "nu"),
+        ("[drive]\ntensions = 1\n[drive]\n", 3, 2, "duplicate key `drive` (first on line 1)"),
+        ("[drive]\ntensions = 1\n[output]\npostures = \"maybe\"\n", 4, 12, "expected a boolean"),
+        ("[drive]\ntensions = 1\n[match]\nlayers = 0\n", 3, 1, "needs `tension"),
+        ("[finger]\npreset = \"fancy\"\n[drive]\ntensions = 1\n", 2, 1, "not \"default\" or \"paper\""),
+        ("title = \"x\"\n", 0, 0, "no tensions"),
     ];
-    for (text, line, what) in cases {
+    for (text, line, column, what) in cases {
         let e = scene::parse("e", text).unwrap_err();
-        assert_eq!(e.line, *line, "{text:?}: {e}");
+        assert_eq!((e.line, e.column), (*line, *column), "{text:?}: {e}");
         assert!(e.to_string().contains(what), "{text:?}: `{e}` lacks `{what}`");
         if *line > 0 {
-            assert!(e.to_string().starts_with(&format!("line {line}: ")), "{e}");
+            assert!(e.to_string().starts_with(&format!("line {line}, column {column}: ")), "{e}");
         }
     }
+}
+
+#[test]
+fn the_old_format_is_refused_with_a_pointer_to_the_new_one() {
+    // INI content: toml's error at its place, and the pointer
+    let old = "[finger]\npreset = paper\nvolts = 0, 0, 0\n[drive]\ntensions = 0, 0.2\n";
+    let e = scene::parse("old", old).unwrap_err();
+    assert_eq!((e.line, e.column), (2, 10), "{e}");
+    assert!(e.message.contains("old INI scene format") && e.message.contains("docs/scenes.md"), "{e}");
+    // a .scene file, whatever it holds, is refused before it is read
+    let dir = std::env::temp_dir().join(format!("finger-scene-old-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("x.scene");
+    std::fs::write(&f, "[drive]\ntensions = 1\n").unwrap();
+    let e = scene::run_file(&f, None).unwrap_err();
+    assert!(e.message.contains("x.scene") && e.message.contains("TOML") && e.message.contains("docs/scenes.md"), "{e}");
+    // and the command says so, writing nothing
+    let out = dir.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene")).arg(&f).arg("--out").arg(&out).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("docs/scenes.md"));
+    assert!(!out.exists());
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -122,15 +147,15 @@ fn model_refusals_name_joint_limit_and_line() {
     // a voltage past the ceiling at joint 2
     let p = Params::<f64>::default();
     let ceiling = de::voltage_ceiling(&p);
-    let text = format!("[finger]\nvolts = 0, {}, 0\n[drive]\ntensions = 1\n", ceiling * 1.01);
+    let text = format!("[finger]\nvolts = [0, {}, 0]\n[drive]\ntensions = 1\n", ceiling * 1.01);
     let e = run_text(&text).unwrap_err();
     assert_eq!(e.line, 2);
     assert!(matches!(e.model, Some(Error::VoltageCeiling { joint: 2, .. })), "{e:?}");
     // a thickness past 33 % at joint 3
     let limit = p.layers as f64 * p.z0 * 2.0 / 3.0;
-    let text = format!("[finger]\nthickness = 2, 2, {}\n[drive]\ntensions = 1\n", limit * 0.99);
+    let text = format!("[finger]\n thickness = [2, 2, {}]\n[drive]\ntensions = 1\n", limit * 0.99);
     let e = run_text(&text).unwrap_err();
-    assert_eq!(e.line, 2);
+    assert_eq!((e.line, e.column), (2, 2));
     match e.model {
         Some(Error::ThicknessLimit { joint, limit_mm, .. }) => {
             assert_eq!(joint, 3);
@@ -168,7 +193,7 @@ fn every_shipped_scene_runs_and_the_refused_one_is_refused() {
 fn the_papers_2mm_to_1mm_request_writes_no_file_and_exits_nonzero() {
     let out = std::env::temp_dir().join(format!("finger-scene-refused-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
-    let scene = top().join("scenes/refused/paper-2mm-to-1mm.scene");
+    let scene = top().join("scenes/refused/paper-2mm-to-1mm.toml");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene"))
         .arg(&scene)
         .arg("--out")
@@ -181,11 +206,11 @@ fn the_papers_2mm_to_1mm_request_writes_no_file_and_exits_nonzero() {
     let limit = p.layers as f64 * p.z0 * 2.0 / 3.0;
     assert!(err.contains("joint 1"), "{err}");
     assert!(err.contains(&format!("{limit:.3} mm")), "{err}");
-    assert!(err.contains("paper-2mm-to-1mm.scene:"), "{err}");
+    assert!(err.contains("paper-2mm-to-1mm.toml:9:1: thickness: joint 1"), "{err}");
     assert!(!out.exists(), "a refused scene created {}", out.display());
 
     // the same command on a good scene writes its three files
-    let good = top().join("scenes/paper-de-0v.scene");
+    let good = top().join("scenes/paper-de-0v.toml");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene"))
         .arg(&good)
         .arg("--out")
@@ -205,7 +230,7 @@ fn the_papers_2mm_to_1mm_request_writes_no_file_and_exits_nonzero() {
 
 #[test]
 fn csv_is_the_models_own_solution() {
-    let path = top().join("scenes/paper-de-joint1-thin.scene");
+    let path = top().join("scenes/paper-de-joint1-thin.toml");
     let r = scene::run_file(&path, scene::reference_solver().as_deref()).unwrap();
     let Drive::Thickness(th) = &r.scene.finger.drive else { panic!("scene drives by thickness") };
     let p = r.scene.finger.params;
@@ -246,11 +271,11 @@ fn csv_is_the_models_own_solution() {
 
 #[test]
 fn stiffness_only_when_asked_and_equal_to_the_models() {
-    let base = "[finger]\npreset = paper\n[drive]\ntensions = 0.3, 0.9\n";
+    let base = "[finger]\npreset = \"paper\"\n[drive]\ntensions = [0.3, 0.9]\n";
     let r = run_text(base).unwrap();
     assert!(r.postures.iter().all(|p| p.stiffness.is_none()));
     assert!(!scene::summary_csv(&r).contains("k_yy"));
-    let r = run_text(&format!("{base}[output]\ntip_stiffness = yes\ncable_excursion = no\npostures = no\n")).unwrap();
+    let r = run_text(&format!("{base}[output]\ntip_stiffness = true\ncable_excursion = false\npostures = false\n")).unwrap();
     let f = Finger::new(Params::<f64>::paper()).unwrap();
     let (head, rows) = csv(&scene::summary_csv(&r));
     assert!(!head.iter().any(|h| h == "cable_excursion_mm"));
@@ -297,7 +322,7 @@ fn match_finds_the_tension_of_equal_tip_angle() {
 
 #[test]
 fn reference_without_a_solver_is_a_clear_error() {
-    let e = run_text("[drive]\ntensions = 1\n[output]\nreference = continuum\n").unwrap_err();
+    let e = run_text("[drive]\ntensions = 1\n[output]\nreference = \"continuum\"\n").unwrap_err();
     assert_eq!(e.line, 3);
     assert!(e.to_string().contains("continuum"));
 }
@@ -394,8 +419,8 @@ fn the_xml_checker_catches_what_it_should() {
 fn svg_is_well_formed_with_one_polyline_per_posture() {
     let reference = scene::reference_solver();
     for name in ["paper-no-de", "paper-de-uniform"] {
-        let r = scene::run_file(&top().join(format!("scenes/{name}.scene")), reference.as_deref()).unwrap();
-        let svg = host_tests::svg::plot(&r);
+        let r = scene::run_file(&top().join(format!("scenes/{name}.toml")), reference.as_deref()).unwrap();
+        let svg = finger_scene::svg::plot(&r);
         check_xml(&svg).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(svg.contains("<svg xmlns=\"http://www.w3.org/2000/svg\""));
         let polys: Vec<&str> = svg.lines().filter(|l| l.contains("<polyline class=\"posture\"")).collect();
@@ -411,11 +436,11 @@ fn svg_is_well_formed_with_one_polyline_per_posture() {
         }
         // a legend entry for each posture, and the axes in mm
         for p in &r.postures {
-            assert!(svg.contains(&host_tests::svg::escape(&p.label)));
+            assert!(svg.contains(&finger_scene::svg::escape(&p.label)));
         }
         assert!(svg.contains("x (mm)") && svg.contains("y (mm)"));
         // one colour per posture
-        let cols = host_tests::svg::colours(&r);
+        let cols = finger_scene::svg::colours(&r);
         let mut uniq = cols.clone();
         uniq.sort();
         uniq.dedup();
@@ -427,8 +452,8 @@ fn svg_is_well_formed_with_one_polyline_per_posture() {
 fn svg_has_equal_aspect() {
     // the straight finger (0 N) spans n*l mm along x; the plotted polyline must span the same
     // number of pixels per mm as a vertical segment of the grid
-    let r = run_text("[drive]\ntensions = 0, 2\n").unwrap();
-    let svg = host_tests::svg::plot(&r);
+    let r = run_text("[drive]\ntensions = [0, 2]\n").unwrap();
+    let svg = finger_scene::svg::plot(&r);
     let line = svg.lines().find(|l| l.contains("class=\"posture\"")).unwrap();
     let pts: Vec<[f64; 2]> = line
         .split("points=\"")
@@ -468,7 +493,7 @@ fn svg_has_equal_aspect() {
 #[test]
 fn shipped_scenes_show_the_papers_statements() {
     let run = |n: &str| {
-        let mut s = scene::parse(n, &std::fs::read_to_string(top().join(format!("scenes/{n}.scene"))).unwrap()).unwrap();
+        let mut s = scene::parse(n, &std::fs::read_to_string(top().join(format!("scenes/{n}.toml"))).unwrap()).unwrap();
         s.output.reference = Reference::None;
         scene::run(&s, None).unwrap()
     };
@@ -513,10 +538,10 @@ impl scene::ReferenceSolver for Counting {
 #[test]
 fn the_reference_is_solved_only_when_asked() {
     let c = Counting(std::cell::Cell::new(0));
-    let s = scene::parse("c", "[drive]\ntensions = 0.2, 0.4\n").unwrap();
+    let s = scene::parse("c", "[drive]\ntensions = [0.2, 0.4]\n").unwrap();
     scene::run(&s, Some(&c)).unwrap();
     assert_eq!(c.0.get(), 0);
-    let s = scene::parse("c", "[drive]\ntensions = 0.2, 0.4\n[output]\nreference = continuum\n").unwrap();
+    let s = scene::parse("c", "[drive]\ntensions = [0.2, 0.4]\n[output]\nreference = \"continuum\"\n").unwrap();
     let e = scene::run(&s, Some(&c)).unwrap_err();
     assert_eq!(c.0.get(), 1);
     assert_eq!(e.line, 3);
@@ -525,8 +550,7 @@ fn the_reference_is_solved_only_when_asked() {
 
 #[test]
 fn continuum_overlay_is_the_continuum_models_solution() {
-    use host_tests::continuum;
-    let path = top().join("scenes/paper-de-joint1-thin.scene");
+    let path = top().join("scenes/paper-de-joint1-thin.toml");
     let r = scene::run_file(&path, scene::reference_solver().as_deref()).unwrap();
     assert_eq!(r.scene.output.reference, Reference::Continuum);
     let cp = scene::continuum_params(&r.scene.finger.params);

@@ -1,0 +1,253 @@
+//! `finger run scene.toml` as a user runs it, against finger-sim (pipes; it has `shape`) and the
+//! firmware's emulator image in QEMU (socket; no `shape`): the CSV holds the host's f64 model
+//! exactly and the board's answers, which agree with it to the board's f32 and print precision;
+//! the board gets the scene's finger; `--drive` arms, drives, reads back and stops; a scene
+//! the model refuses never reaches a board.
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+use finger_model::{Finger, Method, Params};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().unwrap()
+}
+
+fn cargo() -> String {
+    std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
+}
+
+/// finger-sim, built once (host-tests' binary, for this machine).
+fn sim() -> &'static Path {
+    static SIM: OnceLock<PathBuf> = OnceLock::new();
+    SIM.get_or_init(|| {
+        let out = Command::new(cargo())
+            .current_dir(root().join("host-tests"))
+            .args(["build", "--quiet", "--bin", "finger-sim"])
+            .output()
+            .expect("cargo");
+        assert!(out.status.success(), "finger-sim build failed:\n{}", String::from_utf8_lossy(&out.stderr));
+        let p = PathBuf::from(env!("CARGO_BIN_EXE_finger")).parent().unwrap().join("finger-sim");
+        assert!(p.exists(), "finger-sim not at {}", p.display());
+        p
+    })
+}
+
+/// The emulator firmware image, built once (`cargo build --release` at the top).
+fn image() -> &'static Path {
+    static IMG: OnceLock<PathBuf> = OnceLock::new();
+    IMG.get_or_init(|| {
+        let out = Command::new(cargo())
+            .current_dir(root())
+            .args(["build", "--release", "--quiet", "--bin", "finger-fw"])
+            .output()
+            .expect("cargo");
+        assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
+        root().join("target/thumbv7em-none-eabihf/release/finger-fw")
+    })
+}
+
+fn scratch(what: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("finger-run-{what}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn finger(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_finger")).args(args).output().expect("finger")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// header, rows
+fn csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let t = std::fs::read_to_string(path).unwrap();
+    let mut l = t.lines();
+    let head = l.next().unwrap().split(',').map(String::from).collect();
+    (head, l.map(|r| r.split(',').map(String::from).collect()).collect())
+}
+
+fn get(head: &[String], row: &[String], name: &str) -> f64 {
+    let i = head.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"));
+    row[i].parse().unwrap_or_else(|_| panic!("{name} = {:?}", row[i]))
+}
+
+/// A run's CSV: the host columns are the f64 model's own numbers, the board's agree with them
+/// to the console's print precision (3 decimals) plus f32.
+fn check_against_host(csv_path: &Path, params: Params<f64>, volts: &[f64], tensions: &[f64]) {
+    let (head, rows) = csv(csv_path);
+    assert_eq!(rows.len(), tensions.len());
+    let f = Finger::new(params).unwrap();
+    for (row, &t) in rows.iter().zip(tensions) {
+        let s = f.solve(t, volts, Method::Converged { tol: 1e-9, max_iter: 200 }).unwrap();
+        assert_eq!(get(&head, row, "tension_N"), t);
+        for k in 0..3 {
+            let host = get(&head, row, &format!("host_joint{}_deg", k + 1));
+            assert_eq!(host, s.joint_angles()[k].to_degrees());
+            let board = get(&head, row, &format!("board_joint{}_deg", k + 1));
+            assert!((board - host).abs() < 2e-3, "joint {}: board {board} host {host} at {t} N", k + 1);
+            assert_eq!(get(&head, row, &format!("diff_joint{}_deg", k + 1)), board - host);
+            let th = get(&head, row, &format!("board_thickness{}_mm", k + 1));
+            assert!((th - s.thickness[k]).abs() < 2e-4, "stack {}: board {th} host {}", k + 1, s.thickness[k]);
+        }
+        assert!(get(&head, row, "diff_tip_mm") < 5e-3, "{row:?}");
+    }
+}
+
+#[test]
+fn a_scene_on_the_sim_is_the_host_model_to_print_precision() {
+    let dir = scratch("sim");
+    let scene = root().join("scenes/paper-de-joint1-thin.toml");
+    let out = finger(&["--sim", sim().to_str().unwrap(), "run", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    // the paper preset with 4 layers and joint 1 at 1.8 mm: the board computed that finger
+    let s = finger_scene::read_file(&scene).unwrap();
+    let volts = finger_scene::scene::volts_of(&s.finger).unwrap();
+    check_against_host(&dir.join("paper-de-joint1-thin-board.csv"), s.finger.params, &volts, &s.tensions);
+    let (head, rows) = csv(&dir.join("paper-de-joint1-thin-board.csv"));
+    assert!((get(&head, &rows[0], "board_thickness1_mm") - 1.8).abs() < 1e-3);
+    assert!(!head.iter().any(|h| h.starts_with("driven_")), "model only: nothing driven");
+    // the plot: the host's postures and the board's `shape` centrelines (n + 1 nodes, n hinges)
+    let svg = std::fs::read_to_string(dir.join("paper-de-joint1-thin-board.svg")).unwrap();
+    let boards: Vec<&str> = svg.lines().filter(|l| l.contains("<polyline class=\"reference\"")).collect();
+    assert_eq!(boards.len(), s.tensions.len());
+    for l in boards {
+        let pts = l.split("points=\"").nth(1).unwrap().split('"').next().unwrap();
+        assert_eq!(pts.split(' ').count(), 7, "{l}");
+    }
+    assert_eq!(svg.matches("<polyline class=\"posture\"").count(), s.tensions.len());
+    assert!(svg.contains(">board (shape)<"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A scene small enough to drive quickly (600 V at 2000 V/s).
+const DRIVE_SCENE: &str = "title = \"drive\"\n[finger]\nvolts = [600, 300, 0]\n[drive]\ntensions = [0.3, 0.8]\n";
+
+fn check_driven(dir: &Path) {
+    let (head, rows) = csv(&dir.join("drive-board.csv"));
+    assert_eq!(rows.len(), 2);
+    for (row, t) in rows.iter().zip([0.3, 0.8]) {
+        assert_eq!(get(&head, row, "driven_force_N"), t);
+        for (k, v) in [600.0, 300.0, 0.0].iter().enumerate() {
+            assert!((get(&head, row, &format!("driven_volts{}_V", k + 1)) - v).abs() <= 0.5, "{row:?}");
+            // driven there, the board's state is its own `solve` of the posture
+            let d = get(&head, row, &format!("driven_joint{}_deg", k + 1));
+            let b = get(&head, row, &format!("board_joint{}_deg", k + 1));
+            assert!((d - b).abs() < 2e-3, "joint {}: driven {d} solve {b}", k + 1);
+        }
+    }
+}
+
+#[test]
+fn drive_arms_drives_reads_back_and_stops_on_the_sim() {
+    let dir = scratch("drive");
+    let scene = dir.join("drive.toml");
+    std::fs::write(&scene, DRIVE_SCENE).unwrap();
+    // the board's input, as it arrives
+    let log = dir.join("in.log");
+    let board = dir.join("board.sh");
+    std::fs::write(&board, format!("#!/bin/sh\ntee {} | {}\n", log.display(), sim().display())).unwrap();
+    std::fs::set_permissions(&board, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let out = finger(&["--sim", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let p = Params::<f64>::default();
+    check_against_host(&dir.join("drive-board.csv"), p, &[600.0, 300.0, 0.0], &[0.3, 0.8]);
+    check_driven(&dir);
+    let sent = std::fs::read_to_string(&log).unwrap();
+    let lines: Vec<&str> = sent.lines().map(str::trim).collect();
+    let arm = lines.iter().position(|l| *l == "arm").expect("armed");
+    assert!(lines[..arm].iter().any(|l| l.starts_with("preset default")), "{sent}");
+    assert!(lines[arm..].iter().any(|l| *l == "force 0.8") && lines[arm..].iter().any(|l| *l == "volt 1 600"), "{sent}");
+    assert_eq!(lines.last(), Some(&"stop"), "{sent}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_qemu_image_runs_and_drives_the_same_scene() {
+    let dir = scratch("qemu");
+    let scene = dir.join("drive.toml");
+    std::fs::write(&scene, DRIVE_SCENE).unwrap();
+    let log = dir.join("defmt.bin");
+    let out = finger(&[
+        "--qemu",
+        image().to_str().unwrap(),
+        "--defmt-log",
+        log.to_str().unwrap(),
+        "run",
+        "--drive",
+        scene.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    check_against_host(&dir.join("drive-board.csv"), Params::<f64>::default(), &[600.0, 300.0, 0.0], &[0.3, 0.8]);
+    check_driven(&dir);
+    // the image has no `shape`: the board's tips are drawn as rings
+    let svg = std::fs::read_to_string(dir.join("drive-board.svg")).unwrap();
+    assert_eq!(svg.matches("<circle class=\"reference-tip\"").count(), 2);
+    assert!(svg.contains(">board tip (solve)<"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_refused_scene_never_reaches_a_board() {
+    let dir = scratch("refused");
+    let out_dir = dir.join("out");
+    // the model refuses it; the named board does not even exist
+    let scene = root().join("scenes/refused/paper-2mm-to-1mm.toml");
+    let out = finger(&["--sim", "/nonexistent/board", "run", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    let err = text(&out.stderr);
+    assert!(err.contains("line 9, column 1: thickness: joint 1") && err.contains("1.333 mm"), "{err}");
+    // so is the old format, with the pointer to the new one
+    let old = dir.join("old.scene");
+    std::fs::write(&old, "[drive]\ntensions = 1\n").unwrap();
+    let out = finger(&["--sim", "/nonexistent/board", "run", old.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("docs/scenes.md"));
+    assert!(!out_dir.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn ctrl_c_during_a_driven_run_still_stops_the_board() {
+    let dir = scratch("interrupt");
+    let scene = dir.join("drive.toml");
+    std::fs::write(&scene, DRIVE_SCENE).unwrap();
+    // a slow board: each line reaches finger-sim 0.2 s late; what finger sends is logged first
+    let log = dir.join("in.log");
+    let board = dir.join("slow-board.sh");
+    std::fs::write(
+        &board,
+        format!("#!/bin/sh\ntee {} | while IFS= read -r l; do sleep 0.2; printf '%s\\n' \"$l\"; done | {}\n", log.display(), sim().display()),
+    )
+    .unwrap();
+    std::fs::set_permissions(&board, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let out_dir = dir.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_finger"))
+        .args(["--sim", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // once the board is armed, Ctrl-C
+    let t0 = std::time::Instant::now();
+    while !std::fs::read_to_string(&log).unwrap_or_default().lines().any(|l| l.trim() == "arm") {
+        assert!(t0.elapsed() < std::time::Duration::from_secs(30), "never armed");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("interrupted"));
+    let sent = std::fs::read_to_string(&log).unwrap();
+    let lines: Vec<&str> = sent.lines().map(str::trim).collect();
+    assert_eq!(lines.last(), Some(&"stop"), "{sent}");
+    assert!(!lines.iter().any(|l| *l == "force 0.8"), "the run went on after Ctrl-C: {sent}");
+    assert!(!out_dir.exists(), "an interrupted run wrote its files");
+    let _ = std::fs::remove_dir_all(&dir);
+}
