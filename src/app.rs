@@ -653,16 +653,23 @@ impl Commands {
     }
 
     #[inline(never)]
-    fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        // the voltages are optional on a finger without stacks (layers = 0); 0 V is off, never a request
+    /// The arguments of a model-only solve (`solve`, `shape`): `<P> <V1> <V2> <V3>`, the
+    /// voltages optional on a finger without stacks (layers = 0), where 0 V is off, never a
+    /// request. Checked as every voltage is.
+    pub(super) fn model_request(&self, args: &[&[u8]], usage: &str) -> Result<(f32, [f32; CHANNELS]), CmdError> {
         let v = match args {
             [_, v1, v2, v3] => [number(v1, "V1")?, number(v2, "V2")?, number(v3, "V3")?],
             [_] if self.finger.params().layers == 0 => [0.0; CHANNELS],
-            _ => return Err(err!("usage"; "solve <P> <V1> <V2> <V3> (solve <P> without stacks)")),
+            _ => return Err(err!("usage"; usage, " (", usage.split(' ').next().unwrap_or(""), " <P> without stacks)")),
         };
         let p = tension(number(args[0], "P")?)?;
         self.check_volts_of(&v, true)?;
-        let vf = v.map(|x| x as f32);
+        Ok((p, v))
+    }
+
+    #[inline(never)]
+    fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
+        let (p, vf) = self.model_request(args, "solve <P> <V1> <V2> <V3>")?;
         let sol = self.finger.solve(p, &vf, Method::converged()).map_err(model_err)?;
         let k = self.finger.tip_stiffness(&sol).map_err(model_err)?;
         let _ = w!(r; "joints=");

@@ -78,3 +78,19 @@ fn shape_refuses_as_solve_does() {
     }
     assert!(cmd(&mut a, "status").contains("armed=0 force=0.000"), "model only: nothing moved");
 }
+
+#[test]
+fn shape_takes_the_arguments_solve_takes_on_a_finger_without_stacks() {
+    let mut a = App::new(SimBoard::default());
+    assert_eq!(cmd(&mut a, "param layers 0"), "ok layers=0");
+    for args in ["1", "1 0 0 0"] {
+        let solve = cmd(&mut a, &format!("solve {args}"));
+        let shape = cmd(&mut a, &format!("shape {args}"));
+        assert!(solve.starts_with("ok joints="), "{solve}");
+        let nodes = numbers(value(&shape, "nodes"));
+        let tip = numbers(value(&solve, "tip"));
+        assert_eq!(&nodes[nodes.len() - 3..], &tip[..], "shape {args}: {shape} vs {solve}");
+    }
+    assert!(cmd(&mut a, "shape 1 0 100 0").starts_with("err limit:"));
+    assert!(cmd(&mut a, "shape").starts_with("err usage:"));
+}

@@ -9,10 +9,7 @@ use super::*;
 impl Commands {
     #[inline(never)]
     pub(super) fn cmd_shape(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        let [p, v1, v2, v3] = args else { return Err(err!("usage"; "shape <P> <V1> <V2> <V3>")) };
-        let p = tension(number(p, "P")?)?;
-        let v = [number(v1, "V1")?, number(v2, "V2")?, number(v3, "V3")?];
-        self.check_volts(&v)?;
+        let (p, v) = self.model_request(args, "shape <P> <V1> <V2> <V3>")?;
         let sol = self.finger.solve(p, &v, Method::converged()).map_err(model_err)?;
         let link_len = self.finger.params().l - self.finger.params().hinge_len();
         let _ = w!(r; "nodes=");

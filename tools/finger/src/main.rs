@@ -21,6 +21,14 @@ struct Cli {
     /// With --qemu: where QEMU writes the defmt log (`finger log --file` decodes it).
     #[arg(long, global = true, default_value = "target/defmt-client.bin")]
     defmt_log: PathBuf,
+    /// With --sim: the finger-sim program (default: the finger-sim next to this program, else
+    /// on PATH).
+    #[arg(long, global = true)]
+    sim_bin: Option<PathBuf>,
+    /// The firmware image, for --qemu and `log` (default: the release image `cargo build
+    /// --release` writes at the top of the repository).
+    #[arg(long, global = true)]
+    elf: Option<PathBuf>,
     #[command(subcommand)]
     what: What,
 }
@@ -33,14 +41,12 @@ struct Target {
     port: Option<String>,
     #[arg(long, global = true, default_value_t = 115_200)]
     baud: u32,
-    /// finger-sim, the application on a simulated board (default: the finger-sim next to
-    /// this program, else on PATH).
-    #[arg(long, global = true, num_args = 0..=1, default_missing_value = "")]
-    sim: Option<PathBuf>,
-    /// The emulator firmware image booted in QEMU netduinoplus2 (default: the release image
-    /// `cargo build --release` writes at the top of the repository).
-    #[arg(long, global = true, num_args = 0..=1, default_missing_value = "")]
-    qemu: Option<PathBuf>,
+    /// finger-sim, the application on a simulated board (the program: --sim-bin).
+    #[arg(long, global = true)]
+    sim: bool,
+    /// The emulator firmware image booted in QEMU netduinoplus2 (the image: --elf).
+    #[arg(long, global = true)]
+    qemu: bool,
     /// A console on a Unix socket (a QEMU started with -chardev socket,...,server=on).
     #[arg(long, global = true)]
     socket: Option<PathBuf>,
@@ -83,10 +89,8 @@ enum What {
     },
     /// The firmware's defmt log, decoded: a QEMU semihosting log file (followed as it grows),
     /// or with --probe the board's RTT through probe-rs.
+    /// The image whose defmt table decodes the log is --elf.
     Log {
-        /// The firmware image whose defmt table decodes the log.
-        #[arg(long)]
-        elf: Option<PathBuf>,
         /// The log file (default: target/defmt-qemu.bin, which scripts/run writes).
         #[arg(long)]
         file: Option<PathBuf>,
@@ -117,21 +121,26 @@ fn find_sim() -> PathBuf {
     }
 }
 
-fn connect(t: &Target, defmt_log: &Path, timeout: Duration) -> Result<Link, LinkError> {
+fn connect(cli: &Cli, timeout: Duration) -> Result<Link, LinkError> {
+    let t = &cli.to;
     if let Some(p) = &t.port {
         return Link::serial(p, t.baud);
     }
     if let Some(s) = &t.socket {
         return Link::socket(s);
     }
-    if let Some(elf) = &t.qemu {
-        let elf = if elf.as_os_str().is_empty() { default_elf() } else { elf.clone() };
-        let log = if defmt_log.is_absolute() { defmt_log.to_path_buf() } else { repo_root().join(defmt_log) };
+    if t.qemu {
+        let elf = cli.elf.clone().unwrap_or_else(default_elf);
+        let log = if cli.defmt_log.is_absolute() { cli.defmt_log.clone() } else { repo_root().join(&cli.defmt_log) };
         return Link::qemu(&elf, &log, timeout.max(Duration::from_secs(20)));
     }
-    if let Some(sim) = &t.sim {
-        let sim = if sim.as_os_str().is_empty() { find_sim() } else { sim.clone() };
-        return Link::sim(&sim);
+    if t.sim {
+        return Link::sim(&cli.sim_bin.clone().unwrap_or_else(find_sim)).map_err(|e| match e {
+            LinkError::Open(m) if cli.sim_bin.is_none() => {
+                LinkError::Open(format!("{m} (build it: cd host-tests && cargo build --bin finger-sim; or name it with --sim-bin)"))
+            }
+            e => e,
+        });
     }
     Err(LinkError::Open("name a board: --port DEV, --sim, --qemu or --socket PATH".into()))
 }
@@ -234,8 +243,8 @@ fn main() -> ExitCode {
             }
         };
     }
-    if let What::Log { elf, file, no_follow, probe } = &cli.what {
-        let elf = elf.clone().unwrap_or_else(default_elf);
+    if let What::Log { file, no_follow, probe } = &cli.what {
+        let elf = cli.elf.clone().unwrap_or_else(default_elf);
         if *probe {
             let st = std::process::Command::new("probe-rs").args(["attach", "--chip", "STM32F405RGTx"]).arg(&elf).status();
             return match st {
@@ -267,7 +276,7 @@ fn main() -> ExitCode {
         },
         _ => None,
     };
-    let link = match connect(&cli.to, &cli.defmt_log, timeout) {
+    let link = match connect(&cli, timeout) {
         Ok(l) => l,
         Err(e) => {
             eprintln!("finger: {e}");

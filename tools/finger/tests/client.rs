@@ -83,7 +83,9 @@ fn same_session(board: &[&str]) {
 
 #[test]
 fn sim_answers_the_console_contract() {
-    same_session(&["--sim", sim().to_str().unwrap()]);
+    same_session(&["--sim", "--sim-bin", sim().to_str().unwrap()]);
+    // the finger-sim next to the client is the default, and `--sim` takes no value
+    same_session(&["--sim"]);
 }
 
 #[test]
@@ -91,7 +93,7 @@ fn qemu_answers_the_same_session() {
     let dir = std::env::temp_dir().join(format!("finger-client-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let log = dir.join("defmt.bin");
-    same_session(&["--qemu", image().to_str().unwrap(), "--defmt-log", log.to_str().unwrap()]);
+    same_session(&["--qemu", "--elf", image().to_str().unwrap(), "--defmt-log", log.to_str().unwrap()]);
     // what that boot logged, decoded with the image's table
     let out = finger(&["log", "--elf", image().to_str().unwrap(), "--file", log.to_str().unwrap(), "--no-follow"]);
     let so = text(&out.stdout);
@@ -108,17 +110,17 @@ fn script_and_monitor_on_the_sim() {
     std::fs::write(&script, "# a comment\narm\n\nvolt 2 700\nfrobnicate\nstatus\n").unwrap();
     let sim = sim().to_str().unwrap();
     // stops at the first refusal
-    let out = finger(&["--sim", sim, "script", script.to_str().unwrap()]);
+    let out = finger(&["--sim", "--sim-bin", sim, "script", script.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
     let so = text(&out.stdout);
     assert!(so.contains("> volt 2 700\nok volts=0.0,700.0,0.0") && !so.contains("> status"), "{so}");
     assert!(text(&out.stderr).contains("frobnicate: err unknown:"));
     // --keep-going runs the rest, and still reports the refusal in the exit status
-    let out = finger(&["--sim", sim, "script", "--keep-going", script.to_str().unwrap()]);
+    let out = finger(&["--sim", "--sim-bin", sim, "script", "--keep-going", script.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stdout).contains("> status\nok armed=1 "));
 
-    let out = finger(&["--sim", sim, "monitor", "--rate", "50", "--count", "4"]);
+    let out = finger(&["--sim", "--sim-bin", sim, "monitor", "--rate", "50", "--count", "4"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let so = text(&out.stdout);
     assert_eq!(so.lines().filter(|l| l.starts_with("ok armed=0 ")).count(), 4, "{so}");
@@ -134,12 +136,12 @@ fn a_board_that_stops_answering_is_reported_after_the_time_out() {
     std::fs::write(&mute, "#!/bin/sh\nexec sleep 30\n").unwrap();
     std::fs::set_permissions(&mute, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
     let t0 = Instant::now();
-    let out = finger(&["--sim", mute.to_str().unwrap(), "--timeout", "0.5", "cmd", "status"]);
+    let out = finger(&["--sim", "--sim-bin", mute.to_str().unwrap(), "--timeout", "0.5", "cmd", "status"]);
     assert!(t0.elapsed() < Duration::from_secs(10));
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("did not answer within 0.5 s"), "{}", text(&out.stderr));
     // and one whose link ends is reported as such, not waited on
-    let out = finger(&["--sim", "/bin/true", "cmd", "status"]);
+    let out = finger(&["--sim", "--sim-bin", "/bin/true", "cmd", "status"]);
     assert_eq!(out.status.code(), Some(2));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -101,7 +101,7 @@ fn check_against_host(csv_path: &Path, params: Params<f64>, volts: &[f64], tensi
 fn a_scene_on_the_sim_is_the_host_model_to_print_precision() {
     let dir = scratch("sim");
     let scene = root().join("scenes/paper-de-joint1-thin.toml");
-    let out = finger(&["--sim", sim().to_str().unwrap(), "run", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    let out = finger(&["--sim", "--sim-bin", sim().to_str().unwrap(), "run", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     // the paper preset with 4 layers and joint 1 at 1.8 mm: the board computed that finger
     let s = finger_scene::read_file(&scene).unwrap();
@@ -151,7 +151,7 @@ fn drive_arms_drives_reads_back_and_stops_on_the_sim() {
     let board = dir.join("board.sh");
     std::fs::write(&board, format!("#!/bin/sh\ntee {} | {}\n", log.display(), sim().display())).unwrap();
     std::fs::set_permissions(&board, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
-    let out = finger(&["--sim", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    let out = finger(&["--sim", "--sim-bin", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let p = Params::<f64>::default();
     check_against_host(&dir.join("drive-board.csv"), p, &[600.0, 300.0, 0.0], &[0.3, 0.8]);
@@ -173,6 +173,7 @@ fn the_qemu_image_runs_and_drives_the_same_scene() {
     let log = dir.join("defmt.bin");
     let out = finger(&[
         "--qemu",
+        "--elf",
         image().to_str().unwrap(),
         "--defmt-log",
         log.to_str().unwrap(),
@@ -198,14 +199,14 @@ fn a_refused_scene_never_reaches_a_board() {
     let out_dir = dir.join("out");
     // the model refuses it; the named board does not even exist
     let scene = root().join("scenes/refused/paper-2mm-to-1mm.toml");
-    let out = finger(&["--sim", "/nonexistent/board", "run", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+    let out = finger(&["--sim", "--sim-bin", "/nonexistent/board", "run", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
     let err = text(&out.stderr);
     assert!(err.contains("line 9, column 1: thickness: joint 1") && err.contains("1.333 mm"), "{err}");
     // so is the old format, with the pointer to the new one
     let old = dir.join("old.scene");
     std::fs::write(&old, "[drive]\ntensions = 1\n").unwrap();
-    let out = finger(&["--sim", "/nonexistent/board", "run", old.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+    let out = finger(&["--sim", "--sim-bin", "/nonexistent/board", "run", old.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("docs/scenes.md"));
     assert!(!out_dir.exists());
@@ -228,7 +229,7 @@ fn ctrl_c_during_a_driven_run_still_stops_the_board() {
     std::fs::set_permissions(&board, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
     let out_dir = dir.join("out");
     let mut child = Command::new(env!("CARGO_BIN_EXE_finger"))
-        .args(["--sim", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()])
+        .args(["--sim", "--sim-bin", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()])
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
         .spawn()
