@@ -1,0 +1,344 @@
+//! The CalculiX side: the input deck (`.inp`) for a mesh and its loads, running `ccx`, and
+//! reading the nodal displacements it prints to the `.dat` file.
+//!
+//! What it is not: a finite-element solver. Every stiffness, Newton iteration and increment
+//! is CalculiX's (2.20, Debian's `calculix-ccx`; scripts/setup installs it).
+
+use crate::mesh::{Material, Mesh2, Mesh3};
+use finger_model::Params;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::process::Command;
+
+/// The idealisation of the out-of-plane direction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Kind {
+    /// 2D, ε_z = 0 (CPE8R), thickness w.
+    PlaneStrain,
+    /// 2D plane stress (CPS8R), thickness w. CalculiX expands it to one slab of 20-node bricks
+    /// of thickness w with free faces: a coarse 3D plate, not σ_z = 0 (see tests/beam.rs).
+    PlaneStress,
+    /// 3D, half the width (z in [0, w/2]) with the symmetry plane z = 0 (C3D20R).
+    Half3d,
+}
+
+impl Kind {
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::PlaneStrain => "plane strain (CPE8R)",
+            Kind::PlaneStress => "plane stress (CPS8R)",
+            Kind::Half3d => "3D half width (C3D20R)",
+        }
+    }
+    pub fn short(self) -> &'static str {
+        match self {
+            Kind::PlaneStrain => "pe",
+            Kind::PlaneStress => "ps",
+            Kind::Half3d => "3d",
+        }
+    }
+    /// The share of the whole finger's width this model carries (loads are scaled by it).
+    pub fn load_share(self) -> f64 {
+        if self == Kind::Half3d {
+            0.5
+        } else {
+            1.0
+        }
+    }
+}
+
+#[derive(Debug)]
+pub enum FeError {
+    /// `ccx` could not be started (not installed: run scripts/setup).
+    Spawn(String),
+    /// `ccx` ran and reported an error or did not converge; the tail of its log.
+    Ccx(String),
+    /// The `.dat` did not hold what was asked for.
+    Parse(String),
+    /// The geometry asks for a node that the mesh has not (e.g. a guide hole off the grid).
+    Mesh(String),
+}
+
+impl std::fmt::Display for FeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FeError::Spawn(s) => write!(f, "cannot run ccx ({s}); scripts/setup installs calculix-ccx"),
+            FeError::Ccx(s) => write!(f, "ccx failed: {s}"),
+            FeError::Parse(s) => write!(f, "ccx output: {s}"),
+            FeError::Mesh(s) => write!(f, "mesh: {s}"),
+        }
+    }
+}
+impl std::error::Error for FeError {}
+
+/// A mesh in either dimension, as the deck needs it.
+pub enum AnyMesh {
+    Two(Mesh2),
+    Three(Mesh3),
+}
+
+impl AnyMesh {
+    pub fn node_count(&self) -> usize {
+        match self {
+            AnyMesh::Two(m) => m.nodes.len(),
+            AnyMesh::Three(m) => m.nodes.len(),
+        }
+    }
+    pub fn xy(&self, i: usize) -> [f64; 2] {
+        match self {
+            AnyMesh::Two(m) => m.nodes[i],
+            AnyMesh::Three(m) => [m.nodes[i][0], m.nodes[i][1]],
+        }
+    }
+    pub fn at_x(&self, x: f64) -> Vec<usize> {
+        match self {
+            AnyMesh::Two(m) => m.at_x(x),
+            AnyMesh::Three(m) => m.at_x(x),
+        }
+    }
+    /// The node at (x, y) (on the symmetry plane z = 0 in 3D).
+    pub fn find(&self, x: f64, y: f64) -> Result<usize, FeError> {
+        match self {
+            AnyMesh::Two(m) => m.find(x, y),
+            AnyMesh::Three(m) => m.find(x, y, 0.0),
+        }
+        .ok_or_else(|| FeError::Mesh(format!("no node at ({x}, {y}): the guide holes must lie on a node row (e = b/2)")))
+    }
+    /// Elements, as (CalculiX node ids 1-based, material).
+    pub fn element_count(&self) -> usize {
+        match self {
+            AnyMesh::Two(m) => m.elems.len(),
+            AnyMesh::Three(m) => m.elems.len(),
+        }
+    }
+}
+
+/// Nodal forces of one load case: (node, Fx, Fy), already for this model's share of the width.
+pub type NodalLoads = Vec<(usize, f64, f64)>;
+
+/// What a deck loads the mesh with.
+pub enum Loads {
+    /// The cable: constant-force springs between consecutive guide holes (node ids), NLGEOM, one
+    /// step per tension (N), each ramped from the last.
+    Cable { holes: Vec<usize>, tensions: Vec<f64> },
+    /// Linear steps, one per load case.
+    Unit(Vec<NodalLoads>),
+}
+
+/// An input deck and the node set whose displacements it prints.
+pub struct Deck {
+    pub text: String,
+    pub out_nodes: Vec<usize>,
+    /// Total step times at which each result is read (step ends).
+    pub times: Vec<f64>,
+}
+
+/// Write the deck: mesh, materials (body E_b, nu_b; stack E_de, nu), the clamp x = `clamp_x`,
+/// the symmetry plane (3D), loads, output.
+pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &Loads, out_nodes: Vec<usize>) -> Deck {
+    let mut s = String::new();
+    let _ = writeln!(s, "*HEADING\nfinger-calculix: {}", kind.name());
+    let _ = writeln!(s, "*NODE, NSET=NALL");
+    for i in 0..mesh.node_count() {
+        match mesh {
+            AnyMesh::Two(m) => {
+                let _ = writeln!(s, "{}, {:.12e}, {:.12e}", i + 1, m.nodes[i][0], m.nodes[i][1]);
+            }
+            AnyMesh::Three(m) => {
+                let n = m.nodes[i];
+                let _ = writeln!(s, "{}, {:.12e}, {:.12e}, {:.12e}", i + 1, n[0], n[1], n[2]);
+            }
+        }
+    }
+    let etype = match kind {
+        Kind::PlaneStrain => "CPE8R",
+        Kind::PlaneStress => "CPS8R",
+        Kind::Half3d => "C3D20R",
+    };
+    let mut next = 1usize;
+    for (set, mat) in [("EBODY", Material::Body), ("ESTACK", Material::Stack)] {
+        let conn: Vec<Vec<usize>> = match mesh {
+            AnyMesh::Two(m) => m.elems.iter().filter(|e| e.1 == mat).map(|e| e.0.to_vec()).collect(),
+            AnyMesh::Three(m) => m.elems.iter().filter(|e| e.1 == mat).map(|e| e.0.to_vec()).collect(),
+        };
+        if conn.is_empty() {
+            continue;
+        }
+        let _ = writeln!(s, "*ELEMENT, TYPE={etype}, ELSET={set}");
+        for c in conn {
+            // at most 16 entries per line; C3D20 continues on the next line
+            let ids: Vec<String> = c.iter().map(|n| (n + 1).to_string()).collect();
+            let _ = write!(s, "{next}");
+            for (i, id) in ids.iter().enumerate() {
+                if i == 15 {
+                    let _ = write!(s, ",\n{id}");
+                } else {
+                    let _ = write!(s, ", {id}");
+                }
+            }
+            let _ = writeln!(s);
+            next += 1;
+        }
+    }
+    let share = kind.load_share();
+    match loads {
+        Loads::Cable { holes, .. } => {
+            let _ = writeln!(s, "*ELEMENT, TYPE=SPRINGA, ELSET=ECABLE");
+            for w in holes.windows(2) {
+                let _ = writeln!(s, "{next}, {}, {}", w[0] + 1, w[1] + 1);
+                next += 1;
+            }
+        }
+        Loads::Unit(_) => {}
+    }
+    let _ = writeln!(s, "*NSET, NSET=NCLAMP");
+    for i in mesh.at_x(clamp_x) {
+        let _ = writeln!(s, "{},", i + 1);
+    }
+    let _ = writeln!(s, "*NSET, NSET=NOUT");
+    for &i in &out_nodes {
+        let _ = writeln!(s, "{},", i + 1);
+    }
+    if let AnyMesh::Three(m) = mesh {
+        let _ = writeln!(s, "*NSET, NSET=NSYM");
+        for (i, n) in m.nodes.iter().enumerate() {
+            if n[2].abs() < 1e-9 {
+                let _ = writeln!(s, "{},", i + 1);
+            }
+        }
+    }
+    let _ = writeln!(s, "*MATERIAL, NAME=BODY\n*ELASTIC\n{:.9e}, {:.6}", p.e_b, p.nu_b);
+    let _ = writeln!(s, "*MATERIAL, NAME=STACK\n*ELASTIC\n{:.9e}, {:.6}", p.e_de(), p.nu);
+    let thick = if kind == Kind::Half3d { String::new() } else { format!("\n{:.9e}", p.w) };
+    let _ = writeln!(s, "*SOLID SECTION, ELSET=EBODY, MATERIAL=BODY{thick}");
+    let has_stack = match mesh {
+        AnyMesh::Two(m) => m.elems.iter().any(|e| e.1 == Material::Stack),
+        AnyMesh::Three(m) => m.elems.iter().any(|e| e.1 == Material::Stack),
+    };
+    if has_stack {
+        let _ = writeln!(s, "*SOLID SECTION, ELSET=ESTACK, MATERIAL=STACK{thick}");
+    }
+    let mut times = Vec::new();
+    match loads {
+        Loads::Cable { tensions, .. } => {
+            // force = share x temperature: the step's temperature is the tension, ramped
+            let tmax = 1000.0;
+            let _ = writeln!(
+                s,
+                "*SPRING, ELSET=ECABLE, NONLINEAR\n0., -1.e4, 0.\n0., 1.e4, 0.\n{f:.9e}, -1.e4, {tmax:.1}\n{f:.9e}, 1.e4, {tmax:.1}",
+                f = share * tmax
+            );
+            let _ = writeln!(s, "*INITIAL CONDITIONS, TYPE=TEMPERATURE\nNALL, 0.");
+            write_bcs(&mut s, mesh);
+            for (i, t) in tensions.iter().enumerate() {
+                let _ = writeln!(
+                    s,
+                    "*STEP, NLGEOM, INC=2000\n*STATIC\n0.25, 1., 1.e-6, 0.5\n*TEMPERATURE\nNALL, {t:.9e}\n*NODE PRINT, NSET=NOUT\nU\n*END STEP"
+                );
+                times.push((i + 1) as f64);
+            }
+        }
+        Loads::Unit(cases) => {
+            write_bcs(&mut s, mesh);
+            for (i, c) in cases.iter().enumerate() {
+                let _ = writeln!(s, "*STEP\n*STATIC\n*CLOAD, OP=NEW");
+                for &(n, fx, fy) in c {
+                    let _ = writeln!(s, "{}, 1, {fx:.12e}\n{}, 2, {fy:.12e}", n + 1, n + 1);
+                }
+                let _ = writeln!(s, "*NODE PRINT, NSET=NOUT\nU\n*END STEP");
+                times.push((i + 1) as f64);
+            }
+        }
+    }
+    Deck { text: s, out_nodes, times }
+}
+
+fn write_bcs(s: &mut String, mesh: &AnyMesh) {
+    match mesh {
+        AnyMesh::Two(_) => {
+            let _ = writeln!(s, "*BOUNDARY\nNCLAMP, 1, 2");
+        }
+        AnyMesh::Three(_) => {
+            let _ = writeln!(s, "*BOUNDARY\nNCLAMP, 1, 3\nNSYM, 3, 3");
+        }
+    }
+}
+
+/// Displacements (ux, uy) of the deck's output nodes (0-based mesh ids) at each step end.
+pub type Results = Vec<BTreeMap<usize, [f64; 2]>>;
+
+static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Run ccx on the deck in a fresh scratch directory and read the step-end displacements.
+pub fn run(deck: &Deck) -> Result<Results, FeError> {
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    let dir: PathBuf = std::env::temp_dir().join(format!("finger-calculix-{}-{n}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| FeError::Spawn(e.to_string()))?;
+    std::fs::write(dir.join("job.inp"), &deck.text).map_err(|e| FeError::Spawn(e.to_string()))?;
+    let out = Command::new("ccx")
+        .arg("-i")
+        .arg("job")
+        .current_dir(&dir)
+        .env("OMP_NUM_THREADS", "1")
+        .env("CCX_NPROC_EQUATION_SOLVER", "1")
+        .output()
+        .map_err(|e| FeError::Spawn(e.to_string()))?;
+    let log = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap_or_default();
+    let keep = std::env::var_os("FINGER_CALCULIX_KEEP").is_some();
+    if !keep {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    if !out.status.success() || log.contains("*ERROR") {
+        let tail: Vec<&str> = log.lines().filter(|l| !l.trim().is_empty()).collect();
+        let tail = tail[tail.len().saturating_sub(6)..].join(" | ");
+        return Err(FeError::Ccx(tail));
+    }
+    parse_dat(&dat, deck)
+}
+
+/// The `.dat` blocks "displacements (vx,vy,vz) for set NOUT and time T", at the step ends.
+pub fn parse_dat(dat: &str, deck: &Deck) -> Result<Results, FeError> {
+    let mut blocks: Vec<(f64, BTreeMap<usize, [f64; 2]>)> = Vec::new();
+    let mut cur: Option<(f64, BTreeMap<usize, [f64; 2]>)> = None;
+    for line in dat.lines() {
+        let l = line.trim();
+        if l.starts_with("displacements") {
+            if let Some(b) = cur.take() {
+                blocks.push(b);
+            }
+            let t: f64 = l.rsplit(' ').next().and_then(|v| v.parse().ok()).ok_or_else(|| FeError::Parse(format!("time in '{l}'")))?;
+            cur = Some((t, BTreeMap::new()));
+        } else if let Some((_, map)) = cur.as_mut() {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            if f.len() == 4 {
+                if let (Ok(id), Ok(ux), Ok(uy)) = (f[0].parse::<usize>(), f[1].parse::<f64>(), f[2].parse::<f64>()) {
+                    map.insert(id - 1, [ux, uy]);
+                    continue;
+                }
+            }
+            if !l.is_empty() {
+                if let Some(b) = cur.take() {
+                    blocks.push(b);
+                }
+            }
+        }
+    }
+    if let Some(b) = cur.take() {
+        blocks.push(b);
+    }
+    let mut out = Vec::new();
+    for &t in &deck.times {
+        let b = blocks
+            .iter()
+            .rev()
+            .find(|b| (b.0 - t).abs() < 1e-6 * t.max(1.0))
+            .ok_or_else(|| FeError::Parse(format!("no displacements at step end t = {t} (did the step converge?)")))?;
+        if deck.out_nodes.iter().any(|n| !b.1.contains_key(n)) {
+            return Err(FeError::Parse(format!("missing output nodes at t = {t}")));
+        }
+        out.push(b.1.clone());
+    }
+    Ok(out)
+}
