@@ -156,25 +156,53 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
         Kind::PlaneStress => "CPS8R",
         Kind::Half3d => "C3D20R",
     };
-    let mut next = 1usize;
-    for (set, mat) in [("EBODY", Material::Body), ("ESTACK", Material::Stack)] {
-        let conn: Vec<Vec<usize>> = match mesh {
-            AnyMesh::Two(m) => m.elems.iter().filter(|e| e.1 == mat).map(|e| e.0.to_vec()).collect(),
-            AnyMesh::Three(m) => m.elems.iter().filter(|e| e.1 == mat).map(|e| e.0.to_vec()).collect(),
-        };
-        if conn.is_empty() {
-            continue;
+    // element blocks by (set, type); a collapsed quadrilateral (an edge of zero length, where a
+    // stack ends) is written as a 6-node triangle in 2D: CalculiX's expansion of 2D elements
+    // into bricks mishandles repeated nodes (the stack came out 7x too stiff); the 3D mesh's
+    // own collapsed bricks are fine (they converge to the uncollapsed answer)
+    let tri = match kind {
+        Kind::PlaneStrain => "CPE6",
+        _ => "CPS6",
+    };
+    let mut blocks: Vec<(String, &str, Material, Vec<Vec<usize>>)> = Vec::new();
+    let mut push = |set: String, ty: &'static str, mat: Material, c: Vec<usize>| {
+        if let Some(b) = blocks.iter_mut().find(|b| b.0 == set) {
+            b.3.push(c);
+        } else {
+            blocks.push((set, ty, mat, vec![c]));
         }
-        let _ = writeln!(s, "*ELEMENT, TYPE={etype}, ELSET={set}");
+    };
+    match mesh {
+        AnyMesh::Two(m) => {
+            for (n, mat) in &m.elems {
+                let base = if *mat == Material::Body { "EBODY" } else { "ESTACK" };
+                if n[0] == n[3] {
+                    push(format!("{base}T"), tri, *mat, vec![n[0], n[1], n[2], n[4], n[5], n[6]]);
+                } else if n[1] == n[2] {
+                    push(format!("{base}T"), tri, *mat, vec![n[0], n[1], n[3], n[4], n[6], n[7]]);
+                } else {
+                    push(base.to_string(), etype, *mat, n.to_vec());
+                }
+            }
+        }
+        AnyMesh::Three(m) => {
+            for (n, mat) in &m.elems {
+                let base = if *mat == Material::Body { "EBODY" } else { "ESTACK" };
+                push(base.to_string(), etype, *mat, n.to_vec());
+            }
+        }
+    }
+    let mut next = 1usize;
+    for (set, ty, _, conn) in &blocks {
+        let _ = writeln!(s, "*ELEMENT, TYPE={ty}, ELSET={set}");
         for c in conn {
             // at most 16 entries per line; C3D20 continues on the next line
-            let ids: Vec<String> = c.iter().map(|n| (n + 1).to_string()).collect();
             let _ = write!(s, "{next}");
-            for (i, id) in ids.iter().enumerate() {
+            for (i, id) in c.iter().enumerate() {
                 if i == 15 {
-                    let _ = write!(s, ",\n{id}");
+                    let _ = write!(s, ",\n{}", id + 1);
                 } else {
-                    let _ = write!(s, ", {id}");
+                    let _ = write!(s, ", {}", id + 1);
                 }
             }
             let _ = writeln!(s);
@@ -211,13 +239,9 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
     let _ = writeln!(s, "*MATERIAL, NAME=BODY\n*ELASTIC\n{:.9e}, {:.6}", p.e_b, p.nu_b);
     let _ = writeln!(s, "*MATERIAL, NAME=STACK\n*ELASTIC\n{:.9e}, {:.6}", p.e_de(), p.nu);
     let thick = if kind == Kind::Half3d { String::new() } else { format!("\n{:.9e}", p.w) };
-    let _ = writeln!(s, "*SOLID SECTION, ELSET=EBODY, MATERIAL=BODY{thick}");
-    let has_stack = match mesh {
-        AnyMesh::Two(m) => m.elems.iter().any(|e| e.1 == Material::Stack),
-        AnyMesh::Three(m) => m.elems.iter().any(|e| e.1 == Material::Stack),
-    };
-    if has_stack {
-        let _ = writeln!(s, "*SOLID SECTION, ELSET=ESTACK, MATERIAL=STACK{thick}");
+    for (set, _, mat, _) in &blocks {
+        let name = if *mat == Material::Body { "BODY" } else { "STACK" };
+        let _ = writeln!(s, "*SOLID SECTION, ELSET={set}, MATERIAL={name}{thick}");
     }
     let mut times = Vec::new();
     match loads {

@@ -141,8 +141,8 @@ pub fn stub_len(p: &Params<f64>) -> f64 {
 
 /// One element's small-load compliance (linear FE): hinge (with a stack of `stack_mm`) and
 /// link between sections x = 0 and x = l, with link stubs before (clamped) and after (loaded
-/// through a rigid face); the displacement of section l relative to section 0 (in its frame)
-/// per unit wrench at section l (Fx, Fy, M about its centre), as the model's `C_el`.
+/// at its end face); the displacement of section l relative to section 0 (in its frame) per
+/// unit wrench at section l (Fx, Fy, M about its centre), as the model's element compliance.
 pub fn element_compliance(p: &Params<f64>, stack_mm: f64, kind: Kind, d: &Density) -> Result<Mat3<f64>, FeError> {
     let s = stub_len(p);
     let segs = [
@@ -151,40 +151,61 @@ pub fn element_compliance(p: &Params<f64>, stack_mm: f64, kind: Kind, d: &Densit
         Segment::Link { x0: 2.0 * p.a, x1: p.l },
         Segment::Link { x0: p.l, x1: p.l + s },
     ];
-    let m2 = mesh::mesh2(p, &segs, d);
+    compliance_between(p, &segs, kind, d, 0.0, p.l)
+}
+
+/// A uniform strip of thickness p.b and length `len`, clamped at x = 0 (loaded at the end of a
+/// stub of one thickness past x = len): the compliance of section `len` (beam-theory checks).
+pub fn beam_compliance(p: &Params<f64>, len: f64, kind: Kind, d: &Density) -> Result<Mat3<f64>, FeError> {
+    let segs = [Segment::Link { x0: 0.0, x1: len }, Segment::Link { x0: len, x1: len + p.b }];
+    compliance_between(p, &segs, kind, d, 0.0, len)
+}
+
+/// Linear unit loads on the last segment's end face (the mesh is clamped at its first
+/// segment's start): section `xb`'s displacement relative to section `xa`'s rigid motion, per
+/// unit wrench at section `xb` (moment about its centre). `C = Δ W⁻¹` over three load cases.
+pub fn compliance_between(p: &Params<f64>, segs: &[Segment], kind: Kind, d: &Density, xa: f64, xb: f64) -> Result<Mat3<f64>, FeError> {
+    let x_clamp = match segs[0] {
+        Segment::Link { x0, .. } | Segment::Notch { x0, .. } => x0,
+    };
+    let x_face = match *segs.last().unwrap() {
+        Segment::Link { x1, .. } => x1,
+        Segment::Notch { x0, .. } => x0 + 2.0 * p.a,
+    };
+    let m2 = mesh::mesh2(p, segs, d);
     let mesh = match kind {
         Kind::Half3d => AnyMesh::Three(mesh::extrude(&m2, p.w / 2.0, d.layers)),
         _ => AnyMesh::Two(m2),
     };
-    let s0 = mesh.at_x(0.0);
-    let sl = mesh.at_x(p.l);
-    let mut out: Vec<usize> = s0.iter().chain(sl.iter()).copied().collect();
+    let (sa, sb) = (mesh.at_x(xa), mesh.at_x(xb));
+    if sa.is_empty() || sb.is_empty() {
+        return Err(FeError::Mesh(format!("no section at x = {xa} or {xb}")));
+    }
+    let mut out: Vec<usize> = sa.iter().chain(sb.iter()).copied().collect();
     out.sort();
     out.dedup();
-    // unit loads at the face x = l + s, and the wrench they put on section l
     // small loads: the section fit measures finite rotations (atan of the linear field's
     // slope), so the linear solution is read where atan(θ) = θ to 1e-6
     let f = 1e-3;
-    let cases = vec![[f, 0.0, 0.0], [0.0, f, 0.0], [0.0, 0.0, f]];
-    let loads = Loads::Unit(cases.iter().map(|c| face_loads(p, kind, &mesh, p.l + s, *c)).collect::<Result<_, _>>()?);
-    let deck = ccx::deck(p, kind, &mesh, -s, &loads, out);
+    let cases = [[f, 0.0, 0.0], [0.0, f, 0.0], [0.0, 0.0, f]];
+    let arm = x_face - xb;
+    let loads = Loads::Unit(cases.iter().map(|c| face_loads(p, kind, &mesh, x_face, *c)).collect::<Result<_, _>>()?);
+    let deck = ccx::deck(p, kind, &mesh, x_clamp, &loads, out);
     let res = ccx::run(&deck)?;
     let mut delta = [[0.0; 3]; 3]; // columns: cases
     let mut wrench = [[0.0; 3]; 3];
     for (j, (c, u)) in cases.iter().zip(res.iter()).enumerate() {
-        let a = section_pose(&mesh, &s0, u);
-        let b = section_pose(&mesh, &sl, u);
-        // displacements (the reference centres are (0,0) and (l,0))
-        let (u0, ul) = ([a.x, a.y, a.theta], [b.x - p.l, b.y, b.theta]);
-        let rel = [ul[0] - u0[0], ul[1] - u0[1] - p.l * u0[2], ul[2] - u0[2]];
-        let w = [c[0], c[1], c[2] + s * c[1]];
-        if std::env::var_os("FE_DEBUG").is_some() { eprintln!("case {j}: sec0 {a:?} secl {b:?} rel {rel:?} w {w:?}"); }
+        let a = section_pose(&mesh, &sa, u);
+        let b = section_pose(&mesh, &sb, u);
+        let (ua, ub) = ([a.x - xa, a.y, a.theta], [b.x - xb, b.y, b.theta]);
+        let l = xb - xa;
+        let rel = [ub[0] - ua[0], ub[1] - ua[1] - l * ua[2], ub[2] - ua[2]];
+        let w = [c[0], c[1], c[2] + arm * c[1]];
         for i in 0..3 {
             delta[i][j] = rel[i];
             wrench[i][j] = w[i];
         }
     }
-    // C = Δ W⁻¹
     let winv = finger_model::mat3::inverse(&wrench).ok_or_else(|| FeError::Parse("singular load cases".into()))?;
     Ok(finger_model::mat3::mul(&delta, &winv))
 }
