@@ -70,6 +70,7 @@
 //! cable's follower load, so it is a poor Jacobian), with backtracking. F is the force the object exerts on the tip; the finger presses on the object
 //! with -F. The tip is taken as pinned at the point (no slip, no separation test).
 
+use crate::calibration::Calibration;
 use crate::de;
 use crate::error::Error;
 use crate::finger::{Finger, Method, Pose, Solution};
@@ -430,7 +431,8 @@ fn solve<R: Real>(
         iterations: 0,
     };
     out.angles[..n].copy_from_slice(angles);
-    if !cfg!(feature = "inverse-fast") || p.m != 1 || p.flex_links {
+    // a calibrated finger takes the general path (the fast path's K(t) is MODEL.md's)
+    if !cfg!(feature = "inverse-fast") || p.m != 1 || p.flex_links || *f.calibration() != Calibration::none() {
         // sub-divided hinges or flexible links: bracketed root finding around the forward
         // per-joint equilibrium (`general`). A build without `inverse-fast` (the firmware,
         // whose default model is m = 8) takes this path for m = 1 too and leaves the fast

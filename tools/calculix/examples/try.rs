@@ -3,15 +3,12 @@ use finger_calculix::ccx::Kind;
 use finger_calculix::mesh::Density;
 use finger_model::Params;
 fn main() {
-    for nu in [0.49, 0.3] {
-    for stack in [2.0, 4.5] {
-    let p = Params::<f64> { nu, ..Params::default() };
-    for kind in [Kind::PlaneStrain, Kind::PlaneStress, Kind::Half3d] {
-            for k in [1] {
-                let d = Density::coarse().times(k);
-                let c = element_compliance(&p, stack, kind, &d).unwrap();
-                println!("nu {nu} {:?} stack {stack} x{k}: xx {:.6e} yy {:.6e} ym {:.6e} mm {:.6e} xm {:.6e}", kind, c[0][0], c[1][1], c[1][2], c[2][2], c[0][2]);
-            }
-        }
-    }}
+    let p = Params::<f64>::default().without_stacks();
+    for (kind, d) in [(Kind::PlaneStrain, Density::fine()), (Kind::Half3d, Density::coarse()), (Kind::Half3d, Density::fine())] {
+        let t0 = std::time::Instant::now();
+        let r = finger_under_cable_partial(&p, &[0.0;3], kind, &d, &[0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]).unwrap();
+        for st in r.0 { println!("{:?} {} {:?} tip {:?} span {:?}", kind, st.tension, st.joint_angle.iter().map(|a| a.to_degrees()).collect::<Vec<_>>(), st.tip(), st.span); }
+        if let Some(e) = r.1 { println!("{e}"); }
+        println!("{:?} {:?}", d, t0.elapsed());
+    }
 }

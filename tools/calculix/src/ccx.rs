@@ -296,6 +296,14 @@ static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize:
 
 /// Run ccx on the deck in a fresh scratch directory and read the step-end displacements.
 pub fn run(deck: &Deck) -> Result<Results, FeError> {
+    match run_partial(deck)? {
+        (r, None) => Ok(r),
+        (_, Some(e)) => Err(e),
+    }
+}
+
+/// `run`, keeping the steps that ended before a failure: (their results, the failure).
+pub fn run_partial(deck: &Deck) -> Result<(Results, Option<FeError>), FeError> {
     let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
     let dir: PathBuf = std::env::temp_dir().join(format!("finger-calculix-{}-{n}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| FeError::Spawn(e.to_string()))?;
@@ -317,9 +325,18 @@ pub fn run(deck: &Deck) -> Result<Results, FeError> {
     if !out.status.success() || log.contains("*ERROR") {
         let tail: Vec<&str> = log.lines().filter(|l| !l.trim().is_empty()).collect();
         let tail = tail[tail.len().saturating_sub(6)..].join(" | ");
-        return Err(FeError::Ccx(tail));
+        // the steps that ended before it
+        let mut done = Vec::new();
+        for k in 1..=deck.times.len() {
+            let d = Deck { text: String::new(), out_nodes: deck.out_nodes.clone(), times: deck.times[..k].to_vec() };
+            match parse_dat(&dat, &d) {
+                Ok(r) => done = r,
+                Err(_) => break,
+            }
+        }
+        return Ok((done, Some(FeError::Ccx(tail))));
     }
-    parse_dat(&dat, deck)
+    Ok((parse_dat(&dat, deck)?, None))
 }
 
 /// The `.dat` blocks "displacements (vx,vy,vz) for set NOUT and time T", at the step ends.

@@ -99,6 +99,20 @@ pub fn finger_under_cable(
     d: &Density,
     tensions: &[f64],
 ) -> Result<Vec<FeState>, FeError> {
+    match finger_under_cable_partial(p, stack_mm, kind, d, tensions)? {
+        (s, None) => Ok(s),
+        (_, Some(e)) => Err(e),
+    }
+}
+
+/// `finger_under_cable`, keeping the tensions solved before ccx stopped: (states, why it stopped).
+pub fn finger_under_cable_partial(
+    p: &Params<f64>,
+    stack_mm: &[f64],
+    kind: Kind,
+    d: &Density,
+    tensions: &[f64],
+) -> Result<(Vec<FeState>, Option<FeError>), FeError> {
     let mesh = finger_mesh(p, stack_mm, kind, d);
     // guide holes: base (node 0), then per link its proximal end and node k
     let mut holes = vec![mesh.find(0.0, p.e)?];
@@ -113,10 +127,16 @@ pub fn finger_under_cable(
     out_nodes.dedup();
     let loads = Loads::Cable { holes: holes.clone(), tensions: tensions.to_vec() };
     let deck = ccx::deck(p, kind, &mesh, 0.0, &loads, out_nodes);
-    let res = ccx::run(&deck)?;
+    let (res, failure) = ccx::run_partial(&deck)?;
     let mut states = Vec::new();
     for (t, u) in tensions.iter().zip(res.iter()) {
-        let nodes: Vec<SectionPose> = sections.iter().map(|s| section_pose(&mesh, s, u)).collect();
+        let mut nodes: Vec<SectionPose> = sections.iter().map(|s| section_pose(&mesh, s, u)).collect();
+        // unwrap along the finger: each joint turns by less than half a turn
+        for k in 1..nodes.len() {
+            let d = nodes[k].theta - nodes[k - 1].theta;
+            let d = d - (2.0 * std::f64::consts::PI) * (d / (2.0 * std::f64::consts::PI)).round();
+            nodes[k].theta = nodes[k - 1].theta + d;
+        }
         let joint_angle = (1..=p.n).map(|k| nodes[k].theta - nodes[k - 1].theta).collect();
         let pos = |i: usize| {
             let r = mesh.xy(i);
@@ -130,7 +150,7 @@ pub fn finger_under_cable(
             .collect();
         states.push(FeState { tension: *t, nodes, joint_angle, span });
     }
-    Ok(states)
+    Ok((states, failure))
 }
 
 /// Length of the link stubs around the calibration element (mm): one link thickness, so the
