@@ -114,6 +114,40 @@ impl AnyMesh {
     }
 }
 
+/// The material law of the nonlinear (NLGEOM) cable runs. Both have the small-strain constants
+/// (E, ν), so they agree at small loads and the linear unit loads need no choice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Law {
+    /// Compressible neo-Hookean (`*HYPERELASTIC, NEO HOOKE`, C10 = G/2, D1 = 2/K): the
+    /// elastomers' law at the waist's strains; the report's reference.
+    NeoHooke,
+    /// `*ELASTIC` under NLGEOM, i.e. St Venant-Kirchhoff (stress linear in Green strain): it
+    /// softens in compression, so it bends more than neo-Hooke at large strain.
+    StVenantKirchhoff,
+}
+
+impl Law {
+    pub fn name(self) -> &'static str {
+        match self {
+            Law::NeoHooke => "neo-Hookean",
+            Law::StVenantKirchhoff => "St Venant-Kirchhoff",
+        }
+    }
+}
+
+/// A material card for (E, ν) in this law.
+fn material(s: &mut String, name: &str, e: f64, nu: f64, law: Law) {
+    match law {
+        Law::StVenantKirchhoff => {
+            let _ = writeln!(s, "*MATERIAL, NAME={name}\n*ELASTIC\n{e:.9e}, {nu:.6}");
+        }
+        Law::NeoHooke => {
+            let (g, k) = (e / (2.0 * (1.0 + nu)), e / (3.0 * (1.0 - 2.0 * nu)));
+            let _ = writeln!(s, "*MATERIAL, NAME={name}\n*HYPERELASTIC, NEO HOOKE\n{:.9e}, {:.9e}", g / 2.0, 2.0 / k);
+        }
+    }
+}
+
 /// Nodal forces of one load case: (node, Fx, Fy), already for this model's share of the width.
 pub type NodalLoads = Vec<(usize, f64, f64)>;
 
@@ -121,7 +155,7 @@ pub type NodalLoads = Vec<(usize, f64, f64)>;
 pub enum Loads {
     /// The cable: constant-force springs between consecutive guide holes (node ids), NLGEOM, one
     /// step per tension (N), each ramped from the last.
-    Cable { holes: Vec<usize>, tensions: Vec<f64> },
+    Cable { holes: Vec<usize>, tensions: Vec<f64>, law: Law },
     /// Linear steps, one per load case.
     Unit(Vec<NodalLoads>),
 }
@@ -236,8 +270,12 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
             }
         }
     }
-    let _ = writeln!(s, "*MATERIAL, NAME=BODY\n*ELASTIC\n{:.9e}, {:.6}", p.e_b, p.nu_b);
-    let _ = writeln!(s, "*MATERIAL, NAME=STACK\n*ELASTIC\n{:.9e}, {:.6}", p.e_de(), p.nu);
+    let law = match loads {
+        Loads::Cable { law, .. } => *law,
+        Loads::Unit(_) => Law::StVenantKirchhoff, // linear steps: Hooke's law
+    };
+    material(&mut s, "BODY", p.e_b, p.nu_b, law);
+    material(&mut s, "STACK", p.e_de(), p.nu, law);
     let thick = if kind == Kind::Half3d { String::new() } else { format!("\n{:.9e}", p.w) };
     for (set, _, mat, _) in &blocks {
         let name = if *mat == Material::Body { "BODY" } else { "STACK" };

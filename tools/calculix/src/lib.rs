@@ -18,7 +18,7 @@ pub mod calibrate;
 pub mod ccx;
 pub mod mesh;
 
-use ccx::{AnyMesh, FeError, Kind, Loads, NodalLoads};
+use ccx::{AnyMesh, FeError, Kind, Law, Loads, NodalLoads};
 use finger_model::mat3::Mat3;
 use finger_model::Params;
 use mesh::{Density, Segment};
@@ -97,9 +97,10 @@ pub fn finger_under_cable(
     stack_mm: &[f64],
     kind: Kind,
     d: &Density,
+    law: Law,
     tensions: &[f64],
 ) -> Result<Vec<FeState>, FeError> {
-    match finger_under_cable_partial(p, stack_mm, kind, d, tensions)? {
+    match finger_under_cable_partial(p, stack_mm, kind, d, law, tensions)? {
         (s, None) => Ok(s),
         (_, Some(e)) => Err(e),
     }
@@ -111,6 +112,7 @@ pub fn finger_under_cable_partial(
     stack_mm: &[f64],
     kind: Kind,
     d: &Density,
+    law: Law,
     tensions: &[f64],
 ) -> Result<(Vec<FeState>, Option<FeError>), FeError> {
     let mesh = finger_mesh(p, stack_mm, kind, d);
@@ -125,7 +127,7 @@ pub fn finger_under_cable_partial(
     let mut out_nodes: Vec<usize> = sections.iter().flatten().copied().chain(holes.iter().copied()).collect();
     out_nodes.sort();
     out_nodes.dedup();
-    let loads = Loads::Cable { holes: holes.clone(), tensions: tensions.to_vec() };
+    let loads = Loads::Cable { holes: holes.clone(), tensions: tensions.to_vec(), law };
     let deck = ccx::deck(p, kind, &mesh, 0.0, &loads, out_nodes);
     let (res, failure) = ccx::run_partial(&deck)?;
     let mut states = Vec::new();

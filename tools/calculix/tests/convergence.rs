@@ -1,6 +1,6 @@
 //! Mesh convergence by refinement (issue 18): one element's small-load compliance (plane
 //! strain at three densities, 3D at two) and the finger's joint angles under the cable.
-use finger_calculix::ccx::Kind;
+use finger_calculix::ccx::{Kind, Law};
 use finger_calculix::mesh::Density;
 use finger_calculix::{element_compliance, finger_under_cable};
 use finger_model::Params;
@@ -28,8 +28,8 @@ fn element_compliance_3d_coarse_is_within_2_percent_of_refined() {
 #[test]
 fn finger_joint_angles_converge_under_the_cable() {
     let p = Params::<f64>::default().without_stacks();
-    let a = finger_under_cable(&p, &[0.0; 3], Kind::PlaneStrain, &Density::coarse(), &[1.0]).unwrap();
-    let b = finger_under_cable(&p, &[0.0; 3], Kind::PlaneStrain, &Density::coarse().times(2), &[1.0]).unwrap();
+    let a = finger_under_cable(&p, &[0.0; 3], Kind::PlaneStrain, &Density::coarse(), Law::NeoHooke, &[1.0]).unwrap();
+    let b = finger_under_cable(&p, &[0.0; 3], Kind::PlaneStrain, &Density::coarse().times(2), Law::NeoHooke, &[1.0]).unwrap();
     for k in 0..3 {
         let (x, y) = (a[0].joint_angle[k], b[0].joint_angle[k]);
         assert!(((x - y) / y).abs() < 0.015, "joint {}: {x} vs {y} rad", k + 1);
