@@ -85,3 +85,51 @@ impl<R: Real> Calibration<R> {
         o
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::finger::Finger;
+
+    #[test]
+    fn none_is_the_uncalibrated_model() {
+        let p = Params::<f64>::default();
+        let (a, b) = (Finger::new(p).unwrap(), Finger::with_calibration(p, Calibration::none()).unwrap());
+        let v = [3000.0, 0.0, 8000.0];
+        let (ca, cb) = (a.compliances(&v).unwrap(), b.compliances(&v).unwrap());
+        assert_eq!(ca.c, cb.c);
+    }
+
+    #[test]
+    fn factors_scale_their_entries() {
+        let p = Params::<f64>::default();
+        let cal = Calibration { hinge: [1.5, 2.0, 1.1, 1.25], ..Calibration::none() };
+        let (a, b) = (Finger::new(p).unwrap(), Finger::with_calibration(p, cal).unwrap());
+        for j in 0..p.m {
+            let (x, y) = (a.hinge_compliance(j), b.hinge_compliance(j));
+            for (r, c, f) in [(0, 0, 1.5), (1, 1, 2.0), (1, 2, 1.1), (2, 1, 1.1), (2, 2, 1.25)] {
+                assert!((y[r][c] - f * x[r][c]).abs() <= 1e-15 * x[r][c].abs());
+            }
+        }
+        // the stack: EI factor 2 and EA factor 1 double the bending stiffness, keep the axial
+        let t = 2.0;
+        let cal = Calibration { stack_bending: [2.0, 0.0], ..Calibration::none() };
+        let f = Finger::with_calibration(p, cal).unwrap();
+        let (k0, k1) = (a.stack_stiffness(t), f.stack_stiffness(t));
+        let ea = p.e_de() * p.w * t / (p.hinge_len() / p.m as f64);
+        assert!((k1[0][0] - k0[0][0]).abs() < 1e-9 * ea && (k1[1][1] - 2.0 * k0[1][1]).abs() < 1e-9 * k0[1][1]);
+    }
+
+    #[test]
+    fn bad_factors_are_refused() {
+        let p = Params::<f64>::default();
+        for cal in [
+            Calibration { hinge: [f64::NAN, 1.0, 1.0, 1.0], ..Calibration::none() },
+            Calibration { hinge: [1.0, 1.0, 1.0, 0.05], ..Calibration::none() },
+            // fine at 2 mm, below 0.1 at the pull-in thickness 4/3 mm
+            Calibration { stack_bending: [-6.0, 4.0], ..Calibration::none() },
+        ] {
+            assert!(matches!(Finger::with_calibration(p, cal), Err(Error::Param { name: "cal", .. })));
+        }
+    }
+}
