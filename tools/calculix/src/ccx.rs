@@ -246,10 +246,12 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
     let share = kind.load_share();
     match loads {
         Loads::Cable { holes, .. } => {
-            let _ = writeln!(s, "*ELEMENT, TYPE=SPRINGA, ELSET=ECABLE");
-            for w in holes.windows(2) {
-                let _ = writeln!(s, "{next}, {}, {}", w[0] + 1, w[1] + 1);
-                next += 1;
+            for (set, pairs, _) in cable_springs(mesh, holes) {
+                let _ = writeln!(s, "*ELEMENT, TYPE=SPRINGA, ELSET={set}");
+                for (a, b) in pairs {
+                    let _ = writeln!(s, "{next}, {}, {}", a + 1, b + 1);
+                    next += 1;
+                }
             }
         }
         Loads::Unit(_) => {}
@@ -286,11 +288,15 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
         Loads::Cable { tensions, .. } => {
             // force = share x temperature: the step's temperature is the tension, ramped
             let tmax = 1000.0;
-            let _ = writeln!(
-                s,
-                "*SPRING, ELSET=ECABLE, NONLINEAR\n0., -1.e4, 0.\n0., 1.e4, 0.\n{f:.9e}, -1.e4, {tmax:.1}\n{f:.9e}, 1.e4, {tmax:.1}",
-                f = share * tmax
-            );
+            if let Loads::Cable { holes, .. } = loads {
+                for (set, _, frac) in cable_springs(mesh, holes) {
+                    let _ = writeln!(
+                        s,
+                        "*SPRING, ELSET={set}, NONLINEAR\n0., -1.e4, 0.\n0., 1.e4, 0.\n{f:.9e}, -1.e4, {tmax:.1}\n{f:.9e}, 1.e4, {tmax:.1}",
+                        f = share * frac * tmax
+                    );
+                }
+            }
             let _ = writeln!(s, "*INITIAL CONDITIONS, TYPE=TEMPERATURE\nNALL, 0.");
             write_bcs(&mut s, mesh);
             for (i, t) in tensions.iter().enumerate() {
@@ -314,6 +320,42 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
         }
     }
     Deck { text: s, out_nodes, times }
+}
+
+/// The cable's springs between consecutive guide holes: (element set, node pairs, share of the
+/// tension each spring carries). In 2D one spring per span. In 3D the guide spans the width: a
+/// spring per node of the hole's line across the half width (z), each carrying the consistent
+/// share of a uniform line load on the quadratic edges (end corners 1/6, inner corners 1/3,
+/// midsides 2/3 of a layer), so the cable loads a line, not a single node.
+fn cable_springs(mesh: &AnyMesh, holes: &[usize]) -> Vec<(String, Vec<(usize, usize)>, f64)> {
+    match mesh {
+        AnyMesh::Two(_) => vec![("ECABLE".into(), holes.windows(2).map(|w| (w[0], w[1])).collect(), 1.0)],
+        AnyMesh::Three(m) => {
+            let line = |h: usize| -> Vec<usize> {
+                let n = m.nodes[h];
+                let mut l: Vec<usize> =
+                    (0..m.nodes.len()).filter(|&i| (m.nodes[i][0] - n[0]).abs() < 1e-6 && (m.nodes[i][1] - n[1]).abs() < 1e-6).collect();
+                l.sort_by(|&a, &b| m.nodes[a][2].total_cmp(&m.nodes[b][2]));
+                l
+            };
+            let lines: Vec<Vec<usize>> = holes.iter().map(|&h| line(h)).collect();
+            let nz = lines.iter().map(|l| l.len()).min().unwrap_or(1) - 1;
+            let layers = (nz / 2).max(1) as f64;
+            let mut sets: Vec<(String, Vec<(usize, usize)>, f64)> = vec![
+                ("ECABLEE".into(), Vec::new(), 1.0 / 6.0 / layers),
+                ("ECABLEC".into(), Vec::new(), 1.0 / 3.0 / layers),
+                ("ECABLEM".into(), Vec::new(), 2.0 / 3.0 / layers),
+            ];
+            for w in lines.windows(2) {
+                for iz in 0..=nz {
+                    let set = if iz % 2 == 1 { 2 } else if iz == 0 || iz == nz { 0 } else { 1 };
+                    sets[set].1.push((w[0][iz], w[1][iz]));
+                }
+            }
+            sets.retain(|s| !s.1.is_empty());
+            sets
+        }
+    }
 }
 
 fn write_bcs(s: &mut String, mesh: &AnyMesh) {
