@@ -1,6 +1,6 @@
 //! `cargo run --bin fe-report [-- --coarse]` (in tools/calculix): writes docs/fidelity-fe.md,
 //! the board's f32 model (calibrated and not) against CalculiX's nonlinear solution of the
-//! same finger, scene by scene (issue 18). About 15 minutes with the default (fine) 3D mesh on
+//! same finger, scene by scene (issue 18). About 20 minutes with the default (fine) 3D mesh on
 //! one core; `--coarse` (a minute) is for trying the tool, not for the report.
 use finger_calculix::calibrate::{self, model_element_compliance, CalibrationRun};
 use finger_calculix::ccx::{Kind, Law};
