@@ -27,6 +27,7 @@ use crate::error::Error;
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
+use crate::calibration::Calibration;
 use crate::{de, hinge};
 
 mod branch_end;
@@ -259,6 +260,8 @@ pub struct Finger<R> {
     link_len: R,
     /// Link compliance (a uniform beam of the body, thickness b), when `flex_links` is set.
     link_c: Mat3<R>,
+    /// FE calibration of the sub-element compliances (`Calibration::none()`: MODEL.md as is).
+    cal: Calibration<R>,
 }
 
 /// The loads a joint sees besides the cable, in its proximal frame.
@@ -302,7 +305,13 @@ fn norm2<R: Real>(v: [R; 2]) -> R {
 impl<R: Real> Finger<R> {
     /// Validate the parameters and compute the hinge compliances (once per parameter set).
     pub fn new(p: Params<R>) -> Result<Self, Error> {
+        Self::with_calibration(p, Calibration::none())
+    }
+
+    /// `new` with an FE calibration of the sub-element compliances (`calibration`).
+    pub fn with_calibration(p: Params<R>, cal: Calibration<R>) -> Result<Self, Error> {
         p.validate()?;
+        cal.validate(&p)?;
         #[cfg(not(feature = "de"))]
         if p.layers > 0 {
             return Err(Error::Param { name: "layers", range: "0 (this build has no DE support)" });
@@ -312,7 +321,7 @@ impl<R: Real> Finger<R> {
         let e = p.hinge_modulus();
         for j in 0..p.m {
             let (x0, x1) = hinge::sub_element_bounds(p.a, p.m, j);
-            hinge_c[j] = hinge::stretch_compliance(p.b, p.t_min, p.a, e, p.w, x0, x1);
+            hinge_c[j] = cal.hinge_compliance(&hinge::stretch_compliance(p.b, p.t_min, p.a, e, p.w, x0, x1));
             hinge_k[j] = mat3::inverse_spd(&hinge_c[j]).ok_or(Error::Singular { what: "hinge compliance" })?;
             if !hinge_c[j].iter().flatten().all(|x| x.is_finite()) {
                 return Err(Error::Singular { what: "hinge compliance" });
@@ -321,7 +330,7 @@ impl<R: Real> Finger<R> {
         let sub_len = p.hinge_len() / R::from_u32(p.m as u32);
         let link_len = p.l - p.hinge_len();
         let link_c = if p.flex_links { uniform_beam_compliance(e, p.w, p.b, link_len) } else { mat3::zero() };
-        Ok(Finger { p, hinge_c, hinge_k, sub_len, link_len, link_c })
+        Ok(Finger { p, hinge_c, hinge_k, sub_len, link_len, link_c, cal })
     }
 
     pub fn params(&self) -> &Params<R> {
@@ -345,7 +354,22 @@ impl<R: Real> Finger<R> {
             sub_len: S::from_f64(self.sub_len.to_f64()),
             link_len: S::from_f64(self.link_len.to_f64()),
             link_c: cast_mat(&self.link_c),
+            cal: Calibration {
+                hinge: self.cal.hinge.map(|x| S::from_f64(x.to_f64())),
+                stack_axial: self.cal.stack_axial.map(|x| S::from_f64(x.to_f64())),
+                stack_bending: self.cal.stack_bending.map(|x| S::from_f64(x.to_f64())),
+            },
         }
+    }
+
+    /// The FE calibration this finger was prepared with.
+    pub fn calibration(&self) -> &Calibration<R> {
+        &self.cal
+    }
+
+    /// Stiffness of a stack stretch of one sub-element at stack thickness t (mm), calibrated.
+    pub fn stack_stiffness(&self, t: R) -> Mat3<R> {
+        self.cal.stack_stiffness(&self.p, &de::stack_stiffness(&self.p, self.sub_len, t), self.sub_len, t)
     }
 
     /// Hinge compliance of sub-element j (no stack): the Castigliano integrals of MODEL.md
@@ -399,7 +423,7 @@ impl<R: Real> Finger<R> {
             }
             let t = de::stack_thickness(p, k + 1, v)?;
             out.thickness[k] = t;
-            let k_de = de::stack_stiffness(p, self.sub_len, t);
+            let k_de = self.stack_stiffness(t);
             for j in 0..p.m {
                 let k_sum = mat3::add(&self.hinge_k[j], &k_de);
                 out.c[k][j] = mat3::inverse_spd(&k_sum).ok_or(Error::Singular { what: "joint stiffness" })?;

@@ -65,6 +65,7 @@
 //! ## Contact force
 //! `contact` (inverse/contact.rs): the tip pinned at a stop, by continuation from the free posture.
 
+use crate::calibration::Calibration;
 use crate::de;
 use crate::error::Error;
 use crate::finger::{Finger, Pose, Solution};
@@ -416,7 +417,8 @@ fn solve<R: Real>(
         iterations: 0,
     };
     out.angles[..n].copy_from_slice(angles);
-    if !cfg!(feature = "inverse-fast") || p.m != 1 || p.flex_links {
+    // a calibrated finger takes the general path (the fast path's K(t) is MODEL.md's)
+    if !cfg!(feature = "inverse-fast") || p.m != 1 || p.flex_links || *f.calibration() != Calibration::none() {
         // sub-divided hinges or flexible links: bracketed root finding around the forward
         // per-joint equilibrium (`general`). A build without `inverse-fast` (the firmware,
         // whose default model is m = 8) takes this path for m = 1 too and leaves the fast

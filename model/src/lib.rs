@@ -5,6 +5,7 @@
 //! - [`real`]: the scalar (f32 on the target, f64 on the host), with explicitly chosen math.
 //! - [`params`]: parameters, defaults, the paper preset, validation, access by name.
 //! - [`hinge`]: elliptical notch thickness and compliance (Castigliano integrals).
+//! - [`calibration`]: FE corrections to the sub-element compliances (issue 18).
 //! - [`de`]: DE layer thinning, pull-in (33 %) limit, ceiling, stack stiffness.
 //! - [`finger`]: joint equilibrium, posture, cable excursion, tip stiffness, two solvers.
 //! - [`inverse`]: joint angles (and a tension) to tension and voltages; stiffness range; contact force.
@@ -16,6 +17,7 @@
 // One reviewed exception: the M4F's vsqrt.f32 (real.rs, `fpu_sqrt`). Nothing else is unsafe.
 #![deny(unsafe_code)]
 
+pub mod calibration;
 pub mod de;
 pub mod dual;
 pub mod error;
@@ -27,6 +29,7 @@ pub mod params;
 pub mod real;
 pub mod solve;
 
+pub use calibration::Calibration;
 pub use error::Error;
 pub use finger::{BranchEnd, BranchLimit, Compliances, Finger, JointEquilibrium, Method, Pose, Solution};
 pub use inverse::{solve_pose, Contact, PoseSolution, StiffnessRange};

@@ -65,7 +65,6 @@ pub(super) struct Held<R> {
 pub(super) struct Gen<'a, R> {
     f: &'a Finger<R>,
     p: &'a Params<R>,
-    sub_len: R,
     /// The link's linear rotation per newton of tension (0 for rigid links), rad/N.
     link_rot: R,
     /// Hole tolerance of the per-joint Newton, mm.
@@ -93,7 +92,6 @@ impl<'a, R: Real> Gen<'a, R> {
         Ok(Gen {
             f,
             p,
-            sub_len: lh / R::from_u32(p.m as u32),
             link_rot,
             tol_hole: R::from_f64(1e-12) * (lh + p.e),
             tol_angle: R::from_f64(1e-12_f64.max(32.0 * R::EPS)),
@@ -114,7 +112,7 @@ impl<'a, R: Real> Gen<'a, R> {
     /// `comp` into `c` (its first m entries; no array returned by value in the hot loop).
     #[inline(never)]
     fn comp_into(&self, t: R, c: &mut [Mat3<R>; MAX_SUB]) -> Result<(), Error> {
-        let k_de = if self.p.layers == 0 { mat3::zero() } else { de::stack_stiffness(self.p, self.sub_len, t) };
+        let k_de = if self.p.layers == 0 { mat3::zero() } else { self.f.stack_stiffness(t) };
         for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
             *cj = if self.p.layers == 0 {
                 self.f.hinge_compliance(j)

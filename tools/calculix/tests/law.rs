@@ -1,0 +1,19 @@
+//! The FE's material law (issue 18): neo-Hooke and St Venant-Kirchhoff share E and ν, so they
+//! agree at small load; at finite strain (the waist at 2 N) St Venant-Kirchhoff, which softens
+//! in compression, bends more.
+use finger_calculix::ccx::{Kind, Law};
+use finger_calculix::finger_under_cable;
+use finger_calculix::mesh::Density;
+use finger_model::Params;
+
+#[test]
+fn laws_agree_at_small_load_and_part_at_finite_strain() {
+    let p = Params::<f64>::default().without_stacks();
+    let d = Density::coarse();
+    let run = |law| finger_under_cable(&p, &[0.0; 3], Kind::PlaneStrain, &d, law, &[0.05, 2.0]).unwrap();
+    let (nh, svk) = (run(Law::NeoHooke), run(Law::StVenantKirchhoff));
+    let small = svk[0].joint_angle[1] / nh[0].joint_angle[1] - 1.0;
+    let large = svk[1].joint_angle[1] / nh[1].joint_angle[1] - 1.0;
+    assert!(small.abs() < 0.002, "0.05 N: laws differ by {:.3} %", 100.0 * small);
+    assert!(large > 0.01, "2 N: St Venant-Kirchhoff only {:.3} % softer", 100.0 * large);
+}
