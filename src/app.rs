@@ -18,7 +18,7 @@ use core::fmt::Write;
 
 use embedded_hal::pwm::SetDutyCycle;
 use finger_model::params::PARAMS;
-use finger_model::{BranchLimit, Error as ModelError, Finger, Method, Params, Solution};
+use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Method, Params, Solution};
 use heapless::String;
 
 use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_MAX_V, HV_ZERO_DUTY_PCT};
@@ -551,6 +551,7 @@ impl Commands {
             b"contact" => return Err(err!("unknown"; "contact is not in this build (feature contact)")),
             b"param" => self.cmd_param(args, r, out)?,
             b"preset" => self.cmd_preset(args, r)?,
+            b"cal" => self.cmd_cal(args, r)?,
             b"wait" => {
                 let [s] = args else { return Err(err!("usage"; "wait <seconds>")) };
                 let s = number(s, "seconds")?;
@@ -877,7 +878,9 @@ impl Commands {
                 }
                 let mut p = *self.finger.params();
                 p.set(name, v.into()).map_err(model_err)?;
-                let f = Finger::new(p).map_err(model_err)?;
+                // the FE calibration belongs to the mechanical parameters it was computed for
+                let cal = if NOT_MECHANICAL.contains(&name) { *self.finger.calibration() } else { Calibration::none() };
+                let f = Finger::with_calibration(p, cal).map_err(model_err)?;
                 let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
                 self.set_finger(f);
                 self.cable = cable;
@@ -918,7 +921,47 @@ impl Commands {
         let _ = w!(r; "preset=", name);
         Ok(())
     }
+
+    /// `cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]`: the model's FE calibration
+    /// (`finger_model::Calibration`, issue 18): read it, or set / clear it while disarmed. A
+    /// change rebuilds the finger, as `param` does; refused, nothing changes.
+    #[inline(never)]
+    fn cmd_cal(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
+        let cal = match args {
+            [] => None,
+            [w] if *w == b"none" => Some(Calibration::none()),
+            [_, _, _, _, _, _, _, _] => {
+                let mut g = [0.0f32; 8];
+                for k in 0..8 {
+                    g[k] = number(args[k], CAL_NAMES[k])?;
+                }
+                Some(Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] })
+            }
+            _ => return Err(err!("usage"; "cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]")),
+        };
+        if let Some(cal) = cal {
+            self.require_disarmed("cal")?;
+            let f = Finger::with_calibration(*self.finger.params(), cal).map_err(model_err)?;
+            let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
+            self.set_finger(f);
+            self.cable = cable;
+            self.set_servo(deg);
+            self.recompute();
+        }
+        let c = self.finger.calibration();
+        let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];
+        let _ = w!(r; "cal=");
+        list(r, &g, 6);
+        Ok(())
+    }
 }
+
+/// Parameters a `param` set of which keeps the FE calibration (`cal`): the electrical ceiling
+/// and the solver's increments. Any other set clears it.
+const NOT_MECHANICAL: &[&str] = &["margin", "v_supply", "eps_r", "n_inc"];
+
+/// `cal`'s factors in console order (`Calibration`: hinge, stack_axial, stack_bending).
+const CAL_NAMES: [&str; 8] = ["h1", "h2", "h3", "h4", "ea0", "ea1", "ei0", "ei1"];
 
 /// A preset as this build can hold it: without the `de` feature the finger has no stacks.
 fn preset(p: Params<f32>) -> Params<f32> {
@@ -947,6 +990,7 @@ const HELP: &[&str] = &[
     "contact <P0> <P> [<V1> <V2> <V3>] - model only: tip force on a stop at the free tip of P0",
     "param [<name> [<value>]] - list, read or set a parameter; only while disarmed",
     "preset <default|paper> - model parameters back to a preset; only while disarmed",
+    "cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none] - FE calibration factors: read, set or clear (set and clear only while disarmed)",
     "wait <s> - run the control loop for s seconds, then reply",
 ];
 

@@ -8,8 +8,8 @@ use heapless::Vec;
 
 /// Receive buffer: the longest line accepted, in bytes (CONSOLE.md asks for at least 120).
 pub const LINE_MAX: usize = 128;
-/// Most tokens on a line (command word included).
-pub const MAX_TOKENS: usize = 8;
+/// Most tokens on a line (command word included): `cal`'s eight factors need nine.
+pub const MAX_TOKENS: usize = 9;
 
 /// What a byte completed.
 #[derive(Debug, PartialEq)]

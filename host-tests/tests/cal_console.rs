@@ -1,0 +1,227 @@
+//! The `cal` console addition (issue 18, docs/firmware.md "Console additions") on the
+//! simulated board: the model's FE calibration read, set and cleared; the calibrated finger
+//! is the host model's `Finger::with_calibration` in f32; refusals change nothing.
+use finger_fw::sim::SimBoard;
+use finger_fw::App;
+use finger_model::{Calibration, Finger, Method};
+
+/// MODEL.md's finger, as `fe-calibrate` (tools/calculix) prints it.
+const FE_CAL: &str = "1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332";
+const NONE_REPLY: &str = "ok cal=1.000000,1.000000,1.000000,1.000000,1.000000,0.000000,1.000000,0.000000";
+
+struct Out(String);
+impl std::fmt::Write for Out {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        self.0.push_str(s);
+        Ok(())
+    }
+}
+
+/// One command line, the control loop run through any `wait`: its final reply line.
+fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
+    let mut out = Out(String::new());
+    a.input(format!("{line}\n").as_bytes(), &mut out);
+    while a.busy() {
+        a.tick(1, &mut out);
+    }
+    let lines: Vec<&str> = out.0.lines().collect();
+    assert_eq!(lines.iter().filter(|l| l.starts_with("ok") || l.starts_with("err ")).count(), 1, "{line} -> {lines:?}");
+    lines.last().unwrap().to_string()
+}
+
+fn err(a: &mut App<SimBoard>, line: &str, code: &str) {
+    let r = cmd(a, line);
+    assert!(r.starts_with(&format!("err {code}: ")), "{line:?} -> {r} (wanted {code})");
+}
+
+fn kv(reply: &str, key: &str) -> Vec<f64> {
+    let v = reply.split_whitespace().find_map(|w| w.strip_prefix(&format!("{key}="))).unwrap_or_else(|| panic!("no {key} in {reply}"));
+    v.split(',').map(|x| x.parse().unwrap()).collect()
+}
+
+/// The FE line as the model's type, parsed as the host parses f32 (correctly rounded, as the
+/// console's parser).
+fn fe_cal() -> Calibration<f32> {
+    let g: Vec<f32> = FE_CAL.split(' ').map(|x| x.parse().unwrap()).collect();
+    Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] }
+}
+
+fn fe_reply() -> String {
+    format!("ok cal={}", FE_CAL.replace(' ', ","))
+}
+
+/// `solve`'s reply up to its stiffness, as the firmware formats it from a host solution
+/// (`Fixed` prints as core's `{:.p}`; `Exp`'s last digit may differ, so it is left out).
+fn solve_prefix(f: &Finger<f32>, p: f32, v: [f32; 3]) -> String {
+    let s = f.solve(p, &v, Method::converged()).unwrap();
+    let deg = 180.0f32 / std::f32::consts::PI;
+    let j: Vec<String> = s.joint_angle[..3].iter().map(|a| format!("{:.3}", a * deg)).collect();
+    let t = s.tip();
+    let th: Vec<String> = s.thickness[..3].iter().map(|x| format!("{x:.4}")).collect();
+    format!("ok joints={} tip={:.3},{:.3},{:.2} cable={:.4} thick={} stiffness=", j.join(","), t.x, t.y, t.theta * deg, s.cable_excursion, th.join(","))
+}
+
+#[test]
+fn cal_round_trip_and_help() {
+    let mut a = App::new(SimBoard::default());
+    let help = cmd(&mut a, "help");
+    assert_eq!(help, "ok");
+    let mut out = Out(String::new());
+    a.input(b"help\n", &mut out);
+    assert!(out.0.lines().any(|l| l.starts_with("cal ")), "help lacks cal: {}", out.0);
+    // the firmware's default is the uncalibrated model
+    assert_eq!(cmd(&mut a, "cal"), NONE_REPLY);
+    assert_eq!(*a.finger().calibration(), Calibration::none());
+    assert_eq!(cmd(&mut a, &format!("cal {FE_CAL}")), fe_reply());
+    assert_eq!(cmd(&mut a, "cal"), fe_reply());
+    assert_eq!(*a.finger().calibration(), fe_cal());
+    // numbers in any of the console's forms
+    assert_eq!(cmd(&mut a, "cal 1.5 +2 1e0 1.25 .5 0.0 2 -0.25E0"), "ok cal=1.500000,2.000000,1.000000,1.250000,0.500000,0.000000,2.000000,-0.250000");
+    assert_eq!(cmd(&mut a, "CAL NONE"), NONE_REPLY);
+    assert_eq!(*a.finger().calibration(), Calibration::none());
+}
+
+#[test]
+fn calibrated_solve_is_the_host_model() {
+    let mut a = App::new(SimBoard::default());
+    let p = *a.finger().params();
+    let plain = Finger::new(p).unwrap();
+    let cal = Finger::with_calibration(p, fe_cal()).unwrap();
+    let fmax0 = kv(&cmd(&mut a, "limits"), "fmax")[0];
+    let evals = a.fmax_evaluations();
+    cmd(&mut a, &format!("cal {FE_CAL}"));
+    for (f, v) in [(0.5f32, [0.0f32, 1000.0, 2000.0]), (1.5, [3000.0, 0.0, 8000.0]), (0.8, [0.0; 3])] {
+        let line = format!("solve {f} {} {} {}", v[0], v[1], v[2]);
+        let r = cmd(&mut a, &line);
+        let want = solve_prefix(&cal, f, v);
+        assert!(r.starts_with(&want), "{line}: {r}\n  want {want}");
+        let s = cal.solve(f, &v, Method::converged()).unwrap();
+        let k = cal.tip_stiffness(&s).unwrap();
+        let got = kv(&r, "stiffness");
+        for i in 0..3 {
+            assert!((got[i] - k[i][i] as f64).abs() <= 1e-3 * (k[i][i] as f64).abs(), "{r} vs {k:?}");
+        }
+        // and not the uncalibrated model's answer: the calibrated finger bends more
+        let j0 = plain.solve(f, &v, Method::converged()).unwrap().joint_angle;
+        let j = kv(&r, "joints");
+        for i in 0..3 {
+            assert!(j[i] > (j0[i] as f64).to_degrees() * 1.05, "{r} vs uncalibrated {j0:?}");
+        }
+    }
+    // the fmax cache was dropped: recomputed for the calibrated finger, and its answer
+    let fmax1 = kv(&cmd(&mut a, "limits"), "fmax")[0];
+    assert_eq!(a.fmax_evaluations(), evals + 1);
+    let want = cal.fmax(&[0.0; 3]).unwrap().tension as f64;
+    assert!((fmax1 - want).abs() <= 1e-4 && (fmax1 - fmax0).abs() > 1e-3, "{fmax1} vs {want}, uncalibrated {fmax0}");
+    // `cal none` is the uncalibrated model again
+    cmd(&mut a, "cal none");
+    let r = cmd(&mut a, "solve 0.5 0 1000 2000");
+    assert!(r.starts_with(&solve_prefix(&plain, 0.5, [0.0, 1000.0, 2000.0])), "{r}");
+}
+
+#[test]
+fn cal_refused_while_armed() {
+    let mut a = App::new(SimBoard::default());
+    cmd(&mut a, "arm");
+    err(&mut a, &format!("cal {FE_CAL}"), "armed");
+    err(&mut a, "cal none", "armed");
+    assert_eq!(cmd(&mut a, "cal"), NONE_REPLY, "reading is fine armed");
+    cmd(&mut a, "disarm");
+    cmd(&mut a, "wait 1");
+    assert_eq!(cmd(&mut a, &format!("cal {FE_CAL}")), fe_reply());
+    cmd(&mut a, "arm");
+    err(&mut a, "cal none", "armed");
+    assert_eq!(cmd(&mut a, "cal"), fe_reply());
+    assert_eq!(*a.finger().calibration(), fe_cal());
+}
+
+#[test]
+fn bad_cal_changes_nothing() {
+    let mut a = App::new(SimBoard::default());
+    cmd(&mut a, &format!("cal {FE_CAL}"));
+    let state = |a: &mut App<SimBoard>| format!("{} | {} | {}", cmd(a, "status"), cmd(a, "limits"), cmd(a, "cal"));
+    let before = state(&mut a);
+    let evals = a.fmax_evaluations();
+    for (line, code) in [
+        ("cal 1 2 3", "usage"),
+        ("cal bogus", "usage"),
+        ("cal none 1", "usage"),
+        ("cal 1 1 1 1 1 0 1 0 9", "usage"),
+        ("cal nan 1 1 1 1 0 1 0", "bad-number"),
+        ("cal 1 1 1 1 1 0 1 inf", "bad-number"),
+        ("cal 1 1 0x1 1 1 0 1 0", "bad-number"),
+        ("cal 1 1 1 1 1 0 1e999 0", "bad-number"),
+        ("cal 1 1 1 1.5abc 1 0 1 0", "bad-number"),
+        // refused by the model (Error::Param "cal"): a factor outside 0.1..10
+        ("cal 0.05 1 1 1 1 0 1 0", "usage"),
+        ("cal 1 1 1 11 1 0 1 0", "usage"),
+        // EI factor 2 at 2 mm but below 0.1 at the pull-in thickness 4/3 mm
+        ("cal 1 1 1 1 1 0 -6 4", "usage"),
+        ("cal 1 1 1 1 -1 0 1 0", "usage"),
+    ] {
+        err(&mut a, line, code);
+        assert_eq!(state(&mut a), before, "{line} changed something");
+        assert_eq!(*a.finger().calibration(), fe_cal(), "{line}");
+    }
+    // the fmax cache survived every refusal
+    assert_eq!(a.fmax_evaluations(), evals);
+}
+
+#[test]
+fn preset_and_mechanical_param_clear_cal() {
+    let mut a = App::new(SimBoard::default());
+    let fe = format!("cal {FE_CAL}");
+    for clear in ["preset default", "preset paper", "param l 27", "param a 5", "param layers 10", "param m 8", "param e_b 1"] {
+        cmd(&mut a, "preset default");
+        cmd(&mut a, &fe);
+        assert!(cmd(&mut a, clear).starts_with("ok"), "{clear}");
+        assert_eq!(cmd(&mut a, "cal"), NONE_REPLY, "{clear} kept the calibration");
+        assert_eq!(*a.finger().calibration(), Calibration::none());
+    }
+    // electrical, solver and firmware parameters keep it; so do a read and a refused set
+    cmd(&mut a, "preset default");
+    cmd(&mut a, &fe);
+    for keep in ["param margin 0.5", "param v_supply 9000", "param eps_r 4", "param n_inc 20", "param slew 5000", "param l", "param", "param l 1e9", "param nope 1"] {
+        cmd(&mut a, keep);
+        assert_eq!(cmd(&mut a, "cal"), fe_reply(), "{keep} changed the calibration");
+    }
+    // and the finger after them is the host's calibrated finger at those parameters
+    let f = Finger::with_calibration(*a.finger().params(), fe_cal()).unwrap();
+    let r = cmd(&mut a, "solve 1 0 1000 2000");
+    assert!(r.starts_with(&solve_prefix(&f, 1.0, [0.0, 1000.0, 2000.0])), "{r}");
+}
+
+#[test]
+fn pose_after_cal_uses_the_calibrated_finger() {
+    let mut a = App::new(SimBoard::default());
+    let p = *a.finger().params();
+    let plain = Finger::new(p).unwrap();
+    // a `pose` before builds the uncalibrated branch table: `cal` must drop it
+    let r0 = cmd(&mut a, "pose 5 5 5");
+    assert!(r0.starts_with("ok force="), "{r0}");
+    cmd(&mut a, &format!("cal {FE_CAL}"));
+    let cal = Finger::with_calibration(p, fe_cal()).unwrap();
+    // a posture of the calibrated finger, typed as a user would
+    let s = cal.solve(1.0, &[2000.0, 5000.0, 8000.0], Method::converged()).unwrap();
+    let deg = [0, 1, 2].map(|k| format!("{:.6}", (s.joint_angle[k] as f64).to_degrees()).parse::<f64>().unwrap());
+    let rad = deg.map(|d| (d as f32) * (std::f64::consts::PI / 180.0) as f32);
+    let opts = finger_model::inverse::Options::default();
+    let want = finger_model::inverse::solve_pose_tabled(&finger_model::inverse::BranchTable::new(&cal, &opts).unwrap(), &rad, None).unwrap();
+    let line = format!("pose {} {} {}", deg[0], deg[1], deg[2]);
+    let r = cmd(&mut a, &line);
+    assert!(r.starts_with("ok force="), "{r}");
+    assert!((kv(&r, "force")[0] - want.tension as f64).abs() < 1e-3, "{r} vs {want:?}");
+    let volts = kv(&r, "volts");
+    for k in 0..3 {
+        assert!((volts[k] - want.volts[k] as f64).abs() < 0.06, "{r} vs {want:?}");
+        assert!((kv(&r, "joints")[k] - deg[k]).abs() < 1e-3, "{r}");
+    }
+    // the uncalibrated finger's answer to the same angles is another one
+    let other = finger_model::inverse::solve_pose_tabled(&finger_model::inverse::BranchTable::new(&plain, &opts).unwrap(), &rad, None).unwrap();
+    assert!((other.tension - want.tension).abs() > 0.05, "{other:?} vs {want:?}");
+    // armed, the same answer moves the outputs
+    cmd(&mut a, "arm");
+    assert_eq!(cmd(&mut a, &line), r);
+    assert_eq!(a.targets(), [want.volts[0], want.volts[1], want.volts[2]]);
+    cmd(&mut a, "stop");
+}
