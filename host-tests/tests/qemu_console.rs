@@ -199,6 +199,7 @@ fn qemu_console_commands_and_bad_inputs() {
     expect(&mut q, "stop", "ok stopped");
     let s = expect(&mut q, "status", "ok armed=0 force=0.000 volts=0.0,0.0,0.0 ");
     assert!(s.contains(" servo=0.00 ") && s.contains(" enable=0"), "{s}");
+    expect(&mut q, "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "ok cal=1.540745,6.245597,1.066900,1.154625,0.718260,0.054631,5.254023,-1.756332");
     expect(&mut q, "preset paper", "ok preset=paper");
     q.finish();
 }
