@@ -27,8 +27,8 @@
 //!   equations are linear in P.
 //! - `hold_thickness`: P given, unknowns (δax, δtr, t). K(t) is an explicit polynomial in t
 //!   (EA ∝ t, EI ∝ t³, offset d = (t_min + t)/2), its derivative is written out.
-//! Both are Newton with the analytic Jacobian, from a guess that is already close (the
-//! deflections δ are small), 2-5 iterations each. The voltage follows from t in closed form
+//! Both are Newton with the analytic Jacobian (`solve::newton::full_steps`), from a guess
+//! that is already close (the deflections δ are small), 2-5 iterations each. The voltage follows from t in closed form
 //! (`de::voltage_for_thickness`, the inverse of the thinning balance).
 //!
 //! ## The algorithm (`solve_pose`)
@@ -72,6 +72,7 @@ use crate::finger::{Finger, Pose, Solution};
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
+use crate::solve::{newton, Failure};
 
 mod contact;
 mod general;
@@ -246,78 +247,36 @@ impl<'a, R: Real> Ctx<'a, R> {
     }
 
     /// Joint `joint` (1-based) held at `ang` with stack thickness t: Newton on (δax, δtr, P) of
-    /// `K q - P ŵ(q) = 0`. Also the implicit dP/dθ at fixed t.
+    /// `K q - P ŵ(q) = 0` (`solve::newton::full_steps`). Also the implicit dP/dθ at fixed t.
     fn hold_tension(&self, joint: usize, ang: &Angle<R>, t: R, guess: [R; 2]) -> Result<Hold<R>, Error> {
         let k = self.stiffness(t);
-        let mut d = guess;
         // first tension from the moment row with the guessed δ
-        let w0 = self.wrench(ang, d, joint, R::zero())?;
-        let kq = |d: [R; 2], row: usize| k[row][0] * d[0] + k[row][1] * d[1] + k[row][2] * ang.theta;
-        let mut p = kq(d, 2) / w0.w[2];
-        let tol_len = self.rel * self.lh;
-        for it in 1..=self.max_iter {
-            let w = self.wrench(ang, d, joint, p)?;
-            let r = [kq(d, 0) - p * w.w[0], kq(d, 1) - p * w.w[1], kq(d, 2) - p * w.w[2]];
-            let mut jm: Mat3<R> = mat3::zero();
-            for row in 0..3 {
-                jm[row][0] = k[row][0] - p * w.d[0][row];
-                jm[row][1] = k[row][1] - p * w.d[1][row];
-                jm[row][2] = -w.w[row];
-            }
-            let inv = mat3::inverse(&jm).ok_or(Error::LimitPoint { joint, tension: p.to_f64() })?;
-            let dx = mat3::mul_vec(&inv, &r);
-            d[0] -= dx[0];
-            d[1] -= dx[1];
-            p -= dx[2];
-            if !(p.is_finite() && d[0].is_finite() && d[1].is_finite()) {
-                return Err(Error::NotConverged { iterations: it, residual: f64::INFINITY });
-            }
-            if dx[0].abs() <= tol_len && dx[1].abs() <= tol_len && dx[2].abs() <= self.rel * (p.abs() + self.rel) {
-                // implicit derivative: J (dδ, dP) = -(K[:,2] - P dŵ/dθ)
-                let rhs = [
-                    -(k[0][2] - p * w.d[2][0]),
-                    -(k[1][2] - p * w.d[2][1]),
-                    -(k[2][2] - p * w.d[2][2]),
-                ];
-                let dp = mat3::mul_vec(&inv, &rhs)[2];
-                return Ok(Hold { delta: d, tension: p, thickness: t, wm: w.w[2], dp_dtheta: dp, iters: it });
-            }
-        }
-        Err(Error::NotConverged { iterations: self.max_iter, residual: f64::INFINITY })
+        let w0 = self.wrench(ang, guess, joint, R::zero())?;
+        let p0 = (k[2][0] * guess[0] + k[2][1] * guess[1] + k[2][2] * ang.theta) / w0.w[2];
+        let mut eq = HoldTension { ctx: self, joint, ang, k, w: w0 };
+        let mut x = [guess[0], guess[1], p0];
+        let (c, inv) = newton::full_steps(&mut eq, &mut x, self.max_iter).map_err(|e| match e {
+            Failure::Singular { .. } => Error::LimitPoint { joint, tension: x[2].to_f64() },
+            e => hold_error(e),
+        })?;
+        let (p, w) = (x[2], &eq.w);
+        // implicit derivative: J (dδ, dP) = -(K[:,2] - P dŵ/dθ)
+        let rhs = [-(k[0][2] - p * w.d[2][0]), -(k[1][2] - p * w.d[2][1]), -(k[2][2] - p * w.d[2][2])];
+        let dp = newton::mul_vec(&inv, &rhs)[2];
+        Ok(Hold { delta: [x[0], x[1]], tension: p, thickness: t, wm: w.w[2], dp_dtheta: dp, iters: c.iterations })
     }
 
-    /// Joint held at `ang` under tension P: Newton on (δax, δtr, t) of `K(t) q - P ŵ(q) = 0`.
+    /// Joint held at `ang` under tension P: Newton on (δax, δtr, t) of `K(t) q - P ŵ(q) = 0`
+    /// (`solve::newton::full_steps`).
     fn hold_thickness(&self, joint: usize, ang: &Angle<R>, p: R, guess: Hold<R>) -> Result<Hold<R>, Error> {
-        let mut d = guess.delta;
-        let mut t = guess.thickness;
-        let tol_len = self.rel * self.lh;
-        for it in 1..=self.max_iter {
-            let k = self.stiffness(t);
-            let kd = self.stiffness_dt(t);
-            let w = self.wrench(ang, d, joint, p)?;
-            let q = [d[0], d[1], ang.theta];
-            let kq = mat3::mul_vec(&k, &q);
-            let kdq = mat3::mul_vec(&kd, &q);
-            let r = [kq[0] - p * w.w[0], kq[1] - p * w.w[1], kq[2] - p * w.w[2]];
-            let mut jm: Mat3<R> = mat3::zero();
-            for row in 0..3 {
-                jm[row][0] = k[row][0] - p * w.d[0][row];
-                jm[row][1] = k[row][1] - p * w.d[1][row];
-                jm[row][2] = kdq[row];
-            }
-            let inv = mat3::inverse(&jm).ok_or(Error::Singular { what: "inverse joint Jacobian" })?;
-            let dx = mat3::mul_vec(&inv, &r);
-            d[0] -= dx[0];
-            d[1] -= dx[1];
-            t -= dx[2];
-            if !(t.is_finite() && t > R::zero() && d[0].is_finite() && d[1].is_finite()) {
-                return Err(Error::NotConverged { iterations: it, residual: f64::INFINITY });
-            }
-            if dx[0].abs() <= tol_len && dx[1].abs() <= tol_len && dx[2].abs() <= self.rel * t {
-                return Ok(Hold { delta: d, tension: p, thickness: t, wm: w.w[2], dp_dtheta: R::zero(), iters: it });
-            }
-        }
-        Err(Error::NotConverged { iterations: self.max_iter, residual: f64::INFINITY })
+        let w0 = Wrench { w: [R::zero(); 3], d: [[R::zero(); 3]; 3] };
+        let mut eq = HoldThickness { ctx: self, joint, ang, p, w: w0 };
+        let mut x = [guess.delta[0], guess.delta[1], guess.thickness];
+        let (c, _) = newton::full_steps(&mut eq, &mut x, self.max_iter).map_err(|e| match e {
+            Failure::Singular { .. } => Error::Singular { what: "inverse joint Jacobian" },
+            e => hold_error(e),
+        })?;
+        Ok(Hold { delta: [x[0], x[1]], tension: p, thickness: x[2], wm: eq.w.w[2], dp_dtheta: R::zero(), iters: c.iterations })
     }
 
     /// The joint's effective compliance θ/M at its target posture when held with tension P
@@ -331,6 +290,90 @@ impl<'a, R: Real> Ctx<'a, R> {
         let Ok(w) = self.wrench(ang, [R::zero(); 2], 0, R::zero()) else { return 0.0 };
         let cw = mat3::mul_vec(&c, &w.w);
         (cw[2] / w.w[2]).to_f64()
+    }
+}
+
+/// `K q - P ŵ(q) = 0` in (δax, δtr, P) at a fixed stiffness K; `w` the last wrench evaluated.
+struct HoldTension<'c, 'a, R> {
+    ctx: &'c Ctx<'a, R>,
+    joint: usize,
+    ang: &'c Angle<R>,
+    k: Mat3<R>,
+    w: Wrench<R>,
+}
+
+impl<R: Real> newton::Linearized<R, 3> for HoldTension<'_, '_, R> {
+    type Refusal = Error;
+    #[inline]
+    fn linearize(&mut self, x: &[R; 3]) -> Result<([R; 3], Mat3<R>), Error> {
+        let (k, p) = (&self.k, x[2]);
+        self.w = self.ctx.wrench(self.ang, [x[0], x[1]], self.joint, p)?;
+        let w = &self.w;
+        let mut r = [R::zero(); 3];
+        let mut jm: Mat3<R> = mat3::zero();
+        for row in 0..3 {
+            r[row] = k[row][0] * x[0] + k[row][1] * x[1] + k[row][2] * self.ang.theta - p * w.w[row];
+            jm[row][0] = k[row][0] - p * w.d[0][row];
+            jm[row][1] = k[row][1] - p * w.d[1][row];
+            jm[row][2] = -w.w[row];
+        }
+        Ok((r, jm))
+    }
+    #[inline]
+    fn step_converged(&self, x: &[R; 3], dx: &[R; 3]) -> bool {
+        let (rel, tol_len) = (self.ctx.rel, self.ctx.rel * self.ctx.lh);
+        dx[0].abs() <= tol_len && dx[1].abs() <= tol_len && dx[2].abs() <= rel * (x[2].abs() + rel)
+    }
+}
+
+/// `K(t) q - P ŵ(q) = 0` in (δax, δtr, t) at a fixed tension P; `w` the last wrench evaluated.
+struct HoldThickness<'c, 'a, R> {
+    ctx: &'c Ctx<'a, R>,
+    joint: usize,
+    ang: &'c Angle<R>,
+    p: R,
+    w: Wrench<R>,
+}
+
+impl<R: Real> newton::Linearized<R, 3> for HoldThickness<'_, '_, R> {
+    type Refusal = Error;
+    #[inline]
+    fn linearize(&mut self, x: &[R; 3]) -> Result<([R; 3], Mat3<R>), Error> {
+        let (ctx, p) = (self.ctx, self.p);
+        let k = ctx.stiffness(x[2]);
+        let kd = ctx.stiffness_dt(x[2]);
+        self.w = ctx.wrench(self.ang, [x[0], x[1]], self.joint, p)?;
+        let w = &self.w;
+        let q = [x[0], x[1], self.ang.theta];
+        let kq = mat3::mul_vec(&k, &q);
+        let kdq = mat3::mul_vec(&kd, &q);
+        let mut r = [R::zero(); 3];
+        let mut jm: Mat3<R> = mat3::zero();
+        for row in 0..3 {
+            r[row] = kq[row] - p * w.w[row];
+            jm[row][0] = k[row][0] - p * w.d[0][row];
+            jm[row][1] = k[row][1] - p * w.d[1][row];
+            jm[row][2] = kdq[row];
+        }
+        Ok((r, jm))
+    }
+    #[inline]
+    fn step_converged(&self, x: &[R; 3], dx: &[R; 3]) -> bool {
+        let tol_len = self.ctx.rel * self.ctx.lh;
+        dx[0].abs() <= tol_len && dx[1].abs() <= tol_len && dx[2].abs() <= self.ctx.rel * x[2]
+    }
+    #[inline]
+    fn admissible(&self, x: &[R; 3]) -> bool {
+        x.iter().all(|v| v.is_finite()) && x[2] > R::zero()
+    }
+}
+
+/// A joint hold's failure as the model's error (the wrench's refusal as it is).
+fn hold_error(e: Failure<Error>) -> Error {
+    match e {
+        Failure::Domain(e) | Failure::Stalled { last: Some(e), .. } => e,
+        Failure::Singular { iterations } => Error::NotConverged { iterations, residual: f64::INFINITY },
+        Failure::Stalled { iterations, .. } | Failure::MaxIter { iterations, .. } => Error::NotConverged { iterations, residual: f64::INFINITY },
     }
 }
 

@@ -17,6 +17,7 @@ pub struct Lu<R, const N: usize> {
 impl<R: Real, const N: usize> Lu<R, N> {
     /// Factor the leading `dim` block of `a`. `None` if a pivot vanishes against the largest
     /// entry of its column (singular to the scalar's resolution) or is not finite.
+    #[inline]
     pub fn new(a: &[[R; N]; N], dim: usize) -> Option<Self> {
         let dim = dim.min(N);
         let mut lu = *a;
@@ -56,6 +57,7 @@ impl<R: Real, const N: usize> Lu<R, N> {
     }
 
     /// x with A x = b (first `dim` entries).
+    #[inline]
     pub fn solve(&self, b: &[R; N]) -> [R; N] {
         let d = self.dim;
         let mut x = [R::zero(); N];

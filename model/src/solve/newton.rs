@@ -1,6 +1,11 @@
-//! Damped Newton: the Newton step from an LU of the Jacobian, then a backtracking line search
-//! that halves the step until |r| falls (at most `max_halvings` times). Converged at
-//! |r| <= tol, or when no step lowers |r| and |r| is already at the type's resolution.
+//! Newton's method, two ways:
+//! - [`solve`]: damped Newton, the step from an LU of the Jacobian, then a backtracking line
+//!   search that halves the step until |r| falls (at most `max_halvings` times). Converged at
+//!   |r| <= tol, or when no step lowers |r| and |r| is already at the type's resolution.
+//! - [`full_steps`]: undamped Newton for a start already close and a closed-form Jacobian:
+//!   residual and Jacobian from one evaluation, full steps, converged on the step. One
+//!   evaluation and one fixed-size inverse per iteration (closed form at 3 x 3), no trial
+//!   evaluations.
 
 use super::lu::Lu;
 use super::{Converged, Failure, SolveOptions};
@@ -130,6 +135,86 @@ pub fn solve<R: Real, const N: usize, S: Equations<R, N> + ?Sized>(
     }
 }
 
+/// A system r(x) = 0 of N equations whose residual and Jacobian come from one evaluation.
+pub trait Linearized<R: Real, const N: usize> {
+    /// Why r cannot be evaluated at a point.
+    type Refusal: Copy;
+    /// r(x) and ∂r/∂x at x.
+    fn linearize(&mut self, x: &[R; N]) -> Result<([R; N], [[R; N]; N]), Self::Refusal>;
+    /// Whether the step `dx` that led to `x` is within the caller's tolerances.
+    fn step_converged(&self, x: &[R; N], dx: &[R; N]) -> bool;
+    /// Whether `x` lies in r's domain (finite by default).
+    fn admissible(&self, x: &[R; N]) -> bool {
+        x.iter().all(|v| v.is_finite())
+    }
+}
+
+/// J⁻¹ of a Newton step: closed form (scaled cofactors, `mat3::inverse`) for 3 x 3, else from
+/// the LU. `None` if J is singular to the scalar's resolution.
+#[inline]
+pub fn inverse<R: Real, const N: usize>(jac: &[[R; N]; N]) -> Option<[[R; N]; N]> {
+    if N == 3 {
+        let mut m = [[R::zero(); 3]; 3];
+        for (i, row) in m.iter_mut().enumerate() {
+            row.copy_from_slice(&jac[i][..3]);
+        }
+        let inv = crate::mat3::inverse(&m)?;
+        let mut out = [[R::zero(); N]; N];
+        for (i, row) in out.iter_mut().enumerate() {
+            row[..3].copy_from_slice(&inv[i]);
+        }
+        Some(out)
+    } else {
+        Some(Lu::new(jac, N)?.inverse())
+    }
+}
+
+/// A x.
+#[inline]
+pub fn mul_vec<R: Real, const N: usize>(a: &[[R; N]; N], x: &[R; N]) -> [R; N] {
+    let mut y = [R::zero(); N];
+    for (yi, row) in y.iter_mut().zip(a) {
+        *yi = row.iter().zip(x).fold(R::zero(), |s, (&p, &q)| s + p * q);
+    }
+    y
+}
+
+/// Full Newton steps x -= J⁻¹ r from `x` (updated in place), at most `max_iter`: for a start
+/// already close and a closed-form Jacobian (one evaluation, one fixed-size inverse, no trial
+/// points per step). Converged when `step_converged(x, dx)`; the report's iterations count the
+/// steps, its residual is |r| at the last linearization (before the converging step). Returns
+/// J⁻¹ there too (implicit derivatives at the answer). A step out of the domain is `Stalled`.
+#[inline]
+pub fn full_steps<R: Real, const N: usize, S: Linearized<R, N>>(
+    eq: &mut S,
+    x: &mut [R; N],
+    max_iter: u32,
+) -> Result<(Converged<R>, [[R; N]; N]), Failure<S::Refusal>> {
+    let norm = |r: &[R; N]| r.iter().fold(R::zero(), |a, &v| a + v * v).sqrt();
+    // the last residual, its norm taken only for a report
+    let mut last = [R::zero(); N];
+    for it in 1..=max_iter {
+        let (r, jac) = match eq.linearize(x) {
+            Ok(v) => v,
+            Err(e) if it == 1 => return Err(Failure::Domain(e)),
+            Err(e) => return Err(Failure::Stalled { iterations: it - 1, residual: norm(&last).to_f64(), last: Some(e) }),
+        };
+        let Some(inv) = inverse(&jac) else { return Err(Failure::Singular { iterations: it - 1 }) };
+        let dx = mul_vec(&inv, &r);
+        for i in 0..N {
+            x[i] -= dx[i];
+        }
+        if !eq.admissible(x) {
+            return Err(Failure::Stalled { iterations: it, residual: f64::INFINITY, last: None });
+        }
+        if eq.step_converged(x, &dx) {
+            return Ok((Converged { iterations: it, residual: norm(&r) }, inv));
+        }
+        last = r;
+    }
+    Err(Failure::MaxIter { iterations: max_iter, residual: if max_iter == 0 { f64::INFINITY } else { norm(&last).to_f64() } })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -154,5 +239,34 @@ mod tests {
         assert!(c.iterations > 0 && c.residual <= 1e-10);
         let mut z = [0.0, 0.0];
         assert!(matches!(solve(&mut Circle, &mut z, &SolveOptions::new(1e-10, 1e-14, 50)), Err(Failure::Singular { .. })));
+    }
+
+    /// The same system with its Jacobian in closed form, by full steps converged on the step.
+    impl Linearized<f64, 2> for Circle {
+        type Refusal = ();
+        fn linearize(&mut self, x: &[f64; 2]) -> Result<([f64; 2], [[f64; 2]; 2]), ()> {
+            Ok(([x[0] * x[0] + x[1] * x[1] - 4.0, x[0] * x[1] - 1.0], [[2.0 * x[0], 2.0 * x[1]], [x[1], x[0]]]))
+        }
+        fn step_converged(&self, _: &[f64; 2], dx: &[f64; 2]) -> bool {
+            dx.iter().all(|d| d.abs() <= 1e-13)
+        }
+    }
+
+    #[test]
+    fn full_steps_converge_quadratically_and_refuse_a_singular_start() {
+        let mut x = [2.0, 0.3];
+        let (c, inv) = full_steps(&mut Circle, &mut x, 30).unwrap();
+        assert!((x[0] * x[1] - 1.0).abs() < 1e-12 && (x[0] * x[0] + x[1] * x[1] - 4.0).abs() < 1e-12);
+        assert!(c.iterations > 1 && c.iterations < 10, "{c:?}");
+        // the returned inverse is the Jacobian's at (nearly) the root: J J⁻¹ = I
+        let j = [[2.0 * x[0], 2.0 * x[1]], [x[1], x[0]]];
+        for r in 0..2 {
+            for c in 0..2 {
+                let p: f64 = (0..2).map(|k| j[r][k] * inv[k][c]).sum();
+                assert!((p - if r == c { 1.0 } else { 0.0 }).abs() < 1e-9);
+            }
+        }
+        assert!(matches!(full_steps(&mut Circle, &mut [0.0, 0.0], 30), Err(Failure::Singular { iterations: 0 })));
+        assert!(matches!(full_steps(&mut Circle, &mut [2.0, 0.3], 1), Err(Failure::MaxIter { iterations: 1, .. })));
     }
 }
