@@ -105,7 +105,7 @@ fn main() {
                      firmware package built with `cargo build --release --no-default-features --features <set>`\n\
                      (profile: opt-level \"z\", fat LTO, one codegen unit, panic = abort). Flash: vector table,\n\
                      .text, .rodata and .data's load image; static RAM: .data + .bss + .uninit (the stack is not\n\
-                     counted). Target for the full firmware: <= 64 KiB flash, <= 16 KiB static RAM.\n\
+                     counted). The STM32F405 (1 MiB flash, 192 KiB RAM) sets no budget below its chip.\n\
                      See docs/firmware.md (\"Size\") for what the numbers are made of.\n\n{t}"
                 );
                 std::fs::write(out, doc).unwrap_or_else(|e| panic!("{out}: {e}"));
