@@ -4,48 +4,12 @@
 //! the board gets the scene's finger; `--drive` arms, drives, reads back and stops; a scene
 //! the model refuses never reaches a board.
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-use std::sync::OnceLock;
+use std::process::Command;
+
+mod common;
+use common::{finger, image, root, sim, text};
 
 use finger_model::{Finger, Method, Params};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().unwrap()
-}
-
-fn cargo() -> String {
-    std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
-}
-
-/// finger-sim, built once (host-tests' binary, for this machine).
-fn sim() -> &'static Path {
-    static SIM: OnceLock<PathBuf> = OnceLock::new();
-    SIM.get_or_init(|| {
-        let out = Command::new(cargo())
-            .current_dir(root().join("host-tests"))
-            .args(["build", "--quiet", "--bin", "finger-sim"])
-            .output()
-            .expect("cargo");
-        assert!(out.status.success(), "finger-sim build failed:\n{}", String::from_utf8_lossy(&out.stderr));
-        let p = PathBuf::from(env!("CARGO_BIN_EXE_finger")).parent().unwrap().join("finger-sim");
-        assert!(p.exists(), "finger-sim not at {}", p.display());
-        p
-    })
-}
-
-/// The emulator firmware image, built once (`cargo build --release` at the top).
-fn image() -> &'static Path {
-    static IMG: OnceLock<PathBuf> = OnceLock::new();
-    IMG.get_or_init(|| {
-        let out = Command::new(cargo())
-            .current_dir(root())
-            .args(["build", "--release", "--quiet", "--bin", "finger-fw"])
-            .output()
-            .expect("cargo");
-        assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
-        root().join("target/thumbv7em-none-eabihf/release/finger-fw")
-    })
-}
 
 fn scratch(what: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("finger-run-{what}-{}", std::process::id()));
@@ -54,15 +18,6 @@ fn scratch(what: &str) -> PathBuf {
     d
 }
 
-fn finger(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_finger")).args(args).output().expect("finger")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-/// header, rows
 fn csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     let t = std::fs::read_to_string(path).unwrap();
     let mut l = t.lines();
@@ -228,7 +183,7 @@ fn ctrl_c_during_a_driven_run_still_stops_the_board() {
     .unwrap();
     std::fs::set_permissions(&board, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
     let out_dir = dir.join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_finger"))
+    let child = Command::new(env!("CARGO_BIN_EXE_finger"))
         .args(["--sim", "--sim-bin", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()])
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
