@@ -5,6 +5,7 @@
 pub mod paper;
 pub mod perf;
 pub mod qemu;
+pub mod sim_console;
 pub mod domain;
 pub use continuum;
 pub use finger_scene::svg;

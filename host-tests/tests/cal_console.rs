@@ -3,31 +3,12 @@
 //! is the host model's `Finger::with_calibration` in f32; refusals change nothing.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
+use host_tests::sim_console::{cmd, Out};
 use finger_model::{Calibration, Finger, Method};
 
 /// MODEL.md's finger, as `fe-calibrate` (tools/calculix) prints it.
 const FE_CAL: &str = "1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332";
 const NONE_REPLY: &str = "ok cal=1.000000,1.000000,1.000000,1.000000,1.000000,0.000000,1.000000,0.000000";
-
-struct Out(String);
-impl std::fmt::Write for Out {
-    fn write_str(&mut self, s: &str) -> std::fmt::Result {
-        self.0.push_str(s);
-        Ok(())
-    }
-}
-
-/// One command line, the control loop run through any `wait`: its final reply line.
-fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
-    let mut out = Out(String::new());
-    a.input(format!("{line}\n").as_bytes(), &mut out);
-    while a.busy() {
-        a.tick(1, &mut out);
-    }
-    let lines: Vec<&str> = out.0.lines().collect();
-    assert_eq!(lines.iter().filter(|l| l.starts_with("ok") || l.starts_with("err ")).count(), 1, "{line} -> {lines:?}");
-    lines.last().unwrap().to_string()
-}
 
 fn err(a: &mut App<SimBoard>, line: &str, code: &str) {
     let r = cmd(a, line);

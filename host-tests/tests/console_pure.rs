@@ -5,26 +5,12 @@
 //! with the same parameters.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
+use host_tests::sim_console::feed_text;
 use proptest::prelude::*;
-
-struct Out(String);
-impl std::fmt::Write for Out {
-    fn write_str(&mut self, s: &str) -> std::fmt::Result {
-        self.0.push_str(s);
-        Ok(())
-    }
-}
 
 /// One command line; its output, every line (the control loop run through any `wait`).
 fn run(a: &mut App<SimBoard>, line: &str) -> String {
-    let mut out = Out(String::new());
-    for &b in format!("{line}\n").as_bytes() {
-        a.input_byte(b, &mut out);
-        while a.busy() {
-            a.tick(1, &mut out);
-        }
-    }
-    out.0
+    feed_text(a, format!("{line}\n").as_bytes())
 }
 
 /// The probes: model-only commands with arguments inside and outside the domain.

@@ -2,38 +2,10 @@
 //! command and error code, and the safety rules of issue 3, each shown here.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-
-struct Out(String);
-impl std::fmt::Write for Out {
-    fn write_str(&mut self, s: &str) -> std::fmt::Result {
-        self.0.push_str(s);
-        Ok(())
-    }
-}
+use host_tests::sim_console::{cmd, feed, Out};
 
 fn app() -> App<SimBoard> {
     App::new(SimBoard::default())
-}
-
-/// Feed raw bytes, run the control loop through any `wait`; every output line.
-fn feed(a: &mut App<SimBoard>, bytes: &[u8]) -> Vec<String> {
-    let mut out = Out(String::new());
-    for &b in bytes {
-        a.input_byte(b, &mut out);
-        while a.busy() {
-            a.tick(1, &mut out);
-        }
-    }
-    out.0.lines().map(str::to_owned).collect()
-}
-
-/// One command line: its final reply line (asserting there is exactly one ok/err line, last).
-fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
-    let lines = feed(a, format!("{line}\n").as_bytes());
-    let finals: Vec<_> = lines.iter().filter(|l| l.starts_with("ok") || l.starts_with("err ")).collect();
-    assert_eq!(finals.len(), 1, "{line:?} -> {lines:?}");
-    assert!(lines.last().unwrap().starts_with("ok") || lines.last().unwrap().starts_with("err "));
-    lines.last().unwrap().clone()
 }
 
 fn ok(a: &mut App<SimBoard>, line: &str) -> String {

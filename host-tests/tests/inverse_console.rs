@@ -99,25 +99,7 @@ mod console {
     use finger_fw::sim::SimBoard;
     use finger_fw::App;
     use finger_model::Method;
-
-    struct Out(String);
-    impl std::fmt::Write for Out {
-        fn write_str(&mut self, s: &str) -> std::fmt::Result {
-            self.0.push_str(s);
-            Ok(())
-        }
-    }
-
-    fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
-        let mut out = Out(String::new());
-        a.input(format!("{line}\n").as_bytes(), &mut out);
-        while a.busy() {
-            a.tick(1, &mut out);
-        }
-        let lines: Vec<&str> = out.0.lines().collect();
-        assert_eq!(lines.iter().filter(|l| l.starts_with("ok") || l.starts_with("err ")).count(), 1, "{line} -> {lines:?}");
-        lines.last().unwrap().to_string()
-    }
+    use host_tests::sim_console::{cmd, Out};
 
     fn outputs(a: &mut App<SimBoard>) -> String {
         let st = cmd(a, "status");

@@ -3,20 +3,12 @@
 //! sub-elements (the model's posture, MODEL.md "Equilibrium"), the tip as `solve`'s.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
+use host_tests::sim_console::feed;
 use finger_model::{Finger, Method, Params, Pose};
 
-struct Out(String);
-impl std::fmt::Write for Out {
-    fn write_str(&mut self, s: &str) -> std::fmt::Result {
-        self.0.push_str(s);
-        Ok(())
-    }
-}
-
+/// One command line: its reply, which must be the only line.
 fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
-    let mut out = Out(String::new());
-    a.input(format!("{line}\n").as_bytes(), &mut out);
-    let lines: Vec<_> = out.0.lines().map(str::to_owned).collect();
+    let lines = feed(a, format!("{line}\n").as_bytes());
     assert_eq!(lines.len(), 1, "{line:?} -> {lines:?}");
     lines[0].clone()
 }

@@ -1,0 +1,42 @@
+//! The console of the application on a simulated board, as the host tests drive it: bytes in,
+//! the control loop run through any `wait`, the reply lines out. Not a transport: finger-sim
+//! and tools/finger are what a user runs.
+use finger_fw::sim::SimBoard;
+use finger_fw::App;
+
+/// A reply sink for `App::input` and `App::tick`.
+pub struct Out(pub String);
+
+impl std::fmt::Write for Out {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        self.0.push_str(s);
+        Ok(())
+    }
+}
+
+/// Feed raw bytes, run the control loop through any `wait` after each; everything written.
+pub fn feed_text(a: &mut App<SimBoard>, bytes: &[u8]) -> String {
+    let mut out = Out(String::new());
+    for &b in bytes {
+        a.input_byte(b, &mut out);
+        while a.busy() {
+            a.tick(1, &mut out);
+        }
+    }
+    out.0
+}
+
+/// As [`feed_text`], split into lines.
+pub fn feed(a: &mut App<SimBoard>, bytes: &[u8]) -> Vec<String> {
+    feed_text(a, bytes).lines().map(str::to_owned).collect()
+}
+
+/// One command line: its final reply line (asserting there is exactly one ok/err line, last).
+pub fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
+    let lines = feed(a, format!("{line}\n").as_bytes());
+    let finals: Vec<_> = lines.iter().filter(|l| l.starts_with("ok") || l.starts_with("err ")).collect();
+    assert_eq!(finals.len(), 1, "{line:?} -> {lines:?}");
+    let last = lines.last().unwrap();
+    assert!(last.starts_with("ok") || last.starts_with("err "), "{line:?} -> {lines:?}");
+    last.clone()
+}
