@@ -11,9 +11,12 @@ fn main() {
     let out = PathBuf::from(env::var("OUT_DIR").unwrap());
     fs::copy("memory.x", out.join("memory.x")).unwrap();
     println!("cargo:rustc-link-search={}", out.display());
-    println!("cargo:rustc-link-arg-bins=--nmagic");
-    println!("cargo:rustc-link-arg-bins=-Tlink.x");
-    if env::var_os("CARGO_FEATURE_LOG").is_some() {
-        println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    // the firmware (bins) and the on-target tests (tests/on_target.rs) link alike
+    for kind in ["bins", "tests"] {
+        println!("cargo:rustc-link-arg-{kind}=--nmagic");
+        println!("cargo:rustc-link-arg-{kind}=-Tlink.x");
+        if env::var_os("CARGO_FEATURE_LOG").is_some() {
+            println!("cargo:rustc-link-arg-{kind}=-Tdefmt.x");
+        }
     }
 }

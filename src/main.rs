@@ -12,8 +12,8 @@
 #[cfg(target_os = "none")]
 mod chip;
 
-/// On the host the firmware binary is empty: the application runs in host-tests' finger-sim.
+/// On the host the firmware binary is empty: the application runs in tools/finger-sim.
 #[cfg(not(target_os = "none"))]
 fn main() {
-    eprintln!("finger-fw is firmware for thumbv7em-none-eabihf; on the host use host-tests' finger-sim");
+    eprintln!("finger-fw is firmware for thumbv7em-none-eabihf; on the host use tools/finger-sim");
 }

@@ -1,10 +1,10 @@
-//! The soak (issue 13): the property cases of host-tests/src/domain.rs (forward, fmax, the
+//! The soak (issue 13): the property cases of model/testkit/src/domain.rs (forward, fmax, the
 //! inverse round trip, contact) drawn at random, by default 1,000,000 of them, and the count of
 //! each outcome (an answer, each typed refusal, each violation). Exits 1 on any violation.
 //!
 //! `cd host-tests && cargo run --example soak [-- <cases> [<seed>]]`
 
-use host_tests::domain;
+use finger_model_testkit::domain;
 use std::collections::BTreeMap;
 
 /// xorshift64*: a uniform number in [0, 1).

@@ -2,11 +2,9 @@
 //! and the scene runner are crates of their own (tools/continuum, tools/finger-scene),
 //! re-exported here under their old paths for the fidelity test and report.
 
-pub mod paper;
 pub mod perf;
 pub mod qemu;
 pub mod sim_console;
-pub mod domain;
 pub use continuum;
 pub use finger_scene::svg;
 /// The scene runner (tools/finger-scene).

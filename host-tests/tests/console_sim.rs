@@ -439,34 +439,6 @@ fn force_servo_and_travel() {
     assert!(a.board().servo.duty < 4000);
 }
 
-#[test]
-fn finger_sim_binary() {
-    use std::io::Write;
-    use std::process::{Command, Stdio};
-    let mut c = Command::new(env!("CARGO_BIN_EXE_finger-sim"))
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let script = b"version\r\nbogus\nsolve nan 0 0 0\nvolt 1 100\narm\nvolt 1 500\nwait 0.1\nstatus\nparam l 30\nstop\n\xff\n";
-    c.stdin.take().unwrap().write_all(script).unwrap();
-    let out = c.wait_with_output().unwrap(); // exits at end of input
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).unwrap();
-    let lines: Vec<&str> = text.lines().collect();
-    assert_eq!(lines.len(), 11, "{text}");
-    assert!(lines[0].starts_with("ok version="));
-    assert!(lines[1].starts_with("err unknown:"));
-    assert!(lines[2].starts_with("err bad-number:"));
-    assert!(lines[3].starts_with("err not-armed:"));
-    assert_eq!(lines[4], "ok armed=1");
-    assert_eq!(lines[6], "ok waited=0.1");
-    assert!(lines[7].contains(" volts=200.0,0.0,0.0 "), "{}", lines[7]);
-    assert!(lines[8].starts_with("err armed:"));
-    assert_eq!(lines[9], "ok stopped");
-    assert!(lines[10].starts_with("err unknown:"));
-}
-
 /// The firmware's own number parsing and formatting (src/num.rs, src/console.rs; core's
 /// dec2flt and flt2dec are too big for the flash) against core's, over many values.
 #[test]

@@ -137,7 +137,7 @@ fn connect(cli: &Cli, timeout: Duration) -> Result<Link, LinkError> {
     if t.sim {
         return Link::sim(&cli.sim_bin.clone().unwrap_or_else(find_sim)).map_err(|e| match e {
             LinkError::Open(m) if cli.sim_bin.is_none() => {
-                LinkError::Open(format!("{m} (build it: cd host-tests && cargo build --bin finger-sim; or name it with --sim-bin)"))
+                LinkError::Open(format!("{m} (build it: cd tools/finger-sim && cargo build; or name it with --sim-bin)"))
             }
             e => e,
         });

@@ -1,6 +1,6 @@
 //! The finger-fw application on a simulated board, compiled to WebAssembly for web/page.
 //!
-//! What it is: the glue finger-sim is (host-tests/src/bin/finger-sim.rs), as `extern "C"`
+//! What it is: the glue finger-sim is (tools/finger-sim/src/main.rs), as `extern "C"`
 //! exports: console bytes in through a buffer in linear memory, reply text out through
 //! another, and time advanced by the page (`fw_tick`), in the control loop's 1 ms steps.
 //! Input that arrives while a `wait` runs is held and fed when it ends, as the App asks.

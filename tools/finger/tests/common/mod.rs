@@ -13,12 +13,12 @@ pub fn cargo() -> String {
     std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
 }
 
-/// finger-sim, built once (host-tests' binary, for this machine).
+/// finger-sim, built once (tools/finger-sim, for this machine).
 pub fn sim() -> &'static Path {
     static SIM: OnceLock<PathBuf> = OnceLock::new();
     SIM.get_or_init(|| {
         let out = Command::new(cargo())
-            .current_dir(root().join("host-tests"))
+            .current_dir(root().join("tools/finger-sim"))
             .args(["build", "--quiet", "--bin", "finger-sim", "--message-format", "short"])
             .output()
             .expect("cargo");

@@ -1,7 +1,7 @@
 //! Host tests that pin the model's physics (issue 2). Each fails if the feature it names breaks.
 
 use finger_model::{de, hinge, params::EPS0, Error, Finger, Method, Params};
-use host_tests::paper;
+use finger_model_testkit::paper;
 
 fn default_finger() -> Finger<f64> {
     Finger::new(Params::default()).unwrap()

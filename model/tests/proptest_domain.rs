@@ -1,11 +1,11 @@
-//! Property tests over the documented domain (issue 13, host-tests/src/domain.rs): forward,
+//! Property tests over the documented domain (issue 13, finger-model-testkit: model/testkit/src/domain.rs): forward,
 //! fmax, the inverse round trip and contact, 10,000 cases in all. No panic, no NaN or inf in an
 //! answer, no `NotConverged` or fault: every case answers or is refused with a typed reason.
 //! The soak (`cargo run --example soak` in host-tests) runs the same cases by the
 //! million and prints the count of each outcome.
 
 use finger_model::Finger;
-use host_tests::domain;
+use finger_model_testkit::domain;
 use proptest::prelude::*;
 
 fn hinge() -> impl Strategy<Value = Finger<f64>> {

@@ -1,0 +1,7 @@
+//! Cases shared by the model's own tests (model/tests, a dev-dependency of finger-model) and
+//! host-tests' soak example: not part of the model, never in the firmware.
+//! - [`paper`]: the paper's comparison (section III-B), the matching tension.
+//! - [`domain`]: the documented domain's cases, one function per property.
+
+pub mod domain;
+pub mod paper;
