@@ -122,8 +122,12 @@ fn main() {
     let data = read(&path);
     let (flash, ram) = sizes(&data);
     println!("{}", path.display());
-    println!("flash={flash} bytes ({:.1} KiB, target <= 64 KiB)", flash as f64 / 1024.0);
-    println!("ram={ram} bytes static ({:.1} KiB, target <= 16 KiB)", ram as f64 / 1024.0);
+    // the Cortex-M3 image's budget is its linker script's (memory-m3.x): its RAM sections
+    // include the 8 KiB stack
+    let m3 = path.to_string_lossy().contains("thumbv7m-none-eabi");
+    let (fb, rb) = if m3 { ("M3 budget 64 KiB", "with the stack; M3 budget 24 KiB") } else { ("target <= 64 KiB", "target <= 16 KiB") };
+    println!("flash={flash} bytes ({:.1} KiB, {fb})", flash as f64 / 1024.0);
+    println!("ram={ram} bytes static ({:.1} KiB, {rb})", ram as f64 / 1024.0);
     if nsym > 0 {
         let elf = object::File::parse(&*data).expect("ELF");
         let mut syms: Vec<(u64, String)> = elf
