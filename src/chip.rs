@@ -712,7 +712,7 @@ fn timing_report(o: &mut dyn core::fmt::Write) {
 
 /// Test images only (feature `fault-inject`, never in a release): `crash <what>` takes a
 /// fault path on purpose, for tests/qemu_faults.rs: `hardfault` (a load from an unmapped
-/// address), `nmi` (NMIPENDSET), `irq` (an interrupt without a handler: DefaultHandler),
+/// address; an undefined instruction on the M3 image), `nmi` (NMIPENDSET), `irq` (an interrupt without a handler: DefaultHandler),
 /// `overflow` (unbounded recursion into the MPU stack guard).
 #[cfg(feature = "fault-inject")]
 mod fault_inject {
@@ -731,8 +731,14 @@ mod fault_inject {
         let Record::Line(l) = rec else { return };
         let Some(what) = l.strip_prefix(b"crash ") else { return };
         match what {
+            #[cfg(not(m3))]
             b"hardfault" => unsafe {
                 core::ptr::read_volatile(0x6000_0000 as *const u32);
+            },
+            // QEMU's netduino2 ignores an unmapped load: an undefined instruction instead
+            #[cfg(m3)]
+            b"hardfault" => unsafe {
+                core::arch::asm!("udf #0");
             },
             b"nmi" => unsafe {
                 (*cortex_m::peripheral::SCB::PTR).icsr.write(1 << 31);
