@@ -18,6 +18,20 @@ const H_LOG2: i32 = 14;
 
 type CMat = [[Scaled; 3]; 3];
 
+/// `-J^-1 r` for a Q30 Jacobian and a Q22 residual, in Q22; `None` when singular or out of
+/// range.
+fn newton_step(j: &[[i64; 2]; 2], r: [Mm; 2]) -> Option<(i64, i64)> {
+    let det = j[0][0].checked_mul(j[1][1])?.checked_sub(j[0][1].checked_mul(j[1][0])?)?;
+    let det30 = shr_round(det, 30);
+    if det30 == 0 {
+        return None;
+    }
+    let (r0, r1) = (r[0].0 as i64, r[1].0 as i64);
+    let n0 = j[1][1].checked_mul(r0)?.checked_sub(j[0][1].checked_mul(r1)?)?;
+    let n1 = j[0][0].checked_mul(r1)?.checked_sub(j[1][0].checked_mul(r0)?)?;
+    Some((-(n0 / det30), -(n1 / det30)))
+}
+
 /// A planar pose: x, y (mm), angle (rad).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FixedPose {
@@ -93,7 +107,7 @@ fn cmat<R: Real>(m: &[[R; 3]; 3]) -> CMat {
 /// `C (a, b, c)` row `i` as a 64-bit sum at frac [`ACC`].
 #[inline(always)]
 fn row<const A: i32, const B: i32, const C: i32>(cm: &CMat, i: usize, a: Q<A>, b: Q<B>, c: Q<C>) -> i64 {
-    cm[i][0].wide(a, ACC) + cm[i][1].wide(b, ACC) + cm[i][2].wide(c, ACC)
+    cm[i][0].wide(a, ACC).saturating_add(cm[i][1].wide(b, ACC)).saturating_add(cm[i][2].wide(c, ACC))
 }
 
 impl FixedFinger {
@@ -150,17 +164,17 @@ impl FixedFinger {
             let f: [Nt; 2] = [narrow(co.wide(fc[0]) + s.wide(fc[1]), 52), narrow(co.wide(fc[1]) - s.wide(fc[0]), 52)];
             let q0 = [row(cj, 0, f[0], f[1], m0), row(cj, 1, f[0], f[1], m0), row(cj, 2, f[0], f[1], m0)];
             // den = 1 + f_y C02 - f_x C12, at frac ACC
-            let den = (1i64 << ACC) + cj[0][2].wide(f[1], ACC) - cj[1][2].wide(f[0], ACC);
+            let den = (1i64 << ACC).saturating_add(cj[0][2].wide(f[1], ACC)).saturating_sub(cj[1][2].wide(f[0], ACC));
             let den30 = shr_round(den, ACC - 30);
             if den30.abs() <= (1 << 10) {
                 return Err(MarchError::Singular);
             }
             // the moment arm's own change: s = (-f_y q0x + f_x q0y) / den, N mm
-            let num = shr_round(-(f[1].0 as i64) * shr_round(q0[0], ACC - 22) + f[0].0 as i64 * shr_round(q0[1], ACC - 22), 44 - 48); // frac 48
+            let num = shr_round((-(f[1].0 as i64)).saturating_mul(shr_round(q0[0], ACC - 22)).saturating_add((f[0].0 as i64).saturating_mul(shr_round(q0[1], ACC - 22))), 44 - 48); // frac 48
             let sm: Nmm = narrow(num / den30, 18);
-            let qx: Mm = narrow(q0[0] + cj[0][2].wide(sm, ACC), ACC);
-            let qy: Mm = narrow(q0[1] + cj[1][2].wide(sm, ACC), ACC);
-            let qt: Rad = narrow(q0[2] + cj[2][2].wide(sm, ACC), ACC);
+            let qx: Mm = narrow(q0[0].saturating_add(cj[0][2].wide(sm, ACC)), ACC);
+            let qy: Mm = narrow(q0[1].saturating_add(cj[1][2].wide(sm, ACC)), ACC);
+            let qt: Rad = narrow(q0[2].saturating_add(cj[2][2].wide(sm, ACC)), ACC);
             let ax = qx + self.sub_len;
             pose = FixedPose {
                 x: pose.x + narrow(co.wide(ax) - s.wide(qy), 52),
@@ -197,16 +211,12 @@ impl FixedFinger {
                 let mut bh = b;
                 bh[i] = bh[i] + h;
                 let (rh, ..) = self.residual(k, tension, bh)?;
-                jac[0][i] = ((rh[0].0 - r[0].0) as i64) << (30 - H_LOG2);
-                jac[1][i] = ((rh[1].0 - r[1].0) as i64) << (30 - H_LOG2);
+                jac[0][i] = (rh[0].0 as i64 - r[0].0 as i64) << (30 - H_LOG2);
+                jac[1][i] = (rh[1].0 as i64 - r[1].0 as i64) << (30 - H_LOG2);
             }
-            let det30 = shr_round(jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0], 30);
-            if det30 == 0 {
-                return Err(MarchError::Singular);
-            }
-            // step = -J^-1 r (Q52 numerators over a Q30 determinant: Q22)
-            let d0 = -(jac[1][1] * r[0].0 as i64 - jac[0][1] * r[1].0 as i64) / det30;
-            let d1 = -(-jac[1][0] * r[0].0 as i64 + jac[0][0] * r[1].0 as i64) / det30;
+            // step = -J^-1 r (Q52 numerators over a Q30 determinant: Q22); an overflow is a
+            // divergent step (the caller continues in load)
+            let (d0, d1) = newton_step(&jac, r).ok_or(MarchError::Singular)?;
             let mut lambda = 0;
             loop {
                 let bt = [b[0] + narrow(d0 >> lambda, 22), b[1] + narrow(d1 >> lambda, 22)];
@@ -227,23 +237,33 @@ impl FixedFinger {
         }
     }
 
-    /// Joint k at the tension, by load continuation when Newton from the straight joint fails.
+    /// Joint k at the tension, by load continuation when Newton from the straight joint fails
+    /// (the increment doubles on success, halves on failure, down to P / 1024).
     fn joint(&self, k: usize, tension: Nt, iters: &mut u32) -> Result<(FixedPose, [Mm; 2]), MarchError> {
         let straight = [self.hinge_len, self.e];
-        if let Ok(st) = self.newton(k, tension, straight, iters) {
-            return Ok(st);
-        }
-        let mut b = straight;
-        let mut last = Err(MarchError::Singular);
-        for i in 1..=8 {
-            let t: Nt = Q(((tension.0 as i64 * i) / 8) as i32);
-            last = self.newton(k, t, b, iters);
-            match last {
-                Ok((_, hole)) => b = hole,
-                Err(_) => break,
+        let mut last = match self.newton(k, tension, straight, iters) {
+            Ok(st) => return Ok(st),
+            Err(e) => e,
+        };
+        let (total, min_step) = (tension.0 as i64, (tension.0 as i64 >> 10).max(1));
+        let (mut done, mut step, mut b) = (0i64, total / 8, straight);
+        while done < total {
+            let t = (done + step.max(min_step)).min(total);
+            match self.newton(k, Q(t as i32), b, iters) {
+                Ok((end, hole)) if t == total => return Ok((end, hole)),
+                Ok((_, hole)) => {
+                    (done, b, step) = (t, hole, step * 2);
+                }
+                Err(e) => {
+                    last = e;
+                    if step <= min_step {
+                        break;
+                    }
+                    step /= 2;
+                }
             }
         }
-        last
+        Err(last)
     }
 
     /// The converged equilibrium under `tension` (N) alone.

@@ -25,8 +25,12 @@ pub type Unit = Q<30>;
 /// Round-to-nearest shift of a 64-bit value by `s` bits (left when `s` < 0).
 #[inline(always)]
 pub fn shr_round(v: i64, s: i32) -> i64 {
-    if s <= 0 {
-        v << (-s)
+    if s <= -63 {
+        if v == 0 { 0 } else if v > 0 { i64::MAX } else { i64::MIN }
+    } else if s <= 0 {
+        v.saturating_mul(1i64 << (-s))
+    } else if s >= 64 {
+        0
     } else {
         (v + (1i64 << (s - 1))) >> s
     }
@@ -145,22 +149,22 @@ pub struct Scaled {
 }
 
 impl Scaled {
+    /// From the float's bits (integer operations only: no soft-float arithmetic on the M3).
     pub fn from_f64(x: f64) -> Self {
-        if x == 0.0 || !x.is_finite() {
-            return Scaled { m: 0, sh: 0 };
+        let bits = x.to_bits();
+        let exp = ((bits >> 52) & 0x7ff) as i32;
+        if exp == 0 || exp == 0x7ff {
+            return Scaled { m: 0, sh: 0 }; // zero, subnormal (below any compliance), inf, NaN
         }
-        // |x| 2^sh in [2^29, 2^30)
-        let mut sh = 0i32;
-        let mut a = libm::fabs(x);
-        while a >= (1u64 << 30) as f64 {
-            a *= 0.5;
+        // |x| = mant 2^(exp - 1075), mant in [2^52, 2^53): keep its top 30 bits
+        let mant = (bits & ((1u64 << 52) - 1)) | (1u64 << 52);
+        let (mut m, mut sh) = (((mant >> 22) + 1) >> 1, 1052 - exp);
+        if m >= 1 << 30 {
+            m >>= 1;
             sh -= 1;
         }
-        while a < (1u64 << 29) as f64 {
-            a *= 2.0;
-            sh += 1;
-        }
-        Scaled { m: libm::round(x * libm::exp2(sh as f64)) as i32, sh }
+        let m = m as i32;
+        Scaled { m: if bits >> 63 != 0 { -m } else { m }, sh }
     }
     pub fn to_f64(self) -> f64 {
         self.m as f64 * libm::exp2(-self.sh as f64)
