@@ -195,24 +195,29 @@ impl FixedFinger {
         Ok(([b[0] - hole[0], b[1] - hole[1]], end, hole))
     }
 
-    /// Damped Newton on joint k's hole position from `b`, forward-difference Jacobian.
+    /// Damped Newton on joint k's hole position from `b`, forward-difference Jacobian kept
+    /// while it converges fast (chord steps: one march per step).
     fn newton(&self, k: usize, tension: Nt, mut b: [Mm; 2], iters: &mut u32) -> Result<(FixedPose, [Mm; 2]), MarchError> {
         let (mut r, mut end, mut hole) = self.residual(k, tension, b)?;
         let norm = |r: &[Mm; 2]| r[0].0.unsigned_abs().max(r[1].0.unsigned_abs());
+        // the Jacobian is kept (chord steps) while each step cuts the residual at least 4x
+        let mut jac = [[0i64; 2]; 2];
+        let mut fresh = false;
         for _ in 0..MAX_ITER {
             if norm(&r) <= TOL_RAW as u32 {
                 return Ok((end, hole));
             }
             *iters += 1;
-            // J = I - d hole / d b, Q30 (the step is a power of two: exact scaling)
-            let h = Q::<22>(1 << H_LOG2);
-            let mut jac = [[0i64; 2]; 2];
-            for i in 0..2 {
-                let mut bh = b;
-                bh[i] = bh[i] + h;
-                let (rh, ..) = self.residual(k, tension, bh)?;
-                jac[0][i] = (rh[0].0 as i64 - r[0].0 as i64) << (30 - H_LOG2);
-                jac[1][i] = (rh[1].0 as i64 - r[1].0 as i64) << (30 - H_LOG2);
+            if !fresh {
+                // J = I - d hole / d b, Q30 (the step is a power of two: exact scaling)
+                let h = Q::<22>(1 << H_LOG2);
+                for i in 0..2 {
+                    let mut bh = b;
+                    bh[i] = bh[i] + h;
+                    let (rh, ..) = self.residual(k, tension, bh)?;
+                    jac[0][i] = (rh[0].0 as i64 - r[0].0 as i64) << (30 - H_LOG2);
+                    jac[1][i] = (rh[1].0 as i64 - r[1].0 as i64) << (30 - H_LOG2);
+                }
             }
             // step = -J^-1 r (Q52 numerators over a Q30 determinant: Q22); an overflow is a
             // divergent step (the caller continues in load)
@@ -222,6 +227,8 @@ impl FixedFinger {
                 let bt = [b[0] + narrow(d0 >> lambda, 22), b[1] + narrow(d1 >> lambda, 22)];
                 match self.residual(k, tension, bt) {
                     Ok((rt, et, ht)) if norm(&rt) < norm(&r) || lambda >= 6 => {
+                        // a full step that cut the residual 4x keeps the Jacobian (chord)
+                        fresh = lambda == 0 && norm(&rt).saturating_mul(4) <= norm(&r);
                         (b, r, end, hole) = (bt, rt, et, ht);
                         break;
                     }

@@ -1,0 +1,152 @@
+//! Writes docs/fixed-point.md's measured sections (issue 14): the bench image `fixed`
+//! (bench/src/bin/fixed.rs) built for the Cortex-M3 (thumbv7m-none-eabi, soft float) and run
+//! in QEMU mps2-an385 with `-icount`: per bench scene and model (the scene's pinned model and
+//! the default one), the instructions of the f32 forward solve and of the fixed-point one, and
+//! each one's errors against the host's f64 reference; and the Cortex-M3 firmware image's
+//! flash and RAM. `cd host-tests && cargo run --release --example fixed_report`
+use finger_model::{Finger, Method, Params};
+use host_tests::perf::{build, calibration, elf_sizes, run_qemu, scenes, M3};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::process::Command;
+
+/// One line `F <scene> <model> <scalar> ok|err ...` of the image.
+struct Line {
+    ok: Option<([f64; 2], [f64; 3], f64, u32)>,
+    code: String,
+    instr: f64,
+    setup: f64,
+}
+
+fn reference(p: Params<f64>, s: &scenes::Scene) -> Result<([f64; 2], [f64; 3], f64), finger_model::Error> {
+    let f = Finger::new(p)?;
+    let sol = f.solve(s.tension, &s.volts, Method::Converged { tol: 1e-12, max_iter: 400 })?;
+    let (t, a) = (sol.tip(), sol.joint_angles());
+    Ok(([t.x, t.y], [a[0], a[1], a[2]], sol.cable_excursion))
+}
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let elf = build("fixed", M3, "de,model-fixed", "m3-fixed-model").unwrap_or_else(|e| panic!("{e}"));
+    let out = run_qemu(&elf, "mps2-an385", 4).unwrap_or_else(|e| panic!("{e}"));
+    let mut per_instr = None;
+    let mut lines: BTreeMap<(usize, String, String), Line> = BTreeMap::new();
+    let order: Vec<&str> = scenes::SCENES.iter().map(|s| s.name).collect();
+    for l in out.lines() {
+        let f: Vec<&str> = l.split_whitespace().collect();
+        match f.first() {
+            Some(&"CAL") => per_instr = Some(calibration(&f).unwrap()),
+            Some(&"F") if f.len() >= 8 => {
+                let (tpi, overhead) = per_instr.expect("CAL first");
+                let num = |i: usize| f[i].parse::<f64>().unwrap();
+                let instr = ((num(5) - overhead) / tpi).max(0.0);
+                let setup = ((num(6) - overhead) / tpi).max(0.0);
+                let ok = (f[4] == "ok").then(|| ([num(7), num(8)], [num(9), num(10), num(11)], num(12), f[13].parse().unwrap()));
+                let code = if f[4] == "ok" { String::new() } else { f[7].to_string() };
+                let k = order.iter().position(|&n| n == f[1]).expect("scene");
+                lines.insert((k, f[2].to_string(), f[3].to_string()), Line { ok, code, instr, setup });
+            }
+            Some(&"PANIC") => panic!("bench image: {l}"),
+            _ => {}
+        }
+    }
+    assert!(out.contains("END"), "the bench image did not finish:\n{out}");
+
+    let mut t = String::new();
+    let _ = writeln!(t, "| scene | model | f32 instr | fixed instr | f32 / fixed | tip err f32 (mm) | tip err fixed (mm) | joint err fixed (deg) | excursion err fixed (mm) | fixed set-up instr |");
+    let _ = writeln!(t, "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let (mut worst_tip, mut worst_joint, mut worst_exc, mut worst_tip_default) = (0f64, 0f64, 0f64, 0f64);
+    let mut ratios = Vec::new();
+    let mut refusals = Vec::new();
+    for (k, s) in scenes::SCENES.iter().enumerate() {
+        for model in ["pinned", "default"] {
+            let p = if model == "pinned" { scenes::params(s) } else { Params { layers: s.layers, ..Params::default() } };
+            let (Some(a), Some(b)) = (lines.get(&(k, model.into(), "f32".into())), lines.get(&(k, model.into(), "fixed".into()))) else {
+                continue;
+            };
+            let r = reference(p, s);
+            let err = |l: &Line| match (&l.ok, &r) {
+                (Some((tip, ang, exc, _)), Ok((rt, ra, re))) => {
+                    let dt = ((tip[0] - rt[0]).powi(2) + (tip[1] - rt[1]).powi(2)).sqrt();
+                    let da = (0..3).map(|i| (ang[i] - ra[i]).abs().to_degrees()).fold(0.0, f64::max);
+                    Some((dt, da, (exc - re).abs()))
+                }
+                _ => None,
+            };
+            let show = |l: &Line, e: Option<(f64, f64, f64)>, i: usize| match (e, &l.ok) {
+                (Some(e), _) => format!("{:.1e}", [e.0, e.1, e.2][i]),
+                (None, None) => format!("err {}", l.code),
+                (None, Some(_)) => "(f64: err)".into(),
+            };
+            let (ea, eb) = (err(a), err(b));
+            if let Some((dt, da, de)) = eb {
+                worst_tip = worst_tip.max(dt);
+                worst_joint = worst_joint.max(da);
+                worst_exc = worst_exc.max(de);
+                if model == "default" {
+                    worst_tip_default = worst_tip_default.max(dt);
+                }
+            }
+            let ratio = if a.ok.is_some() && b.ok.is_some() { a.instr / b.instr } else { f64::NAN };
+            if ratio.is_finite() {
+                ratios.push(ratio);
+            } else {
+                refusals.push(format!("`{}` ({model}): f32 {}, fixed {}, f64 {}", s.name, if a.ok.is_some() { "ok".into() } else { format!("err {}", a.code) }, if b.ok.is_some() { "ok".into() } else { format!("err {}", b.code) }, match &r { Ok(_) => "ok".to_string(), Err(e) => format!("err {}", e.code()) }));
+            }
+            let _ = writeln!(
+                t,
+                "| {} | {model} | {:.0} | {:.0} | {} | {} | {} | {} | {} | {:.0} |",
+                s.name,
+                a.instr,
+                b.instr,
+                if ratio.is_finite() { format!("{ratio:.2}") } else { "-".into() },
+                show(a, ea, 0),
+                show(b, eb, 0),
+                show(b, eb, 1),
+                show(b, eb, 2),
+                b.setup
+            );
+        }
+    }
+    ratios.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    let (rmin, rmed) = (ratios[0], ratios[ratios.len() / 2]);
+
+    // the Cortex-M3 firmware image
+    let st = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .current_dir(&root)
+        .args(["build", "--release", "--quiet", "--target", "thumbv7m-none-eabi", "--no-default-features", "--features", "m3"])
+        .status()
+        .expect("cargo");
+    assert!(st.success(), "M3 firmware build failed");
+    let fw = std::env::var_os("CARGO_TARGET_DIR").map(std::path::PathBuf::from).unwrap_or_else(|| root.join("target")).join("thumbv7m-none-eabi/release/finger-fw");
+    let (flash, ram) = elf_sizes(&fw).unwrap();
+
+    let mut m = String::new();
+    let _ = writeln!(m, "QEMU mps2-an385 (Cortex-M3, no FPU), `-icount shift=4`, instructions from SysTick calibrated on a");
+    let _ = writeln!(m, "loop of known length (bench/src/cycles.rs). f32: the model's converged forward solve in soft float");
+    let _ = writeln!(m, "(`Finger::solve_with`, dual-number Newton); fixed: `finger_model::fixed` (forward-difference Newton).");
+    let _ = writeln!(m, "Errors against the host's f64 reference (converged to 1e-12 mm). Set-up: `FixedFinger::new` (the");
+    let _ = writeln!(m, "compliances in f32, then scaled), once per parameter or voltage change.\n");
+    let _ = writeln!(m, "| target (issue 14) | measured |");
+    let _ = writeln!(m, "| --- | --- |");
+    let _ = writeln!(m, "| forward tip within 1e-3 mm of f64, every bench scene, default model | worst {worst_tip_default:.1e} mm (all models: {worst_tip:.1e} mm) |");
+    let _ = writeln!(m, "| >= 3x fewer M3 instructions than soft-float f32 | f32 / fixed: min {rmin:.2}, median {rmed:.2} (the f32 solve's algorithm, not the same one: see below) |");
+    let _ = writeln!(m, "| inverse round trip within 0.05 deg | not measured: no fixed-point inverse yet |");
+    let _ = writeln!(m, "| image with console and `pose` in 64 KiB flash / 20 KiB RAM | M3 image (console, DE, defmt; no `pose`, f32 model): flash {flash} bytes ({:.1} KiB); static RAM {ram} bytes + the 20 KiB stack = {:.1} KiB (memory-m3.x: 24 KiB; docs/firmware.md \"Cortex-M3 image\") |", flash as f64 / 1024.0, (ram + 20 * 1024) as f64 / 1024.0);
+    let _ = writeln!(m, "\nWorst fixed-point errors, all scenes both models: joint angle {worst_joint:.1e} deg, cable excursion {worst_exc:.1e} mm.\n");
+    m.push_str(&t);
+    if !refusals.is_empty() {
+        let _ = writeln!(m, "\nRefused (typed errors, no numbers): {}.", refusals.join("; "));
+    }
+
+    let doc_path = root.join("docs/fixed-point.md");
+    let doc = std::fs::read_to_string(&doc_path).unwrap_or_default();
+    let (b, e) = ("<!-- fixed-report:begin (cd host-tests && cargo run --release --example fixed_report) -->", "<!-- fixed-report:end -->");
+    let new = match (doc.find(b), doc.find(e)) {
+        (Some(i), Some(j)) => format!("{}{b}\n{m}{}", &doc[..i], &doc[j..]),
+        _ => format!("{doc}\n## Measured\n{b}\n{m}{e}\n"),
+    };
+    std::fs::write(&doc_path, new).unwrap();
+    println!("wrote {}", doc_path.display());
+}
