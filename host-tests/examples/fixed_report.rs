@@ -28,7 +28,7 @@ fn reference(p: Params<f64>, s: &scenes::Scene) -> Result<([f64; 2], [f64; 3], f
 
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let elf = build("fixed", M3, "de,model-fixed", "m3-fixed-model").unwrap_or_else(|e| panic!("{e}"));
+    let elf = build("fixed", M3, "de,fast-trig,model-fixed", "m3-fixed-model").unwrap_or_else(|e| panic!("{e}"));
     let out = run_qemu(&elf, "mps2-an385", 4).unwrap_or_else(|e| panic!("{e}"));
     let mut per_instr = None;
     let mut lines: BTreeMap<(usize, String, String), Line> = BTreeMap::new();

@@ -2,7 +2,7 @@
 //! position with the march of `Finger::march_t` (MODEL.md "Equilibrium"), then the chain of
 //! links and the cable excursion. Same equations as the float model, Q formats of [`q`].
 use super::q::{narrow, shr_round, Mm, Nmm, Nt, Q, Rad, Scaled, Unit};
-use super::trig::{hypot, sin_cos};
+use super::trig::{hypot, hypot_inv, sin_cos};
 use crate::error::Error;
 use crate::finger::{uniform_beam_compliance, Finger};
 use crate::params::{MAX_JOINTS, MAX_SUB};
@@ -16,7 +16,50 @@ const MAX_ITER: u32 = 30;
 /// Forward-difference step of the 2x2 Jacobian, Q22 units (2^-8 mm).
 const H_LOG2: i32 = 14;
 
-type CMat = [[Scaled; 3]; 3];
+/// A compliance matrix scaled row by row, for a wrench of (Q22 N, Q22 N, Q18 N mm): row i's
+/// sum `sum_j m[i][j] w_j` (raw words, 32x32 -> 64) is `q_i 2^t[i]`, with `t[i]` the largest
+/// that keeps every `|m[i][j]| < 2^30` (the tiny entries keep the row's absolute resolution).
+/// `d02`, `d12`: entries C02, C12 on their own scale (the moment arm's correction).
+#[derive(Clone, Copy, Debug, Default)]
+struct CMat {
+    m: [[i32; 3]; 3],
+    t: [i32; 3],
+    d02: Scaled,
+    d12: Scaled,
+}
+
+/// The wrench's formats (frac bits) by column.
+const W_FRAC: [i32; 3] = [22, 22, 18];
+
+/// (mantissa in [2^52, 2^53), binary exponent e with |x| = mant 2^(e - 52)); None for 0,
+/// subnormals, inf, NaN. Integer operations on the bits.
+fn split(x: f64) -> Option<(i64, i32, bool)> {
+    let bits = x.to_bits();
+    let exp = ((bits >> 52) & 0x7ff) as i32;
+    if exp == 0 || exp == 0x7ff {
+        return None;
+    }
+    Some((((bits & ((1u64 << 52) - 1)) | (1u64 << 52)) as i64, exp - 1023, bits >> 63 != 0))
+}
+
+impl CMat {
+    fn new(c: &[[f64; 3]; 3]) -> CMat {
+        let mut o = CMat { d02: Scaled::from_f64(c[0][2]), d12: Scaled::from_f64(c[1][2]), ..CMat::default() };
+        for i in 0..3 {
+            // |v| < 2^(e+1): |v| 2^(t - F_j) < 2^30 for t <= 29 - e + F_j
+            let t = (0..3).filter_map(|j| split(c[i][j]).map(|(_, e, _)| 29 - e + W_FRAC[j])).min().unwrap_or(0);
+            o.t[i] = t;
+            for j in 0..3 {
+                if let Some((mant, e, neg)) = split(c[i][j]) {
+                    // v 2^(t - F_j) = mant 2^(e - 52 + t - F_j)
+                    let v = shr_round(mant, 52 - e - t + W_FRAC[j]) as i32;
+                    o.m[i][j] = if neg { -v } else { v };
+                }
+            }
+        }
+        o
+    }
+}
 
 /// `-J^-1 r` for a Q30 Jacobian and a Q22 residual, in Q22; `None` when singular or out of
 /// range.
@@ -29,7 +72,7 @@ fn newton_step(j: &[[i64; 2]; 2], r: [Mm; 2]) -> Option<(i64, i64)> {
     let (r0, r1) = (r[0].0 as i64, r[1].0 as i64);
     let n0 = j[1][1].checked_mul(r0)?.checked_sub(j[0][1].checked_mul(r1)?)?;
     let n1 = j[0][0].checked_mul(r1)?.checked_sub(j[1][0].checked_mul(r0)?)?;
-    Some((-(n0 / det30), -(n1 / det30)))
+    Some((-(n0.checked_div(det30)?), -(n1.checked_div(det30)?)))
 }
 
 /// A planar pose: x, y (mm), angle (rad).
@@ -95,19 +138,19 @@ enum MarchError {
 }
 
 fn cmat<R: Real>(m: &[[R; 3]; 3]) -> CMat {
-    let mut o = [[Scaled::default(); 3]; 3];
+    let mut v = [[0f64; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
-            o[i][j] = Scaled::from_f64(m[i][j].to_f64());
+            v[i][j] = m[i][j].to_f64();
         }
     }
-    o
+    CMat::new(&v)
 }
 
-/// `C (a, b, c)` row `i` as a 64-bit sum at frac [`ACC`].
+/// `C (f0, f1, m)` row `i` as a 64-bit sum at frac `cm.t[i]` (three products, no shift).
 #[inline(always)]
-fn row<const A: i32, const B: i32, const C: i32>(cm: &CMat, i: usize, a: Q<A>, b: Q<B>, c: Q<C>) -> i64 {
-    cm[i][0].wide(a, ACC).saturating_add(cm[i][1].wide(b, ACC)).saturating_add(cm[i][2].wide(c, ACC))
+fn row(cm: &CMat, i: usize, f0: Nt, f1: Nt, m: Nmm) -> i64 {
+    (cm.m[i][0] as i64 * f0.0 as i64).saturating_add(cm.m[i][1] as i64 * f1.0 as i64).saturating_add(cm.m[i][2] as i64 * m.0 as i64)
 }
 
 impl FixedFinger {
@@ -117,7 +160,7 @@ impl FixedFinger {
         let p = f.params();
         let comp = f.compliances(volts)?;
         let (n, m) = (p.n, p.m);
-        let mut c = [[[[Scaled::default(); 3]; 3]; MAX_SUB]; MAX_JOINTS];
+        let mut c = [[CMat::default(); MAX_SUB]; MAX_JOINTS];
         let mut same_as_prev = [false; MAX_JOINTS];
         for k in 0..n {
             for j in 0..m {
@@ -147,12 +190,12 @@ impl FixedFinger {
     fn march(&self, k: usize, tension: Nt, b: [Mm; 2]) -> Result<(FixedPose, [Mm; 2]), MarchError> {
         let e = self.e;
         let span_v = [b[0], b[1] - e];
-        let span = hypot(span_v[0], span_v[1]);
+        // the span and its reciprocal (no division), then the direction by two products
+        let (span, inv) = hypot_inv(span_v[0], span_v[1]).ok_or(MarchError::Contact)?;
         if span < self.span_floor {
             return Err(MarchError::Contact);
         }
-        // cable force on the distal chain, toward the proximal hole: -P span_v / |span_v|
-        let dir: [Unit; 2] = [span_v[0].div(span).ok_or(MarchError::Singular)?, span_v[1].div(span).ok_or(MarchError::Singular)?];
+        let dir: [Unit; 2] = [narrow(span_v[0].wide(inv), 48), narrow(span_v[1].wide(inv), 48)];
         let fc: [Nt; 2] = [-dir[0].mul(tension), -dir[1].mul(tension)];
         let mut pose = FixedPose::default();
         let (mut s, mut co) = (Unit::ZERO, Q::<30>(1 << 30));
@@ -164,17 +207,18 @@ impl FixedFinger {
             let f: [Nt; 2] = [narrow(co.wide(fc[0]) + s.wide(fc[1]), 52), narrow(co.wide(fc[1]) - s.wide(fc[0]), 52)];
             let q0 = [row(cj, 0, f[0], f[1], m0), row(cj, 1, f[0], f[1], m0), row(cj, 2, f[0], f[1], m0)];
             // den = 1 + f_y C02 - f_x C12, at frac ACC
-            let den = (1i64 << ACC).saturating_add(cj[0][2].wide(f[1], ACC)).saturating_sub(cj[1][2].wide(f[0], ACC));
+            let den = (1i64 << ACC).saturating_add(cj.d02.wide(f[1], ACC)).saturating_sub(cj.d12.wide(f[0], ACC));
             let den30 = shr_round(den, ACC - 30);
             if den30.abs() <= (1 << 10) {
                 return Err(MarchError::Singular);
             }
             // the moment arm's own change: s = (-f_y q0x + f_x q0y) / den, N mm
-            let num = shr_round((-(f[1].0 as i64)).saturating_mul(shr_round(q0[0], ACC - 22)).saturating_add((f[0].0 as i64).saturating_mul(shr_round(q0[1], ACC - 22))), 44 - 48); // frac 48
-            let sm: Nmm = narrow(num / den30, 18);
-            let qx: Mm = narrow(q0[0].saturating_add(cj[0][2].wide(sm, ACC)), ACC);
-            let qy: Mm = narrow(q0[1].saturating_add(cj[1][2].wide(sm, ACC)), ACC);
-            let qt: Rad = narrow(q0[2].saturating_add(cj[2][2].wide(sm, ACC)), ACC);
+            let (q0x, q0y) = (shr_round(q0[0], cj.t[0] - 22), shr_round(q0[1], cj.t[1] - 22));
+            let num = shr_round((-(f[1].0 as i64)).saturating_mul(q0x).saturating_add((f[0].0 as i64).saturating_mul(q0y)), 44 - 48); // frac 48
+            let sm: Nmm = narrow(num.checked_div(den30).ok_or(MarchError::Singular)?, 18);
+            let qx: Mm = narrow(q0[0].saturating_add(cj.m[0][2] as i64 * sm.0 as i64), cj.t[0]);
+            let qy: Mm = narrow(q0[1].saturating_add(cj.m[1][2] as i64 * sm.0 as i64), cj.t[1]);
+            let qt: Rad = narrow(q0[2].saturating_add(cj.m[2][2] as i64 * sm.0 as i64), cj.t[2]);
             let ax = qx + self.sub_len;
             pose = FixedPose {
                 x: pose.x + narrow(co.wide(ax) - s.wide(qy), 52),
@@ -300,7 +344,7 @@ impl FixedFinger {
             Some(lc) => {
                 let pe: Nmm = tension.mul(self.e);
                 let (w0, w1) = (-tension, Nt::ZERO);
-                let q: (Mm, Mm, Rad) = (narrow(row(lc, 0, w0, w1, pe), ACC), narrow(row(lc, 1, w0, w1, pe), ACC), narrow(row(lc, 2, w0, w1, pe), ACC));
+                let q: (Mm, Mm, Rad) = (narrow(row(lc, 0, w0, w1, pe), lc.t[0]), narrow(row(lc, 1, w0, w1, pe), lc.t[1]), narrow(row(lc, 2, w0, w1, pe), lc.t[2]));
                 q
             }
             None => (Mm::ZERO, Mm::ZERO, Rad::ZERO),

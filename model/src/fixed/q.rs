@@ -101,7 +101,7 @@ impl<const F: i32> Q<F> {
         // (a 2^F / b 2^G) 2^H = (a 2^(H + G - F)) / b
         let s = H + G - F;
         let n = if s >= 0 { (self.0 as i64).checked_shl(s as u32)? } else { (self.0 as i64) >> (-s) };
-        let qv = n / o.0 as i64;
+        let qv = n.checked_div(o.0 as i64)?;
         if qv > i32::MAX as i64 || qv < i32::MIN as i64 {
             return None;
         }

@@ -13,23 +13,27 @@ pub fn sin_cos(x: Rad) -> (Unit, Unit) {
     let xq = x.0 as i64; // Q28
     let k = ((xq * FRAC_2_PI_Q30) + (1i64 << 57)) >> 58;
     let r = (xq << 2) - k * PI_2_Q30 - (k * PI_2_LO_Q60 >> 30); // Q30, |r| <= pi/4
-    let u = (r * r) >> 30; // r^2, Q30
-    let mul = |a: i64, b: i64| (a * b + (1 << 29)) >> 30;
+    // |r| <= pi/4: every value below fits an i32 at Q30, so each product is one SMULL
+    let r = r as i32;
+    let mul = |a: i32, b: i32| ((a as i64 * b as i64 + (1 << 29)) >> 30) as i32;
+    let u = mul(r, r); // r^2, Q30
+    const ONE: i32 = 1 << 30;
     // sin r = r (1 - u/6 (1 - u/20 (1 - u/42 (1 - u/72))))
-    const S: [i64; 4] = [178956971, 53687091, 25565282, 14913081]; // 2^30 / 6, 20, 42, 72
-    let mut s = (1i64 << 30) - mul(u, S[3]);
-    s = (1i64 << 30) - mul(mul(u, S[2]), s);
-    s = (1i64 << 30) - mul(mul(u, S[1]), s);
-    s = (1i64 << 30) - mul(mul(u, S[0]), s);
+    const S: [i32; 4] = [178956971, 53687091, 25565282, 14913081]; // 2^30 / 6, 20, 42, 72
+    let mut s = ONE - mul(u, S[3]);
+    s = ONE - mul(mul(u, S[2]), s);
+    s = ONE - mul(mul(u, S[1]), s);
+    s = ONE - mul(mul(u, S[0]), s);
     let s = mul(r, s);
     // cos r = 1 - u/2 (1 - u/12 (1 - u/30 (1 - u/56 (1 - u/90))))
-    const C: [i64; 5] = [536870912, 89478485, 35791394, 19173961, 11930465]; // 2^30 / 2, 12, 30, 56, 90
-    let mut c = (1i64 << 30) - mul(u, C[4]);
-    c = (1i64 << 30) - mul(mul(u, C[3]), c);
-    c = (1i64 << 30) - mul(mul(u, C[2]), c);
-    c = (1i64 << 30) - mul(mul(u, C[1]), c);
-    c = (1i64 << 30) - mul(mul(u, C[0]), c);
-    let (s, c) = (Q(s as i32), Q(c as i32));
+    const C: [i32; 5] = [536870912, 89478485, 35791394, 19173961, 11930465]; // 2^30 / 2, 12, 30, 56, 90
+    let mut c = ONE - mul(u, C[4]);
+    c = ONE - mul(mul(u, C[3]), c);
+    c = ONE - mul(mul(u, C[2]), c);
+    c = ONE - mul(mul(u, C[1]), c);
+    // cos(0) = 2^30 exactly: Q30's +1 (the format holds +-2)
+    c = ONE - mul(mul(u, C[0]), c);
+    let (s, c) = (Q(s), Q(c));
     match k & 3 {
         0 => (s, c),
         1 => (c, -s),
@@ -42,10 +46,11 @@ pub fn sin_cos(x: Rad) -> (Unit, Unit) {
 pub fn isqrt(v: u64) -> u64 {
     let mut rem = v;
     let mut res: u64 = 0;
-    let mut bit: u64 = 1 << 62;
-    while bit > v {
-        bit >>= 2;
+    if v == 0 {
+        return 0;
     }
+    // the highest even bit at or below v's top bit
+    let mut bit: u64 = 1 << ((63 - v.leading_zeros()) & !1);
     while bit != 0 {
         if rem >= res + bit {
             rem -= res + bit;
@@ -63,6 +68,34 @@ pub fn hypot<const F: i32>(x: Q<F>, y: Q<F>) -> Q<F> {
     let s = (x.0 as i64 * x.0 as i64) as u64 + (y.0 as i64 * y.0 as i64) as u64;
     let r = isqrt(s);
     Q(if r > i32::MAX as u64 { i32::MAX } else { r as i32 })
+}
+
+/// `(|(x, y)|, 1 / |(x, y)|)` for Q22 lengths, the reciprocal in Q26 of 1/mm (lengths down
+/// to 1/32 mm); `None` at 0 or past the formats. Newton on the inverse square root (products only, no division):
+/// `y <- y (3 - v y^2) / 2` from a two-piece start, four steps (relative 1e-9).
+pub fn hypot_inv(x: Q<22>, y: Q<22>) -> Option<(Q<22>, Q<26>)> {
+    let s = (x.0 as i64 * x.0 as i64) as u64 + (y.0 as i64 * y.0 as i64) as u64; // Q44 mm^2
+    if s == 0 {
+        return None;
+    }
+    // s 2^l = v 2^62 with v in [1, 4) (l even); z = v at Q30
+    let l = (s.leading_zeros() & !1) as i32;
+    let z = ((s << l) >> 32) as u64;
+    let mul = |a: u64, b: u64| (a * b + (1 << 29)) >> 30;
+    let three = 3u64 << 30;
+    let mut r: u64 = if z < (2u64 << 30) { 912680550 } else { 644245094 }; // 0.85, 0.6
+    for _ in 0..4 {
+        r = mul(r, three - mul(z, mul(r, r))) >> 1;
+    }
+    let sqrt_v = mul(z, r); // Q30, in [1, 2)
+    // |(x, y)|^2 = s 2^-44 = v 2^(18 - l): |.| = sqrt(v) 2^((18 - l) / 2), 1/|.| = r 2^((l - 18) / 2)
+    let h = (18 - l) / 2;
+    let span = if 8 - h >= 0 { sqrt_v >> (8 - h) } else { sqrt_v.checked_shl((h - 8) as u32)? };
+    let inv = if h + 4 >= 0 { r >> (h + 4) } else { r.checked_shl((-h - 4) as u32)? };
+    if span > i32::MAX as u64 || inv > i32::MAX as u64 {
+        return None;
+    }
+    Some((Q(span as i32), Q(inv as i32)))
 }
 
 #[cfg(test)]
@@ -90,5 +123,14 @@ mod tests {
         }
         let h = hypot(Q::<22>::from_f64(3.0), Q::<22>::from_f64(4.0));
         assert!((h.to_f64() - 5.0).abs() < 1e-6);
+        for (x, y) in [(3.0, 4.0), (0.1, 0.0), (2.58, 0.4165), (-40.0, 77.0), (0.03, 0.01), (300.0, 300.0)] {
+            let (qx, qy) = (Q::<22>::from_f64(x), Q::<22>::from_f64(y));
+            let (s, i) = hypot_inv(qx, qy).unwrap();
+            let want = libm::hypot(qx.to_f64(), qy.to_f64());
+            assert!((s.to_f64() - want).abs() < 2.4e-7 + 3e-9 * want, "{x} {y}: {} vs {want}", s.to_f64());
+            assert!((i.to_f64() - 1.0 / want).abs() < 3e-8 + 2e-9 / want, "{x} {y}: {} vs {}", i.to_f64(), 1.0 / want);
+        }
+        assert_eq!(hypot_inv(Q(0), Q(0)), None);
+        assert_eq!(hypot_inv(Q::<22>::from_f64(1e-3), Q(0)), None);
     }
 }
