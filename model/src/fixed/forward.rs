@@ -45,14 +45,14 @@ fn split(x: f64) -> Option<(i64, i32, bool)> {
 impl CMat {
     fn new(c: &[[f64; 3]; 3]) -> CMat {
         let mut o = CMat { d02: Scaled::from_f64(c[0][2]), d12: Scaled::from_f64(c[1][2]), ..CMat::default() };
-        for i in 0..3 {
+        for (i, ci) in c.iter().enumerate() {
             // |v| < 2^(e+1): |v| 2^(t - F_j) < 2^30 for t <= 29 - e + F_j
-            let t = (0..3).filter_map(|j| split(c[i][j]).map(|(_, e, _)| 29 - e + W_FRAC[j])).min().unwrap_or(0);
+            let t = ci.iter().zip(W_FRAC).filter_map(|(&v, fr)| split(v).map(|(_, e, _)| 29 - e + fr)).min().unwrap_or(0);
             o.t[i] = t;
-            for j in 0..3 {
-                if let Some((mant, e, neg)) = split(c[i][j]) {
+            for (j, (&v, fr)) in ci.iter().zip(W_FRAC).enumerate() {
+                if let Some((mant, e, neg)) = split(v) {
                     // v 2^(t - F_j) = mant 2^(e - 52 + t - F_j)
-                    let v = shr_round(mant, 52 - e - t + W_FRAC[j]) as i32;
+                    let v = shr_round(mant, 52 - e - t + fr) as i32;
                     o.m[i][j] = if neg { -v } else { v };
                 }
             }
@@ -163,8 +163,8 @@ impl FixedFinger {
         let mut c = [[CMat::default(); MAX_SUB]; MAX_JOINTS];
         let mut same_as_prev = [false; MAX_JOINTS];
         for k in 0..n {
-            for j in 0..m {
-                c[k][j] = cmat(&comp.c[k][j]);
+            for (cj, src) in c[k].iter_mut().zip(&comp.c[k][..m]) {
+                *cj = cmat(src);
             }
             same_as_prev[k] = k > 0 && comp.c[k][..m] == comp.c[k - 1][..m];
         }
@@ -196,11 +196,11 @@ impl FixedFinger {
             return Err(MarchError::Contact);
         }
         let dir: [Unit; 2] = [narrow(span_v[0].wide(inv), 48), narrow(span_v[1].wide(inv), 48)];
-        let fc: [Nt; 2] = [-dir[0].mul(tension), -dir[1].mul(tension)];
+        let fc: [Nt; 2] = [-dir[0].mul_q(tension), -dir[1].mul_q(tension)];
         let mut pose = FixedPose::default();
         let (mut s, mut co) = (Unit::ZERO, Q::<30>(1 << 30));
         for cj in self.c[k][..self.m].iter() {
-            let d0 = [pose.x + co.mul(self.sub_len), pose.y + s.mul(self.sub_len)];
+            let d0 = [pose.x + co.mul_q(self.sub_len), pose.y + s.mul_q(self.sub_len)];
             // moment of the cable force about the sub-element's (undeflected) end
             let m0: Nmm = narrow((b[0] - d0[0]).wide(fc[1]) - (b[1] - d0[1]).wide(fc[0]), 44);
             // the force in the sub-element's frame
@@ -227,7 +227,7 @@ impl FixedFinger {
             };
             (s, co) = sin_cos(pose.theta);
         }
-        let hole = [pose.x - s.mul(e), pose.y + co.mul(e)];
+        let hole = [pose.x - s.mul_q(e), pose.y + co.mul_q(e)];
         if hole[0].is_sat() || hole[1].is_sat() || pose.theta.is_sat() || pose.x.is_sat() || pose.y.is_sat() {
             return Err(MarchError::Singular);
         }
@@ -342,7 +342,7 @@ impl FixedFinger {
         // links: under tension alone each carries (-P, 0, P e) in its own frame
         let link_q = match &self.link_c {
             Some(lc) => {
-                let pe: Nmm = tension.mul(self.e);
+                let pe: Nmm = tension.mul_q(self.e);
                 let (w0, w1) = (-tension, Nt::ZERO);
                 let q: (Mm, Mm, Rad) = (narrow(row(lc, 0, w0, w1, pe), lc.t[0]), narrow(row(lc, 1, w0, w1, pe), lc.t[1]), narrow(row(lc, 2, w0, w1, pe), lc.t[2]));
                 q

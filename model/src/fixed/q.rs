@@ -55,14 +55,14 @@ impl<const F: i32> Q<F> {
     /// From a float (host and set-up only); saturates.
     pub fn from_f64(x: f64) -> Self {
         let v = x * (1u64 << F) as f64;
-        if !(v == v) {
+        if v.is_nan() {
             return Self::MAX;
         }
         Q(if v >= i32::MAX as f64 { i32::MAX } else if v <= i32::MIN as f64 { i32::MIN } else { libm::round(v) as i32 })
     }
     pub fn from_f32(x: f32) -> Self {
         let v = x * (1u64 << F) as f32;
-        if !(v == v) {
+        if v.is_nan() {
             return Self::MAX;
         }
         Q(if v >= 2147483520.0 { i32::MAX } else if v <= -2147483648.0 { i32::MIN } else { libm::roundf(v) as i32 })
@@ -84,7 +84,7 @@ impl<const F: i32> Q<F> {
     }
     /// `self * o` in format G (one 32x32 -> 64 product, one shift).
     #[inline(always)]
-    pub fn mul<const G: i32, const H: i32>(self, o: Q<G>) -> Q<H> {
+    pub fn mul_q<const G: i32, const H: i32>(self, o: Q<G>) -> Q<H> {
         Q(sat(shr_round(self.0 as i64 * o.0 as i64, F + G - H)))
     }
     /// The raw 64-bit product at frac F + G (for sums before one final shift).
@@ -94,7 +94,7 @@ impl<const F: i32> Q<F> {
     }
     /// `self / o` in format H; `None` for a zero divisor or a quotient past H's range.
     #[inline(always)]
-    pub fn div<const G: i32, const H: i32>(self, o: Q<G>) -> Option<Q<H>> {
+    pub fn div_q<const G: i32, const H: i32>(self, o: Q<G>) -> Option<Q<H>> {
         if o.0 == 0 {
             return None;
         }
@@ -184,13 +184,13 @@ mod tests {
     fn products_and_quotients_round_to_the_destination_format() {
         let a = Mm::from_f64(12.345678);
         let b = Nt::from_f64(-0.75);
-        let p: Nmm = a.mul(b);
+        let p: Nmm = a.mul_q(b);
         assert!((p.to_f64() + 12.345678 * 0.75).abs() <= 1.0 / 262144.0);
-        let d: Option<Unit> = b.div(a);
+        let d: Option<Unit> = b.div_q(a);
         assert!((d.unwrap().to_f64() + 0.75 / 12.345678).abs() < 1e-8);
-        assert_eq!(a.div::<22, 22>(Mm::ZERO), None);
+        assert_eq!(a.div_q::<22, 22>(Mm::ZERO), None);
         let big = Mm::from_f64(500.0);
-        assert!(big.mul::<22, 22>(big).is_sat());
+        assert!(big.mul_q::<22, 22>(big).is_sat());
     }
 
     #[test]

@@ -12,7 +12,7 @@ pub fn sin_cos(x: Rad) -> (Unit, Unit) {
     // k = round(x 2/pi); r = x - k pi/2 at Q30
     let xq = x.0 as i64; // Q28
     let k = ((xq * FRAC_2_PI_Q30) + (1i64 << 57)) >> 58;
-    let r = (xq << 2) - k * PI_2_Q30 - (k * PI_2_LO_Q60 >> 30); // Q30, |r| <= pi/4
+    let r = (xq << 2) - k * PI_2_Q30 - ((k * PI_2_LO_Q60) >> 30); // Q30, |r| <= pi/4
     // |r| <= pi/4: every value below fits an i32 at Q30, so each product is one SMULL
     let r = r as i32;
     let mul = |a: i32, b: i32| ((a as i64 * b as i64 + (1 << 29)) >> 30) as i32;
@@ -80,7 +80,7 @@ pub fn hypot_inv(x: Q<22>, y: Q<22>) -> Option<(Q<22>, Q<26>)> {
     }
     // s 2^l = v 2^62 with v in [1, 4) (l even); z = v at Q30
     let l = (s.leading_zeros() & !1) as i32;
-    let z = ((s << l) >> 32) as u64;
+    let z = (s << l) >> 32;
     let mul = |a: u64, b: u64| (a * b + (1 << 29)) >> 30;
     let three = 3u64 << 30;
     let mut r: u64 = if z < (2u64 << 30) { 912680550 } else { 644245094 }; // 0.85, 0.6
