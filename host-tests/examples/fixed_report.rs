@@ -32,6 +32,8 @@ fn main() {
     let out = run_qemu(&elf, "mps2-an385", 4).unwrap_or_else(|e| panic!("{e}"));
     let mut per_instr = None;
     let mut lines: BTreeMap<(usize, String, String), Line> = BTreeMap::new();
+    // `I pose<i> <scalar> ok|err <ticks> <setup> <V1> <V2> <V3>|<code>`
+    let mut inv_lines: BTreeMap<(usize, String), (f64, f64, Result<[f64; 3], String>)> = BTreeMap::new();
     let order: Vec<&str> = scenes::SCENES.iter().map(|s| s.name).collect();
     for l in out.lines() {
         let f: Vec<&str> = l.split_whitespace().collect();
@@ -46,6 +48,13 @@ fn main() {
                 let code = if f[4] == "ok" { String::new() } else { f[7].to_string() };
                 let k = order.iter().position(|&n| n == f[1]).expect("scene");
                 lines.insert((k, f[2].to_string(), f[3].to_string()), Line { ok, code, instr, setup });
+            }
+            Some(&"I") if f.len() >= 8 => {
+                let (tpi, overhead) = per_instr.expect("CAL first");
+                let num = |i: usize| f[i].parse::<f64>().unwrap();
+                let i: usize = f[1].trim_start_matches("pose").parse().unwrap();
+                let r = if f[3] == "ok" { Ok([num(6), num(7), num(8)]) } else { Err(f[6].to_string()) };
+                inv_lines.insert((i, f[2].to_string()), (((num(4) - overhead) / tpi).max(0.0), ((num(5) - overhead) / tpi).max(0.0), r));
             }
             Some(&"PANIC") => panic!("bench image: {l}"),
             _ => {}
@@ -162,6 +171,33 @@ fn main() {
         rt_n += 1;
     }
 
+    // the inverse on the M3: each answer's round trip through the f64 forward
+    const POSES: &[(f64, [f64; 3])] = &[(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])];
+    let mut it = String::new();
+    let _ = writeln!(it, "| posture of (P, V) | fixed instr | f32 `solve_pose` instr | f32 / fixed | round trip fixed (deg) | round trip f32 (deg) |");
+    let _ = writeln!(it, "| --- | ---: | ---: | ---: | ---: | ---: |");
+    let (mut inv_worst, mut inv_n, mut inv_setup) = (0f64, 0, 0f64);
+    for (i, (p, v)) in POSES.iter().enumerate() {
+        let want = f.solve(*p, v, Method::converged()).unwrap();
+        let trip = |r: &Result<[f64; 3], String>| -> Result<f64, String> {
+            let vs = r.clone()?;
+            let back = f.solve(*p, &vs, Method::converged()).map_err(|e| e.code().to_string())?;
+            Ok((0..3).map(|k| (back.joint_angle[k] - want.joint_angle[k]).abs().to_degrees()).fold(0.0, f64::max))
+        };
+        let (Some(a), Some(b)) = (inv_lines.get(&(i, "fixed".into())), inv_lines.get(&(i, "f32".into()))) else { continue };
+        let (ta, tb) = (trip(&a.2), trip(&b.2));
+        if let Ok(e) = ta {
+            inv_worst = inv_worst.max(e);
+            inv_n += 1;
+        }
+        inv_setup = a.1;
+        let show = |t: &Result<f64, String>| match t {
+            Ok(e) => format!("{e:.1e}"),
+            Err(c) => format!("err {c}"),
+        };
+        let _ = writeln!(it, "| {p} N, {:?} V | {:.0} | {:.0} | {:.2} | {} | {} |", v, a.0, b.0, b.0 / a.0, show(&ta), show(&tb));
+    }
+
     // the Cortex-M3 firmware image
     let st = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
         .current_dir(&root)
@@ -184,10 +220,12 @@ fn main() {
     let _ = writeln!(m, "| forward tip within 1e-3 mm of f64, every bench scene, default model | worst {worst_tip_default:.1e} mm (all models: {worst_tip:.1e} mm) |");
     let _ = writeln!(m, "| >= 3x fewer M3 instructions than soft-float f32 running the same algorithm | same algorithm in f32 (bench/src/twin.rs) / fixed: min {smin:.2}, median {smed:.2}; default model min {dmin:.2} |");
     let _ = writeln!(m, "| (against the model's own f32 solve, the firmware's) | f32 `Finger::solve_with` / fixed: min {rmin:.2}, median {rmed:.2} |");
-    let _ = writeln!(m, "| inverse round trip within 0.05 deg | no fixed-point inverse yet; the f64 inverse's answer through the fixed-point forward (host): worst {rt_worst:.1e} deg over {rt_n} postures (default model with stacks, postures of forward solves at 0.3..2 N and 0..9 kV; {rt_refused} refused) |");
+    let _ = writeln!(m, "| inverse round trip within 0.05 deg | the fixed-point inverse at a given tension (`FixedInverse`, on the M3) through the f64 forward: worst {inv_worst:.1e} deg over {inv_n} postures (table below); the f64 inverse through the fixed-point forward (host): worst {rt_worst:.1e} deg over {rt_n} postures ({rt_refused} refused) |");
     let _ = writeln!(m, "| image with console and `pose` in 64 KiB flash / 20 KiB RAM | M3 image (console, DE, defmt; no `pose`, f32 model): flash {flash} bytes ({:.1} KiB); static RAM {ram} bytes + the 20 KiB stack = {:.1} KiB (memory-m3.x: 24 KiB; docs/firmware.md \"Cortex-M3 image\") |", flash as f64 / 1024.0, (ram + 20 * 1024) as f64 / 1024.0);
     let _ = writeln!(m, "\nWorst fixed-point errors, all scenes both models: joint angle {worst_joint:.1e} deg, cable excursion {worst_exc:.1e} mm.\n");
     m.push_str(&t);
+    let _ = writeln!(m, "\nThe inverse at a given tension on the M3 (default model, stacks): the postures of forward solves at (P, V); each answer's voltages through the host's f64 forward. The fixed-point inverse's set-up (its compliance table, in f32, once per parameter change): {inv_setup:.0} instructions.\n");
+    m.push_str(&it);
     if !refusals.is_empty() {
         let _ = writeln!(m, "\nRefused (typed errors, no numbers): {}.", refusals.join("; "));
     }

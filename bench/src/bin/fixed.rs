@@ -8,12 +8,18 @@
 //!
 //! `F <scene> <model> <scalar> ok <solve_ticks> <setup_ticks> <tip_x> <tip_y> <a1> <a2> <a3> <excursion> <iters>`
 //! `F <scene> <model> <scalar> err <solve_ticks> <setup_ticks> <error code>`
+//!
+//! Then the inverse at a given tension (default model with stacks) for the postures of
+//! [`POSES`]: the fixed-point one (`FixedInverse`, set-up once) and the f32 one
+//! (`finger_model::solve_pose`), one line each:
+//! `I <case> <scalar> ok <solve_ticks> <setup_ticks> <V1> <V2> <V3>` or `... err <ticks> 0 <code>`
 #![no_std]
 #![no_main]
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use finger_model::fixed::{q::Nt, FixedFinger};
+use finger_model::fixed::q::{Nt, Rad};
+use finger_model::fixed::{FixedFinger, FixedInverse};
 use finger_model::{Finger, Method, Params};
 
 #[path = "../cycles.rs"]
@@ -120,6 +126,42 @@ fn run(s: &scenes::Scene, model: &str, p: Params<f64>) {
     }
 }
 
+/// Postures for the inverse: the forward solve's joint angles at (tension N, voltages V).
+const POSES: &[(f32, [f32; 3])] = &[(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])];
+
+fn run_inverse() {
+    let f = match Finger::new(Params::<f32> { layers: 4, ..Params::default() }) {
+        Ok(f) => f,
+        Err(_) => return,
+    };
+    let t0 = cycles::now();
+    let inv = FixedInverse::new(&f);
+    let setup = cycles::now() - t0;
+    for (i, (p, v)) in POSES.iter().enumerate() {
+        let Ok(want) = f.solve(*p, v, Method::converged()) else { continue };
+        let a = want.joint_angles();
+        if let Ok(inv) = &inv {
+            let angles = [Rad::from_f32(a[0]), Rad::from_f32(a[1]), Rad::from_f32(a[2])];
+            let t0 = cycles::now();
+            let r = inv.solve(&angles, Nt::from_f32(*p));
+            core::hint::black_box(&r);
+            let t1 = cycles::now();
+            match r.and_then(|sol| inv.volts(&f, &sol)) {
+                Ok(vs) => hprintln!("I pose{} fixed ok {} {} {:e} {:e} {:e}", i, t1 - t0, setup, vs[0], vs[1], vs[2]),
+                Err(e) => hprintln!("I pose{} fixed err {} 0 {}", i, t1 - t0, e.code()),
+            }
+        }
+        let t0 = cycles::now();
+        let r = finger_model::solve_pose(&f, a, Some(*p));
+        core::hint::black_box(&r);
+        let t1 = cycles::now();
+        match r {
+            Ok(sol) => hprintln!("I pose{} f32 ok {} 0 {:e} {:e} {:e}", i, t1 - t0, sol.volts[0], sol.volts[1], sol.volts[2]),
+            Err(e) => hprintln!("I pose{} f32 err {} 0 {}", i, t1 - t0, e.code()),
+        }
+    }
+}
+
 #[entry]
 fn main() -> ! {
     let cp = cortex_m::Peripherals::take().unwrap();
@@ -130,6 +172,7 @@ fn main() -> ! {
         run(s, "pinned", scenes::params(s));
         run(s, "default", Params { layers: s.layers, ..Params::default() });
     }
+    run_inverse();
     hprintln!("END");
     debug::exit(debug::EXIT_SUCCESS);
     loop {}

@@ -21,11 +21,11 @@ const H_LOG2: i32 = 14;
 /// that keeps every `|m[i][j]| < 2^30` (the tiny entries keep the row's absolute resolution).
 /// `d02`, `d12`: entries C02, C12 on their own scale (the moment arm's correction).
 #[derive(Clone, Copy, Debug, Default)]
-struct CMat {
-    m: [[i32; 3]; 3],
-    t: [i32; 3],
-    d02: Scaled,
-    d12: Scaled,
+pub(super) struct CMat {
+    pub(super) m: [[i32; 3]; 3],
+    pub(super) t: [i32; 3],
+    pub(super) d02: Scaled,
+    pub(super) d12: Scaled,
 }
 
 /// The wrench's formats (frac bits) by column.
@@ -98,8 +98,8 @@ impl FixedPose {
 /// A finger prepared for fixed-point solves at one set of channel voltages.
 #[derive(Clone, Debug)]
 pub struct FixedFinger {
-    n: usize,
-    m: usize,
+    pub(super) n: usize,
+    pub(super) m: usize,
     e: Mm,
     span_floor: Mm,
     sub_len: Mm,
@@ -132,12 +132,12 @@ impl FixedSolution {
 }
 
 #[derive(Clone, Copy, Debug)]
-enum MarchError {
+pub(super) enum MarchError {
     Contact,
     Singular,
 }
 
-fn cmat<R: Real>(m: &[[R; 3]; 3]) -> CMat {
+pub(super) fn cmat<R: Real>(m: &[[R; 3]; 3]) -> CMat {
     let mut v = [[0f64; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
@@ -186,8 +186,8 @@ impl FixedFinger {
         })
     }
 
-    /// Joint k's march at hole guess `b`: the hinge end and the hole it arrives at.
-    fn march(&self, k: usize, tension: Nt, b: [Mm; 2]) -> Result<(FixedPose, [Mm; 2]), MarchError> {
+    /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.
+    pub(super) fn march(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2]) -> Result<(FixedPose, [Mm; 2]), MarchError> {
         let e = self.e;
         let span_v = [b[0], b[1] - e];
         // the span and its reciprocal (no division), then the direction by two products
@@ -199,7 +199,7 @@ impl FixedFinger {
         let fc: [Nt; 2] = [-dir[0].mul_q(tension), -dir[1].mul_q(tension)];
         let mut pose = FixedPose::default();
         let (mut s, mut co) = (Unit::ZERO, Q::<30>(1 << 30));
-        for cj in self.c[k][..self.m].iter() {
+        for cj in c[..self.m].iter() {
             let d0 = [pose.x + co.mul_q(self.sub_len), pose.y + s.mul_q(self.sub_len)];
             // moment of the cable force about the sub-element's (undeflected) end
             let m0: Nmm = narrow((b[0] - d0[0]).wide(fc[1]) - (b[1] - d0[1]).wide(fc[0]), 44);
@@ -234,15 +234,15 @@ impl FixedFinger {
         Ok((pose, hole))
     }
 
-    fn residual(&self, k: usize, tension: Nt, b: [Mm; 2]) -> Result<([Mm; 2], FixedPose, [Mm; 2]), MarchError> {
-        let (end, hole) = self.march(k, tension, b)?;
+    fn residual(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2]) -> Result<([Mm; 2], FixedPose, [Mm; 2]), MarchError> {
+        let (end, hole) = self.march(c, tension, b)?;
         Ok(([b[0] - hole[0], b[1] - hole[1]], end, hole))
     }
 
     /// Damped Newton on joint k's hole position from `b`, forward-difference Jacobian kept
     /// while it converges fast (chord steps: one march per step).
-    fn newton(&self, k: usize, tension: Nt, mut b: [Mm; 2], iters: &mut u32) -> Result<(FixedPose, [Mm; 2]), MarchError> {
-        let (mut r, mut end, mut hole) = self.residual(k, tension, b)?;
+    fn newton(&self, c: &[CMat; MAX_SUB], tension: Nt, mut b: [Mm; 2], iters: &mut u32) -> Result<(FixedPose, [Mm; 2]), MarchError> {
+        let (mut r, mut end, mut hole) = self.residual(c, tension, b)?;
         let norm = |r: &[Mm; 2]| r[0].0.unsigned_abs().max(r[1].0.unsigned_abs());
         // the Jacobian is kept (chord steps) while each step cuts the residual at least 4x
         let mut jac = [[0i64; 2]; 2];
@@ -258,7 +258,7 @@ impl FixedFinger {
                 for i in 0..2 {
                     let mut bh = b;
                     bh[i] = bh[i] + h;
-                    let (rh, ..) = self.residual(k, tension, bh)?;
+                    let (rh, ..) = self.residual(c, tension, bh)?;
                     jac[0][i] = (rh[0].0 as i64 - r[0].0 as i64) << (30 - H_LOG2);
                     jac[1][i] = (rh[1].0 as i64 - r[1].0 as i64) << (30 - H_LOG2);
                 }
@@ -269,7 +269,7 @@ impl FixedFinger {
             let mut lambda = 0;
             loop {
                 let bt = [b[0] + narrow(d0 >> lambda, 22), b[1] + narrow(d1 >> lambda, 22)];
-                match self.residual(k, tension, bt) {
+                match self.residual(c, tension, bt) {
                     Ok((rt, et, ht)) if norm(&rt) < norm(&r) || lambda >= 6 => {
                         // a full step that cut the residual 4x keeps the Jacobian (chord)
                         fresh = lambda == 0 && norm(&rt).saturating_mul(4) <= norm(&r);
@@ -288,11 +288,16 @@ impl FixedFinger {
         }
     }
 
-    /// Joint k at the tension, by load continuation when Newton from the straight joint fails
+    /// A joint at the tension (from the hole `from` if given, else straight), by load continuation when Newton from the straight joint fails
     /// (the increment doubles on success, halves on failure, down to P / 1024).
-    fn joint(&self, k: usize, tension: Nt, iters: &mut u32) -> Result<(FixedPose, [Mm; 2]), MarchError> {
+    pub(super) fn joint(&self, c: &[CMat; MAX_SUB], tension: Nt, from: Option<[Mm; 2]>, iters: &mut u32) -> Result<(FixedPose, [Mm; 2]), MarchError> {
         let straight = [self.hinge_len, self.e];
-        let mut last = match self.newton(k, tension, straight, iters) {
+        if let Some(b) = from {
+            if let Ok(st) = self.newton(c, tension, b, iters) {
+                return Ok(st);
+            }
+        }
+        let mut last = match self.newton(c, tension, straight, iters) {
             Ok(st) => return Ok(st),
             Err(e) => e,
         };
@@ -300,7 +305,7 @@ impl FixedFinger {
         let (mut done, mut step, mut b) = (0i64, total / 8, straight);
         while done < total {
             let t = (done + step.max(min_step)).min(total);
-            match self.newton(k, Q(t as i32), b, iters) {
+            match self.newton(c, Q(t as i32), b, iters) {
                 Ok((end, hole)) if t == total => return Ok((end, hole)),
                 Ok((_, hole)) => {
                     (done, b, step) = (t, hole, step * 2);
@@ -315,6 +320,18 @@ impl FixedFinger {
             }
         }
         Err(last)
+    }
+
+    /// A link's deflection under tension alone: (-P, 0, P e) in its own frame.
+    pub(super) fn link_q(&self, tension: Nt) -> (Mm, Mm, Rad) {
+        match &self.link_c {
+            Some(lc) => {
+                let pe: Nmm = tension.mul_q(self.e);
+                let (w0, w1) = (-tension, Nt::ZERO);
+                (narrow(row(lc, 0, w0, w1, pe), lc.t[0]), narrow(row(lc, 1, w0, w1, pe), lc.t[1]), narrow(row(lc, 2, w0, w1, pe), lc.t[2]))
+            }
+            None => (Mm::ZERO, Mm::ZERO, Rad::ZERO),
+        }
     }
 
     /// The converged equilibrium under `tension` (N) alone.
@@ -332,23 +349,14 @@ impl FixedFinger {
                 holes[k] = holes[k - 1];
                 continue;
             }
-            let (end, hole) = self.joint(k, tension, &mut iterations).map_err(|e| match e {
+            let (end, hole) = self.joint(&self.c[k], tension, None, &mut iterations).map_err(|e| match e {
                 MarchError::Contact => Error::Contact { joint: k + 1, tension: tension.to_f64() },
                 MarchError::Singular => Error::NotConverged { iterations, residual: f64::INFINITY },
             })?;
             ends[k] = end;
             holes[k] = hole;
         }
-        // links: under tension alone each carries (-P, 0, P e) in its own frame
-        let link_q = match &self.link_c {
-            Some(lc) => {
-                let pe: Nmm = tension.mul_q(self.e);
-                let (w0, w1) = (-tension, Nt::ZERO);
-                let q: (Mm, Mm, Rad) = (narrow(row(lc, 0, w0, w1, pe), lc.t[0]), narrow(row(lc, 1, w0, w1, pe), lc.t[1]), narrow(row(lc, 2, w0, w1, pe), lc.t[2]));
-                q
-            }
-            None => (Mm::ZERO, Mm::ZERO, Rad::ZERO),
-        };
+        let link_q = self.link_q(tension);
         let mut nodes = [FixedPose::default(); MAX_JOINTS + 1];
         let mut joint_angle = [Rad::ZERO; MAX_JOINTS];
         let mut excursion = Mm::ZERO;

@@ -5,11 +5,15 @@
 //! with a Q format per quantity ([`q`]) and 32x32 -> 64 products, trig by polynomial
 //! ([`trig`]). The compliances are computed once per voltage set in the float model and
 //! converted ([`FixedFinger::new`]), each entry with its own scale.
-//! What it is not: the tip-loaded solve, the paper's stepping, the inverse. Error budget and
-//! measurements: docs/fixed-point.md.
+//! And the inverse at a given tension ([`inverse`]: each joint's stack thickness for target
+//! angles, compliances interpolated from a table built once).
+//! What it is not: the tip-loaded solve, the paper's stepping, the tension rule, fmax. Error
+//! budget and measurements: docs/fixed-point.md.
 
 pub mod forward;
+pub mod inverse;
 pub mod q;
 pub mod trig;
 
 pub use forward::{FixedFinger, FixedSolution};
+pub use inverse::{FixedInverse, FixedPoseSolution};
