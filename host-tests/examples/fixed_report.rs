@@ -207,6 +207,22 @@ fn main() {
     assert!(st.success(), "M3 firmware build failed");
     let fw = std::env::var_os("CARGO_TARGET_DIR").map(std::path::PathBuf::from).unwrap_or_else(|| root.join("target")).join("thumbv7m-none-eabi/release/finger-fw");
     let (flash, ram) = elf_sizes(&fw).unwrap();
+    // the M3 image's stack high-water over the console's commands (stack painted at reset;
+    // memory-m3.x: the 20 KiB stack is [0x20000000, 0x20005000))
+    let mut q = host_tests::qemu::Qemu::boot_with(host_tests::qemu::Image::M3.paint_elf(), "stack", &[]);
+    let mut worst_stack: Vec<(String, u64)> = Vec::new();
+    let mut prev = 0;
+    for c in ["version", "status", "limits", "help", "param", "solve 0.5 0 1000 2000", "solve 1 0 9000 9000", "solve 7 0 0 0", "arm", "volt all 1000", "wait 0.6", "force 0.5", "force 2", "volt 1 9000", "wait 5", "status", "stop", "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "solve 1 0 5000 0", "preset paper", "solve 1 0 1000 1000"] {
+        let r = q.cmd(c);
+        assert!(r.starts_with("ok"), "{c}: {r}");
+        let hw = q.stack_high_water(0x2000_0000, 0x2000_5000);
+        if hw > prev {
+            worst_stack.push((c.to_string(), hw));
+            prev = hw;
+        }
+    }
+    q.finish();
+    let stack = prev;
 
     let mut m = String::new();
     let _ = writeln!(m, "QEMU mps2-an385 (Cortex-M3, no FPU), `-icount shift=4`, instructions from SysTick calibrated on a");
@@ -221,8 +237,9 @@ fn main() {
     let _ = writeln!(m, "| >= 3x fewer M3 instructions than soft-float f32 running the same algorithm | same algorithm in f32 (bench/src/twin.rs) / fixed: min {smin:.2}, median {smed:.2}; default model min {dmin:.2} |");
     let _ = writeln!(m, "| (against the model's own f32 solve, the firmware's) | f32 `Finger::solve_with` / fixed: min {rmin:.2}, median {rmed:.2} |");
     let _ = writeln!(m, "| inverse round trip within 0.05 deg | the fixed-point inverse at a given tension (`FixedInverse`, on the M3) through the f64 forward: worst {inv_worst:.1e} deg over {inv_n} postures (table below); the f64 inverse through the fixed-point forward (host): worst {rt_worst:.1e} deg over {rt_n} postures ({rt_refused} refused) |");
-    let _ = writeln!(m, "| image with console and `pose` in 64 KiB flash / 20 KiB RAM | M3 image (console, DE, defmt; no `pose`, f32 model): flash {flash} bytes ({:.1} KiB); static RAM {ram} bytes + the 20 KiB stack = {:.1} KiB (memory-m3.x: 24 KiB; docs/firmware.md \"Cortex-M3 image\") |", flash as f64 / 1024.0, (ram + 20 * 1024) as f64 / 1024.0);
+    let _ = writeln!(m, "| image with console and `pose` in 64 KiB flash / 20 KiB RAM | M3 image (console, DE, defmt; no `pose`, f32 model): flash {flash} bytes ({:.1} KiB); static RAM {ram} bytes + the 20 KiB stack = {:.1} KiB (memory-m3.x: 24 KiB; docs/firmware.md \"Cortex-M3 image\"); stack high-water {stack} bytes ({:.1} KiB, the f32 model's solves) |", flash as f64 / 1024.0, (ram + 20 * 1024) as f64 / 1024.0, stack as f64 / 1024.0);
     let _ = writeln!(m, "\nWorst fixed-point errors, all scenes both models: joint angle {worst_joint:.1e} deg, cable excursion {worst_exc:.1e} mm.\n");
+    let _ = writeln!(m, "The M3 image's stack, painted at reset and read back through QEMU's monitor after each console command (the commands that deepened it, and how deep): {}.\n", worst_stack.iter().map(|(c, b)| format!("`{c}` {b} bytes")).collect::<Vec<_>>().join(", "));
     m.push_str(&t);
     let _ = writeln!(m, "\nThe inverse at a given tension on the M3 (default model, stacks): the postures of forward solves at (P, V); each answer's voltages through the host's f64 forward. The fixed-point inverse's set-up (its compliance table, in f32, once per parameter change): {inv_setup:.0} instructions.\n");
     m.push_str(&it);

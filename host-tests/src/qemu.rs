@@ -99,6 +99,12 @@ impl Image {
         static IMG: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
         IMG[self as usize].get_or_init(|| self.build("", target_dir()))
     }
+    /// The image with its stack painted at reset (cortex-m-rt `paint-stack`; its own target
+    /// dir): [`Qemu::stack_high_water`] reads how deep the stack went.
+    pub fn paint_elf(self) -> &'static Path {
+        static IMG: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
+        IMG[self as usize].get_or_init(|| self.build("cortex-m-rt/paint-stack", target_dir().join("paint")))
+    }
     /// The image with the `fault-inject` test command (its own target dir).
     pub fn fault_elf(self) -> &'static Path {
         static IMG: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
@@ -185,7 +191,8 @@ impl Qemu {
             }
         }
         let mut child = Command::new("qemu-system-arm")
-            .args(["-machine", machine, "-cpu", cpu, "-display", "none", "-monitor", "none"])
+            .args(["-machine", machine, "-cpu", cpu, "-display", "none", "-monitor"])
+            .arg(format!("unix:{},server=on,wait=off", dir.join("mon.sock").display()))
             .arg("-chardev")
             .arg(format!("socket,id=con,path={},server=on,wait=on", sock.display()))
             .args(["-serial", "chardev:con"])
@@ -256,6 +263,47 @@ impl Qemu {
     pub fn cmd(&mut self, line: &str) -> String {
         self.write(format!("{line}\r\n").as_bytes());
         self.finals(1).pop().unwrap()
+    }
+
+    /// `n` words of guest memory from `addr` (QEMU's monitor, `xp`).
+    pub fn read_words(&mut self, addr: u64, n: usize) -> Vec<u32> {
+        let mut mon = UnixStream::connect(self.dir.join("mon.sock")).expect("QEMU monitor socket");
+        mon.set_read_timeout(Some(Duration::from_millis(500))).unwrap();
+        mon.write_all(format!("xp /{n}wx {addr:#x}\n").as_bytes()).unwrap();
+        let mut text = String::new();
+        let mut buf = [0u8; 65536];
+        let t0 = Instant::now();
+        // the reply ends when the last line (its address) has come, or on a quiet half second
+        let last = format!("{:016x}:", addr + 4 * (n as u64 - (n as u64 - 1) % 4 - 1));
+        while t0.elapsed() < Duration::from_secs(20) {
+            match std::io::Read::read(&mut mon, &mut buf) {
+                Ok(0) => break,
+                Ok(k) => text.push_str(&String::from_utf8_lossy(&buf[..k])),
+                Err(_) if text.contains(&last) => break,
+                Err(_) => {}
+            }
+        }
+        let mut words = Vec::new();
+        for l in text.lines() {
+            let Some((a, rest)) = l.split_once(':') else { continue };
+            if u64::from_str_radix(a.trim(), 16).is_err() {
+                continue;
+            }
+            words.extend(rest.split_whitespace().filter_map(|w| u32::from_str_radix(w.trim_start_matches("0x"), 16).ok()));
+        }
+        words.truncate(n);
+        words
+    }
+
+    /// Bytes of the stack `[bottom, top)` written since reset, for a [`Image::paint_elf`]
+    /// image: from `top` down to the lowest word that is no longer the paint (0xCCCCCCCC).
+    pub fn stack_high_water(&mut self, bottom: u64, top: u64) -> u64 {
+        let words = self.read_words(bottom, ((top - bottom) / 4) as usize);
+        assert_eq!(words.len() as u64, (top - bottom) / 4, "monitor read");
+        match words.iter().position(|&w| w != 0xCCCC_CCCC) {
+            Some(i) => top - (bottom + 4 * i as u64),
+            None => 0,
+        }
     }
 
     /// Stop QEMU (SIGTERM: it flushes the trace); every register access, in order.
