@@ -202,7 +202,7 @@ impl FixedFinger {
         for cj in c[..self.m].iter() {
             let d0 = [pose.x + co.mul_q(self.sub_len), pose.y + s.mul_q(self.sub_len)];
             // moment of the cable force about the sub-element's (undeflected) end
-            let m0: Nmm = narrow((b[0] - d0[0]).wide(fc[1]) - (b[1] - d0[1]).wide(fc[0]), 44);
+            let m0: Nmm = narrow((b[0] - d0[0]).wide(fc[1]).saturating_sub((b[1] - d0[1]).wide(fc[0])), 44);
             // the force in the sub-element's frame
             let f: [Nt; 2] = [narrow(co.wide(fc[0]) + s.wide(fc[1]), 52), narrow(co.wide(fc[1]) - s.wide(fc[0]), 52)];
             let q0 = [row(cj, 0, f[0], f[1], m0), row(cj, 1, f[0], f[1], m0), row(cj, 2, f[0], f[1], m0)];
@@ -424,5 +424,27 @@ mod tests {
         let ff = FixedFinger::new(&f, &[0.0; 3]).unwrap();
         assert!(matches!(ff.solve(Nt::from_f64(-1.0)), Err(Error::Input { .. })));
         assert!(ff.solve(Nt::from_f64(400.0)).is_err());
+    }
+}
+
+#[cfg(test)]
+mod edge_tests {
+    use super::*;
+    use crate::Params;
+
+    /// Tensions across the format's range and past it, and a stiff finger: a number or a
+    /// typed error, never a panic (debug builds check every overflow).
+    #[test]
+    fn any_tension_gives_a_number_or_a_typed_error() {
+        for p in [Params::<f64>::default(), Params { m: 1, plate: false, flex_links: false, ..Params::default() }] {
+            let f = Finger::new(p).unwrap();
+            let ff = FixedFinger::new(&f, &[0.0; 3]).unwrap();
+            for t in [0.0, 1e-6, 0.01, 3.0, 20.0, 60.0, 150.0, 300.0, 511.0, 600.0] {
+                match ff.solve(Nt::from_f64(t)) {
+                    Ok(s) => assert!(s.nodes[..=3].iter().all(|n| !n.x.is_sat() && !n.y.is_sat())),
+                    Err(e) => assert!(matches!(e, Error::Contact { .. } | Error::NotConverged { .. } | Error::Singular { .. } | Error::Input { .. }), "{e:?}"),
+                }
+            }
+        }
     }
 }

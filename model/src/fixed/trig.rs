@@ -85,7 +85,7 @@ pub fn hypot_inv(x: Q<22>, y: Q<22>) -> Option<(Q<22>, Q<26>)> {
     let three = 3u64 << 30;
     let mut r: u64 = if z < (2u64 << 30) { 912680550 } else { 644245094 }; // 0.85, 0.6
     for _ in 0..4 {
-        r = mul(r, three - mul(z, mul(r, r))) >> 1;
+        r = mul(r, three.saturating_sub(mul(z, mul(r, r)))) >> 1;
     }
     let sqrt_v = mul(z, r); // Q30, in [1, 2)
     // |(x, y)|^2 = s 2^-44 = v 2^(18 - l): |.| = sqrt(v) 2^((18 - l) / 2), 1/|.| = r 2^((l - 18) / 2)
