@@ -16,7 +16,7 @@ const MAX_ITER: u32 = 30;
 /// Forward-difference step of the 2x2 Jacobian, Q22 units (2^-8 mm).
 const H_LOG2: i32 = 14;
 
-/// A compliance matrix scaled row by row, for a wrench of (Q22 N, Q22 N, Q18 N mm): row i's
+/// A compliance matrix scaled row by row, for a wrench of ([`Nt`], [`Nt`], [`Nmm`]): row i's
 /// sum `sum_j m[i][j] w_j` (raw words, 32x32 -> 64) is `q_i 2^t[i]`, with `t[i]` the largest
 /// that keeps every `|m[i][j]| < 2^30` (the tiny entries keep the row's absolute resolution).
 /// `d02`, `d12`: entries C02, C12 on their own scale (the moment arm's correction).
@@ -29,7 +29,7 @@ pub(super) struct CMat {
 }
 
 /// The wrench's formats (frac bits) by column.
-const W_FRAC: [i32; 3] = [22, 22, 18];
+const W_FRAC: [i32; 3] = [Nt::FRAC, Nt::FRAC, Nmm::FRAC];
 
 /// (mantissa in [2^52, 2^53), binary exponent e with |x| = mant 2^(e - 52)); None for 0,
 /// subnormals, inf, NaN. Integer operations on the bits.
