@@ -22,6 +22,11 @@
 //!
 //! Time: SysTick counts the core clock; QEMU's SysTick runs at 168 MHz whatever the RCC says,
 //! so a 1 ms tick is 168 000 counts in both builds.
+//!
+//! The Cortex-M3 image (`cfg(m3)`: thumbv7m-none-eabi, no FPU; QEMU netduino2, an STM32F205
+//! with the same USART1, TIM3/TIM4, GPIOB and RCC addresses and interrupt numbers) is this
+//! same code with three differences: SysTick at 120 MHz (QEMU's netduino2), the stack at the
+//! bottom of SRAM with the MPU guard below it (memory-m3.x), and the board name. Emulator only.
 
 #[path = "mem.rs"]
 mod mem;
@@ -46,13 +51,21 @@ compile_error!("features `qemu` and `hw` are exclusive: build the board with --n
 #[cfg(not(any(feature = "qemu", feature = "hw")))]
 compile_error!("choose a build: feature `qemu` (default) or `hw` (--no-default-features --features hw)");
 
+#[cfg(all(m3, feature = "hw"))]
+compile_error!("the Cortex-M3 image is an emulator image (QEMU netduino2): build it with --features m3");
+
 #[cfg(all(feature = "log", feature = "hw"))]
 use defmt_rtt as _;
 #[cfg(all(feature = "log", feature = "qemu"))]
 use defmt_semihosting as _;
 
-/// SysTick counts per millisecond (core clock 168 MHz on the board and in QEMU).
-const SYSTICK_PER_MS: u32 = 168_000;
+/// Core clock, MHz: 168 on the board and in QEMU netduinoplus2, 120 in QEMU netduino2 (M3).
+#[cfg(not(m3))]
+const CORE_MHZ: u32 = 168;
+#[cfg(m3)]
+const CORE_MHZ: u32 = 120;
+/// SysTick counts per millisecond.
+const SYSTICK_PER_MS: u32 = CORE_MHZ * 1000;
 
 /// Register addresses the reset and fault paths write without the HAL.
 const RCC_CR: usize = 0x4002_3800;
@@ -167,14 +180,20 @@ fn reg_write(a: usize, v: u32) {
 
 /// Stack guard (MPU region 0, no access): 16 KiB right above the statics, so the stack,
 /// growing down from the top of RAM, faults (HardFault, HV off) before it reaches them. The
-/// largest frame (the inverse's branch table, ~4.5 KB) cannot step over it.
+/// largest frame (the inverse's branch table, ~4.5 KB) cannot step over it. On the M3 image
+/// the stack is at the bottom of SRAM: the guard is the 16 KiB below SRAM.
 fn stack_guard(mpu: &mut cortex_m::peripheral::MPU) -> u32 {
-    extern "C" {
-        static mut __sheap: u32;
-    }
     const SIZE_LOG2: u32 = 14; // 16 KiB
-    let heap = core::ptr::addr_of_mut!(__sheap) as u32;
-    let base = (heap + (1 << SIZE_LOG2) - 1) & !((1 << SIZE_LOG2) - 1);
+    #[cfg(not(m3))]
+    let base = {
+        extern "C" {
+            static mut __sheap: u32;
+        }
+        let heap = core::ptr::addr_of_mut!(__sheap) as u32;
+        (heap + (1 << SIZE_LOG2) - 1) & !((1 << SIZE_LOG2) - 1)
+    };
+    #[cfg(m3)]
+    let base = 0x2000_0000 - (1 << SIZE_LOG2);
     // SAFETY: MPU set-up before the tasks run: region 0 = [base, base + 16 KiB) no access
     // (AP = 000), execute never; the default memory map elsewhere (PRIVDEFENA); off in
     // HardFault and NMI (HFNMIENA = 0).
@@ -218,7 +237,9 @@ impl Board for F405Board {
         self.iwdg.feed();
     }
     fn name(&self) -> &'static str {
-        if cfg!(feature = "qemu") {
+        if cfg!(m3) {
+            "qemu-netduino2"
+        } else if cfg!(feature = "qemu") {
             "qemu-netduinoplus2"
         } else {
             "stm32f405"
@@ -226,8 +247,11 @@ impl Board for F405Board {
     }
 }
 
-/// Bytes waiting to be sent.
+/// Bytes waiting to be sent (less on the Cortex-M3 image's 20 KiB of RAM).
+#[cfg(not(m3))]
 pub const TX_RING: usize = 2048;
+#[cfg(m3)]
+pub const TX_RING: usize = 1024;
 /// Kept free in the transmit queue for `ok stopped` (written from the console interrupt).
 const TX_RESERVE: usize = 16;
 const STOP_REPLY: &[u8] = b"ok stopped\r\n";
@@ -282,7 +306,7 @@ static NOW_MS: AtomicU32 = AtomicU32::new(0);
 /// The command side's last check-in, control ms.
 static CHECKIN_MS: AtomicU32 = AtomicU32::new(0);
 
-/// Timing, measured by the firmware itself in SysTick counts (168 per us) and reported by
+/// Timing, measured by the firmware itself in SysTick counts (`CORE_MHZ` per us) and reported by
 /// the `timing` console addition (docs/firmware.md regenerates from it).
 pub mod timing {
     use core::sync::atomic::{AtomicU32, Ordering};
@@ -316,7 +340,7 @@ fn systick_elapsed() -> u32 {
     (SYSTICK_PER_MS - 1).saturating_sub(cortex_m::peripheral::SYST::get_current())
 }
 
-/// Time now in SysTick counts (control ms x 168 000 + the count within the tick).
+/// Time now in SysTick counts (control ms x `SYSTICK_PER_MS` + the count within the tick).
 fn now_counts() -> u64 {
     loop {
         let ms = NOW_MS.load(Ordering::Acquire);
@@ -661,7 +685,7 @@ pub mod durations {
 fn timing_report(o: &mut dyn core::fmt::Write) {
     use finger_fw::num::Fixed;
     use finger_fw::w;
-    let us = |c: u32| Fixed(c as f32 / 168.0, 2);
+    let us = |c: u32| Fixed(c as f32 / CORE_MHZ as f32, 2);
     let ld = |a: &AtomicU32| a.load(Ordering::Relaxed);
     let min = ld(&timing::TICK_LATENCY_MIN);
     let min = if min == u32::MAX { 0 } else { min };
@@ -688,7 +712,7 @@ fn timing_report(o: &mut dyn core::fmt::Write) {
 
 /// Test images only (feature `fault-inject`, never in a release): `crash <what>` takes a
 /// fault path on purpose, for tests/qemu_faults.rs: `hardfault` (a load from an unmapped
-/// address), `nmi` (NMIPENDSET), `irq` (an interrupt without a handler: DefaultHandler),
+/// address; an undefined instruction on the M3 image), `nmi` (NMIPENDSET), `irq` (an interrupt without a handler: DefaultHandler),
 /// `overflow` (unbounded recursion into the MPU stack guard).
 #[cfg(feature = "fault-inject")]
 mod fault_inject {
@@ -707,8 +731,14 @@ mod fault_inject {
         let Record::Line(l) = rec else { return };
         let Some(what) = l.strip_prefix(b"crash ") else { return };
         match what {
+            #[cfg(not(m3))]
             b"hardfault" => unsafe {
                 core::ptr::read_volatile(0x6000_0000 as *const u32);
+            },
+            // QEMU's netduino2 ignores an unmapped load: an undefined instruction instead
+            #[cfg(m3)]
+            b"hardfault" => unsafe {
+                core::arch::asm!("udf #0");
             },
             b"nmi" => unsafe {
                 (*cortex_m::peripheral::SCB::PTR).icsr.write(1 << 31);

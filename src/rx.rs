@@ -14,8 +14,12 @@ use heapless::{Deque, Vec};
 
 use crate::console::{Line, LineBuf, LINE_MAX};
 
-/// Bytes of queued lines (each line takes its length + 2).
+/// Bytes of queued lines (each line takes its length + 2); smaller on the Cortex-M3 image
+/// (20 KiB of RAM).
+#[cfg(not(m3))]
 pub const RX_RING: usize = 4096;
+#[cfg(m3)]
+pub const RX_RING: usize = 1024;
 
 const KIND_LINE: u8 = 1;
 const KIND_TOO_LONG: u8 = 2;

@@ -1,8 +1,10 @@
-//! The firmware's emulator image in QEMU netduinoplus2 with `-icount shift=0` and a register
-//! trace (`-trace memory_region_ops_write/read -D FILE`): boot, talk to the console over a
-//! Unix socket, read back every register access in order. Used by tests/qemu_realtime.rs and
-//! the `realtime_report` example (docs/firmware.md's real-time figures).
-use std::io::{BufRead, BufReader, Write};
+//! The firmware's emulator images in QEMU with `-icount shift=0` and a register trace
+//! (`-trace memory_region_ops_write/read -D FILE`): boot, talk to the console over a Unix
+//! socket, read back every register access in order, and the defmt bytes (semihosting, QEMU's
+//! stdout). Two images ([`Image`]): the F405's (Cortex-M4F, netduinoplus2) and the Cortex-M3
+//! image (netduino2). Used by tests/qemu_console.rs, qemu_realtime.rs, qemu_faults.rs and the
+//! `realtime_report` example (docs/firmware.md's real-time figures).
+use std::io::{BufRead, BufReader, Read, Write};
 use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -27,29 +29,104 @@ fn target_dir() -> PathBuf {
     }
 }
 
-/// Build the emulator image (extra `features`, its own target dir `sub` when features are
-/// given); its path.
-fn build(features: &str, tdir: PathBuf) -> PathBuf {
-    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
-    c.current_dir(root()).env("CARGO_TARGET_DIR", &tdir).args(["build", "--release", "--quiet", "--bin", "finger-fw"]);
-    if !features.is_empty() {
-        c.args(["--features", features]);
+/// The emulator images the QEMU tests run against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Image {
+    /// The F405's image (`cargo build --release`): Cortex-M4F, QEMU netduinoplus2.
+    M4f,
+    /// The Cortex-M3 image (`--target thumbv7m-none-eabi --features m3`): no FPU, QEMU
+    /// netduino2 (an STM32F205), 64 KiB of flash; no `pose`, no `contact` (docs/firmware.md).
+    M3,
+}
+
+impl Image {
+    pub const ALL: [Image; 2] = [Image::M4f, Image::M3];
+    fn target(self) -> &'static str {
+        match self {
+            Image::M4f => "thumbv7em-none-eabihf",
+            Image::M3 => "thumbv7m-none-eabi",
+        }
     }
-    let out = c.output().expect("cargo");
-    assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
-    tdir.join("thumbv7em-none-eabihf").join("release").join("finger-fw")
+    /// QEMU's `-machine` and `-cpu`.
+    fn machine(self) -> [&'static str; 2] {
+        match self {
+            Image::M4f => ["netduinoplus2", "cortex-m4"],
+            Image::M3 => ["netduino2", "cortex-m3"],
+        }
+    }
+    /// The board name `version` reports.
+    pub fn board(self) -> &'static str {
+        match self {
+            Image::M4f => "qemu-netduinoplus2",
+            Image::M3 => "qemu-netduino2",
+        }
+    }
+    /// The image has `pose` and `contact` (feature `full`).
+    pub fn has_inverse(self) -> bool {
+        self == Image::M4f
+    }
+    /// QEMU models the STM32's RCC and GPIO on this machine (as unimplemented devices that the
+    /// trace shows with their values); netduino2 does not: those writes are logged without a
+    /// value ([`Access::modelled`] false).
+    pub fn models_gpio(self) -> bool {
+        self == Image::M4f
+    }
+    /// `cargo build` features (after `--no-default-features` for the M3 image).
+    fn features(self, extra: &str) -> String {
+        let base = match self {
+            Image::M4f => "",
+            Image::M3 => "m3",
+        };
+        [base, extra].iter().filter(|f| !f.is_empty()).copied().collect::<Vec<_>>().join(",")
+    }
+    /// Build the image (extra `features`) in `tdir`; its path.
+    fn build(self, extra: &str, tdir: PathBuf) -> PathBuf {
+        let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+        c.current_dir(root()).env("CARGO_TARGET_DIR", &tdir).args(["build", "--release", "--quiet", "--bin", "finger-fw"]);
+        if self == Image::M3 {
+            c.args(["--target", self.target(), "--no-default-features"]);
+        }
+        let f = self.features(extra);
+        if !f.is_empty() {
+            c.args(["--features", &f]);
+        }
+        let out = c.output().expect("cargo");
+        assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
+        tdir.join(self.target()).join("release").join("finger-fw")
+    }
+    /// The release image, built once per process.
+    pub fn elf(self) -> &'static Path {
+        static IMG: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
+        IMG[self as usize].get_or_init(|| self.build("", target_dir()))
+    }
+    /// The image with its stack painted at reset (cortex-m-rt `paint-stack`; its own target
+    /// dir): [`Qemu::stack_high_water`] reads how deep the stack went.
+    pub fn paint_elf(self) -> &'static Path {
+        static IMG: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
+        IMG[self as usize].get_or_init(|| self.build("cortex-m-rt/paint-stack", target_dir().join("paint")))
+    }
+    /// The image with the `fault-inject` test command (its own target dir).
+    pub fn fault_elf(self) -> &'static Path {
+        static IMG: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
+        IMG[self as usize].get_or_init(|| self.build("fault-inject", target_dir().join("faults")))
+    }
+    fn of(elf: &Path) -> Image {
+        if elf.to_string_lossy().contains(Image::M3.target()) {
+            Image::M3
+        } else {
+            Image::M4f
+        }
+    }
 }
 
-/// Build the emulator image once per process; its path.
+/// The F405 emulator image, built once per process; its path.
 pub fn image() -> &'static Path {
-    static IMG: OnceLock<PathBuf> = OnceLock::new();
-    IMG.get_or_init(|| build("", target_dir()))
+    Image::M4f.elf()
 }
 
-/// The emulator image with the `fault-inject` test command (its own target dir).
+/// The F405 emulator image with the `fault-inject` test command (its own target dir).
 pub fn fault_image() -> &'static Path {
-    static IMG: OnceLock<PathBuf> = OnceLock::new();
-    IMG.get_or_init(|| build("fault-inject", target_dir().join("faults")))
+    Image::M4f.fault_elf()
 }
 
 /// One register access from the trace.
@@ -57,7 +134,18 @@ pub fn fault_image() -> &'static Path {
 pub struct Access {
     pub write: bool,
     pub addr: u64,
+    /// 0 when not `modelled`.
     pub value: u64,
+    /// false: a register QEMU does not model on this machine (netduino2's RCC, GPIO): the
+    /// access is in the log (`-d guest_errors`), in order, without its value.
+    pub modelled: bool,
+}
+
+impl Access {
+    /// A write of `value` to `addr` (any value where QEMU does not model the register).
+    pub fn writes(&self, addr: u64, value: u64) -> bool {
+        self.write && self.addr == addr && (!self.modelled || self.value == value)
+    }
 }
 
 pub struct Qemu {
@@ -65,12 +153,19 @@ pub struct Qemu {
     con: BufReader<UnixStream>,
     tx: UnixStream,
     dir: PathBuf,
+    /// QEMU's stdout: the defmt bytes (semihosting).
+    log: Option<std::thread::JoinHandle<Vec<u8>>>,
 }
 
 impl Qemu {
-    /// Boot the image with the register trace on; returns after the banner.
+    /// Boot the F405 image with the register trace on; returns after the banner.
     pub fn boot(tag: &str) -> Qemu {
         Self::boot_image(image(), tag)
+    }
+
+    /// Boot `img`'s release image with the register trace on.
+    pub fn boot_on(img: Image, tag: &str) -> Qemu {
+        Self::boot_image(img.elf(), tag)
     }
 
     /// Boot `elf` with the register trace on.
@@ -78,15 +173,26 @@ impl Qemu {
         Self::boot_with(elf, tag, &[])
     }
 
-    /// Boot `elf` with the register trace and `extra` QEMU arguments (e.g. `-d int`, whose
-    /// log goes into the same file: [`Qemu::finish_log`]).
+    /// Boot `elf` (its machine by its target) with the register trace and `extra` QEMU
+    /// arguments (e.g. `-d int`, whose log goes into the same file: [`Qemu::finish_log`]).
     pub fn boot_with(elf: &Path, tag: &str, extra: &[&str]) -> Qemu {
-        let dir = std::env::temp_dir().join(format!("finger-rt-{}-{tag}", std::process::id()));
+        let img = Image::of(elf);
+        let dir = std::env::temp_dir().join(format!("finger-rt-{}-{img:?}-{tag}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let sock = dir.join("con.sock");
-        let child = Command::new("qemu-system-arm")
-            .args(["-machine", "netduinoplus2", "-cpu", "cortex-m4", "-display", "none", "-monitor", "none"])
+        let [machine, cpu] = img.machine();
+        // netduino2 leaves RCC and GPIO unmapped: its accesses there are guest errors
+        let mut extra: Vec<String> = extra.iter().map(|a| a.to_string()).collect();
+        if !img.models_gpio() {
+            match extra.iter().position(|a| a == "-d") {
+                Some(i) => extra[i + 1].push_str(",guest_errors"),
+                None => extra.extend(["-d".into(), "guest_errors".into()]),
+            }
+        }
+        let mut child = Command::new("qemu-system-arm")
+            .args(["-machine", machine, "-cpu", cpu, "-display", "none", "-monitor"])
+            .arg(format!("unix:{},server=on,wait=off", dir.join("mon.sock").display()))
             .arg("-chardev")
             .arg(format!("socket,id=con,path={},server=on,wait=on", sock.display()))
             .args(["-serial", "chardev:con"])
@@ -94,25 +200,34 @@ impl Qemu {
             .args(["-semihosting-config", "enable=on,target=native"])
             .args(["-trace", "memory_region_ops_write", "-trace", "memory_region_ops_read", "-D"])
             .arg(dir.join("trace.log"))
-            .args(extra)
+            .args(&extra)
             .arg("-kernel")
             .arg(elf)
             .stdin(Stdio::null())
-            .stdout(Stdio::null())
+            .stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
             .expect("qemu-system-arm: run scripts/setup");
+        let mut stdout = child.stdout.take().unwrap();
+        let log = std::thread::spawn(move || {
+            let mut v = Vec::new();
+            let _ = stdout.read_to_end(&mut v);
+            v
+        });
         let t0 = Instant::now();
         let stream = loop {
             match UnixStream::connect(&sock) {
                 Ok(s) => break s,
                 Err(_) if t0.elapsed() < Duration::from_secs(20) => std::thread::sleep(Duration::from_millis(20)),
-                Err(e) => panic!("QEMU console socket: {e}"),
+                Err(e) => {
+                    let _ = child.kill();
+                    panic!("QEMU console socket: {e}");
+                }
             }
         };
         stream.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
         let tx = stream.try_clone().unwrap();
-        let mut q = Qemu { child, con: BufReader::new(stream), tx, dir };
+        let mut q = Qemu { child, con: BufReader::new(stream), tx, dir, log: Some(log) };
         let banner = q.line();
         assert!(banner.starts_with("# finger-fw ") && banner.ends_with("ready"), "banner: {banner:?}");
         q
@@ -150,18 +265,69 @@ impl Qemu {
         self.finals(1).pop().unwrap()
     }
 
+    /// `n` words of guest memory from `addr` (QEMU's monitor, `xp`).
+    pub fn read_words(&mut self, addr: u64, n: usize) -> Vec<u32> {
+        let mut mon = UnixStream::connect(self.dir.join("mon.sock")).expect("QEMU monitor socket");
+        mon.set_read_timeout(Some(Duration::from_millis(500))).unwrap();
+        mon.write_all(format!("xp /{n}wx {addr:#x}\n").as_bytes()).unwrap();
+        let mut text = String::new();
+        let mut buf = [0u8; 65536];
+        let t0 = Instant::now();
+        // the reply ends when the last line (its address) has come, or on a quiet half second
+        let last = format!("{:016x}:", addr + 4 * (n as u64 - (n as u64 - 1) % 4 - 1));
+        while t0.elapsed() < Duration::from_secs(20) {
+            match std::io::Read::read(&mut mon, &mut buf) {
+                Ok(0) => break,
+                Ok(k) => text.push_str(&String::from_utf8_lossy(&buf[..k])),
+                Err(_) if text.contains(&last) => break,
+                Err(_) => {}
+            }
+        }
+        let mut words = Vec::new();
+        for l in text.lines() {
+            let Some((a, rest)) = l.split_once(':') else { continue };
+            if u64::from_str_radix(a.trim(), 16).is_err() {
+                continue;
+            }
+            words.extend(rest.split_whitespace().filter_map(|w| u32::from_str_radix(w.trim_start_matches("0x"), 16).ok()));
+        }
+        words.truncate(n);
+        words
+    }
+
+    /// Bytes of the stack `[bottom, top)` written since reset, for a [`Image::paint_elf`]
+    /// image: from `top` down to the lowest word that is no longer the paint (0xCCCCCCCC).
+    pub fn stack_high_water(&mut self, bottom: u64, top: u64) -> u64 {
+        let words = self.read_words(bottom, ((top - bottom) / 4) as usize);
+        assert_eq!(words.len() as u64, (top - bottom) / 4, "monitor read");
+        match words.iter().position(|&w| w != 0xCCCC_CCCC) {
+            Some(i) => top - (bottom + 4 * i as u64),
+            None => 0,
+        }
+    }
+
     /// Stop QEMU (SIGTERM: it flushes the trace); every register access, in order.
     pub fn finish(self) -> Vec<Access> {
         parse_trace(&self.finish_log())
     }
 
     /// Stop QEMU; the whole log file (trace and any `-d` output).
-    pub fn finish_log(mut self) -> String {
+    pub fn finish_log(self) -> String {
+        self.finish_all().0
+    }
+
+    /// Stop QEMU; the defmt bytes it wrote (semihosting, its stdout).
+    pub fn finish_defmt(self) -> Vec<u8> {
+        self.finish_all().1
+    }
+
+    fn finish_all(mut self) -> (String, Vec<u8>) {
         let _ = Command::new("kill").arg(self.child.id().to_string()).status();
         let _ = self.child.wait();
         let text = std::fs::read_to_string(self.dir.join("trace.log")).unwrap_or_default();
         let _ = std::fs::remove_dir_all(&self.dir);
-        text
+        let defmt = self.log.take().map(|h| h.join().unwrap_or_default()).unwrap_or_default();
+        (text, defmt)
     }
 }
 
@@ -171,10 +337,19 @@ impl Drop for Qemu {
     }
 }
 
-/// `memory_region_ops_{write,read} cpu 0 mr .. addr 0x.. value 0x.. size ..` lines.
+/// `memory_region_ops_{write,read} cpu 0 mr .. addr 0x.. value 0x.. size ..` lines, and
+/// `Invalid {write,read} at addr 0x..,` (an unmodelled register, `-d guest_errors`).
 pub fn parse_trace(text: &str) -> Vec<Access> {
     let mut v = Vec::new();
     for l in text.lines() {
+        for (p, write) in [("Invalid write at addr 0x", true), ("Invalid read at addr 0x", false)] {
+            if let Some(rest) = l.strip_prefix(p) {
+                let hex = rest.split(',').next().unwrap_or("");
+                if let Ok(addr) = u64::from_str_radix(hex.trim(), 16) {
+                    v.push(Access { write, addr, value: 0, modelled: false });
+                }
+            }
+        }
         let write = l.starts_with("memory_region_ops_write");
         if !write && !l.starts_with("memory_region_ops_read") {
             continue;
@@ -189,7 +364,7 @@ pub fn parse_trace(text: &str) -> Vec<Access> {
             None
         };
         if let (Some(addr), Some(value)) = (field("addr"), field("value")) {
-            v.push(Access { write, addr, value });
+            v.push(Access { write, addr, value, modelled: true });
         }
     }
     v

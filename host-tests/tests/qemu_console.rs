@@ -1,133 +1,14 @@
-//! The real firmware release image (feature `qemu`, the default) booted in QEMU netduinoplus2
-//! (an STM32F405) with `-icount shift=0`: the console over a Unix socket (loopback only),
-//! the bad inputs included, and the defmt log (semihosting, QEMU's stdout) decoded with
-//! defmt-decoder. The test builds the image itself (`cargo build --release` at the workspace
-//! root). A missing QEMU fails the test: run scripts/setup.
-use std::io::{BufRead, BufReader, Read, Write};
-use std::os::unix::net::UnixStream;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::OnceLock;
-use std::time::{Duration, Instant};
+//! The real firmware release images booted in QEMU with `-icount shift=0`
+//! (host_tests::qemu): the F405's (feature `qemu`, the default; netduinoplus2) and the Cortex-M3
+//! image (netduino2), each test run against both. The console over a Unix socket (loopback
+//! only), the bad inputs included, and the defmt log (semihosting, QEMU's stdout) decoded with
+//! defmt-decoder. The tests build the images themselves (`cargo build --release` at the
+//! workspace root). A missing QEMU fails the test: run scripts/setup.
+use host_tests::qemu::{Image, Qemu};
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").canonicalize().unwrap()
-}
-
-fn target_dir() -> PathBuf {
-    match std::env::var_os("CARGO_TARGET_DIR") {
-        Some(d) if Path::new(&d).is_absolute() => PathBuf::from(d),
-        Some(d) => std::env::current_dir().unwrap().join(d),
-        None => root().join("target"),
-    }
-}
-
-/// Build the emulator image once per test binary; its path.
-fn image() -> &'static Path {
-    static IMG: OnceLock<PathBuf> = OnceLock::new();
-    IMG.get_or_init(|| {
-        let tdir = target_dir();
-        let out = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
-            .current_dir(root())
-            .env("CARGO_TARGET_DIR", &tdir)
-            .args(["build", "--release", "--quiet", "--bin", "finger-fw"])
-            .output()
-            .expect("cargo");
-        assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
-        tdir.join("thumbv7em-none-eabihf").join("release").join("finger-fw")
-    })
-}
-
-struct Qemu {
-    child: Child,
-    con: BufReader<UnixStream>,
-    tx: UnixStream,
-    log: std::thread::JoinHandle<Vec<u8>>,
-    _dir: PathBuf,
-}
-
-impl Qemu {
-    fn boot() -> Qemu {
-        let elf = image();
-        if Command::new("qemu-system-arm").arg("--version").output().is_err() {
-            panic!("qemu-system-arm not found: run scripts/setup (it installs QEMU from the distribution's packages)");
-        }
-        let dir = std::env::temp_dir().join(format!("finger-qemu-{}-{:?}", std::process::id(), std::thread::current().id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let sock = dir.join("con.sock");
-        let mut child = Command::new("qemu-system-arm")
-            .args(["-machine", "netduinoplus2", "-cpu", "cortex-m4", "-display", "none", "-monitor", "none"])
-            .arg("-chardev")
-            .arg(format!("socket,id=con,path={},server=on,wait=on", sock.display()))
-            .args(["-serial", "chardev:con"])
-            .args(["-icount", "shift=0,sleep=off"])
-            .args(["-semihosting-config", "enable=on,target=native"])
-            .arg("-kernel")
-            .arg(elf)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("qemu-system-arm: run scripts/setup");
-        let mut stdout = child.stdout.take().unwrap();
-        let log = std::thread::spawn(move || {
-            let mut v = Vec::new();
-            let _ = stdout.read_to_end(&mut v);
-            v
-        });
-        let t0 = Instant::now();
-        let stream = loop {
-            match UnixStream::connect(&sock) {
-                Ok(s) => break s,
-                Err(_) if t0.elapsed() < Duration::from_secs(20) => std::thread::sleep(Duration::from_millis(20)),
-                Err(e) => {
-                    let _ = child.kill();
-                    panic!("QEMU console socket: {e}");
-                }
-            }
-        };
-        stream.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
-        let tx = stream.try_clone().unwrap();
-        let mut q = Qemu { child, con: BufReader::new(stream), tx, log, _dir: dir };
-        let banner = q.line();
-        assert!(banner.starts_with("# finger-fw ") && banner.ends_with("ready"), "banner: {banner:?}");
-        q
-    }
-
-    fn line(&mut self) -> String {
-        let mut s = String::new();
-        self.con.read_line(&mut s).expect("console read (timeout?)");
-        assert!(!s.is_empty(), "console closed");
-        s.trim_end_matches(['\r', '\n']).to_owned()
-    }
-
-    /// Send raw bytes (one or more lines); read `n` final replies, with any lines before them.
-    fn send(&mut self, bytes: &[u8], n: usize) -> Vec<String> {
-        self.tx.write_all(bytes).unwrap();
-        let mut lines = Vec::new();
-        let mut finals = 0;
-        while finals < n {
-            let l = self.line();
-            if l.starts_with("ok") || l.starts_with("err ") {
-                finals += 1;
-            }
-            lines.push(l);
-        }
-        lines
-    }
-
-    /// One command, its final reply.
-    fn cmd(&mut self, line: &str) -> String {
-        self.send(format!("{line}\r\n").as_bytes(), 1).pop().unwrap()
-    }
-
-    /// Stop QEMU; the defmt bytes it wrote.
-    fn finish(mut self) -> Vec<u8> {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-        self.log.join().unwrap()
-    }
+fn send(q: &mut Qemu, bytes: &[u8], n: usize) -> Vec<String> {
+    q.write(bytes);
+    q.finals(n)
 }
 
 fn expect(q: &mut Qemu, line: &str, prefix: &str) -> String {
@@ -138,10 +19,19 @@ fn expect(q: &mut Qemu, line: &str, prefix: &str) -> String {
 
 #[test]
 fn qemu_console_commands_and_bad_inputs() {
-    let mut q = Qemu::boot();
+    console_commands_and_bad_inputs(Image::M4f);
+}
+
+#[test]
+fn qemu_console_commands_and_bad_inputs_m3() {
+    console_commands_and_bad_inputs(Image::M3);
+}
+
+fn console_commands_and_bad_inputs(img: Image) {
+    let mut q = Qemu::boot_on(img, "console");
     let v = expect(&mut q, "version", "ok version=");
-    assert!(v.contains("board=qemu-netduinoplus2"), "{v}");
-    let help = q.send(b"help\n", 1);
+    assert!(v.contains(&format!("board={}", img.board())), "{v}");
+    let help = send(&mut q, b"help\n", 1);
     assert!(help.len() > 10 && help.last().unwrap() == "ok", "{help:?}");
     let s = expect(&mut q, "status", "ok armed=0 ");
     assert!(s.contains(" fault=none") && s.contains(" enable=0"), "{s}");
@@ -156,14 +46,14 @@ fn qemu_console_commands_and_bad_inputs() {
     expect(&mut q, "solve 1e999 0 0 0", "err bad-number:");
     expect(&mut q, "solve -1 0 0 0", "err usage:");
     expect(&mut q, "solve 1e9 0 0 0", "err limit:");
-    let r = q.send(b"\xff\xfe\x80garbage\r\n", 1);
+    let r = send(&mut q, b"\xff\xfe\x80garbage\r\n", 1);
     assert!(r[0].starts_with("err unknown:"), "{r:?}");
     let long = format!("{}\n", "x".repeat(400));
-    let r = q.send(long.as_bytes(), 1);
+    let r = send(&mut q, long.as_bytes(), 1);
     assert_eq!(r.len(), 1);
     assert!(r[0].starts_with("err too-long:"), "{r:?}");
     // CR, LF, CRLF: one reply each; blank lines none
-    let r = q.send(b"version\rversion\nversion\r\n\r\n\n", 3);
+    let r = send(&mut q, b"version\rversion\nversion\r\n\r\n\n", 3);
     assert_eq!(r.len(), 3, "{r:?}");
     expect(&mut q, "volt 1 100", "err not-armed:");
     expect(&mut q, "force 0.5", "err not-armed:");
@@ -179,6 +69,22 @@ fn qemu_console_commands_and_bad_inputs() {
     let s = expect(&mut q, "status", "ok armed=1 ");
     assert!(s.contains(" volts=1000.0,1000.0,1000.0 ") && s.contains(" enable=1"), "{s}");
     expect(&mut q, "force 0.5", "ok force=0.500 cable=");
+    if img.has_inverse() {
+        pose_and_contact(&mut q);
+    } else {
+        expect(&mut q, "pose 10 10 10", "err unknown: pose is not in this build");
+        expect(&mut q, "contact 1 1.5", "err unknown: contact is not in this build");
+    }
+    expect(&mut q, "stop", "ok stopped");
+    let s = expect(&mut q, "status", "ok armed=0 force=0.000 volts=0.0,0.0,0.0 ");
+    assert!(s.contains(" servo=0.00 ") && s.contains(" enable=0"), "{s}");
+    expect(&mut q, "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "ok cal=1.540745,6.245597,1.066900,1.154625,0.718260,0.054631,5.254023,-1.756332");
+    expect(&mut q, "preset paper", "ok preset=paper");
+    q.finish();
+}
+
+/// Armed: `pose` at a posture of the host's model, then `contact`.
+fn pose_and_contact(q: &mut Qemu) {
     // pose (the inverse model on the target, armed: it sets the tension and the voltages) at a
     // posture of the host's model; the answer agrees with the host's inverse
     let f = finger_model::Finger::new(finger_model::Params::<f32>::default()).unwrap();
@@ -189,28 +95,31 @@ fn qemu_console_commands_and_bad_inputs() {
     let table = finger_model::inverse::BranchTable::new(&f, &opts).unwrap();
     let rad = deg.map(|d| (d * std::f64::consts::PI / 180.0) as f32);
     let want = finger_model::inverse::solve_pose_tabled(&table, &rad, None).unwrap();
-    let r = expect(&mut q, &format!("pose {} {} {}", deg[0], deg[1], deg[2]), "ok force=");
+    let r = expect(q, &format!("pose {} {} {}", deg[0], deg[1], deg[2]), "ok force=");
     let force: f64 = r.split_whitespace().find_map(|w| w.strip_prefix("force=")).unwrap().parse().unwrap();
     assert!((force - want.tension as f64).abs() < 2e-3, "{r} vs {want:?}");
-    let s = expect(&mut q, "status", "ok armed=1 ");
+    let s = expect(q, "status", "ok armed=1 ");
     assert!(s.contains(&format!(" force={:.3} ", want.tension)), "{s}");
-    expect(&mut q, "pose 20 5 5", "err unreachable:");
-    expect(&mut q, "contact 1 1.5", "ok fx=");
-    expect(&mut q, "stop", "ok stopped");
-    let s = expect(&mut q, "status", "ok armed=0 force=0.000 volts=0.0,0.0,0.0 ");
-    assert!(s.contains(" servo=0.00 ") && s.contains(" enable=0"), "{s}");
-    expect(&mut q, "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "ok cal=1.540745,6.245597,1.066900,1.154625,0.718260,0.054631,5.254023,-1.756332");
-    expect(&mut q, "preset paper", "ok preset=paper");
-    q.finish();
+    expect(q, "pose 20 5 5", "err unreachable:");
+    expect(q, "contact 1 1.5", "ok fx=");
 }
 
 #[test]
 fn qemu_defmt_log_decodes() {
-    let mut q = Qemu::boot();
+    defmt_log_decodes(Image::M4f);
+}
+
+#[test]
+fn qemu_defmt_log_decodes_m3() {
+    defmt_log_decodes(Image::M3);
+}
+
+fn defmt_log_decodes(img: Image) {
+    let mut q = Qemu::boot_on(img, "defmt");
     expect(&mut q, "version", "ok version=");
-    let bytes = q.finish();
+    let bytes = q.finish_defmt();
     assert!(!bytes.is_empty(), "no defmt bytes on QEMU's stdout (semihosting)");
-    let elf = std::fs::read(image()).unwrap();
+    let elf = std::fs::read(img.elf()).unwrap();
     let table = defmt_decoder::Table::parse(&elf).unwrap().expect("the image has a .defmt table");
     let mut dec = table.new_stream_decoder();
     dec.received(&bytes);
@@ -219,7 +128,7 @@ fn qemu_defmt_log_decodes() {
         messages.push(frame.display_message().to_string());
     }
     assert!(
-        messages.iter().any(|m| m.contains("finger-fw") && m.contains("up") && m.contains("qemu-netduinoplus2")),
+        messages.iter().any(|m| m.contains("finger-fw") && m.contains("up") && m.contains(img.board())),
         "decoded: {messages:?}"
     );
 }

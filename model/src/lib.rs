@@ -22,6 +22,8 @@ pub mod de;
 pub mod dual;
 pub mod error;
 pub mod finger;
+#[cfg(feature = "fixed")]
+pub mod fixed;
 pub mod hinge;
 pub mod inverse;
 pub mod mat3;

@@ -66,17 +66,28 @@ const SETS: &[(&str, &str, &str)] = &[
     ("forward, no defmt", "qemu,de", "console, DE"),
     ("forward, no DE, no defmt", "qemu", "console, finger without stacks (layers = 0)"),
 ];
+/// The Cortex-M3 image (thumbv7m-none-eabi, QEMU netduino2): its RAM includes its 20 KiB stack
+/// section (memory-m3.x).
+const M3_SET: (&str, &str, &str) = ("Cortex-M3 (thumbv7m, netduino2)", "m3", "console, defmt, DE; soft float; RAM with its 20 KiB stack (budget 64 KiB / 24 KiB)");
 
 fn build(features: &str) -> PathBuf {
+    build_for(features, None)
+}
+
+/// Build with `features` for `target` (None: the package's default, the F405's).
+fn build_for(features: &str, target: Option<&str>) -> PathBuf {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let st = Command::new(cargo)
-        .current_dir(root())
-        .env("CARGO_TARGET_DIR", target_dir())
-        .args(["build", "--release", "--quiet", "--bin", "finger-fw", "--no-default-features", "--features", features])
-        .status()
-        .expect("cargo");
+    let mut c = Command::new(cargo);
+    c.current_dir(root()).env("CARGO_TARGET_DIR", target_dir()).args(["build", "--release", "--quiet", "--bin", "finger-fw", "--no-default-features", "--features", features]);
+    if let Some(t) = target {
+        c.args(["--target", t]);
+    }
+    let st = c.status().expect("cargo");
     assert!(st.success(), "firmware build with features {features} failed");
-    default_elf()
+    match target {
+        Some(t) => target_dir().join(t).join("release/finger-fw"),
+        None => default_elf(),
+    }
 }
 
 fn table() -> String {
@@ -88,6 +99,10 @@ fn table() -> String {
         eprintln!("{name}: flash={flash} ram={ram}");
         t.push_str(&format!("| {name} | `{feats}` | {holds} | {flash} | {:.1} | {ram} |\n", flash as f64 / 1024.0));
     }
+    let (name, feats, holds) = M3_SET;
+    let (flash, ram) = sizes(&read(&build_for(feats, Some("thumbv7m-none-eabi"))));
+    eprintln!("{name}: flash={flash} ram={ram}");
+    t.push_str(&format!("| {name} | `{feats}` | {holds} | {flash} | {:.1} | {ram} |\n", flash as f64 / 1024.0));
     build("qemu,full"); // leave the default image in place
     t
 }
@@ -122,8 +137,12 @@ fn main() {
     let data = read(&path);
     let (flash, ram) = sizes(&data);
     println!("{}", path.display());
-    println!("flash={flash} bytes ({:.1} KiB, target <= 64 KiB)", flash as f64 / 1024.0);
-    println!("ram={ram} bytes static ({:.1} KiB, target <= 16 KiB)", ram as f64 / 1024.0);
+    // the Cortex-M3 image's budget is its linker script's (memory-m3.x): its RAM sections
+    // include the 8 KiB stack
+    let m3 = path.to_string_lossy().contains("thumbv7m-none-eabi");
+    let (fb, rb) = if m3 { ("M3 budget 64 KiB", "with the stack; M3 budget 24 KiB") } else { ("target <= 64 KiB", "target <= 16 KiB") };
+    println!("flash={flash} bytes ({:.1} KiB, {fb})", flash as f64 / 1024.0);
+    println!("ram={ram} bytes static ({:.1} KiB, {rb})", ram as f64 / 1024.0);
     if nsym > 0 {
         let elf = object::File::parse(&*data).expect("ELF");
         let mut syms: Vec<(u64, String)> = elf

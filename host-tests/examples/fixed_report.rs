@@ -1,0 +1,259 @@
+//! Writes docs/fixed-point.md's measured sections (issue 14): the bench image `fixed`
+//! (bench/src/bin/fixed.rs) built for the Cortex-M3 (thumbv7m-none-eabi, soft float) and run
+//! in QEMU mps2-an385 with `-icount`: per bench scene and model (the scene's pinned model and
+//! the default one), the instructions of the f32 forward solve and of the fixed-point one, and
+//! each one's errors against the host's f64 reference; and the Cortex-M3 firmware image's
+//! flash and RAM. `cd host-tests && cargo run --release --example fixed_report`
+use finger_model::{Finger, Method, Params};
+use host_tests::perf::{build, calibration, elf_sizes, run_qemu, scenes, M3};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::process::Command;
+
+/// One line `F <scene> <model> <scalar> ok|err ...` of the image.
+struct Line {
+    ok: Option<([f64; 2], [f64; 3], f64, u32)>,
+    code: String,
+    instr: f64,
+    setup: f64,
+}
+
+fn reference(p: Params<f64>, s: &scenes::Scene) -> Result<([f64; 2], [f64; 3], f64), finger_model::Error> {
+    let f = Finger::new(p)?;
+    let sol = f.solve(s.tension, &s.volts, Method::Converged { tol: 1e-12, max_iter: 400 })?;
+    let (t, a) = (sol.tip(), sol.joint_angles());
+    Ok(([t.x, t.y], [a[0], a[1], a[2]], sol.cable_excursion))
+}
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let elf = build("fixed", M3, "de,fast-trig,model-fixed", "m3-fixed-model").unwrap_or_else(|e| panic!("{e}"));
+    let out = run_qemu(&elf, "mps2-an385", 4).unwrap_or_else(|e| panic!("{e}"));
+    let mut per_instr = None;
+    let mut lines: BTreeMap<(usize, String, String), Line> = BTreeMap::new();
+    // `I pose<i> <scalar> ok|err <ticks> <setup> <V1> <V2> <V3>|<code>`
+    let mut inv_lines: BTreeMap<(usize, String), (f64, f64, Result<[f64; 3], String>)> = BTreeMap::new();
+    let order: Vec<&str> = scenes::SCENES.iter().map(|s| s.name).collect();
+    for l in out.lines() {
+        let f: Vec<&str> = l.split_whitespace().collect();
+        match f.first() {
+            Some(&"CAL") => per_instr = Some(calibration(&f).unwrap()),
+            Some(&"F") if f.len() >= 8 => {
+                let (tpi, overhead) = per_instr.expect("CAL first");
+                let num = |i: usize| f[i].parse::<f64>().unwrap();
+                let instr = ((num(5) - overhead) / tpi).max(0.0);
+                let setup = ((num(6) - overhead) / tpi).max(0.0);
+                let ok = (f[4] == "ok").then(|| ([num(7), num(8)], [num(9), num(10), num(11)], num(12), f[13].parse().unwrap()));
+                let code = if f[4] == "ok" { String::new() } else { f[7].to_string() };
+                let k = order.iter().position(|&n| n == f[1]).expect("scene");
+                lines.insert((k, f[2].to_string(), f[3].to_string()), Line { ok, code, instr, setup });
+            }
+            Some(&"I") if f.len() >= 8 => {
+                let (tpi, overhead) = per_instr.expect("CAL first");
+                let num = |i: usize| f[i].parse::<f64>().unwrap();
+                let i: usize = f[1].trim_start_matches("pose").parse().unwrap();
+                let r = if f[3] == "ok" { Ok([num(6), num(7), num(8)]) } else { Err(f[6].to_string()) };
+                inv_lines.insert((i, f[2].to_string()), (((num(4) - overhead) / tpi).max(0.0), ((num(5) - overhead) / tpi).max(0.0), r));
+            }
+            Some(&"PANIC") => panic!("bench image: {l}"),
+            _ => {}
+        }
+    }
+    assert!(out.contains("END"), "the bench image did not finish:\n{out}");
+
+    let mut t = String::new();
+    let _ = writeln!(t, "| scene | model | f32 instr | f32 same-algorithm instr | fixed instr | f32 / fixed | same / fixed | tip err f32 (mm) | tip err fixed (mm) | joint err fixed (deg) | excursion err fixed (mm) | fixed set-up instr |");
+    let _ = writeln!(t, "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let (mut worst_tip, mut worst_joint, mut worst_exc, mut worst_tip_default) = (0f64, 0f64, 0f64, 0f64);
+    let mut ratios = Vec::new();
+    let mut same_ratios = Vec::new();
+    let mut refusals = Vec::new();
+    for (k, s) in scenes::SCENES.iter().enumerate() {
+        for model in ["pinned", "default"] {
+            let p = if model == "pinned" { scenes::params(s) } else { Params { layers: s.layers, ..Params::default() } };
+            let (Some(a), Some(b)) = (lines.get(&(k, model.into(), "f32".into())), lines.get(&(k, model.into(), "fixed".into()))) else {
+                continue;
+            };
+            let r = reference(p, s);
+            let err = |l: &Line| match (&l.ok, &r) {
+                (Some((tip, ang, exc, _)), Ok((rt, ra, re))) => {
+                    let dt = ((tip[0] - rt[0]).powi(2) + (tip[1] - rt[1]).powi(2)).sqrt();
+                    let da = (0..3).map(|i| (ang[i] - ra[i]).abs().to_degrees()).fold(0.0, f64::max);
+                    Some((dt, da, (exc - re).abs()))
+                }
+                _ => None,
+            };
+            let show = |l: &Line, e: Option<(f64, f64, f64)>, i: usize| match (e, &l.ok) {
+                (Some(e), _) => format!("{:.1e}", [e.0, e.1, e.2][i]),
+                (None, None) => format!("err {}", l.code),
+                (None, Some(_)) => "(f64: err)".into(),
+            };
+            let (ea, eb) = (err(a), err(b));
+            if let Some((dt, da, de)) = eb {
+                worst_tip = worst_tip.max(dt);
+                worst_joint = worst_joint.max(da);
+                worst_exc = worst_exc.max(de);
+                if model == "default" {
+                    worst_tip_default = worst_tip_default.max(dt);
+                }
+            }
+            let ratio = if a.ok.is_some() && b.ok.is_some() { a.instr / b.instr } else { f64::NAN };
+            let same = lines.get(&(k, model.into(), "f32-same".into()));
+            let same_ratio = match same {
+                Some(c) if c.ok.is_some() && b.ok.is_some() => c.instr / b.instr,
+                _ => f64::NAN,
+            };
+            if same_ratio.is_finite() {
+                same_ratios.push(same_ratio);
+            }
+            if ratio.is_finite() {
+                ratios.push(ratio);
+            } else {
+                refusals.push(format!("`{}` ({model}): f32 {}, fixed {}, f64 {}", s.name, if a.ok.is_some() { "ok".into() } else { format!("err {}", a.code) }, if b.ok.is_some() { "ok".into() } else { format!("err {}", b.code) }, match &r { Ok(_) => "ok".to_string(), Err(e) => format!("err {}", e.code()) }));
+            }
+            let _ = writeln!(
+                t,
+                "| {} | {model} | {:.0} | {} | {:.0} | {} | {} | {} | {} | {} | {} | {:.0} |",
+                s.name,
+                a.instr,
+                match same {
+                    Some(c) if c.ok.is_some() => format!("{:.0}", c.instr),
+                    Some(c) => format!("err {}", c.code),
+                    None => "-".into(),
+                },
+                b.instr,
+                if ratio.is_finite() { format!("{ratio:.2}") } else { "-".into() },
+                if same_ratio.is_finite() { format!("{same_ratio:.2}") } else { "-".into() },
+                show(a, ea, 0),
+                show(b, eb, 0),
+                show(b, eb, 1),
+                show(b, eb, 2),
+                b.setup
+            );
+        }
+    }
+    ratios.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    let (rmin, rmed) = (ratios[0], ratios[ratios.len() / 2]);
+    same_ratios.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    let (smin, smed) = (same_ratios[0], same_ratios[same_ratios.len() / 2]);
+    let default_same: Vec<f64> = scenes::SCENES
+        .iter()
+        .enumerate()
+        .filter_map(|(k, _)| {
+            let c = lines.get(&(k, "default".into(), "f32-same".into()))?;
+            let b = lines.get(&(k, "default".into(), "fixed".into()))?;
+            (c.ok.is_some() && b.ok.is_some()).then(|| c.instr / b.instr)
+        })
+        .collect();
+    let dmin = default_same.iter().copied().fold(f64::INFINITY, f64::min);
+
+    // round trip: the f64 inverse (posture -> tension, voltages), then the fixed-point forward
+    let f = Finger::new(Params { layers: 4, ..Params::default() }).unwrap();
+    let (mut rt_worst, mut rt_n, mut rt_refused) = (0f64, 0, 0);
+    // postures the finger reaches: forward solves at these (tension, voltages)
+    for (p, v) in [(0.5, [0.0; 3]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 0.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3]), (2.0, [0.0, 4000.0, 8000.0])] {
+        let Ok(fw) = f.solve(p as f64, &v, Method::converged()) else {
+            rt_refused += 1;
+            continue;
+        };
+        let deg: Vec<f64> = fw.joint_angle[..3].iter().map(|a: &f64| a.to_degrees()).collect();
+        let rad: Vec<f64> = deg.iter().map(|d| d.to_radians()).collect();
+        let Ok(inv) = finger_model::solve_pose(&f, &rad, None) else {
+            rt_refused += 1;
+            continue;
+        };
+        let ff = finger_model::fixed::FixedFinger::new(&f, &inv.volts[..3]).unwrap();
+        let sol = ff.solve(finger_model::fixed::q::Nt::from_f64(inv.tension)).unwrap();
+        for k in 0..3 {
+            rt_worst = rt_worst.max((sol.joint_angle[k].to_f64().to_degrees() - deg[k]).abs());
+        }
+        rt_n += 1;
+    }
+
+    // the inverse on the M3: each answer's round trip through the f64 forward
+    const POSES: &[(f64, [f64; 3])] = &[(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])];
+    let mut it = String::new();
+    let _ = writeln!(it, "| posture of (P, V) | fixed instr | f32 `solve_pose` instr | f32 / fixed | round trip fixed (deg) | round trip f32 (deg) |");
+    let _ = writeln!(it, "| --- | ---: | ---: | ---: | ---: | ---: |");
+    let (mut inv_worst, mut inv_n, mut inv_setup) = (0f64, 0, 0f64);
+    for (i, (p, v)) in POSES.iter().enumerate() {
+        let want = f.solve(*p, v, Method::converged()).unwrap();
+        let trip = |r: &Result<[f64; 3], String>| -> Result<f64, String> {
+            let vs = r.clone()?;
+            let back = f.solve(*p, &vs, Method::converged()).map_err(|e| e.code().to_string())?;
+            Ok((0..3).map(|k| (back.joint_angle[k] - want.joint_angle[k]).abs().to_degrees()).fold(0.0, f64::max))
+        };
+        let (Some(a), Some(b)) = (inv_lines.get(&(i, "fixed".into())), inv_lines.get(&(i, "f32".into()))) else { continue };
+        let (ta, tb) = (trip(&a.2), trip(&b.2));
+        if let Ok(e) = ta {
+            inv_worst = inv_worst.max(e);
+            inv_n += 1;
+        }
+        inv_setup = a.1;
+        let show = |t: &Result<f64, String>| match t {
+            Ok(e) => format!("{e:.1e}"),
+            Err(c) => format!("err {c}"),
+        };
+        let _ = writeln!(it, "| {p} N, {:?} V | {:.0} | {:.0} | {:.2} | {} | {} |", v, a.0, b.0, b.0 / a.0, show(&ta), show(&tb));
+    }
+
+    // the Cortex-M3 firmware image
+    let st = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .current_dir(&root)
+        .args(["build", "--release", "--quiet", "--target", "thumbv7m-none-eabi", "--no-default-features", "--features", "m3"])
+        .status()
+        .expect("cargo");
+    assert!(st.success(), "M3 firmware build failed");
+    let fw = std::env::var_os("CARGO_TARGET_DIR").map(std::path::PathBuf::from).unwrap_or_else(|| root.join("target")).join("thumbv7m-none-eabi/release/finger-fw");
+    let (flash, ram) = elf_sizes(&fw).unwrap();
+    // the M3 image's stack high-water over the console's commands (stack painted at reset;
+    // memory-m3.x: the 20 KiB stack is [0x20000000, 0x20005000))
+    let mut q = host_tests::qemu::Qemu::boot_with(host_tests::qemu::Image::M3.paint_elf(), "stack", &[]);
+    let mut worst_stack: Vec<(String, u64)> = Vec::new();
+    let mut prev = 0;
+    for c in ["version", "status", "limits", "help", "param", "solve 0.5 0 1000 2000", "solve 1 0 9000 9000", "solve 7 0 0 0", "arm", "volt all 1000", "wait 0.6", "force 0.5", "force 2", "volt 1 9000", "wait 5", "status", "stop", "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "solve 1 0 5000 0", "preset paper", "solve 1 0 1000 1000"] {
+        let r = q.cmd(c);
+        assert!(r.starts_with("ok"), "{c}: {r}");
+        let hw = q.stack_high_water(0x2000_0000, 0x2000_5000);
+        if hw > prev {
+            worst_stack.push((c.to_string(), hw));
+            prev = hw;
+        }
+    }
+    q.finish();
+    let stack = prev;
+
+    let mut m = String::new();
+    let _ = writeln!(m, "QEMU mps2-an385 (Cortex-M3, no FPU), `-icount shift=4`, instructions from SysTick calibrated on a");
+    let _ = writeln!(m, "loop of known length (bench/src/cycles.rs). f32: the model's converged forward solve in soft float");
+    let _ = writeln!(m, "(`Finger::solve_with`, dual-number Newton, `fast-trig`); same algorithm: the fixed-point solve's steps in f32");
+    let _ = writeln!(m, "(bench/src/twin.rs; its stop at the f32 model's resolution); fixed: `finger_model::fixed`.");
+    let _ = writeln!(m, "Errors against the host's f64 reference (converged to 1e-12 mm). Set-up: `FixedFinger::new` (the");
+    let _ = writeln!(m, "compliances in f32, then scaled), once per parameter or voltage change.\n");
+    let _ = writeln!(m, "| target (issue 14) | measured |");
+    let _ = writeln!(m, "| --- | --- |");
+    let _ = writeln!(m, "| forward tip within 1e-3 mm of f64, every bench scene, default model | worst {worst_tip_default:.1e} mm (all models: {worst_tip:.1e} mm) |");
+    let _ = writeln!(m, "| >= 3x fewer M3 instructions than soft-float f32 running the same algorithm | same algorithm in f32 (bench/src/twin.rs) / fixed: min {smin:.2}, median {smed:.2}; default model min {dmin:.2} |");
+    let _ = writeln!(m, "| (against the model's own f32 solve, the firmware's) | f32 `Finger::solve_with` / fixed: min {rmin:.2}, median {rmed:.2} |");
+    let _ = writeln!(m, "| inverse round trip within 0.05 deg | the fixed-point inverse at a given tension (`FixedInverse`, on the M3) through the f64 forward: worst {inv_worst:.1e} deg over {inv_n} postures (table below); the f64 inverse through the fixed-point forward (host): worst {rt_worst:.1e} deg over {rt_n} postures ({rt_refused} refused) |");
+    let _ = writeln!(m, "| image with console and `pose` in 64 KiB flash / 20 KiB RAM | M3 image (console, DE, defmt; no `pose`, f32 model): flash {flash} bytes ({:.1} KiB); static RAM {ram} bytes + the 20 KiB stack = {:.1} KiB (memory-m3.x: 24 KiB; docs/firmware.md \"Cortex-M3 image\"); stack high-water {stack} bytes ({:.1} KiB, the f32 model's solves) |", flash as f64 / 1024.0, (ram + 20 * 1024) as f64 / 1024.0, stack as f64 / 1024.0);
+    let _ = writeln!(m, "\nWorst fixed-point errors, all scenes both models: joint angle {worst_joint:.1e} deg, cable excursion {worst_exc:.1e} mm.\n");
+    let _ = writeln!(m, "The M3 image's stack, painted at reset and read back through QEMU's monitor after each console command (the commands that deepened it, and how deep): {}.\n", worst_stack.iter().map(|(c, b)| format!("`{c}` {b} bytes")).collect::<Vec<_>>().join(", "));
+    m.push_str(&t);
+    let _ = writeln!(m, "\nThe inverse at a given tension on the M3 (default model, stacks): the postures of forward solves at (P, V); each answer's voltages through the host's f64 forward. The fixed-point inverse's set-up (its compliance table, in f32, once per parameter change): {inv_setup:.0} instructions.\n");
+    m.push_str(&it);
+    if !refusals.is_empty() {
+        let _ = writeln!(m, "\nRefused (typed errors, no numbers): {}.", refusals.join("; "));
+    }
+
+    let doc_path = root.join("docs/fixed-point.md");
+    let doc = std::fs::read_to_string(&doc_path).unwrap_or_default();
+    let (b, e) = ("<!-- fixed-report:begin (cd host-tests && cargo run --release --example fixed_report) -->", "<!-- fixed-report:end -->");
+    let new = match (doc.find(b), doc.find(e)) {
+        (Some(i), Some(j)) => format!("{}{b}\n{m}{}", &doc[..i], &doc[j..]),
+        _ => format!("{doc}\n## Measured\n{b}\n{m}{e}\n"),
+    };
+    std::fs::write(&doc_path, new).unwrap();
+    println!("wrote {}", doc_path.display());
+}

@@ -1,0 +1,450 @@
+//! The fixed-point forward solve under tension alone: per joint, Newton on the guide-hole
+//! position with the march of `Finger::march_t` (MODEL.md "Equilibrium"), then the chain of
+//! links and the cable excursion. Same equations as the float model, Q formats of [`q`].
+use super::q::{narrow, shr_round, Mm, Nmm, Nt, Q, Rad, Scaled, Unit};
+use super::trig::{hypot, hypot_inv, sin_cos};
+use crate::error::Error;
+use crate::finger::{uniform_beam_compliance, Finger};
+use crate::params::{MAX_JOINTS, MAX_SUB};
+use crate::real::Real;
+
+/// Accumulator frac of the compliance products (sums of q = C w before one shift).
+const ACC: i32 = 40;
+/// Newton: converged when both hole residuals are within this many Q22 units (~4e-6 mm).
+const TOL_RAW: i32 = 16;
+const MAX_ITER: u32 = 30;
+/// Forward-difference step of the 2x2 Jacobian, Q22 units (2^-8 mm).
+const H_LOG2: i32 = 14;
+
+/// A compliance matrix scaled row by row, for a wrench of ([`Nt`], [`Nt`], [`Nmm`]): row i's
+/// sum `sum_j m[i][j] w_j` (raw words, 32x32 -> 64) is `q_i 2^t[i]`, with `t[i]` the largest
+/// that keeps every `|m[i][j]| < 2^30` (the tiny entries keep the row's absolute resolution).
+/// `d02`, `d12`: entries C02, C12 on their own scale (the moment arm's correction).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct CMat {
+    pub(super) m: [[i32; 3]; 3],
+    pub(super) t: [i32; 3],
+    pub(super) d02: Scaled,
+    pub(super) d12: Scaled,
+}
+
+/// The wrench's formats (frac bits) by column.
+const W_FRAC: [i32; 3] = [Nt::FRAC, Nt::FRAC, Nmm::FRAC];
+
+/// (mantissa in [2^52, 2^53), binary exponent e with |x| = mant 2^(e - 52)); None for 0,
+/// subnormals, inf, NaN. Integer operations on the bits.
+fn split(x: f64) -> Option<(i64, i32, bool)> {
+    let bits = x.to_bits();
+    let exp = ((bits >> 52) & 0x7ff) as i32;
+    if exp == 0 || exp == 0x7ff {
+        return None;
+    }
+    Some((((bits & ((1u64 << 52) - 1)) | (1u64 << 52)) as i64, exp - 1023, bits >> 63 != 0))
+}
+
+impl CMat {
+    fn new(c: &[[f64; 3]; 3]) -> CMat {
+        let mut o = CMat { d02: Scaled::from_f64(c[0][2]), d12: Scaled::from_f64(c[1][2]), ..CMat::default() };
+        for (i, ci) in c.iter().enumerate() {
+            // |v| < 2^(e+1): |v| 2^(t - F_j) < 2^30 for t <= 29 - e + F_j
+            let t = ci.iter().zip(W_FRAC).filter_map(|(&v, fr)| split(v).map(|(_, e, _)| 29 - e + fr)).min().unwrap_or(0);
+            o.t[i] = t;
+            for (j, (&v, fr)) in ci.iter().zip(W_FRAC).enumerate() {
+                if let Some((mant, e, neg)) = split(v) {
+                    // v 2^(t - F_j) = mant 2^(e - 52 + t - F_j)
+                    let v = shr_round(mant, 52 - e - t + fr) as i32;
+                    o.m[i][j] = if neg { -v } else { v };
+                }
+            }
+        }
+        o
+    }
+}
+
+/// `-J^-1 r` for a Q30 Jacobian and a Q22 residual, in Q22; `None` when singular or out of
+/// range.
+fn newton_step(j: &[[i64; 2]; 2], r: [Mm; 2]) -> Option<(i64, i64)> {
+    let det = j[0][0].checked_mul(j[1][1])?.checked_sub(j[0][1].checked_mul(j[1][0])?)?;
+    let det30 = shr_round(det, 30);
+    if det30 == 0 {
+        return None;
+    }
+    let (r0, r1) = (r[0].0 as i64, r[1].0 as i64);
+    let n0 = j[1][1].checked_mul(r0)?.checked_sub(j[0][1].checked_mul(r1)?)?;
+    let n1 = j[0][0].checked_mul(r1)?.checked_sub(j[1][0].checked_mul(r0)?)?;
+    Some((-(n0.checked_div(det30)?), -(n1.checked_div(det30)?)))
+}
+
+/// A planar pose: x, y (mm), angle (rad).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FixedPose {
+    pub x: Mm,
+    pub y: Mm,
+    pub theta: Rad,
+}
+
+impl FixedPose {
+    /// This pose moved by (dx, dy, dθ) given in its own frame.
+    fn then(&self, dx: Mm, dy: Mm, dtheta: Rad) -> Self {
+        let (s, c) = sin_cos(self.theta);
+        FixedPose {
+            x: self.x + narrow(c.wide(dx) - s.wide(dy), 52),
+            y: self.y + narrow(s.wide(dx) + c.wide(dy), 52),
+            theta: self.theta + dtheta,
+        }
+    }
+}
+
+/// A finger prepared for fixed-point solves at one set of channel voltages.
+#[derive(Clone, Debug)]
+pub struct FixedFinger {
+    pub(super) n: usize,
+    pub(super) m: usize,
+    e: Mm,
+    span_floor: Mm,
+    sub_len: Mm,
+    link_len: Mm,
+    hinge_len: Mm,
+    c: [[CMat; MAX_SUB]; MAX_JOINTS],
+    /// Joint k's compliances are joint k-1's (its state is the same).
+    same_as_prev: [bool; MAX_JOINTS],
+    link_c: Option<CMat>,
+}
+
+/// The converged posture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FixedSolution {
+    pub n: usize,
+    /// Joint angles (hinge and link rotation), rad.
+    pub joint_angle: [Rad; MAX_JOINTS],
+    /// Node poses 0..=n (node n the tip).
+    pub nodes: [FixedPose; MAX_JOINTS + 1],
+    /// Cable excursion (hinge length minus span, summed), mm.
+    pub cable_excursion: Mm,
+    /// Newton iterations, all joints.
+    pub iterations: u32,
+}
+
+impl FixedSolution {
+    pub fn tip(&self) -> FixedPose {
+        self.nodes[self.n]
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(super) enum MarchError {
+    Contact,
+    Singular,
+}
+
+pub(super) fn cmat<R: Real>(m: &[[R; 3]; 3]) -> CMat {
+    let mut v = [[0f64; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            v[i][j] = m[i][j].to_f64();
+        }
+    }
+    CMat::new(&v)
+}
+
+/// `C (f0, f1, m)` row `i` as a 64-bit sum at frac `cm.t[i]` (three products, no shift).
+#[inline(always)]
+fn row(cm: &CMat, i: usize, f0: Nt, f1: Nt, m: Nmm) -> i64 {
+    (cm.m[i][0] as i64 * f0.0 as i64).saturating_add(cm.m[i][1] as i64 * f1.0 as i64).saturating_add(cm.m[i][2] as i64 * m.0 as i64)
+}
+
+impl FixedFinger {
+    /// Set-up (float, once per parameter or voltage change): the finger's compliances at
+    /// `volts`, each entry scaled to its own exponent; lengths to Q22.
+    pub fn new<R: Real>(f: &Finger<R>, volts: &[R]) -> Result<Self, Error> {
+        let p = f.params();
+        let comp = f.compliances(volts)?;
+        let (n, m) = (p.n, p.m);
+        let mut c = [[CMat::default(); MAX_SUB]; MAX_JOINTS];
+        let mut same_as_prev = [false; MAX_JOINTS];
+        for k in 0..n {
+            for (cj, src) in c[k].iter_mut().zip(&comp.c[k][..m]) {
+                *cj = cmat(src);
+            }
+            same_as_prev[k] = k > 0 && comp.c[k][..m] == comp.c[k - 1][..m];
+        }
+        let hinge_len = p.hinge_len();
+        let link_len = p.l - hinge_len;
+        let link_c = if p.flex_links { Some(cmat(&uniform_beam_compliance(p.hinge_modulus(), p.w, p.b, link_len))) } else { None };
+        let mm = |x: R| Mm::from_f64(x.to_f64());
+        Ok(FixedFinger {
+            n,
+            m,
+            e: mm(p.e),
+            span_floor: mm(p.span_floor),
+            sub_len: mm(hinge_len / R::from_u32(m as u32)),
+            link_len: mm(link_len),
+            hinge_len: mm(hinge_len),
+            c,
+            same_as_prev,
+            link_c,
+        })
+    }
+
+    /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.
+    pub(super) fn march(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2]) -> Result<(FixedPose, [Mm; 2]), MarchError> {
+        let e = self.e;
+        let span_v = [b[0], b[1] - e];
+        // the span and its reciprocal (no division), then the direction by two products
+        let (span, inv) = hypot_inv(span_v[0], span_v[1]).ok_or(MarchError::Contact)?;
+        if span < self.span_floor {
+            return Err(MarchError::Contact);
+        }
+        let dir: [Unit; 2] = [narrow(span_v[0].wide(inv), 48), narrow(span_v[1].wide(inv), 48)];
+        let fc: [Nt; 2] = [-dir[0].mul_q(tension), -dir[1].mul_q(tension)];
+        let mut pose = FixedPose::default();
+        let (mut s, mut co) = (Unit::ZERO, Q::<30>(1 << 30));
+        for cj in c[..self.m].iter() {
+            let d0 = [pose.x + co.mul_q(self.sub_len), pose.y + s.mul_q(self.sub_len)];
+            // moment of the cable force about the sub-element's (undeflected) end
+            let m0: Nmm = narrow((b[0] - d0[0]).wide(fc[1]).saturating_sub((b[1] - d0[1]).wide(fc[0])), 44);
+            // the force in the sub-element's frame
+            let f: [Nt; 2] = [narrow(co.wide(fc[0]) + s.wide(fc[1]), 52), narrow(co.wide(fc[1]) - s.wide(fc[0]), 52)];
+            let q0 = [row(cj, 0, f[0], f[1], m0), row(cj, 1, f[0], f[1], m0), row(cj, 2, f[0], f[1], m0)];
+            // den = 1 + f_y C02 - f_x C12, at frac ACC
+            let den = (1i64 << ACC).saturating_add(cj.d02.wide(f[1], ACC)).saturating_sub(cj.d12.wide(f[0], ACC));
+            let den30 = shr_round(den, ACC - 30);
+            if den30.abs() <= (1 << 10) {
+                return Err(MarchError::Singular);
+            }
+            // the moment arm's own change: s = (-f_y q0x + f_x q0y) / den, N mm
+            let (q0x, q0y) = (shr_round(q0[0], cj.t[0] - 22), shr_round(q0[1], cj.t[1] - 22));
+            let num = shr_round((-(f[1].0 as i64)).saturating_mul(q0x).saturating_add((f[0].0 as i64).saturating_mul(q0y)), 44 - 48); // frac 48
+            let sm: Nmm = narrow(num.checked_div(den30).ok_or(MarchError::Singular)?, 18);
+            let qx: Mm = narrow(q0[0].saturating_add(cj.m[0][2] as i64 * sm.0 as i64), cj.t[0]);
+            let qy: Mm = narrow(q0[1].saturating_add(cj.m[1][2] as i64 * sm.0 as i64), cj.t[1]);
+            let qt: Rad = narrow(q0[2].saturating_add(cj.m[2][2] as i64 * sm.0 as i64), cj.t[2]);
+            let ax = qx + self.sub_len;
+            pose = FixedPose {
+                x: pose.x + narrow(co.wide(ax) - s.wide(qy), 52),
+                y: pose.y + narrow(s.wide(ax) + co.wide(qy), 52),
+                theta: pose.theta + qt,
+            };
+            (s, co) = sin_cos(pose.theta);
+        }
+        let hole = [pose.x - s.mul_q(e), pose.y + co.mul_q(e)];
+        if hole[0].is_sat() || hole[1].is_sat() || pose.theta.is_sat() || pose.x.is_sat() || pose.y.is_sat() {
+            return Err(MarchError::Singular);
+        }
+        Ok((pose, hole))
+    }
+
+    fn residual(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2]) -> Result<([Mm; 2], FixedPose, [Mm; 2]), MarchError> {
+        let (end, hole) = self.march(c, tension, b)?;
+        Ok(([b[0] - hole[0], b[1] - hole[1]], end, hole))
+    }
+
+    /// Damped Newton on joint k's hole position from `b`, forward-difference Jacobian kept
+    /// while it converges fast (chord steps: one march per step).
+    fn newton(&self, c: &[CMat; MAX_SUB], tension: Nt, mut b: [Mm; 2], iters: &mut u32) -> Result<(FixedPose, [Mm; 2]), MarchError> {
+        let (mut r, mut end, mut hole) = self.residual(c, tension, b)?;
+        let norm = |r: &[Mm; 2]| r[0].0.unsigned_abs().max(r[1].0.unsigned_abs());
+        // the Jacobian is kept (chord steps) while each step cuts the residual at least 4x
+        let mut jac = [[0i64; 2]; 2];
+        let mut fresh = false;
+        for _ in 0..MAX_ITER {
+            if norm(&r) <= TOL_RAW as u32 {
+                return Ok((end, hole));
+            }
+            *iters += 1;
+            if !fresh {
+                // J = I - d hole / d b, Q30 (the step is a power of two: exact scaling)
+                let h = Q::<22>(1 << H_LOG2);
+                for i in 0..2 {
+                    let mut bh = b;
+                    bh[i] = bh[i] + h;
+                    let (rh, ..) = self.residual(c, tension, bh)?;
+                    jac[0][i] = (rh[0].0 as i64 - r[0].0 as i64) << (30 - H_LOG2);
+                    jac[1][i] = (rh[1].0 as i64 - r[1].0 as i64) << (30 - H_LOG2);
+                }
+            }
+            // step = -J^-1 r (Q52 numerators over a Q30 determinant: Q22); an overflow is a
+            // divergent step (the caller continues in load)
+            let (d0, d1) = newton_step(&jac, r).ok_or(MarchError::Singular)?;
+            let mut lambda = 0;
+            loop {
+                let bt = [b[0] + narrow(d0 >> lambda, 22), b[1] + narrow(d1 >> lambda, 22)];
+                match self.residual(c, tension, bt) {
+                    Ok((rt, et, ht)) if norm(&rt) < norm(&r) || lambda >= 6 => {
+                        // a full step that cut the residual 4x keeps the Jacobian (chord)
+                        fresh = lambda == 0 && norm(&rt).saturating_mul(4) <= norm(&r);
+                        (b, r, end, hole) = (bt, rt, et, ht);
+                        break;
+                    }
+                    Err(e) if lambda >= 6 => return Err(e),
+                    _ => lambda += 1,
+                }
+            }
+        }
+        if norm(&r) <= TOL_RAW as u32 {
+            Ok((end, hole))
+        } else {
+            Err(MarchError::Singular)
+        }
+    }
+
+    /// A joint at the tension (from the hole `from` if given, else straight), by load continuation when Newton from the straight joint fails
+    /// (the increment doubles on success, halves on failure, down to P / 1024).
+    pub(super) fn joint(&self, c: &[CMat; MAX_SUB], tension: Nt, from: Option<[Mm; 2]>, iters: &mut u32) -> Result<(FixedPose, [Mm; 2]), MarchError> {
+        let straight = [self.hinge_len, self.e];
+        if let Some(b) = from {
+            if let Ok(st) = self.newton(c, tension, b, iters) {
+                return Ok(st);
+            }
+        }
+        let mut last = match self.newton(c, tension, straight, iters) {
+            Ok(st) => return Ok(st),
+            Err(e) => e,
+        };
+        let (total, min_step) = (tension.0 as i64, (tension.0 as i64 >> 10).max(1));
+        let (mut done, mut step, mut b) = (0i64, total / 8, straight);
+        while done < total {
+            let t = (done + step.max(min_step)).min(total);
+            match self.newton(c, Q(t as i32), b, iters) {
+                Ok((end, hole)) if t == total => return Ok((end, hole)),
+                Ok((_, hole)) => {
+                    (done, b, step) = (t, hole, step * 2);
+                }
+                Err(e) => {
+                    last = e;
+                    if step <= min_step {
+                        break;
+                    }
+                    step /= 2;
+                }
+            }
+        }
+        Err(last)
+    }
+
+    /// A link's deflection under tension alone: (-P, 0, P e) in its own frame.
+    pub(super) fn link_q(&self, tension: Nt) -> (Mm, Mm, Rad) {
+        match &self.link_c {
+            Some(lc) => {
+                let pe: Nmm = tension.mul_q(self.e);
+                let (w0, w1) = (-tension, Nt::ZERO);
+                (narrow(row(lc, 0, w0, w1, pe), lc.t[0]), narrow(row(lc, 1, w0, w1, pe), lc.t[1]), narrow(row(lc, 2, w0, w1, pe), lc.t[2]))
+            }
+            None => (Mm::ZERO, Mm::ZERO, Rad::ZERO),
+        }
+    }
+
+    /// The converged equilibrium under `tension` (N) alone.
+    pub fn solve(&self, tension: Nt) -> Result<FixedSolution, Error> {
+        if tension.0 < 0 || tension.is_sat() {
+            return Err(Error::Input { input: "tension", reason: "tension must be >= 0 and within the fixed-point range" });
+        }
+        let n = self.n;
+        let mut ends = [FixedPose::default(); MAX_JOINTS];
+        let mut holes = [[Mm::ZERO; 2]; MAX_JOINTS];
+        let mut iterations = 0;
+        for k in 0..n {
+            if self.same_as_prev[k] {
+                ends[k] = ends[k - 1];
+                holes[k] = holes[k - 1];
+                continue;
+            }
+            let (end, hole) = self.joint(&self.c[k], tension, None, &mut iterations).map_err(|e| match e {
+                MarchError::Contact => Error::Contact { joint: k + 1, tension: tension.to_f64() },
+                MarchError::Singular => Error::NotConverged { iterations, residual: f64::INFINITY },
+            })?;
+            ends[k] = end;
+            holes[k] = hole;
+        }
+        let link_q = self.link_q(tension);
+        let mut nodes = [FixedPose::default(); MAX_JOINTS + 1];
+        let mut joint_angle = [Rad::ZERO; MAX_JOINTS];
+        let mut excursion = Mm::ZERO;
+        for k in 0..n {
+            let e = ends[k];
+            let hinge_end = nodes[k].then(e.x, e.y, e.theta);
+            nodes[k + 1] = hinge_end.then(self.link_len + link_q.0, link_q.1, link_q.2);
+            joint_angle[k] = e.theta + link_q.2;
+            let span = hypot(holes[k][0], holes[k][1] - self.e);
+            if span < self.span_floor {
+                return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() });
+            }
+            excursion = excursion + (self.hinge_len - span);
+        }
+        if nodes[..=n].iter().any(|p| p.x.is_sat() || p.y.is_sat() || p.theta.is_sat()) {
+            return Err(Error::Singular { what: "fixed-point solution (out of range)" });
+        }
+        Ok(FixedSolution { n, joint_angle, nodes, cable_excursion: excursion, iterations })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Method, Params};
+
+    /// The bench's scenes' models (m = 1 rigid links, the paper's; and the default, m = 8 with
+    /// the plate modulus and flexible links), with and without stacks.
+    fn params() -> [Params<f64>; 4] {
+        let d = Params::default();
+        let paper = |layers| Params { layers, m: 1, plate: false, flex_links: false, ..Params::default() };
+        [paper(0), paper(4), d, Params { layers: 0, ..d }]
+    }
+
+    #[test]
+    fn tip_within_1e3_mm_of_the_f64_model() {
+        let mut worst = 0f64;
+        for p in params() {
+            let f = Finger::new(p).unwrap();
+            for volts in [[0.0; 3], [8000.0; 3], [9000.0, 5000.0, 0.0]] {
+                if p.layers == 0 && volts[0] > 0.0 {
+                    continue;
+                }
+                let ff = FixedFinger::new(&f, &volts).unwrap();
+                for t in [0.05, 0.2, 0.5, 1.0, 2.0, 7.0] {
+                    let want = f.solve(t, &volts, Method::converged()).unwrap();
+                    let got = ff.solve(Nt::from_f64(t)).unwrap();
+                    let (tw, tg) = (want.tip(), got.tip());
+                    let d = libm::hypot(tw.x - tg.x.to_f64(), tw.y - tg.y.to_f64());
+                    worst = worst.max(d);
+                    assert!(d < 1e-3, "m={} layers={} {volts:?} P={t}: tip {:?} vs {:?}", p.m, p.layers, (tw.x, tw.y), (tg.x.to_f64(), tg.y.to_f64()));
+                    for k in 0..3 {
+                        assert!((want.joint_angle[k] - got.joint_angle[k].to_f64()).abs() < 2e-5, "joint {k}");
+                    }
+                    assert!((want.cable_excursion - got.cable_excursion.to_f64()).abs() < 1e-4);
+                }
+            }
+        }
+        assert!(worst > 0.0);
+    }
+
+    #[test]
+    fn contact_and_bad_tension_are_typed_errors() {
+        let f = Finger::new(params()[0]).unwrap();
+        let ff = FixedFinger::new(&f, &[0.0; 3]).unwrap();
+        assert!(matches!(ff.solve(Nt::from_f64(-1.0)), Err(Error::Input { .. })));
+        assert!(ff.solve(Nt::from_f64(400.0)).is_err());
+    }
+}
+
+#[cfg(test)]
+mod edge_tests {
+    use super::*;
+    use crate::Params;
+
+    /// Tensions across the format's range and past it, and a stiff finger: a number or a
+    /// typed error, never a panic (debug builds check every overflow).
+    #[test]
+    fn any_tension_gives_a_number_or_a_typed_error() {
+        for p in [Params::<f64>::default(), Params { m: 1, plate: false, flex_links: false, ..Params::default() }] {
+            let f = Finger::new(p).unwrap();
+            let ff = FixedFinger::new(&f, &[0.0; 3]).unwrap();
+            for t in [0.0, 1e-6, 0.01, 3.0, 20.0, 60.0, 150.0, 300.0, 511.0, 600.0] {
+                match ff.solve(Nt::from_f64(t)) {
+                    Ok(s) => assert!(s.nodes[..=3].iter().all(|n| !n.x.is_sat() && !n.y.is_sat())),
+                    Err(e) => assert!(matches!(e, Error::Contact { .. } | Error::NotConverged { .. } | Error::Singular { .. } | Error::Input { .. }), "{e:?}"),
+                }
+            }
+        }
+    }
+}

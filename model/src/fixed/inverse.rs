@@ -1,0 +1,234 @@
+//! The fixed-point inverse at a given tension: target joint angles to each joint's stack
+//! thickness (then its voltage). Set-up (float, once per parameter change): the sub-element
+//! compliances at [`NODES`] stack thicknesses from the rest thickness to the ceiling's, each
+//! matrix row at one exponent across the nodes. Solve: per joint, regula falsi (Illinois) on
+//! the thickness with the compliances interpolated linearly between nodes and the joint
+//! equilibrium of [`FixedFinger`]. Not here: the tension rule (the float inverse's midpoint of
+//! the tensions that hold the posture), fmax.
+use super::forward::{cmat, CMat, FixedFinger};
+use super::q::{Mm, Nt, Q, Rad};
+use crate::de;
+use crate::error::Error;
+use crate::finger::Finger;
+use crate::params::{MAX_JOINTS, MAX_SUB};
+use crate::real::Real;
+
+/// Thickness nodes of the compliance table.
+pub const NODES: usize = 33;
+/// Stop: the hinge angle within this many Q28 units (~6e-8 rad).
+const TOL_RAW: i32 = 16;
+const MAX_ITER: u32 = 40;
+/// A target this close past an end of the range (Q28 units, ~1e-6 rad) is that end.
+const END_TOL_RAW: i64 = 268;
+
+pub struct FixedInverse {
+    fwd: FixedFinger,
+    table: [[CMat; MAX_SUB]; NODES],
+    /// Stack thickness at node 0 (0 V) and at the last node (the ceiling), mm.
+    t_rest: Mm,
+    t_ceiling: Mm,
+}
+
+/// Each joint's stack thickness for the target angles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FixedPoseSolution {
+    pub n: usize,
+    pub thickness: [Mm; MAX_JOINTS],
+    pub tension: Nt,
+    /// Joint solves, all joints.
+    pub evaluations: u32,
+}
+
+fn lerp(a: i32, b: i32, w: i64) -> i32 {
+    (a as i64 + (((b as i64 - a as i64) * w + (1 << 15)) >> 16)) as i32
+}
+
+impl FixedInverse {
+    pub fn new<R: Real>(f: &Finger<R>) -> Result<Self, Error> {
+        let p = f.params();
+        if p.layers == 0 {
+            return Err(Error::Input { input: "layers", reason: "the fixed-point inverse sets stack thicknesses: it needs stacks" });
+        }
+        let n = p.n;
+        let zero = [R::zero(); MAX_JOINTS];
+        let fwd = FixedFinger::new(f, &zero[..n])?;
+        let vmax = f.ceiling_in_force(None) * R::from_f64(1.0 - 1e-6);
+        let (t_rest, t_ceiling) = (f.stack_thickness(R::zero())?, f.stack_thickness(vmax)?);
+        let mut table = [[CMat::default(); MAX_SUB]; NODES];
+        for (i, node) in table.iter_mut().enumerate() {
+            let t = t_rest - (t_rest - t_ceiling) * R::from_u32(i as u32) / R::from_u32(NODES as u32 - 1);
+            let v = if i == 0 { R::zero() } else { de::voltage_for_thickness(p, 1, t.max(t_ceiling))? };
+            let mut vs = [R::zero(); MAX_JOINTS];
+            vs[..n].iter_mut().for_each(|x| *x = v);
+            let comp = f.compliances(&vs[..n])?;
+            for (c, src) in node.iter_mut().zip(&comp.c[0][..p.m]) {
+                *c = cmat(src);
+            }
+        }
+        // one exponent per (sub-element, row) across the nodes: the largest row keeps 30 bits
+        for j in 0..p.m {
+            for r in 0..3 {
+                let t = table.iter().map(|nd| nd[j].t[r]).min().unwrap_or(0);
+                for nd in table.iter_mut() {
+                    let d = nd[j].t[r] - t;
+                    for x in nd[j].m[r].iter_mut() {
+                        *x = super::q::shr_round(*x as i64, d) as i32;
+                    }
+                    nd[j].t[r] = t;
+                }
+            }
+            for pick in [0, 1] {
+                let get = |nd: &[CMat; MAX_SUB]| if pick == 0 { nd[j].d02 } else { nd[j].d12 };
+                let sh = table.iter().filter(|nd| get(nd).m != 0).map(|nd| get(nd).sh).min().unwrap_or(0);
+                for nd in table.iter_mut() {
+                    let d = if pick == 0 { &mut nd[j].d02 } else { &mut nd[j].d12 };
+                    d.m = super::q::shr_round(d.m as i64, d.sh - sh) as i32;
+                    d.sh = sh;
+                }
+            }
+        }
+        let mm = |x: R| Mm::from_f64(x.to_f64());
+        Ok(FixedInverse { fwd, table, t_rest: mm(t_rest), t_ceiling: mm(t_ceiling) })
+    }
+
+    /// The compliances at table position `u` (Q16 nodes: 0 = rest thickness).
+    fn at(&self, u: i64) -> [CMat; MAX_SUB] {
+        let last = ((NODES - 1) as i64) << 16;
+        let u = u.clamp(0, last);
+        let i = ((u >> 16) as usize).min(NODES - 2);
+        let w = u - ((i as i64) << 16);
+        let (a, b) = (&self.table[i], &self.table[i + 1]);
+        let mut o = *a;
+        for j in 0..self.fwd.m {
+            for r in 0..3 {
+                for c in 0..3 {
+                    o[j].m[r][c] = lerp(a[j].m[r][c], b[j].m[r][c], w);
+                }
+            }
+            o[j].d02.m = lerp(a[j].d02.m, b[j].d02.m, w);
+            o[j].d12.m = lerp(a[j].d12.m, b[j].d12.m, w);
+        }
+        o
+    }
+
+    fn thickness_at(&self, u: i64) -> Mm {
+        let span = (self.t_rest.0 - self.t_ceiling.0) as i64;
+        Q(self.t_rest.0 - ((span * u) / (((NODES - 1) as i64) << 16)) as i32)
+    }
+
+    /// Each joint's stack thickness that holds `angles` (rad, joint angles as the forward
+    /// solve reports them) at `tension`; `Error::Unreachable` when a joint's angle lies outside
+    /// what the stack spans at this tension (needed, min, max: the angle, rad).
+    pub fn solve(&self, angles: &[Rad], tension: Nt) -> Result<FixedPoseSolution, Error> {
+        let n = self.fwd.n;
+        if angles.len() != n {
+            return Err(Error::Input { input: "angles", reason: "one angle per joint is required" });
+        }
+        if tension.0 <= 0 || tension.is_sat() {
+            return Err(Error::Input { input: "tension", reason: "tension must be > 0 and within the fixed-point range" });
+        }
+        let link = self.fwd.link_q(tension).2;
+        let mut thickness = [Mm::ZERO; MAX_JOINTS];
+        let mut evals = 0u32;
+        let mut iters = 0u32;
+        let last = ((NODES - 1) as i64) << 16;
+        for k in 0..n {
+            // the same angle as the joint before: the same thickness (the joints are alike)
+            if k > 0 && angles[k] == angles[k - 1] {
+                thickness[k] = thickness[k - 1];
+                continue;
+            }
+            let target = angles[k] - link;
+            let mut hole = None;
+            let mut g = |u: i64, hole: &mut Option<[Mm; 2]>, evals: &mut u32| -> Result<i64, Error> {
+                *evals += 1;
+                let (end, h) = self.fwd.joint(&self.at(u), tension, *hole, &mut iters).map_err(|_| Error::NotConverged { iterations: *evals, residual: f64::INFINITY })?;
+                *hole = Some(h);
+                Ok(end.theta.0 as i64 - target.0 as i64)
+            };
+            let (mut a, mut b) = (0i64, last);
+            let (mut ga, mut gb) = (g(a, &mut hole, &mut evals)?, g(b, &mut hole, &mut evals)?);
+            // at an end of the stack's range within the forward solve's own error: that end
+            if ga > 0 && ga <= END_TOL_RAW {
+                thickness[k] = self.t_rest;
+                continue;
+            }
+            if gb < 0 && -gb <= END_TOL_RAW {
+                thickness[k] = self.t_ceiling;
+                continue;
+            }
+            if ga > 0 || gb < 0 {
+                let unit = |x: i64| (x + target.0 as i64) as f64 / (1u64 << 28) as f64 + link.to_f64();
+                return Err(Error::Unreachable { joint: k + 1, needed: angles[k].to_f64(), min: unit(ga), max: unit(gb) });
+            }
+            let mut u = a;
+            let mut side = 0i32;
+            for _ in 0..MAX_ITER {
+                // regula falsi, Illinois: the end that stays twice halves its weight
+                u = if gb != ga { a + (((b - a) as i128 * (-ga) as i128) / (gb - ga) as i128) as i64 } else { (a + b) / 2 };
+                u = u.clamp(a, b);
+                let gu = g(u, &mut hole, &mut evals)?;
+                if gu.abs() <= TOL_RAW as i64 || b - a <= 1 {
+                    break;
+                }
+                if gu < 0 {
+                    (a, ga) = (u, gu);
+                    if side == -1 {
+                        gb /= 2;
+                    }
+                    side = -1;
+                } else {
+                    (b, gb) = (u, gu);
+                    if side == 1 {
+                        ga /= 2;
+                    }
+                    side = 1;
+                }
+            }
+            thickness[k] = self.thickness_at(u);
+        }
+        Ok(FixedPoseSolution { n, thickness, tension, evaluations: evals })
+    }
+
+    /// The channel voltages for a solution (float: the DE thinning's closed form).
+    pub fn volts<R: Real>(&self, f: &Finger<R>, sol: &FixedPoseSolution) -> Result<[R; MAX_JOINTS], Error> {
+        let p = f.params();
+        let mut v = [R::zero(); MAX_JOINTS];
+        for (k, (vk, tk)) in v.iter_mut().zip(&sol.thickness).enumerate().take(sol.n) {
+            *vk = if tk.0 >= self.t_rest.0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, R::from_f64(tk.to_f64()))? };
+        }
+        Ok(v)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Method, Params};
+
+    #[test]
+    fn round_trip_within_0_05_deg() {
+        let f = Finger::new(Params::<f64> { layers: 4, ..Params::default() }).unwrap();
+        let inv = FixedInverse::new(&f).unwrap();
+        let mut worst = 0f64;
+        for (p, v) in [(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])] {
+            let want = f.solve(p, &v, Method::converged()).unwrap();
+            let angles = [0, 1, 2].map(|k| Rad::from_f64(want.joint_angle[k]));
+            let sol = inv.solve(&angles, Nt::from_f64(p)).unwrap();
+            let volts = inv.volts(&f, &sol).unwrap();
+            let back = f.solve(p, &volts[..3], Method::converged()).unwrap();
+            for k in 0..3 {
+                worst = worst.max((back.joint_angle[k] - want.joint_angle[k]).abs().to_degrees());
+            }
+        }
+        assert!(worst < 0.05, "{worst}");
+    }
+
+    #[test]
+    fn a_posture_past_the_stacks_is_unreachable() {
+        let f = Finger::new(Params::<f64> { layers: 4, ..Params::default() }).unwrap();
+        let inv = FixedInverse::new(&f).unwrap();
+        let a = Rad::from_f64(1.2);
+        assert!(matches!(inv.solve(&[a, a, a], Nt::from_f64(0.5)), Err(Error::Unreachable { joint: 1, .. })));
+    }
+}

@@ -1,0 +1,19 @@
+//! Fixed-point forward model for cores without an FPU (the Cortex-M3 image; issue 14).
+//!
+//! What it is: the converged joint equilibrium under cable tension alone (`Finger::solve`
+//! with no tip load: the march, Newton per joint, the chain, the excursion) in 32-bit words
+//! with a Q format per quantity ([`q`]) and 32x32 -> 64 products, trig by polynomial
+//! ([`trig`]). The compliances are computed once per voltage set in the float model and
+//! converted ([`FixedFinger::new`]), each entry with its own scale.
+//! And the inverse at a given tension ([`inverse`]: each joint's stack thickness for target
+//! angles, compliances interpolated from a table built once).
+//! What it is not: the tip-loaded solve, the paper's stepping, the tension rule, fmax. Error
+//! budget and measurements: docs/fixed-point.md.
+
+pub mod forward;
+pub mod inverse;
+pub mod q;
+pub mod trig;
+
+pub use forward::{FixedFinger, FixedSolution};
+pub use inverse::{FixedInverse, FixedPoseSolution};
