@@ -182,7 +182,8 @@ pub struct Solution<R> {
     pub iterations: u32,
     /// Final equilibrium residual: guide-hole mismatch, mm.
     pub residual: R,
-    /// Determinant of each joint's equilibrium tangent (2x2, dimensionless; 1 unloaded).
+    /// Determinant of each joint's equilibrium tangent (2x2, dimensionless; 1 unloaded; 1 where
+    /// not evaluated: a joint the tabled forward answered at its first march).
     /// It falls to zero at a limit point of the equilibrium branch.
     pub tangent_det: [R; MAX_JOINTS],
 }
@@ -535,11 +536,59 @@ impl<R: Real> Finger<R> {
             tangent_det: [R::one(); MAX_JOINTS],
         });
         if let Ok(sol) = &mut out {
-            if let Err(e) = self.fill_tension_alone(c, tension, tol, max_iter, sol) {
+            if let Err(e) = self.fill_tension_alone(c, tension, tol, max_iter, None, sol) {
                 out = Err(e);
             }
         }
         out
+    }
+
+    /// The converged solve under tension alone started from a guide-hole guess per joint (a
+    /// branch table's, `inverse::BranchTable::solve_with`): Newton on the full model from the
+    /// guess, its first evaluation one plain march; a march whose residual is within the
+    /// converged solver's tolerance is the answer (Newton's own test at its first
+    /// evaluation), else Newton with dual marches from the guess, else the load continuation
+    /// of `solve`. The same tolerance and answer as `solve_with(Method::converged())`.
+    /// `tangent_det` is 1 for a joint answered at its first march (not evaluated).
+    pub(crate) fn solve_from_holes(&self, c: &Compliances<R>, tension: R, holes: &[[R; 2]; MAX_JOINTS]) -> Result<Solution<R>, Error> {
+        self.check_load(c, tension, [R::zero(); 2])?;
+        let Method::Converged { tol, max_iter } = Method::<R>::converged() else { return Err(Error::Singular { what: "method" }) };
+        let tol = tol.max(self.resolution());
+        let mut sol = Solution {
+            n: self.p.n,
+            m: self.p.m,
+            tension,
+            tip_force: [R::zero(); 2],
+            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            links: [[R::zero(); 3]; MAX_JOINTS],
+            joint_angle: [R::zero(); MAX_JOINTS],
+            nodes: [Pose::origin(); MAX_JOINTS + 1],
+            span: [R::zero(); MAX_JOINTS],
+            thickness: c.thickness,
+            volts: c.volts,
+            cable_excursion: R::zero(),
+            iterations: 0,
+            residual: R::zero(),
+            tangent_det: [R::one(); MAX_JOINTS],
+        };
+        self.fill_tension_alone(c, tension, tol, max_iter, Some(holes), &mut sol)?;
+        Ok(sol)
+    }
+
+    /// Joint k's equilibrium from the hole guess `b` (`solve_from_holes`): one plain march,
+    /// accepted if its residual is within `tol`; else Newton from `b` (dual marches), accepted
+    /// if it stays within half a hinge length of the guess; else the load continuation.
+    fn polish_joint(&self, k: usize, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], tol: R, max_iter: u32) -> Result<(JointState<R>, u32), Error> {
+        if let Ok(st) = self.march(c, tension, b, None) {
+            let r = [b[0] - st.hole[0], b[1] - st.hole[1]];
+            if r[0] * r[0] + r[1] * r[1] <= tol * tol {
+                return Ok((JointState { tangent: Some((r, R::one())), ..st }, 0));
+            }
+        }
+        match self.newton_dual(c, tension, b, tol, max_iter) {
+            Ok((st, it)) if norm2([st.hole[0] - b[0], st.hole[1] - b[1]]) <= self.p.hinge_len() / R::from_f64(2.0) => Ok((st, it)),
+            _ => self.newton_joint(k, c, tension, tol, max_iter, tension / R::from_f64(4096.0)),
+        }
     }
 
     fn fill_tension_alone(
@@ -548,6 +597,7 @@ impl<R: Real> Finger<R> {
         tension: R,
         tol: R,
         max_iter: u32,
+        guess: Option<&[[R; 2]; MAX_JOINTS]>,
         sol: &mut Solution<R>,
     ) -> Result<(), Error> {
         let (n, m) = (self.p.n, self.p.m);
@@ -567,8 +617,10 @@ impl<R: Real> Finger<R> {
                 res2 += r2_prev;
                 continue;
             }
-            let min_step = tension / R::from_f64(4096.0);
-            let (st, it) = self.newton_joint(k, &c.c[k], tension, tol, max_iter, min_step)?;
+            let (st, it) = match guess {
+                Some(g) => self.polish_joint(k, &c.c[k], tension, g[k], tol, max_iter)?,
+                None => self.newton_joint(k, &c.c[k], tension, tol, max_iter, tension / R::from_f64(4096.0))?,
+            };
             iters += it;
             sol.q[k][..m].copy_from_slice(&st.q[..m]);
             ends[k] = st.end;

@@ -1,0 +1,90 @@
+//! The forward solve from the branch table (`BranchTable::solve`, model inverse/table.rs): the
+//! table only chooses where Newton starts, so its answers are the full converged solve's, for
+//! the default model (m = 8), the calibrated one and the paper's (m = 1), in f64 and f32.
+
+use finger_model::inverse::{BranchTable, Options};
+use finger_model::{Calibration, Finger, Method, Params, Real, Solution};
+
+/// MODEL.md's calibration factors (docs/fidelity-fe.md).
+fn calibration<R: Real>() -> Calibration<R> {
+    let r = R::from_f64;
+    Calibration { hinge: [r(1.5407), r(6.2456), r(1.0669), r(1.1546)], stack_axial: [r(0.7183), r(0.0546)], stack_bending: [r(5.2540), r(-1.7563)] }
+}
+
+fn fingers<R: Real>() -> Vec<(&'static str, Finger<R>)> {
+    let d = Params::<R>::default();
+    let paper = Params::<R> { m: 1, plate: false, flex_links: false, ..Params::default() };
+    vec![
+        ("default", Finger::new(d).unwrap()),
+        ("calibrated", Finger::with_calibration(d, calibration()).unwrap()),
+        ("paper-m1", Finger::new(paper).unwrap()),
+    ]
+}
+
+fn tip_err<A: Real, B: Real>(a: &Solution<A>, b: &Solution<B>) -> f64 {
+    let (x, y) = (a.tip().x.to_f64() - b.tip().x.to_f64(), a.tip().y.to_f64() - b.tip().y.to_f64());
+    (x * x + y * y).sqrt()
+}
+
+fn grid(top: f64) -> Vec<(f64, [f64; 3])> {
+    let mut g = Vec::new();
+    for p in [0.05, 0.2, 0.5, 1.0, 1.9, 3.0, 5.0, 7.0, 10.0, 15.0] {
+        for v in [[0.0; 3], [0.5 * top; 3], [top; 3], [0.9 * top, 0.5 * top, 0.0], [0.3 * top, 0.99 * top, 0.7 * top]] {
+            g.push((p, v));
+        }
+    }
+    g
+}
+
+/// f64: the tabled answer is the full solve's (tip within 1e-7 mm, the same refusals).
+#[test]
+fn tabled_forward_is_the_full_solve_f64() {
+    for (name, f) in fingers::<f64>() {
+        let table = BranchTable::new(&f, &Options::default()).unwrap();
+        let top = f.voltage_ceiling() * (1.0 - 1e-4);
+        let mut answered = 0;
+        for (p, v) in grid(top) {
+            let full = f.solve(p, &v, Method::converged());
+            let tab = table.solve(p, &v);
+            match (&full, &tab) {
+                (Ok(a), Ok(b)) => {
+                    answered += 1;
+                    assert!(tip_err(a, b) < 1e-7, "{name} P {p} V {v:?}: tip {:?} vs {:?}", a.tip(), b.tip());
+                    for k in 0..3 {
+                        assert!((a.joint_angle[k] - b.joint_angle[k]).abs() < 1e-9, "{name} P {p}: angle {k}");
+                    }
+                    assert!(b.residual <= 1e-9, "{name} P {p}: residual {}", b.residual);
+                    assert!((a.cable_excursion - b.cable_excursion).abs() < 1e-8);
+                }
+                (Err(_), Err(_)) => {}
+                _ => panic!("{name} P {p} V {v:?}: full {full:?} tabled {tab:?}"),
+            }
+        }
+        assert!(answered > 20, "{name}: {answered}");
+    }
+}
+
+/// f32 (the firmware): within 1e-3 mm of the f64 full solve, and the table does the work: most
+/// joints are answered by the march at the table's hole (no Newton iteration).
+#[test]
+fn tabled_forward_f32_within_1um_of_f64() {
+    for ((name, f), (_, f64f)) in fingers::<f32>().into_iter().zip(fingers::<f64>()) {
+        let table = BranchTable::new(&f, &Options::default()).unwrap();
+        let top = f64f.voltage_ceiling() * (1.0 - 1e-3);
+        let (mut first_march, mut all, mut worst) = (0, 0, 0.0f64);
+        for (p, v) in grid(top) {
+            let Ok(want) = f64f.solve(p, &v, Method::converged()) else { continue };
+            let v32 = [v[0] as f32, v[1] as f32, v[2] as f32];
+            let got = table.solve(p as f32, &v32).unwrap_or_else(|e| panic!("{name} P {p} V {v:?}: {e:?}"));
+            let e = tip_err(&got, &want);
+            worst = worst.max(e);
+            assert!(e < 1e-3, "{name} P {p} V {v:?}: tip error {e} mm");
+            all += 1;
+            if got.iterations == 0 {
+                first_march += 1;
+            }
+        }
+        eprintln!("{name}: worst tip error {worst:.2e} mm, {first_march} of {all} answered at the first march");
+        assert!(first_march * 2 > all, "{name}: only {first_march} of {all} at the first march");
+    }
+}
