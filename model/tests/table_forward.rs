@@ -88,3 +88,33 @@ fn tabled_forward_f32_within_1um_of_f64() {
         assert!(first_march * 2 > all, "{name}: only {first_march} of {all} at the first march");
     }
 }
+
+#[test]
+fn print_table_reach() {
+    for (name, f) in fingers::<f32>() {
+        let table = BranchTable::new(&f, &Options::default()).unwrap();
+        let top = f.voltage_ceiling() * (1.0 - 1e-4);
+        let l = table.len();
+        eprintln!("{name}: len {l:?} last P {:?} fmax0 {:?} fmaxtop {:?}", [0.0f32, 0.0, 1.0].map(|t: f32| table.tensions(table.max_angle() * (1.0 - 1e-6 * t))), f.fmax(&[0.0; 3]).map(|b| b.tension), f.fmax(&[top; 3]).map(|b| b.tension));
+    }
+}
+
+/// fmax from the table is `Finger::fmax` (same end to its 1e-4 relative, same joint and kind).
+#[test]
+fn tabled_fmax_is_fmax() {
+    for (name, f) in fingers::<f64>() {
+        let table = BranchTable::new(&f, &Options::default()).unwrap();
+        let top = f.voltage_ceiling() * (1.0 - 1e-4);
+        for v in [[0.0; 3], [0.5 * top; 3], [top; 3], [0.0, 0.5 * top, top], [top, 0.2 * top, 0.7 * top]] {
+            let a = f.fmax(&v).unwrap();
+            let b = table.fmax(&v).unwrap();
+            assert!((a.tension - b.tension).abs() <= 2e-4 * a.tension, "{name} {v:?}: {a:?} vs {b:?}");
+            assert_eq!(a.kind, b.kind, "{name} {v:?}: {a:?} vs {b:?}");
+            // joints that end within the search's 1e-4 of each other tie (contact at the span
+            // floor hardly depends on the stack): either may be named
+            assert!(a.joint == b.joint || (a.tension - b.tension).abs() <= 1e-4 * a.tension, "{name} {v:?}: {a:?} vs {b:?}");
+            // the tabled end is the last tension with an equilibrium
+            assert!(f.solve(b.tension, &v, Method::converged()).is_ok(), "{name} {v:?}");
+        }
+    }
+}

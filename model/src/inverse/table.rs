@@ -27,7 +27,7 @@
 
 use super::Options;
 use crate::error::Error;
-use crate::finger::{Compliances, Finger, Method, Solution};
+use crate::finger::{BranchLimit, Compliances, Finger, Method, Solution};
 use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -280,5 +280,29 @@ impl<R: Real> BranchTable<R> {
             }
         }
         f.solve_with(c, tension, [R::zero(); 2], Method::converged())
+    }
+}
+
+impl<R: Real> BranchTable<R> {
+    /// The end of the equilibrium branch under tension alone at these voltages
+    /// (`Finger::fmax`, same answer and tolerance), its march up the branch started, for each
+    /// joint, at the table's last sample (the three branches' last common angle, the tension
+    /// and hole quadratic in the joint's stack thickness) instead of the straight joint.
+    pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
+        let f = &self.finger;
+        let c = f.compliances(volts)?;
+        let mut starts = [None; MAX_JOINTS];
+        let last = self.covered();
+        if last >= 4 {
+            let i = last - 1;
+            let h = BranchHoles { hole: [0, 1, 2].map(|e| [self.x[e][i][1], self.x[e][i][2]]) };
+            let p = BranchHoles { hole: [0, 1, 2].map(|e| [self.x[e][i][0], R::zero()]) };
+            for k in 0..f.params().n {
+                if let (Some(b), Some(pt)) = (self.hole_at_thickness(&h, c.thickness[k]), self.hole_at_thickness(&p, c.thickness[k])) {
+                    starts[k] = Some((pt[0], b));
+                }
+            }
+        }
+        f.fmax_with(&c, Some(&starts))
     }
 }
