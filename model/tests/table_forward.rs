@@ -118,3 +118,24 @@ fn tabled_fmax_is_fmax() {
         }
     }
 }
+
+#[test]
+fn paper_f32_scenes_finish() {
+    let (_, f) = fingers::<f32>().remove(2);
+    let table = BranchTable::new(&f, &Options::default()).unwrap();
+    for (p, v) in [(0.2f32, [0.0f32; 3]), (1.0, [9000.0, 5000.0, 0.0]), (7.0, [0.0; 3])] {
+        let t = std::time::Instant::now();
+        let c = f.compliances(&v).unwrap();
+        let a = f.solve_with(&c, p, [0.0; 2], Method::converged());
+        eprintln!("full {:?} {:?}", a.as_ref().map(|s| s.iterations), t.elapsed());
+        let b = table.solve_with(&c, p);
+        eprintln!("table {:?} {:?}", b.as_ref().map(|s| s.iterations), t.elapsed());
+        let ang = b.unwrap().joint_angle;
+        let i = finger_model::inverse::solve_pose_tabled(&table, &ang, Some(p));
+        eprintln!("inv {:?} {:?}", i.is_ok(), t.elapsed());
+        let fm = table.fmax(&v);
+        eprintln!("fmax {:?} {:?}", fm, t.elapsed());
+        let fm = f.fmax(&v);
+        eprintln!("fmax full {:?} {:?}", fm, t.elapsed());
+    }
+}
