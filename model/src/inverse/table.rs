@@ -193,7 +193,7 @@ impl<R: Real> BranchTable<R> {
                 let (sm, s1, s2) = (s + R::one(), s - R::one(), s - two);
                 [-s * s1 * s2 * sixth, sm * s1 * s2 * half, -sm * s * s2 * half, sm * s * s1 * sixth]
             };
-            for _ in 0..3 {
+            for _ in 0..2 {
                 // the cubic's value and slope at s
                 let (sm, s1, s2) = (s + R::one(), s - R::one(), s - two);
                 let w = weights(s);
@@ -261,25 +261,30 @@ impl<R: Real> BranchTable<R> {
     /// at the table's hole is within the solver's tolerance is answered by that march). The
     /// answer is `Finger::solve_with(Method::converged())`'s, to its tolerance; where the
     /// table does not hold (P, t) (P = 0, past its last sample, t outside its stack range)
-    /// it is that solve.
+    /// it is that solve. (Inlined, so that the solution is written in the caller's place.)
+    #[inline(always)]
     pub fn solve_with(&self, c: &Compliances<R>, tension: R) -> Result<Solution<R>, Error> {
         let f = &self.finger;
-        let n = f.params().n;
-        let guided = if tension.is_finite() && c.n == n { self.branch_holes(tension) } else { None };
-        if let Some(h) = guided {
-            let mut holes = [[R::zero(); 2]; MAX_JOINTS];
-            let mut all = true;
-            for k in 0..n {
-                match self.hole_at_thickness(&h, c.thickness[k]) {
-                    Some(b) => holes[k] = b,
-                    None => all = false,
-                }
-            }
-            if all {
-                return f.solve_from_holes(c, tension, &holes);
-            }
+        match self.forward_holes(c, tension) {
+            Some(holes) => f.solve_from_holes(c, tension, &holes),
+            None => f.solve_with(c, tension, [R::zero(); 2], Method::converged()),
         }
-        f.solve_with(c, tension, [R::zero(); 2], Method::converged())
+    }
+
+    /// Each joint's guide hole read off the table at (P, its stack thickness), or None where
+    /// the table does not hold one of them.
+    #[inline(never)]
+    fn forward_holes(&self, c: &Compliances<R>, tension: R) -> Option<[[R; 2]; MAX_JOINTS]> {
+        let n = self.finger.params().n;
+        if !(tension.is_finite() && c.n == n) {
+            return None;
+        }
+        let h = self.branch_holes(tension)?;
+        let mut holes = [[R::zero(); 2]; MAX_JOINTS];
+        for k in 0..n {
+            holes[k] = self.hole_at_thickness(&h, c.thickness[k])?;
+        }
+        Some(holes)
     }
 }
 
