@@ -158,7 +158,7 @@ impl<R: Real> Finger<R> {
                     let span = super::norm2([st.hole[0], st.hole[1] - self.p.e]);
                     let det = st.tangent.map_or(R::one(), |t| t.1);
                     lo = Pt { p: ps, st, span, det };
-                    step = ps / R::from_f64(32.0);
+                    step = ps / R::from_f64(256.0);
                 }
             }
         }
