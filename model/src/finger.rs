@@ -598,8 +598,10 @@ impl<R: Real> Finger<R> {
         let (mut res2, mut r2_prev, mut iters) = (R::zero(), R::zero(), 0u32);
         for k in 0..n {
             let b = holes[k];
-            // a joint with the same compliance and guess as the one before has its state
-            if k > 0 && b == holes[k - 1] && c.c[k][..m] == c.c[k - 1][..m] {
+            // a joint with the same voltage, thickness and guess as the one before has its
+            // state (`compliances` makes a joint's compliances a function of its voltage; the
+            // first sub-element's are compared too)
+            if k > 0 && b == holes[k - 1] && c.volts[k] == c.volts[k - 1] && c.thickness[k] == c.thickness[k - 1] && c.c[k][0] == c.c[k - 1][0] {
                 let (done, rest) = sol.q.split_at_mut(k);
                 rest[0][..m].copy_from_slice(&done[k - 1][..m]);
                 ends[k] = ends[k - 1];

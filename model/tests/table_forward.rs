@@ -112,3 +112,22 @@ fn tabled_fmax_is_fmax() {
     }
 }
 
+
+/// In f32 (the firmware), fmax from the table is the f64 fmax (1e-3 relative) for every model,
+/// a tiny span floor and uniform and mixed voltages.
+#[test]
+fn tabled_fmax_f32_is_the_f64_fmax() {
+    let mut all32 = fingers::<f32>();
+    let mut all64 = fingers::<f64>();
+    all32.push(("floor1e-6", Finger::new(Params { span_floor: 1e-6, ..Params::default() }).unwrap()));
+    all64.push(("floor1e-6", Finger::new(Params { span_floor: 1e-6, ..Params::default() }).unwrap()));
+    for ((name, f), (_, g)) in all32.into_iter().zip(all64) {
+        let table = BranchTable::new(&f, &Options::default()).unwrap();
+        let top = g.voltage_ceiling() * (1.0 - 1e-3);
+        for v in [[0.0; 3], [0.5 * top; 3], [top; 3], [0.0, 0.5 * top, top]] {
+            let want = g.fmax(&v).unwrap().tension;
+            let got = table.fmax(&v.map(|x| x as f32)).unwrap().tension as f64;
+            assert!((got - want).abs() <= 1e-3 * want, "{name} {v:?}: table {got} vs f64 {want}");
+        }
+    }
+}

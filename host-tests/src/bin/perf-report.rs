@@ -170,6 +170,9 @@ fn main() {
          target\") says what bounds it. `m1-rigid`: the paper's model (m = 1, E_b, rigid links); \
          `m8-plate-flex`: the default (m = 8, plate modulus, flexible links). Target: at most 20,000.\n\n{inverse_table}\n"
     );
+    // ---- the branch-table path (issue 15)
+    eprintln!("perf-report: branch-table image");
+    let section = format!("{section}{}\n", perf::table_cost_section());
     match md.find("## Stability tests") {
         Some(i) => md.insert_str(i, &section),
         None => md.push_str(&section),

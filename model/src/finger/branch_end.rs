@@ -52,10 +52,10 @@ impl<R: Real> Finger<R> {
         self.fmax_with(&c, None)
     }
 
-    /// `fmax` with precomputed compliances and, per joint, optionally a point known to lie
-    /// on its branch (a tension and a hole guess, from the branch table: the march up the
-    /// branch starts there instead of at the straight joint).
-    pub(crate) fn fmax_with(&self, c: &Compliances<R>, starts: Option<&[Option<(R, [R; 2])>; MAX_JOINTS]>) -> Result<BranchLimit<R>, Error> {
+    /// `fmax` with precomputed compliances and, per joint, optionally two points near its
+    /// branch (tensions and hole guesses, from the branch table: the march up the branch
+    /// continues from them instead of starting at the straight joint).
+    pub(crate) fn fmax_with(&self, c: &Compliances<R>, starts: Option<&[Option<[(R, [R; 2]); 2]>; MAX_JOINTS]>) -> Result<BranchLimit<R>, Error> {
         let (n, m) = (self.p.n, self.p.m);
         // the most thinned stack first (it usually ends first); each later joint marches only
         // up to the end found so far: reaching it, it does not end before
@@ -136,7 +136,7 @@ impl<R: Real> Finger<R> {
         k: usize,
         c: &[Mat3<R>; MAX_SUB],
         bound: Option<R>,
-        start: Option<(R, [R; 2])>,
+        start: Option<[(R, [R; 2]); 2]>,
     ) -> Result<Option<BranchLimit<R>>, Error> {
         let c33 = c[..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
         let p_lin = R::one() / (self.p.e * c33);
@@ -146,20 +146,25 @@ impl<R: Real> Finger<R> {
         let mut lo = Pt { p: R::zero(), st: self.straight(), span: lh, det: R::one() };
         let mut prev: Option<Pt<R>> = None;
         let mut step = p_lin / R::from_f64(8.0);
-        // a point on the branch from the table: solved there, the march starts from it with
-        // a step of a thirty-second of its tension
-        if let Some((ps, guess)) = start.filter(|s| s.0 > R::zero() && s.0 < p_hi) {
+        // two points on the branch from the table (its last two samples at this stack): solved
+        // there, the march continues from them (secant predictor, the table's spacing as the
+        // first step)
+        if let Some(pts) = start.filter(|s| s[0].0 > R::zero() && s[0].0 < s[1].0 && s[1].0 < p_hi) {
             let tol = self.resolution().max(R::from_f64(1e-9));
             let opts = SolveOptions { max_halvings: POINT_HALVINGS, ..SolveOptions::new(tol, self.resolution(), POINT_ITER) };
-            if let Ok((st, _)) = self.newton_dual_with(c, ps, guess, &opts) {
-                // on the table's branch: the solved hole within a twentieth of a hinge length of
-                // the table's
-                if super::norm2([st.hole[0] - guess[0], st.hole[1] - guess[1]]) <= lh / R::from_f64(20.0) {
+            let solved = pts.map(|(ps, guess)| {
+                let (st, _) = self.newton_dual_with(c, ps, guess, &opts).ok()?;
+                // on the table's branch: the solved hole within a twentieth of a hinge length
+                // of the table's
+                (super::norm2([st.hole[0] - guess[0], st.hole[1] - guess[1]]) <= lh / R::from_f64(20.0)).then(|| {
                     let span = super::norm2([st.hole[0], st.hole[1] - self.p.e]);
-                    let det = st.tangent.map_or(R::one(), |t| t.1);
-                    lo = Pt { p: ps, st, span, det };
-                    step = ps / R::from_f64(256.0);
-                }
+                    Pt { p: ps, st, span, det: st.tangent.map_or(R::one(), |t| t.1) }
+                })
+            });
+            if let [Some(a), Some(b)] = solved {
+                step = b.p - a.p;
+                prev = Some(a);
+                lo = b;
             }
         }
         let mut why: Option<MarchError> = None;

@@ -290,21 +290,24 @@ impl<R: Real> BranchTable<R> {
 
 impl<R: Real> BranchTable<R> {
     /// The end of the equilibrium branch under tension alone at these voltages
-    /// (`Finger::fmax`, same answer and tolerance), its march up the branch started, for each
-    /// joint, at the table's last sample (the three branches' last common angle, the tension
-    /// and hole quadratic in the joint's stack thickness) instead of the straight joint.
+    /// (`Finger::fmax`, same answer and tolerance), its march up the branch continued, for each
+    /// joint, from the table's last two samples (the three branches' last common angles, the
+    /// tension and hole quadratic in the joint's stack thickness) instead of started at the
+    /// straight joint.
     pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
         let f = &self.finger;
         let c = f.compliances(volts)?;
         let mut starts = [None; MAX_JOINTS];
         let last = self.covered();
         if last >= 4 {
-            let i = last - 1;
-            let h = BranchHoles { hole: [0, 1, 2].map(|e| [self.x[e][i][1], self.x[e][i][2]]) };
-            let p = BranchHoles { hole: [0, 1, 2].map(|e| [self.x[e][i][0], R::zero()]) };
-            for k in 0..f.params().n {
-                if let (Some(b), Some(pt)) = (self.hole_at_thickness(&h, c.thickness[k]), self.hole_at_thickness(&p, c.thickness[k])) {
-                    starts[k] = Some((pt[0], b));
+            let at = |i: usize, k: usize| {
+                let h = BranchHoles { hole: [0, 1, 2].map(|e| [self.x[e][i][1], self.x[e][i][2]]) };
+                let p = BranchHoles { hole: [0, 1, 2].map(|e| [self.x[e][i][0], R::zero()]) };
+                Some((self.hole_at_thickness(&p, c.thickness[k])?[0], self.hole_at_thickness(&h, c.thickness[k])?))
+            };
+            for (k, s) in starts.iter_mut().enumerate().take(f.params().n) {
+                if let (Some(a), Some(b)) = (at(last - 2, k), at(last - 1, k)) {
+                    *s = Some([a, b]);
                 }
             }
         }
