@@ -456,7 +456,7 @@ pub fn table_cost_section() -> String {
          hole residual is within the converged solver's own tolerance is the answer (Newton's first evaluation), \
          else Newton iterates, else the full solve's continuation. **Inverse** (`solve_pose_tabled`): the \
          tension range and the thickness solve start from the table (docs/inverse.md). **fmax** \
-         (`BranchTable::fmax`): the march up the branch starts at the table's last sample. Every answer is a \
+         (`BranchTable::fmax`): the march up the branch continues from the table's last two samples (docs/fmax-cost.md). Every answer is a \
          converged solve of the full model; the table only chooses where it starts. Bench image \
          `bench/src/bin/table.rs`, f32 with the firmware's model features (fast-trig, general inverse path, \
          no fallback), QEMU netduinoplus2 `-icount shift=0`; errors against the host's f64 full solve at \

@@ -543,8 +543,9 @@ impl<R: Real> Finger<R> {
         out
     }
 
-    /// The converged solve under tension alone started from a guide-hole guess per joint (a
-    /// branch table's, `inverse::BranchTable::solve_with`): Newton on the full model from the
+    /// The converged equilibrium under tension alone (MODEL.md "Equilibrium", the joints
+    /// decoupled) started from a guide-hole guess per joint (a branch table's,
+    /// `inverse::BranchTable::solve_with`): Newton on the full model from the
     /// guess, its first evaluation one plain march; a march whose residual is within the
     /// converged solver's tolerance is the answer (Newton's own test at its first
     /// evaluation), else Newton with dual marches from the guess, else the load continuation
