@@ -10,8 +10,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-#[path = "../../bench/src/scenes.rs"]
-pub mod scenes;
+pub use finger_scenes as scenes;
 use scenes::Scene;
 
 /// One bench image: a core, the QEMU machine for it, the model features compiled in.

@@ -19,9 +19,7 @@ use finger_model::{Calibration, Finger, Method};
 
 #[path = "../cycles.rs"]
 mod cycles;
-#[path = "../scenes.rs"]
-#[allow(dead_code)]
-mod scenes;
+use finger_scenes as scenes;
 
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {

@@ -1,5 +1,5 @@
-//! The fixed scene set of the performance report, shared by the bench image (target) and
-//! perf-report (host reference) through `#[path]` includes.
+//! The fixed scene set of the performance report, a dependency of the bench images (target)
+//! and of perf-report (host reference).
 //!
 //! MODEL.md's finger (3 joints, corrected DE modulus) in the paper's model, pinned here (one
 //! compliance per hinge, m = 1, the body modulus, rigid links) so that the report does not move
@@ -8,6 +8,7 @@
 //! (`layers` = 0) DE stacks. Loads are the paper's 0.2, 0.5 and 1.0 N, uniform and per-joint
 //! voltages, and two high tensions: 7 N (where the paper's stepping at n_inc = 1 is off by
 //! tens of mm) and 250 N (near contact: the links touch at about 300 N).
+#![no_std]
 
 /// One scene: cable tension (N), DE layers per stack, channel voltages (V).
 #[derive(Clone, Copy, Debug)]
