@@ -318,7 +318,7 @@ pub fn inverse_cost_table() -> String {
         writeln!(doc).unwrap();
         writeln!(
             doc,
-            "Building the branch table (`inverse::BranchTable::new`, once per parameter set; the firmware at the first `pose` after a change), same image: {}.",
+            "Building the branch table (`inverse::BranchTable::new`, once per parameter set; the firmware at its first use after a change: `solve`, `status`, `pose`, `force`, `volt`), same image: {}.",
             table_builds.join("; ")
         )
         .unwrap();
