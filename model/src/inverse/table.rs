@@ -167,22 +167,38 @@ impl<R: Real> BranchTable<R> {
     #[inline(never)]
     pub(crate) fn branch_holes(&self, p: R) -> Option<BranchHoles<R>> {
         let mut out = BranchHoles { hole: [[R::zero(); 2]; 3] };
+        let mut found: Option<usize> = None;
         for (e, o) in out.hole.iter_mut().enumerate() {
             let len = self.len[e];
             let xs = &self.x[e];
             if len < 4 || !(p > R::zero() && p < xs[len - 1][0]) {
                 return None;
             }
-            // the sample interval [a, a+1] holding p (tensions rise along the branch)
-            let (mut a, mut b) = (0usize, len - 1);
-            while b - a > 1 {
-                let mid = (a + b) / 2;
-                if xs[mid][0] <= p {
-                    a = mid;
-                } else {
-                    b = mid;
+            // the sample interval [a, a+1] holding p (tensions rise along the branch): a
+            // binary search on the first branch, a walk from its interval on the others (their
+            // tensions differ by the stack's share)
+            let mut a = match found {
+                None => {
+                    let (mut a, mut b) = (0usize, len - 1);
+                    while b - a > 1 {
+                        let mid = (a + b) / 2;
+                        if xs[mid][0] <= p {
+                            a = mid;
+                        } else {
+                            b = mid;
+                        }
+                    }
+                    a
                 }
+                Some(a) => a.min(len - 2),
+            };
+            while a > 0 && xs[a][0] > p {
+                a -= 1;
             }
+            while a + 2 < len && xs[a + 1][0] <= p {
+                a += 1;
+            }
+            found = Some(a);
             let i = a.clamp(1, len - 3);
             let node = |n: usize, c: usize| xs[i - 1 + n][c];
             // s in node units from node i; the linear guess inside [a, a+1]
