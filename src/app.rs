@@ -196,11 +196,12 @@ pub struct Commands {
     /// times it was computed.
     fmax_cache: Cell<Option<([f32; CHANNELS], Result<BranchLimit<f32>, ModelError>)>>,
     fmax_computed: Cell<u32>,
-    /// The inverse's branch table for the current model (`pose`), built at the first `pose`
-    /// after a model change (1.18 M instructions for the default model, about 7 ms at
-    /// 168 MHz; docs/inverse-cost.md) and cleared by [`Commands::set_finger`]. None also for a finger without stacks.
+    /// The finger's branch table (`inverse::BranchTable`: `solve`, `pose`, `force` and fmax
+    /// start from it), built at its first use after a model change (docs/inverse-cost.md has
+    /// its cost) and cleared by [`Commands::set_finger`] and [`Commands::recompute`]. None
+    /// inside for a finger without stacks.
     #[cfg(feature = "pose")]
-    inv_table: Option<finger_model::inverse::BranchTable<f32>>,
+    inv_table: core::cell::OnceCell<Option<finger_model::inverse::BranchTable<f32>>>,
 }
 
 impl Commands {
@@ -240,7 +241,7 @@ impl Commands {
             fmax_cache: Cell::new(None),
             fmax_computed: Cell::new(0),
             #[cfg(feature = "pose")]
-            inv_table: None,
+            inv_table: core::cell::OnceCell::new(),
         };
         c.recompute();
         c
@@ -364,7 +365,7 @@ impl Commands {
         // the inverse's branch table is built for the ceiling in force
         #[cfg(feature = "pose")]
         {
-            self.inv_table = None;
+            self.inv_table = core::cell::OnceCell::new();
         }
         for ch in 0..CHANNELS {
             self.vmax[ch] = v;
@@ -390,8 +391,8 @@ impl Commands {
         if force == 0.0 {
             return Ok((0.0, 0.0));
         }
-        let sol = finger.solve(force, volts, Method::converged()).map_err(model_err)?;
-        let cable = sol.cable_excursion.max(0.0);
+        let sol = if core::ptr::eq(finger, &self.finger) { self.forward(force, volts) } else { finger.solve(force, volts, Method::converged()) };
+        let cable = sol.map_err(model_err)?.cable_excursion.max(0.0);
         let deg = cable / fw.spool_r * DEG;
         if !(deg <= fw.servo_range) {
             return Err(err!("limit"; "cable excursion ", Fixed(cable, 2), " mm needs ", Fixed(deg, 1), " deg, past the servo travel ", Fixed(fw.servo_range, 0), " deg"));
@@ -408,10 +409,42 @@ impl Commands {
                 return r;
             }
         }
+        #[cfg(feature = "pose")]
+        let r = match self.branch_table() {
+            Some(t) => t.fmax(volts),
+            None => self.finger.fmax(volts),
+        };
+        #[cfg(not(feature = "pose"))]
         let r = self.finger.fmax(volts);
         self.fmax_cache.set(Some((*volts, r)));
         self.fmax_computed.set(self.fmax_computed.get() + 1);
         r
+    }
+
+    /// The finger's branch table, built at its first use after a model change (None for a
+    /// finger without stacks, or if it cannot be built: the full solves answer then).
+    #[cfg(feature = "pose")]
+    fn branch_table(&self) -> Option<&finger_model::inverse::BranchTable<f32>> {
+        self.inv_table
+            .get_or_init(|| {
+                if self.finger.params().layers > 0 {
+                    finger_model::inverse::BranchTable::new(&self.finger, &self.inverse_options()).ok()
+                } else {
+                    None
+                }
+            })
+            .as_ref()
+    }
+
+    /// The forward solve under tension alone at these voltages: from the branch table when
+    /// there is one (`BranchTable::solve`: the full model's converged answer, Newton started
+    /// at the table's guide holes), else `Finger::solve`.
+    fn forward(&self, p: f32, volts: &[f32]) -> Result<finger_model::Solution<f32>, ModelError> {
+        #[cfg(feature = "pose")]
+        if let Some(t) = self.branch_table() {
+            return t.solve(p, volts);
+        }
+        self.finger.solve(p, volts, Method::converged())
     }
 
     /// How many times `Finger::fmax` ran (the cache's misses), for the tests.
@@ -431,7 +464,7 @@ impl Commands {
         self.fmax_cache.set(None);
         #[cfg(feature = "pose")]
         {
-            self.inv_table = None;
+            self.inv_table = core::cell::OnceCell::new();
         }
     }
 
@@ -583,7 +616,7 @@ impl Commands {
         }
         let _ = w!(r; " thick=");
         list(r, &thick, 4);
-        let sol = self.finger.solve(self.force, &self.volts, Method::converged());
+        let sol = self.forward(self.force, &self.volts);
         let mut fault = self.fault;
         match sol {
             Ok(s) => {
@@ -671,7 +704,7 @@ impl Commands {
     #[inline(never)]
     fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let (p, vf) = self.model_request(args, "solve <P> <V1> <V2> <V3>")?;
-        let sol = self.finger.solve(p, &vf, Method::converged()).map_err(model_err)?;
+        let sol = self.forward(p, &vf).map_err(model_err)?;
         let k = self.finger.tip_stiffness(&sol).map_err(model_err)?;
         let _ = w!(r; "joints=");
         joints(r, &sol);
@@ -782,14 +815,12 @@ impl Commands {
             Some(t) => Some(tension(number(t, "P")?)?),
             None => None,
         };
-        if self.inv_table.is_none() && self.finger.params().layers > 0 {
-            self.inv_table = finger_model::inverse::BranchTable::new(&self.finger, &self.inverse_options()).ok();
-        }
+        let table = self.branch_table();
         let armed = self.armed;
         let mut plan = None;
         let mut line: String<240> = String::new();
         let this = &*self;
-        let _ = crate::inverse_cmds::pose_with(&mut line, &this.finger, this.inv_table.as_ref(), &this.inverse_options(), &deg, p, |t, v| {
+        let _ = crate::inverse_cmds::pose_with(&mut line, &this.finger, table, &this.inverse_options(), &deg, p, |t, v| {
             if !armed {
                 return Ok(());
             }

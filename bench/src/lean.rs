@@ -14,9 +14,7 @@ use finger_model::{Method, Params, Real};
 #[cfg(feature = "fixed")]
 #[allow(dead_code)]
 mod fix;
-#[allow(dead_code)]
-#[path = "scenes.rs"]
-mod scenes;
+use finger_scenes as scenes;
 #[cfg(feature = "fixed")]
 mod cycles_stub {
     pub fn now() -> u64 {

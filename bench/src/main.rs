@@ -20,8 +20,7 @@ use finger_model::{Finger, Method, Params, Real};
 mod cycles;
 #[cfg(feature = "fixed")]
 mod fix;
-#[path = "scenes.rs"]
-mod scenes;
+use finger_scenes as scenes;
 
 use scenes::{Scene, N_INC, SCENES};
 

@@ -1,5 +1,5 @@
 //! Host nanoseconds per solve, with criterion: `solve_with` (compliances precomputed, as on the
-//! target) for every bench scene (bench/src/scenes.rs) and method, in f64 and f32.
+//! target) for every bench scene (finger-scenes, host-tests/scenes) and method, in f64 and f32.
 //! `cargo bench --bench host_solve`; perf-report runs it and reads criterion's estimates
 //! (median) for docs/performance.md. `cargo test --bench host_solve` runs each once.
 use criterion::{criterion_group, criterion_main, Criterion};

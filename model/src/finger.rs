@@ -182,7 +182,8 @@ pub struct Solution<R> {
     pub iterations: u32,
     /// Final equilibrium residual: guide-hole mismatch, mm.
     pub residual: R,
-    /// Determinant of each joint's equilibrium tangent (2x2, dimensionless; 1 unloaded).
+    /// Determinant of each joint's equilibrium tangent (2x2, dimensionless; 1 unloaded; 1 where
+    /// not evaluated: a joint the tabled forward answered at its first march).
     /// It falls to zero at a limit point of the equilibrium branch.
     pub tangent_det: [R; MAX_JOINTS],
 }
@@ -542,6 +543,109 @@ impl<R: Real> Finger<R> {
         out
     }
 
+    /// The converged equilibrium under tension alone (MODEL.md "Equilibrium", the joints
+    /// decoupled) started from a guide-hole guess per joint (a branch table's,
+    /// `inverse::BranchTable::solve_with`): Newton on the full model from the
+    /// guess, its first evaluation one plain march; a march whose residual is within the
+    /// converged solver's tolerance is the answer (Newton's own test at its first
+    /// evaluation), else Newton with dual marches from the guess, else the load continuation
+    /// of `solve`. The same tolerance and answer as `solve_with(Method::converged())`.
+    /// `tangent_det` is 1 for a joint answered at its first march (not evaluated).
+    #[inline(always)]
+    pub(crate) fn solve_from_holes(&self, c: &Compliances<R>, tension: R, holes: &[[R; 2]; MAX_JOINTS]) -> Result<Solution<R>, Error> {
+        self.check_load(c, tension, [R::zero(); 2])?;
+        let Method::Converged { tol, max_iter } = Method::<R>::converged() else { return Err(Error::Singular { what: "method" }) };
+        let tol = tol.max(self.resolution());
+        let mut out = Ok(Solution {
+            n: self.p.n,
+            m: self.p.m,
+            tension,
+            tip_force: [R::zero(); 2],
+            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            links: [[R::zero(); 3]; MAX_JOINTS],
+            joint_angle: [R::zero(); MAX_JOINTS],
+            nodes: [Pose::origin(); MAX_JOINTS + 1],
+            span: [R::zero(); MAX_JOINTS],
+            thickness: c.thickness,
+            volts: c.volts,
+            cable_excursion: R::zero(),
+            iterations: 0,
+            residual: R::zero(),
+            tangent_det: [R::one(); MAX_JOINTS],
+        });
+        if let Ok(sol) = &mut out {
+            if let Err(e) = self.fill_from_holes(c, tension, holes, tol, max_iter, sol) {
+                out = Err(e);
+            }
+        }
+        out
+    }
+
+    /// `solve_from_holes`'s joints, written in place: one march per distinct joint into the
+    /// solution's rows, Newton (`polish_joint`) only where that march is not converged.
+    #[inline(never)]
+    fn fill_from_holes(
+        &self,
+        c: &Compliances<R>,
+        tension: R,
+        holes: &[[R; 2]; MAX_JOINTS],
+        tol: R,
+        max_iter: u32,
+        sol: &mut Solution<R>,
+    ) -> Result<(), Error> {
+        let (n, m) = (self.p.n, self.p.m);
+        let mut ends = [Pose::origin(); MAX_JOINTS];
+        let mut arrived = [[R::zero(); 2]; MAX_JOINTS];
+        let (mut res2, mut r2_prev, mut iters) = (R::zero(), R::zero(), 0u32);
+        for k in 0..n {
+            let b = holes[k];
+            // a joint with the same voltage, thickness and guess as the one before has its
+            // state (`compliances` makes a joint's compliances a function of its voltage; the
+            // first sub-element's are compared too)
+            if k > 0 && b == holes[k - 1] && c.volts[k] == c.volts[k - 1] && c.thickness[k] == c.thickness[k - 1] && c.c[k][0] == c.c[k - 1][0] {
+                let (done, rest) = sol.q.split_at_mut(k);
+                rest[0][..m].copy_from_slice(&done[k - 1][..m]);
+                ends[k] = ends[k - 1];
+                arrived[k] = arrived[k - 1];
+                sol.tangent_det[k] = sol.tangent_det[k - 1];
+                res2 += r2_prev;
+                continue;
+            }
+            let first = self.march_into(&c.c[k], tension, b, None, &mut sol.q[k]);
+            let r2 = match first {
+                Ok((end, hole)) if (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq() <= tol * tol => {
+                    ends[k] = end;
+                    arrived[k] = hole;
+                    (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq()
+                }
+                _ => {
+                    let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
+                    iters += it;
+                    sol.q[k][..m].copy_from_slice(&st.q[..m]);
+                    ends[k] = st.end;
+                    arrived[k] = st.hole;
+                    let (r, det) = st.tangent.unwrap_or(([R::zero(); 2], R::one()));
+                    sol.tangent_det[k] = det;
+                    r[0] * r[0] + r[1] * r[1]
+                }
+            };
+            r2_prev = r2;
+            res2 += r2;
+        }
+        self.finish_tension_alone(tension, &ends, &arrived, res2, iters, sol)
+    }
+
+    /// Joint k's equilibrium from the hole guess `b` (`solve_from_holes`) when its first march
+    /// is not converged: Newton from `b` (dual marches), accepted if it stays within half a
+    /// hinge length of the guess; else the load continuation from the straight joint.
+    #[inline(never)]
+    fn polish_joint(&self, k: usize, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], tol: R, max_iter: u32) -> Result<(JointState<R>, u32), Error> {
+        match self.newton_dual(c, tension, b, tol, max_iter) {
+            Ok((st, it)) if norm2([st.hole[0] - b[0], st.hole[1] - b[1]]) <= self.p.hinge_len() / R::from_f64(2.0) => Ok((st, it)),
+            _ => self.newton_joint(k, c, tension, tol, max_iter, tension / R::from_f64(4096.0)),
+        }
+    }
+
     fn fill_tension_alone(
         &self,
         c: &Compliances<R>,
@@ -593,7 +697,24 @@ impl<R: Real> Finger<R> {
             r2_prev = r2;
             res2 += r2;
         }
-        let (nodes, links) = self.chain_ends(&ends, tension, [R::zero(); 2], None);
+        self.finish_tension_alone(tension, &ends, &holes, res2, iters, sol)
+    }
+
+    /// The posture of a solve under tension alone from each joint's hinge end and guide hole
+    /// (MODEL.md "Equilibrium": node k = node k-1 ∘ hinge ∘ link; "Cable": the excursion
+    /// Σ (L_h - |span k|)), into `sol`; a span below its floor is contact.
+    #[inline(never)]
+    fn finish_tension_alone(
+        &self,
+        tension: R,
+        ends: &[Pose<R>; MAX_JOINTS],
+        holes: &[[R; 2]; MAX_JOINTS],
+        res2: R,
+        iters: u32,
+        sol: &mut Solution<R>,
+    ) -> Result<(), Error> {
+        let n = self.p.n;
+        let (nodes, links) = self.chain_ends(ends, tension, [R::zero(); 2], None);
         sol.nodes = nodes;
         sol.links = links;
         sol.iterations = iters;

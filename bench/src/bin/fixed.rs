@@ -1,4 +1,4 @@
-//! Bench image for docs/fixed-point.md (issue 14): every scene of `scenes.rs`, for the scene's
+//! Bench image for docs/fixed-point.md (issue 14): every scene of finger-scenes (host-tests/scenes), for the scene's
 //! pinned model and for the default model (`Params::default()`, the firmware's), solved by
 //! the model's f32 forward solve and by its fixed-point one (`finger_model::fixed`), with the
 //! instruction count of each solve (and of each set-up: the compliances at the scene's
@@ -26,9 +26,7 @@ use finger_model::{Finger, Method, Params};
 mod cycles;
 #[path = "../twin.rs"]
 mod twin;
-#[path = "../scenes.rs"]
-#[allow(dead_code)]
-mod scenes;
+use finger_scenes as scenes;
 
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {

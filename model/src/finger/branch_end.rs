@@ -15,7 +15,7 @@
 //! than one joint's. A point's Newton takes few line-search halvings: on the branch the
 //! predictor's full steps converge, past its end a trial fails fast (docs/fmax-cost.md).
 
-use super::{BranchEnd, BranchLimit, Finger, JointState, MarchError};
+use super::{BranchEnd, BranchLimit, Compliances, Finger, JointState, MarchError};
 use crate::error::Error;
 use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
@@ -49,6 +49,13 @@ impl<R: Real> Finger<R> {
     /// tensions past this end (its continuation cannot pass it).
     pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
         let c = self.compliances(volts)?;
+        self.fmax_with(&c, None)
+    }
+
+    /// `fmax` with precomputed compliances and, per joint, optionally two points near its
+    /// branch (tensions and hole guesses, from the branch table: the march up the branch
+    /// continues from them instead of starting at the straight joint).
+    pub(crate) fn fmax_with(&self, c: &Compliances<R>, starts: Option<&[Option<[(R, [R; 2]); 2]>; MAX_JOINTS]>) -> Result<BranchLimit<R>, Error> {
         let (n, m) = (self.p.n, self.p.m);
         // the most thinned stack first (it usually ends first); each later joint marches only
         // up to the end found so far: reaching it, it does not end before
@@ -63,7 +70,8 @@ impl<R: Real> Finger<R> {
             if order[..i].iter().any(|&j| c.c[j][..m] == c.c[k][..m]) {
                 continue;
             }
-            let Some(end) = self.joint_branch_end(k, &c.c[k], best.map(|b| b.tension))? else { continue };
+            let start = starts.and_then(|s| s[k]);
+            let Some(end) = self.joint_branch_end(k, &c.c[k], best.map(|b| b.tension), start)? else { continue };
             if best.map_or(true, |b| end.tension < b.tension || (end.tension == b.tension && end.joint < b.joint)) {
                 best = Some(end);
             }
@@ -123,7 +131,13 @@ impl<R: Real> Finger<R> {
 
     /// Joint `k`'s branch end (see the module header); None if it has an equilibrium at
     /// `bound` (it does not end below the end found so far).
-    fn joint_branch_end(&self, k: usize, c: &[Mat3<R>; MAX_SUB], bound: Option<R>) -> Result<Option<BranchLimit<R>>, Error> {
+    fn joint_branch_end(
+        &self,
+        k: usize,
+        c: &[Mat3<R>; MAX_SUB],
+        bound: Option<R>,
+        start: Option<[(R, [R; 2]); 2]>,
+    ) -> Result<Option<BranchLimit<R>>, Error> {
         let c33 = c[..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
         let p_lin = R::one() / (self.p.e * c33);
         let p_search = R::from_f64(1000.0) * p_lin;
@@ -132,6 +146,27 @@ impl<R: Real> Finger<R> {
         let mut lo = Pt { p: R::zero(), st: self.straight(), span: lh, det: R::one() };
         let mut prev: Option<Pt<R>> = None;
         let mut step = p_lin / R::from_f64(8.0);
+        // two points on the branch from the table (its last two samples at this stack): solved
+        // there, the march continues from them (secant predictor, the table's spacing as the
+        // first step)
+        if let Some(pts) = start.filter(|s| s[0].0 > R::zero() && s[0].0 < s[1].0 && s[1].0 < p_hi) {
+            let tol = self.resolution().max(R::from_f64(1e-9));
+            let opts = SolveOptions { max_halvings: POINT_HALVINGS, ..SolveOptions::new(tol, self.resolution(), POINT_ITER) };
+            let solved = pts.map(|(ps, guess)| {
+                let (st, _) = self.newton_dual_with(c, ps, guess, &opts).ok()?;
+                // on the table's branch: the solved hole within a twentieth of a hinge length
+                // of the table's
+                (super::norm2([st.hole[0] - guess[0], st.hole[1] - guess[1]]) <= lh / R::from_f64(20.0)).then(|| {
+                    let span = super::norm2([st.hole[0], st.hole[1] - self.p.e]);
+                    Pt { p: ps, st, span, det: st.tangent.map_or(R::one(), |t| t.1) }
+                })
+            });
+            if let [Some(a), Some(b)] = solved {
+                step = b.p - a.p;
+                prev = Some(a);
+                lo = b;
+            }
+        }
         let mut why: Option<MarchError> = None;
         let min_step = p_lin * R::from_f64(1e-6);
         let mut stalled = 0u32;

@@ -16,10 +16,11 @@
 //! With the branch table (table.rs) step 1 reads the range ends off the table and solves only
 //! those that bound the feasible interval; step 4 starts from a quadratic through the table's
 //! three branches. Behind the quasi-Newton solves (model feature `inverse-fallback`), a
-//! bracketed root on the warm-started forward equilibrium (`Finger::joint_equilibrium`):
-//! secant steps kept inside a bracket, bisection when a step leaves it or when one end has
-//! been kept three times (the Illinois failure mode), converged when the joint angle is within
-//! the angle tolerance or the bracket has shrunk to the scalar's resolution. A forward failure
+//! bracketed root on the warm-started forward equilibrium (`Finger::joint_equilibrium`), the
+//! solve layer's `bracket::increasing_root`: secant steps kept inside a bracket, bisection when
+//! a step leaves it or when one end has been kept three times (the Illinois failure mode),
+//! converged when the joint angle is within the angle tolerance or the bracket has shrunk to
+//! the scalar's resolution. A forward failure
 //! (contact, limit point) at a trial tension marks it as beyond the branch end; a target past
 //! the end is refused with that error. The flexible link's rotation (P e L/(E I), independent
 //! of the voltage) is part of θ_k.
@@ -35,7 +36,7 @@ use crate::finger::{uniform_beam_compliance, Finger, JointEquilibrium, JointMarc
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
-use crate::solve::broyden;
+use crate::solve::{bracket, broyden};
 
 /// One evaluated point of a root find: the parameter x (P or t), h = sign (θ - θ*), the state.
 #[derive(Clone, Copy)]
@@ -173,10 +174,13 @@ impl<'a, R: Real> Gen<'a, R> {
         }
     }
 
-    /// Root of h(x) = sign (θ(x) - θ*), increasing in x, on [lo, hi] (hi = None: unbounded).
-    /// `left`: a known point at lo; `x0`, `guess`: the first trial and its hole guess;
-    /// `slope`: an estimate of dh/dx > 0. With `beyond_ok`, a forward failure marks the trial
-    /// as past the branch end. Returns the point and dh/dx there (secant estimate).
+    /// Root of h(x) = sign (θ(x) - θ*), increasing in x, on [lo, hi] (hi = None: unbounded),
+    /// on the solve layer's bracket (`solve::bracket::increasing_root`). `left`: a known point
+    /// at lo; `x0`, `guess`: the first trial and its hole guess; `slope`: an estimate of dh/dx
+    /// > 0. With `beyond_ok`, a forward failure (contact, limit point, no convergence) marks the
+    /// trial as past the branch end, and a target past it is refused with that error. Each
+    /// trial's hole guess is interpolated between the bracket's states, else the last state's.
+    /// Returns the point and dh/dx there (secant estimate).
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     fn root(
@@ -192,139 +196,45 @@ impl<'a, R: Real> Gen<'a, R> {
         guess: Option<[R; 2]>,
         slope: R,
         beyond_ok: bool,
-    ) -> Result<(Pt<R>, R), Error>
-    {
-        let atol = self.tol_angle * (theta.abs() + R::from_f64(0.1));
-        let two = R::from_f64(2.0);
-        let (mut l_x, mut l_pt) = (lo, left);
-        let (mut r_x, mut r_pt): (Option<R>, Option<Pt<R>>) = (hi, None);
-        let (mut prev, mut last): (Option<Pt<R>>, Option<Pt<R>>) = (left, None);
-        let mut beyond: Option<Error> = None;
-        let (mut run_side, mut run) = (0i8, 0u32);
-        let mut x = x0;
-        let mut hole = guess;
-        let slope_of = |a: Option<Pt<R>>, b: &Pt<R>| match a {
-            Some(a) if a.x != b.x => {
-                let s = (b.h - a.h) / (b.x - a.x);
-                if s.is_finite() && s > R::zero() {
-                    s
-                } else {
-                    slope
-                }
-            }
-            _ => slope,
+    ) -> Result<(Pt<R>, R), Error> {
+        let opts = bracket::RootOptions {
+            atol: self.tol_angle * (theta.abs() + R::from_f64(0.1)),
+            rel: self.rel,
+            beyond_rel: R::from_f64(1e-6),
+            max_iter: self.max_iter,
         };
-        for _ in 0..self.max_iter {
-            let side;
+        let left = left.map(|p| bracket::Point { x: p.x, h: p.h, state: p.eq });
+        let (mut hole, mut first) = (guess, true);
+        let mut trial = |x: R, at: &bracket::Around<'_, R, JointEquilibrium<R>>| {
+            if !first {
+                hole = match (at.left, at.right) {
+                    (Some(a), Some(b)) if b.x != a.x => {
+                        let fr = (x - a.x) / (b.x - a.x);
+                        Some([
+                            a.state.hole[0] + (b.state.hole[0] - a.state.hole[0]) * fr,
+                            a.state.hole[1] + (b.state.hole[1] - a.state.hole[1]) * fr,
+                        ])
+                    }
+                    _ => at.last.or(at.left).map(|z| z.state.hole).or(hole),
+                };
+            }
+            first = false;
             match ev(x, hole) {
                 Ok(eq) => {
                     *iters += eq.iterations;
-                    let pt = Pt { x, h: sign * (eq.angle - theta), eq };
-                    if !pt.h.is_finite() {
-                        return Err(Error::NotConverged { iterations: *iters, residual: f64::INFINITY });
-                    }
-                    if pt.h.abs() <= atol {
-                        let s = slope_of(last.or(prev), &pt);
-                        return Ok((pt, s));
-                    }
-                    if pt.h < R::zero() {
-                        l_x = x;
-                        l_pt = Some(pt);
-                        side = -1;
-                    } else {
-                        r_x = Some(x);
-                        r_pt = Some(pt);
-                        side = 1;
-                    }
-                    if last.is_some() {
-                        prev = last;
-                    }
-                    last = Some(pt);
+                    Ok(bracket::Trial::Value(sign * (eq.angle - theta), eq))
                 }
                 Err(e @ (Error::Contact { .. } | Error::LimitPoint { .. } | Error::NotConverged { .. })) if beyond_ok => {
-                    r_x = Some(x);
-                    r_pt = None;
-                    beyond = Some(e);
-                    side = 1;
+                    Ok(bracket::Trial::Beyond(e))
                 }
-                Err(e) => return Err(e),
+                Err(e) => Err(e),
             }
-            if side == run_side {
-                run += 1;
-            } else {
-                run_side = side;
-                run = 1;
-            }
-            // the target lies past the branch end: the tension where it ends is known to 1e-6
-            if let (Some(rx), None, Some(e)) = (r_x, r_pt, beyond) {
-                if rx - l_x <= R::from_f64(1e-6) * rx {
-                    return Err(e);
-                }
-            }
-            // the bracket has shrunk to the resolution: the best point, or the branch end
-            if let Some(rx) = r_x {
-                if rx - l_x <= self.rel * rx.abs().max(l_x.abs()) {
-                    if r_pt.is_none() {
-                        if let Some(e) = beyond {
-                            return Err(e);
-                        }
-                    }
-                    let best = match (l_pt, r_pt) {
-                        (Some(a), Some(b)) => Some(if a.h.abs() <= b.h.abs() { a } else { b }),
-                        (a, b) => a.or(b),
-                    };
-                    let Some(pt) = best else {
-                        return Err(Error::NotConverged { iterations: *iters, residual: f64::INFINITY });
-                    };
-                    let s = slope_of(if last.map(|z| z.x) == Some(pt.x) { prev } else { last }, &pt);
-                    return Ok((pt, s));
-                }
-            }
-            // next trial: secant through the last two points, else the slope estimate
-            let mut xn = match (prev, last) {
-                (Some(a), Some(b)) if b.h != a.h => b.x - b.h * (b.x - a.x) / (b.h - a.h),
-                (_, Some(b)) => b.x - b.h / slope,
-                _ => (l_x + x) / two,
-            };
-            let inside = xn.is_finite() && xn > l_x && r_x.map_or(true, |rx| xn < rx);
-            match r_x {
-                None => {
-                    // unbounded: grow at most fourfold per step
-                    let cap = R::from_f64(4.0) * l_x.max(x);
-                    if !inside || run >= 3 {
-                        xn = two * l_x.max(x);
-                    }
-                    xn = xn.min(cap);
-                }
-                Some(rx) => {
-                    if run >= 3 {
-                        xn = (l_x + rx) / two;
-                    } else if !inside {
-                        // an end of the range not yet evaluated is tried first
-                        xn = if xn >= rx && r_pt.is_none() && beyond.is_none() {
-                            rx
-                        } else if xn <= l_x && l_pt.is_none() {
-                            l_x
-                        } else {
-                            (l_x + rx) / two
-                        };
-                    }
-                }
-            }
-            // hole guess: interpolated between the bracket's states, else the nearest state
-            hole = match (l_pt, r_pt) {
-                (Some(a), Some(b)) if b.x != a.x => {
-                    let fr = (xn - a.x) / (b.x - a.x);
-                    Some([
-                        a.eq.hole[0] + (b.eq.hole[0] - a.eq.hole[0]) * fr,
-                        a.eq.hole[1] + (b.eq.hole[1] - a.eq.hole[1]) * fr,
-                    ])
-                }
-                _ => last.or(l_pt).map(|z| z.eq.hole).or(hole),
-            };
-            x = xn;
+        };
+        match bracket::increasing_root(&mut trial, lo, hi, left, x0, slope, &opts) {
+            Ok((p, s)) => Ok((Pt { x: p.x, h: p.h, eq: p.state }, s)),
+            Err(bracket::RootError::Beyond(e) | bracket::RootError::Refused(e)) => Err(e),
+            Err(bracket::RootError::NotConverged) => Err(Error::NotConverged { iterations: *iters, residual: f64::INFINITY }),
         }
-        Err(Error::NotConverged { iterations: *iters, residual: f64::INFINITY })
     }
 
     /// Joint `joint` held at θ* with compliances `c` (thickness t): the tension, by a root in P

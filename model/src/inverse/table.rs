@@ -26,9 +26,10 @@
 //! is never used with another parameter set. About 4.5 KB in f32 (the finger's 1.3 KB).
 
 use super::Options;
-use crate::finger::Finger;
+use crate::error::Error;
+use crate::finger::{BranchLimit, Compliances, Finger, Method, Solution};
 use crate::mat3::Mat3;
-use crate::params::MAX_SUB;
+use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
 /// The relative band around the feasible interval's bounds inside which an end read off the
@@ -149,5 +150,183 @@ impl<R: Real> BranchTable<R> {
             *o = TableEnd { tension: v[0], hole: [v[1], v[2]] };
         }
         Some(out)
+    }
+}
+
+/// The three branches' holes at one tension (`BranchTable::branch_holes`), for the forward
+/// lookup: per branch, the hole where the branch carries that tension.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BranchHoles<R> {
+    pub hole: [[R; 2]; 3],
+}
+
+impl<R: Real> BranchTable<R> {
+    /// Where each branch carries tension `p` (N): the cubic P(θ) through the four samples
+    /// around it inverted by Newton from the linear guess, and the hole's cubic there (the
+    /// same weights). None when `p` is not inside every branch's tabulated tensions.
+    #[inline(never)]
+    pub(crate) fn branch_holes(&self, p: R) -> Option<BranchHoles<R>> {
+        let mut out = BranchHoles { hole: [[R::zero(); 2]; 3] };
+        let mut found: Option<usize> = None;
+        for (e, o) in out.hole.iter_mut().enumerate() {
+            let len = self.len[e];
+            let xs = &self.x[e];
+            if len < 4 || !(p > R::zero() && p < xs[len - 1][0]) {
+                return None;
+            }
+            // the sample interval [a, a+1] holding p (tensions rise along the branch): a
+            // binary search on the first branch, a walk from its interval on the others (their
+            // tensions differ by the stack's share)
+            let mut a = match found {
+                None => {
+                    let (mut a, mut b) = (0usize, len - 1);
+                    while b - a > 1 {
+                        let mid = (a + b) / 2;
+                        if xs[mid][0] <= p {
+                            a = mid;
+                        } else {
+                            b = mid;
+                        }
+                    }
+                    a
+                }
+                Some(a) => a.min(len - 2),
+            };
+            while a > 0 && xs[a][0] > p {
+                a -= 1;
+            }
+            while a + 2 < len && xs[a + 1][0] <= p {
+                a += 1;
+            }
+            found = Some(a);
+            let i = a.clamp(1, len - 3);
+            let node = |n: usize, c: usize| xs[i - 1 + n][c];
+            // s in node units from node i; the linear guess inside [a, a+1]
+            let (pa, pb) = (xs[a][0], xs[a + 1][0]);
+            let mut s = R::from_u32((a - (i - 1)) as u32) - R::one() + (p - pa) / (pb - pa);
+            let (sixth, half, two) = (R::from_f64(1.0 / 6.0), R::from_f64(0.5), R::from_f64(2.0));
+            let weights = |s: R| {
+                let (sm, s1, s2) = (s + R::one(), s - R::one(), s - two);
+                [-s * s1 * s2 * sixth, sm * s1 * s2 * half, -sm * s * s2 * half, sm * s * s1 * sixth]
+            };
+            for _ in 0..2 {
+                // the cubic's value and slope at s
+                let (sm, s1, s2) = (s + R::one(), s - R::one(), s - two);
+                let w = weights(s);
+                let dw = [
+                    -(s1 * s2 + s * s2 + s * s1) * sixth,
+                    (s1 * s2 + sm * s2 + sm * s1) * half,
+                    -(s * s2 + sm * s2 + sm * s) * half,
+                    (s * s1 + sm * s1 + sm * s) * sixth,
+                ];
+                let (mut v, mut d) = (R::zero(), R::zero());
+                for n in 0..4 {
+                    v += w[n] * node(n, 0);
+                    d += dw[n] * node(n, 0);
+                }
+                if !(d > R::zero()) {
+                    return None;
+                }
+                s -= (v - p) / d;
+            }
+            let w = weights(s);
+            for c in 0..2 {
+                o[c] = (0..4).fold(R::zero(), |acc, n| acc + w[n] * node(n, c + 1));
+            }
+            if !(o[0].is_finite() && o[1].is_finite()) {
+                return None;
+            }
+        }
+        Some(out)
+    }
+
+    /// The hole at stack thickness `t` (mm) from the branches' holes at one tension: the
+    /// quadratic through the three branch thicknesses. None outside [t_top, t0] (with a
+    /// sliver of 1e-3 of the range: voltages between the table's top and the ceiling).
+    #[inline(never)]
+    pub(crate) fn hole_at_thickness(&self, h: &BranchHoles<R>, t: R) -> Option<[R; 2]> {
+        let [t_top, t0, tm] = self.thickness;
+        let slack = (t0 - t_top) * R::from_f64(1e-3);
+        if !(t >= t_top - slack && t <= t0 + slack) {
+            return None;
+        }
+        let (d01, d02, d12) = (t_top - t0, t_top - tm, t0 - tm);
+        if d01 == R::zero() || d02 == R::zero() || d12 == R::zero() {
+            return None;
+        }
+        let w = [(t - t0) * (t - tm) / (d01 * d02), -(t - t_top) * (t - tm) / (d01 * d12), (t - t_top) * (t - t0) / (d02 * d12)];
+        let mut b = [R::zero(); 2];
+        for c in 0..2 {
+            b[c] = w[0] * h.hole[0][c] + w[1] * h.hole[1][c] + w[2] * h.hole[2][c];
+        }
+        Some(b)
+    }
+}
+
+impl<R: Real> BranchTable<R> {
+    /// The forward solve under tension alone (N) at these channel voltages (V), from the table:
+    /// `solve_with` after `Finger::compliances`.
+    pub fn solve(&self, tension: R, volts: &[R]) -> Result<Solution<R>, Error> {
+        let c = self.finger.compliances(volts)?;
+        self.solve_with(&c, tension)
+    }
+
+    /// The forward solve under tension alone with precomputed compliances (of this table's
+    /// finger): each joint's guide hole read off the table at (P, its stack thickness), then
+    /// Newton on the full model from there (`Finger::solve_from_holes`: a joint whose march
+    /// at the table's hole is within the solver's tolerance is answered by that march). The
+    /// answer is `Finger::solve_with(Method::converged())`'s, to its tolerance; where the
+    /// table does not hold (P, t) (P = 0, past its last sample, t outside its stack range)
+    /// it is that solve. (Inlined, so that the solution is written in the caller's place.)
+    #[inline(always)]
+    pub fn solve_with(&self, c: &Compliances<R>, tension: R) -> Result<Solution<R>, Error> {
+        let f = &self.finger;
+        match self.forward_holes(c, tension) {
+            Some(holes) => f.solve_from_holes(c, tension, &holes),
+            None => f.solve_with(c, tension, [R::zero(); 2], Method::converged()),
+        }
+    }
+
+    /// Each joint's guide hole read off the table at (P, its stack thickness), or None where
+    /// the table does not hold one of them.
+    #[inline(never)]
+    fn forward_holes(&self, c: &Compliances<R>, tension: R) -> Option<[[R; 2]; MAX_JOINTS]> {
+        let n = self.finger.params().n;
+        if !(tension.is_finite() && c.n == n) {
+            return None;
+        }
+        let h = self.branch_holes(tension)?;
+        let mut holes = [[R::zero(); 2]; MAX_JOINTS];
+        for k in 0..n {
+            holes[k] = self.hole_at_thickness(&h, c.thickness[k])?;
+        }
+        Some(holes)
+    }
+}
+
+impl<R: Real> BranchTable<R> {
+    /// The end of the equilibrium branch under tension alone at these voltages
+    /// (`Finger::fmax`, same answer and tolerance), its march up the branch continued, for each
+    /// joint, from the table's last two samples (the three branches' last common angles, the
+    /// tension and hole quadratic in the joint's stack thickness) instead of started at the
+    /// straight joint.
+    pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
+        let f = &self.finger;
+        let c = f.compliances(volts)?;
+        let mut starts = [None; MAX_JOINTS];
+        let last = self.covered();
+        if last >= 4 {
+            let at = |i: usize, k: usize| {
+                let h = BranchHoles { hole: [0, 1, 2].map(|e| [self.x[e][i][1], self.x[e][i][2]]) };
+                let p = BranchHoles { hole: [0, 1, 2].map(|e| [self.x[e][i][0], R::zero()]) };
+                Some((self.hole_at_thickness(&p, c.thickness[k])?[0], self.hole_at_thickness(&h, c.thickness[k])?))
+            };
+            for (k, s) in starts.iter_mut().enumerate().take(f.params().n) {
+                if let (Some(a), Some(b)) = (at(last - 2, k), at(last - 1, k)) {
+                    *s = Some([a, b]);
+                }
+            }
+        }
+        f.fmax_with(&c, Some(&starts))
     }
 }

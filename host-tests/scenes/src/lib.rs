@@ -1,5 +1,5 @@
-//! The fixed scene set of the performance report, shared by the bench image (target) and
-//! perf-report (host reference) through `#[path]` includes.
+//! The fixed scene set of the performance report, a dependency of the bench images (target)
+//! and of perf-report (host reference).
 //!
 //! MODEL.md's finger (3 joints, corrected DE modulus) in the paper's model, pinned here (one
 //! compliance per hinge, m = 1, the body modulus, rigid links) so that the report does not move
@@ -8,6 +8,7 @@
 //! (`layers` = 0) DE stacks. Loads are the paper's 0.2, 0.5 and 1.0 N, uniform and per-joint
 //! voltages, and two high tensions: 7 N (where the paper's stepping at n_inc = 1 is off by
 //! tens of mm) and 250 N (near contact: the links touch at about 300 N).
+#![no_std]
 
 /// One scene: cable tension (N), DE layers per stack, channel voltages (V).
 #[derive(Clone, Copy, Debug)]
@@ -51,3 +52,44 @@ pub const SCENES: &[Scene] = &[
 
 /// The paper's stepping at these increment counts; plus the converged solver.
 pub const N_INC: &[u32] = &[1, 2, 5, 10, 20, 50, 100, 200];
+
+/// The branch-table path (issue 15, `inverse::BranchTable`): the models it is measured on,
+/// and the scenes (tension N, channel voltages V). Every model has stacks (the table
+/// tabulates the stack's thickness range).
+#[derive(Clone, Copy, Debug)]
+pub struct TableModel {
+    pub name: &'static str,
+    /// m = 8, plate modulus, flexible links (MODEL.md's defaults) if true, else the paper's
+    /// m = 1, body modulus, rigid links.
+    pub fidelity: bool,
+    /// MODEL.md's FE calibration factors (docs/fidelity-fe.md) applied.
+    pub calibrated: bool,
+}
+
+pub const TABLE_MODELS: &[TableModel] = &[
+    TableModel { name: "m8-default", fidelity: true, calibrated: false },
+    TableModel { name: "m8-calibrated", fidelity: true, calibrated: true },
+    TableModel { name: "m1-paper", fidelity: false, calibrated: false },
+];
+
+/// (name, tension N, voltages V): the bench scenes with stacks, and two higher tensions below
+/// the default model's branch end (about 18 N).
+pub const TABLE_SCENES: &[(&str, f64, [f64; 3])] = &[
+    ("de-0.2N", 0.2, [0.0; 3]),
+    ("de-0.5N", 0.5, [0.0; 3]),
+    ("de-1.0N", 1.0, [0.0; 3]),
+    ("de-1.0N-uni8kV", 1.0, [8000.0; 3]),
+    ("de-1.0N-per9/5/0kV", 1.0, [9000.0, 5000.0, 0.0]),
+    ("de-7N", 7.0, [0.0; 3]),
+    ("de-7N-per9/5/0kV", 7.0, [9000.0, 5000.0, 0.0]),
+    ("de-15N-per2/6/9kV", 15.0, [2000.0, 6000.0, 9000.0]),
+];
+
+/// A table model's parameters (4 layers per stack) and calibration factors (hinge x4,
+/// stack EA g0 g1, stack EI g0 g1; all 1 and 0 when uncalibrated).
+pub fn table_params(m: &TableModel) -> (finger_model::Params<f64>, [f64; 8]) {
+    let (mm, plate, flex_links) = if m.fidelity { (8, true, true) } else { (1, false, false) };
+    let p = finger_model::Params { layers: 4, m: mm, plate, flex_links, ..finger_model::Params::default() };
+    let cal = if m.calibrated { [1.5407, 6.2456, 1.0669, 1.1546, 0.7183, 0.0546, 5.2540, -1.7563] } else { [1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 1.0, 0.0] };
+    (p, cal)
+}
