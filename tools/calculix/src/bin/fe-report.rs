@@ -360,7 +360,7 @@ fn main() {
     let _ = writeln!(w, "- **The calibration** carries what the FE sees at small loads into the model's sub-element compliances; beyond small loads the model's subdivision carries it on, and the growth column above is what it does not carry.\n");
     let _ = writeln!(w, "## Per scene\n");
     let _ = write!(w, "{per_scene}");
-    let _ = writeln!(w, "Report run time: {} on one core.", fmt_dur(started.elapsed()));
+    let _ = writeln!(w, "Report run time: {} (ccx on one thread; a 2-core machine shared with other builds).", fmt_dur(started.elapsed()));
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/fidelity-fe.md");
     std::fs::write(&path, out).unwrap_or_else(|e| fail(format!("{}: {e}", path.display())));
     eprintln!("wrote {} in {}", path.display(), fmt_dur(started.elapsed()));
