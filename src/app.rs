@@ -18,6 +18,7 @@ use core::fmt::Write;
 
 use embedded_hal::pwm::SetDutyCycle;
 use finger_model::params::PARAMS;
+use finger_model::calibration::KEEPS_CALIBRATION;
 use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Method, Params, Solution};
 use heapless::String;
 
@@ -209,7 +210,9 @@ impl Commands {
     /// `hv_max` / `servo_max` its PWMs' full-scale duties.
     pub fn new(board_name: &'static str, nl: &'static str, hv_max: [u16; CHANNELS], servo_max: u16) -> Self {
         // the defaults are valid (a model test); no Debug formatting of the error on the target
-        let finger = match Finger::new(preset(Params::default())) {
+        // MODEL.md's finger with its FE calibration (`Calibration::for_params`, issue 18)
+        let p = preset(Params::default());
+        let finger = match Finger::with_calibration(p, Calibration::for_params(&p)) {
             Ok(f) => f,
             Err(_) => panic!("default parameters"),
         };
@@ -910,7 +913,7 @@ impl Commands {
                 let mut p = *self.finger.params();
                 p.set(name, v.into()).map_err(model_err)?;
                 // the FE calibration belongs to the mechanical parameters it was computed for
-                let cal = if NOT_MECHANICAL.contains(&name) { *self.finger.calibration() } else { Calibration::none() };
+                let cal = if KEEPS_CALIBRATION.contains(&name) { *self.finger.calibration() } else { Calibration::for_params(&p) };
                 let f = Finger::with_calibration(p, cal).map_err(model_err)?;
                 let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
                 self.set_finger(f);
@@ -943,7 +946,7 @@ impl Commands {
             w => return Err(err!("usage"; "preset ", (console::printable(w)), " is not default or paper")),
         };
         self.require_disarmed("preset")?;
-        let f = Finger::new(p).map_err(model_err)?;
+        let f = Finger::with_calibration(p, Calibration::for_params(&p)).map_err(model_err)?;
         let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
         self.set_finger(f);
         self.cable = cable;
@@ -986,10 +989,6 @@ impl Commands {
         Ok(())
     }
 }
-
-/// Parameters a `param` set of which keeps the FE calibration (`cal`): the electrical ceiling
-/// and the solver's increments. Any other set clears it.
-const NOT_MECHANICAL: &[&str] = &["margin", "v_supply", "eps_r", "n_inc"];
 
 /// `cal`'s factors in console order (`Calibration`: hinge, stack_axial, stack_bending).
 const CAL_NAMES: [&str; 8] = ["h1", "h2", "h3", "h4", "ea0", "ea1", "ei0", "ei1"];

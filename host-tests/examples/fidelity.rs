@@ -15,7 +15,7 @@
 //!
 //! Every model parameter that the defaults might change (m, plate, flex_links, nu_b) is set
 //! explicitly for each configuration, so these tables stay valid when `Params::default()` does.
-use finger_model::{BranchEnd, Finger, Method, Params};
+use finger_model::{BranchEnd, Calibration, Finger, Method, Params};
 use host_tests::continuum::{self, ContinuumSolution, Discretisation};
 use host_tests::perf;
 use host_tests::scene::{self, continuum_params};
@@ -245,7 +245,14 @@ fn main() {
     let instr = |image: &str, c: Config, case: &str| -> Option<&perf::Rec> {
         bench.get(&(image.to_string(), c.bench_name(), case.to_string()))
     };
-    // worst solve (and setup) instructions of a config over the bench cases
+    // worst solve (and setup) instructions of a bench configuration (its name) over the bench cases
+    let worst_named = |image: &str, name: &str| -> Option<(f64, f64)> {
+        let v: Vec<_> = CASES.iter().filter_map(|(case, _, _)| bench.get(&(image.to_string(), name.to_string(), case.to_string()))).collect();
+        if v.len() != CASES.len() {
+            return None;
+        }
+        Some((v.iter().map(|r| r.instr).fold(0.0, f64::max), v.iter().map(|r| r.setup_instr).fold(0.0, f64::max)))
+    };
     let worst_instr = |image: &str, c: Config| -> Option<(f64, f64)> {
         let v: Vec<_> = CASES.iter().filter_map(|(case, _, _)| instr(image, c, case)).collect();
         if v.len() != CASES.len() {
@@ -519,6 +526,30 @@ docs/performance.md for where the instructions go); m is not the lever.",
             fmt_t(LIMIT_TENSION)
         );
     }
+    // the board's default: m = 8, plate, flexible links, with MODEL.md's FE calibration
+    let plain = Config { plate: true, flex: true, m: 8 };
+    let (u, c) = (worst_instr("m4f-fast-trig", plain), worst_named("m4f-fast-trig", &format!("{}-cal", plain.bench_name())));
+    let (ul, cl) = (worst_instr("m4f-libm", plain), worst_named("m4f-libm", &format!("{}-cal", plain.bench_name())));
+    let g = |x: Option<(f64, f64)>, k: usize| x.map_or(f64::NAN, |x| if k == 0 { x.0 } else { x.1 });
+    let _ = writeln!(
+        w,
+        "\n**The board's default is calibrated** (issue 18): MODEL.md's finger carries its FE calibration \
+(`Calibration::model_md`, `cal` at the console; docs/fidelity-fe.md for its accuracy against a 3D \
+finite-element solution). The factors change the sub-element compliances once, when the finger is \
+built, and the stack's stiffness once per voltage change (`Finger::compliances`), not the solve: m = 8 \
+(plate, flexible links) calibrated costs {:.0} M4F instructions per forward solve (`fast-trig`, the \
+firmware's build; worst over the bench cases) against {:.0} uncalibrated ({:+.0}); libm {:.0} against \
+{:.0}; the setup {:.0} against {:.0} (`fast-trig`). This report's accuracy tables are the uncalibrated \
+model: it shares the continuum reference's beam assumptions, so the pair checks the model's \
+discretisation; the calibration moves the model away from beam theory toward the FE by design.",
+        g(c, 0),
+        g(u, 0),
+        g(c, 0) - g(u, 0),
+        g(cl, 0),
+        g(ul, 0),
+        g(c, 1),
+        g(u, 1),
+    );
     let rigid_vs_flex = |m: usize, plate: bool| {
         (
             worst(Config { plate, flex: false, m }, LIMIT_TENSION).map_or(f64::NAN, |x| x.0),
@@ -742,7 +773,8 @@ a rejected command changes nothing.\n"
     }
     // the console's view of the default finger (4 layers, 0 V) with the recommended switches
     let cc = chosen.unwrap_or(Config { plate: true, flex: true, m: 8 });
-    let cf = Finger::new(params(&SCENES[1], cc)).expect("valid parameters");
+    let cp = params(&SCENES[1], cc);
+    let cf = Finger::with_calibration(cp, Calibration::for_params(&cp)).expect("valid parameters");
     let cb = cf.fmax(&SCENES[1].volts).expect("fmax of the default finger");
     let past = 1.1 * cb.tension;
     // what `force` answers (src/app.rs: the tension against `Finger::fmax`, f32 on the board)
@@ -753,7 +785,7 @@ a rejected command changes nothing.\n"
     assert!(cf.solve(past, &SCENES[1].volts, Method::converged()).is_err(), "the solver refuses past fmax too");
     let _ = writeln!(
         w,
-        "\nExamples (the finger with 4 layers at 0 V, m = {}, plate = 1, flex_links = 1; numbers from the model):\n\n```\n\
+        "\nExamples (the finger with 4 layers at 0 V, m = {}, plate = 1, flex_links = 1, as the board holds it: with its FE calibration for m = 8; numbers from the model):\n\n```\n\
 > param m 9\nerr usage: parameter m out of range: integer 1..8\n> param nu_b 0.5\nerr usage: parameter nu_b out of range: 0..0.499\n\
 > param m {}\nok m={}\n> limits\nok ... fmax={:.4} fmax_end={},{} ...\n> force {:.1}\n{refusal}\n```\n",
         cc.m,

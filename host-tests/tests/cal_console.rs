@@ -1,13 +1,17 @@
 //! The `cal` console addition (issue 18, docs/firmware.md "Console additions") on the
-//! simulated board: the model's FE calibration read, set and cleared; the calibrated finger
-//! is the host model's `Finger::with_calibration` in f32; refusals change nothing.
+//! simulated board: the board boots with MODEL.md's finger's FE calibration; it is read, set
+//! and cleared; the calibrated finger is the host model's `Finger::with_calibration` in f32;
+//! refusals change nothing.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 use host_tests::sim_console::{cmd, Out};
 use finger_model::{Calibration, Finger, Method};
 
-/// MODEL.md's finger, as `fe-calibrate` (tools/calculix) prints it.
+/// MODEL.md's finger, as `fe-calibrate` (tools/calculix) prints it (docs/firmware.md).
+/// Another calibration, for the tests that set one.
 const FE_CAL: &str = "1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332";
+const OTHER: &str = "1.5 2 1 1.25 0.5 0 2 -0.25";
+const OTHER_REPLY: &str = "ok cal=1.500000,2.000000,1.000000,1.250000,0.500000,0.000000,2.000000,-0.250000";
 const NONE_REPLY: &str = "ok cal=1.000000,1.000000,1.000000,1.000000,1.000000,0.000000,1.000000,0.000000";
 
 fn err(a: &mut App<SimBoard>, line: &str, code: &str) {
@@ -50,8 +54,11 @@ fn cal_round_trip_and_help() {
     let mut out = Out(String::new());
     a.input(b"help\n", &mut out);
     assert!(out.0.lines().any(|l| l.starts_with("cal ")), "help lacks cal: {}", out.0);
-    // the firmware's default is the uncalibrated model
-    assert_eq!(cmd(&mut a, "cal"), NONE_REPLY);
+    // the firmware's default is MODEL.md's finger with its FE calibration
+    assert_eq!(cmd(&mut a, "cal"), fe_reply());
+    assert_eq!(*a.finger().calibration(), fe_cal());
+    assert_eq!(*a.finger().calibration(), Calibration::<f32>::model_md());
+    assert_eq!(cmd(&mut a, "cal none"), NONE_REPLY);
     assert_eq!(*a.finger().calibration(), Calibration::none());
     assert_eq!(cmd(&mut a, &format!("cal {FE_CAL}")), fe_reply());
     assert_eq!(cmd(&mut a, "cal"), fe_reply());
@@ -68,6 +75,7 @@ fn calibrated_solve_is_the_host_model() {
     let p = *a.finger().params();
     let plain = Finger::new(p).unwrap();
     let cal = Finger::with_calibration(p, fe_cal()).unwrap();
+    cmd(&mut a, "cal none");
     let fmax0 = kv(&cmd(&mut a, "limits"), "fmax")[0];
     let evals = a.fmax_evaluations();
     cmd(&mut a, &format!("cal {FE_CAL}"));
@@ -104,16 +112,16 @@ fn calibrated_solve_is_the_host_model() {
 fn cal_refused_while_armed() {
     let mut a = App::new(SimBoard::default());
     cmd(&mut a, "arm");
-    err(&mut a, &format!("cal {FE_CAL}"), "armed");
+    err(&mut a, &format!("cal {OTHER}"), "armed");
     err(&mut a, "cal none", "armed");
-    assert_eq!(cmd(&mut a, "cal"), NONE_REPLY, "reading is fine armed");
+    assert_eq!(cmd(&mut a, "cal"), fe_reply(), "reading is fine armed");
     cmd(&mut a, "disarm");
     cmd(&mut a, "wait 1");
-    assert_eq!(cmd(&mut a, &format!("cal {FE_CAL}")), fe_reply());
+    assert_eq!(cmd(&mut a, "cal none"), NONE_REPLY);
     cmd(&mut a, "arm");
-    err(&mut a, "cal none", "armed");
-    assert_eq!(cmd(&mut a, "cal"), fe_reply());
-    assert_eq!(*a.finger().calibration(), fe_cal());
+    err(&mut a, &format!("cal {FE_CAL}"), "armed");
+    assert_eq!(cmd(&mut a, "cal"), NONE_REPLY);
+    assert_eq!(*a.finger().calibration(), Calibration::none());
 }
 
 #[test]
@@ -149,25 +157,42 @@ fn bad_cal_changes_nothing() {
 }
 
 #[test]
-fn preset_and_mechanical_param_clear_cal() {
+fn preset_and_mechanical_param_give_their_parameters_calibration() {
     let mut a = App::new(SimBoard::default());
-    let fe = format!("cal {FE_CAL}");
-    for clear in ["preset default", "preset paper", "param l 27", "param a 5", "param layers 10", "param m 8", "param e_b 1"] {
+    let other = format!("cal {OTHER}");
+    // back to MODEL.md's finger (any mechanical value at its default): its FE calibration
+    for back in ["preset default", "param l 27", "param a 5", "param m 8", "param layers 0"] {
         cmd(&mut a, "preset default");
-        cmd(&mut a, &fe);
+        assert_eq!(cmd(&mut a, &other), OTHER_REPLY);
+        assert!(cmd(&mut a, back).starts_with("ok"), "{back}");
+        assert_eq!(cmd(&mut a, "cal"), fe_reply(), "{back}");
+        assert_eq!(*a.finger().calibration(), fe_cal());
+    }
+    // another finger: none (the factors were computed for MODEL.md's)
+    for clear in ["preset paper", "param l 28", "param a 4", "param layers 10", "param m 4", "param e_b 1"] {
+        cmd(&mut a, "preset default");
+        cmd(&mut a, &other);
         assert!(cmd(&mut a, clear).starts_with("ok"), "{clear}");
         assert_eq!(cmd(&mut a, "cal"), NONE_REPLY, "{clear} kept the calibration");
         assert_eq!(*a.finger().calibration(), Calibration::none());
     }
-    // electrical, solver and firmware parameters keep it; so do a read and a refused set
+    // and back again
     cmd(&mut a, "preset default");
-    cmd(&mut a, &fe);
+    cmd(&mut a, "param l 28");
+    cmd(&mut a, "param v_supply 9000");
+    cmd(&mut a, "param l 27");
+    assert_eq!(cmd(&mut a, "cal"), fe_reply());
+    // electrical, solver and firmware parameters keep the one in force; so do a read and a refused set
+    cmd(&mut a, "preset default");
+    cmd(&mut a, &other);
     for keep in ["param margin 0.5", "param v_supply 9000", "param eps_r 4", "param n_inc 20", "param slew 5000", "param l", "param", "param l 1e9", "param nope 1"] {
         cmd(&mut a, keep);
-        assert_eq!(cmd(&mut a, "cal"), fe_reply(), "{keep} changed the calibration");
+        assert_eq!(cmd(&mut a, "cal"), OTHER_REPLY, "{keep} changed the calibration");
     }
     // and the finger after them is the host's calibrated finger at those parameters
-    let f = Finger::with_calibration(*a.finger().params(), fe_cal()).unwrap();
+    let g: Vec<f32> = OTHER.split(' ').map(|x| x.parse().unwrap()).collect();
+    let c = Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
+    let f = Finger::with_calibration(*a.finger().params(), c).unwrap();
     let r = cmd(&mut a, "solve 1 0 1000 2000");
     assert!(r.starts_with(&solve_prefix(&f, 1.0, [0.0, 1000.0, 2000.0])), "{r}");
 }
@@ -178,6 +203,7 @@ fn pose_after_cal_uses_the_calibrated_finger() {
     let p = *a.finger().params();
     let plain = Finger::new(p).unwrap();
     // a `pose` before builds the uncalibrated branch table: `cal` must drop it
+    cmd(&mut a, "cal none");
     let r0 = cmd(&mut a, "pose 5 5 5");
     assert!(r0.starts_with("ok force="), "{r0}");
     cmd(&mut a, &format!("cal {FE_CAL}"));

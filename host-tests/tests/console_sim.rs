@@ -536,7 +536,7 @@ fn fmax_cached_and_enforced() {
 /// read, set, refused outside their ranges, and the model the console solves with follows.
 #[test]
 fn fidelity_parameters() {
-    use finger_model::{Finger, Method};
+    use finger_model::{Calibration, Finger, Method};
     let mut a = app();
     for (n, v) in [("m", "8"), ("plate", "1"), ("nu_b", "0.3"), ("flex_links", "1"), ("m", "1"), ("plate", "0"), ("flex_links", "0"), ("m", "4")] {
         assert_eq!(ok(&mut a, &format!("param {n} {v}")), format!("ok {n}={v}"));
@@ -551,7 +551,7 @@ fn fidelity_parameters() {
     }
     // the console's solve is the model's at these parameters (m = 4, nu_b = 0.3)
     let s = ok(&mut a, "solve 1 0 2000 4000");
-    let f = Finger::new(*a.finger().params()).unwrap();
+    let f = Finger::with_calibration(*a.finger().params(), Calibration::for_params(a.finger().params())).unwrap();
     let sol = f.solve(1.0, &[0.0, 2000.0, 4000.0], Method::converged()).unwrap();
     let j = nums(val(&s, "joints"));
     for k in 0..3 {

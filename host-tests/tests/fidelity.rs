@@ -165,8 +165,10 @@ fn console_limits_reports_fmax_and_force_refuses_past_it() {
     };
     let fmax: f64 = field("fmax=").parse().unwrap();
     assert_eq!(field("fmax_end="), "contact,1");
-    // the model's own fmax for these parameters (f32 on the board, f64 here)
-    let f = Finger::new(params(M, true, true)).unwrap();
+    // the model's own fmax for these parameters (f32 on the board, f64 here), with the FE
+    // calibration the board gives them (MODEL.md's finger without stacks: calibrated)
+    let p = params(M, true, true);
+    let f = Finger::with_calibration(p, finger_model::Calibration::for_params(&p)).unwrap();
     let b = f.fmax(&[0.0; 3]).unwrap();
     assert!((fmax - b.tension).abs() < 2e-3 * b.tension, "limits fmax {fmax} vs model {}", b.tension);
 

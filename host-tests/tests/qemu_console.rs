@@ -87,7 +87,8 @@ fn console_commands_and_bad_inputs(img: Image) {
 fn pose_and_contact(q: &mut Qemu) {
     // pose (the inverse model on the target, armed: it sets the tension and the voltages) at a
     // posture of the host's model; the answer agrees with the host's inverse
-    let f = finger_model::Finger::new(finger_model::Params::<f32>::default()).unwrap();
+    // the board's default finger: MODEL.md's, with its FE calibration
+    let f = finger_model::Finger::with_calibration(finger_model::Params::<f32>::default(), finger_model::Calibration::model_md()).unwrap();
     let s = f.solve(0.8, &[1000.0, 3000.0, 5000.0], finger_model::Method::converged()).unwrap();
     let deg = [0, 1, 2].map(|k| format!("{:.6}", (s.joint_angle[k] as f64).to_degrees()).parse::<f64>().unwrap());
     // the firmware solves with the finger's branch table

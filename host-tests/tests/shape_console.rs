@@ -4,7 +4,7 @@
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 use host_tests::sim_console::feed;
-use finger_model::{Finger, Method, Params, Pose};
+use finger_model::{Calibration, Finger, Method, Params, Pose};
 
 /// One command line: its reply, which must be the only line.
 fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
@@ -24,7 +24,8 @@ fn numbers(s: &str) -> Vec<f64> {
 #[test]
 fn shape_reports_the_poses_of_the_solve() {
     let mut a = App::new(SimBoard::default());
-    let f: Finger<f32> = Finger::new(Params::default()).unwrap();
+    // the board's default finger: MODEL.md's, with its FE calibration
+    let f: Finger<f32> = Finger::with_calibration(Params::default(), Calibration::model_md()).unwrap();
     let p = f.params();
     let sub_len = p.hinge_len() / p.m as f32;
     for (tension, volts) in [(0.0, [0.0; 3]), (1.0, [0.0; 3]), (3.0, [9000.0, 0.0, 4000.0]), (8.0, [2000.0; 3])] {

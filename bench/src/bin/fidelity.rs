@@ -3,7 +3,8 @@
 //! configuration (rigid links, E_b) and the real-structure one (plate modulus, flexible links).
 //! f32 on the M4F. Prints the same `CAL` / `R` / `END` lines as `finger-bench` (so
 //! `host_tests::perf::parse` reads them); the scene field names the configuration and the case:
-//! `m<m>-p<plate>-f<flex>/<case>`.
+//! `m<m>-p<plate>-f<flex>/<case>`; the board's default, m = 8 with plate modulus, flexible links
+//! and MODEL.md's FE calibration (`Calibration::model_md`, issue 18), is `m8-p1-f1-cal/<case>`.
 //!
 //! Every model parameter is set explicitly (m, plate, flex_links, layers), so the counts do not
 //! move when `Params::default()` changes. Driven by `cargo run --release --example fidelity`
@@ -13,7 +14,7 @@
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use finger_model::{Finger, Method, Params};
+use finger_model::{Calibration, Finger, Method, Params};
 
 #[path = "../cycles.rs"]
 mod cycles;
@@ -47,13 +48,14 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
     loop {}
 }
 
-fn run(m: usize, plate: bool, flex: bool, case: &Case) {
+fn run(m: usize, plate: bool, flex: bool, cal: bool, case: &Case) {
     let p = Params::<f32> { m, plate, flex_links: flex, layers: case.layers, ..Params::default() };
     let (pi, fi) = (plate as u32, flex as u32);
-    let f = match Finger::new(p) {
+    let (c, tag) = if cal { (Calibration::model_md(), "-cal") } else { (Calibration::none(), "") };
+    let f = match Finger::with_calibration(p, c) {
         Ok(f) => f,
         Err(e) => {
-            hprintln!("R m{}-p{}-f{}/{} f32 conv err 0 0 {}", m, pi, fi, case.name, e.code());
+            hprintln!("R m{}-p{}-f{}{}/{} f32 conv err 0 0 {}", m, pi, fi, tag, case.name, e.code());
             return;
         }
     };
@@ -63,7 +65,7 @@ fn run(m: usize, plate: bool, flex: bool, case: &Case) {
     let c = match core::hint::black_box(c) {
         Ok(c) => c,
         Err(e) => {
-            hprintln!("R m{}-p{}-f{}/{} f32 conv err 0 {} {}", m, pi, fi, case.name, t1 - t0, e.code());
+            hprintln!("R m{}-p{}-f{}{}/{} f32 conv err 0 {} {}", m, pi, fi, tag, case.name, t1 - t0, e.code());
             return;
         }
     };
@@ -76,10 +78,11 @@ fn run(m: usize, plate: bool, flex: bool, case: &Case) {
             let tip = s.tip();
             let a = s.joint_angles();
             hprintln!(
-                "R m{}-p{}-f{}/{} f32 conv ok {} {} {:e} {:e} {:e} {:e} {:e} {}",
+                "R m{}-p{}-f{}{}/{} f32 conv ok {} {} {:e} {:e} {:e} {:e} {:e} {}",
                 m,
                 pi,
                 fi,
+                tag,
                 case.name,
                 t3 - t2,
                 t1 - t0,
@@ -91,7 +94,7 @@ fn run(m: usize, plate: bool, flex: bool, case: &Case) {
                 s.iterations
             );
         }
-        Err(e) => hprintln!("R m{}-p{}-f{}/{} f32 conv err {} {} {}", m, pi, fi, case.name, t3 - t2, t1 - t0, e.code()),
+        Err(e) => hprintln!("R m{}-p{}-f{}{}/{} f32 conv err {} {} {}", m, pi, fi, tag, case.name, t3 - t2, t1 - t0, e.code()),
     }
 }
 
@@ -104,9 +107,12 @@ fn main() -> ! {
     for &(plate, flex) in CONFIGS {
         for &m in MS {
             for case in CASES {
-                run(m, plate, flex, case);
+                run(m, plate, flex, false, case);
             }
         }
+    }
+    for case in CASES {
+        run(8, true, true, true, case);
     }
     hprintln!("END");
     debug::exit(debug::EXIT_SUCCESS);

@@ -124,6 +124,9 @@ pub enum Law {
     /// `*ELASTIC` under NLGEOM, i.e. St Venant-Kirchhoff (stress linear in Green strain): it
     /// softens in compression, so it bends more than neo-Hooke at large strain.
     StVenantKirchhoff,
+    /// The body neo-Hookean, the DE stacks St Venant-Kirchhoff: the stacks' finite-strain law
+    /// alone changed (what it does to the stacked scenes' growth with load).
+    NeoHookeBodySvkStacks,
 }
 
 impl Law {
@@ -131,6 +134,15 @@ impl Law {
         match self {
             Law::NeoHooke => "neo-Hookean",
             Law::StVenantKirchhoff => "St Venant-Kirchhoff",
+            Law::NeoHookeBodySvkStacks => "neo-Hookean body, St Venant-Kirchhoff stacks",
+        }
+    }
+
+    /// (body's law, stacks' law).
+    fn parts(self) -> (Law, Law) {
+        match self {
+            Law::NeoHookeBodySvkStacks => (Law::NeoHooke, Law::StVenantKirchhoff),
+            l => (l, l),
         }
     }
 }
@@ -141,7 +153,7 @@ fn material(s: &mut String, name: &str, e: f64, nu: f64, law: Law) {
         Law::StVenantKirchhoff => {
             let _ = writeln!(s, "*MATERIAL, NAME={name}\n*ELASTIC\n{e:.9e}, {nu:.6}");
         }
-        Law::NeoHooke => {
+        Law::NeoHooke | Law::NeoHookeBodySvkStacks => {
             let (g, k) = (e / (2.0 * (1.0 + nu)), e / (3.0 * (1.0 - 2.0 * nu)));
             let _ = writeln!(s, "*MATERIAL, NAME={name}\n*HYPERELASTIC, NEO HOOKE\n{:.9e}, {:.9e}", g / 2.0, 2.0 / k);
         }
@@ -276,8 +288,9 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
         Loads::Cable { law, .. } => *law,
         Loads::Unit(_) => Law::StVenantKirchhoff, // linear steps: Hooke's law
     };
-    material(&mut s, "BODY", p.e_b, p.nu_b, law);
-    material(&mut s, "STACK", p.e_de(), p.nu, law);
+    let (body_law, stack_law) = law.parts();
+    material(&mut s, "BODY", p.e_b, p.nu_b, body_law);
+    material(&mut s, "STACK", p.e_de(), p.nu, stack_law);
     let thick = if kind == Kind::Half3d { String::new() } else { format!("\n{:.9e}", p.w) };
     for (set, _, mat, _) in &blocks {
         let name = if *mat == Material::Body { "BODY" } else { "STACK" };

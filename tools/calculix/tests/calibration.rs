@@ -66,3 +66,18 @@ fn calibrated_finger_reproduces_the_fe_small_load_joint_angle() {
     assert!((m1 / fe - 1.0).abs() < 0.01, "calibrated {m1} rad vs FE {fe} rad");
     assert!(m0 / fe - 1.0 < -0.05, "uncalibrated {m0} rad vs FE {fe} rad");
 }
+
+#[test]
+fn the_boards_default_calibration_is_fe_calibrates_line() {
+    // `Calibration::model_md` (the firmware's default) is what `fe-calibrate` computes for
+    // MODEL.md's finger (3D, fine mesh), to the 6 decimals the line prints
+    let p = Params::<f64>::default();
+    let run = calibrate::run(&p, Kind::Half3d, &Density::fine()).unwrap();
+    let (a, b) = (Calibration::<f64>::model_md(), run.cal);
+    let fa = [a.hinge[0], a.hinge[1], a.hinge[2], a.hinge[3], a.stack_axial[0], a.stack_axial[1], a.stack_bending[0], a.stack_bending[1]];
+    let fb = [b.hinge[0], b.hinge[1], b.hinge[2], b.hinge[3], b.stack_axial[0], b.stack_axial[1], b.stack_bending[0], b.stack_bending[1]];
+    for (i, (x, y)) in fa.iter().zip(&fb).enumerate() {
+        assert!((x - y).abs() < 2e-6, "factor {i}: model_md {x}, fe-calibrate {y}");
+    }
+    assert_eq!(Calibration::for_params(&p), a);
+}

@@ -132,7 +132,7 @@ fn board_params(con: &mut Console) -> Result<Vec<(String, f64)>, RunError> {
 
 /// Give the board the scene's finger: `disarm`, the preset whose DE rule it uses, then each
 /// parameter that differs (retried while some succeed: the board checks the whole set after
-/// each change, as the scene reader does).
+/// each change, as the scene reader does), then `cal none`.
 pub fn load_finger(con: &mut Console, p: &Params<f64>) -> Result<(), RunError> {
     cmd(con, "disarm")?;
     let paper = p.de_rule == Params::<f64>::paper().de_rule;
@@ -168,6 +168,9 @@ pub fn load_finger(con: &mut Console, p: &Params<f64>) -> Result<(), RunError> {
         }
         pending = failed;
     }
+    // a scene's finger is the model as MODEL.md states it (the host's `Finger::new`, which the
+    // continuum reference cross-checks): without the board's FE calibration (`cal`, issue 18)
+    cmd(con, "cal none")?;
     Ok(())
 }
 

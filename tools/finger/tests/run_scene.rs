@@ -115,6 +115,8 @@ fn drive_arms_drives_reads_back_and_stops_on_the_sim() {
     let lines: Vec<&str> = sent.lines().map(str::trim).collect();
     let arm = lines.iter().position(|l| *l == "arm").expect("armed");
     assert!(lines[..arm].iter().any(|l| l.starts_with("preset default")), "{sent}");
+    // the scene's finger is the uncalibrated model: the board's FE calibration is cleared
+    assert!(lines[..arm].iter().any(|l| *l == "cal none"), "{sent}");
     assert!(lines[arm..].iter().any(|l| *l == "force 0.8") && lines[arm..].iter().any(|l| *l == "volt 1 600"), "{sent}");
     assert_eq!(lines.last(), Some(&"stop"), "{sent}");
     let _ = std::fs::remove_dir_all(&dir);

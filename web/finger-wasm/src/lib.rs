@@ -19,7 +19,7 @@ use std::fmt::Write as _;
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 use finger_model::inverse::stiffness_range;
-use finger_model::{solve_pose, Finger, Method, Params, Pose, Solution};
+use finger_model::{solve_pose, Calibration, Finger, Method, Params, Pose, Solution};
 
 const IO_CAP: usize = 4096;
 
@@ -124,6 +124,12 @@ pub extern "C" fn fw_now_ms() -> f64 {
 
 // ------------------------------------------------------------------ host f64 model
 
+/// The host's f64 finger at `p`, with the FE calibration the board gives those parameters
+/// (`Calibration::for_params`: MODEL.md's finger is calibrated, issue 18).
+fn host_finger(p: &Params<f64>) -> Result<Finger<f64>, finger_model::Error> {
+    Finger::with_calibration(*p, Calibration::for_params(p))
+}
+
 /// Host model parameters back to MODEL.md's defaults.
 #[no_mangle]
 pub extern "C" fn host_reset() {
@@ -138,7 +144,7 @@ pub extern "C" fn host_param(len: u32, value: f64) -> i32 {
         let n = (len as usize).min(IO_CAP);
         let Ok(name) = std::str::from_utf8(&s.io[..n]) else { return -1 };
         let mut p = s.host;
-        if p.set(name, value).is_err() || Finger::new(p).is_err() {
+        if p.set(name, value).is_err() || host_finger(&p).is_err() {
             return -1;
         }
         s.host = p;
@@ -194,7 +200,7 @@ fn write_err(o: &mut String, e: &finger_model::Error) {
 pub extern "C" fn host_shape(p: f64, v1: f64, v2: f64, v3: f64) {
     with(|s| {
         let mut o = String::from("ok");
-        let r = Finger::new(s.host).and_then(|f| {
+        let r = host_finger(&s.host).and_then(|f| {
             let sol = f.solve(p, &[v1, v2, v3][..f.params().n.min(3)], Method::converged())?;
             let k = f.tip_stiffness(&sol)?;
             write_shape(&mut o, &f, &sol);
@@ -215,7 +221,7 @@ pub extern "C" fn host_shape(p: f64, v1: f64, v2: f64, v3: f64) {
 pub extern "C" fn host_pose(d1: f64, d2: f64, d3: f64, p: f64) {
     with(|s| {
         let mut o = String::from("ok");
-        let r = Finger::new(s.host).and_then(|f| {
+        let r = host_finger(&s.host).and_then(|f| {
             let angles = [d1.to_radians(), d2.to_radians(), d3.to_radians()];
             let sol = solve_pose(&f, &angles, if p.is_nan() { None } else { Some(p) })?;
             let k = f.tip_stiffness(&sol.to_solution(&f)?)?;

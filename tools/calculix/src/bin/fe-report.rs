@@ -140,6 +140,13 @@ fn main() {
             c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]
         );
     }
+    {
+        let (a, b) = (Calibration::<f64>::model_md(), cals[0].cal);
+        let fa = [a.hinge[0], a.hinge[1], a.hinge[2], a.hinge[3], a.stack_axial[0], a.stack_axial[1], a.stack_bending[0], a.stack_bending[1]];
+        let fb = [b.hinge[0], b.hinge[1], b.hinge[2], b.hinge[3], b.stack_axial[0], b.stack_axial[1], b.stack_bending[0], b.stack_bending[1]];
+        let dmax = fa.iter().zip(&fb).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        let _ = writeln!(w, "\nThe board boots with the MODEL.md line (`Calibration::model_md`, docs/firmware.md `cal`; `preset paper` is uncalibrated, its model being m = 1 with rigid links): it differs from this run's factors by {dmax:.1e} at most.");
+    }
     let _ = writeln!(w, "\nSmall-load element compliance, model against FE (θ-M, the entry that sets the joint angle; θ-Fx with a stack):\n");
     let _ = writeln!(w, "| parameter set | stack (mm) | FE θ-M (rad/N·mm) | uncal. θ-M | cal. θ-M | FE θ-Fx (rad/N) | uncal. θ-Fx | cal. θ-Fx |");
     let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- | --- | --- |");
@@ -185,6 +192,8 @@ fn main() {
         let fe = run(Kind::Half3d, &d3, Law::NeoHooke);
         let pe = run(Kind::PlaneStrain, &d2, Law::NeoHooke);
         let pe_svk = run(Kind::PlaneStrain, &d2, Law::StVenantKirchhoff);
+        // the stacks' law alone changed (body neo-Hookean): what the stacked scenes' growth is
+        let pe_mixed = (sc.p.layers > 0).then(|| run(Kind::PlaneStrain, &d2, Law::NeoHookeBodySvkStacks));
         let m0 = model_states(&sc.p, &Calibration::none(), &sc.volts, &TENSIONS).unwrap_or_else(|e| fail(e));
         let m1 = model_states(&sc.p, cal, &sc.volts, &TENSIONS).unwrap_or_else(|e| fail(e));
         let _ = writeln!(per_scene, "### {} ({}; stacks {})\n", sc.name, sc.what, th.iter().map(|t| format!("{t:.3}")).collect::<Vec<_>>().join(" / ") + " mm");
@@ -231,9 +240,9 @@ fn main() {
         ts.extend((0..=12).map(|i| f1 * (0.3 + 0.1 * i as f64)).filter(|&t| t > 2.0));
         let floor = sc.p.span_floor;
         let lh = sc.p.hinge_len();
-        let contact = |kind: Kind, d: &Density| -> (String, Vec<FeState>) {
+        let contact = |kind: Kind, d: &Density, law: Law| -> (String, Vec<FeState>) {
             let min_span = |s: &FeState| s.span.iter().cloned().fold(f64::MAX, f64::min);
-            match finger_under_cable_partial(&sc.p, &th, kind, d, Law::NeoHooke, &ts) {
+            match finger_under_cable_partial(&sc.p, &th, kind, d, law, &ts) {
                 Ok((s, stop)) => {
                     let txt = match (fe_contact(&s, floor), stop, s.len()) {
                         (Some(c), _, _) => format!("{c:.2} N"),
@@ -257,8 +266,9 @@ fn main() {
             }
         };
         eprintln!("[{}] scene {}: contact runs ...", fmt_dur(started.elapsed()), sc.name);
-        let (c3, s3) = contact(Kind::Half3d, &dc);
-        let (c2, _) = contact(Kind::PlaneStrain, &d2);
+        let (c3, s3) = contact(Kind::Half3d, &dc, Law::NeoHooke);
+        let (c2, _) = contact(Kind::PlaneStrain, &d2, Law::NeoHooke);
+        let c2_mixed = if sc.p.layers > 0 { contact(Kind::PlaneStrain, &d2, Law::NeoHookeBodySvkStacks).0 } else { "—".into() };
         // the 3D coarse mesh against the report's mesh at 2 N (the FE's own discretisation error)
         let mesh_err = s3.first().filter(|s| (s.tension - 2.0).abs() < 1e-9).map(|s| {
             let f2 = fe.last().unwrap();
@@ -269,7 +279,7 @@ fn main() {
             BranchEnd::LimitPoint => "limit point",
             BranchEnd::SearchBound => "search bound",
         };
-        let _ = writeln!(fmax_rows, "| {} | {f0:.3} N ({}) | {f1:.3} N ({}) | {c3} | {c2} |", sc.name, kind(k0), kind(k1));
+        let _ = writeln!(fmax_rows, "| {} | {f0:.3} N ({}) | {f1:.3} N ({}) | {c3} | {c2} | {c2_mixed} |", sc.name, kind(k0), kind(k1));
         // what bounds it
         let mine: Vec<&Row> = rows.iter().filter(|r| r.scene == sc.name).collect();
         let first = mine.first().unwrap();
@@ -278,9 +288,19 @@ fn main() {
         let worst_tip = mine.iter().map(|r| r.e1.1).fold(0.0f64, |a, e| if e.abs() > a.abs() { e } else { a });
         let worst_pos = mine.iter().map(|r| r.e1.2).fold(0.0f64, f64::max);
         let ok = worst.abs() <= 2.0 && worst_tip.abs() <= 2.0 && worst_pos <= 2.0;
+        // growth of the calibrated model's error from the smallest tension to 2 N against a
+        // plane-strain FE (the joint with the largest): the FE's law at finite strain shows in it
+        let n = TENSIONS.len() - 1;
+        let growth = |fe2: &[FeState]| {
+            (0..3)
+                .map(|k| 100.0 * ((m1[n].joint[k] / fe2[n].joint_angle[k]) / (m1[0].joint[k] / fe2[0].joint_angle[k]) - 1.0))
+                .fold(0.0f64, |a, e| if e.abs() > a.abs() { e } else { a })
+        };
+        let g_nh = growth(&pe);
+        let g_mixed = pe_mixed.as_ref().map_or("—".to_string(), |x| format!("{:+.2} %", growth(x)));
         let _ = writeln!(
             bounds,
-            "| {} | {:+.2} % | {:+.2} % | {:.2} % | {} | {:+.2} % | {:+.2} % | {} | {:+.2} % |",
+            "| {} | {:+.2} % | {:+.2} % | {:.2} % | {} | {:+.2} % | {:+.2} % | {} | {:+.2} % | {:+.2} % | {} |",
             sc.name,
             worst,
             worst_tip,
@@ -290,6 +310,8 @@ fn main() {
             last.e1.0 - first.e1.0,
             mesh_err.map_or("—".into(), |e| format!("{e:+.2} %")),
             last.law,
+            g_nh,
+            g_mixed,
         );
     }
 
@@ -315,25 +337,30 @@ fn main() {
         );
     }
     let _ = writeln!(w, "\n## Where 2 % is not reached: what bounds it, scene by scene\n");
-    let _ = writeln!(w, "The calibrated error split in two: its value at the smallest tension ({} N), where the calibration's linear element compliance should hold, and its growth from there to 2 N. The small-load part is the joints' spread: one set of factors serves every joint, but the FE's first joint starts at the clamp and its last link ends free, while the calibration element sits between link stubs and is loaded through its end face, not the guide holes. The growth is large-deflection behaviour the linear calibration does not reach (the guides' loads at the notch corners and the notch's non-plane sections at large rotation; with stacks, the soft bonded layer's own finite strain). The last two columns bound the FE itself at 2 N: its mesh error (the coarse 3D mesh against the report's) and its material law (the same plane-strain finger with `*ELASTIC`, which NLGEOM makes St Venant-Kirchhoff, against neo-Hooke; both have the same E and ν, so they differ only at finite strain). Where the growth is of the size of the law's column, the 2 % goal asks for a statement about TPU's and VHB's stress-strain curves at the waist's strains that neither the model (linear elastic per sub-element) nor the FE's law can make without a material test.\n", TENSIONS[0]);
-    let _ = writeln!(w, "| scene | cal. worst joint | cal. tip θ | cal. tip pos. (% travel) | within 2 % | cal. worst joint at {} N | its growth to 2 N | FE 3D coarse − report mesh, 2 N | FE law: St Venant-Kirchhoff − neo-Hooke, 2 N |", TENSIONS[0]);
-    let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    let _ = writeln!(w, "The calibrated error split in two: its value at the smallest tension ({} N), where the calibration's linear element compliance holds, and its growth from there to 2 N.\n", TENSIONS[0]);
+    let _ = writeln!(w, "- **The small-load part is the joints' spread.** One set of factors serves every joint, and the calibration element sits between link stubs, loaded through its end face; the FE's first joint starts at the clamp, which holds its notch's end section flat (stiffer: the model is above the FE there), and its last link ends free with the cable anchored on it. The bonded stacks widen the spread.");
+    let _ = writeln!(w, "- **With stacks, the growth is the stacks' finite-strain law.** A flexing joint stretches its stack (the extensor side); a neo-Hookean layer softens in stretch (its secant modulus falls about as 1 − ε at strain ε), so the FE's joint softens with the load, while the model's sub-element compliances are constant (linear elastic, as MODEL.md states them). The last two columns show it: the calibrated model's growth against the plane-strain FE with neo-Hookean stacks (as the report's FE), and against the same FE with only the stacks' law changed to St Venant-Kirchhoff (body neo-Hookean), which does not soften in stretch: the growth changes sign. It does not depend on the stacks' stiffness share much (the paper preset's stacks are nine times softer). Without stacks the growth is small: the body's finite strain and the large rotation are carried by the subdivision.");
+    let _ = writeln!(w, "- **The FE itself** at 2 N: its mesh error (the coarse 3D mesh against the report's) and its material law (the whole plane-strain finger with `*ELASTIC`, which NLGEOM makes St Venant-Kirchhoff, against neo-Hooke; both have the same E and ν, so they differ only at finite strain).");
+    let _ = writeln!(w, "- **What the stacked scenes' 2 % would take.** Neither calibration line is the limit (the stack factors match the FE's θ-M and θ-Fx at every thickness calibrated, table above, and the voltage scenes' stacks lie between them). A constant set of factors cannot reach it: the calibrated errors of a stacked scene span the small-load spread plus the growth, more than the 4 % a ±2 % band holds. It takes (1) a stack stiffness that follows the stack's strain, i.e. a deformation-dependent sub-element compliance: a change of the model's equations and of the solve's cost (the compliances are computed once per voltage change today), not a calibration; and (2) a measured stress-strain curve of the stack material at the stretch a flexed joint gives it, because the FE with two standard laws for the same E and ν differs by more than 2 % at 2 N already (the St Venant-Kirchhoff columns). Per-joint factors (the clamped first joint, the free last one) would remove the small-load spread, not the growth.\n");
+    let _ = writeln!(w, "| scene | cal. worst joint | cal. tip θ | cal. tip pos. (% travel) | within 2 % | cal. worst joint at {} N | its growth to 2 N | FE 3D coarse − report mesh, 2 N | FE law: St Venant-Kirchhoff − neo-Hooke, 2 N | cal. growth to 2 N against plane strain, neo-Hooke stacks | the same, St Venant-Kirchhoff stacks |", TENSIONS[0]);
+    let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let _ = write!(w, "{bounds}");
     let _ = writeln!(w, "\n## The end of the branch: fmax against the FE's contact tension\n");
     let _ = writeln!(w, "The model's fmax (f32, `Finger::fmax`: the tension at which a span closes to the span floor, {} mm, or the branch turns) against the tension at which the FE's smallest span (the flexor corners of a notch) reaches the same floor, interpolated between the tensions run; where ccx stops first (its elements at the closing notch corners fail to converge), the last span's slope carried on to the floor. The FE has no contact elements: past that tension its notch faces would overlap. These runs use the coarse 3D mesh (3D) and the plane-strain mesh (2D) to keep the report's run time down.\n", defaults.span_floor);
-    let _ = writeln!(w, "| scene | model fmax uncal. | model fmax cal. | FE 3D (coarse) contact | FE plane strain contact |");
-    let _ = writeln!(w, "| --- | --- | --- | --- | --- |");
+    let _ = writeln!(w, "| scene | model fmax uncal. | model fmax cal. | FE 3D (coarse) contact | FE plane strain contact | FE plane strain contact, St Venant-Kirchhoff stacks |");
+    let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- |");
     let _ = write!(w, "{fmax_rows}");
+    let _ = writeln!(w, "\nWhat bounds it: fmax is where a notch closes, at several times the comparison's 2 N, where the strains at the waist and in the stretched stacks are large and the model's linear-elastic sub-elements (constant compliances, MODEL.md) are furthest from the FE's finite-strain continuum. Without stacks the calibration brings the model's fmax near the FE's contact (the calibrated joint is as compliant as the FE's at small load, and the subdivision carries the large rotation); what is left is of the size of the FE's own law column at that load. With stacks the model stays far above the FE, and this report shows only part of why: the last column is the plane-strain FE with St Venant-Kirchhoff stacks (body unchanged), whose notch closes later than with neo-Hookean stacks, so the stacks' softening in stretch is one part; the larger rest is not attributed here. A stacked finger needs about twice the tension to close a notch, so its waist carries about twice the cable's compression of the no-stacks finger at its contact; the body's finite strain there, which the model cannot carry either, is the candidate, not shown.");
     let pe_worst = rows.iter().map(|r| r.pe_vs_3d.abs()).fold(0.0, f64::max);
     let _ = writeln!(w, "\n## 2D against 3D\n");
     let _ = writeln!(w, "The last column of the summary: plane strain (CPE8R, the plate in 2D) against the 3D half-width model, worst joint. The issue's bar for using plane strain as the reference is 1 %; here it is {:.2} % at worst, so the 3D solution is {}the reference. tests/beam.rs shows why: a 20 mm wide, 1.5 mm thin strip in 3D bends between the beam (E) and the plate (E/(1 − ν²)), because the clamp and the notch's short length hold the anticlastic curvature back; plane strain is the plate. CalculiX's plane-stress elements (CPS8R) are expanded into one slab of bricks of the section's width and bend like the plate too for this width, so they are no plane-stress reference either.\n", pe_worst, if pe_worst > 1.0 { "" } else { "not needed as " });
     let _ = writeln!(w, "## What each reference can see\n");
     let _ = writeln!(w, "- **The continuum reference** (docs/fidelity.md, `host_tests::continuum`): a planar extensible elastica of the real geometry with exact follower loads and bonded stacks. It shares the model's beam assumptions (plane sections stay plane, no shear, a modulus chosen for the whole width), so it checks the model's discretisation (m, links, the load stepping) to 1e-8 and cannot see what those assumptions leave out.");
-    let _ = writeln!(w, "- **The FE** (this report): a continuum of the real geometry, 3D over the width. It sees what the beams cannot: sections that warp in a short, steep notch, shear, the stress concentration at the notch waist, the anticlastic (2D-to-3D) stiffening, the stack bonded along the notch face (it thins toward the ends, not a uniform strip of length L_h), the cable's loads along the guides at the notch corners. It cannot see what it was not given: the body is linear elastic (TPU and VHB are hyperelastic and viscoelastic), the stack is passive (no electrostatic pressure: its thickness at a voltage comes from the model's thinning law), the cable has no friction, the notch faces do not touch (no contact elements), and the mesh has its own error (last column above; tests/convergence.rs).");
+    let _ = writeln!(w, "- **The FE** (this report): a continuum of the real geometry, 3D over the width. It sees what the beams cannot: sections that warp in a short, steep notch, shear, the stress concentration at the notch waist, the anticlastic (2D-to-3D) stiffening, the stack bonded along the notch face (it thins toward the ends, not a uniform strip of length L_h), the cable's loads along the guides at the notch corners. It cannot see what it was not given: the body and the stacks are neo-Hookean with the model's small-strain E and ν (no measured stress-strain curve of TPU or of the stack material, no viscoelasticity), the stack is passive (no electrostatic pressure: its thickness at a voltage comes from the model's thinning law), the cable has no friction, the notch faces do not touch (no contact elements), and the mesh has its own error (last column above; tests/convergence.rs).");
     let _ = writeln!(w, "- **The calibration** carries what the FE sees at small loads into the model's sub-element compliances; beyond small loads the model's subdivision carries it on, and the growth column above is what it does not carry.\n");
     let _ = writeln!(w, "## Per scene\n");
     let _ = write!(w, "{per_scene}");
-    let _ = writeln!(w, "Report run time: {} on one core.", fmt_dur(started.elapsed()));
+    let _ = writeln!(w, "Report run time: {} (ccx on one thread; a 2-core machine shared with other builds).", fmt_dur(started.elapsed()));
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/fidelity-fe.md");
     std::fs::write(&path, out).unwrap_or_else(|e| fail(format!("{}: {e}", path.display())));
     eprintln!("wrote {} in {}", path.display(), fmt_dur(started.elapsed()));
