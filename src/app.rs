@@ -18,7 +18,11 @@ use core::fmt::Write;
 
 use embedded_hal::pwm::SetDutyCycle;
 use finger_model::params::PARAMS;
-use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Method, Params, Solution};
+use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Params};
+#[cfg(any(not(m3), feature = "shape"))]
+use finger_model::Method;
+#[cfg(not(m3))]
+use finger_model::Solution;
 use heapless::String;
 
 use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_MAX_V, HV_ZERO_DUTY_PCT};
@@ -40,6 +44,25 @@ macro_rules! err {
 
 #[cfg(feature = "shape")]
 mod shape;
+#[cfg(m3)]
+mod m3;
+
+/// The forward solves behind the console's answers: the f32 model's; on the Cortex-M3 image
+/// the fixed-point model's (app/m3.rs).
+#[cfg(not(m3))]
+type Solved = Solution<f32>;
+#[cfg(not(m3))]
+#[inline(always)]
+fn forward(f: &Finger<f32>, p: f32, volts: &[f32; CHANNELS]) -> Result<Solved, ModelError> {
+    f.solve(p, volts, Method::converged())
+}
+#[cfg(not(m3))]
+#[inline(always)]
+fn fmax_of(f: &Finger<f32>, volts: &[f32; CHANNELS]) -> Result<BranchLimit<f32>, ModelError> {
+    f.fmax(volts)
+}
+#[cfg(m3)]
+use m3::{fmax_of, forward, Solved};
 
 /// Number of HV channels / joints the board drives.
 pub const CHANNELS: usize = HV_CHANNELS;
@@ -390,7 +413,7 @@ impl Commands {
         if force == 0.0 {
             return Ok((0.0, 0.0));
         }
-        let sol = finger.solve(force, volts, Method::converged()).map_err(model_err)?;
+        let sol = forward(finger, force, volts).map_err(model_err)?;
         let cable = sol.cable_excursion.max(0.0);
         let deg = cable / fw.spool_r * DEG;
         if !(deg <= fw.servo_range) {
@@ -408,7 +431,7 @@ impl Commands {
                 return r;
             }
         }
-        let r = self.finger.fmax(volts);
+        let r = fmax_of(&self.finger, volts);
         self.fmax_cache.set(Some((*volts, r)));
         self.fmax_computed.set(self.fmax_computed.get() + 1);
         r
@@ -583,7 +606,7 @@ impl Commands {
         }
         let _ = w!(r; " thick=");
         list(r, &thick, 4);
-        let sol = self.finger.solve(self.force, &self.volts, Method::converged());
+        let sol = forward(&self.finger, self.force, &self.volts);
         let mut fault = self.fault;
         match sol {
             Ok(s) => {
@@ -671,14 +694,19 @@ impl Commands {
     #[inline(never)]
     fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let (p, vf) = self.model_request(args, "solve <P> <V1> <V2> <V3>")?;
-        let sol = self.finger.solve(p, &vf, Method::converged()).map_err(model_err)?;
+        let sol = forward(&self.finger, p, &vf).map_err(model_err)?;
+        #[cfg(not(m3))]
         let k = self.finger.tip_stiffness(&sol).map_err(model_err)?;
         let _ = w!(r; "joints=");
         joints(r, &sol);
         let tip = sol.tip();
         let _ = w!(r; " tip=", Tip(&tip), " cable=", Fixed(sol.cable_excursion, 4), " thick=");
         list(r, &sol.thickness[..CHANNELS], 4);
+        #[cfg(not(m3))]
         let _ = w!(r; " stiffness=", Exp(k[0][0], 4), ",", Exp(k[1][1], 4), ",", Exp(k[2][2], 4), " iters=", sol.iterations);
+        // the fixed-point model has no tip stiffness (docs/firmware.md "Cortex-M3 image")
+        #[cfg(m3)]
+        let _ = w!(r; " stiffness=-,-,- iters=", sol.iterations);
         Ok(())
     }
 
@@ -1034,7 +1062,7 @@ impl Emit for Tip<'_> {
     }
 }
 
-fn joints(r: &mut Reply, s: &Solution<f32>) {
+fn joints(r: &mut Reply, s: &Solved) {
     let mut d = [0.0f32; CHANNELS];
     for ch in 0..CHANNELS {
         d[ch] = s.joint_angle[ch] * DEG;

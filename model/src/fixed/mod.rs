@@ -10,10 +10,12 @@
 //! What it is not: the tip-loaded solve, the paper's stepping, the tension rule, fmax. Error
 //! budget and measurements: docs/fixed-point.md.
 
+pub mod branch_end;
 pub mod forward;
 pub mod inverse;
 pub mod q;
 pub mod trig;
 
+pub use branch_end::FixedBranchEnd;
 pub use forward::{FixedFinger, FixedSolution};
 pub use inverse::{FixedInverse, FixedPoseSolution};
