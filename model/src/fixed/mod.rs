@@ -18,4 +18,4 @@ pub mod trig;
 
 pub use branch_end::FixedBranchEnd;
 pub use forward::{FixedFinger, FixedSolution};
-pub use inverse::{FixedInverse, FixedPoseSolution};
+pub use inverse::{FixedInverse, FixedInverseDirect, FixedPoseSolution};
