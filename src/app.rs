@@ -568,7 +568,9 @@ impl Commands {
                 self.cmd_contact(args, out)?;
                 return Ok(true);
             }
-            #[cfg(not(feature = "pose"))]
+            #[cfg(m3)]
+            b"pose" => self.cmd_pose(args, r)?,
+            #[cfg(not(any(feature = "pose", m3)))]
             b"pose" => return Err(err!("unknown"; "pose is not in this build (feature pose)")),
             #[cfg(not(feature = "contact"))]
             b"contact" => return Err(err!("unknown"; "contact is not in this build (feature contact)")),
@@ -1012,6 +1014,8 @@ const HELP: &[&str] = &[
     "stop - emergency stop: HV off at once, cable released, disarmed",
     "volt <1|2|3|all> <V> - HV channel setpoint, slewed; needs arm",
     "force <P> - cable tension (servo); needs arm",
+    #[cfg(m3)]
+    "pose <d1> <d2> <d3> <P> - inverse at tension P (fixed point): voltages for these joint angles (deg); moves only when armed",
     #[cfg(feature = "pose")]
     "pose <d1> <d2> <d3> [<P>] - inverse: tension and voltages for these joint angles (deg); moves only when armed",
     #[cfg(feature = "contact")]

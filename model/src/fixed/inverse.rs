@@ -146,7 +146,7 @@ fn volts_of<R: Real>(f: &Finger<R>, t_rest: Mm, sol: &FixedPoseSolution) -> Resu
 /// (a float set-up per evaluation), and no interpolation error.
 pub struct FixedInverseDirect<'a, R: Real> {
     f: &'a Finger<R>,
-    fwd: FixedFinger,
+    fwd: &'a FixedFinger,
     t_rest: Mm,
     t_ceiling: Mm,
     t_rest_r: R,
@@ -154,15 +154,17 @@ pub struct FixedInverseDirect<'a, R: Real> {
 }
 
 impl<'a, R: Real> FixedInverseDirect<'a, R> {
-    /// `vmax`: the ceiling in force (V); the stack spans the rest thickness to the one just
-    /// below it.
-    pub fn new(f: &'a Finger<R>, vmax: R) -> Result<Self, Error> {
+    /// `fwd`: `f` prepared at any voltages (its lengths and the joint solve are used, not its
+    /// compliances); `vmax`: the ceiling in force (V): the stack spans the rest thickness to
+    /// the one just below it.
+    pub fn new(f: &'a Finger<R>, fwd: &'a FixedFinger, vmax: R) -> Result<Self, Error> {
         let p = f.params();
         if p.layers == 0 {
             return Err(Error::Input { input: "layers", reason: "the fixed-point inverse sets stack thicknesses: it needs stacks" });
         }
-        let zero = [R::zero(); MAX_JOINTS];
-        let fwd = FixedFinger::new(f, &zero[..p.n])?;
+        if fwd.n != p.n || fwd.m != p.m {
+            return Err(Error::Input { input: "fwd", reason: "prepared for other parameters" });
+        }
         let (t_rest, t_ceiling) = (f.stack_thickness(R::zero())?, f.stack_thickness(vmax * R::from_f64(1.0 - 1e-6))?);
         let mm = |x: R| Mm::from_f64(x.to_f64());
         Ok(FixedInverseDirect { f, fwd, t_rest: mm(t_rest), t_ceiling: mm(t_ceiling), t_rest_r: t_rest, t_ceiling_r: t_ceiling })
@@ -297,7 +299,8 @@ mod tests {
     #[test]
     fn direct_round_trip_within_0_05_deg() {
         let f = Finger::new(Params::<f64> { layers: 4, ..Params::default() }).unwrap();
-        let inv = FixedInverseDirect::new(&f, f.ceiling_in_force(None)).unwrap();
+        let fwd = FixedFinger::new(&f, &[0.0; 3]).unwrap();
+        let inv = FixedInverseDirect::new(&f, &fwd, f.ceiling_in_force(None)).unwrap();
         let mut worst = 0f64;
         for (p, v) in [(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])] {
             let want = f.solve(p, &v, Method::converged()).unwrap();
