@@ -215,7 +215,7 @@ fn main() {
     for c in ["version", "status", "limits", "help", "param", "solve 0.5 0 1000 2000", "solve 1 0 9000 9000", "solve 7 0 0 0", "arm", "volt all 1000", "wait 0.6", "force 0.5", "force 2", "volt 1 9000", "wait 5", "status", "stop", "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "solve 1 0 5000 0", "preset paper", "solve 1 0 1000 1000"] {
         let r = q.cmd(c);
         assert!(r.starts_with("ok"), "{c}: {r}");
-        let hw = q.stack_high_water(0x2000_0000, 0x2000_5000);
+        let hw = q.stack_high_water(0x2000_0000, 0x2000_4000);
         if hw > prev {
             worst_stack.push((c.to_string(), hw));
             prev = hw;

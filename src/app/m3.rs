@@ -82,7 +82,14 @@ impl Commands {
         let mut ff = FixedFinger::empty();
         ff.prepare(&self.finger, &[0.0; CHANNELS]).map_err(model_err)?;
         let inv = FixedInverseDirect::new(&self.finger, &ff, self.vmax[0]).map_err(model_err)?;
-        let sol = inv.solve(&rad, Nt::from_f32(p)).map_err(model_err)?;
+        let sol = inv.solve(&rad, Nt::from_f32(p)).map_err(|e| match e {
+            // the fixed-point inverse's range is in joint angles (the f32 one's in compliance)
+            ModelError::Unreachable { joint, needed, min, max } => {
+                let d = |x: f64| Fixed(x as f32 * DEG, 3);
+                err!("unreachable"; "joint ", joint, ": needs ", d(needed), " deg, at ", Fixed(p, 3), " N its stack spans ", d(min), "..", d(max), " deg")
+            }
+            e => model_err(e),
+        })?;
         let v = inv.volts(&sol).map_err(model_err)?;
         let target = [v[0], v[1], v[2]];
         // the ceilings as `volt` checks them, armed or not; 0 V (rest thickness) is off
