@@ -19,7 +19,11 @@ use core::fmt::Write;
 use embedded_hal::pwm::SetDutyCycle;
 use finger_model::params::PARAMS;
 use finger_model::calibration::KEEPS_CALIBRATION;
-use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Method, Params, Solution};
+use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Params};
+#[cfg(any(not(m3), feature = "shape"))]
+use finger_model::Method;
+#[cfg(not(m3))]
+use finger_model::Solution;
 use heapless::String;
 
 use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_MAX_V, HV_ZERO_DUTY_PCT};
@@ -41,6 +45,25 @@ macro_rules! err {
 
 #[cfg(feature = "shape")]
 mod shape;
+#[cfg(m3)]
+mod m3;
+
+/// The forward solves behind the console's answers: the f32 model's; on the Cortex-M3 image
+/// the fixed-point model's (app/m3.rs).
+#[cfg(not(m3))]
+type Solved = Solution<f32>;
+#[cfg(not(m3))]
+#[inline(always)]
+fn forward(f: &Finger<f32>, p: f32, volts: &[f32; CHANNELS]) -> Result<Solved, ModelError> {
+    f.solve(p, volts, Method::converged())
+}
+#[cfg(not(m3))]
+#[inline(always)]
+fn fmax_of(f: &Finger<f32>, volts: &[f32; CHANNELS]) -> Result<BranchLimit<f32>, ModelError> {
+    f.fmax(volts)
+}
+#[cfg(m3)]
+use m3::{fmax_of, forward, Solved};
 
 /// Number of HV channels / joints the board drives.
 pub const CHANNELS: usize = HV_CHANNELS;
@@ -394,7 +417,7 @@ impl Commands {
         if force == 0.0 {
             return Ok((0.0, 0.0));
         }
-        let sol = if core::ptr::eq(finger, &self.finger) { self.forward(force, volts) } else { finger.solve(force, volts, Method::converged()) };
+        let sol = if core::ptr::eq(finger, &self.finger) { self.forward(force, volts) } else { forward(finger, force, volts) };
         let cable = sol.map_err(model_err)?.cable_excursion.max(0.0);
         let deg = cable / fw.spool_r * DEG;
         if !(deg <= fw.servo_range) {
@@ -415,10 +438,10 @@ impl Commands {
         #[cfg(feature = "pose")]
         let r = match self.branch_table() {
             Some(t) => t.fmax(volts),
-            None => self.finger.fmax(volts),
+            None => fmax_of(&self.finger, volts),
         };
         #[cfg(not(feature = "pose"))]
-        let r = self.finger.fmax(volts);
+        let r = fmax_of(&self.finger, volts);
         self.fmax_cache.set(Some((*volts, r)));
         self.fmax_computed.set(self.fmax_computed.get() + 1);
         r
@@ -441,13 +464,13 @@ impl Commands {
 
     /// The forward solve under tension alone at these voltages: from the branch table when
     /// there is one (`BranchTable::solve`: the full model's converged answer, Newton started
-    /// at the table's guide holes), else `Finger::solve`.
-    fn forward(&self, p: f32, volts: &[f32]) -> Result<finger_model::Solution<f32>, ModelError> {
+    /// at the table's guide holes), else the full solve (`forward`: f32, or fixed point on the M3).
+    fn forward(&self, p: f32, volts: &[f32; CHANNELS]) -> Result<Solved, ModelError> {
         #[cfg(feature = "pose")]
         if let Some(t) = self.branch_table() {
             return t.solve(p, volts);
         }
-        self.finger.solve(p, volts, Method::converged())
+        forward(&self.finger, p, volts)
     }
 
     /// How many times `Finger::fmax` ran (the cache's misses), for the tests.
@@ -581,7 +604,9 @@ impl Commands {
                 self.cmd_contact(args, out)?;
                 return Ok(true);
             }
-            #[cfg(not(feature = "pose"))]
+            #[cfg(m3)]
+            b"pose" => self.cmd_pose(args, r)?,
+            #[cfg(not(any(feature = "pose", m3)))]
             b"pose" => return Err(err!("unknown"; "pose is not in this build (feature pose)")),
             #[cfg(not(feature = "contact"))]
             b"contact" => return Err(err!("unknown"; "contact is not in this build (feature contact)")),
@@ -708,13 +733,18 @@ impl Commands {
     fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let (p, vf) = self.model_request(args, "solve <P> <V1> <V2> <V3>")?;
         let sol = self.forward(p, &vf).map_err(model_err)?;
+        #[cfg(not(m3))]
         let k = self.finger.tip_stiffness(&sol).map_err(model_err)?;
         let _ = w!(r; "joints=");
         joints(r, &sol);
         let tip = sol.tip();
         let _ = w!(r; " tip=", Tip(&tip), " cable=", Fixed(sol.cable_excursion, 4), " thick=");
         list(r, &sol.thickness[..CHANNELS], 4);
+        #[cfg(not(m3))]
         let _ = w!(r; " stiffness=", Exp(k[0][0], 4), ",", Exp(k[1][1], 4), ",", Exp(k[2][2], 4), " iters=", sol.iterations);
+        // the fixed-point model has no tip stiffness (docs/firmware.md "Cortex-M3 image")
+        #[cfg(m3)]
+        let _ = w!(r; " stiffness=-,-,- iters=", sol.iterations);
         Ok(())
     }
 
@@ -1014,6 +1044,8 @@ const HELP: &[&str] = &[
     "stop - emergency stop: HV off at once, cable released, disarmed",
     "volt <1|2|3|all> <V> - HV channel setpoint, slewed; needs arm",
     "force <P> - cable tension (servo); needs arm",
+    #[cfg(m3)]
+    "pose <d1> <d2> <d3> <P> - inverse at tension P (fixed point): voltages for these joint angles (deg); moves only when armed",
     #[cfg(feature = "pose")]
     "pose <d1> <d2> <d3> [<P>] - inverse: tension and voltages for these joint angles (deg); moves only when armed",
     #[cfg(feature = "contact")]
@@ -1064,7 +1096,7 @@ impl Emit for Tip<'_> {
     }
 }
 
-fn joints(r: &mut Reply, s: &Solution<f32>) {
+fn joints(r: &mut Reply, s: &Solved) {
     let mut d = [0.0f32; CHANNELS];
     for ch in 0..CHANNELS {
         d[ch] = s.joint_angle[ch] * DEG;

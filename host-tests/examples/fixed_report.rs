@@ -174,9 +174,10 @@ fn main() {
     // the inverse on the M3: each answer's round trip through the f64 forward
     const POSES: &[(f64, [f64; 3])] = &[(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])];
     let mut it = String::new();
-    let _ = writeln!(it, "| posture of (P, V) | fixed instr | f32 `solve_pose` instr | f32 / fixed | round trip fixed (deg) | round trip f32 (deg) |");
-    let _ = writeln!(it, "| --- | ---: | ---: | ---: | ---: | ---: |");
+    let _ = writeln!(it, "| posture of (P, V) | fixed instr | fixed, no table (firmware) instr | f32 `solve_pose` instr | f32 / fixed | round trip fixed (deg) | round trip no table (deg) | round trip f32 (deg) |");
+    let _ = writeln!(it, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
     let (mut inv_worst, mut inv_n, mut inv_setup) = (0f64, 0, 0f64);
+    let (mut dir_worst, mut dir_max_instr) = (0f64, 0f64);
     for (i, (p, v)) in POSES.iter().enumerate() {
         let want = f.solve(*p, v, Method::converged()).unwrap();
         let trip = |r: &Result<[f64; 3], String>| -> Result<f64, String> {
@@ -190,12 +191,20 @@ fn main() {
             inv_worst = inv_worst.max(e);
             inv_n += 1;
         }
+        let d = inv_lines.get(&(i, "direct".into()));
+        let td = d.map(|d| trip(&d.2));
+        if let Some(Ok(e)) = td {
+            dir_worst = dir_worst.max(e);
+            dir_max_instr = dir_max_instr.max(d.unwrap().0);
+        }
         inv_setup = a.1;
         let show = |t: &Result<f64, String>| match t {
             Ok(e) => format!("{e:.1e}"),
             Err(c) => format!("err {c}"),
         };
-        let _ = writeln!(it, "| {p} N, {:?} V | {:.0} | {:.0} | {:.2} | {} | {} |", v, a.0, b.0, b.0 / a.0, show(&ta), show(&tb));
+        let dn = d.map_or("-".to_string(), |d| format!("{:.0}", d.0));
+        let dt = td.map_or("-".to_string(), |t| show(&t));
+        let _ = writeln!(it, "| {p} N, {:?} V | {:.0} | {dn} | {:.0} | {:.2} | {} | {dt} | {} |", v, a.0, b.0, b.0 / a.0, show(&ta), show(&tb));
     }
 
     // the Cortex-M3 firmware image
@@ -208,14 +217,17 @@ fn main() {
     let fw = std::env::var_os("CARGO_TARGET_DIR").map(std::path::PathBuf::from).unwrap_or_else(|| root.join("target")).join("thumbv7m-none-eabi/release/finger-fw");
     let (flash, ram) = elf_sizes(&fw).unwrap();
     // the M3 image's stack high-water over the console's commands (stack painted at reset;
-    // memory-m3.x: the 20 KiB stack is [0x20000000, 0x20005000))
+    // memory-m3.x: the 16 KiB stack is [0x20000000, 0x20004000))
     let mut q = host_tests::qemu::Qemu::boot_with(host_tests::qemu::Image::M3.paint_elf(), "stack", &[]);
+    // an armed `pose` (the fixed-point inverse) at a posture of the host's model at 0.8 N
+    let ps = f.solve(0.8, &[1000.0, 3000.0, 5000.0], Method::converged()).unwrap();
+    let pose_cmd = format!("pose {:.6} {:.6} {:.6} 0.8", ps.joint_angle[0].to_degrees(), ps.joint_angle[1].to_degrees(), ps.joint_angle[2].to_degrees());
     let mut worst_stack: Vec<(String, u64)> = Vec::new();
     let mut prev = 0;
-    for c in ["version", "status", "limits", "help", "param", "solve 0.5 0 1000 2000", "solve 1 0 9000 9000", "solve 7 0 0 0", "arm", "volt all 1000", "wait 0.6", "force 0.5", "force 2", "volt 1 9000", "wait 5", "status", "stop", "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "solve 1 0 5000 0", "preset paper", "solve 1 0 1000 1000"] {
+    for c in ["version", "status", "limits", "help", "param", "solve 0.5 0 1000 2000", "solve 1 0 9000 9000", "solve 7 0 0 0", "arm", "volt all 1000", "wait 0.6", "force 0.5", "force 2", "volt 1 9000", "wait 5", "status", pose_cmd.as_str(), "wait 5", "status", "stop", "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "solve 1 0 5000 0", "preset paper", "solve 1 0 1000 1000"] {
         let r = q.cmd(c);
         assert!(r.starts_with("ok"), "{c}: {r}");
-        let hw = q.stack_high_water(0x2000_0000, 0x2000_5000);
+        let hw = q.stack_high_water(0x2000_0000, 0x2000_4000);
         if hw > prev {
             worst_stack.push((c.to_string(), hw));
             prev = hw;
@@ -236,8 +248,8 @@ fn main() {
     let _ = writeln!(m, "| forward tip within 1e-3 mm of f64, every bench scene, default model | worst {worst_tip_default:.1e} mm (all models: {worst_tip:.1e} mm) |");
     let _ = writeln!(m, "| >= 3x fewer M3 instructions than soft-float f32 running the same algorithm | same algorithm in f32 (bench/src/twin.rs) / fixed: min {smin:.2}, median {smed:.2}; default model min {dmin:.2} |");
     let _ = writeln!(m, "| (against the model's own f32 solve, the firmware's) | f32 `Finger::solve_with` / fixed: min {rmin:.2}, median {rmed:.2} |");
-    let _ = writeln!(m, "| inverse round trip within 0.05 deg | the fixed-point inverse at a given tension (`FixedInverse`, on the M3) through the f64 forward: worst {inv_worst:.1e} deg over {inv_n} postures (table below); the f64 inverse through the fixed-point forward (host): worst {rt_worst:.1e} deg over {rt_n} postures ({rt_refused} refused) |");
-    let _ = writeln!(m, "| image with console and `pose` in 64 KiB flash / 20 KiB RAM | M3 image (console, DE, defmt; no `pose`, f32 model): flash {flash} bytes ({:.1} KiB); static RAM {ram} bytes + the 20 KiB stack = {:.1} KiB (memory-m3.x: 24 KiB; docs/firmware.md \"Cortex-M3 image\"); stack high-water {stack} bytes ({:.1} KiB, the f32 model's solves) |", flash as f64 / 1024.0, (ram + 20 * 1024) as f64 / 1024.0, stack as f64 / 1024.0);
+    let _ = writeln!(m, "| inverse round trip within 0.05 deg | the fixed-point inverse at a given tension (`FixedInverse`, on the M3) through the f64 forward: worst {inv_worst:.1e} deg over {inv_n} postures (table below); without the table (`FixedInverseDirect`, the M3 image's `pose`): worst {dir_worst:.1e} deg, at most {dir_max_instr:.0} instructions with its set-up; the f64 inverse through the fixed-point forward (host): worst {rt_worst:.1e} deg over {rt_n} postures ({rt_refused} refused) |");
+    let _ = writeln!(m, "| image with console and `pose` in 64 KiB flash / 20 KiB RAM | M3 image (console, DE, defmt, `pose`; the fixed-point model): flash {flash} bytes ({:.1} KiB); static RAM {ram} bytes + the 16 KiB stack = {:.1} KiB (memory-m3.x: 20 KiB; docs/firmware.md \"Cortex-M3 image\"); stack high-water {stack} bytes ({:.1} KiB) |", flash as f64 / 1024.0, (ram + 16 * 1024) as f64 / 1024.0, stack as f64 / 1024.0);
     let _ = writeln!(m, "\nWorst fixed-point errors, all scenes both models: joint angle {worst_joint:.1e} deg, cable excursion {worst_exc:.1e} mm.\n");
     let _ = writeln!(m, "The M3 image's stack, painted at reset and read back through QEMU's monitor after each console command (the commands that deepened it, and how deep): {}.\n", worst_stack.iter().map(|(c, b)| format!("`{c}` {b} bytes")).collect::<Vec<_>>().join(", "));
     m.push_str(&t);

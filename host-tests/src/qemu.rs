@@ -35,7 +35,8 @@ pub enum Image {
     /// The F405's image (`cargo build --release`): Cortex-M4F, QEMU netduinoplus2.
     M4f,
     /// The Cortex-M3 image (`--target thumbv7m-none-eabi --features m3`): no FPU, QEMU
-    /// netduino2 (an STM32F205), 64 KiB of flash; no `pose`, no `contact` (docs/firmware.md).
+    /// netduino2 (an STM32F205), 64 KiB of flash; the fixed-point model, `pose` at a given
+    /// tension only, no `contact` (docs/firmware.md).
     M3,
 }
 

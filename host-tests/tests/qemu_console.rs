@@ -72,7 +72,7 @@ fn console_commands_and_bad_inputs(img: Image) {
     if img.has_inverse() {
         pose_and_contact(&mut q);
     } else {
-        expect(&mut q, "pose 10 10 10", "err unknown: pose is not in this build");
+        pose_at_a_tension(&mut q);
         expect(&mut q, "contact 1 1.5", "err unknown: contact is not in this build");
     }
     expect(&mut q, "stop", "ok stopped");
@@ -103,6 +103,39 @@ fn pose_and_contact(q: &mut Qemu) {
     assert!(s.contains(&format!(" force={:.3} ", want.tension)), "{s}");
     expect(q, "pose 20 5 5", "err unreachable:");
     expect(q, "contact 1 1.5", "ok fx=");
+}
+
+/// The M3 image's `pose` (the fixed-point inverse at the given tension), armed: at a posture
+/// of the host's f64 model (the board's calibration, read with `cal`), the voltages it answers
+/// hold that posture in the f64 model within the inverse's round-trip target (0.05 deg, issue
+/// 14); they are the setpoints afterwards; past the stacks, `unreachable`; no tension, `usage`.
+fn pose_at_a_tension(q: &mut Qemu) {
+    let c = expect(q, "cal", "ok cal=");
+    let g: Vec<f64> = c["ok cal=".len()..].split(',').map(|x| x.parse().unwrap()).collect();
+    let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
+    let f = finger_model::Finger::with_calibration(finger_model::Params::<f64>::default(), cal).unwrap();
+    let p = 0.8;
+    let s = f.solve(p, &[1000.0, 3000.0, 5000.0], finger_model::Method::converged()).unwrap();
+    let deg = [0, 1, 2].map(|k| format!("{:.6}", s.joint_angle[k].to_degrees()).parse::<f64>().unwrap());
+    let r = expect(q, &format!("pose {} {} {} {p}", deg[0], deg[1], deg[2]), "ok force=0.8000 volts=");
+    let field = |r: &str, k: &str| -> Vec<f64> { r.split_whitespace().find_map(|w| w.strip_prefix(k)).unwrap().split(',').map(|x| x.parse().unwrap()).collect() };
+    let volts = field(&r, "volts=");
+    let back = f.solve(p, &volts, finger_model::Method::converged()).unwrap();
+    let joints = field(&r, "joints=");
+    for k in 0..3 {
+        let err = (back.joint_angle[k].to_degrees() - deg[k]).abs();
+        assert!(err < 0.05, "joint {}: the answer's voltages hold {} deg, wanted {} ({r})", k + 1, back.joint_angle[k].to_degrees(), deg[k]);
+        // the reply's joints: the fixed-point forward at the answer (within its error, 2e-5 deg)
+        assert!((joints[k] - back.joint_angle[k].to_degrees()).abs() < 2e-3, "{r}");
+    }
+    let st = expect(q, "status", "ok armed=1 force=0.800 ");
+    assert!(st.contains(&format!(" target={},{},{}", r_list(&volts)[0], r_list(&volts)[1], r_list(&volts)[2])), "{st} vs {r}");
+    expect(q, "pose 20 5 5 0.8", "err unreachable:");
+    expect(q, "pose 10 10 10", "err usage:");
+}
+
+fn r_list(v: &[f64]) -> Vec<String> {
+    v.iter().map(|x| format!("{x:.1}")).collect()
 }
 
 #[test]

@@ -4,7 +4,7 @@
 //! - the largest HV duty step per control tick over a ramp while help, param, pose, force and
 //!   contact run is at most slew x 1 ms + 1 count;
 //! - a `stop` sent during `wait 600`, during a long model solve (the branch-table build of the
-//!   first armed `pose`; `force` on the M3 image, which has no `pose`) and in the middle of the
+//!   first armed `pose`; `force` on the M3 image, whose `pose` builds no table) and in the middle of the
 //!   `help` output zeroes the duties within one tick, and nothing planned before it writes a
 //!   duty after it;
 //! - each line of a burst sent at once (200 lines; 64 on the M3 image, its 1 KiB line ring)
@@ -90,8 +90,8 @@ fn stop_within_one_tick(img: Image) {
     assert!(s.starts_with("ok armed=0 force=0.000 volts=0.0,0.0,0.0 "), "{s}");
     assert_stopped_within_a_tick(&q.finish(), "wait 600");
 
-    // during the first armed pose (the branch table is built then); on the M3 image, during
-    // `force` (its forward solves take ~9 ms there)
+    // during the first armed pose (the branch table is built then); on the M3 image (no
+    // table), during `force` (its fmax bisection: many fixed-point solves)
     let mut q = Qemu::boot_on(img, "pose");
     armed_at_3kv(&mut q);
     let long = if img.has_inverse() { "pose 10 10 10" } else { "force 0.5" };

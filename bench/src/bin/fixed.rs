@@ -19,7 +19,7 @@
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use finger_model::fixed::q::{Nt, Rad};
-use finger_model::fixed::{FixedFinger, FixedInverse};
+use finger_model::fixed::{FixedFinger, FixedInverse, FixedInverseDirect};
 use finger_model::{Finger, Method, Params};
 
 #[path = "../cycles.rs"]
@@ -148,6 +148,20 @@ fn run_inverse() {
                 Ok(vs) => hprintln!("I pose{} fixed ok {} {} {:e} {:e} {:e}", i, t1 - t0, setup, vs[0], vs[1], vs[2]),
                 Err(e) => hprintln!("I pose{} fixed err {} 0 {}", i, t1 - t0, e.code()),
             }
+        }
+        // the firmware's (M3 image) `pose`: no table, its set-up included (a FixedFinger)
+        let t0 = cycles::now();
+        let mut ff = FixedFinger::empty();
+        let r = ff.prepare(&f, &[0.0; 3]).and_then(|_| {
+            let d = FixedInverseDirect::new(&f, &ff, f.ceiling_in_force(None))?;
+            let angles = [Rad::from_f32(a[0]), Rad::from_f32(a[1]), Rad::from_f32(a[2])];
+            d.solve(&angles, Nt::from_f32(*p)).and_then(|sol| d.volts(&sol))
+        });
+        core::hint::black_box(&r);
+        let t1 = cycles::now();
+        match r {
+            Ok(vs) => hprintln!("I pose{} direct ok {} 0 {:e} {:e} {:e}", i, t1 - t0, vs[0], vs[1], vs[2]),
+            Err(e) => hprintln!("I pose{} direct err {} 0 {}", i, t1 - t0, e.code()),
         }
         let t0 = cycles::now();
         let r = finger_model::solve_pose(&f, a, Some(*p));

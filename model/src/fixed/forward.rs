@@ -3,7 +3,9 @@
 //! links and the cable excursion. Same equations as the float model, Q formats of [`q`].
 use super::q::{narrow, shr_round, Mm, Nmm, Nt, Q, Rad, Scaled, Unit};
 use super::trig::{hypot, hypot_inv, sin_cos};
+use crate::de;
 use crate::error::Error;
+use crate::mat3;
 use crate::finger::{uniform_beam_compliance, Finger};
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -157,33 +159,63 @@ impl FixedFinger {
     /// Set-up (float, once per parameter or voltage change): the finger's compliances at
     /// `volts`, each entry scaled to its own exponent; lengths to Q22.
     pub fn new<R: Real>(f: &Finger<R>, volts: &[R]) -> Result<Self, Error> {
+        let mut s = Self::empty();
+        s.prepare(f, volts)?;
+        Ok(s)
+    }
+
+    /// A finger with no joints, to be [`FixedFinger::prepare`]d in place.
+    pub fn empty() -> Self {
+        FixedFinger {
+            n: 0,
+            m: 0,
+            e: Mm::ZERO,
+            span_floor: Mm::ZERO,
+            sub_len: Mm::ZERO,
+            link_len: Mm::ZERO,
+            hinge_len: Mm::ZERO,
+            c: [[CMat::default(); MAX_SUB]; MAX_JOINTS],
+            same_as_prev: [false; MAX_JOINTS],
+            link_c: None,
+        }
+    }
+
+    /// [`FixedFinger::new`] in place (no copy of the compliances on the stack: small-RAM
+    /// targets). On an error `self` is left with no joints.
+    pub fn prepare<R: Real>(&mut self, f: &Finger<R>, volts: &[R]) -> Result<(), Error> {
+        self.n = 0;
         let p = f.params();
-        let comp = f.compliances(volts)?;
         let (n, m) = (p.n, p.m);
-        let mut c = [[CMat::default(); MAX_SUB]; MAX_JOINTS];
-        let mut same_as_prev = [false; MAX_JOINTS];
-        for k in 0..n {
-            for (cj, src) in c[k].iter_mut().zip(&comp.c[k][..m]) {
-                *cj = cmat(src);
+        if volts.len() != n {
+            return Err(Error::Input { input: "voltages", reason: "one voltage per joint is required" });
+        }
+        // `Finger::compliances`, one joint at a time: C = (K_hinge + K_stack(t))^-1, or
+        // C_hinge without stacks
+        let stacks = p.layers > 0 && cfg!(feature = "de");
+        for (k, &v) in volts.iter().enumerate() {
+            de::check_voltage(p, k + 1, v)?;
+            let k_de = if stacks { Some(f.stack_stiffness(de::stack_thickness(p, k + 1, v)?)) } else { None };
+            for j in 0..m {
+                let c = match &k_de {
+                    Some(kd) => mat3::inverse_spd(&mat3::add(f.hinge_stiffness(j), kd)).ok_or(Error::Singular { what: "joint stiffness" })?,
+                    None => f.hinge_compliance(j),
+                };
+                self.c[k][j] = cmat(&c);
             }
-            same_as_prev[k] = k > 0 && comp.c[k][..m] == comp.c[k - 1][..m];
+            self.same_as_prev[k] = k > 0 && (!stacks || v == volts[k - 1]);
         }
         let hinge_len = p.hinge_len();
         let link_len = p.l - hinge_len;
-        let link_c = if p.flex_links { Some(cmat(&uniform_beam_compliance(p.hinge_modulus(), p.w, p.b, link_len))) } else { None };
+        self.link_c = if p.flex_links { Some(cmat(&uniform_beam_compliance(p.hinge_modulus(), p.w, p.b, link_len))) } else { None };
         let mm = |x: R| Mm::from_f64(x.to_f64());
-        Ok(FixedFinger {
-            n,
-            m,
-            e: mm(p.e),
-            span_floor: mm(p.span_floor),
-            sub_len: mm(hinge_len / R::from_u32(m as u32)),
-            link_len: mm(link_len),
-            hinge_len: mm(hinge_len),
-            c,
-            same_as_prev,
-            link_c,
-        })
+        self.m = m;
+        self.e = mm(p.e);
+        self.span_floor = mm(p.span_floor);
+        self.sub_len = mm(hinge_len / R::from_u32(m as u32));
+        self.link_len = mm(link_len);
+        self.hinge_len = mm(hinge_len);
+        self.n = n;
+        Ok(())
     }
 
     /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.

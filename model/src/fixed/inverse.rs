@@ -111,23 +111,103 @@ impl FixedInverse {
         o
     }
 
-    fn thickness_at(&self, u: i64) -> Mm {
-        let span = (self.t_rest.0 - self.t_ceiling.0) as i64;
-        Q(self.t_rest.0 - ((span * u) / (((NODES - 1) as i64) << 16)) as i32)
-    }
-
     /// Each joint's stack thickness that holds `angles` (rad, joint angles as the forward
     /// solve reports them) at `tension`; `Error::Unreachable` when a joint's angle lies outside
     /// what the stack spans at this tension (needed, min, max: the angle, rad).
     pub fn solve(&self, angles: &[Rad], tension: Nt) -> Result<FixedPoseSolution, Error> {
-        let n = self.fwd.n;
+        solve_by(&self.fwd, self.t_rest, self.t_ceiling, |u| Ok(self.at(u)), angles, tension)
+    }
+
+    /// The channel voltages for a solution (float: the DE thinning's closed form).
+    pub fn volts<R: Real>(&self, f: &Finger<R>, sol: &FixedPoseSolution) -> Result<[R; MAX_JOINTS], Error> {
+        volts_of(f, self.t_rest, sol)
+    }
+}
+
+/// Stack thickness at position `u` (Q16 nodes from the rest thickness to the ceiling's).
+fn thickness_at(t_rest: Mm, t_ceiling: Mm, u: i64) -> Mm {
+    let span = (t_rest.0 - t_ceiling.0) as i64;
+    Q(t_rest.0 - ((span * u) / (((NODES - 1) as i64) << 16)) as i32)
+}
+
+fn volts_of<R: Real>(f: &Finger<R>, t_rest: Mm, sol: &FixedPoseSolution) -> Result<[R; MAX_JOINTS], Error> {
+    let p = f.params();
+    let mut v = [R::zero(); MAX_JOINTS];
+    for (k, (vk, tk)) in v.iter_mut().zip(&sol.thickness).enumerate().take(sol.n) {
+        *vk = if tk.0 >= t_rest.0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, R::from_f64(tk.to_f64()))? };
+    }
+    Ok(v)
+}
+
+/// The inverse at a given tension without the table: each evaluation computes the joint's
+/// sub-element compliances at its stack thickness in the float model (`C = (K_hinge +
+/// K_stack(t))^-1`, as `Finger::compliances`), so it holds one joint's compliances instead of
+/// the table's NODES x MAX_SUB (17 KB): the Cortex-M3 image's `pose` (20 KiB of RAM). Slower
+/// (a float set-up per evaluation), and no interpolation error.
+pub struct FixedInverseDirect<'a, R: Real> {
+    f: &'a Finger<R>,
+    fwd: &'a FixedFinger,
+    t_rest: Mm,
+    t_ceiling: Mm,
+    t_rest_r: R,
+    t_ceiling_r: R,
+}
+
+impl<'a, R: Real> FixedInverseDirect<'a, R> {
+    /// `fwd`: `f` prepared at any voltages (its lengths and the joint solve are used, not its
+    /// compliances); `vmax`: the ceiling in force (V): the stack spans the rest thickness to
+    /// the one just below it.
+    pub fn new(f: &'a Finger<R>, fwd: &'a FixedFinger, vmax: R) -> Result<Self, Error> {
+        let p = f.params();
+        if p.layers == 0 {
+            return Err(Error::Input { input: "layers", reason: "the fixed-point inverse sets stack thicknesses: it needs stacks" });
+        }
+        if fwd.n != p.n || fwd.m != p.m {
+            return Err(Error::Input { input: "fwd", reason: "prepared for other parameters" });
+        }
+        let (t_rest, t_ceiling) = (f.stack_thickness(R::zero())?, f.stack_thickness(vmax * R::from_f64(1.0 - 1e-6))?);
+        let mm = |x: R| Mm::from_f64(x.to_f64());
+        Ok(FixedInverseDirect { f, fwd, t_rest: mm(t_rest), t_ceiling: mm(t_ceiling), t_rest_r: t_rest, t_ceiling_r: t_ceiling })
+    }
+
+    /// The sub-element compliances at position `u` (as the table's: 0 = rest thickness).
+    fn at(&self, u: i64) -> Result<[CMat; MAX_SUB], Error> {
+        let last = ((NODES - 1) as i64) << 16;
+        let u = u.clamp(0, last);
+        let frac = R::from_f64(u as f64 / last as f64);
+        let t = (self.t_rest_r - (self.t_rest_r - self.t_ceiling_r) * frac).max(self.t_ceiling_r);
+        let k_de = self.f.stack_stiffness(t);
+        let mut o = [CMat::default(); MAX_SUB];
+        for (j, c) in o.iter_mut().enumerate().take(self.fwd.m) {
+            let k = crate::mat3::add(self.f.hinge_stiffness(j), &k_de);
+            *c = cmat(&crate::mat3::inverse_spd(&k).ok_or(Error::Singular { what: "joint stiffness" })?);
+        }
+        Ok(o)
+    }
+
+    /// As [`FixedInverse::solve`].
+    pub fn solve(&self, angles: &[Rad], tension: Nt) -> Result<FixedPoseSolution, Error> {
+        solve_by(&self.fwd, self.t_rest, self.t_ceiling, |u| self.at(u), angles, tension)
+    }
+
+    /// The channel voltages for a solution (float: the DE thinning's closed form).
+    pub fn volts(&self, sol: &FixedPoseSolution) -> Result<[R; MAX_JOINTS], Error> {
+        volts_of(self.f, self.t_rest, sol)
+    }
+}
+
+/// Each joint's stack thickness that holds `angles` at `tension`, the compliances at table
+/// position `u` from `at`.
+fn solve_by(fwd: &FixedFinger, t_rest: Mm, t_ceiling: Mm, at: impl Fn(i64) -> Result<[CMat; MAX_SUB], Error>, angles: &[Rad], tension: Nt) -> Result<FixedPoseSolution, Error> {
+    {
+        let n = fwd.n;
         if angles.len() != n {
             return Err(Error::Input { input: "angles", reason: "one angle per joint is required" });
         }
         if tension.0 <= 0 || tension.is_sat() {
             return Err(Error::Input { input: "tension", reason: "tension must be > 0 and within the fixed-point range" });
         }
-        let link = self.fwd.link_q(tension).2;
+        let link = fwd.link_q(tension).2;
         let mut thickness = [Mm::ZERO; MAX_JOINTS];
         let mut evals = 0u32;
         let mut iters = 0u32;
@@ -142,7 +222,7 @@ impl FixedInverse {
             let mut hole = None;
             let mut g = |u: i64, hole: &mut Option<[Mm; 2]>, evals: &mut u32| -> Result<i64, Error> {
                 *evals += 1;
-                let (end, h) = self.fwd.joint(&self.at(u), tension, *hole, &mut iters).map_err(|_| Error::NotConverged { iterations: *evals, residual: f64::INFINITY })?;
+                let (end, h) = fwd.joint(&at(u)?, tension, *hole, &mut iters).map_err(|_| Error::NotConverged { iterations: *evals, residual: f64::INFINITY })?;
                 *hole = Some(h);
                 Ok(end.theta.0 as i64 - target.0 as i64)
             };
@@ -150,11 +230,11 @@ impl FixedInverse {
             let (mut ga, mut gb) = (g(a, &mut hole, &mut evals)?, g(b, &mut hole, &mut evals)?);
             // at an end of the stack's range within the forward solve's own error: that end
             if ga > 0 && ga <= END_TOL_RAW {
-                thickness[k] = self.t_rest;
+                thickness[k] = t_rest;
                 continue;
             }
             if gb < 0 && -gb <= END_TOL_RAW {
-                thickness[k] = self.t_ceiling;
+                thickness[k] = t_ceiling;
                 continue;
             }
             if ga > 0 || gb < 0 {
@@ -185,19 +265,9 @@ impl FixedInverse {
                     side = 1;
                 }
             }
-            thickness[k] = self.thickness_at(u);
+            thickness[k] = thickness_at(t_rest, t_ceiling, u);
         }
         Ok(FixedPoseSolution { n, thickness, tension, evaluations: evals })
-    }
-
-    /// The channel voltages for a solution (float: the DE thinning's closed form).
-    pub fn volts<R: Real>(&self, f: &Finger<R>, sol: &FixedPoseSolution) -> Result<[R; MAX_JOINTS], Error> {
-        let p = f.params();
-        let mut v = [R::zero(); MAX_JOINTS];
-        for (k, (vk, tk)) in v.iter_mut().zip(&sol.thickness).enumerate().take(sol.n) {
-            *vk = if tk.0 >= self.t_rest.0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, R::from_f64(tk.to_f64()))? };
-        }
-        Ok(v)
     }
 }
 
@@ -222,6 +292,29 @@ mod tests {
             }
         }
         assert!(worst < 0.05, "{worst}");
+    }
+
+    /// The untabled inverse (the M3 image's `pose`) round-trips as the tabled one does, and
+    /// refuses the same unreachable posture.
+    #[test]
+    fn direct_round_trip_within_0_05_deg() {
+        let f = Finger::new(Params::<f64> { layers: 4, ..Params::default() }).unwrap();
+        let fwd = FixedFinger::new(&f, &[0.0; 3]).unwrap();
+        let inv = FixedInverseDirect::new(&f, &fwd, f.ceiling_in_force(None)).unwrap();
+        let mut worst = 0f64;
+        for (p, v) in [(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])] {
+            let want = f.solve(p, &v, Method::converged()).unwrap();
+            let angles = [0, 1, 2].map(|k| Rad::from_f64(want.joint_angle[k]));
+            let sol = inv.solve(&angles, Nt::from_f64(p)).unwrap();
+            let volts = inv.volts(&sol).unwrap();
+            let back = f.solve(p, &volts[..3], Method::converged()).unwrap();
+            for k in 0..3 {
+                worst = worst.max((back.joint_angle[k] - want.joint_angle[k]).abs().to_degrees());
+            }
+        }
+        assert!(worst < 0.05, "{worst}");
+        let a = Rad::from_f64(1.2);
+        assert!(matches!(inv.solve(&[a, a, a], Nt::from_f64(0.5)), Err(Error::Unreachable { joint: 1, .. })));
     }
 
     #[test]

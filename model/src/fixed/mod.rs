@@ -6,14 +6,17 @@
 //! ([`trig`]). The compliances are computed once per voltage set in the float model and
 //! converted ([`FixedFinger::new`]), each entry with its own scale.
 //! And the inverse at a given tension ([`inverse`]: each joint's stack thickness for target
-//! angles, compliances interpolated from a table built once).
-//! What it is not: the tip-loaded solve, the paper's stepping, the tension rule, fmax. Error
-//! budget and measurements: docs/fixed-point.md.
+//! angles, compliances interpolated from a table built once, or computed per evaluation without
+//! the table), and fmax by bisection on the solve ([`branch_end`]).
+//! What it is not: the tip-loaded solve, the paper's stepping, the tension rule, the tip
+//! stiffness. Error budget and measurements: docs/fixed-point.md.
 
+pub mod branch_end;
 pub mod forward;
 pub mod inverse;
 pub mod q;
 pub mod trig;
 
+pub use branch_end::FixedBranchEnd;
 pub use forward::{FixedFinger, FixedSolution};
-pub use inverse::{FixedInverse, FixedPoseSolution};
+pub use inverse::{FixedInverse, FixedInverseDirect, FixedPoseSolution};
