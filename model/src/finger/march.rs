@@ -27,6 +27,7 @@ impl<R: Real> Finger<R> {
     /// compliances stay in R. Same operations in the same order as `march`. Returns the hinge
     /// end and the hole in T; the sub-element displacements go to `q_out` as values (`val`),
     /// which keeps the fixed-capacity array out of T (no zeroing and copying of dual arrays).
+    /// The third value is (sin, cos) of the end's angle (the posture chain reuses it).
     pub(super) fn march_t<T>(
         &self,
         c: &[Mat3<R>; MAX_SUB],
@@ -35,7 +36,7 @@ impl<R: Real> Finger<R> {
         tip: Option<TipLoad<R>>,
         q_out: &mut [[R; 3]; MAX_SUB],
         val: impl Fn(T) -> R,
-    ) -> Result<(Pose<T>, [T; 2]), MarchError>
+    ) -> Result<(Pose<T>, [T; 2], [T; 2]), MarchError>
     where
         T: Real + Mul<R, Output = T> + Add<R, Output = T> + Sub<R, Output = T>,
     {
@@ -87,7 +88,7 @@ impl<R: Real> Finger<R> {
         if !(hole[0].is_finite() && hole[1].is_finite() && pose.theta.is_finite()) {
             return Err(MarchError::Singular);
         }
-        Ok((pose, hole))
+        Ok((pose, hole, [s, co]))
     }
 
     /// One dual march at hole guess `b` (tension alone): state, residual, Jacobian.
@@ -108,7 +109,7 @@ impl<R: Real> Finger<R> {
     ) -> Result<(Pose<R>, [R; 2], [R; 2], [[R; 2]; 2]), MarchError> {
         let (z, o) = (R::zero(), R::one());
         let bd = [D { v: b[0], d: [o, z] }, D { v: b[1], d: [z, o] }];
-        let (end_d, hole_d) = self.march_t::<D<R>>(c, tension, bd, None, q, |x| x.v)?;
+        let (end_d, hole_d, _) = self.march_t::<D<R>>(c, tension, bd, None, q, |x| x.v)?;
         let end = Pose { x: end_d.x.v, y: end_d.y.v, theta: end_d.theta.v };
         let hole = [hole_d[0].v, hole_d[1].v];
         let r = [b[0] - hole[0], b[1] - hole[1]];

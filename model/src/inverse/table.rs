@@ -272,18 +272,29 @@ impl<R: Real> BranchTable<R> {
     }
 
     /// The forward solve under tension alone with precomputed compliances (of this table's
-    /// finger): each joint's guide hole read off the table at (P, its stack thickness), then
-    /// Newton on the full model from there (`Finger::solve_from_holes`: a joint whose march
-    /// at the table's hole is within the solver's tolerance is answered by that march). The
-    /// answer is `Finger::solve_with(Method::converged())`'s, to its tolerance; where the
-    /// table does not hold (P, t) (P = 0, past its last sample, t outside its stack range)
-    /// it is that solve. (Inlined, so that the solution is written in the caller's place.)
+    /// finger), returned by value: `solve_into` into a new solution.
     #[inline(always)]
     pub fn solve_with(&self, c: &Compliances<R>, tension: R) -> Result<Solution<R>, Error> {
+        let mut sol = Solution::empty();
+        self.solve_into(c, tension, &mut sol).map(|()| sol)
+    }
+
+    /// The forward solve under tension alone with precomputed compliances (of this table's
+    /// finger), written into `sol` (the caller's storage; no copy of the solution): each
+    /// joint's guide hole read off the table at (P, its stack thickness), then Newton on the
+    /// full model from there (`Finger::solve_from_holes_into`: a joint whose march at the
+    /// table's hole is within the solver's tolerance is answered by that march). The answer
+    /// is `Finger::solve_with(Method::converged())`'s, to its tolerance; where the table does
+    /// not hold (P, t) (P = 0, past its last sample, t outside its stack range) it is that
+    /// solve. On an error `sol` holds no solution.
+    pub fn solve_into(&self, c: &Compliances<R>, tension: R, sol: &mut Solution<R>) -> Result<(), Error> {
         let f = &self.finger;
         match self.forward_holes(c, tension) {
-            Some(holes) => f.solve_from_holes(c, tension, &holes),
-            None => f.solve_with(c, tension, [R::zero(); 2], Method::converged()),
+            Some(holes) => f.solve_from_holes_into(c, tension, &holes, sol),
+            None => {
+                *sol = f.solve_with(c, tension, [R::zero(); 2], Method::converged())?;
+                Ok(())
+            }
         }
     }
 
