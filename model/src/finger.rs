@@ -580,9 +580,13 @@ impl<R: Real> Finger<R> {
         self.fill_from_holes(c, tension, holes, tol, max_iter, sol)
     }
 
-    /// `solve_from_holes_into`'s joints, written in place: the solution's scalars set, the
-    /// rows past (n, m) zeroed (only those), one march per distinct joint into its rows,
-    /// Newton (`polish_joint`) only where that march is not converged.
+    /// `solve_from_holes_into`'s joints and posture, written in place in one pass: the
+    /// solution's scalars set, the rows past (n, m) zeroed (only those), one march per
+    /// distinct joint into its rows (Newton, `polish_joint`, only where that march is not
+    /// converged), and the posture as it goes (MODEL.md "Equilibrium": node k = node k-1 ∘
+    /// hinge ∘ link; "Cable": the excursion Σ (L_h - |span k|)): `chain_ends` with the node
+    /// rotations composed from the marches' own (sin, cos) and the link's (the same for every
+    /// link under tension alone), one sin/cos pair per solve. A span below its floor is contact.
     #[inline(always)]
     fn fill_from_holes(
         &self,
@@ -600,117 +604,89 @@ impl<R: Real> Finger<R> {
         sol.tip_force = [R::zero(); 2];
         sol.thickness = c.thickness;
         sol.volts = c.volts;
-        sol.cable_excursion = R::zero();
-        sol.tangent_det = [R::one(); MAX_JOINTS];
         for k in 0..MAX_JOINTS {
             let from = if k < n { m } else { 0 };
             for row in sol.q[k][from..].iter_mut() {
                 *row = [R::zero(); 3];
             }
         }
-        let mut ends = [Pose::origin(); MAX_JOINTS];
-        let mut turns = [[R::zero(), R::one()]; MAX_JOINTS];
-        let mut arrived = [[R::zero(); 2]; MAX_JOINTS];
-        let (mut res2, mut r2_prev, mut iters) = (R::zero(), R::zero(), 0u32);
-        for k in 0..n {
-            let b = holes[k];
-            // a joint with the same voltage, thickness and guess as the one before has its
-            // state (`compliances` makes a joint's compliances a function of its voltage; the
-            // first sub-element's are compared too)
-            if k > 0 && b == holes[k - 1] && c.volts[k] == c.volts[k - 1] && c.thickness[k] == c.thickness[k - 1] && c.c[k][0] == c.c[k - 1][0] {
-                let (done, rest) = sol.q.split_at_mut(k);
-                rest[0][..m].copy_from_slice(&done[k - 1][..m]);
-                ends[k] = ends[k - 1];
-                turns[k] = turns[k - 1];
-                arrived[k] = arrived[k - 1];
-                sol.tangent_det[k] = sol.tangent_det[k - 1];
-                res2 += r2_prev;
-                continue;
-            }
-            let first = self.march_into(&c.c[k], tension, b, None, &mut sol.q[k]);
-            let r2 = match first {
-                Ok((end, hole, sc)) if (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq() <= tol * tol => {
-                    ends[k] = end;
-                    turns[k] = sc;
-                    arrived[k] = hole;
-                    (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq()
-                }
-                _ => {
-                    let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
-                    iters += it;
-                    sol.q[k][..m].copy_from_slice(&st.q[..m]);
-                    ends[k] = st.end;
-                    let (s, co) = st.end.theta.sin_cos();
-                    turns[k] = [s, co];
-                    arrived[k] = st.hole;
-                    let (r, det) = st.tangent.unwrap_or(([R::zero(); 2], R::one()));
-                    sol.tangent_det[k] = det;
-                    r[0] * r[0] + r[1] * r[1]
-                }
-            };
-            r2_prev = r2;
-            res2 += r2;
-        }
-        sol.iterations = iters;
-        self.chain_tension_alone(tension, &ends, &turns, &arrived, res2, sol)
-    }
-
-    /// The posture under tension alone from each joint's hinge end, the (sin, cos) of its
-    /// angle and its guide hole (MODEL.md "Equilibrium": node k = node k-1 ∘ hinge ∘ link;
-    /// "Cable": the excursion Σ (L_h - |span k|)), written into `sol`: `chain_ends` with the
-    /// node rotations composed from the marches' own (sin, cos) and the link's (the same for
-    /// every link under tension alone), one sin/cos pair per solve; a span below its floor is
-    /// contact.
-    #[inline(never)]
-    fn chain_tension_alone(
-        &self,
-        tension: R,
-        ends: &[Pose<R>; MAX_JOINTS],
-        turns: &[[R; 2]; MAX_JOINTS],
-        holes: &[[R; 2]; MAX_JOINTS],
-        res2: R,
-        sol: &mut Solution<R>,
-    ) -> Result<(), Error> {
-        let n = self.p.n;
         let link = self.link_q(tension, &Pose::origin(), None);
         let (ls, lc) = if link[2] == R::zero() { (R::zero(), R::one()) } else { link[2].sin_cos() };
         let (lx, ly) = (self.link_len + link[0], link[1]);
         let mut node = Pose::origin();
         let (mut s, mut co) = (R::zero(), R::one());
         sol.nodes[0] = node;
-        let mut finite = true;
+        // the joint before: hinge end, (sin, cos) of its angle, the hole it arrived at, its
+        // squared residual and tangent determinant
+        let mut prev = (Pose::origin(), [R::zero(), R::one()], [R::zero(); 2], R::zero(), R::one());
+        let (mut res2, mut iters, mut excursion) = (R::zero(), 0u32, R::zero());
         for k in 0..n {
-            let (e, [se, ce]) = (ends[k], turns[k]);
-            let hinge = Pose { x: node.x + co * e.x - s * e.y, y: node.y + s * e.x + co * e.y, theta: node.theta + e.theta };
+            let b = holes[k];
+            // a joint with the same voltage, thickness and guess as the one before has its
+            // state (`compliances` makes a joint's compliances a function of its voltage; the
+            // first sub-element's are compared too)
+            let (end, turn, hole, r2, det) = if k > 0
+                && b == holes[k - 1]
+                && c.volts[k] == c.volts[k - 1]
+                && c.thickness[k] == c.thickness[k - 1]
+                && c.c[k][0] == c.c[k - 1][0]
+            {
+                let (done, rest) = sol.q.split_at_mut(k);
+                rest[0][..m].copy_from_slice(&done[k - 1][..m]);
+                prev
+            } else {
+                match self.march_into(&c.c[k], tension, b, None, &mut sol.q[k]) {
+                    Ok((end, hole, sc)) if (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq() <= tol * tol => {
+                        (end, sc, hole, (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq(), R::one())
+                    }
+                    _ => {
+                        let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
+                        iters += it;
+                        sol.q[k][..m].copy_from_slice(&st.q[..m]);
+                        let (se, ce) = st.end.theta.sin_cos();
+                        let (r, det) = st.tangent.unwrap_or(([R::zero(); 2], R::one()));
+                        (st.end, [se, ce], st.hole, r[0] * r[0] + r[1] * r[1], det)
+                    }
+                }
+            };
+            prev = (end, turn, hole, r2, det);
+            res2 += r2;
+            sol.tangent_det[k] = det;
+            let [se, ce] = turn;
+            let hinge = Pose { x: node.x + co * end.x - s * end.y, y: node.y + s * end.x + co * end.y, theta: node.theta + end.theta };
             let (hs, hc) = (s * ce + co * se, co * ce - s * se);
             node = Pose { x: hinge.x + hc * lx - hs * ly, y: hinge.y + hs * lx + hc * ly, theta: hinge.theta + link[2] };
             (s, co) = (hs * lc + hc * ls, hc * lc - hs * ls);
             sol.nodes[k + 1] = node;
             sol.links[k] = link;
-            sol.joint_angle[k] = e.theta + link[2];
+            sol.joint_angle[k] = end.theta + link[2];
             // the span as the final geometry has it (not the one the loads came from)
-            let span = norm2([holes[k][0], holes[k][1] - self.p.e]);
+            let span = norm2([hole[0], hole[1] - self.p.e]);
             if !(span >= self.p.span_floor) {
                 return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() });
             }
             sol.span[k] = span;
-            sol.cable_excursion += self.p.hinge_len() - span;
-            finite &= node.x.is_finite() && node.y.is_finite() && node.theta.is_finite() && sol.tangent_det[k].is_finite();
+            excursion += self.p.hinge_len() - span;
         }
         for k in n..MAX_JOINTS {
             sol.nodes[k + 1] = Pose::origin();
             sol.links[k] = [R::zero(); 3];
             sol.joint_angle[k] = R::zero();
             sol.span[k] = R::zero();
+            sol.tangent_det[k] = R::one();
         }
+        sol.iterations = iters;
+        sol.cable_excursion = excursion;
         sol.residual = res2.sqrt();
-        if !(finite && sol.residual.is_finite() && sol.cable_excursion.is_finite()) {
+        // a non-finite node carries on to the tip
+        let finite = node.x.is_finite() && node.y.is_finite() && node.theta.is_finite() && sol.tangent_det[..n].iter().all(|d| d.is_finite());
+        if !(finite && sol.residual.is_finite() && excursion.is_finite()) {
             return Err(Error::Singular { what: "solution (non-finite)" });
         }
         Ok(())
     }
 
-    /// Joint k's equilibrium from the hole guess `b` (`solve_from_holes`) when its first march
+    /// Joint k's equilibrium from the hole guess `b` (`solve_from_holes_into`) when its first march
     /// is not converged: Newton from `b` (dual marches), accepted if it stays within half a
     /// hinge length of the guess; else the load continuation from the straight joint.
     #[inline(never)]

@@ -153,6 +153,18 @@ impl<R: Real> BranchTable<R> {
     }
 }
 
+/// Power-form coefficients (c0 + c1 s + c2 s² + c3 s³, s in node units from the second
+/// node) of the cubic through four equally spaced samples' component `c`.
+#[inline(always)]
+fn cubic<R: Real>(y: &[[R; 3]], c: usize) -> [R; 4] {
+    let (y0, y1, y2, y3) = (y[0][c], y[1][c], y[2][c], y[3][c]);
+    let (half, sixth) = (R::from_f64(0.5), R::from_f64(1.0 / 6.0));
+    let c2 = (y0 + y2) * half - y1;
+    let c3 = (y3 - y0) * sixth + (y1 - y2) * half;
+    let c1 = y2 - y1 - c2 - c3;
+    [y1, c1, c2, c3]
+}
+
 /// The three branches' holes at one tension (`BranchTable::branch_holes`), for the forward
 /// lookup: per branch, the hole where the branch carries that tension.
 #[derive(Clone, Copy, Debug)]
@@ -162,8 +174,9 @@ pub(crate) struct BranchHoles<R> {
 
 impl<R: Real> BranchTable<R> {
     /// Where each branch carries tension `p` (N): the cubic P(θ) through the four samples
-    /// around it inverted by Newton from the linear guess, and the hole's cubic there (the
-    /// same weights). None when `p` is not inside every branch's tabulated tensions.
+    /// around it (in power form on the interval, s in node units from node i) inverted by two
+    /// Newton steps from the linear guess, and the hole's cubic there. None when `p` is not
+    /// inside every branch's tabulated tensions.
     #[inline(never)]
     pub(crate) fn branch_holes(&self, p: R) -> Option<BranchHoles<R>> {
         let mut out = BranchHoles { hole: [[R::zero(); 2]; 3] };
@@ -200,38 +213,22 @@ impl<R: Real> BranchTable<R> {
             }
             found = Some(a);
             let i = a.clamp(1, len - 3);
-            let node = |n: usize, c: usize| xs[i - 1 + n][c];
-            // s in node units from node i; the linear guess inside [a, a+1]
+            let cp = cubic(&xs[i - 1..i + 3], 0);
+            // the linear guess inside [a, a+1], s from node i
             let (pa, pb) = (xs[a][0], xs[a + 1][0]);
-            let mut s = R::from_u32((a - (i - 1)) as u32) - R::one() + (p - pa) / (pb - pa);
-            let (sixth, half, two) = (R::from_f64(1.0 / 6.0), R::from_f64(0.5), R::from_f64(2.0));
-            let weights = |s: R| {
-                let (sm, s1, s2) = (s + R::one(), s - R::one(), s - two);
-                [-s * s1 * s2 * sixth, sm * s1 * s2 * half, -sm * s * s2 * half, sm * s * s1 * sixth]
-            };
+            let mut s = R::from_u32(a as u32) - R::from_u32(i as u32) + (p - pa) / (pb - pa);
+            let (two, three) = (R::from_f64(2.0), R::from_f64(3.0));
             for _ in 0..2 {
-                // the cubic's value and slope at s
-                let (sm, s1, s2) = (s + R::one(), s - R::one(), s - two);
-                let w = weights(s);
-                let dw = [
-                    -(s1 * s2 + s * s2 + s * s1) * sixth,
-                    (s1 * s2 + sm * s2 + sm * s1) * half,
-                    -(s * s2 + sm * s2 + sm * s) * half,
-                    (s * s1 + sm * s1 + sm * s) * sixth,
-                ];
-                let (mut v, mut d) = (R::zero(), R::zero());
-                for n in 0..4 {
-                    v += w[n] * node(n, 0);
-                    d += dw[n] * node(n, 0);
-                }
+                let v = cp[0] + s * (cp[1] + s * (cp[2] + s * cp[3]));
+                let d = cp[1] + s * (two * cp[2] + s * three * cp[3]);
                 if !(d > R::zero()) {
                     return None;
                 }
                 s -= (v - p) / d;
             }
-            let w = weights(s);
             for c in 0..2 {
-                o[c] = (0..4).fold(R::zero(), |acc, n| acc + w[n] * node(n, c + 1));
+                let h = cubic(&xs[i - 1..i + 3], c + 1);
+                o[c] = h[0] + s * (h[1] + s * (h[2] + s * h[3]));
             }
             if !(o[0].is_finite() && o[1].is_finite()) {
                 return None;
@@ -307,9 +304,30 @@ impl<R: Real> BranchTable<R> {
             return None;
         }
         let h = self.branch_holes(tension)?;
+        let [t_top, t0, tm] = self.thickness;
+        let slack = (t0 - t_top) * R::from_f64(1e-3);
+        let (d01, d02, d12) = (t_top - t0, t_top - tm, t0 - tm);
+        if d01 == R::zero() || d02 == R::zero() || d12 == R::zero() {
+            return None;
+        }
+        // the quadratic through the three branch thicknesses (`hole_at_thickness`), its
+        // denominators once
+        let inv = [R::one() / (d01 * d02), -R::one() / (d01 * d12), R::one() / (d02 * d12)];
         let mut holes = [[R::zero(); 2]; MAX_JOINTS];
         for k in 0..n {
-            holes[k] = self.hole_at_thickness(&h, c.thickness[k])?;
+            let t = c.thickness[k];
+            if k > 0 && t == c.thickness[k - 1] {
+                holes[k] = holes[k - 1];
+                continue;
+            }
+            if !(t >= t_top - slack && t <= t0 + slack) {
+                return None;
+            }
+            let (a0, a1, a2) = (t - t_top, t - t0, t - tm);
+            let w = [a1 * a2 * inv[0], a0 * a2 * inv[1], a0 * a1 * inv[2]];
+            for c in 0..2 {
+                holes[k][c] = w[0] * h.hole[0][c] + w[1] * h.hole[1][c] + w[2] * h.hole[2][c];
+            }
         }
         Some(holes)
     }
