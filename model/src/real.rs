@@ -40,6 +40,12 @@ pub trait Real:
     /// f32 build on the target does no double-precision arithmetic.
     fn from_u32(n: u32) -> Self;
     fn to_f64(self) -> f64;
+    /// The integer part of a non-negative scalar (a table index; saturating, 0 for NaN).
+    /// f32 converts directly, never through f64.
+    #[inline(always)]
+    fn to_index(self) -> usize {
+        self.to_f64() as usize
+    }
     fn sqrt(self) -> Self;
     fn sin(self) -> Self;
     fn cos(self) -> Self;
@@ -144,6 +150,10 @@ impl Real for f32 {
         n as f32
     }
     #[inline(always)]
+    fn to_index(self) -> usize {
+        self as usize
+    }
+    #[inline(always)]
     fn to_f64(self) -> f64 {
         self as f64
     }
@@ -194,6 +204,10 @@ impl Real for f32 {
     #[inline(always)]
     fn from_u32(n: u32) -> Self {
         n as f32
+    }
+    #[inline(always)]
+    fn to_index(self) -> usize {
+        self as usize
     }
     #[inline(always)]
     fn to_f64(self) -> f64 {

@@ -861,6 +861,11 @@ impl<R: Real> BranchTable<R> {
             step,
             len: [1; 3],
             x: [[[R::zero(), lh, p.e]; TABLE_LEN]; 3],
+            grid: [[[R::zero(); 2]; TABLE_LEN]; 3],
+            dp: R::zero(),
+            inv_dp: R::zero(),
+            grid_len: 0,
+            grid_top: R::zero(),
         };
         let mut scratch = [[R::zero(); 3]; MAX_SUB];
         for e in 0..3 {
@@ -887,6 +892,7 @@ impl<R: Real> BranchTable<R> {
                 slope = h.slope;
             }
         }
+        t.build_tension_grid();
         Ok(t)
     }
 }

@@ -71,6 +71,13 @@ pub struct BranchTable<R> {
     pub(super) len: [usize; 3],
     /// (P N, hole x mm, hole y mm) per sample.
     pub(super) x: [[[R; 3]; TABLE_LEN]; 3],
+    /// The forward lookup's grid (`build_tension_grid`): each branch's hole at the tensions
+    /// j x `dp`, j < `grid_len`, read directly below `grid_top` (N).
+    pub(super) grid: [[[R; 2]; TABLE_LEN]; 3],
+    pub(super) dp: R,
+    pub(super) inv_dp: R,
+    pub(super) grid_len: usize,
+    pub(super) grid_top: R,
 }
 
 impl<R: Real> BranchTable<R> {
@@ -237,6 +244,81 @@ impl<R: Real> BranchTable<R> {
         Some(out)
     }
 
+    /// The forward lookup's tension grid, from the table itself: each branch's hole at
+    /// P_j = j dp (the common tension range in TABLE_LEN - 1 steps) by `branch_holes`, and
+    /// the range `grid_top` over which the cubic in P through the grid reads what
+    /// `branch_holes` reads, to 1/8 of the converged solver's tolerance (checked at the
+    /// quarter, middle and three quarters of every grid interval; near a limit point the hole
+    /// is not smooth in P, and the grid stops). No solves: built from the samples in
+    /// ~64 x 12 lookups.
+    pub(super) fn build_tension_grid(&mut self) {
+        self.grid_len = 0;
+        self.grid_top = R::zero();
+        if self.len.iter().any(|&l| l < 4) {
+            return;
+        }
+        let top = self.len.iter().enumerate().map(|(e, &l)| self.x[e][l - 1][0]).fold(R::from_f64(f64::INFINITY), |a, b| a.min(b));
+        self.dp = top / R::from_u32(TABLE_LEN as u32 - 1);
+        self.inv_dp = R::one() / self.dp;
+        for e in 0..3 {
+            self.grid[e][0] = [self.x[e][0][1], self.x[e][0][2]];
+        }
+        self.grid_len = 1;
+        for j in 1..TABLE_LEN {
+            let Some(h) = self.branch_holes(self.dp * R::from_u32(j as u32)) else { break };
+            for e in 0..3 {
+                self.grid[e][j] = h.hole[e];
+            }
+            self.grid_len = j + 1;
+        }
+        if self.grid_len < 4 {
+            self.grid_len = 0;
+            return;
+        }
+        let p = self.finger.params();
+        let res = R::from_f64(16.0 * R::EPS) * (p.hinge_len() + p.e + p.l);
+        let bound = res.max(R::from_f64(1e-9)) * R::from_f64(0.125);
+        for j in 0..self.grid_len - 1 {
+            for f in [0.25, 0.5, 0.75] {
+                let pj = self.dp * (R::from_u32(j as u32) + R::from_f64(f));
+                let (Some(a), Some(b)) = (self.grid_holes(pj), self.branch_holes(pj)) else { return };
+                for e in 0..3 {
+                    if !((a.hole[e][0] - b.hole[e][0]).abs() <= bound && (a.hole[e][1] - b.hole[e][1]).abs() <= bound) {
+                        return;
+                    }
+                }
+            }
+            self.grid_top = self.dp * R::from_u32(j as u32 + 1);
+        }
+    }
+
+    /// The three branches' holes at tension `p` (N) from the tension grid: the cubic in P
+    /// through the four grid nodes around it (one set of weights for all three branches). None
+    /// outside [0, grid_top).
+    #[inline(always)]
+    fn grid_holes(&self, p: R) -> Option<BranchHoles<R>> {
+        let len = self.grid_len;
+        if len < 4 || !(p >= R::zero() && p < self.dp * R::from_u32(len as u32 - 1)) {
+            return None;
+        }
+        let u = p * self.inv_dp;
+        let a = u.to_index().min(len - 2);
+        let i = a.clamp(1, len - 3);
+        let s = u - R::from_u32(i as u32);
+        let (sm, s1, s2) = (s + R::one(), s - R::one(), s - R::from_f64(2.0));
+        let (sixth, half) = (R::from_f64(1.0 / 6.0), R::from_f64(0.5));
+        let (a01, a23) = (sm * s, s1 * s2);
+        let w = [-s * a23 * sixth, sm * a23 * half, -a01 * s2 * half, a01 * s1 * sixth];
+        let mut out = BranchHoles { hole: [[R::zero(); 2]; 3] };
+        for e in 0..3 {
+            let g = &self.grid[e][i - 1..i + 3];
+            for c in 0..2 {
+                out.hole[e][c] = w[0] * g[0][c] + w[1] * g[1][c] + w[2] * g[2][c] + w[3] * g[3][c];
+            }
+        }
+        Some(out)
+    }
+
     /// The hole at stack thickness `t` (mm) from the branches' holes at one tension: the
     /// quadratic through the three branch thicknesses. None outside [t_top, t0] (with a
     /// sliver of 1e-3 of the range: voltages between the table's top and the ceiling).
@@ -303,7 +385,7 @@ impl<R: Real> BranchTable<R> {
         if !(tension.is_finite() && c.n == n) {
             return None;
         }
-        let h = self.branch_holes(tension)?;
+        let h = if tension > R::zero() && tension < self.grid_top { self.grid_holes(tension)? } else { self.branch_holes(tension)? };
         let [t_top, t0, tm] = self.thickness;
         let slack = (t0 - t_top) * R::from_f64(1e-3);
         let (d01, d02, d12) = (t_top - t0, t_top - tm, t0 - tm);
