@@ -631,8 +631,8 @@ impl<R: Real> Finger<R> {
                 && c.thickness[k] == c.thickness[k - 1]
                 && c.c[k][0] == c.c[k - 1][0]
             {
-                let (done, rest) = sol.q.split_at_mut(k);
-                rest[0][..m].copy_from_slice(&done[k - 1][..m]);
+                // the whole row: its sub-elements past m are zero in both
+                sol.q[k] = sol.q[k - 1];
                 prev
             } else {
                 match self.march_into(&c.c[k], tension, b, None, &mut sol.q[k]) {
