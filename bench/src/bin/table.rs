@@ -120,7 +120,7 @@ fn run_model(m: &scenes::TableModel) {
 
 /// Profiling markers (`--features profile`): the execution trace between the two calls is one
 /// tabled forward solve of the default model at three different voltages (or, built with
-/// PROFILE_SAME set, one voltage).
+/// PROFILE_SAME set, one voltage; with PROFILE_INVERSE, the tabled inverse of its angles).
 #[inline(never)]
 #[no_mangle]
 pub extern "C" fn profile_start() {
@@ -143,6 +143,16 @@ fn main() -> ! {
         let v = if option_env!("PROFILE_SAME").is_some() { [5000.0; 3] } else { [9000.0, 5000.0, 0.0] };
         let c = f.compliances(&core::hint::black_box(v)).unwrap();
         let mut out = Solution::empty();
+        if option_env!("PROFILE_INVERSE").is_some() {
+            // PROFILE_INVERSE set at build time: the tabled inverse of that solve's angles
+            tb.solve_into(&c, 1.0, &mut out).unwrap();
+            let a = core::hint::black_box([out.joint_angle[0], out.joint_angle[1], out.joint_angle[2]]);
+            profile_start();
+            let r = solve_pose_tabled(&tb, &a, core::hint::black_box(Some(1.0)));
+            profile_stop();
+            core::hint::black_box(r).ok();
+            debug::exit(debug::EXIT_SUCCESS);
+        }
         profile_start();
         let r = tb.solve_into(&c, core::hint::black_box(1.0), core::hint::black_box(&mut out));
         profile_stop();
