@@ -118,7 +118,7 @@ impl<'a, R: Real> Gen<'a, R> {
             *cj = if self.p.layers == 0 {
                 self.f.hinge_compliance(j)
             } else {
-                mat3::inverse_spd(&mat3::add(self.f.hinge_stiffness(j), &k_de)).ok_or(Error::Singular { what: "joint stiffness" })?
+                mat3::inverse_spd_of_sum(self.f.hinge_stiffness(j), &k_de).ok_or(Error::Singular { what: "joint stiffness" })?
             };
         }
         Ok(())

@@ -127,16 +127,8 @@ impl<R: Real> BranchTable<R> {
         if !(u > R::zero() && u <= R::from_u32(len as u32 - 1)) {
             return None;
         }
-        // the sample interval [i, i+1] holding u (binary search: the scalar has no floor)
-        let (mut a, mut b) = (0usize, len - 1);
-        while b - a > 1 {
-            let mid = (a + b) / 2;
-            if R::from_u32(mid as u32) <= u {
-                a = mid;
-            } else {
-                b = mid;
-            }
-        }
+        // the sample interval [a, a+1] holding u (uniform samples: its integer part)
+        let a = u.to_index().min(len - 2);
         let i = a.clamp(1, len - 3);
         let s = u - R::from_u32(i as u32);
         // Lagrange weights on the nodes i-1, i, i+1, i+2
