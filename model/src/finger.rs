@@ -446,7 +446,8 @@ impl<R: Real> Finger<R> {
             out.thickness[k] = t;
             let k_de = self.stack_stiffness(t);
             for j in 0..p.m {
-                out.c[k][j] = mat3::inverse_spd_of_sum(&self.hinge_k[j], &k_de).ok_or(Error::Singular { what: "joint stiffness" })?;
+                let k_sum = mat3::add(&self.hinge_k[j], &k_de);
+                out.c[k][j] = mat3::inverse_spd(&k_sum).ok_or(Error::Singular { what: "joint stiffness" })?;
             }
         }
         Ok(out)

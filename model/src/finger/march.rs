@@ -17,6 +17,11 @@ use crate::real::Real;
 use crate::solve::{self, newton::Equations, SolveOptions};
 use core::ops::{Add, Mul, Sub};
 
+/// Whether the march turns (sin, cos) by the series (below): not on a soft-float core, where
+/// the series' code in the plain and the dual march costs flash the M3 image's 64 KiB does not
+/// have (~1 KB); there each sub-element takes its angle's sin/cos.
+const SERIES_TURN: bool = !cfg!(target_abi = "eabi");
+
 /// The largest sub-element rotation (rad) whose (sin, cos) the march takes from the Taylor
 /// series to x⁵ and x⁶: their truncation errors, x⁷/5040 and x⁸/40320, stay below the scalar's
 /// resolution `eps` relative (x⁶ < 5040 eps: 0.29 in f32, 0.010 in f64; the bounds below are
@@ -97,7 +102,7 @@ impl<R: Real> Finger<R> {
             // (a short Taylor series, below SMALL_TURN's bound exact to the scalar's
             // resolution), else the angle's own sin/cos
             let dth = qj[2];
-            if dth.abs() < small {
+            if SERIES_TURN && dth.abs() < small {
                 let z = dth * dth;
                 let sd = dth * (T::one() - z * (T::from_f64(1.0 / 6.0) - z * T::from_f64(1.0 / 120.0)));
                 let cd = T::one() - z * (T::from_f64(0.5) - z * (T::from_f64(1.0 / 24.0) - z * T::from_f64(1.0 / 720.0)));
