@@ -34,6 +34,15 @@ pub(super) fn small_turn(eps: f64) -> f64 {
     }
 }
 
+/// (sin x, cos x) by their Taylor series to x⁵ and x⁶, for |x| below `small_turn`.
+#[inline(always)]
+fn series_turn<T: Real>(x: T) -> (T, T) {
+    let z = x * x;
+    let s = x * (T::one() - z * (T::from_f64(1.0 / 6.0) - z * T::from_f64(1.0 / 120.0)));
+    let c = T::one() - z * (T::from_f64(0.5) - z * (T::from_f64(1.0 / 24.0) - z * T::from_f64(1.0 / 720.0)));
+    (s, c)
+}
+
 /// A joint state, its hole residual `b - hole` and the residual's Jacobian `I - ∂hole/∂b`.
 pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
 
@@ -99,13 +108,11 @@ impl<R: Real> Finger<R> {
                 theta: pose.theta + qj[2],
             };
             // (sin, cos) of the new angle: the old one turned by this sub-element's rotation
-            // (a short Taylor series, below SMALL_TURN's bound exact to the scalar's
-            // resolution), else the angle's own sin/cos
+            // (`series_turn`, below `small_turn`'s bound exact to the scalar's resolution),
+            // else the angle's own sin/cos
             let dth = qj[2];
             if SERIES_TURN && dth.abs() < small {
-                let z = dth * dth;
-                let sd = dth * (T::one() - z * (T::from_f64(1.0 / 6.0) - z * T::from_f64(1.0 / 120.0)));
-                let cd = T::one() - z * (T::from_f64(0.5) - z * (T::from_f64(1.0 / 24.0) - z * T::from_f64(1.0 / 720.0)));
+                let (sd, cd) = series_turn(dth);
                 (s, co) = (s * cd + co * sd, co * cd - s * sd);
             } else {
                 (s, co) = pose.theta.sin_cos();
@@ -244,6 +251,24 @@ mod tests {
         let mut q = [[0.0; 3]; MAX_SUB];
         let t = f.march_t::<f32>(&c.c[0], 1.0, [9.5, 5.5], None, &mut q, |x| x).ok().unwrap();
         assert_eq!(a.hole, t.1);
+    }
+
+    /// The series turn is the sine and cosine to the scalar's resolution over its whole range.
+    #[test]
+    fn series_turn_matches_sin_cos() {
+        let lim = small_turn(f64::EPSILON);
+        for i in -100..=100 {
+            let x = lim * f64::from(i) / 100.0;
+            let (s, c) = series_turn(x);
+            assert!((s - x.sin()).abs() <= 2.0 * f64::EPSILON && (c - x.cos()).abs() <= 2.0 * f64::EPSILON, "{x}");
+        }
+        let lim = small_turn(f64::from(f32::EPSILON)) as f32;
+        for i in -100..=100 {
+            let x = lim * i as f32 / 100.0;
+            let (s, c) = series_turn(x);
+            let (ws, wc) = (f64::from(x).sin(), f64::from(x).cos());
+            assert!((f64::from(s) - ws).abs() <= 2e-7 && (f64::from(c) - wc).abs() <= 2e-7, "{x}");
+        }
     }
 
     #[test]
