@@ -52,6 +52,15 @@ pub trait Real:
     fn sin_cos(self) -> (Self, Self) {
         (self.sin(), self.cos())
     }
+    /// (sin x, cos x) of a small angle by their Taylor series to x⁵ and x⁶ (the march's turn
+    /// of a sub-element, below its bound `small_turn`: exact to the scalar's resolution there).
+    #[inline(always)]
+    fn sin_cos_small(self) -> (Self, Self) {
+        let z = self * self;
+        let s = self * (Self::one() - z * (Self::from_f64(1.0 / 6.0) - z * Self::from_f64(1.0 / 120.0)));
+        let c = Self::one() - z * (Self::from_f64(0.5) - z * (Self::from_f64(1.0 / 24.0) - z * Self::from_f64(1.0 / 720.0)));
+        (s, c)
+    }
     fn atan2(self, x: Self) -> Self;
     fn is_finite(self) -> bool;
 

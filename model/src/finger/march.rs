@@ -34,15 +34,6 @@ pub(super) fn small_turn(eps: f64) -> f64 {
     }
 }
 
-/// (sin x, cos x) by their Taylor series to x⁵ and x⁶, for |x| below `small_turn`.
-#[inline(always)]
-fn series_turn<T: Real>(x: T) -> (T, T) {
-    let z = x * x;
-    let s = x * (T::one() - z * (T::from_f64(1.0 / 6.0) - z * T::from_f64(1.0 / 120.0)));
-    let c = T::one() - z * (T::from_f64(0.5) - z * (T::from_f64(1.0 / 24.0) - z * T::from_f64(1.0 / 720.0)));
-    (s, c)
-}
-
 /// A joint state, its hole residual `b - hole` and the residual's Jacobian `I - ∂hole/∂b`.
 pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
 
@@ -108,11 +99,11 @@ impl<R: Real> Finger<R> {
                 theta: pose.theta + qj[2],
             };
             // (sin, cos) of the new angle: the old one turned by this sub-element's rotation
-            // (`series_turn`, below `small_turn`'s bound exact to the scalar's resolution),
-            // else the angle's own sin/cos
+            // (`Real::sin_cos_small`, below `small_turn`'s bound exact to the scalar's
+            // resolution), else the angle's own sin/cos
             let dth = qj[2];
             if SERIES_TURN && dth.abs() < small {
-                let (sd, cd) = series_turn(dth);
+                let (sd, cd) = dth.sin_cos_small();
                 (s, co) = (s * cd + co * sd, co * cd - s * sd);
             } else {
                 (s, co) = pose.theta.sin_cos();
@@ -259,13 +250,13 @@ mod tests {
         let lim = small_turn(f64::EPSILON);
         for i in -100..=100 {
             let x = lim * f64::from(i) / 100.0;
-            let (s, c) = series_turn(x);
+            let (s, c) = x.sin_cos_small();
             assert!((s - x.sin()).abs() <= 2.0 * f64::EPSILON && (c - x.cos()).abs() <= 2.0 * f64::EPSILON, "{x}");
         }
         let lim = small_turn(f64::from(f32::EPSILON)) as f32;
         for i in -100..=100 {
             let x = lim * i as f32 / 100.0;
-            let (s, c) = series_turn(x);
+            let (s, c) = x.sin_cos_small();
             let (ws, wc) = (f64::from(x).sin(), f64::from(x).cos());
             assert!((f64::from(s) - ws).abs() <= 2e-7 && (f64::from(c) - wc).abs() <= 2e-7, "{x}");
         }
