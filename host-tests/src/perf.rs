@@ -449,11 +449,15 @@ pub fn table_cost_section() -> String {
         "Under tension alone the joints decouple and a joint's equilibrium depends on the tension and its stack \
          thickness. `inverse::BranchTable` (model inverse/table.rs) tabulates that branch once per parameter set: \
          64 joint angles (1.5 deg apart, or to the branch's end) at three stack thicknesses (0 V, the ceiling, \
-         the middle), each sample the tension and the guide hole. From it: **forward** (`BranchTable::solve_with`): \
-         each joint's hole read off the table at (P, t) (the cubic P(theta) inverted at P on each thickness, then \
-         the quadratic across the thicknesses), then Newton on the full model from that hole; a march whose \
-         hole residual is within the converged solver's own tolerance is the answer (Newton's first evaluation), \
-         else Newton iterates, else the full solve's continuation. **Inverse** (`solve_pose_tabled`): the \
+         the middle), each sample the tension and the guide hole. From it: **forward** (`BranchTable::solve_into`, \
+         written into a solution the caller holds; `solve_with` returns it by value): each joint's hole read off \
+         the table at (P, t) (on the table's tension grid, each branch's hole at 64 uniform tensions built from \
+         the samples, the cubic in P where the grid agrees with the inversion below to 1/8 of the solver's \
+         tolerance; else the cubic P(theta) inverted at P on each thickness; then the quadratic across the \
+         thicknesses), then Newton on the full model from that hole; a march whose hole residual is within the \
+         converged solver's own tolerance is the answer (Newton's first evaluation), else Newton iterates, else \
+         the full solve's continuation; the posture is composed as the joints are marched, from each march's \
+         own sin/cos. **Inverse** (`solve_pose_tabled`): the \
          tension range and the thickness solve start from the table (docs/inverse.md). **fmax** \
          (`BranchTable::fmax`): the march up the branch continues from the table's last two samples (docs/fmax-cost.md). Every answer is a \
          converged solve of the full model; the table only chooses where it starts. Bench image \
@@ -542,16 +546,23 @@ pub fn table_cost_section() -> String {
     }
     writeln!(
         w,
-        "\n**What bounds it.** The table's part is small; the full model's is not. Per distinct joint the \
-         forward takes one march of the full model (m sub-elements, each a closed-form 3x3 equilibrium and a \
-         sin/cos pair; the figure per joint above); the table lookup (three cubic inversions and the quadratic \
-         across thicknesses), the posture (node poses and flexible links: a sin/cos pair per hinge and per \
-         link) and moving the solution ({} bytes in f32) into place come on top, once per solve. So the forward \
-         meets 3,000 only where one march is most of that; the m = 1 rows show the rest alone (a cheap march, \
-         the same lookup, posture and move). The inverse spends per distinct joint a \
-         compliance evaluation (m 3x3 inverses) and a march, plus the verified ends of the tension interval \
-         (docs/inverse.md). A cheaper answer would have to come from a cheaper march (fewer sub-elements, or \
-         the table itself as the answer), which would no longer be the full model's converged solve.\n",
+        "\n**What bounds it.** The full model's march. Per distinct joint the forward takes one march (m \
+         sub-elements, each the closed-form 3x3 equilibrium with its division, the moment arm, the pose update \
+         and the turn of the angle's sine and cosine by the sub-element's rotation; the figure per further \
+         joint above); the rest comes once per solve: the lookup on the tension grid (three branches' cubics in \
+         P at one set of weights, the quadratic across thicknesses; near the branch's end, where the grid stops, \
+         the cubic inversion on each branch, several hundred more), setting the solution's scalars and zeroing \
+         its unused rows ({} bytes in f32, written in place), the posture (one sin/cos pair per solve, for the \
+         links), and for identical joints the copy of a joint's rows. So the forward meets 3,000 with \
+         identical joints (one march and the rest), and with three different voltages at m = 8 it cannot: \
+         three marches alone come close to 3,000. Below that a march would have to be cheaper than m \
+         sub-elements of the full model (fewer sub-elements, or the table itself as the answer), which would \
+         no longer be the full model's converged solve. The inverse spends per distinct joint a compliance \
+         evaluation at the solved thickness (m 3x3 inverses), a march and the thickness solve's quasi-Newton \
+         bookkeeping, plus one march for each verified end of the feasible tension interval (the tension rule \
+         rests on those), plus copying and zeroing its state (the pose solution's sub-element rows, the held \
+         ends): over 3,000 for one distinct joint already, its structure unchanged by issue 15's work so far \
+         (docs/inverse.md).\n",
         std::mem::size_of::<finger_model::Solution<f32>>()
     )
     .unwrap();

@@ -154,6 +154,12 @@ impl<R: Real> Real for D<R> {
         let (s, c) = self.v.sin_cos();
         (D { v: s, d: [c * self.d[0], c * self.d[1]] }, D { v: c, d: [-s * self.d[0], -s * self.d[1]] })
     }
+    #[inline(always)]
+    fn sin_cos_small(self) -> (Self, Self) {
+        // the value part is R's own (the plain march's, bit for bit), the derivative cos, -sin
+        let (s, c) = self.v.sin_cos_small();
+        (D { v: s, d: [c * self.d[0], c * self.d[1]] }, D { v: c, d: [-s * self.d[0], -s * self.d[1]] })
+    }
     fn atan2(self, x: Self) -> Self {
         let v = self.v.atan2(x.v);
         let r2 = x.v * x.v + self.v * self.v;

@@ -189,6 +189,26 @@ pub struct Solution<R> {
 }
 
 impl<R: Real> Solution<R> {
+    /// An empty solution (every field zero, no joints): storage for the `_into` solves.
+    pub fn empty() -> Self {
+        Solution {
+            n: 0,
+            m: 0,
+            tension: R::zero(),
+            tip_force: [R::zero(); 2],
+            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            links: [[R::zero(); 3]; MAX_JOINTS],
+            joint_angle: [R::zero(); MAX_JOINTS],
+            nodes: [Pose::origin(); MAX_JOINTS + 1],
+            span: [R::zero(); MAX_JOINTS],
+            thickness: [R::zero(); MAX_JOINTS],
+            volts: [R::zero(); MAX_JOINTS],
+            cable_excursion: R::zero(),
+            iterations: 0,
+            residual: R::zero(),
+            tangent_det: [R::one(); MAX_JOINTS],
+        }
+    }
     /// Tip pose (node n).
     pub fn tip(&self) -> Pose<R> {
         self.nodes[self.n]
@@ -545,45 +565,29 @@ impl<R: Real> Finger<R> {
 
     /// The converged equilibrium under tension alone (MODEL.md "Equilibrium", the joints
     /// decoupled) started from a guide-hole guess per joint (a branch table's,
-    /// `inverse::BranchTable::solve_with`): Newton on the full model from the
-    /// guess, its first evaluation one plain march; a march whose residual is within the
-    /// converged solver's tolerance is the answer (Newton's own test at its first
+    /// `inverse::BranchTable::solve_into`), written into the caller's `sol`: Newton on the full
+    /// model from the guess, its first evaluation one plain march; a march whose residual is
+    /// within the converged solver's tolerance is the answer (Newton's own test at its first
     /// evaluation), else Newton with dual marches from the guess, else the load continuation
     /// of `solve`. The same tolerance and answer as `solve_with(Method::converged())`.
-    /// `tangent_det` is 1 for a joint answered at its first march (not evaluated).
-    #[inline(always)]
-    pub(crate) fn solve_from_holes(&self, c: &Compliances<R>, tension: R, holes: &[[R; 2]; MAX_JOINTS]) -> Result<Solution<R>, Error> {
+    /// `tangent_det` is 1 for a joint answered at its first march (not evaluated). On an error
+    /// `sol` holds no solution.
+    #[inline(never)]
+    pub(crate) fn solve_from_holes_into(&self, c: &Compliances<R>, tension: R, holes: &[[R; 2]; MAX_JOINTS], sol: &mut Solution<R>) -> Result<(), Error> {
         self.check_load(c, tension, [R::zero(); 2])?;
         let Method::Converged { tol, max_iter } = Method::<R>::converged() else { return Err(Error::Singular { what: "method" }) };
         let tol = tol.max(self.resolution());
-        let mut out = Ok(Solution {
-            n: self.p.n,
-            m: self.p.m,
-            tension,
-            tip_force: [R::zero(); 2],
-            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
-            links: [[R::zero(); 3]; MAX_JOINTS],
-            joint_angle: [R::zero(); MAX_JOINTS],
-            nodes: [Pose::origin(); MAX_JOINTS + 1],
-            span: [R::zero(); MAX_JOINTS],
-            thickness: c.thickness,
-            volts: c.volts,
-            cable_excursion: R::zero(),
-            iterations: 0,
-            residual: R::zero(),
-            tangent_det: [R::one(); MAX_JOINTS],
-        });
-        if let Ok(sol) = &mut out {
-            if let Err(e) = self.fill_from_holes(c, tension, holes, tol, max_iter, sol) {
-                out = Err(e);
-            }
-        }
-        out
+        self.fill_from_holes(c, tension, holes, tol, max_iter, sol)
     }
 
-    /// `solve_from_holes`'s joints, written in place: one march per distinct joint into the
-    /// solution's rows, Newton (`polish_joint`) only where that march is not converged.
-    #[inline(never)]
+    /// `solve_from_holes_into`'s joints and posture, written in place in one pass: the
+    /// solution's scalars set, the rows past (n, m) zeroed (only those), one march per
+    /// distinct joint into its rows (Newton, `polish_joint`, only where that march is not
+    /// converged), and the posture as it goes (MODEL.md "Equilibrium": node k = node k-1 ∘
+    /// hinge ∘ link; "Cable": the excursion Σ (L_h - |span k|)): `chain_ends` with the node
+    /// rotations composed from the marches' own (sin, cos) and the link's (the same for every
+    /// link under tension alone), one sin/cos pair per solve. A span below its floor is contact.
+    #[inline(always)]
     fn fill_from_holes(
         &self,
         c: &Compliances<R>,
@@ -594,48 +598,95 @@ impl<R: Real> Finger<R> {
         sol: &mut Solution<R>,
     ) -> Result<(), Error> {
         let (n, m) = (self.p.n, self.p.m);
-        let mut ends = [Pose::origin(); MAX_JOINTS];
-        let mut arrived = [[R::zero(); 2]; MAX_JOINTS];
-        let (mut res2, mut r2_prev, mut iters) = (R::zero(), R::zero(), 0u32);
+        sol.n = n;
+        sol.m = m;
+        sol.tension = tension;
+        sol.tip_force = [R::zero(); 2];
+        sol.thickness = c.thickness;
+        sol.volts = c.volts;
+        for k in 0..MAX_JOINTS {
+            let from = if k < n { m } else { 0 };
+            for row in sol.q[k][from..].iter_mut() {
+                *row = [R::zero(); 3];
+            }
+        }
+        let link = self.link_q(tension, &Pose::origin(), None);
+        let (ls, lc) = if link[2] == R::zero() { (R::zero(), R::one()) } else { link[2].sin_cos() };
+        let (lx, ly) = (self.link_len + link[0], link[1]);
+        let mut node = Pose::origin();
+        let (mut s, mut co) = (R::zero(), R::one());
+        sol.nodes[0] = node;
+        // the joint before: hinge end, (sin, cos) of its angle, the hole it arrived at, its
+        // squared residual and tangent determinant
+        let mut prev = (Pose::origin(), [R::zero(), R::one()], [R::zero(); 2], R::zero(), R::one());
+        let (mut res2, mut iters, mut excursion) = (R::zero(), 0u32, R::zero());
         for k in 0..n {
             let b = holes[k];
             // a joint with the same voltage, thickness and guess as the one before has its
             // state (`compliances` makes a joint's compliances a function of its voltage; the
             // first sub-element's are compared too)
-            if k > 0 && b == holes[k - 1] && c.volts[k] == c.volts[k - 1] && c.thickness[k] == c.thickness[k - 1] && c.c[k][0] == c.c[k - 1][0] {
-                let (done, rest) = sol.q.split_at_mut(k);
-                rest[0][..m].copy_from_slice(&done[k - 1][..m]);
-                ends[k] = ends[k - 1];
-                arrived[k] = arrived[k - 1];
-                sol.tangent_det[k] = sol.tangent_det[k - 1];
-                res2 += r2_prev;
-                continue;
-            }
-            let first = self.march_into(&c.c[k], tension, b, None, &mut sol.q[k]);
-            let r2 = match first {
-                Ok((end, hole)) if (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq() <= tol * tol => {
-                    ends[k] = end;
-                    arrived[k] = hole;
-                    (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq()
-                }
-                _ => {
-                    let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
-                    iters += it;
-                    sol.q[k][..m].copy_from_slice(&st.q[..m]);
-                    ends[k] = st.end;
-                    arrived[k] = st.hole;
-                    let (r, det) = st.tangent.unwrap_or(([R::zero(); 2], R::one()));
-                    sol.tangent_det[k] = det;
-                    r[0] * r[0] + r[1] * r[1]
+            let (end, turn, hole, r2, det) = if k > 0
+                && b == holes[k - 1]
+                && c.volts[k] == c.volts[k - 1]
+                && c.thickness[k] == c.thickness[k - 1]
+                && c.c[k][0] == c.c[k - 1][0]
+            {
+                // the whole row: its sub-elements past m are zero in both
+                sol.q[k] = sol.q[k - 1];
+                prev
+            } else {
+                match self.march_into(&c.c[k], tension, b, None, &mut sol.q[k]) {
+                    Ok((end, hole, sc)) if (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq() <= tol * tol => {
+                        (end, sc, hole, (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq(), R::one())
+                    }
+                    _ => {
+                        let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
+                        iters += it;
+                        sol.q[k][..m].copy_from_slice(&st.q[..m]);
+                        let (se, ce) = st.end.theta.sin_cos();
+                        let (r, det) = st.tangent.unwrap_or(([R::zero(); 2], R::one()));
+                        (st.end, [se, ce], st.hole, r[0] * r[0] + r[1] * r[1], det)
+                    }
                 }
             };
-            r2_prev = r2;
+            prev = (end, turn, hole, r2, det);
             res2 += r2;
+            sol.tangent_det[k] = det;
+            let [se, ce] = turn;
+            let hinge = Pose { x: node.x + co * end.x - s * end.y, y: node.y + s * end.x + co * end.y, theta: node.theta + end.theta };
+            let (hs, hc) = (s * ce + co * se, co * ce - s * se);
+            node = Pose { x: hinge.x + hc * lx - hs * ly, y: hinge.y + hs * lx + hc * ly, theta: hinge.theta + link[2] };
+            (s, co) = (hs * lc + hc * ls, hc * lc - hs * ls);
+            sol.nodes[k + 1] = node;
+            sol.links[k] = link;
+            sol.joint_angle[k] = end.theta + link[2];
+            // the span as the final geometry has it (not the one the loads came from)
+            let span = norm2([hole[0], hole[1] - self.p.e]);
+            if !(span >= self.p.span_floor) {
+                return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() });
+            }
+            sol.span[k] = span;
+            excursion += self.p.hinge_len() - span;
         }
-        self.finish_tension_alone(tension, &ends, &arrived, res2, iters, sol)
+        for k in n..MAX_JOINTS {
+            sol.nodes[k + 1] = Pose::origin();
+            sol.links[k] = [R::zero(); 3];
+            sol.joint_angle[k] = R::zero();
+            sol.span[k] = R::zero();
+            sol.tangent_det[k] = R::one();
+        }
+        sol.iterations = iters;
+        sol.cable_excursion = excursion;
+        sol.residual = res2.sqrt();
+        // a non-finite node carries on to the tip
+        let finite = node.x.is_finite() && node.y.is_finite() && node.theta.is_finite() && sol.tangent_det[..n].iter().all(|d| d.is_finite());
+        if !(finite && sol.residual.is_finite() && excursion.is_finite()) {
+            return Err(Error::Singular { what: "solution (non-finite)" });
+        }
+        Ok(())
     }
 
-    /// Joint k's equilibrium from the hole guess `b` (`solve_from_holes`) when its first march
+    /// Joint k's equilibrium from the hole guess `b` (`solve_from_holes_into`) when its first march
     /// is not converged: Newton from `b` (dual marches), accepted if it stays within half a
     /// hinge length of the guess; else the load continuation from the straight joint.
     #[inline(never)]
@@ -787,7 +838,7 @@ impl<R: Real> Finger<R> {
         // the arithmetic is `march_t`'s in R (one copy of the march in the image; the test
         // `march_t_matches_march` keeps the two entry points bit-equal)
         let mut q = [[R::zero(); 3]; MAX_SUB];
-        let (end, hole) = self.march_into(c, tension, b_hole, tip, &mut q)?;
+        let (end, hole, _) = self.march_into(c, tension, b_hole, tip, &mut q)?;
         Ok(JointState { q, end, hole, tangent: None })
     }
 
@@ -801,7 +852,7 @@ impl<R: Real> Finger<R> {
         b_hole: [R; 2],
         tip: Option<TipLoad<R>>,
         q: &mut [[R; 3]; MAX_SUB],
-    ) -> Result<(Pose<R>, [R; 2]), MarchError> {
+    ) -> Result<(Pose<R>, [R; 2], [R; 2]), MarchError> {
         self.march_t::<R>(c, tension, b_hole, tip, q, |x| x)
     }
 
@@ -1312,7 +1363,7 @@ impl<R: Real> Finger<R> {
         b: [R; 2],
         q: &mut [[R; 3]; MAX_SUB],
     ) -> Result<JointMarch<R>, Error> {
-        let (end, hole) = self.march_into(c, tension, b, None, q).map_err(|e| match e {
+        let (end, hole, _) = self.march_into(c, tension, b, None, q).map_err(|e| match e {
             MarchError::Contact => Error::Contact { joint, tension: tension.to_f64() },
             MarchError::Singular => Error::Singular { what: "joint march" },
         })?;

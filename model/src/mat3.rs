@@ -58,7 +58,19 @@ pub fn det<R: Real>(m: &Mat3<R>) -> R {
 /// `None` unless det > 64 ε Π m_ii (for a positive-definite matrix det ≤ Π m_ii, so this is
 /// the scale-free singularity test, as the diagonal scaling gives `inverse`) and finite.
 pub fn inverse_spd<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
-    let (a, b, c, d, e, f) = (m[0][0], m[0][1], m[0][2], m[1][1], m[1][2], m[2][2]);
+    inverse_spd_upper([m[0][0], m[0][1], m[0][2], m[1][1], m[1][2], m[2][2]])
+}
+
+/// `inverse_spd(&add(a, b))` (a stiffness in parallel with another: a joint's hinge and
+/// stack), inlined into its caller: the upper triangles added, no sum matrix.
+#[inline(always)]
+pub fn inverse_spd_of_sum<R: Real>(a: &Mat3<R>, b: &Mat3<R>) -> Option<Mat3<R>> {
+    inverse_spd_upper([a[0][0] + b[0][0], a[0][1] + b[0][1], a[0][2] + b[0][2], a[1][1] + b[1][1], a[1][2] + b[1][2], a[2][2] + b[2][2]])
+}
+
+/// `inverse_spd` from the upper triangle (m00, m01, m02, m11, m12, m22).
+#[inline(always)]
+fn inverse_spd_upper<R: Real>([a, b, c, d, e, f]: [R; 6]) -> Option<Mat3<R>> {
     let ca = d * f - e * e;
     let cb = c * e - b * f;
     let cc = b * e - c * d;

@@ -40,11 +40,26 @@ pub trait Real:
     /// f32 build on the target does no double-precision arithmetic.
     fn from_u32(n: u32) -> Self;
     fn to_f64(self) -> f64;
+    /// The integer part of a non-negative scalar (a table index; saturating, 0 for NaN).
+    /// f32 converts directly, never through f64.
+    #[inline(always)]
+    fn to_index(self) -> usize {
+        self.to_f64() as usize
+    }
     fn sqrt(self) -> Self;
     fn sin(self) -> Self;
     fn cos(self) -> Self;
     fn sin_cos(self) -> (Self, Self) {
         (self.sin(), self.cos())
+    }
+    /// (sin x, cos x) of a small angle by their Taylor series to x⁵ and x⁶ (the march's turn
+    /// of a sub-element, below its bound `small_turn`: exact to the scalar's resolution there).
+    #[inline(always)]
+    fn sin_cos_small(self) -> (Self, Self) {
+        let z = self * self;
+        let s = self * (Self::one() - z * (Self::from_f64(1.0 / 6.0) - z * Self::from_f64(1.0 / 120.0)));
+        let c = Self::one() - z * (Self::from_f64(0.5) - z * (Self::from_f64(1.0 / 24.0) - z * Self::from_f64(1.0 / 720.0)));
+        (s, c)
     }
     fn atan2(self, x: Self) -> Self;
     fn is_finite(self) -> bool;
@@ -144,6 +159,10 @@ impl Real for f32 {
         n as f32
     }
     #[inline(always)]
+    fn to_index(self) -> usize {
+        self as usize
+    }
+    #[inline(always)]
     fn to_f64(self) -> f64 {
         self as f64
     }
@@ -194,6 +213,10 @@ impl Real for f32 {
     #[inline(always)]
     fn from_u32(n: u32) -> Self {
         n as f32
+    }
+    #[inline(always)]
+    fn to_index(self) -> usize {
+        self as usize
     }
     #[inline(always)]
     fn to_f64(self) -> f64 {

@@ -1,7 +1,7 @@
 //! Bench image for the branch-table path on the target (issue 15): per model of
 //! `scenes::TABLE_MODELS`, the cost of building `inverse::BranchTable` (once per parameter
 //! set), then per scene of `scenes::TABLE_SCENES` the forward solve (full: `Finger::solve_with`;
-//! table: `BranchTable::solve_with`, both after the same `compliances`), the inverse from the
+//! table: `BranchTable::solve_into` into a solution the caller holds, both after the same `compliances`), the inverse from the
 //! table (`solve_pose_tabled`, the table forward's angles, with the scene's tension and without
 //! one) and fmax (full and from the table). f32. Prints `CAL`, then
 //! `B <model> <ticks> <samples>`,
@@ -15,7 +15,7 @@
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use finger_model::inverse::{solve_pose_tabled, BranchTable, Options};
-use finger_model::{Calibration, Finger, Method};
+use finger_model::{Calibration, Finger, Method, Solution};
 
 #[path = "../cycles.rs"]
 mod cycles;
@@ -67,10 +67,18 @@ fn run_model(m: &scenes::TableModel) {
         };
         let mut angles = None;
         for method in ["full", "table"] {
+            // the tabled solve writes into the caller's solution (`solve_into`, as a caller
+            // that keeps one would); the full solve returns by value
+            let mut out = Solution::empty();
             let t0 = cycles::now();
-            let r = if method == "full" { f.solve_with(&c, p, [0.0; 2], Method::converged()) } else { tb.solve_with(&c, p) };
+            let r = if method == "full" {
+                Some(f.solve_with(&c, p, [0.0; 2], Method::converged()))
+            } else {
+                core::hint::black_box(tb.solve_into(&c, p, core::hint::black_box(&mut out))).err().map(Err)
+            };
             core::hint::black_box(&r);
             let t1 = cycles::now();
+            let r = r.unwrap_or(Ok(out));
             match r {
                 Ok(sol) => {
                     let a = sol.joint_angles();
@@ -111,7 +119,8 @@ fn run_model(m: &scenes::TableModel) {
 }
 
 /// Profiling markers (`--features profile`): the execution trace between the two calls is one
-/// tabled forward solve of the default model at three different voltages.
+/// tabled forward solve of the default model at three different voltages (or, built with
+/// PROFILE_SAME set, one voltage; with PROFILE_INVERSE, the tabled inverse of its angles).
 #[inline(never)]
 #[no_mangle]
 pub extern "C" fn profile_start() {
@@ -130,11 +139,25 @@ fn main() -> ! {
     if cfg!(feature = "profile") {
         let f = model(&scenes::TABLE_MODELS[0]).unwrap();
         let tb = BranchTable::new(&f, &Options::default()).unwrap();
-        let c = f.compliances(&core::hint::black_box([9000.0, 5000.0, 0.0])).unwrap();
+        // PROFILE_SAME=1 at build time: the three joints at the same voltage instead
+        let v = if option_env!("PROFILE_SAME").is_some() { [5000.0; 3] } else { [9000.0, 5000.0, 0.0] };
+        let c = f.compliances(&core::hint::black_box(v)).unwrap();
+        let mut out = Solution::empty();
+        if option_env!("PROFILE_INVERSE").is_some() {
+            // PROFILE_INVERSE set at build time: the tabled inverse of that solve's angles
+            tb.solve_into(&c, 1.0, &mut out).unwrap();
+            let a = core::hint::black_box([out.joint_angle[0], out.joint_angle[1], out.joint_angle[2]]);
+            profile_start();
+            let r = solve_pose_tabled(&tb, &a, core::hint::black_box(Some(1.0)));
+            profile_stop();
+            core::hint::black_box(r).ok();
+            debug::exit(debug::EXIT_SUCCESS);
+        }
         profile_start();
-        let r = tb.solve_with(&c, core::hint::black_box(1.0));
+        let r = tb.solve_into(&c, core::hint::black_box(1.0), core::hint::black_box(&mut out));
         profile_stop();
         core::hint::black_box(r).ok();
+        core::hint::black_box(&out);
         debug::exit(debug::EXIT_SUCCESS);
     }
     let (ticks, overhead) = cycles::calibrate(1_000_000);

@@ -17,6 +17,23 @@ use crate::real::Real;
 use crate::solve::{self, newton::Equations, SolveOptions};
 use core::ops::{Add, Mul, Sub};
 
+/// Whether the march turns (sin, cos) by the series (below): not on a soft-float core, where
+/// the series' code in the plain and the dual march costs flash the M3 image's 64 KiB does not
+/// have (~1 KB); there each sub-element takes its angle's sin/cos.
+const SERIES_TURN: bool = !cfg!(target_abi = "eabi");
+
+/// The largest sub-element rotation (rad) whose (sin, cos) the march takes from the Taylor
+/// series to x⁵ and x⁶: their truncation errors, x⁷/5040 and x⁸/40320, stay below the scalar's
+/// resolution `eps` relative (x⁶ < 5040 eps: 0.29 in f32, 0.010 in f64; the bounds below are
+/// inside those).
+pub(super) fn small_turn(eps: f64) -> f64 {
+    if eps > 1e-10 {
+        0.25
+    } else {
+        0.008
+    }
+}
+
 /// A joint state, its hole residual `b - hole` and the residual's Jacobian `I - ∂hole/∂b`.
 pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
 
@@ -27,6 +44,7 @@ impl<R: Real> Finger<R> {
     /// compliances stay in R. Same operations in the same order as `march`. Returns the hinge
     /// end and the hole in T; the sub-element displacements go to `q_out` as values (`val`),
     /// which keeps the fixed-capacity array out of T (no zeroing and copying of dual arrays).
+    /// The third value is (sin, cos) of the end's angle (the posture chain reuses it).
     pub(super) fn march_t<T>(
         &self,
         c: &[Mat3<R>; MAX_SUB],
@@ -35,7 +53,7 @@ impl<R: Real> Finger<R> {
         tip: Option<TipLoad<R>>,
         q_out: &mut [[R; 3]; MAX_SUB],
         val: impl Fn(T) -> R,
-    ) -> Result<(Pose<T>, [T; 2]), MarchError>
+    ) -> Result<(Pose<T>, [T; 2], [T; 2]), MarchError>
     where
         T: Real + Mul<R, Output = T> + Add<R, Output = T> + Sub<R, Output = T>,
     {
@@ -54,6 +72,7 @@ impl<R: Real> Finger<R> {
         let ftot = [fc[0] + ft[0], fc[1] + ft[1]];
         let mut pose: Pose<T> = Pose::origin();
         let (mut s, mut co) = (T::zero(), T::one());
+        let small = T::from_f64(small_turn(T::EPS));
         for j in 0..self.p.m {
             let cj = &c[j];
             let d0 = [pose.x + co * self.sub_len, pose.y + s * self.sub_len];
@@ -79,15 +98,22 @@ impl<R: Real> Finger<R> {
                 y: pose.y + s * (qj[0] + self.sub_len) + co * qj[1],
                 theta: pose.theta + qj[2],
             };
-            let sc = pose.theta.sin_cos();
-            s = sc.0;
-            co = sc.1;
+            // (sin, cos) of the new angle: the old one turned by this sub-element's rotation
+            // (`Real::sin_cos_small`, below `small_turn`'s bound exact to the scalar's
+            // resolution), else the angle's own sin/cos
+            let dth = qj[2];
+            if SERIES_TURN && dth.abs() < small {
+                let (sd, cd) = dth.sin_cos_small();
+                (s, co) = (s * cd + co * sd, co * cd - s * sd);
+            } else {
+                (s, co) = pose.theta.sin_cos();
+            }
         }
         let hole = [pose.x - s * e, pose.y + co * e];
         if !(hole[0].is_finite() && hole[1].is_finite() && pose.theta.is_finite()) {
             return Err(MarchError::Singular);
         }
-        Ok((pose, hole))
+        Ok((pose, hole, [s, co]))
     }
 
     /// One dual march at hole guess `b` (tension alone): state, residual, Jacobian.
@@ -108,7 +134,7 @@ impl<R: Real> Finger<R> {
     ) -> Result<(Pose<R>, [R; 2], [R; 2], [[R; 2]; 2]), MarchError> {
         let (z, o) = (R::zero(), R::one());
         let bd = [D { v: b[0], d: [o, z] }, D { v: b[1], d: [z, o] }];
-        let (end_d, hole_d) = self.march_t::<D<R>>(c, tension, bd, None, q, |x| x.v)?;
+        let (end_d, hole_d, _) = self.march_t::<D<R>>(c, tension, bd, None, q, |x| x.v)?;
         let end = Pose { x: end_d.x.v, y: end_d.y.v, theta: end_d.theta.v };
         let hole = [hole_d[0].v, hole_d[1].v];
         let r = [b[0] - hole[0], b[1] - hole[1]];
@@ -216,6 +242,24 @@ mod tests {
         let mut q = [[0.0; 3]; MAX_SUB];
         let t = f.march_t::<f32>(&c.c[0], 1.0, [9.5, 5.5], None, &mut q, |x| x).ok().unwrap();
         assert_eq!(a.hole, t.1);
+    }
+
+    /// The series turn is the sine and cosine to the scalar's resolution over its whole range.
+    #[test]
+    fn series_turn_matches_sin_cos() {
+        let lim = small_turn(f64::EPSILON);
+        for i in -100..=100 {
+            let x = lim * f64::from(i) / 100.0;
+            let (s, c) = x.sin_cos_small();
+            assert!((s - x.sin()).abs() <= 2.0 * f64::EPSILON && (c - x.cos()).abs() <= 2.0 * f64::EPSILON, "{x}");
+        }
+        let lim = small_turn(f64::from(f32::EPSILON)) as f32;
+        for i in -100..=100 {
+            let x = lim * i as f32 / 100.0;
+            let (s, c) = x.sin_cos_small();
+            let (ws, wc) = (f64::from(x).sin(), f64::from(x).cos());
+            assert!((f64::from(s) - ws).abs() <= 2e-7 && (f64::from(c) - wc).abs() <= 2e-7, "{x}");
+        }
     }
 
     #[test]

@@ -118,7 +118,7 @@ impl<'a, R: Real> Gen<'a, R> {
             *cj = if self.p.layers == 0 {
                 self.f.hinge_compliance(j)
             } else {
-                mat3::inverse_spd(&mat3::add(self.f.hinge_stiffness(j), &k_de)).ok_or(Error::Singular { what: "joint stiffness" })?
+                mat3::inverse_spd_of_sum(self.f.hinge_stiffness(j), &k_de).ok_or(Error::Singular { what: "joint stiffness" })?
             };
         }
         Ok(())
@@ -861,6 +861,11 @@ impl<R: Real> BranchTable<R> {
             step,
             len: [1; 3],
             x: [[[R::zero(), lh, p.e]; TABLE_LEN]; 3],
+            grid: [[[R::zero(); 2]; TABLE_LEN]; 3],
+            dp: R::zero(),
+            inv_dp: R::zero(),
+            grid_len: 0,
+            grid_top: R::zero(),
         };
         let mut scratch = [[R::zero(); 3]; MAX_SUB];
         for e in 0..3 {
@@ -887,6 +892,7 @@ impl<R: Real> BranchTable<R> {
                 slope = h.slope;
             }
         }
+        t.build_tension_grid();
         Ok(t)
     }
 }

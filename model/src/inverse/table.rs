@@ -23,7 +23,8 @@
 //! full model, to the same tolerance as without the table; the table only decides where the
 //! solves start and which range ends need one. Built once per parameter set (the firmware
 //! rebuilds it when a parameter changes); it keeps a copy of its finger and options, so it
-//! is never used with another parameter set. About 4.5 KB in f32 (the finger's 1.3 KB).
+//! is never used with another parameter set. About 6 KB in f32 (the tension grid 1.5 KB, the
+//! finger 1.3 KB).
 
 use super::Options;
 use crate::error::Error;
@@ -71,6 +72,13 @@ pub struct BranchTable<R> {
     pub(super) len: [usize; 3],
     /// (P N, hole x mm, hole y mm) per sample.
     pub(super) x: [[[R; 3]; TABLE_LEN]; 3],
+    /// The forward lookup's grid (`build_tension_grid`): each branch's hole at the tensions
+    /// j x `dp`, j < `grid_len`, read directly below `grid_top` (N).
+    pub(super) grid: [[[R; 2]; TABLE_LEN]; 3],
+    pub(super) dp: R,
+    pub(super) inv_dp: R,
+    pub(super) grid_len: usize,
+    pub(super) grid_top: R,
 }
 
 impl<R: Real> BranchTable<R> {
@@ -120,16 +128,8 @@ impl<R: Real> BranchTable<R> {
         if !(u > R::zero() && u <= R::from_u32(len as u32 - 1)) {
             return None;
         }
-        // the sample interval [i, i+1] holding u (binary search: the scalar has no floor)
-        let (mut a, mut b) = (0usize, len - 1);
-        while b - a > 1 {
-            let mid = (a + b) / 2;
-            if R::from_u32(mid as u32) <= u {
-                a = mid;
-            } else {
-                b = mid;
-            }
-        }
+        // the sample interval [a, a+1] holding u (uniform samples: its integer part)
+        let a = u.to_index().min(len - 2);
         let i = a.clamp(1, len - 3);
         let s = u - R::from_u32(i as u32);
         // Lagrange weights on the nodes i-1, i, i+1, i+2
@@ -153,6 +153,18 @@ impl<R: Real> BranchTable<R> {
     }
 }
 
+/// Power-form coefficients (c0 + c1 s + c2 s² + c3 s³, s in node units from the second
+/// node) of the cubic through four equally spaced samples' component `c`.
+#[inline(always)]
+fn cubic<R: Real>(y: &[[R; 3]], c: usize) -> [R; 4] {
+    let (y0, y1, y2, y3) = (y[0][c], y[1][c], y[2][c], y[3][c]);
+    let (half, sixth) = (R::from_f64(0.5), R::from_f64(1.0 / 6.0));
+    let c2 = (y0 + y2) * half - y1;
+    let c3 = (y3 - y0) * sixth + (y1 - y2) * half;
+    let c1 = y2 - y1 - c2 - c3;
+    [y1, c1, c2, c3]
+}
+
 /// The three branches' holes at one tension (`BranchTable::branch_holes`), for the forward
 /// lookup: per branch, the hole where the branch carries that tension.
 #[derive(Clone, Copy, Debug)]
@@ -162,8 +174,9 @@ pub(crate) struct BranchHoles<R> {
 
 impl<R: Real> BranchTable<R> {
     /// Where each branch carries tension `p` (N): the cubic P(θ) through the four samples
-    /// around it inverted by Newton from the linear guess, and the hole's cubic there (the
-    /// same weights). None when `p` is not inside every branch's tabulated tensions.
+    /// around it (in power form on the interval, s in node units from node i) inverted by two
+    /// Newton steps from the linear guess, and the hole's cubic there. None when `p` is not
+    /// inside every branch's tabulated tensions.
     #[inline(never)]
     pub(crate) fn branch_holes(&self, p: R) -> Option<BranchHoles<R>> {
         let mut out = BranchHoles { hole: [[R::zero(); 2]; 3] };
@@ -200,41 +213,100 @@ impl<R: Real> BranchTable<R> {
             }
             found = Some(a);
             let i = a.clamp(1, len - 3);
-            let node = |n: usize, c: usize| xs[i - 1 + n][c];
-            // s in node units from node i; the linear guess inside [a, a+1]
+            let cp = cubic(&xs[i - 1..i + 3], 0);
+            // the linear guess inside [a, a+1], s from node i
             let (pa, pb) = (xs[a][0], xs[a + 1][0]);
-            let mut s = R::from_u32((a - (i - 1)) as u32) - R::one() + (p - pa) / (pb - pa);
-            let (sixth, half, two) = (R::from_f64(1.0 / 6.0), R::from_f64(0.5), R::from_f64(2.0));
-            let weights = |s: R| {
-                let (sm, s1, s2) = (s + R::one(), s - R::one(), s - two);
-                [-s * s1 * s2 * sixth, sm * s1 * s2 * half, -sm * s * s2 * half, sm * s * s1 * sixth]
-            };
+            let mut s = R::from_u32(a as u32) - R::from_u32(i as u32) + (p - pa) / (pb - pa);
+            let (two, three) = (R::from_f64(2.0), R::from_f64(3.0));
             for _ in 0..2 {
-                // the cubic's value and slope at s
-                let (sm, s1, s2) = (s + R::one(), s - R::one(), s - two);
-                let w = weights(s);
-                let dw = [
-                    -(s1 * s2 + s * s2 + s * s1) * sixth,
-                    (s1 * s2 + sm * s2 + sm * s1) * half,
-                    -(s * s2 + sm * s2 + sm * s) * half,
-                    (s * s1 + sm * s1 + sm * s) * sixth,
-                ];
-                let (mut v, mut d) = (R::zero(), R::zero());
-                for n in 0..4 {
-                    v += w[n] * node(n, 0);
-                    d += dw[n] * node(n, 0);
-                }
+                let v = cp[0] + s * (cp[1] + s * (cp[2] + s * cp[3]));
+                let d = cp[1] + s * (two * cp[2] + s * three * cp[3]);
                 if !(d > R::zero()) {
                     return None;
                 }
                 s -= (v - p) / d;
             }
-            let w = weights(s);
             for c in 0..2 {
-                o[c] = (0..4).fold(R::zero(), |acc, n| acc + w[n] * node(n, c + 1));
+                let h = cubic(&xs[i - 1..i + 3], c + 1);
+                o[c] = h[0] + s * (h[1] + s * (h[2] + s * h[3]));
             }
             if !(o[0].is_finite() && o[1].is_finite()) {
                 return None;
+            }
+        }
+        Some(out)
+    }
+
+    /// The forward lookup's tension grid, from the table itself: each branch's hole at
+    /// P_j = j dp (the common tension range in TABLE_LEN - 1 steps) by `branch_holes`, and
+    /// the range `grid_top` over which the cubic in P through the grid reads what
+    /// `branch_holes` reads, to 1/8 of the converged solver's tolerance (checked at the
+    /// quarter, middle and three quarters of every grid interval; near a limit point the hole
+    /// is not smooth in P, and the grid stops). No solves: built from the samples in
+    /// ~64 x 12 lookups.
+    pub(super) fn build_tension_grid(&mut self) {
+        self.grid_len = 0;
+        self.grid_top = R::zero();
+        if self.len.iter().any(|&l| l < 4) {
+            return;
+        }
+        let top = self.len.iter().enumerate().map(|(e, &l)| self.x[e][l - 1][0]).fold(R::from_f64(f64::INFINITY), |a, b| a.min(b));
+        self.dp = top / R::from_u32(TABLE_LEN as u32 - 1);
+        self.inv_dp = R::one() / self.dp;
+        for e in 0..3 {
+            self.grid[e][0] = [self.x[e][0][1], self.x[e][0][2]];
+        }
+        self.grid_len = 1;
+        for j in 1..TABLE_LEN {
+            let Some(h) = self.branch_holes(self.dp * R::from_u32(j as u32)) else { break };
+            for e in 0..3 {
+                self.grid[e][j] = h.hole[e];
+            }
+            self.grid_len = j + 1;
+        }
+        if self.grid_len < 4 {
+            self.grid_len = 0;
+            return;
+        }
+        let p = self.finger.params();
+        let res = R::from_f64(16.0 * R::EPS) * (p.hinge_len() + p.e + p.l);
+        let bound = res.max(R::from_f64(1e-9)) * R::from_f64(0.125);
+        for j in 0..self.grid_len - 1 {
+            for f in [0.25, 0.5, 0.75] {
+                let pj = self.dp * (R::from_u32(j as u32) + R::from_f64(f));
+                let (Some(a), Some(b)) = (self.grid_holes(pj), self.branch_holes(pj)) else { return };
+                for e in 0..3 {
+                    if !((a.hole[e][0] - b.hole[e][0]).abs() <= bound && (a.hole[e][1] - b.hole[e][1]).abs() <= bound) {
+                        return;
+                    }
+                }
+            }
+            self.grid_top = self.dp * R::from_u32(j as u32 + 1);
+        }
+    }
+
+    /// The three branches' holes at tension `p` (N) from the tension grid: the cubic in P
+    /// through the four grid nodes around it (one set of weights for all three branches). None
+    /// outside [0, grid_top).
+    #[inline(always)]
+    fn grid_holes(&self, p: R) -> Option<BranchHoles<R>> {
+        let len = self.grid_len;
+        if len < 4 || !(p >= R::zero() && p < self.dp * R::from_u32(len as u32 - 1)) {
+            return None;
+        }
+        let u = p * self.inv_dp;
+        let a = u.to_index().min(len - 2);
+        let i = a.clamp(1, len - 3);
+        let s = u - R::from_u32(i as u32);
+        let (sm, s1, s2) = (s + R::one(), s - R::one(), s - R::from_f64(2.0));
+        let (sixth, half) = (R::from_f64(1.0 / 6.0), R::from_f64(0.5));
+        let (a01, a23) = (sm * s, s1 * s2);
+        let w = [-s * a23 * sixth, sm * a23 * half, -a01 * s2 * half, a01 * s1 * sixth];
+        let mut out = BranchHoles { hole: [[R::zero(); 2]; 3] };
+        for e in 0..3 {
+            let g = &self.grid[e][i - 1..i + 3];
+            for c in 0..2 {
+                out.hole[e][c] = w[0] * g[0][c] + w[1] * g[1][c] + w[2] * g[2][c] + w[3] * g[3][c];
             }
         }
         Some(out)
@@ -272,18 +344,29 @@ impl<R: Real> BranchTable<R> {
     }
 
     /// The forward solve under tension alone with precomputed compliances (of this table's
-    /// finger): each joint's guide hole read off the table at (P, its stack thickness), then
-    /// Newton on the full model from there (`Finger::solve_from_holes`: a joint whose march
-    /// at the table's hole is within the solver's tolerance is answered by that march). The
-    /// answer is `Finger::solve_with(Method::converged())`'s, to its tolerance; where the
-    /// table does not hold (P, t) (P = 0, past its last sample, t outside its stack range)
-    /// it is that solve. (Inlined, so that the solution is written in the caller's place.)
+    /// finger), returned by value: `solve_into` into a new solution.
     #[inline(always)]
     pub fn solve_with(&self, c: &Compliances<R>, tension: R) -> Result<Solution<R>, Error> {
+        let mut sol = Solution::empty();
+        self.solve_into(c, tension, &mut sol).map(|()| sol)
+    }
+
+    /// The forward solve under tension alone with precomputed compliances (of this table's
+    /// finger), written into `sol` (the caller's storage; no copy of the solution): each
+    /// joint's guide hole read off the table at (P, its stack thickness), then Newton on the
+    /// full model from there (`Finger::solve_from_holes_into`: a joint whose march at the
+    /// table's hole is within the solver's tolerance is answered by that march). The answer
+    /// is `Finger::solve_with(Method::converged())`'s, to its tolerance; where the table does
+    /// not hold (P, t) (P = 0, past its last sample, t outside its stack range) it is that
+    /// solve. On an error `sol` holds no solution.
+    pub fn solve_into(&self, c: &Compliances<R>, tension: R, sol: &mut Solution<R>) -> Result<(), Error> {
         let f = &self.finger;
         match self.forward_holes(c, tension) {
-            Some(holes) => f.solve_from_holes(c, tension, &holes),
-            None => f.solve_with(c, tension, [R::zero(); 2], Method::converged()),
+            Some(holes) => f.solve_from_holes_into(c, tension, &holes, sol),
+            None => {
+                *sol = f.solve_with(c, tension, [R::zero(); 2], Method::converged())?;
+                Ok(())
+            }
         }
     }
 
@@ -295,10 +378,31 @@ impl<R: Real> BranchTable<R> {
         if !(tension.is_finite() && c.n == n) {
             return None;
         }
-        let h = self.branch_holes(tension)?;
+        let h = if tension > R::zero() && tension < self.grid_top { self.grid_holes(tension)? } else { self.branch_holes(tension)? };
+        let [t_top, t0, tm] = self.thickness;
+        let slack = (t0 - t_top) * R::from_f64(1e-3);
+        let (d01, d02, d12) = (t_top - t0, t_top - tm, t0 - tm);
+        if d01 == R::zero() || d02 == R::zero() || d12 == R::zero() {
+            return None;
+        }
+        // the quadratic through the three branch thicknesses (`hole_at_thickness`), its
+        // denominators once
+        let inv = [R::one() / (d01 * d02), -R::one() / (d01 * d12), R::one() / (d02 * d12)];
         let mut holes = [[R::zero(); 2]; MAX_JOINTS];
         for k in 0..n {
-            holes[k] = self.hole_at_thickness(&h, c.thickness[k])?;
+            let t = c.thickness[k];
+            if k > 0 && t == c.thickness[k - 1] {
+                holes[k] = holes[k - 1];
+                continue;
+            }
+            if !(t >= t_top - slack && t <= t0 + slack) {
+                return None;
+            }
+            let (a0, a1, a2) = (t - t_top, t - t0, t - tm);
+            let w = [a1 * a2 * inv[0], a0 * a2 * inv[1], a0 * a1 * inv[2]];
+            for c in 0..2 {
+                holes[k][c] = w[0] * h.hole[0][c] + w[1] * h.hole[1][c] + w[2] * h.hole[2][c];
+            }
         }
         Some(holes)
     }
