@@ -485,12 +485,11 @@ forward solve costs {:.0} (m = 1) to {:.0} (m = 8) M4F instructions with libm's 
 sin/cos, ~1 ulp; the firmware's build), {:.0} to {:.0} with micromath's; m's own share is about {:.0} (libm) or {:.0} (micromath) \
 instructions per sub-element per distinct joint, the rest is the solver's fixed cost (continuation, \
 dual-number Newton iterations, the posture and the tangent determinant of every joint in \
-`assemble`). What bounds it: trig and the number of marches per solve, not the model's arithmetic. \
-Each sub-element of each march (every Newton iteration, the dual-number tangent, the posture) \
-evaluates a sine and a cosine; libm's f32 `sincosf` reduces its argument and evaluates its \
-polynomials in f64 (musl's algorithm), which the M4F's single-precision FPU runs in software, \
-so a libm sub-element costs {:.1} times a micromath one (`fast-trig` keeps libm's accuracy at \
-close to micromath's cost). The per-joint case (three different \
+`assemble`). What bounds it: the number of marches per solve, not the model's arithmetic. \
+A march turns each sub-element's sine and cosine from the previous one by a short series where \
+the step is small (`Real::sin_cos_small`, docs/performance.md), so the trig (libm's f32 `sincosf` \
+runs its polynomials in f64, in software on the M4F) is called about once per march: a libm \
+sub-element costs {:.1} times a micromath one. The per-joint case (three different \
 joints, no reuse of a solved joint) is the worst case.",
         if budget_ok.is_empty() && budget_ok_mm.is_empty() {
             String::new()
@@ -516,8 +515,8 @@ the requirement that can be met, and the cost is affordable for what the firmwar
 `fast-trig` build) are about {:.2} ms \
 at 168 MHz (QEMU counts instructions, not wait states; the real M4F at 168 MHz with flash wait states \
 and the ART accelerator is within a small factor of that). The paper's m = 1 costs {:.0} and is \
-{} off at {} N. To reach the {BUDGET:.0}-instruction budget the solver itself has to get cheaper (see \
-docs/performance.md for where the instructions go); m is not the lever.",
+{} off at {} N. These are full solves; the firmware's forward solve under tension alone starts from its \
+branch table and is within the budget (docs/performance.md, \"The branch-table path\"); m is not the lever.",
             c.m,
             cost("m4f-fast-trig", c.m),
             cost("m4f-fast-trig", c.m) / 168e3,
