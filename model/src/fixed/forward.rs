@@ -6,7 +6,8 @@ use super::trig::{hypot, hypot_inv, sin_cos};
 use crate::de;
 use crate::error::Error;
 use crate::mat3;
-use crate::finger::{uniform_beam_compliance, Finger};
+use crate::finger::{uniform_beam_compliance, Finger, Pose, Solution};
+use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
@@ -125,7 +126,14 @@ pub struct FixedSolution {
     pub cable_excursion: Mm,
     /// Newton iterations, all joints.
     pub iterations: u32,
+    /// The tension solved at.
+    pub tension: Nt,
+    /// Each joint's converged guide hole (its hinge's frame), mm.
+    pub holes: [[Mm; 2]; MAX_JOINTS],
 }
+
+/// A sub-element's displacement q = (δax mm, δtr mm, Δθ rad).
+pub type SubQ = (Mm, Mm, Rad);
 
 impl FixedSolution {
     pub fn tip(&self) -> FixedPose {
@@ -220,6 +228,11 @@ impl FixedFinger {
 
     /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.
     pub(super) fn march(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2]) -> Result<(FixedPose, [Mm; 2]), MarchError> {
+        self.march_q(c, tension, b, None)
+    }
+
+    /// [`FixedFinger::march`], writing each sub-element's q = (δax, δtr, Δθ) to `rec` if given.
+    fn march_q(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2], mut rec: Option<&mut [SubQ; MAX_SUB]>) -> Result<(FixedPose, [Mm; 2]), MarchError> {
         let e = self.e;
         let span_v = [b[0], b[1] - e];
         // the span and its reciprocal (no division), then the direction by two products
@@ -231,7 +244,7 @@ impl FixedFinger {
         let fc: [Nt; 2] = [-dir[0].mul_q(tension), -dir[1].mul_q(tension)];
         let mut pose = FixedPose::default();
         let (mut s, mut co) = (Unit::ZERO, Q::<30>(1 << 30));
-        for cj in c[..self.m].iter() {
+        for (j, cj) in c[..self.m].iter().enumerate() {
             let d0 = [pose.x + co.mul_q(self.sub_len), pose.y + s.mul_q(self.sub_len)];
             // moment of the cable force about the sub-element's (undeflected) end
             let m0: Nmm = narrow((b[0] - d0[0]).wide(fc[1]).saturating_sub((b[1] - d0[1]).wide(fc[0])), 44);
@@ -251,6 +264,9 @@ impl FixedFinger {
             let qx: Mm = narrow(q0[0].saturating_add(cj.m[0][2] as i64 * sm.0 as i64), cj.t[0]);
             let qy: Mm = narrow(q0[1].saturating_add(cj.m[1][2] as i64 * sm.0 as i64), cj.t[1]);
             let qt: Rad = narrow(q0[2].saturating_add(cj.m[2][2] as i64 * sm.0 as i64), cj.t[2]);
+            if let Some(r) = rec.as_deref_mut() {
+                r[j] = (qx, qy, qt);
+            }
             let ax = qx + self.sub_len;
             pose = FixedPose {
                 x: pose.x + narrow(co.wide(ax) - s.wide(qy), 52),
@@ -406,7 +422,58 @@ impl FixedFinger {
         if nodes[..=n].iter().any(|p| p.x.is_sat() || p.y.is_sat() || p.theta.is_sat()) {
             return Err(Error::Singular { what: "fixed-point solution (out of range)" });
         }
-        Ok(FixedSolution { n, joint_angle, nodes, cable_excursion: excursion, iterations })
+        Ok(FixedSolution { n, joint_angle, nodes, cable_excursion: excursion, iterations, tension, holes })
+    }
+
+    /// Joint k's sub-element displacements at the converged `sol` (its march from the converged hole, once).
+    pub fn sub_element_q(&self, sol: &FixedSolution, k: usize) -> Result<[SubQ; MAX_SUB], Error> {
+        let mut q = [(Mm::ZERO, Mm::ZERO, Rad::ZERO); MAX_SUB];
+        if k >= self.n || sol.n != self.n {
+            return Err(Error::Input { input: "joint", reason: "not a joint of this solution" });
+        }
+        self.march_q(&self.c[k], sol.tension, sol.holes[k], Some(&mut q))
+            .map_err(|_| Error::Singular { what: "fixed-point solution (re-march)" })?;
+        Ok(q)
+    }
+
+    /// The linearised tip stiffness (`Finger::tip_stiffness`, MODEL.md "Tip stiffness") at the
+    /// converged fixed-point `sol`: the sub-element displacements and nodes from fixed point,
+    /// then C_tip = Σ J C Jᵀ and its inverse once in `R` (the compliances at `volts`, `f`'s).
+    pub fn tip_stiffness<R: Real>(&self, f: &Finger<R>, sol: &FixedSolution, volts: &[R]) -> Result<Mat3<R>, Error> {
+        let n = sol.n;
+        if n != f.params().n || self.m != f.params().m || volts.len() != n {
+            return Err(Error::Input { input: "solution", reason: "solved for other parameters" });
+        }
+        let r = |x: f64| R::from_f64(x);
+        let pose = |p: &FixedPose| Pose { x: r(p.x.to_f64()), y: r(p.y.to_f64()), theta: r(p.theta.to_f64()) };
+        let mut s = Solution {
+            n,
+            m: self.m,
+            tension: r(sol.tension.to_f64()),
+            tip_force: [R::zero(); 2],
+            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            links: [[R::zero(); 3]; MAX_JOINTS],
+            joint_angle: [R::zero(); MAX_JOINTS],
+            nodes: [Pose::origin(); MAX_JOINTS + 1],
+            span: [R::zero(); MAX_JOINTS],
+            thickness: [R::zero(); MAX_JOINTS],
+            volts: [R::zero(); MAX_JOINTS],
+            cable_excursion: R::zero(),
+            iterations: sol.iterations,
+            residual: R::zero(),
+            tangent_det: [R::one(); MAX_JOINTS],
+        };
+        for k in 0..n {
+            let q = self.sub_element_q(sol, k)?;
+            for j in 0..self.m {
+                s.q[k][j] = [r(q[j].0.to_f64()), r(q[j].1.to_f64()), r(q[j].2.to_f64())];
+            }
+            s.volts[k] = volts[k];
+        }
+        for k in 0..=n {
+            s.nodes[k] = pose(&sol.nodes[k]);
+        }
+        f.tip_stiffness(&s)
     }
 }
 
@@ -444,6 +511,32 @@ mod tests {
                         assert!((want.joint_angle[k] - got.joint_angle[k].to_f64()).abs() < 2e-5, "joint {k}");
                     }
                     assert!((want.cable_excursion - got.cable_excursion.to_f64()).abs() < 1e-4);
+                }
+            }
+        }
+        assert!(worst > 0.0);
+    }
+
+    /// The tip stiffness from the fixed-point state against the f64 model's at its own solve:
+    /// each diagonal term within 2e-5 relative.
+    #[test]
+    fn tip_stiffness_within_2e5_of_the_f64_model() {
+        let mut worst = 0f64;
+        for p in params() {
+            let f = Finger::new(p).unwrap();
+            for volts in [[0.0; 3], [8000.0; 3], [9000.0, 5000.0, 0.0]] {
+                if p.layers == 0 && volts[0] > 0.0 {
+                    continue;
+                }
+                let ff = FixedFinger::new(&f, &volts).unwrap();
+                for t in [0.05, 0.5, 1.0, 7.0] {
+                    let want = f.tip_stiffness(&f.solve(t, &volts, Method::converged()).unwrap()).unwrap();
+                    let got = ff.tip_stiffness(&f, &ff.solve(Nt::from_f64(t)).unwrap(), &volts).unwrap();
+                    for i in 0..3 {
+                        let rel = ((got[i][i] - want[i][i]) / want[i][i]).abs();
+                        worst = worst.max(rel);
+                        assert!(rel < 2e-5, "m={} layers={} {volts:?} P={t}: k{i}{i} {} vs {}", p.m, p.layers, got[i][i], want[i][i]);
+                    }
                 }
             }
         }
