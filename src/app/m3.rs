@@ -43,12 +43,12 @@ pub(super) fn forward_stiffness(f: &Finger<f32>, p: f32, volts: &[f32; CHANNELS]
     let mut ff = FixedFinger::empty();
     ff.prepare(f, volts)?;
     let s = ff.solve(Nt::from_f32(p))?;
-    Ok((solved(f, &s, volts)?, stiffness(f, &ff, &s, volts)?))
+    Ok((solved(f, &s, volts)?, stiffness(f, &ff, &s)?))
 }
 
 #[inline(never)]
-fn stiffness(f: &Finger<f32>, ff: &FixedFinger, s: &FixedSolution, volts: &[f32; CHANNELS]) -> Result<Mat3<f32>, ModelError> {
-    ff.tip_stiffness(f, s, volts)
+fn stiffness(f: &Finger<f32>, ff: &FixedFinger, s: &FixedSolution) -> Result<Mat3<f32>, ModelError> {
+    ff.tip_stiffness(f, s)
 }
 
 fn solved(f: &Finger<f32>, s: &FixedSolution, volts: &[f32; CHANNELS]) -> Result<Solved, ModelError> {

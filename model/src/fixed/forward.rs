@@ -6,7 +6,7 @@ use super::trig::{hypot, hypot_inv, sin_cos};
 use crate::de;
 use crate::error::Error;
 use crate::mat3;
-use crate::finger::{uniform_beam_compliance, Finger, Pose, Solution};
+use crate::finger::{uniform_beam_compliance, Compliances, Finger, Pose, Solution};
 use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -46,6 +46,18 @@ fn split(x: f64) -> Option<(i64, i32, bool)> {
 }
 
 impl CMat {
+    /// The matrix it scales (entry (i, j) = m[i][j] 2^(F_j - t[i])).
+    fn value(&self) -> [[f64; 3]; 3] {
+        let mut v = [[0f64; 3]; 3];
+        for i in 0..3 {
+            for (j, fr) in W_FRAC.iter().enumerate() {
+                // 2^(F_j - t): |F_j - t| stays well inside f64's exponent range
+                v[i][j] = self.m[i][j] as f64 * f64::from_bits(((1023 + fr - self.t[i]) as u64) << 52);
+            }
+        }
+        v
+    }
+
     fn new(c: &[[f64; 3]; 3]) -> CMat {
         let mut o = CMat { d02: Scaled::from_f64(c[0][2]), d12: Scaled::from_f64(c[1][2]), ..CMat::default() };
         for (i, ci) in c.iter().enumerate() {
@@ -438,10 +450,11 @@ impl FixedFinger {
 
     /// The linearised tip stiffness (`Finger::tip_stiffness`, MODEL.md "Tip stiffness") at the
     /// converged fixed-point `sol`: the sub-element displacements and nodes from fixed point,
-    /// then C_tip = Σ J C Jᵀ and its inverse once in `R` (the compliances at `volts`, `f`'s).
-    pub fn tip_stiffness<R: Real>(&self, f: &Finger<R>, sol: &FixedSolution, volts: &[R]) -> Result<Mat3<R>, Error> {
+    /// then C_tip = Σ J C Jᵀ and its inverse once in `R` (the sub-element compliances this
+    /// finger was prepared with, unscaled; `f`: the parameters it was prepared from).
+    pub fn tip_stiffness<R: Real>(&self, f: &Finger<R>, sol: &FixedSolution) -> Result<Mat3<R>, Error> {
         let n = sol.n;
-        if n != f.params().n || self.m != f.params().m || volts.len() != n {
+        if n != f.params().n || self.m != f.params().m || n != self.n {
             return Err(Error::Input { input: "solution", reason: "solved for other parameters" });
         }
         let r = |x: f64| R::from_f64(x);
@@ -463,17 +476,19 @@ impl FixedFinger {
             residual: R::zero(),
             tangent_det: [R::one(); MAX_JOINTS],
         };
+        let mut c = Compliances { n, m: self.m, c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS], thickness: [R::zero(); MAX_JOINTS], volts: [R::zero(); MAX_JOINTS] };
         for k in 0..n {
             let q = self.sub_element_q(sol, k)?;
             for j in 0..self.m {
                 s.q[k][j] = [r(q[j].0.to_f64()), r(q[j].1.to_f64()), r(q[j].2.to_f64())];
+                c.c[k][j] = self.c[k][j].value().map(|row| row.map(r));
             }
-            s.volts[k] = volts[k];
         }
         for k in 0..=n {
             s.nodes[k] = pose(&sol.nodes[k]);
         }
-        f.tip_stiffness(&s)
+        // C_tip is symmetric positive definite (Σ J C Jᵀ), as in `Finger::tip_stiffness`
+        mat3::inverse_spd(&f.tip_compliance(&c, &s)).ok_or(Error::Singular { what: "tip compliance" })
     }
 }
 
@@ -531,7 +546,7 @@ mod tests {
                 let ff = FixedFinger::new(&f, &volts).unwrap();
                 for t in [0.05, 0.5, 1.0, 7.0] {
                     let want = f.tip_stiffness(&f.solve(t, &volts, Method::converged()).unwrap()).unwrap();
-                    let got = ff.tip_stiffness(&f, &ff.solve(Nt::from_f64(t)).unwrap(), &volts).unwrap();
+                    let got = ff.tip_stiffness(&f, &ff.solve(Nt::from_f64(t)).unwrap()).unwrap();
                     for i in 0..3 {
                         let rel = ((got[i][i] - want[i][i]) / want[i][i]).abs();
                         worst = worst.max(rel);
