@@ -144,9 +144,6 @@ pub struct FixedSolution {
     pub holes: [[Mm; 2]; MAX_JOINTS],
 }
 
-/// A sub-element's displacement q = (δax mm, δtr mm, Δθ rad).
-pub type SubQ = (Mm, Mm, Rad);
-
 impl FixedSolution {
     pub fn tip(&self) -> FixedPose {
         self.nodes[self.n]
@@ -239,12 +236,8 @@ impl FixedFinger {
     }
 
     /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.
+    /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.
     pub(super) fn march(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2]) -> Result<(FixedPose, [Mm; 2]), MarchError> {
-        self.march_q(c, tension, b, None)
-    }
-
-    /// [`FixedFinger::march`], writing each sub-element's q = (δax, δtr, Δθ) to `rec` if given.
-    fn march_q(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2], mut rec: Option<&mut [SubQ; MAX_SUB]>) -> Result<(FixedPose, [Mm; 2]), MarchError> {
         let e = self.e;
         let span_v = [b[0], b[1] - e];
         // the span and its reciprocal (no division), then the direction by two products
@@ -256,7 +249,7 @@ impl FixedFinger {
         let fc: [Nt; 2] = [-dir[0].mul_q(tension), -dir[1].mul_q(tension)];
         let mut pose = FixedPose::default();
         let (mut s, mut co) = (Unit::ZERO, Q::<30>(1 << 30));
-        for (j, cj) in c[..self.m].iter().enumerate() {
+        for cj in c[..self.m].iter() {
             let d0 = [pose.x + co.mul_q(self.sub_len), pose.y + s.mul_q(self.sub_len)];
             // moment of the cable force about the sub-element's (undeflected) end
             let m0: Nmm = narrow((b[0] - d0[0]).wide(fc[1]).saturating_sub((b[1] - d0[1]).wide(fc[0])), 44);
@@ -276,9 +269,6 @@ impl FixedFinger {
             let qx: Mm = narrow(q0[0].saturating_add(cj.m[0][2] as i64 * sm.0 as i64), cj.t[0]);
             let qy: Mm = narrow(q0[1].saturating_add(cj.m[1][2] as i64 * sm.0 as i64), cj.t[1]);
             let qt: Rad = narrow(q0[2].saturating_add(cj.m[2][2] as i64 * sm.0 as i64), cj.t[2]);
-            if let Some(r) = rec.as_deref_mut() {
-                r[j] = (qx, qy, qt);
-            }
             let ax = qx + self.sub_len;
             pose = FixedPose {
                 x: pose.x + narrow(co.wide(ax) - s.wide(qy), 52),
@@ -437,19 +427,24 @@ impl FixedFinger {
         Ok(FixedSolution { n, joint_angle, nodes, cable_excursion: excursion, iterations, tension, holes })
     }
 
-    /// Joint k's sub-element displacements at the converged `sol` (its march from the converged hole, once).
-    pub fn sub_element_q(&self, sol: &FixedSolution, k: usize) -> Result<[SubQ; MAX_SUB], Error> {
-        let mut q = [(Mm::ZERO, Mm::ZERO, Rad::ZERO); MAX_SUB];
+    /// Joint k's sub-element end poses (its hinge's frame) at the converged `sol`: the march
+    /// from the converged hole over the first j + 1 sub-elements ends at sub-element j's end.
+    pub fn sub_element_ends(&self, sol: &FixedSolution, k: usize) -> Result<[FixedPose; MAX_SUB], Error> {
+        let mut ends = [FixedPose::default(); MAX_SUB];
         if k >= self.n || sol.n != self.n {
             return Err(Error::Input { input: "joint", reason: "not a joint of this solution" });
         }
-        self.march_q(&self.c[k], sol.tension, sol.holes[k], Some(&mut q))
-            .map_err(|_| Error::Singular { what: "fixed-point solution (re-march)" })?;
-        Ok(q)
+        // the march of the solve, unchanged, on a finger of j + 1 sub-elements
+        let mut prefix = self.clone();
+        for j in 0..self.m {
+            prefix.m = j + 1;
+            ends[j] = prefix.march(&self.c[k], sol.tension, sol.holes[k]).map_err(|_| Error::Singular { what: "fixed-point solution (re-march)" })?.0;
+        }
+        Ok(ends)
     }
 
     /// The linearised tip stiffness (`Finger::tip_stiffness`, MODEL.md "Tip stiffness") at the
-    /// converged fixed-point `sol`: the sub-element displacements and nodes from fixed point,
+    /// converged fixed-point `sol`: the sub-element end poses and nodes from fixed point,
     /// then C_tip = Σ J C Jᵀ and its inverse once in `R` (the sub-element compliances this
     /// finger was prepared with, unscaled; `f`: the parameters it was prepared from).
     pub fn tip_stiffness<R: Real>(&self, f: &Finger<R>, sol: &FixedSolution) -> Result<Mat3<R>, Error> {
@@ -477,11 +472,18 @@ impl FixedFinger {
             tangent_det: [R::one(); MAX_JOINTS],
         };
         let mut c = Compliances { n, m: self.m, c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS], thickness: [R::zero(); MAX_JOINTS], volts: [R::zero(); MAX_JOINTS] };
+        let sub_len = r(self.sub_len.to_f64());
         for k in 0..n {
-            let q = self.sub_element_q(sol, k)?;
+            let ends = self.sub_element_ends(sol, k)?;
+            let mut from: Pose<R> = Pose::origin();
             for j in 0..self.m {
-                s.q[k][j] = [r(q[j].0.to_f64()), r(q[j].1.to_f64()), r(q[j].2.to_f64())];
+                // q from consecutive end poses: the step in the proximal end's frame
+                let to = pose(&ends[j]);
+                let (sn, cs) = from.theta.sin_cos();
+                let (dx, dy) = (to.x - from.x, to.y - from.y);
+                s.q[k][j] = [cs * dx + sn * dy - sub_len, cs * dy - sn * dx, to.theta - from.theta];
                 c.c[k][j] = self.c[k][j].value().map(|row| row.map(r));
+                from = to;
             }
         }
         for k in 0..=n {
