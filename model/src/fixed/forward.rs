@@ -438,7 +438,7 @@ impl FixedFinger {
         let mut prefix = self.clone();
         for j in 0..self.m {
             prefix.m = j + 1;
-            ends[j] = prefix.march(&self.c[k], sol.tension, sol.holes[k]).map_err(|_| Error::Singular { what: "fixed-point solution (re-march)" })?.0;
+            ends[j] = prefix.residual(&self.c[k], sol.tension, sol.holes[k]).map_err(|_| Error::Singular { what: "fixed-point solution (re-march)" })?.1;
         }
         Ok(ends)
     }
