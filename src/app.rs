@@ -732,19 +732,19 @@ impl Commands {
     #[inline(never)]
     fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let (p, vf) = self.model_request(args, "solve <P> <V1> <V2> <V3>")?;
+        #[cfg(not(m3))]
         let sol = self.forward(p, &vf).map_err(model_err)?;
         #[cfg(not(m3))]
         let k = self.finger.tip_stiffness(&sol).map_err(model_err)?;
+        // the M3's: from the fixed-point state (app/m3.rs)
+        #[cfg(m3)]
+        let (sol, k) = m3::forward_stiffness(&self.finger, p, &vf).map_err(model_err)?;
         let _ = w!(r; "joints=");
         joints(r, &sol);
         let tip = sol.tip();
         let _ = w!(r; " tip=", Tip(&tip), " cable=", Fixed(sol.cable_excursion, 4), " thick=");
         list(r, &sol.thickness[..CHANNELS], 4);
-        #[cfg(not(m3))]
         let _ = w!(r; " stiffness=", Exp(k[0][0], 4), ",", Exp(k[1][1], 4), ",", Exp(k[2][2], 4), " iters=", sol.iterations);
-        // the fixed-point model has no tip stiffness (docs/firmware.md "Cortex-M3 image")
-        #[cfg(m3)]
-        let _ = w!(r; " stiffness=-,-,- iters=", sol.iterations);
         Ok(())
     }
 

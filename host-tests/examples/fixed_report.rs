@@ -219,8 +219,13 @@ fn main() {
     // the M3 image's stack high-water over the console's commands (stack painted at reset;
     // memory-m3.x: the 16 KiB stack is [0x20000000, 0x20004000))
     let mut q = host_tests::qemu::Qemu::boot_with(host_tests::qemu::Image::M3.paint_elf(), "stack", &[]);
-    // an armed `pose` (the fixed-point inverse) at a posture of the host's model at 0.8 N
-    let ps = f.solve(0.8, &[1000.0, 3000.0, 5000.0], Method::converged()).unwrap();
+    // an armed `pose` (the fixed-point inverse) at a posture of the host's model at 0.8 N,
+    // with the board's calibration (read with `cal`)
+    let c = q.cmd("cal");
+    let g: Vec<f64> = c.strip_prefix("ok cal=").expect("cal").split(',').map(|x| x.parse().unwrap()).collect();
+    let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
+    let board = Finger::with_calibration(Params::<f64>::default(), cal).unwrap();
+    let ps = board.solve(0.8, &[1000.0, 3000.0, 5000.0], Method::converged()).unwrap();
     let pose_cmd = format!("pose {:.6} {:.6} {:.6} 0.8", ps.joint_angle[0].to_degrees(), ps.joint_angle[1].to_degrees(), ps.joint_angle[2].to_degrees());
     let mut worst_stack: Vec<(String, u64)> = Vec::new();
     let mut prev = 0;

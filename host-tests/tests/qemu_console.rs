@@ -36,7 +36,7 @@ fn console_commands_and_bad_inputs(img: Image) {
     let s = expect(&mut q, "status", "ok armed=0 ");
     assert!(s.contains(" fault=none") && s.contains(" enable=0"), "{s}");
     expect(&mut q, "limits", "ok vmax=10000.0,10000.0,10000.0 vpullin=");
-    expect(&mut q, "solve 0.5 0 1000 2000", "ok joints=");
+    solve_stiffness(&mut q);
     // bad inputs
     expect(&mut q, "frobnicate", "err unknown:");
     expect(&mut q, "solve nan 0 0 0", "err bad-number:");
@@ -105,15 +105,34 @@ fn pose_and_contact(q: &mut Qemu) {
     expect(q, "contact 1 1.5", "ok fx=");
 }
 
+/// `solve`'s tip stiffness (the M3's: from the fixed-point state, in f32) against the host's f64
+/// model with the board's calibration (read with `cal`): each diagonal term within 5e-4
+/// relative (the reply's 5 digits and f32's J C Jᵀ and inverse).
+fn solve_stiffness(q: &mut Qemu) {
+    let f = board_finger(q);
+    let (p, v) = (0.5, [0.0, 1000.0, 2000.0]);
+    let want = f.tip_stiffness(&f.solve(p, &v, finger_model::Method::converged()).unwrap()).unwrap();
+    let r = expect(q, &format!("solve {p} {} {} {}", v[0], v[1], v[2]), "ok joints=");
+    let k: Vec<f64> = r.split_whitespace().find_map(|w| w.strip_prefix("stiffness=")).unwrap().split(',').map(|x| x.parse().unwrap()).collect();
+    for i in 0..3 {
+        assert!(((k[i] - want[i][i]) / want[i][i]).abs() < 5e-4, "k{i}{i}: {} vs the f64 model's {} ({r})", k[i], want[i][i]);
+    }
+}
+
+/// The host's f64 model of the board's finger: default parameters, the board's calibration.
+fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
+    let c = expect(q, "cal", "ok cal=");
+    let g: Vec<f64> = c["ok cal=".len()..].split(',').map(|x| x.parse().unwrap()).collect();
+    let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
+    finger_model::Finger::with_calibration(finger_model::Params::<f64>::default(), cal).unwrap()
+}
+
 /// The M3 image's `pose` (the fixed-point inverse at the given tension), armed: at a posture
 /// of the host's f64 model (the board's calibration, read with `cal`), the voltages it answers
 /// hold that posture in the f64 model within the inverse's round-trip target (0.05 deg, issue
 /// 14); they are the setpoints afterwards; past the stacks, `unreachable`; no tension, `usage`.
 fn pose_at_a_tension(q: &mut Qemu) {
-    let c = expect(q, "cal", "ok cal=");
-    let g: Vec<f64> = c["ok cal=".len()..].split(',').map(|x| x.parse().unwrap()).collect();
-    let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
-    let f = finger_model::Finger::with_calibration(finger_model::Params::<f64>::default(), cal).unwrap();
+    let f = board_finger(q);
     let p = 0.8;
     let s = f.solve(p, &[1000.0, 3000.0, 5000.0], finger_model::Method::converged()).unwrap();
     let deg = [0, 1, 2].map(|k| format!("{:.6}", s.joint_angle[k].to_degrees()).parse::<f64>().unwrap());

@@ -2,11 +2,13 @@
 //! console's forward solves (`solve`, `status`, the servo plan) and fmax on the fixed-point
 //! model (`finger_model::fixed`, docs/fixed-point.md) instead of the f32 model in soft float.
 //! The set-up (compliances at the voltages) is the f32 model's; the solve has no float
-//! operation. `pose` on the fixed-point inverse at a given tension. Not here: the tip
-//! stiffness (`solve` answers `stiffness=-,-,-`), `pose`'s tension rule (`<P>` required).
+//! operation; `solve`'s tip stiffness from the converged fixed-point state, once in f32.
+//! `pose` on the fixed-point inverse at a given tension. Not here: `pose`'s tension rule
+//! (`<P>` required).
 
 use finger_model::fixed::q::{Nt, Rad};
-use finger_model::fixed::{FixedFinger, FixedInverseDirect};
+use finger_model::fixed::{FixedFinger, FixedInverseDirect, FixedSolution};
+use finger_model::mat3::Mat3;
 use finger_model::Pose;
 
 use super::*;
@@ -31,7 +33,25 @@ impl Solved {
 pub(super) fn forward(f: &Finger<f32>, p: f32, volts: &[f32; CHANNELS]) -> Result<Solved, ModelError> {
     let mut ff = FixedFinger::empty();
     ff.prepare(f, volts)?;
+    solved(f, &ff.solve(Nt::from_f32(p))?, volts)
+}
+
+/// [`forward`] and the tip stiffness at its posture (`solve`): the fixed-point state's
+/// sub-element displacements, then K_tip = (Σ J C Jᵀ)⁻¹ once in f32 (`FixedFinger::tip_stiffness`).
+#[inline(never)]
+pub(super) fn forward_stiffness(f: &Finger<f32>, p: f32, volts: &[f32; CHANNELS]) -> Result<(Solved, Mat3<f32>), ModelError> {
+    let mut ff = FixedFinger::empty();
+    ff.prepare(f, volts)?;
     let s = ff.solve(Nt::from_f32(p))?;
+    Ok((solved(f, &s, volts)?, stiffness(f, &ff, &s)?))
+}
+
+#[inline(never)]
+fn stiffness(f: &Finger<f32>, ff: &FixedFinger, s: &FixedSolution) -> Result<Mat3<f32>, ModelError> {
+    ff.tip_stiffness(f, s)
+}
+
+fn solved(f: &Finger<f32>, s: &FixedSolution, volts: &[f32; CHANNELS]) -> Result<Solved, ModelError> {
     let mut out = Solved { joint_angle: [0.0; CHANNELS], cable_excursion: s.cable_excursion.to_f32(), thickness: [0.0; CHANNELS], iterations: s.iterations, tip: Pose::origin() };
     for k in 0..CHANNELS {
         out.joint_angle[k] = s.joint_angle[k].to_f32();

@@ -6,7 +6,8 @@ use super::trig::{hypot, hypot_inv, sin_cos};
 use crate::de;
 use crate::error::Error;
 use crate::mat3;
-use crate::finger::{uniform_beam_compliance, Finger};
+use crate::finger::{uniform_beam_compliance, Compliances, Finger, Pose, Solution};
+use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
@@ -45,6 +46,18 @@ fn split(x: f64) -> Option<(i64, i32, bool)> {
 }
 
 impl CMat {
+    /// The matrix it scales (entry (i, j) = m[i][j] 2^(F_j - t[i])).
+    fn value(&self) -> [[f64; 3]; 3] {
+        let mut v = [[0f64; 3]; 3];
+        for i in 0..3 {
+            for (j, fr) in W_FRAC.iter().enumerate() {
+                // 2^(F_j - t): |F_j - t| stays well inside f64's exponent range
+                v[i][j] = self.m[i][j] as f64 * f64::from_bits(((1023 + fr - self.t[i]) as u64) << 52);
+            }
+        }
+        v
+    }
+
     fn new(c: &[[f64; 3]; 3]) -> CMat {
         let mut o = CMat { d02: Scaled::from_f64(c[0][2]), d12: Scaled::from_f64(c[1][2]), ..CMat::default() };
         for (i, ci) in c.iter().enumerate() {
@@ -125,6 +138,10 @@ pub struct FixedSolution {
     pub cable_excursion: Mm,
     /// Newton iterations, all joints.
     pub iterations: u32,
+    /// The tension solved at.
+    pub tension: Nt,
+    /// Each joint's converged guide hole (its hinge's frame), mm.
+    pub holes: [[Mm; 2]; MAX_JOINTS],
 }
 
 impl FixedSolution {
@@ -218,6 +235,7 @@ impl FixedFinger {
         Ok(())
     }
 
+    /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.
     /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.
     pub(super) fn march(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2]) -> Result<(FixedPose, [Mm; 2]), MarchError> {
         let e = self.e;
@@ -406,7 +424,73 @@ impl FixedFinger {
         if nodes[..=n].iter().any(|p| p.x.is_sat() || p.y.is_sat() || p.theta.is_sat()) {
             return Err(Error::Singular { what: "fixed-point solution (out of range)" });
         }
-        Ok(FixedSolution { n, joint_angle, nodes, cable_excursion: excursion, iterations })
+        Ok(FixedSolution { n, joint_angle, nodes, cable_excursion: excursion, iterations, tension, holes })
+    }
+
+    /// Joint k's sub-element end poses (its hinge's frame) at the converged `sol`: the march
+    /// from the converged hole over the first j + 1 sub-elements ends at sub-element j's end.
+    pub fn sub_element_ends(&self, sol: &FixedSolution, k: usize) -> Result<[FixedPose; MAX_SUB], Error> {
+        let mut ends = [FixedPose::default(); MAX_SUB];
+        if k >= self.n || sol.n != self.n {
+            return Err(Error::Input { input: "joint", reason: "not a joint of this solution" });
+        }
+        // the march of the solve, unchanged, on a finger of j + 1 sub-elements
+        let mut prefix = self.clone();
+        for j in 0..self.m {
+            prefix.m = j + 1;
+            ends[j] = prefix.residual(&self.c[k], sol.tension, sol.holes[k]).map_err(|_| Error::Singular { what: "fixed-point solution (re-march)" })?.1;
+        }
+        Ok(ends)
+    }
+
+    /// The linearised tip stiffness (`Finger::tip_stiffness`, MODEL.md "Tip stiffness") at the
+    /// converged fixed-point `sol`: the sub-element end poses and nodes from fixed point,
+    /// then C_tip = Σ J C Jᵀ and its inverse once in `R` (the sub-element compliances this
+    /// finger was prepared with, unscaled; `f`: the parameters it was prepared from).
+    pub fn tip_stiffness<R: Real>(&self, f: &Finger<R>, sol: &FixedSolution) -> Result<Mat3<R>, Error> {
+        let n = sol.n;
+        if n != f.params().n || self.m != f.params().m || n != self.n {
+            return Err(Error::Input { input: "solution", reason: "solved for other parameters" });
+        }
+        let r = |x: f64| R::from_f64(x);
+        let pose = |p: &FixedPose| Pose { x: r(p.x.to_f64()), y: r(p.y.to_f64()), theta: r(p.theta.to_f64()) };
+        let mut s = Solution {
+            n,
+            m: self.m,
+            tension: r(sol.tension.to_f64()),
+            tip_force: [R::zero(); 2],
+            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            links: [[R::zero(); 3]; MAX_JOINTS],
+            joint_angle: [R::zero(); MAX_JOINTS],
+            nodes: [Pose::origin(); MAX_JOINTS + 1],
+            span: [R::zero(); MAX_JOINTS],
+            thickness: [R::zero(); MAX_JOINTS],
+            volts: [R::zero(); MAX_JOINTS],
+            cable_excursion: R::zero(),
+            iterations: sol.iterations,
+            residual: R::zero(),
+            tangent_det: [R::one(); MAX_JOINTS],
+        };
+        let mut c = Compliances { n, m: self.m, c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS], thickness: [R::zero(); MAX_JOINTS], volts: [R::zero(); MAX_JOINTS] };
+        let sub_len = r(self.sub_len.to_f64());
+        for k in 0..n {
+            let ends = self.sub_element_ends(sol, k)?;
+            let mut from: Pose<R> = Pose::origin();
+            for j in 0..self.m {
+                // q from consecutive end poses: the step in the proximal end's frame
+                let to = pose(&ends[j]);
+                let (sn, cs) = from.theta.sin_cos();
+                let (dx, dy) = (to.x - from.x, to.y - from.y);
+                s.q[k][j] = [cs * dx + sn * dy - sub_len, cs * dy - sn * dx, to.theta - from.theta];
+                c.c[k][j] = self.c[k][j].value().map(|row| row.map(r));
+                from = to;
+            }
+        }
+        for k in 0..=n {
+            s.nodes[k] = pose(&sol.nodes[k]);
+        }
+        // C_tip is symmetric positive definite (Σ J C Jᵀ), as in `Finger::tip_stiffness`
+        mat3::inverse_spd(&f.tip_compliance(&c, &s)).ok_or(Error::Singular { what: "tip compliance" })
     }
 }
 
@@ -444,6 +528,32 @@ mod tests {
                         assert!((want.joint_angle[k] - got.joint_angle[k].to_f64()).abs() < 2e-5, "joint {k}");
                     }
                     assert!((want.cable_excursion - got.cable_excursion.to_f64()).abs() < 1e-4);
+                }
+            }
+        }
+        assert!(worst > 0.0);
+    }
+
+    /// The tip stiffness from the fixed-point state against the f64 model's at its own solve:
+    /// each diagonal term within 2e-5 relative.
+    #[test]
+    fn tip_stiffness_within_2e5_of_the_f64_model() {
+        let mut worst = 0f64;
+        for p in params() {
+            let f = Finger::new(p).unwrap();
+            for volts in [[0.0; 3], [8000.0; 3], [9000.0, 5000.0, 0.0]] {
+                if p.layers == 0 && volts[0] > 0.0 {
+                    continue;
+                }
+                let ff = FixedFinger::new(&f, &volts).unwrap();
+                for t in [0.05, 0.5, 1.0, 7.0] {
+                    let want = f.tip_stiffness(&f.solve(t, &volts, Method::converged()).unwrap()).unwrap();
+                    let got = ff.tip_stiffness(&f, &ff.solve(Nt::from_f64(t)).unwrap()).unwrap();
+                    for i in 0..3 {
+                        let rel = ((got[i][i] - want[i][i]) / want[i][i]).abs();
+                        worst = worst.max(rel);
+                        assert!(rel < 2e-5, "m={} layers={} {volts:?} P={t}: k{i}{i} {} vs {}", p.m, p.layers, got[i][i], want[i][i]);
+                    }
                 }
             }
         }
