@@ -51,17 +51,7 @@ pub fn bench_dir() -> PathBuf {
 
 /// Where cargo puts the bench builds: $CARGO_TARGET_DIR if set, else bench/target.
 pub fn target_dir() -> PathBuf {
-    match std::env::var_os("CARGO_TARGET_DIR") {
-        Some(d) => {
-            let p = PathBuf::from(d);
-            if p.is_absolute() {
-                p
-            } else {
-                std::env::current_dir().unwrap_or_default().join(p)
-            }
-        }
-        None => bench_dir().join("target"),
-    }
+    crate::qemu::cargo_target_dir(bench_dir().join("target"))
 }
 
 /// Build binary `bin` of the bench crate for `triple` with `features` (no defaults), and copy

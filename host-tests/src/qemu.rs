@@ -17,16 +17,24 @@ pub const TIM4_ARR: u64 = 0x4000_082c;
 pub const TICK_MARKER: u64 = 0x4000_0840;
 pub const USART1_DR: u64 = 0x4001_1004;
 
-fn root() -> PathBuf {
+/// The firmware package's directory (the repository's top).
+pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..").canonicalize().unwrap()
 }
 
-fn target_dir() -> PathBuf {
+/// Where cargo puts builds: $CARGO_TARGET_DIR if set (relative to the current directory),
+/// else `default`.
+pub fn cargo_target_dir(default: PathBuf) -> PathBuf {
     match std::env::var_os("CARGO_TARGET_DIR") {
         Some(d) if Path::new(&d).is_absolute() => PathBuf::from(d),
-        Some(d) => std::env::current_dir().unwrap().join(d),
-        None => root().join("target"),
+        Some(d) => std::env::current_dir().unwrap_or_default().join(d),
+        None => default,
     }
+}
+
+/// Where the firmware's builds go: $CARGO_TARGET_DIR if set, else target/ at the top.
+pub fn target_dir() -> PathBuf {
+    cargo_target_dir(root().join("target"))
 }
 
 /// The emulator images the QEMU tests run against.

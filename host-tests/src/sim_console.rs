@@ -40,3 +40,16 @@ pub fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
     assert!(last.starts_with("ok") || last.starts_with("err "), "{line:?} -> {lines:?}");
     last.clone()
 }
+
+/// The value of `key=` in a reply (panics if the reply has none).
+pub fn val<'a>(reply: &'a str, key: &str) -> &'a str {
+    reply
+        .split_whitespace()
+        .find_map(|kv| kv.strip_prefix(key).and_then(|r| r.strip_prefix('=')))
+        .unwrap_or_else(|| panic!("no {key} in {reply}"))
+}
+
+/// A reply's comma-separated list of numbers.
+pub fn nums(s: &str) -> Vec<f64> {
+    s.split(',').map(|x| x.parse().unwrap()).collect()
+}

@@ -2,7 +2,7 @@
 //! command and error code, and the safety rules of issue 3, each shown here.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{cmd, feed, Out};
+use host_tests::sim_console::{cmd, feed, nums, val, Out};
 
 fn app() -> App<SimBoard> {
     App::new(SimBoard::default())
@@ -20,17 +20,6 @@ fn err(a: &mut App<SimBoard>, line: &str, code: &str) -> String {
     r
 }
 
-/// Value of `key=` in a reply.
-fn val<'a>(reply: &'a str, key: &str) -> &'a str {
-    reply
-        .split_whitespace()
-        .find_map(|kv| kv.strip_prefix(key).and_then(|r| r.strip_prefix('=')))
-        .unwrap_or_else(|| panic!("no {key} in {reply}"))
-}
-
-fn nums(s: &str) -> Vec<f64> {
-    s.split(',').map(|x| x.parse().unwrap()).collect()
-}
 
 /// Everything observable: the status reply and the outputs of the board.
 fn snapshot(a: &mut App<SimBoard>) -> String {

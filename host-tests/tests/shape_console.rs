@@ -3,7 +3,7 @@
 //! sub-elements (the model's posture, MODEL.md "Equilibrium"), the tip as `solve`'s.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::feed;
+use host_tests::sim_console::{feed, nums, val};
 use finger_model::{Calibration, Finger, Method, Params, Pose};
 
 /// One command line: its reply, which must be the only line.
@@ -13,13 +13,6 @@ fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
     lines[0].clone()
 }
 
-fn value<'a>(reply: &'a str, key: &str) -> &'a str {
-    reply.split_whitespace().find_map(|t| t.strip_prefix(key).and_then(|r| r.strip_prefix('='))).unwrap_or_else(|| panic!("{key} in {reply}"))
-}
-
-fn numbers(s: &str) -> Vec<f64> {
-    s.split(',').map(|x| x.parse().unwrap()).collect()
-}
 
 #[test]
 fn shape_reports_the_poses_of_the_solve() {
@@ -32,7 +25,7 @@ fn shape_reports_the_poses_of_the_solve() {
         let args = format!("{tension} {} {} {}", volts[0], volts[1], volts[2]);
         let r = cmd(&mut a, &format!("shape {args}"));
         assert!(r.starts_with("ok nodes="), "{r}");
-        let (nodes, hinges) = (numbers(value(&r, "nodes")), numbers(value(&r, "hinges")));
+        let (nodes, hinges) = (nums(val(&r, "nodes")), nums(val(&r, "hinges")));
         assert_eq!((nodes.len(), hinges.len()), (12, 9));
         let sol = f.solve(tension, &volts, Method::converged()).unwrap();
         for k in 0..3 {
@@ -50,9 +43,9 @@ fn shape_reports_the_poses_of_the_solve() {
             assert!((n[0] - s.x as f64).abs() <= 1e-3 && (n[1] - s.y as f64).abs() <= 1e-3, "node {}: {n:?} vs {s:?}", k + 1);
         }
         // the tip is solve's
-        let tip = numbers(value(&cmd(&mut a, &format!("solve {args}")), "tip"));
+        let tip = nums(val(&cmd(&mut a, &format!("solve {args}")), "tip"));
         assert_eq!(&nodes[9..12], &tip[..]);
-        assert_eq!(value(&r, "thick"), value(&cmd(&mut a, &format!("solve {args}")), "thick"));
+        assert_eq!(val(&r, "thick"), val(&cmd(&mut a, &format!("solve {args}")), "thick"));
     }
 }
 
@@ -80,8 +73,8 @@ fn shape_takes_the_arguments_solve_takes_on_a_finger_without_stacks() {
         let solve = cmd(&mut a, &format!("solve {args}"));
         let shape = cmd(&mut a, &format!("shape {args}"));
         assert!(solve.starts_with("ok joints="), "{solve}");
-        let nodes = numbers(value(&shape, "nodes"));
-        let tip = numbers(value(&solve, "tip"));
+        let nodes = nums(val(&shape, "nodes"));
+        let tip = nums(val(&solve, "tip"));
         assert_eq!(&nodes[nodes.len() - 3..], &tip[..], "shape {args}: {shape} vs {solve}");
     }
     assert!(cmd(&mut a, "shape 1 0 100 0").starts_with("err limit:"));

@@ -6,18 +6,7 @@
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 use finger_model::Method;
-use host_tests::sim_console::cmd;
-
-fn val<'a>(reply: &'a str, key: &str) -> &'a str {
-    reply
-        .split_whitespace()
-        .find_map(|kv| kv.strip_prefix(key).and_then(|r| r.strip_prefix('=')))
-        .unwrap_or_else(|| panic!("no {key} in {reply}"))
-}
-
-fn nums(s: &str) -> Vec<f64> {
-    s.split(',').map(|x| x.parse().unwrap()).collect()
-}
+use host_tests::sim_console::{cmd, nums, val};
 
 /// `solve P V1 V2 V3` against the app's finger's full solve: joints (3 decimals, degrees) and
 /// tip (3 decimals, mm) within a unit of the last digit; returns `iters`.

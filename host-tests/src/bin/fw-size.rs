@@ -10,19 +10,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use host_tests::qemu::{root, target_dir};
 use object::{Object, ObjectSection, ObjectSymbol, SectionFlags, SymbolKind};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").canonicalize().unwrap()
-}
-
-fn target_dir() -> PathBuf {
-    match std::env::var_os("CARGO_TARGET_DIR") {
-        Some(d) if Path::new(&d).is_absolute() => PathBuf::from(d),
-        Some(d) => std::env::current_dir().unwrap().join(d),
-        None => root().join("target"),
-    }
-}
 
 fn default_elf() -> PathBuf {
     target_dir().join("thumbv7em-none-eabihf/release/finger-fw")
