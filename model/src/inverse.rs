@@ -740,12 +740,18 @@ impl<R: Real> PoseSolution<R> {
             n,
             m: p.m,
             tension: self.tension,
+            tip_force: [R::zero(); 2],
             q: self.sub_q,
             links: self.links,
+            joint_angle: [R::zero(); MAX_JOINTS],
+            nodes: [Pose::origin(); MAX_JOINTS + 1],
+            span: [R::zero(); MAX_JOINTS],
             thickness: self.thickness,
             volts: self.volts,
+            cable_excursion: R::zero(),
             iterations: self.iterations,
-            ..Solution::empty()
+            residual: R::zero(),
+            tangent_det: [R::one(); MAX_JOINTS],
         };
         for k in 0..n {
             let mut end = Pose::origin();

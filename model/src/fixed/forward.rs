@@ -454,7 +454,23 @@ impl FixedFinger {
         }
         let r = |x: f64| R::from_f64(x);
         let pose = |p: &FixedPose| Pose { x: r(p.x.to_f64()), y: r(p.y.to_f64()), theta: r(p.theta.to_f64()) };
-        let mut s = Solution { n, m: self.m, tension: r(sol.tension.to_f64()), iterations: sol.iterations, ..Solution::empty() };
+        let mut s = Solution {
+            n,
+            m: self.m,
+            tension: r(sol.tension.to_f64()),
+            tip_force: [R::zero(); 2],
+            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            links: [[R::zero(); 3]; MAX_JOINTS],
+            joint_angle: [R::zero(); MAX_JOINTS],
+            nodes: [Pose::origin(); MAX_JOINTS + 1],
+            span: [R::zero(); MAX_JOINTS],
+            thickness: [R::zero(); MAX_JOINTS],
+            volts: [R::zero(); MAX_JOINTS],
+            cable_excursion: R::zero(),
+            iterations: sol.iterations,
+            residual: R::zero(),
+            tangent_det: [R::one(); MAX_JOINTS],
+        };
         let mut c = Compliances { n, m: self.m, c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS], thickness: [R::zero(); MAX_JOINTS], volts: [R::zero(); MAX_JOINTS] };
         let sub_len = r(self.sub_len.to_f64());
         for k in 0..n {
