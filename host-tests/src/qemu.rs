@@ -37,6 +37,26 @@ pub fn target_dir() -> PathBuf {
     cargo_target_dir(root().join("target"))
 }
 
+/// One `#[test]` per image for each `test => check;` (`check(Image)`): `m4f::test` and
+/// `m3::test`, in the test file that invokes it.
+#[macro_export]
+macro_rules! on_both_images {
+    ($($name:ident => $check:ident;)*) => {
+        mod m4f {
+            $(#[test]
+            fn $name() {
+                super::$check($crate::qemu::Image::M4f);
+            })*
+        }
+        mod m3 {
+            $(#[test]
+            fn $name() {
+                super::$check($crate::qemu::Image::M3);
+            })*
+        }
+    };
+}
+
 /// The emulator images the QEMU tests run against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Image {
