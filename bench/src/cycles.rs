@@ -17,6 +17,7 @@ fn SysTick() {
     WRAPS.fetch_add(1, Ordering::Relaxed);
 }
 
+#[inline]
 pub fn start(mut syst: SYST) {
     syst.set_clock_source(SystClkSource::Core);
     syst.set_reload(RELOAD);
@@ -51,6 +52,7 @@ pub fn spin(n: u32) {
 
 /// (ticks for `2 n` instructions of `spin(n)`, ticks for `spin(0)`): the host takes the
 /// difference over `2 n` as ticks per instruction, and the second as the timing overhead.
+#[inline]
 pub fn calibrate(n: u32) -> (u64, u64) {
     let t0 = now();
     spin(0);

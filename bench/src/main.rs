@@ -11,13 +11,12 @@
 //! instructions with the `CAL` line and compares against its f64 reference.
 #![no_std]
 #![no_main]
-// `unsafe` only in the calibration loop's inline asm (cycles.rs).
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::hprintln;
 use finger_model::{Finger, Method, Params, Real};
 
-mod cycles;
+use bench::cycles;
 #[cfg(feature = "fixed")]
 mod fix;
 use finger_scenes as scenes;
@@ -130,20 +129,9 @@ fn prep_float<S: Real>(s: &Scene) -> Result<(Finger<S>, finger_model::Compliance
     Ok((f, c?, t1 - t0))
 }
 
-/// A panic in the model is a bug (it must return typed errors): say so and fail the run.
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("PANIC {}", info);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {}
-}
-
 #[entry]
 fn main() -> ! {
-    let cp = cortex_m::Peripherals::take().unwrap();
-    cycles::start(cp.SYST);
-    let (ticks, overhead) = cycles::calibrate(if cfg!(feature = "quick") { 1000 } else { 1_000_000 });
-    hprintln!("CAL {} {} {}", if cfg!(feature = "quick") { 2000u32 } else { 2_000_000 }, ticks, overhead);
+    bench::start!(if cfg!(feature = "quick") { 1000 } else { 1_000_000 }, (if cfg!(feature = "quick") { 2000u32 } else { 2_000_000 }));
     // `quick`: one scene (bare finger, 1.0 N)
     let scenes = if cfg!(feature = "quick") { &SCENES[2..3] } else { SCENES };
     for s in scenes.iter() {
@@ -157,7 +145,5 @@ fn main() -> ! {
             run_scene::<fix::Q32>("i32f32", s, fix::prep::<fix::Q32>);
         }
     }
-    hprintln!("END");
-    debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    bench::end()
 }

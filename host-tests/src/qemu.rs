@@ -37,6 +37,26 @@ pub fn target_dir() -> PathBuf {
     cargo_target_dir(root().join("target"))
 }
 
+/// One `#[test]` per image for each `test => check;` (`check(Image)`): `m4f::test` and
+/// `m3::test`, in the test file that invokes it.
+#[macro_export]
+macro_rules! on_both_images {
+    ($($name:ident => $check:ident;)*) => {
+        mod m4f {
+            $(#[test]
+            fn $name() {
+                super::$check($crate::qemu::Image::M4f);
+            })*
+        }
+        mod m3 {
+            $(#[test]
+            fn $name() {
+                super::$check($crate::qemu::Image::M3);
+            })*
+        }
+    };
+}
+
 /// The emulator images the QEMU tests run against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Image {
@@ -408,47 +428,37 @@ pub fn hv_full_scale(trace: &[Access]) -> u64 {
 /// whether any duty was written non-zero after it (before `until` accesses).
 pub fn stop_latencies(trace: &[Access]) -> Vec<(usize, bool)> {
     let mut res = Vec::new();
-    let mut last: Vec<u8> = Vec::new();
-    for (i, a) in trace.iter().enumerate() {
-        if a.write || a.addr != USART1_DR {
-            continue;
-        }
-        let b = a.value as u8;
-        if b == b'\r' || b == b'\n' {
-            let word: String = String::from_utf8_lossy(&last).trim().to_lowercase();
-            if word.split_whitespace().next() == Some("stop") {
-                let mut ticks = 0;
-                let mut zero = [false; 3];
-                let mut j = i + 1;
-                while j < trace.len() && !zero.iter().all(|&z| z) {
-                    let w = trace[j];
-                    if w.write && w.addr == TICK_MARKER {
-                        ticks += 1;
-                    }
-                    if let Some(ch) = TIM4_CCR.iter().position(|&r| r == w.addr && w.write) {
-                        zero[ch] = w.value == 0;
-                    }
-                    j += 1;
+    for (i, line) in lines_read(trace) {
+        let word: String = line.trim().to_lowercase();
+        if word.split_whitespace().next() == Some("stop") {
+            let mut ticks = 0;
+            let mut zero = [false; 3];
+            let mut j = i + 1;
+            while j < trace.len() && !zero.iter().all(|&z| z) {
+                let w = trace[j];
+                if w.write && w.addr == TICK_MARKER {
+                    ticks += 1;
                 }
-                // after the stop: any non-zero duty written in the next 50 ticks?
-                let mut later_nonzero = false;
-                let mut t = 0;
-                for w in &trace[j..] {
-                    if w.write && w.addr == TICK_MARKER {
-                        t += 1;
-                        if t > 50 {
-                            break;
-                        }
-                    }
-                    if w.write && TIM4_CCR.contains(&w.addr) && w.value != 0 {
-                        later_nonzero = true;
-                    }
+                if let Some(ch) = TIM4_CCR.iter().position(|&r| r == w.addr && w.write) {
+                    zero[ch] = w.value == 0;
                 }
-                res.push((ticks, later_nonzero));
+                j += 1;
             }
-            last.clear();
-        } else {
-            last.push(b);
+            // after the stop: any non-zero duty written in the next 50 ticks?
+            let mut later_nonzero = false;
+            let mut t = 0;
+            for w in &trace[j..] {
+                if w.write && w.addr == TICK_MARKER {
+                    t += 1;
+                    if t > 50 {
+                        break;
+                    }
+                }
+                if w.write && TIM4_CCR.contains(&w.addr) && w.value != 0 {
+                    later_nonzero = true;
+                }
+            }
+            res.push((ticks, later_nonzero));
         }
     }
     res
@@ -456,6 +466,18 @@ pub fn stop_latencies(trace: &[Access]) -> Vec<(usize, bool)> {
 
 /// Bytes written to USART1 after the first `stop` line was read.
 pub fn tx_bytes_after_stop(trace: &[Access]) -> usize {
+    for (i, line) in lines_read(trace) {
+        if line.trim().to_lowercase().starts_with("stop") {
+            return trace[i..].iter().filter(|w| w.write && w.addr == USART1_DR).count();
+        }
+    }
+    0
+}
+
+/// The lines read from USART1: (index in `trace` of the read of the line's CR or LF, the text
+/// before it); an empty text between CR and LF.
+fn lines_read(trace: &[Access]) -> Vec<(usize, String)> {
+    let mut lines = Vec::new();
     let mut last: Vec<u8> = Vec::new();
     for (i, a) in trace.iter().enumerate() {
         if a.write || a.addr != USART1_DR {
@@ -463,13 +485,11 @@ pub fn tx_bytes_after_stop(trace: &[Access]) -> usize {
         }
         let b = a.value as u8;
         if b == b'\r' || b == b'\n' {
-            if String::from_utf8_lossy(&last).trim().to_lowercase().starts_with("stop") {
-                return trace[i..].iter().filter(|w| w.write && w.addr == USART1_DR).count();
-            }
+            lines.push((i, String::from_utf8_lossy(&last).into_owned()));
             last.clear();
         } else {
             last.push(b);
         }
     }
-    0
+    lines
 }

@@ -17,14 +17,9 @@ fn expect(q: &mut Qemu, line: &str, prefix: &str) -> String {
     r
 }
 
-#[test]
-fn qemu_console_commands_and_bad_inputs() {
-    console_commands_and_bad_inputs(Image::M4f);
-}
-
-#[test]
-fn qemu_console_commands_and_bad_inputs_m3() {
-    console_commands_and_bad_inputs(Image::M3);
+host_tests::on_both_images! {
+    qemu_console_commands_and_bad_inputs => console_commands_and_bad_inputs;
+    qemu_defmt_log_decodes => defmt_log_decodes;
 }
 
 fn console_commands_and_bad_inputs(img: Image) {
@@ -155,16 +150,6 @@ fn pose_at_a_tension(q: &mut Qemu) {
 
 fn r_list(v: &[f64]) -> Vec<String> {
     v.iter().map(|x| format!("{x:.1}")).collect()
-}
-
-#[test]
-fn qemu_defmt_log_decodes() {
-    defmt_log_decodes(Image::M4f);
-}
-
-#[test]
-fn qemu_defmt_log_decodes_m3() {
-    defmt_log_decodes(Image::M3);
 }
 
 fn defmt_log_decodes(img: Image) {

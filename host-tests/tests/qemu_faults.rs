@@ -7,14 +7,8 @@
 //! modelled: its writes are checked in order, without their values; the guard is below SRAM).
 use host_tests::qemu::{parse_trace, Image, Qemu, TICK_MARKER, TIM4_CCR};
 
-#[test]
-fn every_fault_path_turns_hv_off() {
-    every_fault_path(Image::M4f);
-}
-
-#[test]
-fn every_fault_path_turns_hv_off_m3() {
-    every_fault_path(Image::M3);
+host_tests::on_both_images! {
+    every_fault_path_turns_hv_off => every_fault_path;
 }
 
 fn every_fault_path(img: Image) {

@@ -12,25 +12,8 @@
 //! - right after reset, the first register writes drive the HV pins low (GPIOB clock on first).
 use host_tests::qemu::{duties_per_tick, hv_full_scale, max_step, stop_latencies, Image, Qemu, TIM4_CCR};
 
-/// One `#[test]` per image for each check below.
-macro_rules! on_both_images {
-    ($($name:ident => $check:ident;)*) => {
-        mod m4f {
-            $(#[test]
-            fn $name() {
-                super::$check(super::Image::M4f);
-            })*
-        }
-        mod m3 {
-            $(#[test]
-            fn $name() {
-                super::$check(super::Image::M3);
-            })*
-        }
-    };
-}
-
-on_both_images! {
+// one `#[test]` per image for each check below
+host_tests::on_both_images! {
     duty_step_per_tick_within_slew_while_commands_run => duty_step_within_slew;
     stop_within_one_tick_during_wait_solve_and_help => stop_within_one_tick;
     burst_of_lines_one_reply_each => burst_one_reply_each;

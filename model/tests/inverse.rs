@@ -172,14 +172,15 @@ fn given_tension_gives_back_the_voltages() {
     assert!(inv.tension_given && inv.tension == 1.0);
 }
 
-#[test]
-fn without_stacks_only_consistent_postures() {
-    let f = Finger::new(Params::<f64>::default().without_stacks()).unwrap();
+/// Without stacks, each forward posture at 0.1, 0.7, 2.5 N: its inverse gives back the tension
+/// (and the forward solve at that tension the angles); one joint off by 10 angle tolerances is
+/// unreachable, with one fixed compliance. Returns the inverses.
+fn only_consistent_postures(f: &Finger<f64>) -> Vec<inverse::PoseSolution<f64>> {
+    let mut out = Vec::new();
     for p in [0.1, 0.7, 2.5] {
         let s = f.solve(p, &[0.0; 3], Method::converged()).unwrap();
-        let inv = solve_pose(&f, s.joint_angles(), None).unwrap();
+        let inv = solve_pose(f, s.joint_angles(), None).unwrap();
         assert!((inv.tension - p).abs() < 1e-9 * p.max(1.0), "{} vs {p}", inv.tension);
-        assert_eq!(&inv.volts[..3], &[0.0; 3]);
         let back = f.solve(inv.tension, &[0.0; 3], Method::converged()).unwrap();
         for k in 0..3 {
             assert!((back.joint_angle[k] - s.joint_angle[k]).abs() < 1e-9);
@@ -187,13 +188,23 @@ fn without_stacks_only_consistent_postures() {
         // one joint off by 10 angle tolerances: no tension holds it
         let mut a = s.joint_angles().to_vec();
         a[1] += 10.0 * Options::<f64>::default().angle_tol;
-        match solve_pose(&f, &a, None) {
+        match solve_pose(f, &a, None) {
             Err(Error::Unreachable { needed, min, max, .. }) => {
                 assert_eq!(min, max, "without stacks the compliance is fixed");
                 assert!(needed != min);
             }
             other => panic!("expected unreachable, got {other:?}"),
         }
+        out.push(inv);
+    }
+    out
+}
+
+#[test]
+fn without_stacks_only_consistent_postures() {
+    let f = Finger::new(Params::<f64>::default().without_stacks()).unwrap();
+    for inv in only_consistent_postures(&f) {
+        assert_eq!(&inv.volts[..3], &[0.0; 3]);
     }
 }
 
@@ -298,25 +309,7 @@ fn without_stacks_only_consistent_postures_every_hinge_model() {
     for m in [4, 8] {
         for flex_links in [false, true] {
             let params = Params::<f64> { m, plate: true, flex_links, ..Params::default() }.without_stacks();
-            let f = Finger::new(params).unwrap();
-            for p in [0.1, 0.7, 2.5] {
-                let s = f.solve(p, &[0.0; 3], Method::converged()).unwrap();
-                let inv = solve_pose(&f, s.joint_angles(), None).unwrap();
-                assert!((inv.tension - p).abs() < 1e-9 * p.max(1.0), "{} vs {p}", inv.tension);
-                let back = f.solve(inv.tension, &[0.0; 3], Method::converged()).unwrap();
-                for k in 0..3 {
-                    assert!((back.joint_angle[k] - s.joint_angle[k]).abs() < 1e-9);
-                }
-                let mut a = s.joint_angles().to_vec();
-                a[1] += 10.0 * Options::<f64>::default().angle_tol;
-                match solve_pose(&f, &a, None) {
-                    Err(Error::Unreachable { needed, min, max, .. }) => {
-                        assert_eq!(min, max);
-                        assert!(needed != min);
-                    }
-                    other => panic!("expected unreachable, got {other:?}"),
-                }
-            }
+            only_consistent_postures(&Finger::new(params).unwrap());
         }
     }
 }

@@ -13,11 +13,10 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::hprintln;
 use finger_model::{Calibration, Finger, Method, Params};
 
-#[path = "../cycles.rs"]
-mod cycles;
+use bench::cycles;
 
 /// A forward solve: layers per stack, channel voltages (V), cable tension (N).
 pub struct Case {
@@ -40,13 +39,6 @@ pub const CASES: &[Case] = &[
 pub const MS: &[usize] = &[1, 2, 4, 8];
 /// (plate, flex_links).
 pub const CONFIGS: &[(bool, bool)] = &[(false, false), (true, true)];
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("PANIC {}", info);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {}
-}
 
 fn run(m: usize, plate: bool, flex: bool, cal: bool, case: &Case) {
     let p = Params::<f32> { m, plate, flex_links: flex, layers: case.layers, ..Params::default() };
@@ -100,10 +92,7 @@ fn run(m: usize, plate: bool, flex: bool, cal: bool, case: &Case) {
 
 #[entry]
 fn main() -> ! {
-    let cp = cortex_m::Peripherals::take().unwrap();
-    cycles::start(cp.SYST);
-    let (ticks, overhead) = cycles::calibrate(1_000_000);
-    hprintln!("CAL {} {} {}", 2_000_000u32, ticks, overhead);
+    bench::start!();
     for &(plate, flex) in CONFIGS {
         for &m in MS {
             for case in CASES {
@@ -114,7 +103,5 @@ fn main() -> ! {
     for case in CASES {
         run(8, true, true, true, case);
     }
-    hprintln!("END");
-    debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    bench::end()
 }

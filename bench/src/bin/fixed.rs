@@ -17,23 +17,15 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::hprintln;
 use finger_model::fixed::q::{Nt, Rad};
 use finger_model::fixed::{FixedFinger, FixedInverse, FixedInverseDirect};
 use finger_model::{Finger, Method, Params};
 
-#[path = "../cycles.rs"]
-mod cycles;
+use bench::cycles;
 #[path = "../twin.rs"]
 mod twin;
 use finger_scenes as scenes;
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("PANIC {}", info);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {}
-}
 
 fn run(s: &scenes::Scene, model: &str, p: Params<f64>) {
     let f = match Finger::new(p.cast::<f32>()) {
@@ -176,16 +168,11 @@ fn run_inverse() {
 
 #[entry]
 fn main() -> ! {
-    let cp = cortex_m::Peripherals::take().unwrap();
-    cycles::start(cp.SYST);
-    let (ticks, overhead) = cycles::calibrate(1_000_000);
-    hprintln!("CAL {} {} {}", 2_000_000u32, ticks, overhead);
+    bench::start!();
     for s in scenes::SCENES.iter() {
         run(s, "pinned", scenes::params(s));
         run(s, "default", Params { layers: s.layers, ..Params::default() });
     }
     run_inverse();
-    hprintln!("END");
-    debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    bench::end()
 }

@@ -11,19 +11,11 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::hprintln;
 use finger_model::inverse::{BranchTable, Options};
 use finger_model::{BranchEnd, Finger, Params};
 
-#[path = "../cycles.rs"]
-mod cycles;
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("PANIC {}", info);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {}
-}
+use bench::cycles;
 
 fn run(name: &str, f: &Finger<f32>, table: Option<&BranchTable<f32>>, frac: [f32; 3]) {
     let top = f.voltage_ceiling() * (1.0 - 1e-4);
@@ -52,10 +44,7 @@ fn run(name: &str, f: &Finger<f32>, table: Option<&BranchTable<f32>>, frac: [f32
 
 #[entry]
 fn main() -> ! {
-    let cp = cortex_m::Peripherals::take().unwrap();
-    cycles::start(cp.SYST);
-    let (ticks, overhead) = cycles::calibrate(1_000_000);
-    hprintln!("CAL {} {} {}", 2_000_000u32, ticks, overhead);
+    bench::start!();
     let paper = Params::<f32> { m: 1, plate: false, flex_links: false, ..Params::default() };
     let real = Params::<f32> { m: 8, plate: true, flex_links: true, ..Params::default() };
     let tiny = Params::<f32> { span_floor: 1e-6, ..real };
@@ -82,7 +71,5 @@ fn main() -> ! {
             run(core::str::from_utf8(&buf[..len]).unwrap_or("?"), &f, table.as_ref(), frac);
         }
     }
-    hprintln!("END");
-    debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    bench::end()
 }

@@ -9,19 +9,11 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::{debug, hprintln};
+use cortex_m_semihosting::hprintln;
 use finger_model::inverse::{solve_pose, solve_pose_tabled, BranchTable, Options};
 use finger_model::{Finger, Params};
 
-#[path = "../cycles.rs"]
-mod cycles;
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("PANIC {}", info);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {}
-}
+use bench::cycles;
 
 const DEG: f32 = core::f32::consts::PI / 180.0;
 
@@ -83,17 +75,14 @@ fn main() -> ! {
         Ok(s) => hprintln!("P ok {} {} {} {}", s.tension, s.volts[0], s.volts[1], s.volts[2]),
         Err(e) => hprintln!("P err {}", e.code()),
     }
-    debug::exit(debug::EXIT_SUCCESS);
+    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_SUCCESS);
     loop {}
 }
 
 #[cfg(not(feature = "profile"))]
 #[entry]
 fn main() -> ! {
-    let cp = cortex_m::Peripherals::take().unwrap();
-    cycles::start(cp.SYST);
-    let (ticks, overhead) = cycles::calibrate(1_000_000);
-    hprintln!("CAL {} {} {}", 2_000_000u32, ticks, overhead);
+    bench::start!();
     let paper = Params::<f32> { m: 1, plate: false, flex_links: false, ..Params::default() };
     let real = Params::<f32> { m: 8, plate: true, flex_links: true, ..Params::default() };
     for (cfg, p) in [("m1-rigid", paper), ("m8-plate-flex", real)] {
@@ -124,9 +113,7 @@ fn main() -> ! {
     // a given tension inside the interval of the uniform posture
     run("m1-rigid/10-10-10@1.548N", paper, [10.0; 3], Some(1.548));
     run("m8-plate-flex/10-10-10@1.90N", real, [10.0; 3], Some(1.90));
-    hprintln!("END");
-    debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    bench::end()
 }
 
 /// A tiny fixed-capacity string for case names (no allocation, no extra crate).

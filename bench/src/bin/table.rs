@@ -17,16 +17,8 @@ use cortex_m_semihosting::{debug, hprintln};
 use finger_model::inverse::{solve_pose_tabled, BranchTable, Options};
 use finger_model::{Calibration, Finger, Method, Solution};
 
-#[path = "../cycles.rs"]
-mod cycles;
+use bench::cycles;
 use finger_scenes as scenes;
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo) -> ! {
-    hprintln!("PANIC {}", info);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {}
-}
 
 fn model(m: &scenes::TableModel) -> Result<Finger<f32>, finger_model::Error> {
     let (p, g) = scenes::table_params(m);

@@ -72,6 +72,21 @@ pub fn postures_csv(r: &SceneResult) -> String {
     let mut out = String::from("scene,posture,label,tension_N,source,point,what,x_mm,y_mm\n");
     for (i, p) in r.postures.iter().enumerate() {
         let m = p.solution.m;
+        // one row: what is empty for the reference's points
+        let mut row = |source: &str, j: usize, what: &str, pt: &[f64; 2]| {
+            out.push_str(&format!(
+                "{},{},{},{},{},{},{},{},{}\n",
+                r.scene.name,
+                i + 1,
+                csv_text(&p.label),
+                p.tension,
+                source,
+                j,
+                what,
+                pt[0],
+                pt[1]
+            ))
+        };
         for (j, pt) in p.points.iter().enumerate() {
             let what = if j == 0 {
                 "node 0".to_string()
@@ -80,30 +95,11 @@ pub fn postures_csv(r: &SceneResult) -> String {
                 let r = (j - 1) % (m + 1);
                 if r == m { format!("node {k}") } else if r + 1 == m { format!("hinge {k} end") } else { format!("hinge {k} sub {}", r + 1) }
             };
-            out.push_str(&format!(
-                "{},{},{},{},model,{},{},{},{}\n",
-                r.scene.name,
-                i + 1,
-                csv_text(&p.label),
-                p.tension,
-                j,
-                what,
-                pt[0],
-                pt[1]
-            ));
+            row("model", j, &what, pt);
         }
         if let Some(rf) = &p.reference {
             for (j, pt) in rf.points.iter().enumerate() {
-                out.push_str(&format!(
-                    "{},{},{},{},reference,{},,{},{}\n",
-                    r.scene.name,
-                    i + 1,
-                    csv_text(&p.label),
-                    p.tension,
-                    j,
-                    pt[0],
-                    pt[1]
-                ));
+                row("reference", j, "", pt);
             }
         }
     }

@@ -448,6 +448,17 @@ fn svg_is_well_formed_with_one_polyline_per_posture() {
     }
 }
 
+/// The (x, y) pixel points of an SVG `<polyline ... points="x,y x,y ...">` line.
+fn polyline_points(line: &str) -> Vec<[f64; 2]> {
+    let pts = line.split("points=\"").nth(1).unwrap().split('"').next().unwrap();
+    pts.split(' ')
+        .map(|p| {
+            let mut it = p.split(',').map(|v| v.parse::<f64>().unwrap());
+            [it.next().unwrap(), it.next().unwrap()]
+        })
+        .collect()
+}
+
 #[test]
 fn svg_has_equal_aspect() {
     // the straight finger (0 N) spans n*l mm along x; the plotted polyline must span the same
@@ -455,35 +466,11 @@ fn svg_has_equal_aspect() {
     let r = run_text("[drive]\ntensions = [0, 2]\n").unwrap();
     let svg = finger_scene::svg::plot(&r);
     let line = svg.lines().find(|l| l.contains("class=\"posture\"")).unwrap();
-    let pts: Vec<[f64; 2]> = line
-        .split("points=\"")
-        .nth(1)
-        .unwrap()
-        .split('"')
-        .next()
-        .unwrap()
-        .split(' ')
-        .map(|p| {
-            let mut it = p.split(',').map(|v| v.parse::<f64>().unwrap());
-            [it.next().unwrap(), it.next().unwrap()]
-        })
-        .collect();
+    let pts = polyline_points(line);
     let sx = (pts.last().unwrap()[0] - pts[0][0]) / (3.0 * 27.0);
     // the second posture's tip: its pixel offsets over its mm offsets in x and y agree
     let line2 = svg.lines().filter(|l| l.contains("class=\"posture\"")).nth(1).unwrap();
-    let p2: Vec<[f64; 2]> = line2
-        .split("points=\"")
-        .nth(1)
-        .unwrap()
-        .split('"')
-        .next()
-        .unwrap()
-        .split(' ')
-        .map(|p| {
-            let mut it = p.split(',').map(|v| v.parse::<f64>().unwrap());
-            [it.next().unwrap(), it.next().unwrap()]
-        })
-        .collect();
+    let p2 = polyline_points(line2);
     let tip = r.postures[1].tip();
     let sy = -(p2.last().unwrap()[1] - p2[0][1]) / tip.y;
     let sx2 = (p2.last().unwrap()[0] - p2[0][0]) / tip.x;
