@@ -27,7 +27,7 @@ impl FixedFinger {
     /// `Contact` when the first failing tension met a contact, `LimitPoint` when its Newton
     /// did not converge (past a limit point), `SearchBound` when the bound itself solves.
     pub fn branch_end(&self) -> Result<FixedBranchEnd, Error> {
-        let mut hi = Nt::from_f64(SEARCH_BOUND_N as f64);
+        let mut hi: Nt = super::q::Q(SEARCH_BOUND_N << 22);
         let mut err_hi = match self.solve(hi) {
             Ok(_) => return Ok(FixedBranchEnd { tension: hi, joint: 0, kind: BranchEnd::SearchBound }),
             Err(e) => e,

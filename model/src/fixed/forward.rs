@@ -46,13 +46,21 @@ fn split(x: f64) -> Option<(i64, i32, bool)> {
 }
 
 impl CMat {
-    /// The matrix it scales (entry (i, j) = m[i][j] 2^(F_j - t[i])).
-    fn value(&self) -> [[f64; 3]; 3] {
-        let mut v = [[0f64; 3]; 3];
+    /// The matrix it scales (entry (i, j) = m[i][j] 2^(F_j - t[i])), in `R` (f32 arithmetic
+    /// when `R` is f32: no soft-float f64 on the M3).
+    fn value<R: Real>(&self) -> [[R; 3]; 3] {
+        let mut v = [[R::zero(); 3]; 3];
         for i in 0..3 {
             for (j, fr) in W_FRAC.iter().enumerate() {
-                // 2^(F_j - t): |F_j - t| stays well inside f64's exponent range
-                v[i][j] = self.m[i][j] as f64 * f64::from_bits(((1023 + fr - self.t[i]) as u64) << 52);
+                let e = fr - self.t[i];
+                v[i][j] = if R::EPS > 1e-10 {
+                    // 2^e as two powers of two in f32's exponent range (|e| <= 252)
+                    let pow2 = |k: i32| f32::from_bits(((127 + k.clamp(-126, 127)) as u32) << 23);
+                    R::from_f64((self.m[i][j] as f32 * pow2(e / 2) * pow2(e - e / 2)) as f64)
+                } else {
+                    // 2^(F_j - t): |F_j - t| stays well inside f64's exponent range
+                    R::from_f64(self.m[i][j] as f64 * f64::from_bits(((1023 + e) as u64) << 52))
+                };
             }
         }
         v
@@ -224,7 +232,7 @@ impl FixedFinger {
         let hinge_len = p.hinge_len();
         let link_len = p.l - hinge_len;
         self.link_c = if p.flex_links { Some(cmat(&uniform_beam_compliance(p.hinge_modulus(), p.w, p.b, link_len))) } else { None };
-        let mm = |x: R| Mm::from_f64(x.to_f64());
+        let mm = |x: R| Mm::from_real(x);
         self.m = m;
         self.e = mm(p.e);
         self.span_floor = mm(p.span_floor);
@@ -400,7 +408,7 @@ impl FixedFinger {
                 continue;
             }
             let (end, hole) = self.joint(&self.c[k], tension, None, &mut iterations).map_err(|e| match e {
-                MarchError::Contact => Error::Contact { joint: k + 1, tension: tension.to_f64() },
+                MarchError::Contact => Error::Contact { joint: k + 1, tension: tension.to_report() },
                 MarchError::Singular => Error::NotConverged { iterations, residual: f64::INFINITY },
             })?;
             ends[k] = end;
@@ -417,7 +425,7 @@ impl FixedFinger {
             joint_angle[k] = e.theta + link_q.2;
             let span = hypot(holes[k][0], holes[k][1] - self.e);
             if span < self.span_floor {
-                return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() });
+                return Err(Error::Contact { joint: k + 1, tension: tension.to_report() });
             }
             excursion = excursion + (self.hinge_len - span);
         }
@@ -452,27 +460,10 @@ impl FixedFinger {
         if n != f.params().n || self.m != f.params().m || n != self.n {
             return Err(Error::Input { input: "solution", reason: "solved for other parameters" });
         }
-        let r = |x: f64| R::from_f64(x);
-        let pose = |p: &FixedPose| Pose { x: r(p.x.to_f64()), y: r(p.y.to_f64()), theta: r(p.theta.to_f64()) };
-        let mut s = Solution {
-            n,
-            m: self.m,
-            tension: r(sol.tension.to_f64()),
-            tip_force: [R::zero(); 2],
-            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
-            links: [[R::zero(); 3]; MAX_JOINTS],
-            joint_angle: [R::zero(); MAX_JOINTS],
-            nodes: [Pose::origin(); MAX_JOINTS + 1],
-            span: [R::zero(); MAX_JOINTS],
-            thickness: [R::zero(); MAX_JOINTS],
-            volts: [R::zero(); MAX_JOINTS],
-            cable_excursion: R::zero(),
-            iterations: sol.iterations,
-            residual: R::zero(),
-            tangent_det: [R::one(); MAX_JOINTS],
-        };
+        let pose = |p: &FixedPose| Pose { x: p.x.to_real(), y: p.y.to_real(), theta: p.theta.to_real() };
+        let mut s = Solution { n, m: self.m, tension: sol.tension.to_real(), iterations: sol.iterations, ..Solution::empty() };
         let mut c = Compliances { n, m: self.m, c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS], thickness: [R::zero(); MAX_JOINTS], volts: [R::zero(); MAX_JOINTS] };
-        let sub_len = r(self.sub_len.to_f64());
+        let sub_len: R = self.sub_len.to_real();
         for k in 0..n {
             let ends = self.sub_element_ends(sol, k)?;
             let mut from: Pose<R> = Pose::origin();
@@ -482,7 +473,7 @@ impl FixedFinger {
                 let (sn, cs) = from.theta.sin_cos();
                 let (dx, dy) = (to.x - from.x, to.y - from.y);
                 s.q[k][j] = [cs * dx + sn * dy - sub_len, cs * dy - sn * dx, to.theta - from.theta];
-                c.c[k][j] = self.c[k][j].value().map(|row| row.map(r));
+                c.c[k][j] = self.c[k][j].value();
                 from = to;
             }
         }

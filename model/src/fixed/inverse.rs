@@ -87,7 +87,7 @@ impl FixedInverse {
                 }
             }
         }
-        let mm = |x: R| Mm::from_f64(x.to_f64());
+        let mm = |x: R| Mm::from_real(x);
         Ok(FixedInverse { fwd, table, t_rest: mm(t_rest), t_ceiling: mm(t_ceiling) })
     }
 
@@ -134,7 +134,7 @@ fn volts_of<R: Real>(f: &Finger<R>, t_rest: Mm, sol: &FixedPoseSolution) -> Resu
     let p = f.params();
     let mut v = [R::zero(); MAX_JOINTS];
     for (k, (vk, tk)) in v.iter_mut().zip(&sol.thickness).enumerate().take(sol.n) {
-        *vk = if tk.0 >= t_rest.0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, R::from_f64(tk.to_f64()))? };
+        *vk = if tk.0 >= t_rest.0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, tk.to_real())? };
     }
     Ok(v)
 }
@@ -166,7 +166,7 @@ impl<'a, R: Real> FixedInverseDirect<'a, R> {
             return Err(Error::Input { input: "fwd", reason: "prepared for other parameters" });
         }
         let (t_rest, t_ceiling) = (f.stack_thickness(R::zero())?, f.stack_thickness(vmax * R::from_f64(1.0 - 1e-6))?);
-        let mm = |x: R| Mm::from_f64(x.to_f64());
+        let mm = |x: R| Mm::from_real(x);
         Ok(FixedInverseDirect { f, fwd, t_rest: mm(t_rest), t_ceiling: mm(t_ceiling), t_rest_r: t_rest, t_ceiling_r: t_ceiling })
     }
 
@@ -174,7 +174,7 @@ impl<'a, R: Real> FixedInverseDirect<'a, R> {
     fn at(&self, u: i64) -> Result<[CMat; MAX_SUB], Error> {
         let last = ((NODES - 1) as i64) << 16;
         let u = u.clamp(0, last);
-        let frac = R::from_f64(u as f64 / last as f64);
+        let frac = R::from_u32(u as u32) / R::from_u32(last as u32);
         let t = (self.t_rest_r - (self.t_rest_r - self.t_ceiling_r) * frac).max(self.t_ceiling_r);
         let k_de = self.f.stack_stiffness(t);
         let mut o = [CMat::default(); MAX_SUB];
@@ -238,8 +238,8 @@ fn solve_by(fwd: &FixedFinger, t_rest: Mm, t_ceiling: Mm, at: impl Fn(i64) -> Re
                 continue;
             }
             if ga > 0 || gb < 0 {
-                let unit = |x: i64| (x + target.0 as i64) as f64 / (1u64 << 28) as f64 + link.to_f64();
-                return Err(Error::Unreachable { joint: k + 1, needed: angles[k].to_f64(), min: unit(ga), max: unit(gb) });
+                let unit = |x: i64| (Rad::from_raw_sat(x + target.0 as i64) + link).to_report();
+                return Err(Error::Unreachable { joint: k + 1, needed: angles[k].to_report(), min: unit(ga), max: unit(gb) });
             }
             let mut u = a;
             let mut side = 0i32;
