@@ -130,7 +130,8 @@ fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
 /// The M3 image's `pose` (the fixed-point inverse at the given tension), armed: at a posture
 /// of the host's f64 model (the board's calibration, read with `cal`), the voltages it answers
 /// hold that posture in the f64 model within the inverse's round-trip target (0.05 deg, issue
-/// 14); they are the setpoints afterwards; past the stacks, `unreachable`; no tension, `usage`.
+/// 14); they are the setpoints afterwards; past the stacks, `unreachable`. Without a tension:
+/// the F405's rule.
 fn pose_at_a_tension(q: &mut Qemu) {
     let f = board_finger(q);
     let p = 0.8;
@@ -150,7 +151,22 @@ fn pose_at_a_tension(q: &mut Qemu) {
     let st = expect(q, "status", "ok armed=1 force=0.800 ");
     assert!(st.contains(&format!(" target={},{},{}", r_list(&volts)[0], r_list(&volts)[1], r_list(&volts)[2])), "{st} vs {r}");
     expect(q, "pose 20 5 5 0.8", "err unreachable:");
-    expect(q, "pose 10 10 10", "err usage:");
+    // without P: the F405's tension rule (the midpoint of the tensions that hold the posture)
+    // as the host's f64 inverse picks it, within 1e-4 relative (the fixed-point joint angles'
+    // error over dθ/dP, and the reply's 4 decimals); its range too; the answer holds the posture
+    let want = finger_model::inverse::solve_pose(&f, &deg.map(f64::to_radians), None).unwrap();
+    let r = expect(q, &format!("pose {} {} {}", deg[0], deg[1], deg[2]), "ok force=");
+    let (force, range) = (field(&r, "force=")[0], field(&r, "range="));
+    assert!((force - want.tension).abs() < 1e-4 * want.tension + 1e-4, "{r} vs the f64 rule's {}", want.tension);
+    for e in 0..2 {
+        assert!((range[e] - want.interval[e]).abs() < 1e-4 * want.interval[e] + 1e-4, "{r} vs {:?}", want.interval);
+    }
+    let back = f.solve(force, &field(&r, "volts="), finger_model::Method::converged()).unwrap();
+    for k in 0..3 {
+        assert!((back.joint_angle[k].to_degrees() - deg[k]).abs() < 0.05, "joint {}: {r}", k + 1);
+    }
+    expect(q, "status", &format!("ok armed=1 force={force:.3} "));
+    expect(q, "pose 20 5 5", "err unreachable:");
 }
 
 fn r_list(v: &[f64]) -> Vec<String> {
