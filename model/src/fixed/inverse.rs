@@ -504,7 +504,7 @@ mod tests {
             let want = f.solve(p, &v, Method::converged()).unwrap();
             let ang = [want.joint_angle[0], want.joint_angle[1], want.joint_angle[2]];
             let fl = crate::inverse::solve_pose(&f, &ang, None).unwrap();
-            let (sol, interval) = inv.solve_free(&ang.map(Rad::from_f64), &mut Nt::ZERO).unwrap();
+            let (sol, interval) = inv.solve_free(&ang.map(Rad::from_f64), &mut Q(0)).unwrap();
             let rel = |a: Nt, b: f64| (a.to_f64() - b).abs() / b;
             worst_p = worst_p.max(rel(sol.tension, fl.tension)).max(rel(interval[0], fl.interval[0])).max(rel(interval[1], fl.interval[1]));
             assert!(fl.interval[0] <= p * (1.0 + 1e-9) && p <= fl.interval[1] * (1.0 + 1e-9), "{p} {v:?}: f64 {} {:?} fixed {} {:?}", fl.tension, fl.interval, sol.tension.to_f64(), [interval[0].to_f64(), interval[1].to_f64()]);
@@ -518,9 +518,9 @@ mod tests {
         assert!(worst_deg < 0.05, "{worst_deg}");
         // no tension holds it: refused, naming a joint; the straight finger: 0 N, 0 V
         let a = [Rad::from_f64(0.02), Rad::from_f64(0.02), Rad::from_f64(0.6)];
-        assert!(matches!(inv.solve_free(&a, &mut Nt::ZERO), Err(Error::Unreachable { .. })));
-        assert!(matches!(inv.solve_free(&[Rad::from_f64(-0.1), Rad::from_f64(0.1), Rad::from_f64(0.1)], &mut Nt::ZERO), Err(Error::Unreachable { joint: 1, .. })));
-        let (z, _) = inv.solve_free(&[Rad::ZERO; 3], &mut Nt::ZERO).unwrap();
+        assert!(matches!(inv.solve_free(&a, &mut Q(0)), Err(Error::Unreachable { .. })));
+        assert!(matches!(inv.solve_free(&[Rad::from_f64(-0.1), Rad::from_f64(0.1), Rad::from_f64(0.1)], &mut Q(0)), Err(Error::Unreachable { joint: 1, .. })));
+        let (z, _) = inv.solve_free(&[Rad::ZERO; 3], &mut Q(0)).unwrap();
         assert_eq!(z.tension, Nt::ZERO);
         assert_eq!(inv.volts(&z).unwrap()[..3], [0.0; 3]);
     }
