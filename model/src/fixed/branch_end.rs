@@ -1,8 +1,8 @@
 //! The end of the equilibrium branch under tension alone in fixed point (the firmware's fmax
-//! on the Cortex-M3 image): bisection on the tension with the converged solve of
-//! [`FixedFinger`], which follows the branch from 0 N by load continuation and is a typed
-//! error past its end. Not the float model's `Finger::fmax` (branch tracking to the limit
-//! point): the tension returned is the largest one the fixed-point solve was seen to hold.
+//! on the Cortex-M3 image): each distinct joint's branch followed from 0 N in tension
+//! (`FixedFinger::follow_branch`) to the refusal that ends it, the lowest end a margin below,
+//! checked by the whole solve. Not the float model's `Finger::fmax` (its span and tangent
+//! secants): the tension returned is one the fixed-point branch was seen to hold.
 use super::forward::{FixedFinger, MarchError};
 use super::q::{Nt, Q};
 use crate::error::Error;
@@ -12,7 +12,7 @@ use crate::finger::BranchEnd;
 pub const SEARCH_BOUND_N: i32 = 448;
 /// The end returned is below the last tension held by 2^-12 (2.4e-4) of it.
 const MARGIN_SHIFT: u32 = 12;
-/// Bisection stop: the bracket within 2^-14 of its upper end (relative 6e-5).
+/// Stop: the branch's step, and the fallback bisection's bracket, within 2^-14 of its upper end (relative 6e-5).
 const REL_SHIFT: u32 = 14;
 
 /// Where the branch ends: the tension (N, Q22), the joint (1-based; 0 when the solve's error
