@@ -267,6 +267,27 @@ fn main() {
     q.finish();
     let stack = prev;
 
+    // fmax (host): the fixed-point branch end against the f64 model's, and whether the f64
+    // converged solve holds there (the safe side)
+    let mut fm = String::new();
+    let _ = writeln!(fm, "| model | voltages (V) | f64 `Finger::fmax` (N) | fixed `branch_end` (N) | fixed / f64 - 1 | f64 solve holds at the fixed end |");
+    let _ = writeln!(fm, "| --- | --- | ---: | ---: | ---: | --- |");
+    let board_cal = finger_model::Calibration::for_params(&Params::<f64>::default());
+    let models: [(&str, Finger<f64>); 4] = [
+        ("default, the board's calibration", Finger::with_calibration(Params::<f64>::default(), board_cal).unwrap()),
+        ("default", Finger::new(Params::<f64>::default()).unwrap()),
+        ("m = 1 (the paper's hinge)", Finger::new(Params { m: 1, plate: false, flex_links: false, ..Params::default() }).unwrap()),
+        ("`preset paper`", Finger::new(Params::<f64>::paper()).unwrap()),
+    ];
+    for (name, f) in &models {
+        for v in [[0.0; 3], [8000.0; 3], [0.0, 4000.0, 9000.0]] {
+            let (Ok(want), Ok(got)) = (f.fmax(&v), finger_model::fixed::FixedFinger::new(f, &v).and_then(|ff| ff.branch_end())) else { continue };
+            let t = got.tension.to_f64();
+            let holds = if f.solve(t, &v, Method::converged()).is_ok() { "yes" } else { "no" };
+            let _ = writeln!(fm, "| {name} | {v:?} | {:.4} ({:?}) | {t:.4} ({:?}) | {:+.1e} | {holds} |", want.tension, want.kind, got.kind, t / want.tension - 1.0);
+        }
+    }
+
     let mut m = String::new();
     let _ = writeln!(m, "QEMU mps2-an385 (Cortex-M3, no FPU), `-icount shift=4`, instructions from SysTick calibrated on a");
     let _ = writeln!(m, "loop of known length (bench/src/cycles.rs). f32: the model's converged forward solve in soft float");
@@ -286,6 +307,8 @@ fn main() {
     m.push_str(&t);
     let _ = writeln!(m, "\nThe inverse on the M3 (default model, stacks): the postures of forward solves at (P, V); each answer's voltages through the host's f64 forward (at P, or without P at the tension the rule chose). The fixed-point inverse's set-up (its compliance table, in f32, once per parameter change): {inv_setup:.0} instructions.\n");
     m.push_str(&it);
+    let _ = writeln!(m, "\nfmax on the host (the M3 image's `limits`: `FixedFinger::branch_end`, each joint's branch followed in fixed point, 2^-12 below its end) against the f64 model's:\n");
+    m.push_str(&fm);
     if !refusals.is_empty() {
         let _ = writeln!(m, "\nRefused (typed errors, no numbers): {}.", refusals.join("; "));
     }
