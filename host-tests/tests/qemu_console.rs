@@ -37,6 +37,7 @@ fn console_commands_and_bad_inputs(img: Image) {
     assert!(s.contains(" fault=none") && s.contains(" enable=0"), "{s}");
     expect(&mut q, "limits", "ok vmax=10000.0,10000.0,10000.0 vpullin=");
     solve_stiffness(&mut q);
+    fmax_against_f64(&mut q, img);
     // bad inputs
     expect(&mut q, "frobnicate", "err unknown:");
     expect(&mut q, "solve nan 0 0 0", "err bad-number:");
@@ -116,6 +117,20 @@ fn solve_stiffness(q: &mut Qemu) {
     let k: Vec<f64> = r.split_whitespace().find_map(|w| w.strip_prefix("stiffness=")).unwrap().split(',').map(|x| x.parse().unwrap()).collect();
     for i in 0..3 {
         assert!(((k[i] - want[i][i]) / want[i][i]).abs() < 5e-4, "k{i}{i}: {} vs the f64 model's {} ({r})", k[i], want[i][i]);
+    }
+}
+
+/// `limits`' fmax against the host's f64 model of the board's finger (0 V): the F405's (f32
+/// branch tracking) within 1e-3 of it; the M3's (the fixed-point branch end) below it and
+/// within 0.1 % (docs/fixed-point.md).
+fn fmax_against_f64(q: &mut Qemu, img: Image) {
+    let want = board_finger(q).fmax(&[0.0; 3]).unwrap().tension;
+    let r = expect(q, "limits", "ok vmax=");
+    let got: f64 = r.split_whitespace().find_map(|w| w.strip_prefix("fmax=")).unwrap().parse().unwrap();
+    let rel = got / want - 1.0;
+    match img {
+        Image::M3 => assert!(rel <= 0.0 && rel >= -1e-3, "M3 fmax {got} vs the f64 model's {want} ({r})"),
+        _ => assert!(rel.abs() <= 1e-3, "fmax {got} vs the f64 model's {want} ({r})"),
     }
 }
 
