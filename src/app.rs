@@ -1045,7 +1045,7 @@ const HELP: &[&str] = &[
     "volt <1|2|3|all> <V> - HV channel setpoint, slewed; needs arm",
     "force <P> - cable tension (servo); needs arm",
     #[cfg(m3)]
-    "pose <d1> <d2> <d3> <P> - inverse at tension P (fixed point): voltages for these joint angles (deg); moves only when armed",
+    "pose <d1> <d2> <d3> [<P>] - inverse (fixed point): tension and voltages for these joint angles (deg); moves only when armed",
     #[cfg(feature = "pose")]
     "pose <d1> <d2> <d3> [<P>] - inverse: tension and voltages for these joint angles (deg); moves only when armed",
     #[cfg(feature = "contact")]

@@ -34,6 +34,7 @@ fn main() {
     let mut lines: BTreeMap<(usize, String, String), Line> = BTreeMap::new();
     // `I pose<i> <scalar> ok|err <ticks> <setup> <V1> <V2> <V3>|<code>`
     let mut inv_lines: BTreeMap<(usize, String), (f64, f64, Result<[f64; 3], String>)> = BTreeMap::new();
+    let mut free_tension: BTreeMap<usize, f64> = BTreeMap::new();
     let order: Vec<&str> = scenes::SCENES.iter().map(|s| s.name).collect();
     for l in out.lines() {
         let f: Vec<&str> = l.split_whitespace().collect();
@@ -54,6 +55,10 @@ fn main() {
                 let num = |i: usize| f[i].parse::<f64>().unwrap();
                 let i: usize = f[1].trim_start_matches("pose").parse().unwrap();
                 let r = if f[3] == "ok" { Ok([num(6), num(7), num(8)]) } else { Err(f[6].to_string()) };
+                // `free` (the tension rule): the tension it chose
+                if f[2] == "free" && f[3] == "ok" {
+                    free_tension.insert(i, num(9));
+                }
                 inv_lines.insert((i, f[2].to_string()), (((num(4) - overhead) / tpi).max(0.0), ((num(5) - overhead) / tpi).max(0.0), r));
             }
             Some(&"PANIC") => panic!("bench image: {l}"),
@@ -174,18 +179,38 @@ fn main() {
     // the inverse on the M3: each answer's round trip through the f64 forward
     const POSES: &[(f64, [f64; 3])] = &[(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])];
     let mut it = String::new();
-    let _ = writeln!(it, "| posture of (P, V) | fixed instr | fixed, no table (firmware) instr | f32 `solve_pose` instr | f32 / fixed | round trip fixed (deg) | round trip no table (deg) | round trip f32 (deg) |");
-    let _ = writeln!(it, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let _ = writeln!(it, "| posture of (P, V) | fixed instr | fixed, no table (firmware) instr | f32 `solve_pose` instr | f32 / fixed | round trip fixed (deg) | round trip no table (deg) | round trip f32 (deg) | no P (tension rule, firmware) instr | its tension vs the f64 rule's (relative) | round trip no P (deg) |");
+    let _ = writeln!(it, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let (mut free_worst_p, mut free_worst_deg, mut free_max_instr, mut free_n) = (0f64, 0f64, 0f64, 0);
     let (mut inv_worst, mut inv_n, mut inv_setup) = (0f64, 0, 0f64);
     let (mut dir_worst, mut dir_max_instr) = (0f64, 0f64);
     for (i, (p, v)) in POSES.iter().enumerate() {
         let want = f.solve(*p, v, Method::converged()).unwrap();
-        let trip = |r: &Result<[f64; 3], String>| -> Result<f64, String> {
+        let trip_at = |r: &Result<[f64; 3], String>, p: f64| -> Result<f64, String> {
             let vs = r.clone()?;
-            let back = f.solve(*p, &vs, Method::converged()).map_err(|e| e.code().to_string())?;
+            let back = f.solve(p, &vs, Method::converged()).map_err(|e| e.code().to_string())?;
             Ok((0..3).map(|k| (back.joint_angle[k] - want.joint_angle[k]).abs().to_degrees()).fold(0.0, f64::max))
         };
+        let trip = |r: &Result<[f64; 3], String>| trip_at(r, *p);
         let (Some(a), Some(b)) = (inv_lines.get(&(i, "fixed".into())), inv_lines.get(&(i, "f32".into()))) else { continue };
+        // without P: the chosen tension against the f64 inverse's rule, the round trip at it
+        let rule = finger_model::solve_pose(&f, &want.joint_angle[..3], None).map(|s| s.tension).map_err(|e| e.code().to_string());
+        let fr = inv_lines.get(&(i, "free".into()));
+        let (free_instr, free_rel, free_trip) = match (fr, free_tension.get(&i), &rule) {
+            (Some(fr), Some(&pt), Ok(want_p)) => {
+                let rel = (pt - want_p).abs() / want_p;
+                let trip = trip_at(&fr.2, pt);
+                free_worst_p = free_worst_p.max(rel);
+                free_max_instr = free_max_instr.max(fr.0);
+                if let Ok(e) = trip {
+                    free_worst_deg = free_worst_deg.max(e);
+                    free_n += 1;
+                }
+                (format!("{:.0}", fr.0), format!("{rel:.1e}"), trip)
+            }
+            (Some(fr), _, _) => (format!("{:.0}", fr.0), "-".to_string(), fr.2.clone().map(|_| 0.0)),
+            _ => ("-".to_string(), "-".to_string(), Err("-".to_string())),
+        };
         let (ta, tb) = (trip(&a.2), trip(&b.2));
         if let Ok(e) = ta {
             inv_worst = inv_worst.max(e);
@@ -204,7 +229,7 @@ fn main() {
         };
         let dn = d.map_or("-".to_string(), |d| format!("{:.0}", d.0));
         let dt = td.map_or("-".to_string(), |t| show(&t));
-        let _ = writeln!(it, "| {p} N, {:?} V | {:.0} | {dn} | {:.0} | {:.2} | {} | {dt} | {} |", v, a.0, b.0, b.0 / a.0, show(&ta), show(&tb));
+        let _ = writeln!(it, "| {p} N, {:?} V | {:.0} | {dn} | {:.0} | {:.2} | {} | {dt} | {} | {free_instr} | {free_rel} | {} |", v, a.0, b.0, b.0 / a.0, show(&ta), show(&tb), show(&free_trip));
     }
 
     // the Cortex-M3 firmware image
@@ -227,9 +252,10 @@ fn main() {
     let board = Finger::with_calibration(Params::<f64>::default(), cal).unwrap();
     let ps = board.solve(0.8, &[1000.0, 3000.0, 5000.0], Method::converged()).unwrap();
     let pose_cmd = format!("pose {:.6} {:.6} {:.6} 0.8", ps.joint_angle[0].to_degrees(), ps.joint_angle[1].to_degrees(), ps.joint_angle[2].to_degrees());
+    let pose_free = format!("pose {:.6} {:.6} {:.6}", ps.joint_angle[0].to_degrees(), ps.joint_angle[1].to_degrees(), ps.joint_angle[2].to_degrees());
     let mut worst_stack: Vec<(String, u64)> = Vec::new();
     let mut prev = 0;
-    for c in ["version", "status", "limits", "help", "param", "solve 0.5 0 1000 2000", "solve 1 0 9000 9000", "solve 7 0 0 0", "arm", "volt all 1000", "wait 0.6", "force 0.5", "force 2", "volt 1 9000", "wait 5", "status", pose_cmd.as_str(), "wait 5", "status", "stop", "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "solve 1 0 5000 0", "preset paper", "solve 1 0 1000 1000"] {
+    for c in ["version", "status", "limits", "help", "param", "solve 0.5 0 1000 2000", "solve 1 0 9000 9000", "solve 7 0 0 0", "arm", "volt all 1000", "wait 0.6", "force 0.5", "force 2", "volt 1 9000", "wait 5", "status", pose_cmd.as_str(), "wait 5", "status", pose_free.as_str(), "wait 5", "status", "stop", "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "solve 1 0 5000 0", "preset paper", "solve 1 0 1000 1000", "limits"] {
         let r = q.cmd(c);
         assert!(r.starts_with("ok"), "{c}: {r}");
         let hw = q.stack_high_water(0x2000_0000, 0x2000_4000);
@@ -240,6 +266,27 @@ fn main() {
     }
     q.finish();
     let stack = prev;
+
+    // fmax (host): the fixed-point branch end against the f64 model's, and whether the f64
+    // converged solve holds there (the safe side)
+    let mut fm = String::new();
+    let _ = writeln!(fm, "| model | voltages (V) | f64 `Finger::fmax` (N) | fixed `branch_end` (N) | fixed / f64 - 1 | f64 solve holds at the fixed end |");
+    let _ = writeln!(fm, "| --- | --- | ---: | ---: | ---: | --- |");
+    let board_cal = finger_model::Calibration::for_params(&Params::<f64>::default());
+    let models: [(&str, Finger<f64>); 4] = [
+        ("default, the board's calibration", Finger::with_calibration(Params::<f64>::default(), board_cal).unwrap()),
+        ("default", Finger::new(Params::<f64>::default()).unwrap()),
+        ("m = 1 (the paper's hinge)", Finger::new(Params { m: 1, plate: false, flex_links: false, ..Params::default() }).unwrap()),
+        ("`preset paper`", Finger::new(Params::<f64>::paper()).unwrap()),
+    ];
+    for (name, f) in &models {
+        for v in [[0.0; 3], [8000.0; 3], [0.0, 4000.0, 9000.0]] {
+            let (Ok(want), Ok(got)) = (f.fmax(&v), finger_model::fixed::FixedFinger::new(f, &v).and_then(|ff| ff.branch_end())) else { continue };
+            let t = got.tension.to_f64();
+            let holds = if f.solve(t, &v, Method::converged()).is_ok() { "yes" } else { "no" };
+            let _ = writeln!(fm, "| {name} | {v:?} | {:.4} ({:?}) | {t:.4} ({:?}) | {:+.1e} | {holds} |", want.tension, want.kind, got.kind, t / want.tension - 1.0);
+        }
+    }
 
     let mut m = String::new();
     let _ = writeln!(m, "QEMU mps2-an385 (Cortex-M3, no FPU), `-icount shift=4`, instructions from SysTick calibrated on a");
@@ -253,13 +300,15 @@ fn main() {
     let _ = writeln!(m, "| forward tip within 1e-3 mm of f64, every bench scene, default model | worst {worst_tip_default:.1e} mm (all models: {worst_tip:.1e} mm) |");
     let _ = writeln!(m, "| >= 3x fewer M3 instructions than soft-float f32 running the same algorithm | same algorithm in f32 (bench/src/twin.rs) / fixed: min {smin:.2}, median {smed:.2}; default model min {dmin:.2} |");
     let _ = writeln!(m, "| (against the model's own f32 solve, the firmware's) | f32 `Finger::solve_with` / fixed: min {rmin:.2}, median {rmed:.2} |");
-    let _ = writeln!(m, "| inverse round trip within 0.05 deg | the fixed-point inverse at a given tension (`FixedInverse`, on the M3) through the f64 forward: worst {inv_worst:.1e} deg over {inv_n} postures (table below); without the table (`FixedInverseDirect`, the M3 image's `pose`): worst {dir_worst:.1e} deg, at most {dir_max_instr:.0} instructions with its set-up; the f64 inverse through the fixed-point forward (host): worst {rt_worst:.1e} deg over {rt_n} postures ({rt_refused} refused) |");
+    let _ = writeln!(m, "| inverse round trip within 0.05 deg | the fixed-point inverse at a given tension (`FixedInverse`, on the M3) through the f64 forward: worst {inv_worst:.1e} deg over {inv_n} postures (table below); without the table (`FixedInverseDirect`, the M3 image's `pose`): worst {dir_worst:.1e} deg, at most {dir_max_instr:.0} instructions with its set-up; the f64 inverse through the fixed-point forward (host): worst {rt_worst:.1e} deg over {rt_n} postures ({rt_refused} refused); `pose` without P (the F405's tension rule in fixed point, `FixedInverseDirect::solve_free`): its tension within {free_worst_p:.1e} (relative) of the f64 rule's, round trip worst {free_worst_deg:.1e} deg over {free_n} postures, at most {free_max_instr:.0} instructions |");
     let _ = writeln!(m, "| image with console and `pose` in 64 KiB flash / 20 KiB RAM | M3 image (console, DE, defmt, `pose`; the fixed-point model): flash {flash} bytes ({:.1} KiB); static RAM {ram} bytes + the 16 KiB stack = {:.1} KiB (memory-m3.x: 20 KiB; docs/firmware.md \"Cortex-M3 image\"); stack high-water {stack} bytes ({:.1} KiB) |", flash as f64 / 1024.0, (ram + 16 * 1024) as f64 / 1024.0, stack as f64 / 1024.0);
     let _ = writeln!(m, "\nWorst fixed-point errors, all scenes both models: joint angle {worst_joint:.1e} deg, cable excursion {worst_exc:.1e} mm.\n");
     let _ = writeln!(m, "The M3 image's stack, painted at reset and read back through QEMU's monitor after each console command (the commands that deepened it, and how deep): {}.\n", worst_stack.iter().map(|(c, b)| format!("`{c}` {b} bytes")).collect::<Vec<_>>().join(", "));
     m.push_str(&t);
-    let _ = writeln!(m, "\nThe inverse at a given tension on the M3 (default model, stacks): the postures of forward solves at (P, V); each answer's voltages through the host's f64 forward. The fixed-point inverse's set-up (its compliance table, in f32, once per parameter change): {inv_setup:.0} instructions.\n");
+    let _ = writeln!(m, "\nThe inverse on the M3 (default model, stacks): the postures of forward solves at (P, V); each answer's voltages through the host's f64 forward (at P, or without P at the tension the rule chose). The fixed-point inverse's set-up (its compliance table, in f32, once per parameter change): {inv_setup:.0} instructions.\n");
     m.push_str(&it);
+    let _ = writeln!(m, "\nfmax on the host (the M3 image's `limits`: `FixedFinger::branch_end`, each joint's branch followed in fixed point, 2^-12 below its end) against the f64 model's:\n");
+    m.push_str(&fm);
     if !refusals.is_empty() {
         let _ = writeln!(m, "\nRefused (typed errors, no numbers): {}.", refusals.join("; "));
     }

@@ -32,6 +32,7 @@ fn console_commands_and_bad_inputs(img: Image) {
     assert!(s.contains(" fault=none") && s.contains(" enable=0"), "{s}");
     expect(&mut q, "limits", "ok vmax=10000.0,10000.0,10000.0 vpullin=");
     solve_stiffness(&mut q);
+    fmax_against_f64(&mut q, img);
     // bad inputs
     expect(&mut q, "frobnicate", "err unknown:");
     expect(&mut q, "solve nan 0 0 0", "err bad-number:");
@@ -114,6 +115,20 @@ fn solve_stiffness(q: &mut Qemu) {
     }
 }
 
+/// `limits`' fmax against the host's f64 model of the board's finger (0 V): the F405's (f32
+/// branch tracking) within 1e-3 of it; the M3's (the fixed-point branch end) below it and
+/// within 0.1 % (docs/fixed-point.md).
+fn fmax_against_f64(q: &mut Qemu, img: Image) {
+    let want = board_finger(q).fmax(&[0.0; 3]).unwrap().tension;
+    let r = expect(q, "limits", "ok vmax=");
+    let got: f64 = r.split_whitespace().find_map(|w| w.strip_prefix("fmax=")).unwrap().parse().unwrap();
+    let rel = got / want - 1.0;
+    match img {
+        Image::M3 => assert!(rel <= 0.0 && rel >= -1e-3, "M3 fmax {got} vs the f64 model's {want} ({r})"),
+        _ => assert!(rel.abs() <= 1e-3, "fmax {got} vs the f64 model's {want} ({r})"),
+    }
+}
+
 /// The host's f64 model of the board's finger: default parameters, the board's calibration.
 fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
     let c = expect(q, "cal", "ok cal=");
@@ -125,7 +140,8 @@ fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
 /// The M3 image's `pose` (the fixed-point inverse at the given tension), armed: at a posture
 /// of the host's f64 model (the board's calibration, read with `cal`), the voltages it answers
 /// hold that posture in the f64 model within the inverse's round-trip target (0.05 deg, issue
-/// 14); they are the setpoints afterwards; past the stacks, `unreachable`; no tension, `usage`.
+/// 14); they are the setpoints afterwards; past the stacks, `unreachable`. Without a tension:
+/// the F405's rule.
 fn pose_at_a_tension(q: &mut Qemu) {
     let f = board_finger(q);
     let p = 0.8;
@@ -145,7 +161,22 @@ fn pose_at_a_tension(q: &mut Qemu) {
     let st = expect(q, "status", "ok armed=1 force=0.800 ");
     assert!(st.contains(&format!(" target={},{},{}", r_list(&volts)[0], r_list(&volts)[1], r_list(&volts)[2])), "{st} vs {r}");
     expect(q, "pose 20 5 5 0.8", "err unreachable:");
-    expect(q, "pose 10 10 10", "err usage:");
+    // without P: the F405's tension rule (the midpoint of the tensions that hold the posture)
+    // as the host's f64 inverse picks it, within 1e-4 relative (the fixed-point joint angles'
+    // error over dθ/dP, and the reply's 4 decimals); its range too; the answer holds the posture
+    let want = finger_model::inverse::solve_pose(&f, &deg.map(f64::to_radians), None).unwrap();
+    let r = expect(q, &format!("pose {} {} {}", deg[0], deg[1], deg[2]), "ok force=");
+    let (force, range) = (field(&r, "force=")[0], field(&r, "range="));
+    assert!((force - want.tension).abs() < 1e-4 * want.tension + 1e-4, "{r} vs the f64 rule's {}", want.tension);
+    for e in 0..2 {
+        assert!((range[e] - want.interval[e]).abs() < 1e-4 * want.interval[e] + 1e-4, "{r} vs {:?}", want.interval);
+    }
+    let back = f.solve(force, &field(&r, "volts="), finger_model::Method::converged()).unwrap();
+    for k in 0..3 {
+        assert!((back.joint_angle[k].to_degrees() - deg[k]).abs() < 0.05, "joint {}: {r}", k + 1);
+    }
+    expect(q, "status", &format!("ok armed=1 force={force:.3} "));
+    expect(q, "pose 20 5 5", "err unreachable:");
 }
 
 fn r_list(v: &[f64]) -> Vec<String> {

@@ -3,8 +3,7 @@
 //! model (`finger_model::fixed`, docs/fixed-point.md) instead of the f32 model in soft float.
 //! The set-up (compliances at the voltages) is the f32 model's; the solve has no float
 //! operation; `solve`'s tip stiffness from the converged fixed-point state, once in f32.
-//! `pose` on the fixed-point inverse at a given tension. Not here: `pose`'s tension rule
-//! (`<P>` required).
+//! `pose` on the fixed-point inverse, at a given tension or at the F405's tension rule.
 
 use finger_model::fixed::q::{Nt, Rad};
 use finger_model::fixed::{FixedFinger, FixedInverseDirect, FixedSolution};
@@ -77,15 +76,17 @@ pub(super) fn fmax_of(f: &Finger<f32>, volts: &[f32; CHANNELS]) -> Result<Branch
 compile_error!("the Cortex-M3 image's pose is the fixed-point one (app/m3.rs): build it without feature pose");
 
 impl Commands {
-    /// `pose <d1> <d2> <d3> <P>` on the fixed-point inverse at the given tension
-    /// (`FixedInverseDirect`, the ceiling in force): the voltages, then, armed, the checks of
-    /// `volt` and `force` ([`Commands::plan_setpoints`]) and the outputs move; disarmed nothing
-    /// moves. Reply `ok force= volts= joints=` (joints: the fixed-point forward solve at that
-    /// answer). Without `<P>`: `err usage` (no tension rule in fixed point; docs/firmware.md).
+    /// `pose <d1> <d2> <d3> [<P>]` on the fixed-point inverse (`FixedInverseDirect`, the
+    /// ceiling in force, the top voltage the F405's: `Options::top` of it): at the given
+    /// tension, or without `<P>` at the F405's tension rule (the midpoint of the tensions that
+    /// hold the posture, `solve_free`). The voltages, then, armed, the checks of `volt` and
+    /// `force` ([`Commands::plan_setpoints`]) and the outputs move; disarmed nothing moves.
+    /// Reply `ok force= volts= joints=` (joints: the fixed-point forward solve at that answer),
+    /// and without `<P>` `range=` (the interval, as the F405's).
     #[inline(never)]
     pub(super) fn cmd_pose(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         if args.len() != 3 && args.len() != 4 {
-            return Err(err!("usage"; "pose <d1> <d2> <d3> <P>"));
+            return Err(err!("usage"; "pose <d1> <d2> <d3> [<P>]"));
         }
         let mut rad = [Rad::ZERO; CHANNELS];
         for ch in 0..CHANNELS {
@@ -95,21 +96,28 @@ impl Commands {
             }
             rad[ch] = Rad::from_f32(d / DEG);
         }
-        let Some(p) = args.get(3) else {
-            return Err(err!("usage"; "pose <d1> <d2> <d3> <P>: this image's fixed-point inverse needs the tension (no tension rule)"));
+        let given = match args.get(3) {
+            Some(t) => Some(tension(number(t, "P")?)?),
+            None => None,
         };
-        let p = tension(number(p, "P")?)?;
         let mut ff = FixedFinger::empty();
         ff.prepare(&self.finger, &[0.0; CHANNELS]).map_err(model_err)?;
-        let inv = FixedInverseDirect::new(&self.finger, &ff, self.vmax[0]).map_err(model_err)?;
-        let sol = inv.solve(&rad, Nt::from_f32(p)).map_err(|e| match e {
+        let top = finger_model::inverse::Options::<f32>::default().top;
+        let inv = FixedInverseDirect::new(&self.finger, &ff, self.vmax[0] * top).map_err(model_err)?;
+        let mut at = Nt::from_f32(given.unwrap_or(0.0));
+        let res = match given {
+            Some(_) => inv.solve(&rad, at).map(|s| (s, None)),
+            None => inv.solve_free(&rad, &mut at).map(|(s, i)| (s, Some(i))),
+        };
+        let (sol, range) = res.map_err(|e| match e {
             // the fixed-point inverse's range is in joint angles (the f32 one's in compliance)
             ModelError::Unreachable { joint, needed, min, max } => {
                 let d = |x: f64| Fixed(x as f32 * DEG, 3);
-                err!("unreachable"; "joint ", joint, ": needs ", d(needed), " deg, at ", Fixed(p, 3), " N its stack spans ", d(min), "..", d(max), " deg")
+                err!("unreachable"; "joint ", joint, ": needs ", d(needed), " deg, its stack spans ", d(min), "..", d(max), " deg at ", Fixed(at.to_f32(), 3), " N")
             }
             e => model_err(e),
         })?;
+        let p = sol.tension.to_f32();
         let v = inv.volts(&sol).map_err(model_err)?;
         let target = [v[0], v[1], v[2]];
         // the ceilings as `volt` checks them, armed or not; 0 V (rest thickness) is off
@@ -127,6 +135,9 @@ impl Commands {
         list(r, &target, 1);
         let _ = w!(r; " joints=");
         joints(r, &held);
+        if let Some(i) = range {
+            let _ = w!(r; " range=", Fixed(i[0].to_f32(), 4), ",", Fixed(i[1].to_f32(), 4));
+        }
         Ok(())
     }
 }

@@ -127,6 +127,8 @@ fn run_inverse() {
     let t0 = cycles::now();
     let inv = FixedInverse::new(&f);
     let setup = cycles::now() - t0;
+    // the top voltage of the firmware's `pose` (the F405's inverse: `Options::top` of the ceiling)
+    let top = finger_model::inverse::Options::<f32>::default().top;
     for (i, (p, v)) in POSES.iter().enumerate() {
         let Ok(want) = f.solve(*p, v, Method::converged()) else { continue };
         let a = want.joint_angles();
@@ -145,7 +147,7 @@ fn run_inverse() {
         let t0 = cycles::now();
         let mut ff = FixedFinger::empty();
         let r = ff.prepare(&f, &[0.0; 3]).and_then(|_| {
-            let d = FixedInverseDirect::new(&f, &ff, f.ceiling_in_force(None))?;
+            let d = FixedInverseDirect::new(&f, &ff, f.ceiling_in_force(None) * top)?;
             let angles = [Rad::from_f32(a[0]), Rad::from_f32(a[1]), Rad::from_f32(a[2])];
             d.solve(&angles, Nt::from_f32(*p)).and_then(|sol| d.volts(&sol))
         });
@@ -154,6 +156,21 @@ fn run_inverse() {
         match r {
             Ok(vs) => hprintln!("I pose{} direct ok {} 0 {:e} {:e} {:e}", i, t1 - t0, vs[0], vs[1], vs[2]),
             Err(e) => hprintln!("I pose{} direct err {} 0 {}", i, t1 - t0, e.code()),
+        }
+        // the firmware's `pose` without P: the tension rule, then the same solve
+        let t0 = cycles::now();
+        let mut ff = FixedFinger::empty();
+        let mut used = Nt::ZERO;
+        let r = ff.prepare(&f, &[0.0; 3]).and_then(|_| {
+            let d = FixedInverseDirect::new(&f, &ff, f.ceiling_in_force(None) * top)?;
+            let angles = [Rad::from_f32(a[0]), Rad::from_f32(a[1]), Rad::from_f32(a[2])];
+            d.solve_free(&angles, &mut used).and_then(|(sol, _)| d.volts(&sol))
+        });
+        core::hint::black_box(&r);
+        let t1 = cycles::now();
+        match r {
+            Ok(vs) => hprintln!("I pose{} free ok {} 0 {:e} {:e} {:e} {:e}", i, t1 - t0, vs[0], vs[1], vs[2], used.to_f32()),
+            Err(e) => hprintln!("I pose{} free err {} 0 {}", i, t1 - t0, e.code()),
         }
         let t0 = cycles::now();
         let r = finger_model::solve_pose(&f, a, Some(*p));

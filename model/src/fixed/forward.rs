@@ -46,13 +46,21 @@ fn split(x: f64) -> Option<(i64, i32, bool)> {
 }
 
 impl CMat {
-    /// The matrix it scales (entry (i, j) = m[i][j] 2^(F_j - t[i])).
-    fn value(&self) -> [[f64; 3]; 3] {
-        let mut v = [[0f64; 3]; 3];
+    /// The matrix it scales (entry (i, j) = m[i][j] 2^(F_j - t[i])), in `R` (f32 arithmetic
+    /// when `R` is f32: no soft-float f64 on the M3).
+    fn value<R: Real>(&self) -> [[R; 3]; 3] {
+        let mut v = [[R::zero(); 3]; 3];
         for i in 0..3 {
             for (j, fr) in W_FRAC.iter().enumerate() {
-                // 2^(F_j - t): |F_j - t| stays well inside f64's exponent range
-                v[i][j] = self.m[i][j] as f64 * f64::from_bits(((1023 + fr - self.t[i]) as u64) << 52);
+                let e = fr - self.t[i];
+                v[i][j] = if R::EPS > 1e-10 {
+                    // 2^e as two powers of two in f32's exponent range (|e| <= 252)
+                    let pow2 = |k: i32| f32::from_bits(((127 + k.clamp(-126, 127)) as u32) << 23);
+                    R::from_f64((self.m[i][j] as f32 * pow2(e / 2) * pow2(e - e / 2)) as f64)
+                } else {
+                    // 2^(F_j - t): |F_j - t| stays well inside f64's exponent range
+                    R::from_f64(self.m[i][j] as f64 * f64::from_bits(((1023 + e) as u64) << 52))
+                };
             }
         }
         v
@@ -77,8 +85,17 @@ impl CMat {
 }
 
 /// `-J^-1 r` for a Q30 Jacobian and a Q22 residual, in Q22; `None` when singular or out of
-/// range.
+/// range. Entries past Q30's products (|J| > ~2.8: near contact the hole moves far more than
+/// its guess) are scaled down by 2^-s first, the step by the same 2^-s after.
 fn newton_step(j: &[[i64; 2]; 2], r: [Mm; 2]) -> Option<(i64, i64)> {
+    step_q30(j, r).or_else(|| {
+        let big = j.iter().flatten().map(|x| x.unsigned_abs()).max().unwrap_or(0);
+        let s = (33 - big.leading_zeros() as i32).max(1) as u32;
+        step_q30(&j.map(|row| row.map(|x| x >> s)), r).map(|(a, b)| (a >> s, b >> s))
+    })
+}
+
+fn step_q30(j: &[[i64; 2]; 2], r: [Mm; 2]) -> Option<(i64, i64)> {
     let det = j[0][0].checked_mul(j[1][1])?.checked_sub(j[0][1].checked_mul(j[1][0])?)?;
     let det30 = shr_round(det, 30);
     if det30 == 0 {
@@ -122,7 +139,7 @@ pub struct FixedFinger {
     hinge_len: Mm,
     c: [[CMat; MAX_SUB]; MAX_JOINTS],
     /// Joint k's compliances are joint k-1's (its state is the same).
-    same_as_prev: [bool; MAX_JOINTS],
+    pub(super) same_as_prev: [bool; MAX_JOINTS],
     link_c: Option<CMat>,
 }
 
@@ -224,7 +241,7 @@ impl FixedFinger {
         let hinge_len = p.hinge_len();
         let link_len = p.l - hinge_len;
         self.link_c = if p.flex_links { Some(cmat(&uniform_beam_compliance(p.hinge_modulus(), p.w, p.b, link_len))) } else { None };
-        let mm = |x: R| Mm::from_f64(x.to_f64());
+        let mm = |x: R| Mm::from_real(x);
         self.m = m;
         self.e = mm(p.e);
         self.span_floor = mm(p.span_floor);
@@ -258,14 +275,16 @@ impl FixedFinger {
             let q0 = [row(cj, 0, f[0], f[1], m0), row(cj, 1, f[0], f[1], m0), row(cj, 2, f[0], f[1], m0)];
             // den = 1 + f_y C02 - f_x C12, at frac ACC
             let den = (1i64 << ACC).saturating_add(cj.d02.wide(f[1], ACC)).saturating_sub(cj.d12.wide(f[0], ACC));
-            let den30 = shr_round(den, ACC - 30);
-            if den30.abs() <= (1 << 10) {
+            let den26 = shr_round(den, ACC - 26);
+            if den26.abs() <= (1 << 6) {
                 return Err(MarchError::Singular);
             }
             // the moment arm's own change: s = (-f_y q0x + f_x q0y) / den, N mm
             let (q0x, q0y) = (shr_round(q0[0], cj.t[0] - 22), shr_round(q0[1], cj.t[1] - 22));
-            let num = shr_round((-(f[1].0 as i64)).saturating_mul(q0x).saturating_add((f[0].0 as i64).saturating_mul(q0y)), 44 - 48); // frac 48
-            let sm: Nmm = narrow(num.checked_div(den30).ok_or(MarchError::Singular)?, 18);
+            // frac 44 over den at frac 26: s at frac 18 (no left shift: f q reaches 2^59 at
+            // hundreds of newtons)
+            let num = (-(f[1].0 as i64)).saturating_mul(q0x).saturating_add((f[0].0 as i64).saturating_mul(q0y));
+            let sm: Nmm = narrow(num.checked_div(den26).ok_or(MarchError::Singular)?, 18);
             let qx: Mm = narrow(q0[0].saturating_add(cj.m[0][2] as i64 * sm.0 as i64), cj.t[0]);
             let qy: Mm = narrow(q0[1].saturating_add(cj.m[1][2] as i64 * sm.0 as i64), cj.t[1]);
             let qt: Rad = narrow(q0[2].saturating_add(cj.m[2][2] as i64 * sm.0 as i64), cj.t[2]);
@@ -331,10 +350,12 @@ impl FixedFinger {
                 }
             }
         }
-        if norm(&r) <= TOL_RAW as u32 {
-            Ok((end, hole))
-        } else {
-            Err(MarchError::Singular)
+        // not within the stop: still converged when the step left is (|J| large near contact:
+        // the residual's own rounding, J times the hole's resolution, passes the stop)
+        match newton_step(&jac, r) {
+            _ if norm(&r) <= TOL_RAW as u32 => Ok((end, hole)),
+            Some((d0, d1)) if d0.abs().max(d1.abs()) <= TOL_RAW as i64 => Ok((end, hole)),
+            _ => Err(MarchError::Singular),
         }
     }
 
@@ -372,6 +393,53 @@ impl FixedFinger {
         Err(last)
     }
 
+    /// Joint k's branch followed from 0 N up to `cap`: tension steps that double while they
+    /// converge and halve when refused, each a Newton from the hole the last two points
+    /// extrapolate to; stops when the step is below 2^-`rel_shift` of the tension. The largest
+    /// tension held, and the refusal that ended the branch there (None: `cap` was held).
+    pub(super) fn follow_branch(&self, k: usize, cap: Nt, rel_shift: u32) -> (Nt, Option<MarchError>) {
+        let c = &self.c[k];
+        let mut iters = 0u32;
+        // the last two points held: (tension, hole)
+        let (mut p, mut hole) = (0i64, [self.hinge_len, self.e]);
+        let (mut p_prev, mut hole_prev) = (p, hole);
+        let mut step = 1i64 << 20;
+        loop {
+            let t = (p + step).min(cap.0 as i64);
+            // the secant predictor through the last two points (the straight hole from 0 N)
+            let guess = if p > p_prev {
+                let w = |a: Mm, b: Mm| Q(b.0 + (((b.0 as i64 - a.0 as i64) * (t - p)) / (p - p_prev)) as i32);
+                [w(hole_prev[0], hole[0]), w(hole_prev[1], hole[1])]
+            } else {
+                hole
+            };
+            // a step that moves the span vector by more than a quarter of its length was too
+            // long (near contact it could cross to the far side of the floor)
+            let span_v = |h: &[Mm; 2]| [h[0].0 as i64, h[1].0 as i64 - self.e.0 as i64];
+            let (s0, s1) = (span_v(&hole), self.newton(c, Q(t as i32), guess, &mut iters));
+            let s1 = s1.and_then(|(_, h)| {
+                let d = span_v(&h);
+                let moved = (d[0] - s0[0]).abs().max((d[1] - s0[1]).abs());
+                if 4 * moved <= s0[0].abs().max(s0[1].abs()) { Ok(h) } else { Err(MarchError::Contact) }
+            });
+            match s1 {
+                Ok(h) => {
+                    (p_prev, hole_prev, p, hole) = (p, hole, t, h);
+                    if t >= cap.0 as i64 {
+                        return (cap, None);
+                    }
+                    step *= 2;
+                }
+                Err(e) => {
+                    step /= 2;
+                    if step <= (p >> rel_shift).max(1) {
+                        return (Q(p as i32), Some(e));
+                    }
+                }
+            }
+        }
+    }
+
     /// A link's deflection under tension alone: (-P, 0, P e) in its own frame.
     pub(super) fn link_q(&self, tension: Nt) -> (Mm, Mm, Rad) {
         match &self.link_c {
@@ -400,7 +468,7 @@ impl FixedFinger {
                 continue;
             }
             let (end, hole) = self.joint(&self.c[k], tension, None, &mut iterations).map_err(|e| match e {
-                MarchError::Contact => Error::Contact { joint: k + 1, tension: tension.to_f64() },
+                MarchError::Contact => Error::Contact { joint: k + 1, tension: tension.to_report() },
                 MarchError::Singular => Error::NotConverged { iterations, residual: f64::INFINITY },
             })?;
             ends[k] = end;
@@ -417,7 +485,7 @@ impl FixedFinger {
             joint_angle[k] = e.theta + link_q.2;
             let span = hypot(holes[k][0], holes[k][1] - self.e);
             if span < self.span_floor {
-                return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() });
+                return Err(Error::Contact { joint: k + 1, tension: tension.to_report() });
             }
             excursion = excursion + (self.hinge_len - span);
         }
@@ -452,27 +520,10 @@ impl FixedFinger {
         if n != f.params().n || self.m != f.params().m || n != self.n {
             return Err(Error::Input { input: "solution", reason: "solved for other parameters" });
         }
-        let r = |x: f64| R::from_f64(x);
-        let pose = |p: &FixedPose| Pose { x: r(p.x.to_f64()), y: r(p.y.to_f64()), theta: r(p.theta.to_f64()) };
-        let mut s = Solution {
-            n,
-            m: self.m,
-            tension: r(sol.tension.to_f64()),
-            tip_force: [R::zero(); 2],
-            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
-            links: [[R::zero(); 3]; MAX_JOINTS],
-            joint_angle: [R::zero(); MAX_JOINTS],
-            nodes: [Pose::origin(); MAX_JOINTS + 1],
-            span: [R::zero(); MAX_JOINTS],
-            thickness: [R::zero(); MAX_JOINTS],
-            volts: [R::zero(); MAX_JOINTS],
-            cable_excursion: R::zero(),
-            iterations: sol.iterations,
-            residual: R::zero(),
-            tangent_det: [R::one(); MAX_JOINTS],
-        };
+        let pose = |p: &FixedPose| Pose { x: p.x.to_real(), y: p.y.to_real(), theta: p.theta.to_real() };
+        let mut s = Solution { n, m: self.m, tension: sol.tension.to_real(), iterations: sol.iterations, ..Solution::empty() };
         let mut c = Compliances { n, m: self.m, c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS], thickness: [R::zero(); MAX_JOINTS], volts: [R::zero(); MAX_JOINTS] };
-        let sub_len = r(self.sub_len.to_f64());
+        let sub_len: R = self.sub_len.to_real();
         for k in 0..n {
             let ends = self.sub_element_ends(sol, k)?;
             let mut from: Pose<R> = Pose::origin();
@@ -482,7 +533,7 @@ impl FixedFinger {
                 let (sn, cs) = from.theta.sin_cos();
                 let (dx, dy) = (to.x - from.x, to.y - from.y);
                 s.q[k][j] = [cs * dx + sn * dy - sub_len, cs * dy - sn * dx, to.theta - from.theta];
-                c.c[k][j] = self.c[k][j].value().map(|row| row.map(r));
+                c.c[k][j] = self.c[k][j].value();
                 from = to;
             }
         }

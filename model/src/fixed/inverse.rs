@@ -3,9 +3,11 @@
 //! compliances at [`NODES`] stack thicknesses from the rest thickness to the ceiling's, each
 //! matrix row at one exponent across the nodes. Solve: per joint, regula falsi (Illinois) on
 //! the thickness with the compliances interpolated linearly between nodes and the joint
-//! equilibrium of [`FixedFinger`]. Not here: the tension rule (the float inverse's midpoint of
-//! the tensions that hold the posture), fmax.
-use super::forward::{cmat, CMat, FixedFinger};
+//! equilibrium of [`FixedFinger`]. Without a tension ([`FixedInverseDirect::solve_free`]):
+//! the float inverse's rule (`inverse::choose_tension`), each joint's tensions at the two stack
+//! ends by following its branch from 0 N, the midpoint of the feasible interval. Not here: fmax.
+use super::branch_end::SEARCH_BOUND_N;
+use super::forward::{cmat, CMat, FixedFinger, MarchError};
 use super::q::{Mm, Nt, Q, Rad};
 use crate::de;
 use crate::error::Error;
@@ -87,7 +89,7 @@ impl FixedInverse {
                 }
             }
         }
-        let mm = |x: R| Mm::from_f64(x.to_f64());
+        let mm = |x: R| Mm::from_real(x);
         Ok(FixedInverse { fwd, table, t_rest: mm(t_rest), t_ceiling: mm(t_ceiling) })
     }
 
@@ -134,7 +136,7 @@ fn volts_of<R: Real>(f: &Finger<R>, t_rest: Mm, sol: &FixedPoseSolution) -> Resu
     let p = f.params();
     let mut v = [R::zero(); MAX_JOINTS];
     for (k, (vk, tk)) in v.iter_mut().zip(&sol.thickness).enumerate().take(sol.n) {
-        *vk = if tk.0 >= t_rest.0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, R::from_f64(tk.to_f64()))? };
+        *vk = if tk.0 >= t_rest.0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, tk.to_real())? };
     }
     Ok(v)
 }
@@ -155,9 +157,10 @@ pub struct FixedInverseDirect<'a, R: Real> {
 
 impl<'a, R: Real> FixedInverseDirect<'a, R> {
     /// `fwd`: `f` prepared at any voltages (its lengths and the joint solve are used, not its
-    /// compliances); `vmax`: the ceiling in force (V): the stack spans the rest thickness to
-    /// the one just below it.
-    pub fn new(f: &'a Finger<R>, fwd: &'a FixedFinger, vmax: R) -> Result<Self, Error> {
+    /// compliances); `v_top`: the highest voltage the inverse commands (V, below the ceiling in
+    /// force; the float inverse's `Options::top` x ceiling): the stack spans the rest thickness
+    /// to the one at `v_top`.
+    pub fn new(f: &'a Finger<R>, fwd: &'a FixedFinger, v_top: R) -> Result<Self, Error> {
         let p = f.params();
         if p.layers == 0 {
             return Err(Error::Input { input: "layers", reason: "the fixed-point inverse sets stack thicknesses: it needs stacks" });
@@ -165,8 +168,8 @@ impl<'a, R: Real> FixedInverseDirect<'a, R> {
         if fwd.n != p.n || fwd.m != p.m {
             return Err(Error::Input { input: "fwd", reason: "prepared for other parameters" });
         }
-        let (t_rest, t_ceiling) = (f.stack_thickness(R::zero())?, f.stack_thickness(vmax * R::from_f64(1.0 - 1e-6))?);
-        let mm = |x: R| Mm::from_f64(x.to_f64());
+        let (t_rest, t_ceiling) = (f.stack_thickness(R::zero())?, f.stack_thickness(v_top)?);
+        let mm = |x: R| Mm::from_real(x);
         Ok(FixedInverseDirect { f, fwd, t_rest: mm(t_rest), t_ceiling: mm(t_ceiling), t_rest_r: t_rest, t_ceiling_r: t_ceiling })
     }
 
@@ -174,7 +177,7 @@ impl<'a, R: Real> FixedInverseDirect<'a, R> {
     fn at(&self, u: i64) -> Result<[CMat; MAX_SUB], Error> {
         let last = ((NODES - 1) as i64) << 16;
         let u = u.clamp(0, last);
-        let frac = R::from_f64(u as f64 / last as f64);
+        let frac = R::from_u32(u as u32) / R::from_u32(last as u32);
         let t = (self.t_rest_r - (self.t_rest_r - self.t_ceiling_r) * frac).max(self.t_ceiling_r);
         let k_de = self.f.stack_stiffness(t);
         let mut o = [CMat::default(); MAX_SUB];
@@ -190,10 +193,176 @@ impl<'a, R: Real> FixedInverseDirect<'a, R> {
         solve_by(&self.fwd, self.t_rest, self.t_ceiling, |u| self.at(u), angles, tension)
     }
 
+    /// Without a tension: the tension by the float inverse's rule ([`tension_rule`]), then
+    /// [`FixedInverseDirect::solve`] at it. Also returns the feasible interval (N; empty, lo > hi,
+    /// when no tension holds the posture: then the error names a joint at the reference tension,
+    /// written to `used` as the chosen one is).
+    pub fn solve_free(&self, angles: &[Rad], used: &mut Nt) -> Result<(FixedPoseSolution, [Nt; 2]), Error> {
+        let rule = tension_rule(self.fwd, |u| self.at(u), angles)?;
+        *used = rule.tension;
+        if rule.tension.0 == 0 && rule.feasible {
+            // every angle zero: the straight finger at 0 N, 0 V
+            let sol = FixedPoseSolution { n: self.fwd.n, thickness: [self.t_rest; MAX_JOINTS], tension: Nt::ZERO, evaluations: rule.evaluations };
+            return Ok((sol, rule.interval));
+        }
+        if rule.tension.0 == 0 {
+            let k = angles.iter().position(|a| a.0 < 0).unwrap_or(0);
+            return Err(Error::Unreachable { joint: k + 1, needed: angles[k].to_report(), min: 0.0, max: 0.0 });
+        }
+        let mut sol = self.solve(angles, rule.tension)?;
+        sol.evaluations += rule.evaluations;
+        Ok((sol, rule.interval))
+    }
+
     /// The channel voltages for a solution (float: the DE thinning's closed form).
     pub fn volts(&self, sol: &FixedPoseSolution) -> Result<[R; MAX_JOINTS], Error> {
         volts_of(self.f, self.t_rest, sol)
     }
+}
+
+/// The tension chosen for a posture and the interval it came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TensionRule {
+    pub tension: Nt,
+    /// [largest low end, smallest high end] of the joints' tension ranges, N.
+    pub interval: [Nt; 2],
+    /// Whether the interval holds a tension and no angle is negative (else `tension` is the
+    /// reference of the unreachable report: the median of the joints' mid-range tensions).
+    pub feasible: bool,
+    /// Joint solves.
+    pub evaluations: u32,
+}
+
+/// The float inverse's tension rule (`inverse::choose_tension`): each joint's range is the
+/// [min, max] of the tensions that hold its angle at the stiffest stack (rest thickness, table
+/// position 0) and at the softest (the top voltage, the last position), by [`hold_tension`];
+/// the tension is the midpoint of their intersection, else the median of the mid-ranges.
+fn tension_rule(fwd: &FixedFinger, at: impl Fn(i64) -> Result<[CMat; MAX_SUB], Error>, angles: &[Rad]) -> Result<TensionRule, Error> {
+    let n = fwd.n;
+    if angles.len() != n {
+        return Err(Error::Input { input: "angles", reason: "one angle per joint is required" });
+    }
+    let (c_soft, c_stiff) = (at(((NODES - 1) as i64) << 16)?, at(0)?);
+    let mut ends = [[Nt::ZERO; 2]; MAX_JOINTS];
+    let mut evals = 0u32;
+    for k in 0..n {
+        if k > 0 && angles[k] == angles[k - 1] {
+            ends[k] = ends[k - 1];
+            continue;
+        }
+        let lo = hold_tension(fwd, &c_soft, angles[k], k + 1, Nt::ZERO, &mut evals)?;
+        ends[k] = [lo, hold_tension(fwd, &c_stiff, angles[k], k + 1, lo, &mut evals)?];
+    }
+    let range = |e: &[Nt; 2]| (e[0].min(e[1]), e[0].max(e[1]));
+    let mut interval = [Nt::ZERO, Nt::MAX];
+    let mut mids = [Nt::ZERO; MAX_JOINTS];
+    for (k, e) in ends[..n].iter().enumerate() {
+        let (a, b) = range(e);
+        interval = [interval[0].max(a), interval[1].min(b)];
+        mids[k] = Q(a.0 + (b.0 - a.0) / 2);
+    }
+    let feasible = interval[0] <= interval[1] && angles.iter().all(|a| a.0 >= 0);
+    let tension = if feasible {
+        Q(interval[0].0 + (interval[1].0 - interval[0].0) / 2)
+    } else {
+        let m = &mut mids[..n];
+        m.sort_unstable();
+        if n % 2 == 1 { m[n / 2] } else { Q(m[n / 2 - 1].0 + (m[n / 2].0 - m[n / 2 - 1].0) / 2) }
+    };
+    Ok(TensionRule { tension, interval, feasible, evaluations: evals })
+}
+
+/// The tension at which a joint with compliances `c` holds `angle` (its joint angle: the
+/// hinge's and the link's), following its branch from 0 N (`joint`: 1-based, for errors):
+/// trial tensions from the secant through the origin (past the target by 1/16, at most
+/// doubling), each warm-started from the last converged hole and halved when refused, then
+/// regula falsi (Illinois) on the bracket. The branch's end before the angle: its error.
+/// `from`: a tension known to lie below (0: none). 0 N for an angle <= 0.
+fn hold_tension(fwd: &FixedFinger, c: &[CMat; MAX_SUB], angle: Rad, joint: usize, from: Nt, evals: &mut u32) -> Result<Nt, Error> {
+    if angle.0 <= 0 {
+        return Ok(Nt::ZERO);
+    }
+    let mut iters = 0u32;
+    let refused = Error::NotConverged { iterations: MAX_ITER, residual: f64::INFINITY };
+    // θ(P) - θ*, and the converged hole
+    let mut g = |p: i64, hole: Option<[Mm; 2]>| -> Result<(i64, [Mm; 2]), MarchError> {
+        *evals += 1;
+        let (end, h) = fwd.joint(c, Q(p as i32), hole, &mut iters)?;
+        Ok(((end.theta + fwd.link_q(Q(p as i32)).2).0 as i64 - angle.0 as i64, h))
+    };
+    let bound = (SEARCH_BOUND_N as i64) << 22;
+    // lower end: (P, g, hole); the upper (P, g) once found
+    let (mut a, mut ga, mut ha) = (0i64, -(angle.0 as i64), None);
+    if from.0 > 0 {
+        if let Ok((gf, h)) = g(from.0 as i64, None) {
+            if gf < 0 {
+                (a, ga, ha) = (from.0 as i64, gf, Some(h));
+            }
+        }
+    }
+    // first trial: 1/4 N, or the secant through the origin
+    let mut step = if a == 0 { 1i64 << 20 } else { 0 };
+    let mut trials = 0u32;
+    let (b, gb) = loop {
+        trials += 1;
+        if trials > 4 * MAX_ITER {
+            return Err(refused);
+        }
+        let want = if a == 0 { step } else { (a * 17 / 16) * angle.0 as i64 / (angle.0 as i64 + ga).max(1) - a };
+        let p = a + if step > 0 { step.min(want.max(1)) } else { want.clamp(1, a) };
+        if p > bound {
+            return Err(Error::LimitPoint { joint, tension: Q::<22>(bound as i32).to_report() });
+        }
+        match g(p, ha) {
+            Ok((gp, _)) if gp >= 0 => break (p, gp),
+            Ok((gp, h)) => {
+                (a, ga, ha) = (p, gp, Some(h));
+                step = 0;
+            }
+            Err(e) => {
+                // refused: a shorter step, down to the stop's resolution
+                let d = (p - a) / 2;
+                if d <= (a >> 14).max(1) {
+                    let t = Q::<22>(p as i32).to_report();
+                    return Err(match e {
+                        MarchError::Contact => Error::Contact { joint, tension: t },
+                        MarchError::Singular => Error::LimitPoint { joint, tension: t },
+                    });
+                }
+                step = d;
+            }
+        }
+    };
+    let (mut b, mut gb) = (b, gb);
+    if gb <= TOL_RAW as i64 {
+        return Ok(Q(b as i32));
+    }
+    let mut side = 0i32;
+    let mut u = b;
+    for _ in 0..MAX_ITER {
+        if b - a <= 1 {
+            break;
+        }
+        u = (a + (b - a) * (-ga) / (gb - ga)).clamp(a + 1, b - 1);
+        let (gu, h) = g(u, ha).map_err(|_| refused)?;
+        if gu.abs() <= TOL_RAW as i64 {
+            break;
+        }
+        if gu < 0 {
+            (a, ga, ha) = (u, gu, Some(h));
+            if side == -1 {
+                gb /= 2;
+            }
+            side = -1;
+        } else {
+            (b, gb) = (u, gu);
+            if side == 1 {
+                ga /= 2;
+            }
+            side = 1;
+        }
+    }
+    Ok(Q(u as i32))
 }
 
 /// Each joint's stack thickness that holds `angles` at `tension`, the compliances at table
@@ -238,14 +407,14 @@ fn solve_by(fwd: &FixedFinger, t_rest: Mm, t_ceiling: Mm, at: impl Fn(i64) -> Re
                 continue;
             }
             if ga > 0 || gb < 0 {
-                let unit = |x: i64| (x + target.0 as i64) as f64 / (1u64 << 28) as f64 + link.to_f64();
-                return Err(Error::Unreachable { joint: k + 1, needed: angles[k].to_f64(), min: unit(ga), max: unit(gb) });
+                let unit = |x: i64| (Rad::from_raw_sat(x + target.0 as i64) + link).to_report();
+                return Err(Error::Unreachable { joint: k + 1, needed: angles[k].to_report(), min: unit(ga), max: unit(gb) });
             }
             let mut u = a;
             let mut side = 0i32;
             for _ in 0..MAX_ITER {
                 // regula falsi, Illinois: the end that stays twice halves its weight
-                u = if gb != ga { a + (((b - a) as i128 * (-ga) as i128) / (gb - ga) as i128) as i64 } else { (a + b) / 2 };
+                u = if gb != ga { a + (b - a) * (-ga) / (gb - ga) } else { (a + b) / 2 };
                 u = u.clamp(a, b);
                 let gu = g(u, &mut hole, &mut evals)?;
                 if gu.abs() <= TOL_RAW as i64 || b - a <= 1 {
@@ -300,7 +469,7 @@ mod tests {
     fn direct_round_trip_within_0_05_deg() {
         let f = Finger::new(Params::<f64> { layers: 4, ..Params::default() }).unwrap();
         let fwd = FixedFinger::new(&f, &[0.0; 3]).unwrap();
-        let inv = FixedInverseDirect::new(&f, &fwd, f.ceiling_in_force(None)).unwrap();
+        let inv = FixedInverseDirect::new(&f, &fwd, f.ceiling_in_force(None) * (1.0 - 1e-6)).unwrap();
         let mut worst = 0f64;
         for (p, v) in [(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])] {
             let want = f.solve(p, &v, Method::converged()).unwrap();
@@ -315,6 +484,45 @@ mod tests {
         assert!(worst < 0.05, "{worst}");
         let a = Rad::from_f64(1.2);
         assert!(matches!(inv.solve(&[a, a, a], Nt::from_f64(0.5)), Err(Error::Unreachable { joint: 1, .. })));
+    }
+
+    /// Without a tension (the M3 image's `pose` without P): the float inverse's rule at the
+    /// board's finger (MODEL.md's, with its FE calibration): the same interval and midpoint as
+    /// the f64 `solve_pose` (the fixed-point joint angles' error over dθ/dP: within 1e-4
+    /// relative), and the answer holds the posture through the f64 forward (0.05 deg).
+    #[test]
+    fn free_tension_is_the_f64_rule() {
+        use crate::calibration::Calibration;
+        let p = Params::<f64>::default();
+        let f = Finger::with_calibration(p, Calibration::for_params(&p)).unwrap();
+        assert_ne!(*f.calibration(), Calibration::none());
+        let fwd = FixedFinger::new(&f, &[0.0; 3]).unwrap();
+        let top = crate::inverse::Options::<f64>::default().top;
+        let inv = FixedInverseDirect::new(&f, &fwd, f.ceiling_in_force(None) * top).unwrap();
+        let (mut worst_p, mut worst_deg) = (0f64, 0f64);
+        for (p, v) in [(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3]), (4.0, [0.0, 6000.0, 9000.0])] {
+            let want = f.solve(p, &v, Method::converged()).unwrap();
+            let ang = [want.joint_angle[0], want.joint_angle[1], want.joint_angle[2]];
+            let fl = crate::inverse::solve_pose(&f, &ang, None).unwrap();
+            let (sol, interval) = inv.solve_free(&ang.map(Rad::from_f64), &mut Q(0)).unwrap();
+            let rel = |a: Nt, b: f64| (a.to_f64() - b).abs() / b;
+            worst_p = worst_p.max(rel(sol.tension, fl.tension)).max(rel(interval[0], fl.interval[0])).max(rel(interval[1], fl.interval[1]));
+            assert!(fl.interval[0] <= p * (1.0 + 1e-9) && p <= fl.interval[1] * (1.0 + 1e-9), "{p} {v:?}: f64 {} {:?} fixed {} {:?}", fl.tension, fl.interval, sol.tension.to_f64(), [interval[0].to_f64(), interval[1].to_f64()]);
+            let volts = inv.volts(&sol).unwrap();
+            let back = f.solve(sol.tension.to_f64(), &volts[..3], Method::converged()).unwrap();
+            for k in 0..3 {
+                worst_deg = worst_deg.max((back.joint_angle[k] - ang[k]).abs().to_degrees());
+            }
+        }
+        assert!(worst_p < 1e-4, "tension {worst_p}");
+        assert!(worst_deg < 0.05, "{worst_deg}");
+        // no tension holds it: refused, naming a joint; the straight finger: 0 N, 0 V
+        let a = [Rad::from_f64(0.02), Rad::from_f64(0.02), Rad::from_f64(0.6)];
+        assert!(matches!(inv.solve_free(&a, &mut Q(0)), Err(Error::Unreachable { .. })));
+        assert!(matches!(inv.solve_free(&[Rad::from_f64(-0.1), Rad::from_f64(0.1), Rad::from_f64(0.1)], &mut Q(0)), Err(Error::Unreachable { joint: 1, .. })));
+        let (z, _) = inv.solve_free(&[Rad::ZERO; 3], &mut Q(0)).unwrap();
+        assert_eq!(z.tension, Nt::ZERO);
+        assert_eq!(inv.volts(&z).unwrap()[..3], [0.0; 3]);
     }
 
     #[test]

@@ -5,11 +5,12 @@
 //! with a Q format per quantity ([`q`]) and 32x32 -> 64 products, trig by polynomial
 //! ([`trig`]). The compliances are computed once per voltage set in the float model and
 //! converted ([`FixedFinger::new`]), each entry with its own scale.
-//! And the inverse at a given tension ([`inverse`]: each joint's stack thickness for target
-//! angles, compliances interpolated from a table built once, or computed per evaluation without
-//! the table), and fmax by bisection on the solve ([`branch_end`]).
-//! What it is not: the tip-loaded solve, the paper's stepping, the tension rule, the tip
-//! stiffness. Error budget and measurements: docs/fixed-point.md.
+//! And the inverse ([`inverse`]: each joint's stack thickness for target angles at a given
+//! tension or at the float inverse's tension rule, compliances interpolated from a table built
+//! once, or computed per evaluation without the table), fmax by following each joint's branch
+//! ([`branch_end`]), the tip stiffness from the converged state (its J C Jᵀ in float).
+//! What it is not: the tip-loaded solve, the paper's stepping, contact. Error budget and
+//! measurements: docs/fixed-point.md.
 
 pub mod branch_end;
 pub mod forward;

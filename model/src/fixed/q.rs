@@ -67,11 +67,40 @@ impl<const F: i32> Q<F> {
         }
         Q(if v >= 2147483520.0 { i32::MAX } else if v <= -2147483648.0 { i32::MIN } else { libm::roundf(v) as i32 })
     }
+    /// From the model's float type: through f32 when that is the type (no soft-float f64
+    /// arithmetic in an f32 image), else through f64.
+    #[inline(always)]
+    pub fn from_real<R: crate::real::Real>(x: R) -> Self {
+        if R::EPS > 1e-10 {
+            Self::from_f32(x.to_f64() as f32)
+        } else {
+            Self::from_f64(x.to_f64())
+        }
+    }
     pub fn to_f64(self) -> f64 {
         self.0 as f64 / (1u64 << F) as f64
     }
+    /// To the model's float type (through f32 when that is the type, as [`Q::from_real`]).
+    #[inline(always)]
+    pub fn to_real<R: crate::real::Real>(self) -> R {
+        if R::EPS > 1e-10 {
+            R::from_f64(self.to_f32() as f64)
+        } else {
+            R::from_f64(self.to_f64())
+        }
+    }
+    /// For an error's report (f64 fields): through f32 (no f64 arithmetic on the M3).
+    #[inline(always)]
+    pub fn to_report(self) -> f64 {
+        self.to_f32() as f64
+    }
     pub fn to_f32(self) -> f32 {
         self.0 as f32 / (1u64 << F) as f32
+    }
+    /// From a raw 64-bit value at this format's frac (saturating).
+    #[inline(always)]
+    pub fn from_raw_sat(v: i64) -> Self {
+        Q(sat(v))
     }
     /// Saturated (the format's end): treated as not finite.
     pub fn is_sat(self) -> bool {

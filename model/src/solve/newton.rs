@@ -66,8 +66,9 @@ fn squared<R: Real>() -> bool {
 }
 
 fn unmetric<R: Real>(m: R) -> f64 {
+    // the root in R (f32 on the target: no soft-float f64; correctly rounded either way)
     if squared::<R>() {
-        m.to_f64().sqrt()
+        m.sqrt().to_f64()
     } else {
         m.to_f64()
     }
