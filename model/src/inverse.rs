@@ -426,7 +426,7 @@ pub fn solve_pose_tabled<R: Real>(table: &BranchTable<R>, angles: &[R], tension:
 /// the solution on the tabled path): the same answer. On an error `out` holds no solution.
 pub fn solve_pose_tabled_into<R: Real>(table: &BranchTable<R>, angles: &[R], tension: Option<R>, out: &mut PoseSolution<R>) -> Result<(), Error> {
     let f = table.finger();
-    check_inputs(f, angles, tension, table.options())?;
+    check_inputs(f, angles, tension, None)?;
     if takes_general(f) && general::solve_tabled(table, angles, tension, out)? {
         return Ok(());
     }
@@ -450,8 +450,9 @@ fn check_options<R: Real>(opts: &Options<R>) -> Result<(), Error> {
     Ok(())
 }
 
-/// The inputs' own checks (both entry points).
-fn check_inputs<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>, opts: &Options<R>) -> Result<(), Error> {
+/// The inputs' own checks (both entry points), and the options' (None: a table's, checked
+/// when it was built).
+fn check_inputs<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>, opts: Option<&Options<R>>) -> Result<(), Error> {
     if angles.len() != f.params().n {
         return Err(Error::Input { input: "angles", reason: "one angle per joint is required" });
     }
@@ -466,7 +467,7 @@ fn check_inputs<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>, opts: 
             return Err(Error::Input { input: "tension", reason: "a cable cannot push: tension must be >= 0" });
         }
     }
-    check_options(opts)
+    opts.map_or(Ok(()), check_options)
 }
 
 /// Whether `f`'s inverse takes the general path (inverse/general.rs): sub-divided hinges,
@@ -487,7 +488,7 @@ fn solve<R: Real>(
     tension: Option<R>,
     opts: &Options<R>,
 ) -> Result<PoseSolution<R>, Error> {
-    check_inputs(f, angles, tension, opts)?;
+    check_inputs(f, angles, tension, Some(opts))?;
     let p = f.params();
     let n = p.n;
     let mut out = PoseSolution {

@@ -13,9 +13,10 @@
 //! - at fixed tension it falls with t where thinning softens the joint, rises where the
 //!   stack's axial-bending coupling makes thinning stiffen it.
 //!
-//! With the branch table (table.rs) step 1 reads the range ends off the table and solves only
-//! those that bound the feasible interval; step 4 starts from a quadratic through the table's
-//! three branches. Behind the quasi-Newton solves (model feature `inverse-fallback`), a
+//! With the branch table (table.rs, `solve_tabled`) step 1 reads the range ends off the table
+//! and confirms (one march) only those the answer rests on (the interval's bounds when the
+//! tension is free); step 4 starts from a quadratic through the table's three branches, one
+//! compliance evaluation and one march where that is within the tolerance. Behind the quasi-Newton solves (model feature `inverse-fallback`), a
 //! bracketed root on the warm-started forward equilibrium (`Finger::joint_equilibrium`), the
 //! solve layer's `bracket::increasing_root`: secant steps kept inside a bracket, bisection when
 //! a step leaves it or when one end has been kept three times (the Illinois failure mode),
@@ -90,7 +91,16 @@ impl<'a, R: Real> Gen<'a, R> {
         } else {
             R::zero()
         };
-        Ok(Gen {
+        Ok(Self::with_link_rot(f, opts, link_rot))
+    }
+
+    /// `new` with the link's rotation per newton given (zero where `slope0` is not used: the
+    /// tabled path, whose slopes the table holds).
+    #[inline(always)]
+    fn with_link_rot(f: &'a Finger<R>, opts: &Options<R>, link_rot: R) -> Self {
+        let p = f.params();
+        let lh = p.hinge_len();
+        Gen {
             f,
             p,
             link_rot,
@@ -99,7 +109,7 @@ impl<'a, R: Real> Gen<'a, R> {
             rel: R::from_f64(4.0 * R::EPS),
             max_iter: 2 * opts.max_iter.max(8),
             iters: 0,
-        })
+        }
     }
 
     /// Sub-element compliances at stack thickness t, as `Finger::compliances` computes them.
@@ -111,48 +121,62 @@ impl<'a, R: Real> Gen<'a, R> {
     }
 
     /// `comp` into `c` (its first m entries; no array returned by value in the hot loop).
-    /// C_j = (K_hinge,j + K_de(t))⁻¹: the stack's stiffness depends on t alone and is the same
-    /// for every sub-element, so it is formed once; per sub-element only the upper triangle's
-    /// sum and its cofactor inverse (`mat3::inverse_spd_of_sum`'s arithmetic, the same numbers),
-    /// with one finiteness check for all of them instead of one per entry.
     #[inline(never)]
     fn comp_into(&self, t: R, c: &mut [Mat3<R>; MAX_SUB]) -> Result<(), Error> {
-        let singular = Error::Singular { what: "joint stiffness" };
         if self.p.layers == 0 {
             for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
                 *cj = self.f.hinge_compliance(j);
             }
             return Ok(());
         }
-        // K_de ∝ t (axial), t³ (bending): positive semi-definite for t > 0, so each sum with
-        // the (positive definite) hinge has a positive diagonal
+        let kd = self.stack_upper(t)?;
+        let mut check = R::zero();
+        for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
+            let (m, ck) = self.sub_compliance(j, &kd);
+            *cj = m;
+            check += ck;
+        }
+        Self::checked(check)
+    }
+
+    /// The upper triangle of the stack's stiffness at thickness t (K_de ∝ t axially, t³ in
+    /// bending: positive semi-definite for t > 0, so each sum with the positive definite
+    /// hinge has a positive diagonal). It depends on t alone: once per compliance evaluation.
+    #[inline(always)]
+    fn stack_upper(&self, t: R) -> Result<[R; 6], Error> {
         if !(t > R::zero() && t.is_finite()) {
-            return Err(singular);
+            return Err(Error::Singular { what: "joint stiffness" });
         }
         let kd = self.f.stack_stiffness(t);
-        let kd = [kd[0][0], kd[0][1], kd[0][2], kd[1][1], kd[1][2], kd[2][2]];
-        let floor = R::from_f64(64.0 * R::EPS);
-        let mut sum = R::zero();
-        for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
-            let kh = self.f.hinge_stiffness(j);
-            let (a, b, cc, d, e, f) = (kh[0][0] + kd[0], kh[0][1] + kd[1], kh[0][2] + kd[2], kh[1][1] + kd[3], kh[1][2] + kd[4], kh[2][2] + kd[5]);
-            let ca = d * f - e * e;
-            let cb = cc * e - b * f;
-            let c2 = b * e - cc * d;
-            let det = a * ca + b * cb + cc * c2;
-            if !(det > a * d * f * floor) {
-                return Err(singular);
-            }
-            let inv = R::one() / det;
-            let (cd, ce, cf) = (a * f - cc * cc, b * cc - a * e, a * d - b * b);
-            let o = [ca * inv, cb * inv, c2 * inv, cd * inv, ce * inv, cf * inv];
-            sum += det + o[0] + o[1] + o[2] + o[3] + o[4] + o[5];
-            *cj = [[o[0], o[1], o[2]], [o[1], o[3], o[4]], [o[2], o[4], o[5]]];
-        }
-        if sum.is_finite() {
+        Ok([kd[0][0], kd[0][1], kd[0][2], kd[1][1], kd[1][2], kd[2][2]])
+    }
+
+    /// Sub-element j's compliance C_j = (K_hinge,j + K_de)⁻¹ (`kd` the stack's upper triangle):
+    /// the upper triangle's sum and its cofactor inverse, `mat3::inverse_spd_of_sum`'s
+    /// arithmetic (the same numbers). With a check value: finite (the determinant plus the
+    /// entries) when the sum is positive definite to working precision, else NaN; one
+    /// finiteness test of the checks' sum then stands for every entry's.
+    #[inline(always)]
+    fn sub_compliance(&self, j: usize, kd: &[R; 6]) -> (Mat3<R>, R) {
+        let kh = self.f.hinge_stiffness(j);
+        let (a, b, c, d, e, f) = (kh[0][0] + kd[0], kh[0][1] + kd[1], kh[0][2] + kd[2], kh[1][1] + kd[3], kh[1][2] + kd[4], kh[2][2] + kd[5]);
+        let ca = d * f - e * e;
+        let cb = c * e - b * f;
+        let cc = b * e - c * d;
+        let det = a * ca + b * cb + c * cc;
+        let ok = det > a * d * f * R::from_f64(64.0 * R::EPS);
+        let inv = R::one() / det;
+        let (cd, ce, cf) = (a * f - c * c, b * c - a * e, a * d - b * b);
+        let o = [ca * inv, cb * inv, cc * inv, cd * inv, ce * inv, cf * inv];
+        let check = if ok { det + o[0] + o[1] + o[2] + o[3] + o[4] + o[5] } else { R::from_f64(f64::NAN) };
+        ([[o[0], o[1], o[2]], [o[1], o[3], o[4]], [o[2], o[4], o[5]]], check)
+    }
+
+    fn checked(check: R) -> Result<(), Error> {
+        if check.is_finite() {
             Ok(())
         } else {
-            Err(singular)
+            Err(Error::Singular { what: "joint stiffness" })
         }
     }
 
@@ -803,6 +827,20 @@ impl<'a, R: Real> Gen<'a, R> {
     }
 }
 
+/// Joint `k`'s (0-based) range end `e` (0 softest, 1 stiffest stack) held at `theta`,
+/// confirmed from the table's reading `r`: the reading where one march there is within the
+/// solver's tolerance, else the quasi-Newton solve from it.
+#[inline(never)]
+fn confirm_end<R: Real>(g: &mut Gen<'_, R>, tb: &BranchTable<R>, k: usize, e: usize, r: TableEnd<R>, theta: R) -> Result<TableEnd<R>, Error> {
+    let c = &tb.comp[e];
+    let mut scratch = [[R::zero(); 3]; MAX_SUB];
+    if g.march_converged(k + 1, c, r.tension, r.hole, theta, &mut scratch).is_some() {
+        return Ok(r);
+    }
+    let h = g.hold_tension(k + 1, theta, c, tb.thickness[e], tb.slope0[e], Some((r.tension, r.hole)), None, Some(theta / r.tension), &mut scratch)?;
+    Ok(TableEnd { tension: h.tension, hole: h.st.hole })
+}
+
 /// `solve_pose_tabled`'s path (docs/inverse.md, "The tabled inverse"): every joint's range
 /// ends and step 4's start read off the table; each read confirmed by one march of the full
 /// model where the answer depends on it, the quasi-Newton solve from there only where that
@@ -818,25 +856,24 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     if p.layers == 0 || !(t0 - t_top > R::from_f64(4.0 * R::EPS) * t0) {
         return Ok(false);
     }
-    let mut g = Gen::new(f, &tb.opts)?;
+    // (the table holds the straight joint's slopes: no link rotation needed)
+    let mut g = Gen::with_link_rot(f, &tb.opts, R::zero());
     // per joint: the softest end, the stiffest end, the middle branch (tension, hole), and
     // whether each end is solved; joint k repeats joint k-1 where their angles are equal
-    let z = TableEnd { tension: R::zero(), hole: [R::zero(); 2] };
-    let mut rd = [[z; 3]; MAX_JOINTS];
-    let mut exact = [[false; 2]; MAX_JOINTS];
-    for k in 0..n {
-        if k > 0 && angles[k] == angles[k - 1] {
+    // (filled with the first joint's reading: no zeroed array written twice)
+    let Some(e0) = tb.ends(angles[0]).filter(|_| angles[0] > R::zero()) else { return Ok(false) };
+    let mut rd = [e0; MAX_JOINTS];
+    for k in 1..n {
+        if angles[k] == angles[k - 1] {
             rd[k] = rd[k - 1];
             continue;
         }
-        if !(angles[k] > R::zero()) {
-            return Ok(false);
-        }
         match tb.ends(angles[k]) {
-            Some(e) => rd[k] = e,
-            None => return Ok(false),
+            Some(e) if angles[k] > R::zero() => rd[k] = e,
+            _ => return Ok(false),
         }
     }
+    let mut exact = [[false; 2]; MAX_JOINTS];
     let band = R::from_f64(TABLE_BAND);
     // 1b. confirm the ends the answer depends on. Without a tension: the interval's bounds
     //     (the midpoint rule rests on them) and any end within `TABLE_BAND` of them. With one:
@@ -855,18 +892,7 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
             }
         }
         let Some((k, e)) = next else { break };
-        let r = rd[k][e];
-        let c = &tb.comp[e];
-        let mut scratch = [[R::zero(); 3]; MAX_SUB];
-        let solved = match g.march_converged(k + 1, c, r.tension, r.hole, angles[k], &mut scratch) {
-            Some(_) => r,
-            None => {
-                // not within the tolerance at the table's reading: the quasi-Newton solve
-                let (t, s) = if e == 0 { (t_top, tb.slope0[0]) } else { (t0, tb.slope0[1]) };
-                let h = g.hold_tension(k + 1, angles[k], c, t, s, Some((r.tension, r.hole)), None, Some(angles[k] / r.tension), &mut scratch)?;
-                TableEnd { tension: h.tension, hole: h.st.hole }
-            }
-        };
+        let solved = confirm_end(&mut g, tb, k, e, rd[k][e], angles[k])?;
         g.iters += 1;
         for j in 0..n {
             if angles[j] == angles[k] {
@@ -914,13 +940,18 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     //    not within the tolerance; then the voltage
     let lh = p.hinge_len();
     let v_top = tb.v_top;
-    let mut c = [mat3::zero(); MAX_SUB];
+    // the compliances at each joint's thickness (filled with the table's 0 V ones: every
+    // entry is written before it is read, the first m by `comp_into`)
+    let mut c = [tb.comp[1][0]; MAX_SUB];
     for k in 0..n {
         if k > 0 && angles[k] == angles[k - 1] {
             out.thickness[k] = out.thickness[k - 1];
             out.volts[k] = out.volts[k - 1];
             out.q[k] = out.q[k - 1];
-            out.sub_q[k] = out.sub_q[k - 1];
+            // (row by row, strided: no call to a byte-wise memcpy)
+            for jj in 0..p.m {
+                out.sub_q[k][jj] = out.sub_q[k - 1][jj];
+            }
             out.links[k] = out.links[k - 1];
             continue;
         }

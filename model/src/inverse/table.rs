@@ -13,10 +13,10 @@
 //! path's solves); this module holds the table and reads it, and imports nothing of the solves.
 //!
 //! What it is for: `solve_pose_tabled` reads step 1's tension range of every joint off
-//! the table (a cubic through four samples) instead of solving for it, and solves (verifies)
-//! only the ends that bound the feasible interval; its step 4 starts from the interpolated
-//! ends. That takes the inverse of the default model (m = 8) from ~60,000 to ~12,000
-//! instructions on the M4F (docs/inverse-cost.md).
+//! the table (a cubic through four samples) instead of solving for it, and confirms (one
+//! march each) only the ends its answer rests on; its step 4 starts from the table's point on
+//! the level curve, one compliance evaluation and one march (general.rs `solve_tabled`;
+//! docs/inverse-cost.md has the counts).
 //!
 //! What it is not: a reduced model. Every number `solve_pose_tabled` returns (the tension,
 //! the interval's ends, the thicknesses and voltages, the states) is a converged solve of the
