@@ -415,11 +415,14 @@ pub fn solve_pose_with<R: Real>(
 }
 
 /// The inverse with a branch table (table.rs), for the finger and the options the table was
-/// built for: step 1's tension ranges are read off the table and only the ends that bound the
-/// feasible interval are solved. The same answers to the same tolerance, at a fraction of the
-/// cost (issue 4). The m = 1 fast path does not use it.
+/// built for: step 1's tension ranges are read off the table and only the ends the answer
+/// rests on are confirmed (without a tension: the feasible interval's bounds), step 4 starts
+/// on the table's level curve (docs/inverse.md, "The branch table"). The same answers to the
+/// same tolerance (with a given tension, `interval` is the table's reading), at a fraction of
+/// the cost. The m = 1 fast path does not use it. `solve_pose_tabled_into` without the copy.
 pub fn solve_pose_tabled<R: Real>(table: &BranchTable<R>, angles: &[R], tension: Option<R>) -> Result<PoseSolution<R>, Error> {
-    solve(table.finger(), Some(table), angles, tension, table.options())
+    let mut out = PoseSolution::empty();
+    solve_pose_tabled_into(table, angles, tension, &mut out).map(|()| out)
 }
 
 /// `solve_pose_tabled` written into `out` (the caller's storage, every field set; no copy of

@@ -123,7 +123,8 @@ fn run_model(m: &scenes::TableModel) {
 
 /// Profiling markers (`--features profile`): the execution trace between the two calls is one
 /// tabled forward solve of the default model at three different voltages (or, built with
-/// PROFILE_SAME set, one voltage; with PROFILE_INVERSE, the tabled inverse of its angles).
+/// PROFILE_SAME set, one voltage; with PROFILE_INVERSE, the tabled inverse of its angles at
+/// 1 N, with PROFILE_FREE too without a tension).
 #[inline(never)]
 #[no_mangle]
 pub extern "C" fn profile_start() {
@@ -152,7 +153,9 @@ fn main() -> ! {
             let a = core::hint::black_box([out.joint_angle[0], out.joint_angle[1], out.joint_angle[2]]);
             let mut s = PoseSolution::empty();
             profile_start();
-            let r = solve_pose_tabled_into(&tb, &a, core::hint::black_box(Some(1.0)), core::hint::black_box(&mut s));
+            // PROFILE_FREE set too: without a tension (the midpoint rule)
+            let p = if option_env!("PROFILE_FREE").is_some() { None } else { Some(1.0) };
+            let r = solve_pose_tabled_into(&tb, &a, core::hint::black_box(p), core::hint::black_box(&mut s));
             profile_stop();
             core::hint::black_box(r).ok();
             core::hint::black_box(&s);

@@ -829,15 +829,16 @@ impl<'a, R: Real> Gen<'a, R> {
 
 /// Joint `k`'s (0-based) range end `e` (0 softest, 1 stiffest stack) held at `theta`,
 /// confirmed from the table's reading `r`: the reading where one march there is within the
-/// solver's tolerance, else the quasi-Newton solve from it.
+/// solver's tolerance, else the quasi-Newton solve from it. The march's sub-element
+/// displacements go to `q` (the joint's own rows: step 4 writes them again).
 #[inline(never)]
-fn confirm_end<R: Real>(g: &mut Gen<'_, R>, tb: &BranchTable<R>, k: usize, e: usize, r: TableEnd<R>, theta: R) -> Result<TableEnd<R>, Error> {
+#[allow(clippy::too_many_arguments)]
+fn confirm_end<R: Real>(g: &mut Gen<'_, R>, tb: &BranchTable<R>, k: usize, e: usize, r: TableEnd<R>, theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Result<TableEnd<R>, Error> {
     let c = &tb.comp[e];
-    let mut scratch = [[R::zero(); 3]; MAX_SUB];
-    if g.march_converged(k + 1, c, r.tension, r.hole, theta, &mut scratch).is_some() {
+    if g.march_converged(k + 1, c, r.tension, r.hole, theta, q).is_some() {
         return Ok(r);
     }
-    let h = g.hold_tension(k + 1, theta, c, tb.thickness[e], tb.slope0[e], Some((r.tension, r.hole)), None, Some(theta / r.tension), &mut scratch)?;
+    let h = g.hold_tension(k + 1, theta, c, tb.thickness[e], tb.slope0[e], Some((r.tension, r.hole)), None, Some(theta / r.tension), q)?;
     Ok(TableEnd { tension: h.tension, hole: h.st.hole })
 }
 
@@ -892,7 +893,7 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
             }
         }
         let Some((k, e)) = next else { break };
-        let solved = confirm_end(&mut g, tb, k, e, rd[k][e], angles[k])?;
+        let solved = confirm_end(&mut g, tb, k, e, rd[k][e], angles[k], &mut out.sub_q[k])?;
         g.iters += 1;
         for j in 0..n {
             if angles[j] == angles[k] {
