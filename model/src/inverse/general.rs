@@ -876,6 +876,24 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     }
     let mut exact = [[false; 2]; MAX_JOINTS];
     let band = R::from_f64(TABLE_BAND);
+    // a target the readings refuse by more than the band (the interval empty, a given tension
+    // outside a joint's range) is `solve`'s to refuse and report, before any march here
+    let outside = match tension {
+        None => {
+            let bound = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
+            bound[0] - bound[1] > band * bound[1]
+        }
+        Some(pg) => {
+            let tol = band * pg;
+            (0..n).any(|k| {
+                let (a, b) = (rd[k][0].tension, rd[k][1].tension);
+                a.min(b) - pg > tol || pg - a.max(b) > tol
+            })
+        }
+    };
+    if outside {
+        return Ok(false);
+    }
     // 1b. confirm the ends the answer depends on. Without a tension: the interval's bounds
     //     (the midpoint rule rests on them) and any end within `TABLE_BAND` of them. With one:
     //     none; step 4's converged solve inside [t_top, t0] is what shows the tension within
@@ -902,20 +920,18 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
             }
         }
     }
-    // 2-3. the interval and the tension (`choose_tension`'s rule and slack); a refusal is
-    //     `solve`'s to report
+    // 2-3. the interval and the tension (`choose_tension`'s rule); a refusal is `solve`'s to
+    //     report
     let interval = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
     let pt = match tension {
         Some(t) => t,
         None if interval[0] <= interval[1] => (interval[0] + interval[1]) / R::from_f64(2.0),
         None => return Ok(false),
     };
-    let slack = R::from_f64(1e-8_f64.max(256.0 * R::EPS)) * (pt.abs() + g.rel);
-    for k in 0..n {
-        let (a, b) = (rd[k][0].tension, rd[k][1].tension);
-        if !(pt > R::zero() && a.min(b) - pt <= slack && pt - a.max(b) <= slack) {
-            return Ok(false);
-        }
+    // (the midpoint of a non-empty interval lies in every joint's range; a given tension was
+    // checked against the readings above, and step 4 shows it inside or hands it to `solve`)
+    if !(pt > R::zero()) {
+        return Ok(false);
     }
     // the answer's scalars, and zeros past the n joints and m sub-elements (written in place)
     let zr = R::zero();
