@@ -421,8 +421,7 @@ pub fn solve_pose_with<R: Real>(
 /// same tolerance (with a given tension, `interval` is the table's reading), at a fraction of
 /// the cost. The m = 1 fast path does not use it. `solve_pose_tabled_into` without the copy.
 pub fn solve_pose_tabled<R: Real>(table: &BranchTable<R>, angles: &[R], tension: Option<R>) -> Result<PoseSolution<R>, Error> {
-    let mut out = PoseSolution::empty();
-    solve_pose_tabled_into(table, angles, tension, &mut out).map(|()| out)
+    solve(table.finger(), Some(table), angles, tension, table.options())
 }
 
 /// `solve_pose_tabled` written into `out` (the caller's storage, every field set; no copy of

@@ -876,12 +876,12 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     }
     let mut exact = [[false; 2]; MAX_JOINTS];
     let band = R::from_f64(TABLE_BAND);
-    // a target the readings refuse by more than the band (the interval empty, a given tension
-    // outside a joint's range) is `solve`'s to refuse and report, before any march here
+    // a target the readings refuse (the interval empty; a given tension outside a joint's
+    // range by more than the band) is `solve`'s to refuse and report, before any march here
     let outside = match tension {
         None => {
             let bound = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
-            bound[0] - bound[1] > band * bound[1]
+            !(bound[0] <= bound[1])
         }
         Some(pg) => {
             let tol = band * pg;
