@@ -974,9 +974,17 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
         }
         let [lo, hi, md] = rd[k];
         let (t_guess, b) = level_guess((lo.tension, t_top, lo.hole), (hi.tension, t0, hi.hole), Some((md.tension, tm, md.hole)), pt);
-        g.comp_into(t_guess, &mut c)?;
+        // at either end of the stack's range the table holds the compliances
+        let ck = if t_guess >= t0 {
+            &tb.comp[1]
+        } else if t_guess <= t_top {
+            &tb.comp[0]
+        } else {
+            g.comp_into(t_guess, &mut c)?;
+            &c
+        };
         g.iters += 1;
-        let (t, st) = match g.march_converged(k + 1, &c, pt, b, angles[k], &mut out.sub_q[k]) {
+        let (t, st) = match g.march_converged(k + 1, ck, pt, b, angles[k], &mut out.sub_q[k]) {
             Some(st) => (t_guess, st),
             None if tension.is_some() && (0..2).any(|e| (rd[k][e].tension - pt).abs() <= band * pt) => {
                 // a given tension near an unconfirmed end: `solve` confirms the range
