@@ -533,14 +533,20 @@ pub fn table_cost_section() -> String {
         if let (Some(a), Some(b)) = (get("de-1.0N"), get("de-1.0N-per9/5/0kV")) {
             writeln!(w, "\n- {m}: a forward solve with one distinct joint costs {a:.0}, each further distinct joint {:.0} (its march on the full model).", (b - a) / 2.0).unwrap();
         }
-        // the inverse's: the same two scenes, tension given and free
+        // the inverse's: identical joints inside the stack's range (8 kV), three different
+        // ones inside it (2/6/9 kV), identical joints at 0 V (no compliance evaluation), each
+        // with the tension given and free
         let inv = |s: &str, i: usize| rows.iter().find(|r| &r.0 == m && r.1 == s).and_then(|r| r.2.inv.get(i).map(|x| x.0));
-        if let (Some(a), Some(b), Some(fa), Some(fb)) =
-            (inv("de-1.0N", 0), inv("de-1.0N-per9/5/0kV", 0), inv("de-1.0N", 1), inv("de-1.0N-per9/5/0kV", 1))
-        {
+        if let (Some(a), Some(b), Some(fa), Some(fb), Some(z)) = (
+            inv("de-1.0N-uni8kV", 0),
+            inv("de-15N-per2/6/9kV", 0),
+            inv("de-1.0N-uni8kV", 1),
+            inv("de-15N-per2/6/9kV", 1),
+            inv("de-0.2N", 0),
+        ) {
             writeln!(
                 w,
-                "- {m}: an inverse with the tension given and one distinct joint costs {a:.0}, each further distinct joint {:.0} (its reading, compliance evaluation, march and voltage); the tension free adds {:.0} with one distinct joint, {:.0} with three (the two confirming marches of the interval's bounds).",
+                "- {m}: an inverse with the tension given and one distinct joint (de-1.0N-uni8kV) costs {a:.0}, each further distinct joint {:.0} (de-15N-per2/6/9kV: its reading, compliance evaluation, march and voltage); with the joints at the scene's 0 V (de-0.2N) {z:.0} (where the solved thickness is t0 itself the table's compliances serve, no evaluation); the tension free adds {:.0} with one distinct joint, {:.0} with three (the two confirming marches of the interval's bounds).",
                 (b - a) / 2.0,
                 fa - a,
                 fb - b
@@ -564,7 +570,8 @@ pub fn table_cost_section() -> String {
          no longer be the full model's converged solve. The inverse (`solve_pose_tabled_into`, written in \
          place) spends per distinct joint the table's reading (three branches' cubics at one set of weights), \
          one compliance evaluation at the thickness the table gives along the level curve (the stack's \
-         stiffness once, then m cofactor inverses of the hinge's and the stack's stiffness in parallel), one \
+         stiffness once, then m cofactor inverses of the hinge's and the stack's stiffness in parallel; none \
+         at either end of the stack's range, whose compliances the table holds), one \
          march that confirms it within the converged solver's tolerance (the quasi-Newton solve only if not) \
          and the voltage; with the tension free, one march more for each end of the feasible interval that \
          bounds it (the midpoint rule rests on them: two, each at the table's reading); with a tension given \
