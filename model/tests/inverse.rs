@@ -517,12 +517,12 @@ fn branch_table_keeps_its_finger_and_options() {
 /// inverse's are: over a grid of targets (tensions up to 12 N, voltages up to 0.99 of the
 /// ceiling, near the 33 % limit), postures at the table's last angle and past it (outside the
 /// table), postures whose joints' ranges barely overlap or not at all, with the tension free,
-/// given, given on an interval end and given past it (refused),
-/// both return the same tension, stack thicknesses (to the solves' tolerance) and refusals
-/// (same error, same joint); the returned state is the forward solve's at the returned tension
-/// and voltages (sub-element displacements), which holds the target angles. For a given
-/// tension the interval is the table's reading (unconfirmed where the answer does not rest on
-/// it): within 1e-4 relative of the solved one.
+/// given, given on an interval end and given past it (refused), both return the same tension,
+/// stack thicknesses (to the solves' tolerance) and refusals (same error; the same joint, or
+/// one at the same angle: a tie); the returned state is the forward solve's at the returned
+/// tension and voltages (sub-element displacements), which holds the target angles. For a
+/// given tension the interval is the table's reading (unconfirmed where the answer does not
+/// rest on it): within 1e-4 relative of the solved one.
 fn tabled_is_a_converged_solve<R: Real>(f: &Finger<R>, tensions: &[f64], tol_v: f64, tol_angle: f64, tol_q: f64) -> usize {
     let opts = Options::default();
     let table = inverse::BranchTable::new(f, &opts).unwrap();
@@ -584,7 +584,8 @@ fn tabled_is_a_converged_solve<R: Real>(f: &Finger<R>, tensions: &[f64], tol_v: 
                 }
                 (Err(Error::Unreachable { joint: ja, .. }), Err(Error::Unreachable { joint: jb, .. })) => {
                     refused += 1;
-                    assert_eq!(ja, jb, "{what}")
+                    // the same joint, or one at the same angle to 1e-5 (a tie, either is right)
+                    assert!(ja == jb || rel(angles[ja - 1], angles[jb - 1]) < 1e-5, "{what}: joint {ja} vs {jb}")
                 }
                 (Err(ea), Err(eb)) => assert_eq!(core::mem::discriminant(&ea), core::mem::discriminant(&eb), "{what}: {ea:?} vs {eb:?}"),
                 (a, b) => panic!("{what}: untabled {a:?}, tabled {b:?}"),
