@@ -20,9 +20,13 @@ fn main() {
          loop of known length). `m1-rigid` is the paper's model (m = 1, E_b, rigid links), \
          `m8-plate-flex` the default model (m = 8, plate modulus, flexible links). Without a tension the \
          inverse also finds the feasible tension interval (both ends) and takes its midpoint. The last \
-         column solves with the finger's branch table (model inverse/table.rs: step 1's tension ranges \
-         read off the table, only the ends that bound the interval solved; built once per parameter set, \
-         its cost below the table), as the firmware does. The images are built with opt-level 3 (the \
+         column solves with the finger's branch table (`solve_pose_tabled`, model inverse/table.rs and \
+         general.rs `solve_tabled`: step 1's tension ranges read off the table and only the ends the answer \
+         rests on confirmed, one march each: without a tension the interval's bounds, with one none; step 4 \
+         one compliance evaluation and one march from the table's point on the level curve; a refusal is \
+         decided and reported by the untabled steps, which confirm the bounding ends; the table built once \
+         per parameter set, its cost below the table), as the firmware does (a solution returned by value; \
+         docs/performance.md has `solve_pose_tabled_into`, written in place). The images are built with opt-level 3 (the \
          firmware's own image with opt-level z). Issue 4's target: at most 20,000 instructions.\n"
     )
     .unwrap();

@@ -533,6 +533,26 @@ pub fn table_cost_section() -> String {
         if let (Some(a), Some(b)) = (get("de-1.0N"), get("de-1.0N-per9/5/0kV")) {
             writeln!(w, "\n- {m}: a forward solve with one distinct joint costs {a:.0}, each further distinct joint {:.0} (its march on the full model).", (b - a) / 2.0).unwrap();
         }
+        // the inverse's: identical joints inside the stack's range (8 kV), three different
+        // ones inside it (2/6/9 kV), identical joints at 0 V (no compliance evaluation), each
+        // with the tension given and free
+        let inv = |s: &str, i: usize| rows.iter().find(|r| &r.0 == m && r.1 == s).and_then(|r| r.2.inv.get(i).map(|x| x.0));
+        if let (Some(a), Some(b), Some(fa), Some(fb), Some(z)) = (
+            inv("de-1.0N-uni8kV", 0),
+            inv("de-15N-per2/6/9kV", 0),
+            inv("de-1.0N-uni8kV", 1),
+            inv("de-15N-per2/6/9kV", 1),
+            inv("de-0.2N", 0),
+        ) {
+            writeln!(
+                w,
+                "- {m}: an inverse with the tension given and one distinct joint (de-1.0N-uni8kV) costs {a:.0}, each further distinct joint {:.0} (de-15N-per2/6/9kV: its reading, compliance evaluation, march and voltage); with the joints at the scene's 0 V (de-0.2N) {z:.0} (where the solved thickness is t0 itself the table's compliances serve, no evaluation); the tension free adds {:.0} with one distinct joint, {:.0} with three (the two confirming marches of the interval's bounds).",
+                (b - a) / 2.0,
+                fa - a,
+                fb - b
+            )
+            .unwrap();
+        }
     }
     writeln!(
         w,
@@ -547,11 +567,21 @@ pub fn table_cost_section() -> String {
          identical joints (one march and the rest), and with three different voltages at m = 8 it cannot: \
          three marches alone come close to 3,000. Below that a march would have to be cheaper than m \
          sub-elements of the full model (fewer sub-elements, or the table itself as the answer), which would \
-         no longer be the full model's converged solve. The inverse spends per distinct joint a compliance \
-         evaluation at the solved thickness (m 3x3 inverses), a march and the thickness solve's quasi-Newton \
-         bookkeeping, plus one march for each verified end of the feasible tension interval (the tension rule \
-         rests on those), plus copying and zeroing its state (the pose solution's sub-element rows, the held \
-         ends): over 3,000 for one distinct joint already, its structure unchanged by issue 15's work so far \
+         no longer be the full model's converged solve. The inverse (`solve_pose_tabled_into`, written in \
+         place) spends per distinct joint the table's reading (three branches' cubics at one set of weights), \
+         one compliance evaluation at the thickness the table gives along the level curve (the stack's \
+         stiffness once, then m cofactor inverses of the hinge's and the stack's stiffness in parallel; none \
+         at either end of the stack's range, whose compliances the table holds), one \
+         march that confirms it within the converged solver's tolerance (the quasi-Newton solve only if not) \
+         and the voltage; with the tension free, one march more for each end of the feasible interval that \
+         bounds it (the midpoint rule rests on them: two, each at the table's reading); with a tension given \
+         the ends are not confirmed (step 4's converged solve inside the stack's range shows the tension \
+         within every joint's range; `interval` is then the table's reading). With a given tension and \
+         identical joints that is one march, one compliance evaluation and the rest (the figures above); with \
+         three different voltages at m = 8 it cannot meet 3,000: three marches and three compliance evaluations \
+         (m = 8 3x3 inverses each) exceed 3,000 by themselves; with the tension free the two confirming \
+         marches put even one distinct joint above it. Below that the interval's ends and the sub-element \
+         states would have to be the table's readings instead of the full model's solves \
          (docs/inverse.md).\n",
         std::mem::size_of::<finger_model::Solution<f32>>()
     )

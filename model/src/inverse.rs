@@ -133,6 +133,26 @@ pub struct PoseSolution<R> {
     pub iterations: u32,
 }
 
+impl<R: Real> PoseSolution<R> {
+    /// An all-zero solution (no joints): storage for `solve_pose_tabled_into`.
+    pub fn empty() -> Self {
+        PoseSolution {
+            n: 0,
+            angles: [R::zero(); MAX_JOINTS],
+            tension: R::zero(),
+            tension_given: false,
+            volts: [R::zero(); MAX_JOINTS],
+            thickness: [R::zero(); MAX_JOINTS],
+            q: [[R::zero(); 3]; MAX_JOINTS],
+            m: 0,
+            sub_q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
+            links: [[R::zero(); 3]; MAX_JOINTS],
+            interval: [R::zero(); 2],
+            iterations: 0,
+        }
+    }
+}
+
 /// The stiffness range of a posture: the solutions at both ends of its tension interval and
 /// the tip stiffness (`Finger::tip_stiffness`) at each.
 #[derive(Clone, Copy, Debug)]
@@ -395,11 +415,25 @@ pub fn solve_pose_with<R: Real>(
 }
 
 /// The inverse with a branch table (table.rs), for the finger and the options the table was
-/// built for: step 1's tension ranges are read off the table and only the ends that bound the
-/// feasible interval are solved. The same answers to the same tolerance, at a fraction of the
-/// cost (issue 4). The m = 1 fast path does not use it.
+/// built for: step 1's tension ranges are read off the table and only the ends the answer
+/// rests on are confirmed (without a tension: the feasible interval's bounds), step 4 starts
+/// on the table's level curve (docs/inverse.md, "The branch table"). The same answers to the
+/// same tolerance (with a given tension, `interval` is the table's reading), at a fraction of
+/// the cost. The m = 1 fast path does not use it. `solve_pose_tabled_into` without the copy.
 pub fn solve_pose_tabled<R: Real>(table: &BranchTable<R>, angles: &[R], tension: Option<R>) -> Result<PoseSolution<R>, Error> {
     solve(table.finger(), Some(table), angles, tension, table.options())
+}
+
+/// `solve_pose_tabled` written into `out` (the caller's storage, every field set; no copy of
+/// the solution on the tabled path): the same answer. On an error `out` holds no solution.
+pub fn solve_pose_tabled_into<R: Real>(table: &BranchTable<R>, angles: &[R], tension: Option<R>, out: &mut PoseSolution<R>) -> Result<(), Error> {
+    let f = table.finger();
+    check_inputs(f, angles, tension, None)?;
+    if takes_general(f) && general::solve_tabled(table, angles, tension, out)? {
+        return Ok(());
+    }
+    *out = solve(f, Some(table), angles, tension, table.options())?;
+    Ok(())
 }
 
 /// The options' own checks.
@@ -418,19 +452,10 @@ fn check_options<R: Real>(opts: &Options<R>) -> Result<(), Error> {
     Ok(())
 }
 
-/// `solve_pose_with` and `solve_pose_tabled` (`table`, when given, was built for `f` and
-/// `opts`). One copy in the image for both entry points.
-#[inline(never)]
-fn solve<R: Real>(
-    f: &Finger<R>,
-    table: Option<&BranchTable<R>>,
-    angles: &[R],
-    tension: Option<R>,
-    opts: &Options<R>,
-) -> Result<PoseSolution<R>, Error> {
-    let p = f.params();
-    let n = p.n;
-    if angles.len() != n {
+/// The inputs' own checks (both entry points), and the options' (None: a table's, checked
+/// when it was built).
+fn check_inputs<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>, opts: Option<&Options<R>>) -> Result<(), Error> {
+    if angles.len() != f.params().n {
         return Err(Error::Input { input: "angles", reason: "one angle per joint is required" });
     }
     if angles.iter().any(|a| !a.is_finite()) {
@@ -444,7 +469,30 @@ fn solve<R: Real>(
             return Err(Error::Input { input: "tension", reason: "a cable cannot push: tension must be >= 0" });
         }
     }
-    check_options(opts)?;
+    opts.map_or(Ok(()), check_options)
+}
+
+/// Whether `f`'s inverse takes the general path (inverse/general.rs): sub-divided hinges,
+/// flexible links, a calibrated finger (the fast path's K(t) is MODEL.md's), or a build
+/// without the m = 1 fast path.
+fn takes_general<R: Real>(f: &Finger<R>) -> bool {
+    let p = f.params();
+    !cfg!(feature = "inverse-fast") || p.m != 1 || p.flex_links || *f.calibration() != Calibration::none()
+}
+
+/// `solve_pose_with` and `solve_pose_tabled` (`table`, when given, was built for `f` and
+/// `opts`). One copy in the image for both entry points.
+#[inline(never)]
+fn solve<R: Real>(
+    f: &Finger<R>,
+    table: Option<&BranchTable<R>>,
+    angles: &[R],
+    tension: Option<R>,
+    opts: &Options<R>,
+) -> Result<PoseSolution<R>, Error> {
+    check_inputs(f, angles, tension, Some(opts))?;
+    let p = f.params();
+    let n = p.n;
     let mut out = PoseSolution {
         n,
         angles: [R::zero(); MAX_JOINTS],
@@ -460,12 +508,16 @@ fn solve<R: Real>(
         iterations: 0,
     };
     out.angles[..n].copy_from_slice(angles);
-    // a calibrated finger takes the general path (the fast path's K(t) is MODEL.md's)
-    if !cfg!(feature = "inverse-fast") || p.m != 1 || p.flex_links || *f.calibration() != Calibration::none() {
+    if takes_general(f) {
         // sub-divided hinges or flexible links: bracketed root finding around the forward
         // per-joint equilibrium (`general`). A build without `inverse-fast` (the firmware,
         // whose default model is m = 8) takes this path for m = 1 too and leaves the fast
         // path's code out of the image.
+        if let Some(tb) = table {
+            if general::solve_tabled(tb, angles, tension, &mut out)? {
+                return Ok(out);
+            }
+        }
         general::solve(f, table, angles, tension, opts, &mut out)?;
         return Ok(out);
     }

@@ -505,3 +505,103 @@ fn branch_table_keeps_its_finger_and_options() {
     let bare = Finger::new(Params::<f64> { layers: 0, ..Params::default() }).unwrap();
     assert!(matches!(inverse::BranchTable::new(&bare, &opts), Err(Error::Input { input: "table", .. })));
 }
+
+/// The tabled inverse's answers are converged solves of the full model, as the untabled
+/// inverse's are: over a grid of targets (tensions up to 12 N, voltages up to 0.99 of the
+/// ceiling, near the 33 % limit), postures at the table's last angle and past it (outside the
+/// table), postures whose joints' ranges barely overlap or not at all, with the tension free,
+/// given, given on an interval end and given past it (refused), both return the same tension,
+/// stack thicknesses (to the solves' tolerance) and refusals (same error; the same joint, or
+/// one at the same angle: a tie); the returned state is the forward solve's at the returned
+/// tension and voltages (sub-element displacements), which holds the target angles. For a
+/// given tension the interval is the table's reading (unconfirmed where the answer does not
+/// rest on it): within 1e-4 relative of the solved one.
+fn tabled_is_a_converged_solve<R: Real>(f: &Finger<R>, tensions: &[f64], tol_v: f64, tol_angle: f64, tol_q: f64) -> usize {
+    let opts = Options::default();
+    let table = inverse::BranchTable::new(f, &opts).unwrap();
+    let mut targets: Vec<Vec<R>> = grid_with(f, tensions, &[0.0, 0.5, 0.99]).into_iter().map(|g| g.2).collect();
+    let end = table.max_angle();
+    for fr in [0.999, 1.0, 1.02] {
+        targets.push(vec![end * R::from_f64(fr); 3]);
+    }
+    targets.push(vec![end * R::from_f64(0.998), end * R::from_f64(0.98), end * R::from_f64(0.99)]);
+    // spread postures: the joints' ranges barely overlap or not at all (refused, the same joint)
+    let spread: Vec<Vec<R>> = targets.iter().step_by(7).take(6).cloned().collect();
+    for a in spread {
+        for d in [0.002, 0.005, 0.03] {
+            targets.push(vec![a[0] * R::from_f64(1.0 + d), a[1], a[2] * R::from_f64(1.0 - d)]);
+        }
+    }
+    let rel = |x: R, y: R| (x - y).abs().to_f64() / y.abs().to_f64().max(1e-9);
+    let (mut answered, mut refused) = (0, 0);
+    for angles in &targets {
+        let free = solve_pose(f, angles, None);
+        let mut tensions: Vec<Option<R>> = vec![None];
+        if let Ok(s) = &free {
+            let mid = (s.interval[0] + s.interval[1]) / R::from_f64(2.0);
+            tensions.extend([Some(mid), Some(s.interval[0]), Some(s.interval[1]), Some(s.interval[1] * R::from_f64(1.01))]);
+        }
+        for tension in tensions {
+            let a = solve_pose(f, angles, tension);
+            let b = inverse::solve_pose_tabled(&table, angles, tension);
+            let mut c = inverse::PoseSolution::empty();
+            let c = inverse::solve_pose_tabled_into(&table, angles, tension, &mut c).map(|()| c);
+            match (&b, &c) {
+                (Ok(b), Ok(c)) => assert_eq!(b, c, "solve_pose_tabled_into differs"),
+                (Err(b), Err(c)) => assert_eq!(format!("{b:?}"), format!("{c:?}")),
+                _ => panic!("{angles:?} {tension:?}: {b:?} vs {c:?}"),
+            }
+            let what = format!("{angles:?} P={tension:?}");
+            match (a, b) {
+                (Ok(a), Ok(b)) => {
+                    answered += 1;
+                    assert!(rel(b.tension, a.tension) < tol_v, "{what}: P {:?} vs {:?}", b.tension, a.tension);
+                    let irel = if tension.is_none() { tol_v } else { 1e-4 };
+                    for e in 0..2 {
+                        assert!(rel(b.interval[e], a.interval[e]) < irel, "{what}: {:?} vs {:?}", b.interval, a.interval);
+                    }
+                    // the thickness (the voltage goes as the square root of t0 - t near 0 V)
+                    for k in 0..3 {
+                        assert!(rel(b.thickness[k], a.thickness[k]) < tol_v, "{what}: joint {k}: {:?} vs {:?} mm", b.thickness[k], a.thickness[k]);
+                    }
+                    let back = f.solve(b.tension, &b.volts[..3], Method::converged()).unwrap();
+                    for k in 0..3 {
+                        assert!((back.joint_angle[k] - angles[k]).abs().to_f64() < tol_angle, "{what}: joint {k}");
+                        for j in 0..f.params().m {
+                            for i in 0..3 {
+                                let d = (back.q[k][j][i] - b.sub_q[k][j][i]).abs().to_f64();
+                                assert!(d < tol_q, "{what}: joint {k} sub-element {j}: {:?} vs {:?}", b.sub_q[k][j], back.q[k][j]);
+                            }
+                        }
+                    }
+                }
+                (Err(Error::Unreachable { joint: ja, .. }), Err(Error::Unreachable { joint: jb, .. })) => {
+                    refused += 1;
+                    // the same joint, or one at the same angle to 1e-5 (a tie, either is right)
+                    assert!(ja == jb || rel(angles[ja - 1], angles[jb - 1]) < 1e-5, "{what}: joint {ja} vs {jb}")
+                }
+                (Err(ea), Err(eb)) => assert_eq!(core::mem::discriminant(&ea), core::mem::discriminant(&eb), "{what}: {ea:?} vs {eb:?}"),
+                (a, b) => panic!("{what}: untabled {a:?}, tabled {b:?}"),
+            }
+        }
+    }
+    assert!(refused >= 10, "{refused} refusals");
+    answered
+}
+
+#[test]
+fn tabled_inverse_is_a_converged_solve_f64() {
+    let (hi, lo) = (&[0.2, 1.0, 4.0, 12.0][..], &[0.2, 1.0, 4.0][..]);
+    for (params, tensions) in [(Params::<f64>::default(), hi), (Params { m: 4, ..Params::<f64>::paper() }, lo), (Params { flex_links: true, ..Params::<f64>::paper() }, lo)] {
+        let f = Finger::new(params).unwrap();
+        let n = tabled_is_a_converged_solve(&f, tensions, 1e-8, 1e-9, 1e-9);
+        assert!(n > 80 * tensions.len(), "{}: {n} answers", label(&params));
+    }
+}
+
+#[test]
+fn tabled_inverse_is_a_converged_solve_f32() {
+    let f = Finger::new(Params::<f32>::default()).unwrap();
+    let n = tabled_is_a_converged_solve(&f, &[0.2, 1.0, 4.0, 12.0], 2e-4, 2e-5, 1e-5);
+    assert!(n > 320, "{n} answers");
+}

@@ -2,7 +2,7 @@
 //! `scenes::TABLE_MODELS`, the cost of building `inverse::BranchTable` (once per parameter
 //! set), then per scene of `scenes::TABLE_SCENES` the forward solve (full: `Finger::solve_with`;
 //! table: `BranchTable::solve_into` into a solution the caller holds, both after the same `compliances`), the inverse from the
-//! table (`solve_pose_tabled`, the table forward's angles, with the scene's tension and without
+//! table (`solve_pose_tabled_into`, the table forward's angles, with the scene's tension and without
 //! one) and fmax (full and from the table). f32. Prints `CAL`, then
 //! `B <model> <ticks> <samples>`,
 //! `S <model> <scene> <full|table> ok <ticks> <setup_ticks> <tip_x> <tip_y> <a1> <a2> <a3> <iters>`,
@@ -14,7 +14,7 @@
 
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
-use finger_model::inverse::{solve_pose_tabled, BranchTable, Options};
+use finger_model::inverse::{solve_pose_tabled_into, BranchTable, Options, PoseSolution};
 use finger_model::{Calibration, Finger, Method, Solution};
 
 use bench::cycles;
@@ -86,10 +86,13 @@ fn run_model(m: &scenes::TableModel) {
         if let Some(a) = angles {
             for (case, given) in [("given", Some(p)), ("free", None)] {
                 let a = core::hint::black_box(a);
+                // written into a solution the caller holds (`solve_pose_tabled_into`), as the
+                // forward's `solve_into`
+                let mut s = PoseSolution::empty();
                 let t0 = cycles::now();
-                let r = solve_pose_tabled(&tb, &a, core::hint::black_box(given));
+                let r = solve_pose_tabled_into(&tb, &a, core::hint::black_box(given), core::hint::black_box(&mut s));
                 let t1 = cycles::now();
-                match core::hint::black_box(r) {
+                match core::hint::black_box(r).map(|()| s) {
                     Ok(s) => hprintln!(
                         "I {} {} {} ok {} {:e} {:e} {:e} {:e} {:e} {:e} {:e}",
                         m.name, name, case, t1 - t0, s.tension, s.volts[0], s.volts[1], s.volts[2], a[0], a[1], a[2]
@@ -112,7 +115,8 @@ fn run_model(m: &scenes::TableModel) {
 
 /// Profiling markers (`--features profile`): the execution trace between the two calls is one
 /// tabled forward solve of the default model at three different voltages (or, built with
-/// PROFILE_SAME set, one voltage; with PROFILE_INVERSE, the tabled inverse of its angles).
+/// PROFILE_SAME set, one voltage; with PROFILE_INVERSE, the tabled inverse of its angles at
+/// 1 N, with PROFILE_FREE too without a tension).
 #[inline(never)]
 #[no_mangle]
 pub extern "C" fn profile_start() {
@@ -139,10 +143,14 @@ fn main() -> ! {
             // PROFILE_INVERSE set at build time: the tabled inverse of that solve's angles
             tb.solve_into(&c, 1.0, &mut out).unwrap();
             let a = core::hint::black_box([out.joint_angle[0], out.joint_angle[1], out.joint_angle[2]]);
+            let mut s = PoseSolution::empty();
             profile_start();
-            let r = solve_pose_tabled(&tb, &a, core::hint::black_box(Some(1.0)));
+            // PROFILE_FREE set too: without a tension (the midpoint rule)
+            let p = if option_env!("PROFILE_FREE").is_some() { None } else { Some(1.0) };
+            let r = solve_pose_tabled_into(&tb, &a, core::hint::black_box(p), core::hint::black_box(&mut s));
             profile_stop();
             core::hint::black_box(r).ok();
+            core::hint::black_box(&s);
             debug::exit(debug::EXIT_SUCCESS);
         }
         profile_start();

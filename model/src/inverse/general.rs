@@ -13,9 +13,10 @@
 //! - at fixed tension it falls with t where thinning softens the joint, rises where the
 //!   stack's axial-bending coupling makes thinning stiffen it.
 //!
-//! With the branch table (table.rs) step 1 reads the range ends off the table and solves only
-//! those that bound the feasible interval; step 4 starts from a quadratic through the table's
-//! three branches. Behind the quasi-Newton solves (model feature `inverse-fallback`), a
+//! With the branch table (table.rs, `solve_tabled`) step 1 reads the range ends off the table
+//! and confirms (one march) only those the answer rests on (the interval's bounds when the
+//! tension is free); step 4 starts from a quadratic through the table's three branches, one
+//! compliance evaluation and one march where that is within the tolerance. Behind the quasi-Newton solves (model feature `inverse-fallback`), a
 //! bracketed root on the warm-started forward equilibrium (`Finger::joint_equilibrium`), the
 //! solve layer's `bracket::increasing_root`: secant steps kept inside a bracket, bisection when
 //! a step leaves it or when one end has been kept three times (the Illinois failure mode),
@@ -90,7 +91,16 @@ impl<'a, R: Real> Gen<'a, R> {
         } else {
             R::zero()
         };
-        Ok(Gen {
+        Ok(Self::with_link_rot(f, opts, link_rot))
+    }
+
+    /// `new` with the link's rotation per newton given (zero where `slope0` is not used: the
+    /// tabled path, whose slopes the table holds).
+    #[inline(always)]
+    fn with_link_rot(f: &'a Finger<R>, opts: &Options<R>, link_rot: R) -> Self {
+        let p = f.params();
+        let lh = p.hinge_len();
+        Gen {
             f,
             p,
             link_rot,
@@ -99,7 +109,7 @@ impl<'a, R: Real> Gen<'a, R> {
             rel: R::from_f64(4.0 * R::EPS),
             max_iter: 2 * opts.max_iter.max(8),
             iters: 0,
-        })
+        }
     }
 
     /// Sub-element compliances at stack thickness t, as `Finger::compliances` computes them.
@@ -113,15 +123,61 @@ impl<'a, R: Real> Gen<'a, R> {
     /// `comp` into `c` (its first m entries; no array returned by value in the hot loop).
     #[inline(never)]
     fn comp_into(&self, t: R, c: &mut [Mat3<R>; MAX_SUB]) -> Result<(), Error> {
-        let k_de = if self.p.layers == 0 { mat3::zero() } else { self.f.stack_stiffness(t) };
-        for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
-            *cj = if self.p.layers == 0 {
-                self.f.hinge_compliance(j)
-            } else {
-                mat3::inverse_spd_of_sum(self.f.hinge_stiffness(j), &k_de).ok_or(Error::Singular { what: "joint stiffness" })?
-            };
+        if self.p.layers == 0 {
+            for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
+                *cj = self.f.hinge_compliance(j);
+            }
+            return Ok(());
         }
-        Ok(())
+        let kd = self.stack_upper(t)?;
+        let mut check = R::zero();
+        for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
+            let (m, ck) = self.sub_compliance(j, &kd);
+            *cj = m;
+            check += ck;
+        }
+        Self::checked(check)
+    }
+
+    /// The upper triangle of the stack's stiffness at thickness t (K_de ∝ t axially, t³ in
+    /// bending: positive semi-definite for t > 0, so each sum with the positive definite
+    /// hinge has a positive diagonal). It depends on t alone: once per compliance evaluation.
+    #[inline(always)]
+    fn stack_upper(&self, t: R) -> Result<[R; 6], Error> {
+        if !(t > R::zero() && t.is_finite()) {
+            return Err(Error::Singular { what: "joint stiffness" });
+        }
+        let kd = self.f.stack_stiffness(t);
+        Ok([kd[0][0], kd[0][1], kd[0][2], kd[1][1], kd[1][2], kd[2][2]])
+    }
+
+    /// Sub-element j's compliance C_j = (K_hinge,j + K_de)⁻¹ (`kd` the stack's upper triangle):
+    /// the upper triangle's sum and its cofactor inverse, `mat3::inverse_spd_of_sum`'s
+    /// arithmetic (the same numbers). With a check value: finite (the determinant plus the
+    /// entries) when the sum is positive definite to working precision, else NaN; one
+    /// finiteness test of the checks' sum then stands for every entry's.
+    #[inline(always)]
+    fn sub_compliance(&self, j: usize, kd: &[R; 6]) -> (Mat3<R>, R) {
+        let kh = self.f.hinge_stiffness(j);
+        let (a, b, c, d, e, f) = (kh[0][0] + kd[0], kh[0][1] + kd[1], kh[0][2] + kd[2], kh[1][1] + kd[3], kh[1][2] + kd[4], kh[2][2] + kd[5]);
+        let ca = d * f - e * e;
+        let cb = c * e - b * f;
+        let cc = b * e - c * d;
+        let det = a * ca + b * cb + c * cc;
+        let ok = det > a * d * f * R::from_f64(64.0 * R::EPS);
+        let inv = R::one() / det;
+        let (cd, ce, cf) = (a * f - c * c, b * c - a * e, a * d - b * b);
+        let o = [ca * inv, cb * inv, cc * inv, cd * inv, ce * inv, cf * inv];
+        let check = if ok { det + o[0] + o[1] + o[2] + o[3] + o[4] + o[5] } else { R::from_f64(f64::NAN) };
+        ([[o[0], o[1], o[2]], [o[1], o[3], o[4]], [o[2], o[4], o[5]]], check)
+    }
+
+    fn checked(check: R) -> Result<(), Error> {
+        if check.is_finite() {
+            Ok(())
+        } else {
+            Err(Error::Singular { what: "joint stiffness" })
+        }
     }
 
     /// Scale the angle tolerance of the solves (the branch table's samples).
@@ -329,30 +385,7 @@ impl<'a, R: Real> Gen<'a, R> {
     ) -> Result<Held<R>, Error> {
         let (t_top, t0) = (lo.thickness, hi.thickness);
         let span = hi.tension - lo.tension;
-        let frac = if span != R::zero() { ((pt - lo.tension) / span).max(R::zero()).min(R::one()) } else { R::one() };
-        // the first guess along the level curve θ(P, t) = θ*: linear between the two ends, or
-        // quadratic through a third point of it (the branch table's middle thickness), which
-        // takes the guess inside the solve's tolerance for the default stacks
-        let mut x0 = t_top + (t0 - t_top) * frac;
-        let mut guess = [
-            lo.st.hole[0] + (hi.st.hole[0] - lo.st.hole[0]) * frac,
-            lo.st.hole[1] + (hi.st.hole[1] - lo.st.hole[1]) * frac,
-        ];
-        if let Some((pm, tm, bm)) = mid {
-            let (p0, p1, p2) = (lo.tension, pm, hi.tension);
-            let (d01, d02, d12) = (p0 - p1, p0 - p2, p1 - p2);
-            if d01 != R::zero() && d02 != R::zero() && d12 != R::zero() {
-                let w = [(pt - p1) * (pt - p2) / (d01 * d02), -(pt - p0) * (pt - p2) / (d01 * d12), (pt - p0) * (pt - p1) / (d02 * d12)];
-                let q = w[0] * t_top + w[1] * tm + w[2] * t0;
-                if q.is_finite() {
-                    x0 = q.max(t_top).min(t0);
-                    guess = [
-                        w[0] * lo.st.hole[0] + w[1] * bm[0] + w[2] * hi.st.hole[0],
-                        w[0] * lo.st.hole[1] + w[1] * bm[1] + w[2] * hi.st.hole[1],
-                    ];
-                }
-            }
-        }
+        let (x0, guess) = level_guess((lo.tension, t_top, lo.st.hole), (hi.tension, t0, hi.st.hole), mid, pt);
         let dt = t0 - t_top;
         // dh/dt, h = θ* - θ: dθ/dP times the tension the range of t trades for
         let mut slope = ((lo.slope + hi.slope) / R::from_f64(2.0) * span / dt).abs();
@@ -576,6 +609,29 @@ impl<'a, R: Real> Gen<'a, R> {
     }
 }
 
+/// The first guess of a thickness solve at tension `pt` along the level curve θ(P, t) = θ*
+/// through the joint's two ends `lo`, `hi` (tension, thickness, hole): linear between them, or
+/// quadratic through a third point `mid` of it (the branch table's middle thickness), which
+/// takes the guess inside the solve's tolerance for the default stacks. Returns (t, hole).
+#[inline(always)]
+fn level_guess<R: Real>(lo: (R, R, [R; 2]), hi: (R, R, [R; 2]), mid: Option<(R, R, [R; 2])>, pt: R) -> (R, [R; 2]) {
+    let ((p0, t_top, b0), (p2, t0, b2)) = (lo, hi);
+    if let Some((p1, tm, b1)) = mid {
+        let (d01, d02, d12) = (p0 - p1, p0 - p2, p1 - p2);
+        if d01 != R::zero() && d02 != R::zero() && d12 != R::zero() {
+            let w = [(pt - p1) * (pt - p2) / (d01 * d02), -(pt - p0) * (pt - p2) / (d01 * d12), (pt - p0) * (pt - p1) / (d02 * d12)];
+            let q = w[0] * t_top + w[1] * tm + w[2] * t0;
+            if q.is_finite() {
+                let b = [w[0] * b0[0] + w[1] * b1[0] + w[2] * b2[0], w[0] * b0[1] + w[1] * b1[1] + w[2] * b2[1]];
+                return (q.max(t_top).min(t0), b);
+            }
+        }
+    }
+    let span = p2 - p0;
+    let frac = if span != R::zero() { ((pt - p0) / span).max(R::zero()).min(R::one()) } else { R::one() };
+    (t_top + (t0 - t_top) * frac, [b0[0] + (b2[0] - b0[0]) * frac, b0[1] + (b2[1] - b0[1]) * frac])
+}
+
 /// The joint's equilibrium at tension `p` with the stack at thickness `t`.
 fn f_eval<R: Real>(g: &Gen<'_, R>, joint: usize, t: R, p: R, guess: Option<[R; 2]>) -> Result<JointEquilibrium<R>, Error> {
     let c = g.comp(t)?;
@@ -754,6 +810,208 @@ pub(super) fn solve<R: Real>(
     }
     out.iterations = g.iters;
     Ok(())
+}
+
+impl<'a, R: Real> Gen<'a, R> {
+    /// One march of joint `joint` at tension `p` from hole `b` with compliances `c`: its state
+    /// when that is already an equilibrium of the full model to the quasi-Newton solves' own
+    /// tolerance (`broyden_steps`: hole residual and joint angle), else None (also when the
+    /// march fails). The sub-element displacements go to `q`.
+    #[inline(never)]
+    fn march_converged(&self, joint: usize, c: &[Mat3<R>; MAX_SUB], p: R, b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+        let st = self.f.joint_march(joint, c, p, b, q).ok()?;
+        let atol = self.tol_angle * (theta.abs() + R::from_f64(0.1));
+        let htol = self.tol_hole.max(self.f.hole_resolution());
+        let ok = (b[0] - st.hole[0]).abs() <= htol && (b[1] - st.hole[1]).abs() <= htol && (st.angle - theta).abs() <= atol;
+        ok.then_some(st)
+    }
+}
+
+/// Joint `k`'s (0-based) range end `e` (0 softest, 1 stiffest stack) held at `theta`,
+/// confirmed from the table's reading `r`: the reading where one march there is within the
+/// solver's tolerance, else the quasi-Newton solve from it. The march's sub-element
+/// displacements go to `q` (the joint's own rows: step 4 writes them again).
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn confirm_end<R: Real>(g: &mut Gen<'_, R>, tb: &BranchTable<R>, k: usize, e: usize, r: TableEnd<R>, theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Result<TableEnd<R>, Error> {
+    let c = &tb.comp[e];
+    if g.march_converged(k + 1, c, r.tension, r.hole, theta, q).is_some() {
+        return Ok(r);
+    }
+    let h = g.hold_tension(k + 1, theta, c, tb.thickness[e], tb.slope0[e], Some((r.tension, r.hole)), None, Some(theta / r.tension), q)?;
+    Ok(TableEnd { tension: h.tension, hole: h.st.hole })
+}
+
+/// `solve_pose_tabled`'s path (docs/inverse.md, "The tabled inverse"): every joint's range
+/// ends and step 4's start read off the table; each read confirmed by one march of the full
+/// model where the answer depends on it, the quasi-Newton solve from there only where that
+/// march is not within the solver's tolerance. Writes `out` in place (every field). Returns
+/// false, leaving the answer to `solve`, where the table does not hold a target (outside its
+/// angles, zero or negative angles) and on a refusal (the error's report is `solve`'s).
+#[inline(never)]
+pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: Option<R>, out: &mut PoseSolution<R>) -> Result<bool, Error> {
+    let f = &tb.finger;
+    let p = f.params();
+    let n = p.n;
+    let [t_top, t0, tm] = tb.thickness;
+    if p.layers == 0 || !(t0 - t_top > R::from_f64(4.0 * R::EPS) * t0) {
+        return Ok(false);
+    }
+    // (the table holds the straight joint's slopes: no link rotation needed)
+    let mut g = Gen::with_link_rot(f, &tb.opts, R::zero());
+    // per joint: the softest end, the stiffest end, the middle branch (tension, hole), and
+    // whether each end is solved; joint k repeats joint k-1 where their angles are equal
+    // (filled with the first joint's reading: no zeroed array written twice)
+    let Some(e0) = tb.ends(angles[0]).filter(|_| angles[0] > R::zero()) else { return Ok(false) };
+    let mut rd = [e0; MAX_JOINTS];
+    for k in 1..n {
+        if angles[k] == angles[k - 1] {
+            rd[k] = rd[k - 1];
+            continue;
+        }
+        match tb.ends(angles[k]) {
+            Some(e) if angles[k] > R::zero() => rd[k] = e,
+            _ => return Ok(false),
+        }
+    }
+    let mut exact = [[false; 2]; MAX_JOINTS];
+    let band = R::from_f64(TABLE_BAND);
+    // a target the readings refuse (the interval empty; a given tension outside a joint's
+    // range by more than the band) is `solve`'s to refuse and report, before any march here
+    let outside = match tension {
+        None => {
+            let bound = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
+            !(bound[0] <= bound[1])
+        }
+        Some(pg) => {
+            let tol = band * pg;
+            (0..n).any(|k| {
+                let (a, b) = (rd[k][0].tension, rd[k][1].tension);
+                a.min(b) - pg > tol || pg - a.max(b) > tol
+            })
+        }
+    };
+    if outside {
+        return Ok(false);
+    }
+    // 1b. confirm the ends the answer depends on. Without a tension: the interval's bounds
+    //     (the midpoint rule rests on them) and any end within `TABLE_BAND` of them. With one:
+    //     none; step 4's converged solve inside [t_top, t0] is what shows the tension within
+    //     a joint's range (near an end whose solve does not converge, `solve` decides)
+    while tension.is_none() {
+        let bound = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
+        let near = |x: R| (x - bound[0]).abs() <= band * bound[0] || (x - bound[1]).abs() <= band * bound[1];
+        let mut next = None;
+        'find: for k in 0..n {
+            for e in 0..2 {
+                if !exact[k][e] && near(rd[k][e].tension) {
+                    next = Some((k, e));
+                    break 'find;
+                }
+            }
+        }
+        let Some((k, e)) = next else { break };
+        let solved = confirm_end(&mut g, tb, k, e, rd[k][e], angles[k], &mut out.sub_q[k])?;
+        g.iters += 1;
+        for j in 0..n {
+            if angles[j] == angles[k] {
+                rd[j][e] = solved;
+                exact[j][e] = true;
+            }
+        }
+    }
+    // 2-3. the interval and the tension (`choose_tension`'s rule); a refusal is `solve`'s to
+    //     report
+    let interval = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
+    let pt = match tension {
+        Some(t) => t,
+        None if interval[0] <= interval[1] => (interval[0] + interval[1]) / R::from_f64(2.0),
+        None => return Ok(false),
+    };
+    // (the midpoint of a non-empty interval lies in every joint's range; a given tension was
+    // checked against the readings above, and step 4 shows it inside or hands it to `solve`)
+    if !(pt > R::zero()) {
+        return Ok(false);
+    }
+    // the answer's scalars, and zeros past the n joints and m sub-elements (written in place)
+    let zr = R::zero();
+    out.n = n;
+    out.m = p.m;
+    out.tension_given = tension.is_some();
+    out.interval = interval;
+    out.tension = pt;
+    for k in 0..MAX_JOINTS {
+        out.angles[k] = if k < n { angles[k] } else { zr };
+        if k >= n {
+            out.volts[k] = zr;
+            out.thickness[k] = zr;
+            out.q[k] = [zr; 3];
+            out.links[k] = [zr; 3];
+        }
+        for j in (if k < n { p.m } else { 0 })..MAX_SUB {
+            out.sub_q[k][j] = [zr; 3];
+        }
+    }
+    // 4. every joint's thickness at that tension: one compliance evaluation and one march at
+    //    the table's start along the level curve, the quasi-Newton solve only if that march is
+    //    not within the tolerance; then the voltage
+    let lh = p.hinge_len();
+    let v_top = tb.v_top;
+    // the compliances at each joint's thickness (filled with the table's 0 V ones: every
+    // entry is written before it is read, the first m by `comp_into`)
+    let mut c = [tb.comp[1][0]; MAX_SUB];
+    for k in 0..n {
+        if k > 0 && angles[k] == angles[k - 1] {
+            out.thickness[k] = out.thickness[k - 1];
+            out.volts[k] = out.volts[k - 1];
+            out.q[k] = out.q[k - 1];
+            // (row by row, strided: no call to a byte-wise memcpy)
+            for jj in 0..p.m {
+                out.sub_q[k][jj] = out.sub_q[k - 1][jj];
+            }
+            out.links[k] = out.links[k - 1];
+            continue;
+        }
+        let [lo, hi, md] = rd[k];
+        let (t_guess, b) = level_guess((lo.tension, t_top, lo.hole), (hi.tension, t0, hi.hole), Some((md.tension, tm, md.hole)), pt);
+        // at either end of the stack's range the table holds the compliances
+        let ck = if t_guess >= t0 {
+            &tb.comp[1]
+        } else if t_guess <= t_top {
+            &tb.comp[0]
+        } else {
+            g.comp_into(t_guess, &mut c)?;
+            &c
+        };
+        g.iters += 1;
+        let (t, st) = match g.march_converged(k + 1, ck, pt, b, angles[k], &mut out.sub_q[k]) {
+            Some(st) => (t_guess, st),
+            None if tension.is_some() && (0..2).any(|e| (rd[k][e].tension - pt).abs() <= band * pt) => {
+                // a given tension near an unconfirmed end: `solve` confirms the range
+                return Ok(false);
+            }
+            None => {
+                let held = |e: &TableEnd<R>, t: R| Held {
+                    tension: e.tension,
+                    thickness: t,
+                    st: JointMarch { hole: e.hole, angle: angles[k], ..g.straight_st() },
+                    slope: angles[k] / e.tension,
+                    jac: None,
+                    exact: false,
+                };
+                let (l, h) = (held(&lo, t_top), held(&hi, t0));
+                let r = g.hold_thickness(k + 1, angles[k], pt, &l, &h, Some((md.tension, tm, md.hole)), &mut out.sub_q[k])?;
+                (r.thickness, r.st)
+            }
+        };
+        let t = t.max(t_top).min(t0);
+        out.thickness[k] = t;
+        out.volts[k] = if t >= t0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, t)?.min(v_top) };
+        out.q[k] = [st.end.x - lh, st.end.y, st.end.theta];
+        out.links[k] = st.link;
+    }
+    out.iterations = g.iters;
+    Ok(true)
 }
 
 /// The finger without stacks: only the tension is free (the parent's rule).

@@ -13,10 +13,10 @@
 //! path's solves); this module holds the table and reads it, and imports nothing of the solves.
 //!
 //! What it is for: `solve_pose_tabled` reads step 1's tension range of every joint off
-//! the table (a cubic through four samples) instead of solving for it, and solves (verifies)
-//! only the ends that bound the feasible interval; its step 4 starts from the interpolated
-//! ends. That takes the inverse of the default model (m = 8) from ~60,000 to ~12,000
-//! instructions on the M4F (docs/inverse-cost.md).
+//! the table (a cubic through four samples) instead of solving for it, and confirms (one
+//! march each) only the ends its answer rests on; its step 4 starts from the table's point on
+//! the level curve, one compliance evaluation and one march (general.rs `solve_tabled`;
+//! docs/inverse-cost.md has the counts).
 //!
 //! What it is not: a reduced model. Every number `solve_pose_tabled` returns (the tension,
 //! the interval's ends, the thicknesses and voltages, the states) is a converged solve of the
@@ -136,20 +136,14 @@ impl<R: Real> BranchTable<R> {
         let (sm, s1, s2) = (s + R::one(), s - R::one(), s - R::from_f64(2.0));
         let (sixth, half) = (R::from_f64(1.0 / 6.0), R::from_f64(0.5));
         let w = [-s * s1 * s2 * sixth, sm * s1 * s2 * half, -sm * s * s2 * half, sm * s * s1 * sixth];
-        let mut out = [TableEnd { tension: R::zero(), hole: [R::zero(); 2] }; 3];
-        for (e, o) in out.iter_mut().enumerate() {
-            let mut v = [R::zero(); 3];
-            for n in 0..4 {
-                for c in 0..3 {
-                    v[c] += w[n] * self.x[e][i - 1 + n][c];
-                }
-            }
-            if !(v[0] > R::zero()) {
-                return None;
-            }
-            *o = TableEnd { tension: v[0], hole: [v[1], v[2]] };
-        }
-        Some(out)
+        // (the four samples as one slice per branch: one bounds check each)
+        let read = |e: usize| {
+            let y: &[[R; 3]; 4] = self.x[e][i - 1..i + 3].try_into().ok()?;
+            let v = |c: usize| w[0] * y[0][c] + w[1] * y[1][c] + w[2] * y[2][c] + w[3] * y[3][c];
+            let tension = v(0);
+            (tension > R::zero()).then(|| TableEnd { tension, hole: [v(1), v(2)] })
+        };
+        Some([read(0)?, read(1)?, read(2)?])
     }
 }
 
