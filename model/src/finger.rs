@@ -635,10 +635,8 @@ impl<R: Real> Finger<R> {
                 sol.q[k] = sol.q[k - 1];
                 prev
             } else {
-                match self.march_into(&c.c[k], tension, b, None, &mut sol.q[k]) {
-                    Ok((end, hole, sc)) if (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq() <= tol * tol => {
-                        (end, sc, hole, (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq(), R::one())
-                    }
+                match self.march_tension(&c.c[k], tension, b, &mut sol.q[k]) {
+                    Ok((end, hole, sc, r2)) if r2 <= tol * tol => (end, sc, hole, r2, R::one()),
                     _ => {
                         let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
                         iters += it;

@@ -116,6 +116,80 @@ impl<R: Real> Finger<R> {
         Ok((pose, hole, [s, co]))
     }
 
+    /// The plain march under tension alone (P > 0), carried in each sub-element's own frame:
+    /// the same equations as `march_t` (MODEL.md "Equilibrium", the paper's Eq. 7 and 15) with
+    /// the hole B and the cable force kept as vectors in the running frame, so a sub-element
+    /// costs the wrench, its closed-form 3x3 equilibrium, and one turn of two vectors (no
+    /// global pose update, no moment arm rebuilt from the pose). The end's rotation comes back
+    /// once from the turned force (R^T f_c = f). Same answer as `march_into` to the scalar's
+    /// rounding (test `tension_march_matches_march`); the branch table's forward marches with
+    /// it (`Finger::fill_from_holes`). Returns the hinge end, the hole, (sin, cos) of the end's
+    /// angle, and the squared hole residual |b - hole|².
+    #[inline(never)]
+    pub(super) fn march_tension(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        q_out: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
+        let (e, l) = (self.p.e, self.sub_len);
+        let span_v = [b[0], b[1] - e];
+        let span = norm2(span_v);
+        if !(span >= self.p.span_floor) || !(tension > R::zero()) {
+            return Err(MarchError::Contact);
+        }
+        let fc = [span_v[0] * -tension / span, span_v[1] * -tension / span];
+        // f: the cable's force, u: from the sub-element's undeformed distal end to B, both in
+        // the sub-element's proximal frame
+        let mut f = fc;
+        let mut u = [b[0] - l, b[1]];
+        let mut theta = R::zero();
+        let small = R::from_f64(small_turn(R::EPS));
+        let one = R::one();
+        let eps_den = R::from_f64(1e-6);
+        let m = self.p.m.min(MAX_SUB);
+        for (cj, qo) in c[..m].iter().zip(q_out[..m].iter_mut()) {
+            let m0 = u[0] * f[1] - u[1] * f[0];
+            // q = C (f, M), M the moment about the deformed distal end: M = m0 + f0 q1 - f1 q0
+            // is linear in q, so with a = C (f, 0) it is (m0 + f0 a1 - f1 a0) / den (`march_t`'s
+            // closed form, its terms regrouped)
+            let a = [
+                f[0] * cj[0][0] + f[1] * cj[0][1],
+                f[0] * cj[1][0] + f[1] * cj[1][1],
+                f[0] * cj[2][0] + f[1] * cj[2][1],
+            ];
+            let den = (f[1] * cj[0][2] + one) - f[0] * cj[1][2];
+            if !(den.abs() > eps_den) {
+                return Err(MarchError::Singular);
+            }
+            let mm = (m0 + f[0] * a[1] - f[1] * a[0]) / den;
+            let q = [a[0] + mm * cj[0][2], a[1] + mm * cj[1][2], a[2] + mm * cj[2][2]];
+            *qo = q;
+            theta = theta + q[2];
+            let v = [u[0] - q[0], u[1] - q[1]];
+            let (sd, cd) = if q[2].abs() < small { q[2].sin_cos_small() } else { q[2].sin_cos() };
+            // into the next sub-element's frame (turned by q[2])
+            f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
+            u = [cd * v[0] + sd * v[1] - l, cd * v[1] - sd * v[0]];
+        }
+        // the end's rotation R from f = R^T f_c
+        let inv = one / (fc[0] * fc[0] + fc[1] * fc[1]);
+        let co = (f[0] * fc[0] + f[1] * fc[1]) * inv;
+        let s = (f[0] * fc[1] - f[1] * fc[0]) * inv;
+        // B - end = R r, hole - end = R (0, e): b - hole = R (r - (0, e))
+        let r = [u[0] + l, u[1]];
+        let d = [r[0], r[1] - e];
+        let res2 = d[0] * d[0] + d[1] * d[1];
+        let end = Pose { x: b[0] - (co * r[0] - s * r[1]), y: b[1] - (s * r[0] + co * r[1]), theta };
+        let hole = [b[0] - (co * d[0] - s * d[1]), b[1] - (s * d[0] + co * d[1])];
+        // one test for all four: a sum is finite only if every term is
+        if !(hole[0] + hole[1] + theta + res2).is_finite() {
+            return Err(MarchError::Singular);
+        }
+        Ok((end, hole, [s, co], res2))
+    }
+
     /// One dual march at hole guess `b` (tension alone): state, residual, Jacobian.
     pub(super) fn eval_dual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2]) -> Result<Eval<R>, MarchError> {
         let mut q = [[R::zero(); 3]; MAX_SUB];
@@ -242,6 +316,61 @@ mod tests {
         let mut q = [[0.0; 3]; MAX_SUB];
         let t = f.march_t::<f32>(&c.c[0], 1.0, [9.5, 5.5], None, &mut q, |x| x).ok().unwrap();
         assert_eq!(a.hole, t.1);
+    }
+
+    /// The tension-alone march in the running frame is the plain march (`march_t`) to rounding:
+    /// same sub-element displacements, end, hole and (sin, cos), in f64 and in f32, at the
+    /// stiffest and softest stacks, the calibrated finger too, and up to joint angles past the
+    /// series turn's bound (m = 1: one turn of the whole joint).
+    #[test]
+    fn tension_march_matches_march() {
+        let cal = crate::calibration::Calibration::<f64>::model_md();
+        let mut fingers = fingers().to_vec();
+        fingers.push(Finger::with_calibration(Params::default(), cal).unwrap());
+        fingers.push(Finger::new(Params::<f64> { m: 1, ..Params::default() }).unwrap());
+        for f in &fingers {
+            let v_top = 0.9 * f.voltage_ceiling();
+            for volts in [0.0, v_top] {
+                let c = f.compliances(&[volts; 3]).unwrap();
+                for tension in [0.05, 1.0, 7.0, 15.0] {
+                    for b in [[10.0, 5.0], [9.3, 6.1], [8.0, 7.5], [3.0, 9.0]] {
+                        let Ok(a) = f.march(&c.c[0], tension, b, None) else { continue };
+                        let mut q = [[0.0; 3]; MAX_SUB];
+                        let (end, hole, sc, r2) = f.march_tension(&c.c[0], tension, b, &mut q).ok().unwrap();
+                        let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * (1.0 + y.abs());
+                        assert!(close(end.x, a.end.x) && close(end.y, a.end.y) && close(end.theta, a.end.theta), "{end:?} {:?}", a.end);
+                        assert!(close(hole[0], a.hole[0]) && close(hole[1], a.hole[1]));
+                        let (s, co) = a.end.theta.sin_cos();
+                        assert!((sc[0] - s).abs() < 1e-12 && (sc[1] - co).abs() < 1e-12);
+                        assert!(close(r2, (b[0] - a.hole[0]).powi(2) + (b[1] - a.hole[1]).powi(2)));
+                        for j in 0..MAX_SUB {
+                            for i in 0..3 {
+                                assert!((q[j][i] - a.q[j][i]).abs() <= 1e-12 * (1e-3 + a.q[j][i].abs()), "q[{j}][{i}]");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // f32: within a few units of its resolution on a hinge length
+        let f = Finger::new(Params::<f32>::default()).unwrap();
+        for volts in [0.0, 5000.0, 9000.0] {
+            let c = f.compliances(&[volts; 3]).unwrap();
+            for tension in [0.2, 1.0, 7.0, 15.0] {
+                let b = [9.0, 6.5];
+                let a = f.march(&c.c[0], tension, b, None).ok().unwrap();
+                let mut q = [[0.0; 3]; MAX_SUB];
+                let (end, hole, _, _) = f.march_tension(&c.c[0], tension, b, &mut q).ok().unwrap();
+                assert!((end.x - a.end.x).abs() < 2e-5 && (end.y - a.end.y).abs() < 2e-5 && (end.theta - a.end.theta).abs() < 2e-6);
+                assert!((hole[0] - a.hole[0]).abs() < 2e-5 && (hole[1] - a.hole[1]).abs() < 2e-5);
+            }
+        }
+        // what the plain march refuses, it refuses
+        let f = &fingers[0];
+        let c = f.compliances(&[0.0; 3]).unwrap();
+        let mut q = [[0.0; 3]; MAX_SUB];
+        assert!(f.march_tension(&c.c[0], 1.0, [0.0, f.params().e], &mut q).is_err(), "span below its floor");
+        assert!(f.march_tension(&c.c[0], 0.0, [10.0, 5.0], &mut q).is_err(), "no tension: not this march's case");
     }
 
     /// The series turn is the sine and cosine to the scalar's resolution over its whole range.
