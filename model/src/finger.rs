@@ -161,7 +161,10 @@ pub struct Solution<R> {
     pub tension: R,
     /// External tip force (base frame), N.
     pub tip_force: [R; 2],
-    /// Sub-element displacements q = (δax, δtr, Δθ), `q[k][j]`.
+    /// Sub-element displacements q = (δax, δtr, Δθ), `q[k][j]`. Every solver leaves the rows
+    /// past (n, m) zero, as `empty()` has them (and the per-joint arrays past n as `empty()`
+    /// has them); the `_into` solves rely on it and clear only rows a solution held past
+    /// another finger's (n, m).
     pub q: [[[R; 3]; MAX_SUB]; MAX_JOINTS],
     /// Link deflections (δax, δtr, Δθ) in each link's proximal frame (zero for rigid links).
     pub links: [[R; 3]; MAX_JOINTS],
@@ -598,20 +601,40 @@ impl<R: Real> Finger<R> {
         sol: &mut Solution<R>,
     ) -> Result<(), Error> {
         let (n, m) = (self.p.n, self.p.m);
+        // a solution's rows past its own (n, m) are zero (`Solution`): only the rows `sol`
+        // held past this finger's (n, m) are cleared (none for `Solution::empty()` or a
+        // solution of this finger)
+        let (held_n, held_m) = (sol.n.min(MAX_JOINTS), sol.m.min(MAX_SUB));
+        for k in 0..held_n {
+            let from = if k < n { m } else { 0 };
+            if from < held_m {
+                for row in sol.q[k][from..held_m].iter_mut() {
+                    *row = [R::zero(); 3];
+                }
+            }
+        }
+        for k in n..held_n {
+            sol.nodes[k + 1] = Pose::origin();
+            sol.links[k] = [R::zero(); 3];
+            sol.joint_angle[k] = R::zero();
+            sol.span[k] = R::zero();
+            sol.tangent_det[k] = R::one();
+        }
         sol.n = n;
         sol.m = m;
         sol.tension = tension;
         sol.tip_force = [R::zero(); 2];
         sol.thickness = c.thickness;
         sol.volts = c.volts;
-        for k in 0..MAX_JOINTS {
-            let from = if k < n { m } else { 0 };
-            for row in sol.q[k][from..].iter_mut() {
-                *row = [R::zero(); 3];
-            }
-        }
         let link = self.link_q(tension, &Pose::origin(), None);
-        let (ls, lc) = if link[2] == R::zero() { (R::zero(), R::one()) } else { link[2].sin_cos() };
+        // the link's rotation (small: the series turn where it holds, `march::small_turn`)
+        let (ls, lc) = if link[2] == R::zero() {
+            (R::zero(), R::one())
+        } else if link[2].abs() < R::from_f64(march::small_turn(R::EPS)) {
+            link[2].sin_cos_small()
+        } else {
+            link[2].sin_cos()
+        };
         let (lx, ly) = (self.link_len + link[0], link[1]);
         let mut node = Pose::origin();
         let (mut s, mut co) = (R::zero(), R::one());
@@ -619,7 +642,7 @@ impl<R: Real> Finger<R> {
         // the joint before: hinge end, (sin, cos) of its angle, the hole it arrived at, its
         // squared residual and tangent determinant
         let mut prev = (Pose::origin(), [R::zero(), R::one()], [R::zero(); 2], R::zero(), R::one());
-        let (mut res2, mut iters, mut excursion) = (R::zero(), 0u32, R::zero());
+        let (mut res2, mut iters, mut excursion, mut dets) = (R::zero(), 0u32, R::zero(), R::zero());
         for k in 0..n {
             let b = holes[k];
             // a joint with the same voltage, thickness and guess as the one before has its
@@ -649,6 +672,7 @@ impl<R: Real> Finger<R> {
             };
             prev = (end, turn, hole, r2, det);
             res2 += r2;
+            dets += det;
             sol.tangent_det[k] = det;
             let [se, ce] = turn;
             let hinge = Pose { x: node.x + co * end.x - s * end.y, y: node.y + s * end.x + co * end.y, theta: node.theta + end.theta };
@@ -666,19 +690,12 @@ impl<R: Real> Finger<R> {
             sol.span[k] = span;
             excursion += self.p.hinge_len() - span;
         }
-        for k in n..MAX_JOINTS {
-            sol.nodes[k + 1] = Pose::origin();
-            sol.links[k] = [R::zero(); 3];
-            sol.joint_angle[k] = R::zero();
-            sol.span[k] = R::zero();
-            sol.tangent_det[k] = R::one();
-        }
         sol.iterations = iters;
         sol.cable_excursion = excursion;
         sol.residual = res2.sqrt();
-        // a non-finite node carries on to the tip
-        let finite = node.x.is_finite() && node.y.is_finite() && node.theta.is_finite() && sol.tangent_det[..n].iter().all(|d| d.is_finite());
-        if !(finite && sol.residual.is_finite() && excursion.is_finite()) {
+        // a non-finite node carries on to the tip; one test for all (a sum is finite only if
+        // every term is)
+        if !(node.x + node.y + node.theta + res2 + excursion + dets).is_finite() {
             return Err(Error::Singular { what: "solution (non-finite)" });
         }
         Ok(())

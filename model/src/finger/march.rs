@@ -125,7 +125,7 @@ impl<R: Real> Finger<R> {
     /// rounding (test `tension_march_matches_march`); the branch table's forward marches with
     /// it (`Finger::fill_from_holes`). Returns the hinge end, the hole, (sin, cos) of the end's
     /// angle, and the squared hole residual |b - hole|².
-    #[inline(never)]
+    #[inline(always)]
     pub(super) fn march_tension(
         &self,
         c: &[Mat3<R>; MAX_SUB],
