@@ -34,6 +34,34 @@ pub(super) fn small_turn(eps: f64) -> f64 {
     }
 }
 
+/// (sin x, cos x) of a sub-element's rotation: the series (`Real::sin_cos_small`'s) below
+/// `small` (`small_turn`), the series at x/2 and the double angle below 2 `small` (the stiffest
+/// scenes' middle sub-elements), else the scalar's sin/cos. The bounds are tested on x², which
+/// the series needs anyway.
+#[inline(always)]
+fn turn<R: Real>(x: R, small: R) -> (R, R) {
+    let z = x * x;
+    let small2 = small * small;
+    if z < small2 {
+        series_turn(x, z)
+    } else if z < small2 * R::from_f64(4.0) {
+        let h = x * R::from_f64(0.5);
+        let (s, c) = series_turn(h, h * h);
+        let s2 = s + s;
+        (s2 * c, R::one() - s2 * s)
+    } else {
+        x.sin_cos()
+    }
+}
+
+/// `Real::sin_cos_small` with x² given.
+#[inline(always)]
+fn series_turn<R: Real>(x: R, z: R) -> (R, R) {
+    let s = x * (R::one() - z * (R::from_f64(1.0 / 6.0) - z * R::from_f64(1.0 / 120.0)));
+    let c = R::one() - z * (R::from_f64(0.5) - z * (R::from_f64(1.0 / 24.0) - z * R::from_f64(1.0 / 720.0)));
+    (s, c)
+}
+
 /// A joint state, its hole residual `b - hole` and the residual's Jacobian `I - ∂hole/∂b`.
 pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
 
@@ -117,13 +145,15 @@ impl<R: Real> Finger<R> {
     }
 
     /// The plain march under tension alone (P > 0), carried in each sub-element's own frame:
-    /// the same equations as `march_t` (MODEL.md "Equilibrium", the paper's Eq. 7 and 15) with
-    /// the hole B and the cable force kept as vectors in the running frame, so a sub-element
-    /// costs the wrench, its closed-form 3x3 equilibrium, and one turn of two vectors (no
-    /// global pose update, no moment arm rebuilt from the pose). The end's rotation comes back
-    /// once from the turned force (R^T f_c = f). Same answer as `march_into` to the scalar's
-    /// rounding (test `tension_march_matches_march`); the branch table's forward marches with
-    /// it (`Finger::fill_from_holes`). Returns the hinge end, the hole, (sin, cos) of the end's
+    /// the same equations as `march_t` (MODEL.md "Equilibrium", the paper's Eq. 7 and 15), with
+    /// the cable force f turned into each sub-element's frame and the hole B held by two
+    /// scalars, the moment and the dot product of (B - the undeformed distal end) with f, each
+    /// carried to the next sub-element by a rotation-free recurrence: a sub-element costs its
+    /// closed-form 3x3 equilibrium and one turn of f (no pose update, no moment arm rebuilt from
+    /// the pose). The end's pose comes back once: its rotation from f = R^T f_c, B - end from
+    /// the two scalars. Same answer as `march_into` to the scalar's rounding (test
+    /// `tension_march_matches_march`); the branch table's forward marches with it
+    /// (`Finger::fill_from_holes`). Returns the hinge end, the hole, (sin, cos) of the end's
     /// angle, and the squared hole residual |b - hole|².
     #[inline(always)]
     pub(super) fn march_tension(
@@ -140,17 +170,18 @@ impl<R: Real> Finger<R> {
             return Err(MarchError::Contact);
         }
         let fc = [span_v[0] * -tension / span, span_v[1] * -tension / span];
-        // f: the cable's force, u: from the sub-element's undeformed distal end to B, both in
-        // the sub-element's proximal frame
+        // in sub-element j's proximal frame: f the cable's force on the distal chain, w = B - the
+        // sub-element's undeformed distal end; m0 = w × f (the moment about that end), dot = w · f
         let mut f = fc;
-        let mut u = [b[0] - l, b[1]];
+        let mut m0 = (b[0] - l) * fc[1] - b[1] * fc[0];
+        let mut dot = (b[0] - l) * fc[0] + b[1] * fc[1];
+        let mut mm = m0;
         let mut theta = R::zero();
         let small = R::from_f64(small_turn(R::EPS));
         let one = R::one();
         let eps_den = R::from_f64(1e-6);
         let m = self.p.m.min(MAX_SUB);
         for (cj, qo) in c[..m].iter().zip(q_out[..m].iter_mut()) {
-            let m0 = u[0] * f[1] - u[1] * f[0];
             // q = C (f, M), M the moment about the deformed distal end: M = m0 + f0 q1 - f1 q0
             // is linear in q, so with a = C (f, 0) it is (m0 + f0 a1 - f1 a0) / den (`march_t`'s
             // closed form, its terms regrouped)
@@ -163,22 +194,26 @@ impl<R: Real> Finger<R> {
             if !(den.abs() > eps_den) {
                 return Err(MarchError::Singular);
             }
-            let mm = (m0 + f[0] * a[1] - f[1] * a[0]) / den;
+            mm = (m0 + f[0] * a[1] - f[1] * a[0]) / den;
             let q = [a[0] + mm * cj[0][2], a[1] + mm * cj[1][2], a[2] + mm * cj[2][2]];
             *qo = q;
             theta = theta + q[2];
-            let v = [u[0] - q[0], u[1] - q[1]];
-            let (sd, cd) = if q[2].abs() < small { q[2].sin_cos_small() } else { q[2].sin_cos() };
-            // into the next sub-element's frame (turned by q[2])
+            // w - (q0, q1) is B - the deformed distal end: its dot with f, then everything into
+            // the next frame (turned by q[2]; dot and cross products keep) and shifted by L
+            let dq = dot - (q[0] * f[0] + q[1] * f[1]);
+            let (sd, cd) = turn(q[2], small);
             f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
-            u = [cd * v[0] + sd * v[1] - l, cd * v[1] - sd * v[0]];
+            m0 = mm - l * f[1];
+            dot = dq - l * f[0];
         }
-        // the end's rotation R from f = R^T f_c
+        // the end's rotation R from f = R^T f_c, and r = B - end in its frame from r · f and
+        // r × f (= the last moment M)
         let inv = one / (fc[0] * fc[0] + fc[1] * fc[1]);
         let co = (f[0] * fc[0] + f[1] * fc[1]) * inv;
         let s = (f[0] * fc[1] - f[1] * fc[0]) * inv;
-        // B - end = R r, hole - end = R (0, e): b - hole = R (r - (0, e))
-        let r = [u[0] + l, u[1]];
+        let rf = dot + l * f[0];
+        let r = [(rf * f[0] + mm * f[1]) * inv, (rf * f[1] - mm * f[0]) * inv];
+        // hole - end = R (0, e): b - hole = R (r - (0, e))
         let d = [r[0], r[1] - e];
         let res2 = d[0] * d[0] + d[1] * d[1];
         let end = Pose { x: b[0] - (co * r[0] - s * r[1]), y: b[1] - (s * r[0] + co * r[1]), theta };

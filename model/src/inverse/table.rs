@@ -176,7 +176,7 @@ impl<R: Real> BranchTable<R> {
     /// Where each branch carries tension `p` (N): the cubic P(θ) through the four samples
     /// around it (in power form on the interval, s in node units from node i) inverted by two
     /// Newton steps from the linear guess, and the hole's cubic there. None when `p` is not
-    /// inside every branch's tabulated tensions.
+    /// inside every branch's tabulated tensions (its last sample's included).
     #[inline(never)]
     pub(crate) fn branch_holes(&self, p: R) -> Option<BranchHoles<R>> {
         let mut out = BranchHoles { hole: [[R::zero(); 2]; 3] };
@@ -184,7 +184,7 @@ impl<R: Real> BranchTable<R> {
         for (e, o) in out.hole.iter_mut().enumerate() {
             let len = self.len[e];
             let xs = &self.x[e];
-            if len < 4 || !(p > R::zero() && p < xs[len - 1][0]) {
+            if len < 4 || !(p > R::zero() && p <= xs[len - 1][0]) {
                 return None;
             }
             // the sample interval [a, a+1] holding p (tensions rise along the branch): a
@@ -258,7 +258,9 @@ impl<R: Real> BranchTable<R> {
         }
         self.grid_len = 1;
         for j in 1..TABLE_LEN {
-            let Some(h) = self.branch_holes(self.dp * R::from_u32(j as u32)) else { break };
+            // the last node at the common range's end itself (`dp` x j may round past it)
+            let pj = if j == TABLE_LEN - 1 { top } else { self.dp * R::from_u32(j as u32) };
+            let Some(h) = self.branch_holes(pj) else { break };
             for e in 0..3 {
                 self.grid[e][j] = h.hole[e];
             }
@@ -432,5 +434,30 @@ impl<R: Real> BranchTable<R> {
             }
         }
         f.fmax_with(&c, Some(&starts))
+    }
+}
+
+#[cfg(test)]
+mod fwd_probe {
+    extern crate std;
+    use super::*;
+    use crate::calibration::Calibration;
+    use crate::params::Params;
+    #[test]
+    fn probe_grid() {
+        for cal in [false, true] {
+            let p = Params::<f64> { layers: 4, m: 8, plate: true, flex_links: true, ..Params::default() }.cast::<f32>();
+            let g = if cal { [1.5407f32, 6.2456, 1.0669, 1.1546, 0.7183, 0.0546, 5.2540, -1.7563] } else { [1.0, 1.0, 1.0, 1.0, 1.0, 0.0, 1.0, 0.0] };
+            let c = Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
+            let f = Finger::with_calibration(p, c).unwrap();
+            let t = BranchTable::new(&f, &Options::default()).unwrap();
+            let tops: [f32; 3] = [0, 1, 2].map(|e| t.x[e][t.len[e] - 1][0]);
+            std::println!("cal {cal} grid_len {} grid_top {} dp {} tops {:?} lens {:?}", t.grid_len, t.grid_top, t.dp, tops, t.len);
+            let cc = f.compliances(&[0.0; 3]).unwrap();
+            let mut kmax = 0.0f32;
+            for k in [0usize] { for j in 0..8 { let m = cc.c[k][j]; kmax = kmax.max((m[0][2]*m[0][2] + m[1][2]*m[1][2]).sqrt()); } }
+            let hc: f32 = (0..8).map(|j| { let m = f.hinge_compliance(j); (m[0][2]*m[0][2] + m[1][2]*m[1][2]).sqrt() }).fold(0.0, f32::max);
+            std::println!("kappa(0V) {kmax} kappa(hinge) {hc}");
+        }
     }
 }
