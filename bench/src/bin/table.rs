@@ -137,10 +137,19 @@ fn main() -> ! {
     let cp = cortex_m::Peripherals::take().unwrap();
     cycles::start(cp.SYST);
     if cfg!(feature = "profile") {
-        let f = model(&scenes::TABLE_MODELS[0]).unwrap();
+        // PROFILE_HARD set at build time: the calibrated model's 15 N scene at 2/6/9 kV instead
+        let hard = option_env!("PROFILE_HARD").is_some();
+        let f = model(&scenes::TABLE_MODELS[if hard { 1 } else { 0 }]).unwrap();
         let tb = BranchTable::new(&f, &Options::default()).unwrap();
         // PROFILE_SAME=1 at build time: the three joints at the same voltage instead
-        let v = if option_env!("PROFILE_SAME").is_some() { [5000.0; 3] } else { [9000.0, 5000.0, 0.0] };
+        let v = if option_env!("PROFILE_SAME").is_some() {
+            [5000.0; 3]
+        } else if hard {
+            [2000.0, 6000.0, 9000.0]
+        } else {
+            [9000.0, 5000.0, 0.0]
+        };
+        let p = if hard { 15.0 } else { 1.0 };
         let c = f.compliances(&core::hint::black_box(v)).unwrap();
         let mut out = Solution::empty();
         if option_env!("PROFILE_INVERSE").is_some() {
@@ -154,7 +163,7 @@ fn main() -> ! {
             debug::exit(debug::EXIT_SUCCESS);
         }
         profile_start();
-        let r = tb.solve_into(&c, core::hint::black_box(1.0), core::hint::black_box(&mut out));
+        let r = tb.solve_into(&c, core::hint::black_box(p), core::hint::black_box(&mut out));
         profile_stop();
         core::hint::black_box(r).ok();
         core::hint::black_box(&out);

@@ -458,6 +458,10 @@ mod fwd_probe {
             for k in [0usize] { for j in 0..8 { let m = cc.c[k][j]; kmax = kmax.max((m[0][2]*m[0][2] + m[1][2]*m[1][2]).sqrt()); } }
             let hc: f32 = (0..8).map(|j| { let m = f.hinge_compliance(j); (m[0][2]*m[0][2] + m[1][2]*m[1][2]).sqrt() }).fold(0.0, f32::max);
             std::println!("kappa(0V) {kmax} kappa(hinge) {hc}");
+            for (pp, v) in [(15.0f32, [2000.0f32, 6000.0, 9000.0]), (7.0, [9000.0, 5000.0, 0.0])] {
+                let sol = t.solve(pp, &v).unwrap();
+                for k in 0..3 { std::println!("P {pp} joint {k} q2 {:?}", (0..8).map(|j| sol.q[k][j][2]).collect::<std::vec::Vec<_>>()); }
+            }
         }
     }
 }
