@@ -541,23 +541,7 @@ impl<R: Real> Finger<R> {
     /// its own; the solution is written in place (no joint-state arrays, no second march for
     /// the residual and tangent: Newton's last dual march gives them).
     fn solve_tension_alone(&self, c: &Compliances<R>, tension: R, tol: R, max_iter: u32) -> Result<Solution<R>, Error> {
-        let mut out = Ok(Solution {
-            n: self.p.n,
-            m: self.p.m,
-            tension,
-            tip_force: [R::zero(); 2],
-            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
-            links: [[R::zero(); 3]; MAX_JOINTS],
-            joint_angle: [R::zero(); MAX_JOINTS],
-            nodes: [Pose::origin(); MAX_JOINTS + 1],
-            span: [R::zero(); MAX_JOINTS],
-            thickness: c.thickness,
-            volts: c.volts,
-            cable_excursion: R::zero(),
-            iterations: 0,
-            residual: R::zero(),
-            tangent_det: [R::one(); MAX_JOINTS],
-        });
+        let mut out = Ok(Solution { n: self.p.n, m: self.p.m, tension, thickness: c.thickness, volts: c.volts, ..Solution::empty() });
         if let Ok(sol) = &mut out {
             if let Err(e) = self.fill_tension_alone(c, tension, tol, max_iter, sol) {
                 out = Err(e);
@@ -1257,23 +1241,7 @@ impl<R: Real> Finger<R> {
     ) -> Result<Solution<R>, Error> {
         let n = self.p.n;
         let (nodes, links) = self.chain(states, tension, tip_force, tip_point);
-        let mut sol = Solution {
-            n,
-            m: self.p.m,
-            tension,
-            tip_force,
-            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
-            links: [[R::zero(); 3]; MAX_JOINTS],
-            joint_angle: [R::zero(); MAX_JOINTS],
-            nodes,
-            span: [R::zero(); MAX_JOINTS],
-            thickness: c.thickness,
-            volts: c.volts,
-            cable_excursion: R::zero(),
-            iterations,
-            residual: R::zero(),
-            tangent_det: [R::one(); MAX_JOINTS],
-        };
+        let mut sol = Solution { n, m: self.p.m, tension, tip_force, nodes, thickness: c.thickness, volts: c.volts, iterations, ..Solution::empty() };
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
         // the solved tip (the load's point in the joints' residuals), and its mismatch with
         // the chain's tip in the residual

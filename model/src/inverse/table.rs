@@ -505,3 +505,45 @@ impl<R: Real> BranchTable<R> {
         f.fmax_with(&c, Some(&starts))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::Params;
+
+    /// The forward's lookup (`forward_holes`: the tension grid's cubic in P, per coefficient of
+    /// the quadratic in thickness) reads what the branch inversion and the Lagrange quadratic
+    /// across the three branch thicknesses read (`branch_holes`, `hole_at_thickness`): in f32
+    /// (where the grid holds over the whole table) to its bound (1/8 of the converged solver's
+    /// tolerance) and the rounding of both, over the tensions and the stack's range; in f64
+    /// (no grid at its tolerance) the power form of the quadratic to rounding.
+    #[test]
+    fn forward_lookup_is_the_branch_quadratic() {
+        fn check<R: Real>(tol: f64, grid: bool) {
+            let f = Finger::new(Params::<R>::default()).unwrap();
+            let t = BranchTable::new(&f, &Options::default()).unwrap();
+            let top = f.voltage_ceiling().to_f64() * (1.0 - 1e-4);
+            let p_end = t.dp.to_f64() * (TABLE_LEN - 1) as f64;
+            assert_eq!(t.grid_top.to_f64() > 0.99 * p_end, grid, "grid to {} of {p_end}", t.grid_top.to_f64());
+            let mut checked = 0;
+            for i in 1..200 {
+                let p = R::from_f64(p_end * 1.02 * i as f64 / 200.0);
+                for v in [[0.0, 0.5 * top, top], [0.9 * top, 0.2 * top, 0.7 * top]] {
+                    let c = f.compliances(&v.map(R::from_f64)).unwrap();
+                    let (Some(got), Some(h)) = (t.forward_holes(&c, p), t.branch_holes(p)) else { continue };
+                    for k in 0..3 {
+                        let want = t.hole_at_thickness(&h, c.thickness[k]).unwrap();
+                        for x in 0..2 {
+                            let e = (got[k][x] - want[x]).to_f64().abs();
+                            assert!(e < tol, "P {} joint {k}: {e} mm", p.to_f64());
+                        }
+                    }
+                    checked += 1;
+                }
+            }
+            assert!(checked > 380, "{checked}");
+        }
+        check::<f32>(2e-5, true);
+        check::<f64>(1e-11, false);
+    }
+}
