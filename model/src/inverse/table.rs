@@ -23,8 +23,7 @@
 //! full model, to the same tolerance as without the table; the table only decides where the
 //! solves start and which range ends need one. Built once per parameter set (the firmware
 //! rebuilds it when a parameter changes); it keeps a copy of its finger and options, so it
-//! is never used with another parameter set. About 6 KB in f32 (the tension grid 1.5 KB, the
-//! finger 1.3 KB).
+//! is never used with another parameter set. About 10 KB in f32 (the forward's tension grid 6 KB).
 
 use super::Options;
 use crate::error::Error;
