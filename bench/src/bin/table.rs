@@ -120,7 +120,8 @@ fn run_model(m: &scenes::TableModel) {
 
 /// Profiling markers (`--features profile`): the execution trace between the two calls is one
 /// tabled forward solve of the default model at three different voltages (or, built with
-/// PROFILE_SAME set, one voltage; with PROFILE_INVERSE, the tabled inverse of its angles).
+/// PROFILE_SAME set, one voltage; with PROFILE_HARD, the calibrated model's 15 N scene at
+/// 2/6/9 kV; with PROFILE_INVERSE, the tabled inverse of its angles).
 #[inline(never)]
 #[no_mangle]
 pub extern "C" fn profile_start() {

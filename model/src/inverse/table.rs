@@ -423,7 +423,9 @@ impl<R: Real> BranchTable<R> {
     }
 
     /// The forward solve under tension alone with precomputed compliances (of this table's
-    /// finger), written into `sol` (the caller's storage; no copy of the solution): each
+    /// finger, as `Finger::compliances` makes them: symmetric), written into `sol` (the
+    /// caller's storage; no copy of the solution; rows it held past this finger's (n, m) are
+    /// cleared, `Solution`): each
     /// joint's guide hole read off the table at (P, its stack thickness), then Newton on the
     /// full model from there (`Finger::solve_from_holes_into`: a joint whose march at the
     /// table's hole is within the solver's tolerance is answered by that march). The answer
