@@ -568,12 +568,13 @@ impl<R: Real> Finger<R> {
     }
 
     /// `solve_from_holes_into`'s joints and posture, written in place in one pass: the
-    /// solution's scalars set, the rows past (n, m) zeroed (only those), one march per
-    /// distinct joint into its rows (Newton, `polish_joint`, only where that march is not
-    /// converged), and the posture as it goes (MODEL.md "Equilibrium": node k = node k-1 ∘
-    /// hinge ∘ link; "Cable": the excursion Σ (L_h - |span k|)): `chain_ends` with the node
-    /// rotations composed from the marches' own (sin, cos) and the link's (the same for every
-    /// link under tension alone), one sin/cos pair per solve. A span below its floor is contact.
+    /// solution's scalars set, the rows it held past this finger's (n, m) cleared (only
+    /// those), one march per distinct joint into its rows (`march_tension`; Newton,
+    /// `polish_joint`, only where that march is not converged), and the posture as it goes
+    /// (MODEL.md "Equilibrium": node k = node k-1 ∘ hinge ∘ link; "Cable": the excursion
+    /// Σ (L_h - |span k|)): `chain_ends` with the node rotations composed from the marches' own
+    /// (sin, cos) and the link's (the same for every link under tension alone, by the series
+    /// turn). A span below its floor is contact.
     #[inline(always)]
     fn fill_from_holes(
         &self,
