@@ -173,7 +173,8 @@ impl<R: Real> Finger<R> {
         if !(span >= self.p.span_floor) || !(tension > R::zero()) {
             return Err(MarchError::Contact);
         }
-        let fc = [span_v[0] * -tension / span, span_v[1] * -tension / span];
+        let k = -tension / span;
+        let fc = [span_v[0] * k, span_v[1] * k];
         // in sub-element j's proximal frame: f the cable's force on the distal chain; with w =
         // B - the sub-element's proximal end, mm = w × f (the moment about that end) and
         // dot = w · f
@@ -208,7 +209,7 @@ impl<R: Real> Finger<R> {
         }
         // the end's rotation R from f = R^T f_c, and r = B - end in its frame from r · f and
         // r × f
-        let inv = R::one() / (fc[0] * fc[0] + fc[1] * fc[1]);
+        let inv = R::one() / (tension * tension);
         let co = (f[0] * fc[0] + f[1] * fc[1]) * inv;
         let s = (f[0] * fc[1] - f[1] * fc[0]) * inv;
         let r = [(dot * f[0] + mm * f[1]) * inv, (dot * f[1] - mm * f[0]) * inv];
