@@ -417,8 +417,9 @@ impl Commands {
         if force == 0.0 {
             return Ok((0.0, 0.0));
         }
-        let sol = if core::ptr::eq(finger, &self.finger) { self.forward(force, volts) } else { forward(finger, force, volts) };
-        let cable = sol.map_err(model_err)?.cable_excursion.max(0.0);
+        let excursion = |s: &Solved| s.cable_excursion;
+        let cable = if core::ptr::eq(finger, &self.finger) { self.forward_with(force, volts, excursion) } else { forward(finger, force, volts).map(|s| excursion(&s)) };
+        let cable = cable.map_err(model_err)?.max(0.0);
         let deg = cable / fw.spool_r * DEG;
         if !(deg <= fw.servo_range) {
             return Err(err!("limit"; "cable excursion ", Fixed(cable, 2), " mm needs ", Fixed(deg, 1), " deg, past the servo travel ", Fixed(fw.servo_range, 0), " deg"));
@@ -462,15 +463,19 @@ impl Commands {
             .as_ref()
     }
 
-    /// The forward solve under tension alone at these voltages: from the branch table when
-    /// there is one (`BranchTable::solve`: the full model's converged answer, Newton started
-    /// at the table's guide holes), else the full solve (`forward`: f32, or fixed point on the M3).
-    fn forward(&self, p: f32, volts: &[f32; CHANNELS]) -> Result<Solved, ModelError> {
+    /// The forward solve under tension alone at these voltages, handed to `use_it`: from the
+    /// branch table when there is one (`BranchTable::solve_into`, into storage here: no copy
+    /// of the solution; the full model's converged answer, Newton started at the table's guide
+    /// holes), else the full solve (`forward`: f32, or fixed point on the M3).
+    fn forward_with<T>(&self, p: f32, volts: &[f32; CHANNELS], use_it: impl FnOnce(&Solved) -> T) -> Result<T, ModelError> {
         #[cfg(feature = "pose")]
         if let Some(t) = self.branch_table() {
-            return t.solve(p, volts);
+            let c = self.finger.compliances(volts)?;
+            let mut sol = Solution::empty();
+            t.solve_into(&c, p, &mut sol)?;
+            return Ok(use_it(&sol));
         }
-        forward(&self.finger, p, volts)
+        forward(&self.finger, p, volts).map(|s| use_it(&s))
     }
 
     /// How many times `Finger::fmax` ran (the cache's misses), for the tests.
@@ -644,19 +649,16 @@ impl Commands {
         }
         let _ = w!(r; " thick=");
         list(r, &thick, 4);
-        let sol = self.forward(self.force, &self.volts);
         let mut fault = self.fault;
-        match sol {
-            Ok(s) => {
-                let _ = w!(r; " joints=");
-                joints(r, &s);
-                let tip = s.tip();
-                let _ = w!(r; " tip=", Tip(&tip));
-            }
-            Err(_) => {
-                let _ = w!(r; " joints=-,-,- tip=-,-,-");
-                fault = fault.or(Some("model"));
-            }
+        let shown = self.forward_with(self.force, &self.volts, |s| {
+            let _ = w!(r; " joints=");
+            joints(r, s);
+            let tip = s.tip();
+            let _ = w!(r; " tip=", Tip(&tip));
+        });
+        if shown.is_err() {
+            let _ = w!(r; " joints=-,-,- tip=-,-,-");
+            fault = fault.or(Some("model"));
         }
         let _ = w!(r; " cable=", Fixed(self.cable, 3), " servo=", Fixed(self.servo_deg, 2), " fault=", fault.unwrap_or("none"));
         let _ = w!(r; " enable=", self.enable as u8, " target=");
@@ -733,19 +735,13 @@ impl Commands {
     fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let (p, vf) = self.model_request(args, "solve <P> <V1> <V2> <V3>")?;
         #[cfg(not(m3))]
-        let sol = self.forward(p, &vf).map_err(model_err)?;
-        #[cfg(not(m3))]
-        let k = self.finger.tip_stiffness(&sol).map_err(model_err)?;
+        return self.forward_with(p, &vf, |sol| solve_reply(r, sol, self.finger.tip_stiffness(sol).map_err(model_err)?)).map_err(model_err)?;
         // the M3's: from the fixed-point state (app/m3.rs)
         #[cfg(m3)]
-        let (sol, k) = m3::forward_stiffness(&self.finger, p, &vf).map_err(model_err)?;
-        let _ = w!(r; "joints=");
-        joints(r, &sol);
-        let tip = sol.tip();
-        let _ = w!(r; " tip=", Tip(&tip), " cable=", Fixed(sol.cable_excursion, 4), " thick=");
-        list(r, &sol.thickness[..CHANNELS], 4);
-        let _ = w!(r; " stiffness=", Exp(k[0][0], 4), ",", Exp(k[1][1], 4), ",", Exp(k[2][2], 4), " iters=", sol.iterations);
-        Ok(())
+        {
+            let (sol, k) = m3::forward_stiffness(&self.finger, p, &vf).map_err(model_err)?;
+            solve_reply(r, &sol, k)
+        }
     }
 
     #[inline(never)]
@@ -1094,6 +1090,17 @@ impl Emit for Tip<'_> {
         let t = self.0;
         let _ = w!(f; Fixed(t.x, 3), ",", Fixed(t.y, 3), ",", Fixed(t.theta * DEG, 2));
     }
+}
+
+/// `solve`'s reply: joints, tip, cable, thicknesses, tip stiffness, iterations.
+fn solve_reply(r: &mut Reply, sol: &Solved, k: finger_model::mat3::Mat3<f32>) -> Result<(), CmdError> {
+    let _ = w!(r; "joints=");
+    joints(r, sol);
+    let tip = sol.tip();
+    let _ = w!(r; " tip=", Tip(&tip), " cable=", Fixed(sol.cable_excursion, 4), " thick=");
+    list(r, &sol.thickness[..CHANNELS], 4);
+    let _ = w!(r; " stiffness=", Exp(k[0][0], 4), ",", Exp(k[1][1], 4), ",", Exp(k[2][2], 4), " iters=", sol.iterations);
+    Ok(())
 }
 
 fn joints(r: &mut Reply, s: &Solved) {

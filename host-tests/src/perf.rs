@@ -441,13 +441,15 @@ pub fn table_cost_section() -> String {
          64 joint angles (1.5 deg apart, or to the branch's end) at three stack thicknesses (0 V, the ceiling, \
          the middle), each sample the tension and the guide hole. From it: **forward** (`BranchTable::solve_into`, \
          written into a solution the caller holds; `solve_with` returns it by value): each joint's hole read off \
-         the table at (P, t) (on the table's tension grid, each branch's hole at 64 uniform tensions built from \
-         the samples, the cubic in P where the grid agrees with the inversion below to 1/8 of the solver's \
-         tolerance; else the cubic P(theta) inverted at P on each thickness; then the quadratic across the \
-         thicknesses), then Newton on the full model from that hole; a march whose hole residual is within the \
-         converged solver's own tolerance is the answer (Newton's first evaluation), else Newton iterates, else \
-         the full solve's continuation; the posture is composed as the joints are marched, from each march's \
-         own sin/cos. **Inverse** (`solve_pose_tabled`): the \
+         the table at (P, t) (on the table's tension grid: 64 uniform tensions to the three branches' common \
+         end, each interval holding the hole's cubic in P for each coefficient of its quadratic in stack \
+         thickness, read where the grid agrees with the inversion below to 1/8 of the solver's tolerance; else \
+         the cubic P(theta) inverted at P on each thickness, then the quadratic across the thicknesses), then \
+         Newton on the full model from that hole; a march whose hole residual is within the converged solver's \
+         own tolerance is the answer (Newton's first evaluation; that march is `march_tension`, the plain \
+         march's equations carried in each sub-element's own frame, the same answer to rounding), else Newton \
+         iterates, else the full solve's continuation; the posture is composed as the joints are marched, from \
+         each march's own sin/cos. **Inverse** (`solve_pose_tabled`): the \
          tension range and the thickness solve start from the table (docs/inverse.md). **fmax** \
          (`BranchTable::fmax`): the march up the branch continues from the table's last two samples (docs/fmax-cost.md). Every answer is a \
          converged solve of the full model; the table only chooses where it starts. Bench image \
@@ -556,18 +558,22 @@ pub fn table_cost_section() -> String {
     }
     writeln!(
         w,
-        "\n**What bounds it.** The full model's march. Per distinct joint the forward takes one march (m \
-         sub-elements, each the closed-form 3x3 equilibrium with its division, the moment arm, the pose update \
-         and the turn of the angle's sine and cosine by the sub-element's rotation; the figure per further \
-         joint above); the rest comes once per solve: the lookup on the tension grid (three branches' cubics in \
-         P at one set of weights, the quadratic across thicknesses; near the branch's end, where the grid stops, \
-         the cubic inversion on each branch, several hundred more), setting the solution's scalars and zeroing \
-         its unused rows ({} bytes in f32, written in place), the posture (one sin/cos pair per solve, for the \
-         links), and for identical joints the copy of a joint's rows. So the forward meets 3,000 with \
-         identical joints (one march and the rest), and with three different voltages at m = 8 it cannot: \
-         three marches alone come close to 3,000. Below that a march would have to be cheaper than m \
-         sub-elements of the full model (fewer sub-elements, or the table itself as the answer), which would \
-         no longer be the full model's converged solve. The inverse (`solve_pose_tabled_into`, written in \
+        "\n**What bounds it.** The full model's march: m sub-elements per distinct joint. The forward marches \
+         each distinct joint once (`march_tension`, in each sub-element's own frame: per sub-element the \
+         closed-form 3x3 equilibrium with its one division, from the six entries of the symmetric compliance, \
+         the cable force turned by the sub-element's rotation from the sine and cosine series, one term longer \
+         where the stiffest scenes' middle sub-elements pass the short series' bound, and the moment and the \
+         hole's dot product carried by two rotation-free recurrences; no pose update, no moment arm rebuilt); \
+         with its end's pose recovered once and the joint's share of the posture (the node composed, its span \
+         and excursion) that is the figure per further joint above. Once per solve: the lookup (six cubics in P \
+         on the grid's interval, then one quadratic per distinct joint; past the grid the cubic inversion on \
+         each branch, several hundred more), the link's deflection and rotation (the series turn), the \
+         solution's scalars (the {}-byte solution is written in place; only rows it held past this finger's \
+         (n, m) are cleared), and for identical joints the copy of a joint's rows. The once-per-solve part and \
+         one march come to the first figure above, each further distinct joint to the second: with three \
+         different voltages at m = 8 the sum is what the table shows. Below that a march would have to be \
+         cheaper than m sub-elements of the full model (fewer sub-elements, or the table itself as the answer), \
+         which would no longer be the full model's converged solve. The inverse (`solve_pose_tabled_into`, written in \
          place) spends per distinct joint the table's reading (three branches' cubics at one set of weights), \
          one compliance evaluation at the thickness the table gives along the level curve (the stack's \
          stiffness once, then m cofactor inverses of the hinge's and the stack's stiffness in parallel; none \

@@ -161,7 +161,10 @@ pub struct Solution<R> {
     pub tension: R,
     /// External tip force (base frame), N.
     pub tip_force: [R; 2],
-    /// Sub-element displacements q = (δax, δtr, Δθ), `q[k][j]`.
+    /// Sub-element displacements q = (δax, δtr, Δθ), `q[k][j]`. Every solver leaves the rows
+    /// past (n, m) zero, as `empty()` has them (and the per-joint arrays past n as `empty()`
+    /// has them); the `_into` solves rely on it and clear only rows a solution held past
+    /// another finger's (n, m).
     pub q: [[[R; 3]; MAX_SUB]; MAX_JOINTS],
     /// Link deflections (δax, δtr, Δθ) in each link's proximal frame (zero for rigid links).
     pub links: [[R; 3]; MAX_JOINTS],
@@ -538,23 +541,7 @@ impl<R: Real> Finger<R> {
     /// its own; the solution is written in place (no joint-state arrays, no second march for
     /// the residual and tangent: Newton's last dual march gives them).
     fn solve_tension_alone(&self, c: &Compliances<R>, tension: R, tol: R, max_iter: u32) -> Result<Solution<R>, Error> {
-        let mut out = Ok(Solution {
-            n: self.p.n,
-            m: self.p.m,
-            tension,
-            tip_force: [R::zero(); 2],
-            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
-            links: [[R::zero(); 3]; MAX_JOINTS],
-            joint_angle: [R::zero(); MAX_JOINTS],
-            nodes: [Pose::origin(); MAX_JOINTS + 1],
-            span: [R::zero(); MAX_JOINTS],
-            thickness: c.thickness,
-            volts: c.volts,
-            cable_excursion: R::zero(),
-            iterations: 0,
-            residual: R::zero(),
-            tangent_det: [R::one(); MAX_JOINTS],
-        });
+        let mut out = Ok(Solution { n: self.p.n, m: self.p.m, tension, thickness: c.thickness, volts: c.volts, ..Solution::empty() });
         if let Ok(sol) = &mut out {
             if let Err(e) = self.fill_tension_alone(c, tension, tol, max_iter, sol) {
                 out = Err(e);
@@ -581,12 +568,13 @@ impl<R: Real> Finger<R> {
     }
 
     /// `solve_from_holes_into`'s joints and posture, written in place in one pass: the
-    /// solution's scalars set, the rows past (n, m) zeroed (only those), one march per
-    /// distinct joint into its rows (Newton, `polish_joint`, only where that march is not
-    /// converged), and the posture as it goes (MODEL.md "Equilibrium": node k = node k-1 ∘
-    /// hinge ∘ link; "Cable": the excursion Σ (L_h - |span k|)): `chain_ends` with the node
-    /// rotations composed from the marches' own (sin, cos) and the link's (the same for every
-    /// link under tension alone), one sin/cos pair per solve. A span below its floor is contact.
+    /// solution's scalars set, the rows it held past this finger's (n, m) cleared (only
+    /// those), one march per distinct joint into its rows (`march_tension`; Newton,
+    /// `polish_joint`, only where that march is not converged), and the posture as it goes
+    /// (MODEL.md "Equilibrium": node k = node k-1 ∘ hinge ∘ link; "Cable": the excursion
+    /// Σ (L_h - |span k|)): `chain_ends` with the node rotations composed from the marches' own
+    /// (sin, cos) and the link's (the same for every link under tension alone, by the series
+    /// turn). A span below its floor is contact.
     #[inline(always)]
     fn fill_from_holes(
         &self,
@@ -598,20 +586,40 @@ impl<R: Real> Finger<R> {
         sol: &mut Solution<R>,
     ) -> Result<(), Error> {
         let (n, m) = (self.p.n, self.p.m);
+        // a solution's rows past its own (n, m) are zero (`Solution`): only the rows `sol`
+        // held past this finger's (n, m) are cleared (none for `Solution::empty()` or a
+        // solution of this finger)
+        let (held_n, held_m) = (sol.n.min(MAX_JOINTS), sol.m.min(MAX_SUB));
+        for k in 0..held_n {
+            let from = if k < n { m } else { 0 };
+            if from < held_m {
+                for row in sol.q[k][from..held_m].iter_mut() {
+                    *row = [R::zero(); 3];
+                }
+            }
+        }
+        for k in n..held_n {
+            sol.nodes[k + 1] = Pose::origin();
+            sol.links[k] = [R::zero(); 3];
+            sol.joint_angle[k] = R::zero();
+            sol.span[k] = R::zero();
+            sol.tangent_det[k] = R::one();
+        }
         sol.n = n;
         sol.m = m;
         sol.tension = tension;
         sol.tip_force = [R::zero(); 2];
         sol.thickness = c.thickness;
         sol.volts = c.volts;
-        for k in 0..MAX_JOINTS {
-            let from = if k < n { m } else { 0 };
-            for row in sol.q[k][from..].iter_mut() {
-                *row = [R::zero(); 3];
-            }
-        }
         let link = self.link_q(tension, &Pose::origin(), None);
-        let (ls, lc) = if link[2] == R::zero() { (R::zero(), R::one()) } else { link[2].sin_cos() };
+        // the link's rotation (small: the series turn where it holds, `march::small_turn`)
+        let (ls, lc) = if link[2] == R::zero() {
+            (R::zero(), R::one())
+        } else if link[2].abs() < R::from_f64(march::small_turn(R::EPS)) {
+            link[2].sin_cos_small()
+        } else {
+            link[2].sin_cos()
+        };
         let (lx, ly) = (self.link_len + link[0], link[1]);
         let mut node = Pose::origin();
         let (mut s, mut co) = (R::zero(), R::one());
@@ -619,7 +627,7 @@ impl<R: Real> Finger<R> {
         // the joint before: hinge end, (sin, cos) of its angle, the hole it arrived at, its
         // squared residual and tangent determinant
         let mut prev = (Pose::origin(), [R::zero(), R::one()], [R::zero(); 2], R::zero(), R::one());
-        let (mut res2, mut iters, mut excursion) = (R::zero(), 0u32, R::zero());
+        let (mut res2, mut iters, mut excursion, mut dets) = (R::zero(), 0u32, R::zero(), R::zero());
         for k in 0..n {
             let b = holes[k];
             // a joint with the same voltage, thickness and guess as the one before has its
@@ -635,10 +643,8 @@ impl<R: Real> Finger<R> {
                 sol.q[k] = sol.q[k - 1];
                 prev
             } else {
-                match self.march_into(&c.c[k], tension, b, None, &mut sol.q[k]) {
-                    Ok((end, hole, sc)) if (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq() <= tol * tol => {
-                        (end, sc, hole, (b[0] - hole[0]).sq() + (b[1] - hole[1]).sq(), R::one())
-                    }
+                match self.march_tension(&c.c[k], tension, b, &mut sol.q[k]) {
+                    Ok((end, hole, sc, r2)) if r2 <= tol * tol => (end, sc, hole, r2, R::one()),
                     _ => {
                         let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
                         iters += it;
@@ -651,6 +657,7 @@ impl<R: Real> Finger<R> {
             };
             prev = (end, turn, hole, r2, det);
             res2 += r2;
+            dets += det;
             sol.tangent_det[k] = det;
             let [se, ce] = turn;
             let hinge = Pose { x: node.x + co * end.x - s * end.y, y: node.y + s * end.x + co * end.y, theta: node.theta + end.theta };
@@ -668,19 +675,12 @@ impl<R: Real> Finger<R> {
             sol.span[k] = span;
             excursion += self.p.hinge_len() - span;
         }
-        for k in n..MAX_JOINTS {
-            sol.nodes[k + 1] = Pose::origin();
-            sol.links[k] = [R::zero(); 3];
-            sol.joint_angle[k] = R::zero();
-            sol.span[k] = R::zero();
-            sol.tangent_det[k] = R::one();
-        }
         sol.iterations = iters;
         sol.cable_excursion = excursion;
         sol.residual = res2.sqrt();
-        // a non-finite node carries on to the tip
-        let finite = node.x.is_finite() && node.y.is_finite() && node.theta.is_finite() && sol.tangent_det[..n].iter().all(|d| d.is_finite());
-        if !(finite && sol.residual.is_finite() && excursion.is_finite()) {
+        // a non-finite node carries on to the tip; one test for all (a sum is finite only if
+        // every term is)
+        if !(node.x + node.y + node.theta + res2 + excursion + dets).is_finite() {
             return Err(Error::Singular { what: "solution (non-finite)" });
         }
         Ok(())
@@ -1242,23 +1242,7 @@ impl<R: Real> Finger<R> {
     ) -> Result<Solution<R>, Error> {
         let n = self.p.n;
         let (nodes, links) = self.chain(states, tension, tip_force, tip_point);
-        let mut sol = Solution {
-            n,
-            m: self.p.m,
-            tension,
-            tip_force,
-            q: [[[R::zero(); 3]; MAX_SUB]; MAX_JOINTS],
-            links: [[R::zero(); 3]; MAX_JOINTS],
-            joint_angle: [R::zero(); MAX_JOINTS],
-            nodes,
-            span: [R::zero(); MAX_JOINTS],
-            thickness: c.thickness,
-            volts: c.volts,
-            cable_excursion: R::zero(),
-            iterations,
-            residual: R::zero(),
-            tangent_det: [R::one(); MAX_JOINTS],
-        };
+        let mut sol = Solution { n, m: self.p.m, tension, tip_force, nodes, thickness: c.thickness, volts: c.volts, iterations, ..Solution::empty() };
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
         // the solved tip (the load's point in the joints' residuals), and its mismatch with
         // the chain's tip in the residual

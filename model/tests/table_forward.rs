@@ -169,3 +169,59 @@ fn tabled_forward_agrees_with_the_full_solve_over_the_domain() {
         assert!(both > 300 && neither > 0, "{name}: {both} answered, {neither} refused");
     }
 }
+
+/// `solve_into` writes the whole solution into storage the caller keeps: one `Solution` reused
+/// across voltage changes (each with its own compliances), after a solve of a finger with more
+/// joints and sub-elements and after a refused solve, holds exactly what a fresh solve returns
+/// (every field, the rows past (n, m) zero), never a previous voltage's state; and compliances
+/// of other voltages give those voltages' answer, not the table's last one.
+#[test]
+fn solve_into_reused_storage_is_a_fresh_solve() {
+    let same = |a: &Solution<f32>, b: &Solution<f32>| {
+        a.n == b.n
+            && a.m == b.m
+            && a.q == b.q
+            && a.links == b.links
+            && a.joint_angle == b.joint_angle
+            && a.nodes == b.nodes
+            && a.span == b.span
+            && a.thickness == b.thickness
+            && a.volts == b.volts
+            && a.cable_excursion == b.cable_excursion
+            && a.iterations == b.iterations
+            && a.residual == b.residual
+            && a.tangent_det == b.tangent_det
+            && a.tension == b.tension
+    };
+    let f = Finger::new(Params::<f32>::default()).unwrap();
+    let table = BranchTable::new(&f, &Options::default()).unwrap();
+    // a solution of a finger with five joints first (rows past this finger's three are held)
+    let big = Finger::new(Params::<f32> { n: 5, ..Params::default() }).unwrap();
+    let big_table = BranchTable::new(&big, &Options::default()).unwrap();
+    let mut sol = Solution::empty();
+    big_table.solve_into(&big.compliances(&[4000.0; 5]).unwrap(), 2.0, &mut sol).unwrap();
+    assert_eq!(sol.n, 5);
+    let top = f.voltage_ceiling() * 0.99;
+    let cases = [(1.0, [0.9 * top, 0.5 * top, 0.0]), (7.0, [0.0; 3]), (1.0, [top; 3]), (15.0, [0.2 * top, 0.6 * top, 0.9 * top]), (1e9, [0.0; 3]), (0.5, [0.3 * top, 0.3 * top, 0.8 * top])];
+    for (p, v) in cases {
+        let c = f.compliances(&v).unwrap();
+        let fresh = table.solve(p, &v);
+        let into = table.solve_into(&c, p, &mut sol);
+        match (fresh, into) {
+            (Ok(a), Ok(())) => {
+                assert!(same(&a, &sol), "P {p} V {v:?}: reused storage differs from a fresh solve");
+                assert!(sol.q[3..].iter().flatten().flatten().all(|&x| x == 0.0) && sol.tangent_det[3..] == [1.0; 2]);
+                assert!(sol.volts[..3] == v && sol.thickness[..3] == c.thickness[..3]);
+            }
+            (Err(a), Err(b)) => assert_eq!(a, b, "P {p}"),
+            (a, b) => panic!("P {p} V {v:?}: fresh {a:?}, into {b:?}"),
+        }
+    }
+    // a voltage change without new compliances answers for the compliances' voltages
+    let (v_old, v_new) = ([0.0f32; 3], [top; 3]);
+    let c_old = f.compliances(&v_old).unwrap();
+    table.solve_into(&c_old, 1.0, &mut sol).unwrap();
+    let want_old = f.solve_with(&c_old, 1.0, [0.0; 2], finger_model::Method::converged()).unwrap();
+    let want_new = f.solve(1.0, &v_new, finger_model::Method::converged()).unwrap();
+    assert!(tip_err(&sol, &want_old) < 1e-4 && tip_err(&sol, &want_new) > 1e-2 && sol.volts[..3] == v_old);
+}

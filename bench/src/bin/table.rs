@@ -115,8 +115,9 @@ fn run_model(m: &scenes::TableModel) {
 
 /// Profiling markers (`--features profile`): the execution trace between the two calls is one
 /// tabled forward solve of the default model at three different voltages (or, built with
-/// PROFILE_SAME set, one voltage; with PROFILE_INVERSE, the tabled inverse of its angles at
-/// 1 N, with PROFILE_FREE too without a tension).
+/// PROFILE_SAME set, one voltage; with PROFILE_HARD, the calibrated model's 15 N scene at
+/// 2/6/9 kV; with PROFILE_INVERSE, the tabled inverse of its angles at 1 N, with PROFILE_FREE
+/// too without a tension).
 #[inline(never)]
 #[no_mangle]
 pub extern "C" fn profile_start() {
@@ -133,10 +134,19 @@ fn main() -> ! {
     let cp = cortex_m::Peripherals::take().unwrap();
     cycles::start(cp.SYST);
     if cfg!(feature = "profile") {
-        let f = model(&scenes::TABLE_MODELS[0]).unwrap();
+        // PROFILE_HARD set at build time: the calibrated model's 15 N scene at 2/6/9 kV instead
+        let hard = option_env!("PROFILE_HARD").is_some();
+        let f = model(&scenes::TABLE_MODELS[if hard { 1 } else { 0 }]).unwrap();
         let tb = BranchTable::new(&f, &Options::default()).unwrap();
         // PROFILE_SAME=1 at build time: the three joints at the same voltage instead
-        let v = if option_env!("PROFILE_SAME").is_some() { [5000.0; 3] } else { [9000.0, 5000.0, 0.0] };
+        let v = if option_env!("PROFILE_SAME").is_some() {
+            [5000.0; 3]
+        } else if hard {
+            [2000.0, 6000.0, 9000.0]
+        } else {
+            [9000.0, 5000.0, 0.0]
+        };
+        let p = if hard { 15.0 } else { 1.0 };
         let c = f.compliances(&core::hint::black_box(v)).unwrap();
         let mut out = Solution::empty();
         if option_env!("PROFILE_INVERSE").is_some() {
@@ -154,7 +164,7 @@ fn main() -> ! {
             debug::exit(debug::EXIT_SUCCESS);
         }
         profile_start();
-        let r = tb.solve_into(&c, core::hint::black_box(1.0), core::hint::black_box(&mut out));
+        let r = tb.solve_into(&c, core::hint::black_box(p), core::hint::black_box(&mut out));
         profile_stop();
         core::hint::black_box(r).ok();
         core::hint::black_box(&out);

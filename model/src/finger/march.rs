@@ -34,6 +34,35 @@ pub(super) fn small_turn(eps: f64) -> f64 {
     }
 }
 
+/// (sin x, cos x) of a sub-element's rotation: the series (`Real::sin_cos_small`'s) below
+/// `small` (`small_turn`), the series one term longer (to x⁷ and x⁸, exact to the scalar's
+/// resolution up to 0.6 in f32, 0.07 in f64) below 2 `small` (the stiffest scenes' middle
+/// sub-elements), else the scalar's sin/cos. The bounds are tested on x², which the series
+/// needs anyway.
+#[inline(always)]
+fn turn<R: Real>(x: R, small: R) -> (R, R) {
+    let z = x * x;
+    let small2 = small * small;
+    if z < small2 {
+        series_turn(x, z)
+    } else if z < small2 * R::from_f64(4.0) {
+        let s = x * (R::one() - z * (R::from_f64(1.0 / 6.0) - z * (R::from_f64(1.0 / 120.0) - z * R::from_f64(1.0 / 5040.0))));
+        let c = R::one()
+            - z * (R::from_f64(0.5) - z * (R::from_f64(1.0 / 24.0) - z * (R::from_f64(1.0 / 720.0) - z * R::from_f64(1.0 / 40320.0))));
+        (s, c)
+    } else {
+        x.sin_cos()
+    }
+}
+
+/// `Real::sin_cos_small` with x² given.
+#[inline(always)]
+fn series_turn<R: Real>(x: R, z: R) -> (R, R) {
+    let s = x * (R::one() - z * (R::from_f64(1.0 / 6.0) - z * R::from_f64(1.0 / 120.0)));
+    let c = R::one() - z * (R::from_f64(0.5) - z * (R::from_f64(1.0 / 24.0) - z * R::from_f64(1.0 / 720.0)));
+    (s, c)
+}
+
 /// A joint state, its hole residual `b - hole` and the residual's Jacobian `I - ∂hole/∂b`.
 pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
 
@@ -114,6 +143,86 @@ impl<R: Real> Finger<R> {
             return Err(MarchError::Singular);
         }
         Ok((pose, hole, [s, co]))
+    }
+
+    /// The plain march under tension alone (P > 0), carried in each sub-element's own frame:
+    /// the same equations as `march_t` (MODEL.md "Equilibrium", the paper's Eq. 7 and 15), with
+    /// the cable force f turned into each sub-element's frame and the hole B held by two
+    /// scalars, the moment about the sub-element's proximal end and the dot product of
+    /// (B - that end) with f, each carried to the next sub-element by a rotation-free
+    /// recurrence: a sub-element costs its closed-form 3x3 equilibrium and one turn of f (no
+    /// pose update, no moment arm rebuilt from the pose). The end's pose comes back once: its
+    /// rotation from f = R^T f_c, B - end from the two scalars. The compliances are symmetric
+    /// (`Finger::compliances` makes them so: `mat3::inverse_spd`), and their upper triangles
+    /// are read. Same answer as `march_into` to the scalar's rounding (test
+    /// `tension_march_matches_march`); the branch table's forward marches with it
+    /// (`Finger::fill_from_holes`), and refuses what it refuses (and a non-positive `den`,
+    /// which the full model's Newton then takes). Returns the hinge end, the hole, (sin, cos)
+    /// of the end's angle, and the squared hole residual |b - hole|².
+    #[inline(always)]
+    pub(super) fn march_tension(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        q_out: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
+        let (e, l) = (self.p.e, self.sub_len);
+        let span_v = [b[0], b[1] - e];
+        let span = norm2(span_v);
+        if !(span >= self.p.span_floor) || !(tension > R::zero()) {
+            return Err(MarchError::Contact);
+        }
+        let k = -tension / span;
+        let fc = [span_v[0] * k, span_v[1] * k];
+        // in sub-element j's proximal frame: f the cable's force on the distal chain; with w =
+        // B - the sub-element's proximal end, mm = w × f (the moment about that end) and
+        // dot = w · f
+        let mut f = fc;
+        let mut mm = b[0] * fc[1] - b[1] * fc[0];
+        let mut dot = b[0] * fc[0] + b[1] * fc[1];
+        let mut theta = R::zero();
+        let small = R::from_f64(small_turn(R::EPS));
+        let eps_den = R::from_f64(1e-6);
+        let m = self.p.m.min(MAX_SUB);
+        for (cj, qo) in c[..m].iter().zip(q_out[..m].iter_mut()) {
+            debug_assert!(cj[1][0] == cj[0][1] && cj[2][0] == cj[0][2] && cj[2][1] == cj[1][2]);
+            // q = C (f, M), M the moment about the deformed distal end: M = m0 + f0 q1 - f1 q0
+            // with m0 = mm - L f1 the moment about the undeformed one, linear in q, so with
+            // a = C (f, 0) it is (mm + f0 a1 - f1 (a0 + L)) / den (`march_t`'s closed form, its
+            // terms regrouped)
+            let (c00, c01, c02, c11, c12, c22) = (cj[0][0], cj[0][1], cj[0][2], cj[1][1], cj[1][2], cj[2][2]);
+            let a = [f[0] * c00 + f[1] * c01, f[0] * c01 + f[1] * c11, f[0] * c02 + f[1] * c12];
+            let den = (f[1] * c02 + R::one()) - f[0] * c12;
+            if !(den > eps_den) {
+                return Err(MarchError::Singular);
+            }
+            mm = (mm + f[0] * a[1] - f[1] * (a[0] + l)) / den;
+            let q = [a[0] + mm * c02, a[1] + mm * c12, a[2] + mm * c22];
+            *qo = q;
+            theta = theta + q[2];
+            // B - the deformed distal end (the next proximal end) is w - (L + q0, q1): its dot
+            // with f; then f into the next frame (turned by q[2]; dot and cross products keep)
+            dot = dot - (q[0] + l) * f[0] - q[1] * f[1];
+            let (sd, cd) = turn(q[2], small);
+            f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
+        }
+        // the end's rotation R from f = R^T f_c, and r = B - end in its frame from r · f and
+        // r × f
+        let inv = R::one() / (tension * tension);
+        let co = (f[0] * fc[0] + f[1] * fc[1]) * inv;
+        let s = (f[0] * fc[1] - f[1] * fc[0]) * inv;
+        let r = [(dot * f[0] + mm * f[1]) * inv, (dot * f[1] - mm * f[0]) * inv];
+        // hole - end = R (0, e): b - hole = R (r - (0, e))
+        let d = [r[0], r[1] - e];
+        let res2 = d[0] * d[0] + d[1] * d[1];
+        let end = Pose { x: b[0] - (co * r[0] - s * r[1]), y: b[1] - (s * r[0] + co * r[1]), theta };
+        let hole = [end.x - s * e, end.y + co * e];
+        // one test for all four: a sum is finite only if every term is
+        if !(hole[0] + hole[1] + theta + res2).is_finite() {
+            return Err(MarchError::Singular);
+        }
+        Ok((end, hole, [s, co], res2))
     }
 
     /// One dual march at hole guess `b` (tension alone): state, residual, Jacobian.
@@ -244,6 +353,66 @@ mod tests {
         assert_eq!(a.hole, t.1);
     }
 
+    /// The tension-alone march in the running frame is the plain march (`march_t`) to rounding:
+    /// same sub-element displacements, end, hole and (sin, cos), in f64 and in f32, at the
+    /// stiffest and softest stacks, the calibrated finger too, and up to joint angles past the
+    /// series turn's bound (m = 1: one turn of the whole joint).
+    #[test]
+    fn tension_march_matches_march() {
+        let cal = crate::calibration::Calibration::<f64>::model_md();
+        let mut fingers = fingers().to_vec();
+        fingers.push(Finger::with_calibration(Params::default(), cal).unwrap());
+        fingers.push(Finger::new(Params::<f64> { m: 1, ..Params::default() }).unwrap());
+        for f in &fingers {
+            let v_top = 0.9 * f.voltage_ceiling();
+            for volts in [0.0, v_top] {
+                let c = f.compliances(&[volts; 3]).unwrap();
+                // what it reads: the upper triangles of symmetric compliances
+                assert!(f.params().layers > 0);
+                for cj in &c.c[0] {
+                    assert!(cj[1][0] == cj[0][1] && cj[2][0] == cj[0][2] && cj[2][1] == cj[1][2]);
+                }
+                for tension in [0.05, 1.0, 7.0, 15.0] {
+                    for b in [[10.0, 5.0], [9.3, 6.1], [8.0, 7.5], [3.0, 9.0]] {
+                        let Ok(a) = f.march(&c.c[0], tension, b, None) else { continue };
+                        let mut q = [[0.0; 3]; MAX_SUB];
+                        let (end, hole, sc, r2) = f.march_tension(&c.c[0], tension, b, &mut q).ok().unwrap();
+                        let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * (1.0 + y.abs());
+                        assert!(close(end.x, a.end.x) && close(end.y, a.end.y) && close(end.theta, a.end.theta), "{end:?} {:?}", a.end);
+                        assert!(close(hole[0], a.hole[0]) && close(hole[1], a.hole[1]));
+                        let (s, co) = a.end.theta.sin_cos();
+                        assert!((sc[0] - s).abs() < 1e-12 && (sc[1] - co).abs() < 1e-12);
+                        assert!(close(r2, (b[0] - a.hole[0]).powi(2) + (b[1] - a.hole[1]).powi(2)));
+                        for j in 0..MAX_SUB {
+                            for i in 0..3 {
+                                assert!((q[j][i] - a.q[j][i]).abs() <= 1e-12 * (1e-3 + a.q[j][i].abs()), "q[{j}][{i}]");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // f32: within a few units of its resolution on a hinge length
+        let f = Finger::new(Params::<f32>::default()).unwrap();
+        for volts in [0.0, 5000.0, 9000.0] {
+            let c = f.compliances(&[volts; 3]).unwrap();
+            for tension in [0.2, 1.0, 7.0, 15.0] {
+                let b = [9.0, 6.5];
+                let a = f.march(&c.c[0], tension, b, None).ok().unwrap();
+                let mut q = [[0.0; 3]; MAX_SUB];
+                let (end, hole, _, _) = f.march_tension(&c.c[0], tension, b, &mut q).ok().unwrap();
+                assert!((end.x - a.end.x).abs() < 2e-5 && (end.y - a.end.y).abs() < 2e-5 && (end.theta - a.end.theta).abs() < 2e-6);
+                assert!((hole[0] - a.hole[0]).abs() < 2e-5 && (hole[1] - a.hole[1]).abs() < 2e-5);
+            }
+        }
+        // what the plain march refuses, it refuses
+        let f = &fingers[0];
+        let c = f.compliances(&[0.0; 3]).unwrap();
+        let mut q = [[0.0; 3]; MAX_SUB];
+        assert!(f.march_tension(&c.c[0], 1.0, [0.0, f.params().e], &mut q).is_err(), "span below its floor");
+        assert!(f.march_tension(&c.c[0], 0.0, [10.0, 5.0], &mut q).is_err(), "no tension: not this march's case");
+    }
+
     /// The series turn is the sine and cosine to the scalar's resolution over its whole range.
     #[test]
     fn series_turn_matches_sin_cos() {
@@ -257,6 +426,25 @@ mod tests {
         for i in -100..=100 {
             let x = lim * i as f32 / 100.0;
             let (s, c) = x.sin_cos_small();
+            let (ws, wc) = (f64::from(x).sin(), f64::from(x).cos());
+            assert!((f64::from(s) - ws).abs() <= 2e-7 && (f64::from(c) - wc).abs() <= 2e-7, "{x}");
+        }
+    }
+
+    /// The tension march's turn (series, longer series, sin/cos) is the sine and cosine to the
+    /// scalar's resolution across its branches, in f64 and f32.
+    #[test]
+    fn turn_matches_sin_cos() {
+        let small = small_turn(f64::EPSILON);
+        for i in -300..=300 {
+            let x = small * f64::from(i) / 100.0;
+            let (s, c) = turn(x, small);
+            assert!((s - x.sin()).abs() <= 2.0 * f64::EPSILON && (c - x.cos()).abs() <= 2.0 * f64::EPSILON, "{x}");
+        }
+        let small = small_turn(f64::from(f32::EPSILON)) as f32;
+        for i in -300..=300 {
+            let x = small * i as f32 / 100.0;
+            let (s, c) = turn(x, small);
             let (ws, wc) = (f64::from(x).sin(), f64::from(x).cos());
             assert!((f64::from(s) - ws).abs() <= 2e-7 && (f64::from(c) - wc).abs() <= 2e-7, "{x}");
         }

@@ -1119,7 +1119,7 @@ impl<R: Real> BranchTable<R> {
             step,
             len: [1; 3],
             x: [[[R::zero(), lh, p.e]; TABLE_LEN]; 3],
-            grid: [[[R::zero(); 2]; TABLE_LEN]; 3],
+            grid: super::table::zero_grid(),
             dp: R::zero(),
             inv_dp: R::zero(),
             grid_len: 0,

@@ -23,8 +23,7 @@
 //! full model, to the same tolerance as without the table; the table only decides where the
 //! solves start and which range ends need one. Built once per parameter set (the firmware
 //! rebuilds it when a parameter changes); it keeps a copy of its finger and options, so it
-//! is never used with another parameter set. About 6 KB in f32 (the tension grid 1.5 KB, the
-//! finger 1.3 KB).
+//! is never used with another parameter set. About 10 KB in f32 (the forward's tension grid 6 KB).
 
 use super::Options;
 use crate::error::Error;
@@ -42,6 +41,18 @@ pub const TABLE_BAND: f64 = 1e-3;
 pub const TABLE_LEN: usize = 64;
 /// The angle step between samples, degrees (64 samples reach 94.5°).
 pub const TABLE_STEP_DEG: f64 = 1.5;
+
+/// The forward lookup's tension grid: per interval a of the tensions [a dp, (a + 1) dp),
+/// a + 1 < `grid_len`, the hole's cubic in s = P/dp - a (power form, the Lagrange cubic through
+/// the four nodes around the interval, one-sided at the ends), for each coefficient of its
+/// quadratic in stack thickness (powers of τ = t - the middle branch's thickness,
+/// `BranchTable::thickness_quadratic`) and each coordinate: `grid[a][i][c]` for τ^i, hole x/y.
+pub(super) type TensionGrid<R> = [[[[R; 4]; 2]; 3]; TABLE_LEN];
+
+/// An empty tension grid (`BranchTable::new` starts from it).
+pub(super) fn zero_grid<R: Real>() -> TensionGrid<R> {
+    [[[[R::zero(); 4]; 2]; 3]; TABLE_LEN]
+}
 
 /// A joint end read off the table: the tension and the hole.
 #[derive(Clone, Copy, Debug)]
@@ -72,9 +83,9 @@ pub struct BranchTable<R> {
     pub(super) len: [usize; 3],
     /// (P N, hole x mm, hole y mm) per sample.
     pub(super) x: [[[R; 3]; TABLE_LEN]; 3],
-    /// The forward lookup's grid (`build_tension_grid`): each branch's hole at the tensions
-    /// j x `dp`, j < `grid_len`, read directly below `grid_top` (N).
-    pub(super) grid: [[[R; 2]; TABLE_LEN]; 3],
+    /// The forward lookup's grid (`build_tension_grid`, `TensionGrid`), read directly below
+    /// `grid_top` (N).
+    pub(super) grid: TensionGrid<R>,
     pub(super) dp: R,
     pub(super) inv_dp: R,
     pub(super) grid_len: usize,
@@ -151,7 +162,12 @@ impl<R: Real> BranchTable<R> {
 /// node) of the cubic through four equally spaced samples' component `c`.
 #[inline(always)]
 fn cubic<R: Real>(y: &[[R; 3]], c: usize) -> [R; 4] {
-    let (y0, y1, y2, y3) = (y[0][c], y[1][c], y[2][c], y[3][c]);
+    cubic4([y[0][c], y[1][c], y[2][c], y[3][c]])
+}
+
+/// `cubic` of four values.
+#[inline(always)]
+fn cubic4<R: Real>([y0, y1, y2, y3]: [R; 4]) -> [R; 4] {
     let (half, sixth) = (R::from_f64(0.5), R::from_f64(1.0 / 6.0));
     let c2 = (y0 + y2) * half - y1;
     let c3 = (y3 - y0) * sixth + (y1 - y2) * half;
@@ -170,7 +186,7 @@ impl<R: Real> BranchTable<R> {
     /// Where each branch carries tension `p` (N): the cubic P(θ) through the four samples
     /// around it (in power form on the interval, s in node units from node i) inverted by two
     /// Newton steps from the linear guess, and the hole's cubic there. None when `p` is not
-    /// inside every branch's tabulated tensions.
+    /// inside every branch's tabulated tensions (its last sample's included).
     #[inline(never)]
     pub(crate) fn branch_holes(&self, p: R) -> Option<BranchHoles<R>> {
         let mut out = BranchHoles { hole: [[R::zero(); 2]; 3] };
@@ -178,7 +194,7 @@ impl<R: Real> BranchTable<R> {
         for (e, o) in out.hole.iter_mut().enumerate() {
             let len = self.len[e];
             let xs = &self.x[e];
-            if len < 4 || !(p > R::zero() && p < xs[len - 1][0]) {
+            if len < 4 || !(p > R::zero() && p <= xs[len - 1][0]) {
                 return None;
             }
             // the sample interval [a, a+1] holding p (tensions rise along the branch): a
@@ -231,13 +247,14 @@ impl<R: Real> BranchTable<R> {
         Some(out)
     }
 
-    /// The forward lookup's tension grid, from the table itself: each branch's hole at
-    /// P_j = j dp (the common tension range in TABLE_LEN - 1 steps) by `branch_holes`, and
-    /// the range `grid_top` over which the cubic in P through the grid reads what
-    /// `branch_holes` reads, to 1/8 of the converged solver's tolerance (checked at the
-    /// quarter, middle and three quarters of every grid interval; near a limit point the hole
-    /// is not smooth in P, and the grid stops). No solves: built from the samples in
-    /// ~64 x 12 lookups.
+    /// The forward lookup's tension grid (`TensionGrid`), from the table itself: each
+    /// branch's hole at the nodes P_j = j dp (the common tension range in TABLE_LEN - 1 steps)
+    /// by `branch_holes`, each interval's cubic in P through the nodes around it, and the range
+    /// `grid_top` over which that cubic reads what `branch_holes` reads, to 1/8 of the
+    /// converged solver's tolerance (checked at the quarter, middle and three quarters of every
+    /// interval; near a limit point the hole is not smooth in P, and the grid stops); then each
+    /// interval's three branches as the quadratic in thickness. No solves: built from the
+    /// samples in ~64 x 4 lookups.
     pub(super) fn build_tension_grid(&mut self) {
         self.grid_len = 0;
         self.grid_top = R::zero();
@@ -247,41 +264,99 @@ impl<R: Real> BranchTable<R> {
         let top = self.len.iter().enumerate().map(|(e, &l)| self.x[e][l - 1][0]).fold(R::from_f64(f64::INFINITY), |a, b| a.min(b));
         self.dp = top / R::from_u32(TABLE_LEN as u32 - 1);
         self.inv_dp = R::one() / self.dp;
+        // per node: each branch's hole
+        let mut nodes = [[[R::zero(); 2]; 3]; TABLE_LEN];
         for e in 0..3 {
-            self.grid[e][0] = [self.x[e][0][1], self.x[e][0][2]];
+            nodes[0][e] = [self.x[e][0][1], self.x[e][0][2]];
         }
-        self.grid_len = 1;
+        let mut len = 1;
         for j in 1..TABLE_LEN {
-            let Some(h) = self.branch_holes(self.dp * R::from_u32(j as u32)) else { break };
-            for e in 0..3 {
-                self.grid[e][j] = h.hole[e];
-            }
-            self.grid_len = j + 1;
+            // the last node at the common range's end itself (`dp` x j may round past it)
+            let pj = if j == TABLE_LEN - 1 { top } else { self.dp * R::from_u32(j as u32) };
+            let Some(h) = self.branch_holes(pj) else { break };
+            nodes[j] = h.hole;
+            len = j + 1;
         }
-        if self.grid_len < 4 {
-            self.grid_len = 0;
+        if len < 4 {
             return;
+        }
+        self.grid_len = len;
+        for a in 0..len - 1 {
+            let i = a.clamp(1, len - 3);
+            let shift = R::from_u32(a as u32) - R::from_u32(i as u32);
+            for e in 0..3 {
+                for c in 0..2 {
+                    // `cubic` in s from node i, shifted to s from node a (Taylor shift by a - i)
+                    let [c0, c1, c2, c3] = cubic4([0, 1, 2, 3].map(|n| nodes[i - 1 + n][e][c]));
+                    let (two, three) = (R::from_f64(2.0), R::from_f64(3.0));
+                    self.grid[a][e][c] = [
+                        c0 + shift * (c1 + shift * (c2 + shift * c3)),
+                        c1 + shift * (two * c2 + shift * three * c3),
+                        c2 + shift * three * c3,
+                        c3,
+                    ];
+                }
+            }
         }
         let p = self.finger.params();
         let res = R::from_f64(16.0 * R::EPS) * (p.hinge_len() + p.e + p.l);
         let bound = res.max(R::from_f64(1e-9)) * R::from_f64(0.125);
-        for j in 0..self.grid_len - 1 {
+        'check: for j in 0..len - 1 {
             for f in [0.25, 0.5, 0.75] {
                 let pj = self.dp * (R::from_u32(j as u32) + R::from_f64(f));
-                let (Some(a), Some(b)) = (self.grid_holes(pj), self.branch_holes(pj)) else { return };
+                let (Some(a), Some(b)) = (self.grid_holes(pj), self.branch_holes(pj)) else { break 'check };
                 for e in 0..3 {
                     if !((a.hole[e][0] - b.hole[e][0]).abs() <= bound && (a.hole[e][1] - b.hole[e][1]).abs() <= bound) {
-                        return;
+                        break 'check;
                     }
                 }
             }
             self.grid_top = self.dp * R::from_u32(j as u32 + 1);
         }
+        // each interval's three branches as the quadratic in thickness (`thickness_quadratic`):
+        // what the forward reads (the map is linear: applied to each power of s)
+        for a in 0..len - 1 {
+            for k in 0..4 {
+                let h = BranchHoles { hole: [0, 1, 2].map(|e| [self.grid[a][e][0][k], self.grid[a][e][1][k]]) };
+                let Some(q) = self.thickness_quadratic(&h) else {
+                    self.grid_len = 0;
+                    self.grid_top = R::zero();
+                    return;
+                };
+                for r in 0..3 {
+                    for c in 0..2 {
+                        self.grid[a][r][c][k] = q.hole[r][c];
+                    }
+                }
+            }
+        }
     }
 
-    /// The three branches' holes at tension `p` (N) from the tension grid: the cubic in P
-    /// through the four grid nodes around it (one set of weights for all three branches). None
-    /// outside [0, grid_top).
+    /// The hole's quadratic in the stack thickness t through the three branches' holes at one
+    /// tension, in powers of τ = t - t_mid (the middle branch's thickness): `hole[i]` the
+    /// coefficient of τ^i. None if two branch thicknesses coincide.
+    fn thickness_quadratic(&self, h: &BranchHoles<R>) -> Option<BranchHoles<R>> {
+        let [t_top, t0, tm] = self.thickness;
+        // the Lagrange basis in τ: (d_top, d0) the outer thicknesses from the middle
+        let (dt, d0) = (t_top - tm, t0 - tm);
+        let (a, b, m) = (dt * (dt - d0), d0 * (d0 - dt), dt * d0);
+        if a == R::zero() || b == R::zero() || m == R::zero() {
+            return None;
+        }
+        let (ia, ib, im) = (R::one() / a, R::one() / b, R::one() / m);
+        let mut out = BranchHoles { hole: [[R::zero(); 2]; 3] };
+        for c in 0..2 {
+            let (yt, y0, ym) = (h.hole[0][c] * ia, h.hole[1][c] * ib, h.hole[2][c] * im);
+            out.hole[0][c] = h.hole[2][c];
+            out.hole[1][c] = -(yt * d0 + y0 * dt + ym * (dt + d0));
+            out.hole[2][c] = yt + y0 + ym;
+        }
+        Some(out)
+    }
+
+    /// The tension grid's three rows at tension `p` (N): its interval's cubics in P. The
+    /// branches' holes while `build_tension_grid` checks the grid, their quadratic in thickness
+    /// after. None outside the grid.
     #[inline(always)]
     fn grid_holes(&self, p: R) -> Option<BranchHoles<R>> {
         let len = self.grid_len;
@@ -290,17 +365,13 @@ impl<R: Real> BranchTable<R> {
         }
         let u = p * self.inv_dp;
         let a = u.to_index().min(len - 2);
-        let i = a.clamp(1, len - 3);
-        let s = u - R::from_u32(i as u32);
-        let (sm, s1, s2) = (s + R::one(), s - R::one(), s - R::from_f64(2.0));
-        let (sixth, half) = (R::from_f64(1.0 / 6.0), R::from_f64(0.5));
-        let (a01, a23) = (sm * s, s1 * s2);
-        let w = [-s * a23 * sixth, sm * a23 * half, -a01 * s2 * half, a01 * s1 * sixth];
+        let s = u - R::from_u32(a as u32);
+        let g = self.grid.get(a)?;
         let mut out = BranchHoles { hole: [[R::zero(); 2]; 3] };
-        for e in 0..3 {
-            let g = &self.grid[e][i - 1..i + 3];
+        for r in 0..3 {
             for c in 0..2 {
-                out.hole[e][c] = w[0] * g[0][c] + w[1] * g[1][c] + w[2] * g[2][c] + w[3] * g[3][c];
+                let k = &g[r][c];
+                out.hole[r][c] = k[0] + s * (k[1] + s * (k[2] + s * k[3]));
             }
         }
         Some(out)
@@ -346,7 +417,9 @@ impl<R: Real> BranchTable<R> {
     }
 
     /// The forward solve under tension alone with precomputed compliances (of this table's
-    /// finger), written into `sol` (the caller's storage; no copy of the solution): each
+    /// finger, as `Finger::compliances` makes them: symmetric), written into `sol` (the
+    /// caller's storage; no copy of the solution; rows it held past this finger's (n, m) are
+    /// cleared, `Solution`): each
     /// joint's guide hole read off the table at (P, its stack thickness), then Newton on the
     /// full model from there (`Finger::solve_from_holes_into`: a joint whose march at the
     /// table's hole is within the solver's tolerance is answered by that march). The answer
@@ -365,23 +438,23 @@ impl<R: Real> BranchTable<R> {
     }
 
     /// Each joint's guide hole read off the table at (P, its stack thickness), or None where
-    /// the table does not hold one of them.
+    /// the table does not hold one of them: the quadratic in thickness at P (the tension
+    /// grid's cubic in P, or `branch_holes` past the grid), evaluated at each distinct joint's
+    /// thickness.
     #[inline(never)]
     fn forward_holes(&self, c: &Compliances<R>, tension: R) -> Option<[[R; 2]; MAX_JOINTS]> {
         let n = self.finger.params().n;
         if !(tension.is_finite() && c.n == n) {
             return None;
         }
-        let h = if tension > R::zero() && tension < self.grid_top { self.grid_holes(tension)? } else { self.branch_holes(tension)? };
+        let h = if tension > R::zero() && tension < self.grid_top {
+            self.grid_holes(tension)?
+        } else {
+            self.thickness_quadratic(&self.branch_holes(tension)?)?
+        };
         let [t_top, t0, tm] = self.thickness;
         let slack = (t0 - t_top) * R::from_f64(1e-3);
-        let (d01, d02, d12) = (t_top - t0, t_top - tm, t0 - tm);
-        if d01 == R::zero() || d02 == R::zero() || d12 == R::zero() {
-            return None;
-        }
-        // the quadratic through the three branch thicknesses (`hole_at_thickness`), its
-        // denominators once
-        let inv = [R::one() / (d01 * d02), -R::one() / (d01 * d12), R::one() / (d02 * d12)];
+        let (lo, hi) = (t_top - slack, t0 + slack);
         let mut holes = [[R::zero(); 2]; MAX_JOINTS];
         for k in 0..n {
             let t = c.thickness[k];
@@ -389,13 +462,12 @@ impl<R: Real> BranchTable<R> {
                 holes[k] = holes[k - 1];
                 continue;
             }
-            if !(t >= t_top - slack && t <= t0 + slack) {
+            if !(t >= lo && t <= hi) {
                 return None;
             }
-            let (a0, a1, a2) = (t - t_top, t - t0, t - tm);
-            let w = [a1 * a2 * inv[0], a0 * a2 * inv[1], a0 * a1 * inv[2]];
+            let tau = t - tm;
             for c in 0..2 {
-                holes[k][c] = w[0] * h.hole[0][c] + w[1] * h.hole[1][c] + w[2] * h.hole[2][c];
+                holes[k][c] = h.hole[0][c] + tau * (h.hole[1][c] + tau * h.hole[2][c]);
             }
         }
         Some(holes)
@@ -426,5 +498,47 @@ impl<R: Real> BranchTable<R> {
             }
         }
         f.fmax_with(&c, Some(&starts))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::params::Params;
+
+    /// The forward's lookup (`forward_holes`: the tension grid's cubic in P, per coefficient of
+    /// the quadratic in thickness) reads what the branch inversion and the Lagrange quadratic
+    /// across the three branch thicknesses read (`branch_holes`, `hole_at_thickness`): in f32
+    /// (where the grid holds over the whole table) to its bound (1/8 of the converged solver's
+    /// tolerance) and the rounding of both, over the tensions and the stack's range; in f64
+    /// (no grid at its tolerance) the power form of the quadratic to rounding.
+    #[test]
+    fn forward_lookup_is_the_branch_quadratic() {
+        fn check<R: Real>(tol: f64, grid: bool) {
+            let f = Finger::new(Params::<R>::default()).unwrap();
+            let t = BranchTable::new(&f, &Options::default()).unwrap();
+            let top = f.voltage_ceiling().to_f64() * (1.0 - 1e-4);
+            let p_end = t.dp.to_f64() * (TABLE_LEN - 1) as f64;
+            assert_eq!(t.grid_top.to_f64() > 0.99 * p_end, grid, "grid to {} of {p_end}", t.grid_top.to_f64());
+            let mut checked = 0;
+            for i in 1..200 {
+                let p = R::from_f64(p_end * 1.02 * i as f64 / 200.0);
+                for v in [[0.0, 0.5 * top, top], [0.9 * top, 0.2 * top, 0.7 * top]] {
+                    let c = f.compliances(&v.map(R::from_f64)).unwrap();
+                    let (Some(got), Some(h)) = (t.forward_holes(&c, p), t.branch_holes(p)) else { continue };
+                    for k in 0..3 {
+                        let want = t.hole_at_thickness(&h, c.thickness[k]).unwrap();
+                        for x in 0..2 {
+                            let e = (got[k][x] - want[x]).to_f64().abs();
+                            assert!(e < tol, "P {} joint {k}: {e} mm", p.to_f64());
+                        }
+                    }
+                    checked += 1;
+                }
+            }
+            assert!(checked > 380, "{checked}");
+        }
+        check::<f32>(2e-5, true);
+        check::<f64>(1e-11, false);
     }
 }
