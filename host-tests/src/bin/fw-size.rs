@@ -129,7 +129,7 @@ fn main() {
     // the Cortex-M3 image's budget is its linker script's (memory-m3.x): its RAM sections
     // include the stack
     let m3 = path.to_string_lossy().contains("thumbv7m-none-eabi");
-    let (fb, rb) = if m3 { ("M3 budget 64 KiB", "with the stack; M3 budget 20 KiB") } else { ("target <= 64 KiB", "target <= 16 KiB") };
+    let (fb, rb) = if m3 { ("M3 budget 64 KiB", "with the stack; M3 budget 20 KiB") } else { ("memory.x: 1024 KiB", "without the stack; memory.x: 128 KiB") };
     println!("flash={flash} bytes ({:.1} KiB, {fb})", flash as f64 / 1024.0);
     println!("ram={ram} bytes static ({:.1} KiB, {rb})", ram as f64 / 1024.0);
     if nsym > 0 {
