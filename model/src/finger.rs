@@ -1355,6 +1355,28 @@ impl<R: Real> Finger<R> {
         Ok(JointMarch { end, hole, link, angle: end.theta + link[2] })
     }
 
+    /// `joint_march` by `march_tension` (the same equations carried in each sub-element's own
+    /// frame, the same answer to rounding: test `tension_march_matches_march`) where that march
+    /// applies (P > 0 and its `den` positive), else `joint_march`'s plain march, as the branch
+    /// table's forward does (`fill_from_holes`). For the tabled inverse's confirming marches.
+    #[inline(always)]
+    pub(crate) fn joint_march_tension(
+        &self,
+        joint: usize,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        q: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<JointMarch<R>, Error> {
+        match self.march_tension(c, tension, b, q) {
+            Ok((end, hole, _, _)) => {
+                let link = self.link_q(tension, &end, None);
+                Ok(JointMarch { end, hole, link, angle: end.theta + link[2] })
+            }
+            Err(_) => self.joint_march(joint, c, tension, b, q),
+        }
+    }
+
     /// Hinge sub-element j's stiffness (the inverse of its compliance, computed in `new`).
     pub(crate) fn hinge_stiffness(&self, j: usize) -> &Mat3<R> {
         &self.hinge_k[j]

@@ -816,10 +816,11 @@ impl<'a, R: Real> Gen<'a, R> {
     /// One march of joint `joint` at tension `p` from hole `b` with compliances `c`: its state
     /// when that is already an equilibrium of the full model to the quasi-Newton solves' own
     /// tolerance (`broyden_steps`: hole residual and joint angle), else None (also when the
-    /// march fails). The sub-element displacements go to `q`.
+    /// march fails). The march is `march_tension` where it applies (`Finger::joint_march_tension`).
+    /// The sub-element displacements go to `q`.
     #[inline(never)]
     fn march_converged(&self, joint: usize, c: &[Mat3<R>; MAX_SUB], p: R, b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
-        let st = self.f.joint_march(joint, c, p, b, q).ok()?;
+        let st = self.f.joint_march_tension(joint, c, p, b, q).ok()?;
         let atol = self.tol_angle * (theta.abs() + R::from_f64(0.1));
         let htol = self.tol_hole.max(self.f.hole_resolution());
         let ok = (b[0] - st.hole[0]).abs() <= htol && (b[1] - st.hole[1]).abs() <= htol && (st.angle - theta).abs() <= atol;
