@@ -153,7 +153,7 @@ impl<R: Real> Compliances<R> {
 }
 
 /// A solved posture.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Solution<R> {
     pub n: usize,
     pub m: usize,

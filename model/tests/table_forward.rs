@@ -177,22 +177,6 @@ fn tabled_forward_agrees_with_the_full_solve_over_the_domain() {
 /// of other voltages give those voltages' answer, not the table's last one.
 #[test]
 fn solve_into_reused_storage_is_a_fresh_solve() {
-    let same = |a: &Solution<f32>, b: &Solution<f32>| {
-        a.n == b.n
-            && a.m == b.m
-            && a.q == b.q
-            && a.links == b.links
-            && a.joint_angle == b.joint_angle
-            && a.nodes == b.nodes
-            && a.span == b.span
-            && a.thickness == b.thickness
-            && a.volts == b.volts
-            && a.cable_excursion == b.cable_excursion
-            && a.iterations == b.iterations
-            && a.residual == b.residual
-            && a.tangent_det == b.tangent_det
-            && a.tension == b.tension
-    };
     let f = Finger::new(Params::<f32>::default()).unwrap();
     let table = BranchTable::new(&f, &Options::default()).unwrap();
     // a solution of a finger with five joints first (rows past this finger's three are held)
@@ -209,7 +193,7 @@ fn solve_into_reused_storage_is_a_fresh_solve() {
         let into = table.solve_into(&c, p, &mut sol);
         match (fresh, into) {
             (Ok(a), Ok(())) => {
-                assert!(same(&a, &sol), "P {p} V {v:?}: reused storage differs from a fresh solve");
+                assert!(a == sol, "P {p} V {v:?}: reused storage differs from a fresh solve");
                 assert!(sol.q[3..].iter().flatten().flatten().all(|&x| x == 0.0) && sol.tangent_det[3..] == [1.0; 2]);
                 assert!(sol.volts[..3] == v && sol.thickness[..3] == c.thickness[..3]);
             }
