@@ -4,7 +4,7 @@
 //! refusals change nothing.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{cmd, Out};
+use host_tests::sim_console::{cmd, nums, val, Out};
 use finger_model::{Calibration, Finger, Method};
 
 /// MODEL.md's finger, as `fe-calibrate` (tools/calculix) prints it (docs/firmware.md).
@@ -17,11 +17,6 @@ const NONE_REPLY: &str = "ok cal=1.000000,1.000000,1.000000,1.000000,1.000000,0.
 fn err(a: &mut App<SimBoard>, line: &str, code: &str) {
     let r = cmd(a, line);
     assert!(r.starts_with(&format!("err {code}: ")), "{line:?} -> {r} (wanted {code})");
-}
-
-fn kv(reply: &str, key: &str) -> Vec<f64> {
-    let v = reply.split_whitespace().find_map(|w| w.strip_prefix(&format!("{key}="))).unwrap_or_else(|| panic!("no {key} in {reply}"));
-    v.split(',').map(|x| x.parse().unwrap()).collect()
 }
 
 /// The FE line as the model's type, parsed as the host parses f32 (correctly rounded, as the
@@ -54,7 +49,7 @@ fn assert_solve_reply(r: &str, f: &Finger<f32>, p: f32, v: [f32; 3]) {
     ];
     assert!(r.starts_with("ok joints="), "{r}");
     for (key, w) in &want {
-        let got = kv(r, key);
+        let got = nums(val(r, key));
         assert_eq!(got.len(), w.len(), "{key} in {r}");
         for (g, (w, unit)) in got.iter().zip(w) {
             assert!((g - w).abs() <= *unit, "{key}: {g} vs {w} (one printed unit {unit}) in {r}");
@@ -92,7 +87,7 @@ fn calibrated_solve_is_the_host_model() {
     let plain = Finger::new(p).unwrap();
     let cal = Finger::with_calibration(p, fe_cal()).unwrap();
     cmd(&mut a, "cal none");
-    let fmax0 = kv(&cmd(&mut a, "limits"), "fmax")[0];
+    let fmax0 = nums(val(&cmd(&mut a, "limits"), "fmax"))[0];
     let evals = a.fmax_evaluations();
     cmd(&mut a, &format!("cal {FE_CAL}"));
     for (f, v) in [(0.5f32, [0.0f32, 1000.0, 2000.0]), (1.5, [3000.0, 0.0, 8000.0]), (0.8, [0.0; 3])] {
@@ -101,19 +96,19 @@ fn calibrated_solve_is_the_host_model() {
         assert_solve_reply(&r, &cal, f, v);
         let s = cal.solve(f, &v, Method::converged()).unwrap();
         let k = cal.tip_stiffness(&s).unwrap();
-        let got = kv(&r, "stiffness");
+        let got = nums(val(&r, "stiffness"));
         for i in 0..3 {
             assert!((got[i] - k[i][i] as f64).abs() <= 1e-3 * (k[i][i] as f64).abs(), "{r} vs {k:?}");
         }
         // and not the uncalibrated model's answer: the calibrated finger bends more
         let j0 = plain.solve(f, &v, Method::converged()).unwrap().joint_angle;
-        let j = kv(&r, "joints");
+        let j = nums(val(&r, "joints"));
         for i in 0..3 {
             assert!(j[i] > (j0[i] as f64).to_degrees() * 1.05, "{r} vs uncalibrated {j0:?}");
         }
     }
     // the fmax cache was dropped: recomputed for the calibrated finger, and its answer
-    let fmax1 = kv(&cmd(&mut a, "limits"), "fmax")[0];
+    let fmax1 = nums(val(&cmd(&mut a, "limits"), "fmax"))[0];
     assert_eq!(a.fmax_evaluations(), evals + 1);
     let want = cal.fmax(&[0.0; 3]).unwrap().tension as f64;
     assert!((fmax1 - want).abs() <= 1e-4 && (fmax1 - fmax0).abs() > 1e-3, "{fmax1} vs {want}, uncalibrated {fmax0}");
@@ -232,11 +227,11 @@ fn pose_after_cal_uses_the_calibrated_finger() {
     let line = format!("pose {} {} {}", deg[0], deg[1], deg[2]);
     let r = cmd(&mut a, &line);
     assert!(r.starts_with("ok force="), "{r}");
-    assert!((kv(&r, "force")[0] - want.tension as f64).abs() < 1e-3, "{r} vs {want:?}");
-    let volts = kv(&r, "volts");
+    assert!((nums(val(&r, "force"))[0] - want.tension as f64).abs() < 1e-3, "{r} vs {want:?}");
+    let volts = nums(val(&r, "volts"));
     for k in 0..3 {
         assert!((volts[k] - want.volts[k] as f64).abs() < 0.06, "{r} vs {want:?}");
-        assert!((kv(&r, "joints")[k] - deg[k]).abs() < 1e-3, "{r}");
+        assert!((nums(val(&r, "joints"))[k] - deg[k]).abs() < 1e-3, "{r}");
     }
     // the uncalibrated finger's answer to the same angles is another one
     let other = finger_model::inverse::solve_pose_tabled(&finger_model::inverse::BranchTable::new(&plain, &opts).unwrap(), &rad, None).unwrap();
