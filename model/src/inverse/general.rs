@@ -929,19 +929,16 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     // repeats joint k-1 where their angles are equal (filled with the first joint's reading:
     // no zeroed array written twice)
     let len = tb.covered();
-    let mut e0 = [TableEnd { tension: R::zero(), hole: [R::zero(); 2] }; 3];
-    if !(angles[0] > R::zero() && tb.read(angles[0], len, &mut e0)) {
-        return Ok(false);
-    }
+    let Some(e0) = tb.read(angles[0], len).filter(|_| angles[0] > R::zero()) else { return Ok(false) };
     let mut rd = [e0; MAX_JOINTS];
     for k in 1..n {
-        if !(angles[k] > R::zero()) {
-            return Ok(false);
-        }
         if angles[k] == angles[k - 1] {
             rd[k] = rd[k - 1];
-        } else if !tb.read(angles[k], len, &mut rd[k]) {
-            return Ok(false);
+            continue;
+        }
+        match tb.read(angles[k], len) {
+            Some(e) if angles[k] > R::zero() => rd[k] = e,
+            _ => return Ok(false),
         }
     }
     let band = R::from_f64(TABLE_BAND);
@@ -950,12 +947,10 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     // range by more than the band) is `solve`'s to refuse and report, before any march here
     let pt = match tension {
         Some(pg) => {
+            // (some joint's range starts above pg + tol or ends below pg - tol: the interval
+            // does, its bounds the largest start and the smallest end)
             let tol = band * pg;
-            let outside = (0..n).any(|k| {
-                let (a, b) = (rd[k][0].tension, rd[k][1].tension);
-                a.min(b) - pg > tol || pg - a.max(b) > tol
-            });
-            if outside {
+            if interval[0] - pg > tol || pg - interval[1] > tol {
                 return Ok(false);
             }
             // (no end confirmed: step 4's converged solve inside [t_top, t0] is what shows the
@@ -999,7 +994,7 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
         out.q[k] = [zr; 3];
         out.links[k] = [zr; 3];
     }
-    out.sub_q[n..].fill([[zr; 3]; MAX_SUB]);
+    out.sub_q[n..].as_flattened_mut().as_flattened_mut().fill(zr);
     if p.m < MAX_SUB {
         for row in out.sub_q.iter_mut().take(n) {
             for qj in row.iter_mut().skip(p.m) {

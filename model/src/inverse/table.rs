@@ -141,40 +141,30 @@ impl<R: Real> BranchTable<R> {
     /// for all three (the same grid). None outside (0, last sample of the shortest branch]
     /// or with fewer than four samples.
     pub(super) fn ends(&self, theta: R) -> Option<[TableEnd<R>; 3]> {
-        let mut e = [TableEnd { tension: R::zero(), hole: [R::zero(); 2] }; 3];
-        self.read(theta, self.covered(), &mut e).then_some(e)
+        self.read(theta, self.covered())
     }
 
-    /// `ends` written into `out` (`len`: the samples held on all three branches, `covered`):
-    /// the sample interval's cubics (`angle_cubics`) at θ. False where `ends` is None (`out`
-    /// then partly written).
+    /// `ends` with `len`, the samples held on all three branches (`covered`), given: the
+    /// sample interval's cubics (`angle_cubics`) at θ.
     #[inline(never)]
-    pub(super) fn read(&self, theta: R, len: usize, out: &mut [TableEnd<R>; 3]) -> bool {
+    pub(super) fn read(&self, theta: R, len: usize) -> Option<[TableEnd<R>; 3]> {
         if len < 4 {
-            return false;
+            return None;
         }
         let u = theta / self.step;
         if !(u > R::zero() && u <= R::from_u32(len as u32 - 1)) {
-            return false;
+            return None;
         }
         // the sample interval [a, a+1] holding u (uniform samples: its integer part), the cubic
         // of the four samples around it (one-sided at the table's ends)
         let a = u.to_index().min(len - 2);
         let i = a.clamp(1, len - 3);
         let s = u - R::from_u32(i as u32);
-        let Some(k) = self.angle_cubics.get(i) else { return false };
-        for (ke, o) in k.iter().zip(out.iter_mut()) {
-            let v = |c: usize| {
-                let p = &ke[c];
-                p[0] + s * (p[1] + s * (p[2] + s * p[3]))
-            };
-            let tension = v(0);
-            if !(tension > R::zero()) {
-                return false;
-            }
-            *o = TableEnd { tension, hole: [v(1), v(2)] };
-        }
-        true
+        let k = self.angle_cubics.get(i)?;
+        let at = |p: &[R; 4]| p[0] + s * (p[1] + s * (p[2] + s * p[3]));
+        let end = |b: &[[R; 4]; 3]| TableEnd { tension: at(&b[0]), hole: [at(&b[1]), at(&b[2])] };
+        let e = [end(&k[0]), end(&k[1]), end(&k[2])];
+        (e[0].tension > R::zero() && e[1].tension > R::zero() && e[2].tension > R::zero()).then_some(e)
     }
 
     /// The cubics `read` evaluates (`AngleCubics`), from the samples.
