@@ -23,7 +23,7 @@ use core::fmt::{self, Write};
 #[cfg(feature = "contact")]
 use finger_model::inverse::contact_force;
 #[cfg(feature = "pose")]
-use finger_model::inverse::{solve_pose_tabled, solve_pose_with, BranchTable, Options};
+use finger_model::inverse::{solve_pose_tabled_into, solve_pose_with, BranchTable, Options, PoseSolution};
 use finger_model::{Error, Finger, Real, MAX_JOINTS};
 
 #[cfg(feature = "pose")]
@@ -109,13 +109,16 @@ where
         *a = R::from_f64(f64::from(d)) * R::from_f64(core::f64::consts::PI / 180.0);
     }
     let tension = tension.map(|t| R::from_f64(f64::from(t)));
-    let sol = match table.map_or_else(|| solve_pose_with(finger, &angles[..n], tension, opts), |t| solve_pose_tabled(t, &angles[..n], tension)) {
-        Ok(s) => s,
-        Err(e) => {
-            write_err(out, &e)?;
-            return Ok(false);
-        }
+    // (the tabled inverse writes its answer in place: no copy of the solution)
+    let mut sol = PoseSolution::empty();
+    let solved = match table {
+        Some(t) => solve_pose_tabled_into(t, &angles[..n], tension, &mut sol),
+        None => solve_pose_with(finger, &angles[..n], tension, opts).map(|s| sol = s),
     };
+    if let Err(e) = solved {
+        write_err(out, &e)?;
+        return Ok(false);
+    }
     if let Err(e) = apply(sol.tension, &sol.volts[..n]) {
         w!(out; "err ", e.code, ": ", e.msg)?;
         return Ok(false);

@@ -55,13 +55,17 @@ pub fn ceiling_in_force<R: Real>(p: &Params<R>, hv_fs: Option<R>) -> R {
 /// Check one channel voltage: finite, not negative, and below the ceiling (0 V is always
 /// allowed, also without stacks).
 pub fn check_voltage<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<(), Error> {
+    check_below(joint, volts, voltage_ceiling(p))
+}
+
+/// `check_voltage` against a known ceiling.
+fn check_below<R: Real>(joint: usize, volts: R, ceiling: R) -> Result<(), Error> {
     if !volts.is_finite() {
         return Err(Error::NonFinite { input: "voltage" });
     }
     if volts < R::zero() {
         return Err(Error::Input { input: "voltage", reason: "must not be negative" });
     }
-    let ceiling = voltage_ceiling(p);
     if volts > R::zero() && volts >= ceiling {
         return Err(Error::VoltageCeiling { joint, volts: volts.to_f64(), ceiling: ceiling.to_f64() });
     }
@@ -118,26 +122,57 @@ pub fn stack_thickness<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result
 /// 33 % limit (the paper's "2 mm to 1 mm" is a 50 % reduction) and a voltage at or past the
 /// ceiling.
 pub fn voltage_for_thickness<R: Real>(p: &Params<R>, joint: usize, thickness_mm: R) -> Result<R, Error> {
-    if !thickness_mm.is_finite() {
-        return Err(Error::NonFinite { input: "thickness" });
+    ThicknessVoltage::new(p).voltage(joint, thickness_mm)
+}
+
+/// `voltage_for_thickness` with its parameter-set constants (stack thickness at 0 V, modulus,
+/// permittivity, ceiling) computed once: the branch table keeps one for its finger.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThicknessVoltage<R> {
+    has_stacks: bool,
+    t0: R,
+    z0: R,
+    e_de: R,
+    permittivity: R,
+    ceiling: R,
+}
+
+impl<R: Real> ThicknessVoltage<R> {
+    /// The constants of parameter set `p`.
+    pub fn new(p: &Params<R>) -> Self {
+        ThicknessVoltage {
+            has_stacks: p.layers != 0,
+            t0: R::from_u32(p.layers as u32) * p.z0,
+            z0: p.z0,
+            e_de: p.e_de(),
+            permittivity: permittivity(p),
+            ceiling: voltage_ceiling(p),
+        }
     }
-    let t0 = R::from_u32(p.layers as u32) * p.z0;
-    if p.layers == 0 || thickness_mm > t0 || thickness_mm <= R::zero() {
-        return Err(Error::Input { input: "thickness", reason: "must lie in (0, N_L z0]" });
+
+    /// The voltage that thins joint `joint`'s stack to `thickness_mm`, V (`voltage_for_thickness`).
+    pub fn voltage(&self, joint: usize, thickness_mm: R) -> Result<R, Error> {
+        if !thickness_mm.is_finite() {
+            return Err(Error::NonFinite { input: "thickness" });
+        }
+        let t0 = self.t0;
+        if !self.has_stacks || thickness_mm > t0 || thickness_mm <= R::zero() {
+            return Err(Error::Input { input: "thickness", reason: "must lie in (0, N_L z0]" });
+        }
+        let s = thickness_mm / t0;
+        let limit = R::from_f64(2.0 / 3.0);
+        if s <= limit {
+            return Err(Error::ThicknessLimit {
+                joint,
+                requested_mm: thickness_mm.to_f64(),
+                limit_mm: (t0 * limit).to_f64(),
+            });
+        }
+        let beta = s * s * (R::one() - s);
+        let v = (beta * self.e_de * self.z0 * self.z0 / self.permittivity).sqrt();
+        check_below(joint, v, self.ceiling)?;
+        Ok(v)
     }
-    let s = thickness_mm / t0;
-    let limit = R::from_f64(2.0 / 3.0);
-    if s <= limit {
-        return Err(Error::ThicknessLimit {
-            joint,
-            requested_mm: thickness_mm.to_f64(),
-            limit_mm: (t0 * limit).to_f64(),
-        });
-    }
-    let beta = s * s * (R::one() - s);
-    let v = (beta * p.e_de() * p.z0 * p.z0 / permittivity(p)).sqrt();
-    check_voltage(p, joint, v)?;
-    Ok(v)
 }
 
 /// Stiffness of a stack stretch of length `len` and thickness `t` (mm), a uniform beam of

@@ -411,7 +411,7 @@ pub fn solve_pose_with<R: Real>(
     tension: Option<R>,
     opts: &Options<R>,
 ) -> Result<PoseSolution<R>, Error> {
-    solve(f, None, angles, tension, opts)
+    solve(f, None, true, angles, tension, opts)
 }
 
 /// The inverse with a branch table (table.rs), for the finger and the options the table was
@@ -421,7 +421,7 @@ pub fn solve_pose_with<R: Real>(
 /// same tolerance (with a given tension, `interval` is the table's reading), at a fraction of
 /// the cost. The m = 1 fast path does not use it. `solve_pose_tabled_into` without the copy.
 pub fn solve_pose_tabled<R: Real>(table: &BranchTable<R>, angles: &[R], tension: Option<R>) -> Result<PoseSolution<R>, Error> {
-    solve(table.finger(), Some(table), angles, tension, table.options())
+    solve(table.finger(), Some(table), true, angles, tension, table.options())
 }
 
 /// `solve_pose_tabled` written into `out` (the caller's storage, every field set; no copy of
@@ -432,7 +432,8 @@ pub fn solve_pose_tabled_into<R: Real>(table: &BranchTable<R>, angles: &[R], ten
     if takes_general(f) && general::solve_tabled(table, angles, tension, out)? {
         return Ok(());
     }
-    *out = solve(f, Some(table), angles, tension, table.options())?;
+    // (the tabled path tried already: not again)
+    *out = solve(f, Some(table), false, angles, tension, table.options())?;
     Ok(())
 }
 
@@ -481,11 +482,13 @@ fn takes_general<R: Real>(f: &Finger<R>) -> bool {
 }
 
 /// `solve_pose_with` and `solve_pose_tabled` (`table`, when given, was built for `f` and
-/// `opts`). One copy in the image for both entry points.
+/// `opts`; with `tabled` the general path's `solve_tabled` is tried first). One copy in the
+/// image for both entry points.
 #[inline(never)]
 fn solve<R: Real>(
     f: &Finger<R>,
     table: Option<&BranchTable<R>>,
+    tabled: bool,
     angles: &[R],
     tension: Option<R>,
     opts: &Options<R>,
@@ -513,7 +516,7 @@ fn solve<R: Real>(
         // per-joint equilibrium (`general`). A build without `inverse-fast` (the firmware,
         // whose default model is m = 8) takes this path for m = 1 too and leaves the fast
         // path's code out of the image.
-        if let Some(tb) = table {
+        if let Some(tb) = table.filter(|_| tabled) {
             if general::solve_tabled(tb, angles, tension, &mut out)? {
                 return Ok(out);
             }

@@ -71,6 +71,8 @@ pub(super) struct Gen<'a, R> {
     link_rot: R,
     /// Hole tolerance of the per-joint Newton, mm.
     tol_hole: R,
+    /// Hole tolerance of a converged march (`tol_hole`, or the march's resolution if coarser), mm.
+    htol: R,
     /// Relative angle tolerance of a root.
     tol_angle: R,
     /// Relative bracket width at which a root stops.
@@ -100,11 +102,13 @@ impl<'a, R: Real> Gen<'a, R> {
     fn with_link_rot(f: &'a Finger<R>, opts: &Options<R>, link_rot: R) -> Self {
         let p = f.params();
         let lh = p.hinge_len();
+        let tol_hole = R::from_f64(1e-12) * (lh + p.e);
         Gen {
             f,
             p,
             link_rot,
-            tol_hole: R::from_f64(1e-12) * (lh + p.e),
+            tol_hole,
+            htol: tol_hole.max(f.hole_resolution()),
             tol_angle: R::from_f64(1e-12_f64.max(32.0 * R::EPS)),
             rel: R::from_f64(4.0 * R::EPS),
             max_iter: 2 * opts.max_iter.max(8),
@@ -539,7 +543,7 @@ impl<'a, R: Real> Gen<'a, R> {
         F: FnMut([R; 3], &mut [[R; 3]; MAX_SUB]) -> Result<JointMarch<R>, Error>,
     {
         let atol = self.tol_angle * (theta.abs() + R::from_f64(0.1));
-        let htol = self.tol_hole.max(self.f.hole_resolution());
+        let htol = self.htol;
         let resid = |x: &[R; 3], st: &JointMarch<R>| [x[0] - st.hole[0], x[1] - st.hole[1], st.angle - theta];
         let mut x = x0;
         let st = ev(x, q_out).ok()?;
@@ -822,25 +826,86 @@ impl<'a, R: Real> Gen<'a, R> {
     fn march_converged(&self, joint: usize, c: &[Mat3<R>; MAX_SUB], p: R, b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
         let st = self.f.joint_march_tension(joint, c, p, b, q).ok()?;
         let atol = self.tol_angle * (theta.abs() + R::from_f64(0.1));
-        let htol = self.tol_hole.max(self.f.hole_resolution());
+        let htol = self.htol;
         let ok = (b[0] - st.hole[0]).abs() <= htol && (b[1] - st.hole[1]).abs() <= htol && (st.angle - theta).abs() <= atol;
         ok.then_some(st)
     }
 }
 
 /// Joint `k`'s (0-based) range end `e` (0 softest, 1 stiffest stack) held at `theta`,
-/// confirmed from the table's reading `r`: the reading where one march there is within the
-/// solver's tolerance, else the quasi-Newton solve from it. The march's sub-element
-/// displacements go to `q` (the joint's own rows: step 4 writes them again).
-#[inline(never)]
+/// confirmed in place from the table's reading `r`: kept where one march there is within the
+/// solver's tolerance, else the quasi-Newton solve from it. Returns whether the tension moved.
+/// The march's sub-element displacements go to `q` (the joint's own rows: step 4 writes them
+/// again).
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn confirm_end<R: Real>(g: &mut Gen<'_, R>, tb: &BranchTable<R>, k: usize, e: usize, r: TableEnd<R>, theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Result<TableEnd<R>, Error> {
+fn confirm_end<R: Real>(g: &mut Gen<'_, R>, tb: &BranchTable<R>, k: usize, e: usize, r: &mut TableEnd<R>, theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Result<bool, Error> {
     let c = &tb.comp[e];
     if g.march_converged(k + 1, c, r.tension, r.hole, theta, q).is_some() {
-        return Ok(r);
+        return Ok(false);
     }
     let h = g.hold_tension(k + 1, theta, c, tb.thickness[e], tb.slope0[e], Some((r.tension, r.hole)), None, Some(theta / r.tension), q)?;
-    Ok(TableEnd { tension: h.tension, hole: h.st.hole })
+    let moved = h.tension != r.tension;
+    *r = TableEnd { tension: h.tension, hole: h.st.hole };
+    Ok(moved)
+}
+
+/// Step 1b of `solve_tabled` with the tension free: confirm (`confirm_end`) the ends the
+/// midpoint rule rests on, the feasible interval's bounds and any end within `TABLE_BAND` of
+/// them, in the readings `rd` (per joint: softest, stiffest, middle); `interval` the readings'
+/// bounds, updated when a confirmed tension moves them (then the scan starts again). The
+/// marches' sub-element displacements go to each joint's rows of `sub_q`.
+#[inline(never)]
+fn confirm_bounds<R: Real>(
+    g: &mut Gen<'_, R>,
+    tb: &BranchTable<R>,
+    angles: &[R],
+    rd: &mut [[TableEnd<R>; 3]; MAX_JOINTS],
+    interval: &mut [R; 2],
+    sub_q: &mut [[[R; 3]; MAX_SUB]; MAX_JOINTS],
+) -> Result<(), Error> {
+    let n = angles.len().min(MAX_JOINTS);
+    let band = R::from_f64(TABLE_BAND);
+    // (bit 2k + e: end e of joint k)
+    let mut exact = 0u32;
+    loop {
+        // the ends near a bound, not yet confirmed, in the order of the bits
+        let [lo, hi] = *interval;
+        let (near_lo, near_hi) = (band * lo, band * hi);
+        let mut todo = 0u32;
+        for (k, rk) in rd.iter().enumerate().take(n) {
+            for (e, end) in rk.iter().take(2).enumerate() {
+                let x = end.tension;
+                if (x - lo).abs() <= near_lo || (x - hi).abs() <= near_hi {
+                    todo |= 1 << (2 * k + e);
+                }
+            }
+        }
+        todo &= !exact;
+        let mut moved = false;
+        while todo != 0 && !moved {
+            let i = todo.trailing_zeros() as usize;
+            let (k, e) = (i / 2, i % 2);
+            moved = confirm_end(g, tb, k, e, &mut rd[k][e], angles[k], &mut sub_q[k])?;
+            g.iters += 1;
+            exact |= 1 << i;
+            todo &= !(1 << i);
+            // the same angle, the same end (a joint before at this angle has the same reading:
+            // it was confirmed first)
+            let solved = rd[k][e];
+            for j in k + 1..n {
+                if angles[j] == angles[k] {
+                    rd[j][e] = solved;
+                    exact |= 1 << (2 * j + e);
+                    todo &= !(1 << (2 * j + e));
+                }
+            }
+        }
+        if !moved {
+            return Ok(());
+        }
+        *interval = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
+    }
 }
 
 /// `solve_pose_tabled`'s path (docs/inverse.md, "The tabled inverse"): every joint's range
@@ -860,74 +925,52 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     }
     // (the table holds the straight joint's slopes: no link rotation needed)
     let mut g = Gen::with_link_rot(f, &tb.opts, R::zero());
-    // per joint: the softest end, the stiffest end, the middle branch (tension, hole), and
-    // whether each end is solved; joint k repeats joint k-1 where their angles are equal
-    // (filled with the first joint's reading: no zeroed array written twice)
-    let Some(e0) = tb.ends(angles[0]).filter(|_| angles[0] > R::zero()) else { return Ok(false) };
+    // per joint: the softest end, the stiffest end, the middle branch (tension, hole); joint k
+    // repeats joint k-1 where their angles are equal (filled with the first joint's reading:
+    // no zeroed array written twice)
+    let len = tb.covered();
+    let Some(e0) = tb.read(angles[0], len).filter(|_| angles[0] > R::zero()) else { return Ok(false) };
     let mut rd = [e0; MAX_JOINTS];
     for k in 1..n {
         if angles[k] == angles[k - 1] {
             rd[k] = rd[k - 1];
             continue;
         }
-        match tb.ends(angles[k]) {
+        match tb.read(angles[k], len) {
             Some(e) if angles[k] > R::zero() => rd[k] = e,
             _ => return Ok(false),
         }
     }
-    let mut exact = [[false; 2]; MAX_JOINTS];
     let band = R::from_f64(TABLE_BAND);
+    let mut interval = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
     // a target the readings refuse (the interval empty; a given tension outside a joint's
     // range by more than the band) is `solve`'s to refuse and report, before any march here
-    let outside = match tension {
-        None => {
-            let bound = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
-            !(bound[0] <= bound[1])
-        }
-        Some(pg) => {
-            let tol = band * pg;
-            (0..n).any(|k| {
-                let (a, b) = (rd[k][0].tension, rd[k][1].tension);
-                a.min(b) - pg > tol || pg - a.max(b) > tol
-            })
-        }
-    };
-    if outside {
-        return Ok(false);
-    }
-    // 1b. confirm the ends the answer depends on. Without a tension: the interval's bounds
-    //     (the midpoint rule rests on them) and any end within `TABLE_BAND` of them. With one:
-    //     none; step 4's converged solve inside [t_top, t0] is what shows the tension within
-    //     a joint's range (near an end whose solve does not converge, `solve` decides)
-    while tension.is_none() {
-        let bound = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
-        let near = |x: R| (x - bound[0]).abs() <= band * bound[0] || (x - bound[1]).abs() <= band * bound[1];
-        let mut next = None;
-        'find: for k in 0..n {
-            for e in 0..2 {
-                if !exact[k][e] && near(rd[k][e].tension) {
-                    next = Some((k, e));
-                    break 'find;
-                }
-            }
-        }
-        let Some((k, e)) = next else { break };
-        let solved = confirm_end(&mut g, tb, k, e, rd[k][e], angles[k], &mut out.sub_q[k])?;
-        g.iters += 1;
-        for j in 0..n {
-            if angles[j] == angles[k] {
-                rd[j][e] = solved;
-                exact[j][e] = true;
-            }
-        }
-    }
-    // 2-3. the interval and the tension (`choose_tension`'s rule); a refusal is `solve`'s to
-    //     report
-    let interval = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
     let pt = match tension {
-        Some(t) => t,
-        None if interval[0] <= interval[1] => (interval[0] + interval[1]) / R::from_f64(2.0),
-        None => return Ok(false),
+        Some(pg) => {
+            // (some joint's range starts above pg + tol or ends below pg - tol: the interval
+            // does, its bounds the largest start and the smallest end)
+            let tol = band * pg;
+            if interval[0] - pg > tol || pg - interval[1] > tol {
+                return Ok(false);
+            }
+            // (no end confirmed: step 4's converged solve inside [t_top, t0] is what shows the
+            // tension within a joint's range; near an end whose solve does not converge,
+            // `solve` decides)
+            pg
+        }
+        None => {
+            if !(interval[0] <= interval[1]) {
+                return Ok(false);
+            }
+            // 1b. confirm the ends the midpoint rule rests on
+            confirm_bounds(&mut g, tb, angles, &mut rd, &mut interval, &mut out.sub_q)?;
+            // 2-3. the midpoint of the interval (`choose_tension`'s rule); a refusal is
+            //      `solve`'s to report
+            if !(interval[0] <= interval[1]) {
+                return Ok(false);
+            }
+            (interval[0] + interval[1]) / R::from_f64(2.0)
+        }
     };
     // (the midpoint of a non-empty interval lies in every joint's range; a given tension was
     // checked against the readings above, and step 4 shows it inside or hands it to `solve`)
@@ -941,23 +984,29 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     out.tension_given = tension.is_some();
     out.interval = interval;
     out.tension = pt;
-    for k in 0..MAX_JOINTS {
-        out.angles[k] = if k < n { angles[k] } else { zr };
-        if k >= n {
-            out.volts[k] = zr;
-            out.thickness[k] = zr;
-            out.q[k] = [zr; 3];
-            out.links[k] = [zr; 3];
-        }
-        for j in (if k < n { p.m } else { 0 })..MAX_SUB {
-            out.sub_q[k][j] = [zr; 3];
+    for k in 0..n {
+        out.angles[k] = angles[k];
+    }
+    for k in n..MAX_JOINTS {
+        out.angles[k] = zr;
+        out.volts[k] = zr;
+        out.thickness[k] = zr;
+        out.q[k] = [zr; 3];
+        out.links[k] = [zr; 3];
+    }
+    out.sub_q[n..].as_flattened_mut().as_flattened_mut().fill(zr);
+    if p.m < MAX_SUB {
+        for row in out.sub_q.iter_mut().take(n) {
+            for qj in row.iter_mut().skip(p.m) {
+                *qj = [zr; 3];
+            }
         }
     }
     // 4. every joint's thickness at that tension: one compliance evaluation and one march at
     //    the table's start along the level curve, the quasi-Newton solve only if that march is
     //    not within the tolerance; then the voltage
     let lh = p.hinge_len();
-    let v_top = tb.v_top;
+    let (v_top, volts) = (tb.v_top, &tb.volts);
     // the compliances at each joint's thickness (filled with the table's 0 V ones: every
     // entry is written before it is read, the first m by `comp_into`)
     let mut c = [tb.comp[1][0]; MAX_SUB];
@@ -973,7 +1022,7 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
             out.links[k] = out.links[k - 1];
             continue;
         }
-        let [lo, hi, md] = rd[k];
+        let [lo, hi, md] = &rd[k];
         let (t_guess, b) = level_guess((lo.tension, t_top, lo.hole), (hi.tension, t0, hi.hole), Some((md.tension, tm, md.hole)), pt);
         // at either end of the stack's range the table holds the compliances
         let ck = if t_guess >= t0 {
@@ -1007,7 +1056,7 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
         };
         let t = t.max(t_top).min(t0);
         out.thickness[k] = t;
-        out.volts[k] = if t >= t0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, t)?.min(v_top) };
+        out.volts[k] = if t >= t0 { R::zero() } else { volts.voltage(k + 1, t)?.min(v_top) };
         out.q[k] = [st.end.x - lh, st.end.y, st.end.theta];
         out.links[k] = st.link;
     }
@@ -1115,11 +1164,13 @@ impl<R: Real> BranchTable<R> {
             opts: *opts,
             thickness: [t_top, t0, t_mid],
             v_top,
+            volts: de::ThicknessVoltage::new(p),
             comp,
             slope0,
             step,
             len: [1; 3],
             x: [[[R::zero(), lh, p.e]; TABLE_LEN]; 3],
+            angle_cubics: [[[[R::zero(); 4]; 3]; 3]; TABLE_LEN],
             grid: super::table::zero_grid(),
             dp: R::zero(),
             inv_dp: R::zero(),
@@ -1151,6 +1202,7 @@ impl<R: Real> BranchTable<R> {
                 slope = h.slope;
             }
         }
+        t.build_angle_cubics();
         t.build_tension_grid();
         Ok(t)
     }

@@ -23,9 +23,11 @@
 //! full model, to the same tolerance as without the table; the table only decides where the
 //! solves start and which range ends need one. Built once per parameter set (the firmware
 //! rebuilds it when a parameter changes); it keeps a copy of its finger and options, so it
-//! is never used with another parameter set. About 10 KB in f32 (the forward's tension grid 6 KB).
+//! is never used with another parameter set. About 19 KB in f32 (the cubics in θ 9 KB, the
+//! forward's tension grid 6 KB).
 
 use super::Options;
+use crate::de::ThicknessVoltage;
 use crate::error::Error;
 use crate::finger::{BranchLimit, Compliances, Finger, Method, Solution};
 use crate::mat3::Mat3;
@@ -48,6 +50,12 @@ pub const TABLE_STEP_DEG: f64 = 1.5;
 /// quadratic in stack thickness (powers of τ = t - the middle branch's thickness,
 /// `BranchTable::thickness_quadratic`) and each coordinate: `grid[a][i][c]` for τ^i, hole x/y.
 pub(super) type TensionGrid<R> = [[[[R; 4]; 2]; 3]; TABLE_LEN];
+
+/// The inverse's reading of the three branches at a joint angle: per sample i (1 ..= len - 3,
+/// len the samples held on all three), the cubic through samples i-1 .. i+2 of each branch's
+/// tension and hole in power form (`cubic`, s in samples from i): `angle_cubics[i][e][c]` for
+/// branch e, component c (P, hole x, hole y).
+pub(super) type AngleCubics<R> = [[[[R; 4]; 3]; 3]; TABLE_LEN];
 
 /// An empty tension grid (`BranchTable::new` starts from it).
 pub(super) fn zero_grid<R: Real>() -> TensionGrid<R> {
@@ -74,6 +82,8 @@ pub struct BranchTable<R> {
     pub(super) thickness: [R; 3],
     /// The top voltage (`top` x the ceiling), V.
     pub(super) v_top: R,
+    /// The finger's thickness-to-voltage constants (`solve_pose_tabled`'s voltages).
+    pub(super) volts: ThicknessVoltage<R>,
     /// Sub-element compliances at each end (the middle branch's are not kept).
     pub(super) comp: [[Mat3<R>; MAX_SUB]; 2],
     /// dθ/dP of the straight joint at each end, rad/N.
@@ -83,6 +93,8 @@ pub struct BranchTable<R> {
     pub(super) len: [usize; 3],
     /// (P N, hole x mm, hole y mm) per sample.
     pub(super) x: [[[R; 3]; TABLE_LEN]; 3],
+    /// The samples' cubics in θ (`AngleCubics`, `build_angle_cubics`), what `ends` reads.
+    pub(super) angle_cubics: AngleCubics<R>,
     /// The forward lookup's grid (`build_tension_grid`, `TensionGrid`), read directly below
     /// `grid_top` (N).
     pub(super) grid: TensionGrid<R>,
@@ -110,7 +122,7 @@ impl<R: Real> BranchTable<R> {
     }
 
     /// Samples held on all three branches.
-    fn covered(&self) -> usize {
+    pub(super) fn covered(&self) -> usize {
         self.len[0].min(self.len[1]).min(self.len[2])
     }
 
@@ -129,9 +141,14 @@ impl<R: Real> BranchTable<R> {
     /// through the four samples around θ (one-sided at the table's ends), one set of weights
     /// for all three (the same grid). None outside (0, last sample of the shortest branch]
     /// or with fewer than four samples.
-    #[inline(never)]
     pub(super) fn ends(&self, theta: R) -> Option<[TableEnd<R>; 3]> {
-        let len = self.covered();
+        self.read(theta, self.covered())
+    }
+
+    /// `ends` with `len`, the samples held on all three branches (`covered`), given: the
+    /// sample interval's cubics (`angle_cubics`) at θ.
+    #[inline(never)]
+    pub(super) fn read(&self, theta: R, len: usize) -> Option<[TableEnd<R>; 3]> {
         if len < 4 {
             return None;
         }
@@ -139,22 +156,31 @@ impl<R: Real> BranchTable<R> {
         if !(u > R::zero() && u <= R::from_u32(len as u32 - 1)) {
             return None;
         }
-        // the sample interval [a, a+1] holding u (uniform samples: its integer part)
+        // the sample interval [a, a+1] holding u (uniform samples: its integer part), the cubic
+        // of the four samples around it (one-sided at the table's ends)
         let a = u.to_index().min(len - 2);
         let i = a.clamp(1, len - 3);
         let s = u - R::from_u32(i as u32);
-        // Lagrange weights on the nodes i-1, i, i+1, i+2
-        let (sm, s1, s2) = (s + R::one(), s - R::one(), s - R::from_f64(2.0));
-        let (sixth, half) = (R::from_f64(1.0 / 6.0), R::from_f64(0.5));
-        let w = [-s * s1 * s2 * sixth, sm * s1 * s2 * half, -sm * s * s2 * half, sm * s * s1 * sixth];
-        // (the four samples as one slice per branch: one bounds check each)
-        let read = |e: usize| {
-            let y: &[[R; 3]; 4] = self.x[e][i - 1..i + 3].try_into().ok()?;
-            let v = |c: usize| w[0] * y[0][c] + w[1] * y[1][c] + w[2] * y[2][c] + w[3] * y[3][c];
-            let tension = v(0);
-            (tension > R::zero()).then(|| TableEnd { tension, hole: [v(1), v(2)] })
-        };
-        Some([read(0)?, read(1)?, read(2)?])
+        let k = self.angle_cubics.get(i)?;
+        let at = |p: &[R; 4]| p[0] + s * (p[1] + s * (p[2] + s * p[3]));
+        let end = |b: &[[R; 4]; 3]| TableEnd { tension: at(&b[0]), hole: [at(&b[1]), at(&b[2])] };
+        let e = [end(&k[0]), end(&k[1]), end(&k[2])];
+        (e[0].tension > R::zero() && e[1].tension > R::zero() && e[2].tension > R::zero()).then_some(e)
+    }
+
+    /// The cubics `read` evaluates (`AngleCubics`), from the samples.
+    pub(super) fn build_angle_cubics(&mut self) {
+        let len = self.covered();
+        if len < 4 {
+            return;
+        }
+        for i in 1..len - 2 {
+            for e in 0..3 {
+                for c in 0..3 {
+                    self.angle_cubics[i][e][c] = cubic(&self.x[e][i - 1..i + 3], c);
+                }
+            }
+        }
     }
 }
 
