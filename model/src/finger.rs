@@ -32,6 +32,7 @@ use crate::{de, hinge};
 
 mod branch_end;
 mod march;
+mod march_stiffness;
 mod pinned;
 
 use crate::solve::continuation::{self, Step};
@@ -1375,6 +1376,16 @@ impl<R: Real> Finger<R> {
             }
             Err(_) => self.joint_march(joint, c, tension, b, q),
         }
+    }
+
+    /// Joint `joint`'s march under tension alone from the stiffnesses K_hinge,j + K_de (`kd`
+    /// the stack's upper triangle): `march_stiffness`, with its link's deflection; None where
+    /// it refuses (the caller takes the compliance path).
+    #[inline(always)]
+    pub(crate) fn joint_march_stiffness(&self, kd: &[R; 6], tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+        let (end, hole, _, _) = self.march_stiffness(kd, tension, b, q).ok()?;
+        let link = self.link_q(tension, &end, None);
+        Some(JointMarch { end, hole, link, angle: end.theta + link[2] })
     }
 
     /// Hinge sub-element j's stiffness (the inverse of its compliance, computed in `new`).
