@@ -49,7 +49,8 @@ impl<R: Real> Finger<R> {
             let l2 = (k02 + f[1]) * i0;
             let u11 = k11 - l1 * k01;
             let u12 = k12 - l1 * k02;
-            let l3 = ((k12 - f[0]) - l2 * k01) / u11;
+            let i1 = R::one() / u11;
+            let l3 = ((k12 - f[0]) - l2 * k01) * i1;
             let u22 = (k22 - l2 * k02) - l3 * u12;
             let y1 = f[1] - l1 * f[0];
             let y2 = (g - l2 * f[0]) - l3 * y1;
@@ -59,7 +60,7 @@ impl<R: Real> Finger<R> {
                 return Err(MarchError::Singular);
             }
             let q2 = y2 / u22;
-            let q1 = (y1 - u12 * q2) / u11;
+            let q1 = (y1 - u12 * q2) * i1;
             let q0 = (f[0] - k01 * q1 - k02 * q2) * i0;
             mm = g + f[0] * q1 - f[1] * q0;
             *qo = [q0, q1, q2];
@@ -100,6 +101,29 @@ mod tests {
             c[j] = mat3::inverse_spd_of_sum(f.hinge_stiffness(j), &k).unwrap();
         }
         (kd, c)
+    }
+
+    /// The stack's upper triangle in closed form is `Finger::stack_stiffness`'s to rounding, with
+    /// and without the calibration, over the thicknesses the stacks reach and past them.
+    #[test]
+    fn stack_upper_is_the_stack_stiffness() {
+        for cal in [Calibration::<f64>::none(), Calibration::model_md()] {
+            for p in [Params::<f64>::default(), Params { m: 1, ..Params::default() }] {
+                let f = Finger::with_calibration(p, cal).unwrap();
+                let su = f.stack_upper();
+                let t0 = f.stack_thickness(0.0).unwrap();
+                for i in 0..=20 {
+                    let t = t0 * (0.3 + 0.04 * f64::from(i));
+                    let k = f.stack_stiffness(t);
+                    let want = [k[0][0], k[0][1], k[0][2], k[1][1], k[1][2], k[2][2]];
+                    let got = su.at(t);
+                    let scale = want.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+                    for (g, w) in got.iter().zip(want) {
+                        assert!((g - w).abs() <= 1e-14 * scale, "{got:?} vs {want:?} at t = {t}");
+                    }
+                }
+            }
+        }
     }
 
     /// The stiffness march is the compliance march (`march_tension`) to rounding: q, end, hole,

@@ -975,6 +975,7 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     // the compliances at each joint's thickness (filled with the table's 0 V ones: every
     // entry is written before it is read, the first m by `comp_into`)
     let mut c = [tb.comp[1][0]; MAX_SUB];
+    let stack = f.stack_upper();
     for k in 0..n {
         if k > 0 && angles[k] == angles[k - 1] {
             out.thickness[k] = out.thickness[k - 1];
@@ -993,7 +994,7 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
         // inside the stack's range: one march from the stiffnesses (no compliance formed),
         // and only where it is not converged the compliances and the march from them
         let inside = t_guess < t0 && t_guess > t_top;
-        let quick = if inside { g.march_converged_stiff(&g.stack_upper(t_guess)?, pt, b, angles[k], &mut out.sub_q[k]) } else { None };
+        let quick = if inside { g.march_converged_stiff(&stack.at(t_guess), pt, b, angles[k], &mut out.sub_q[k]) } else { None };
         let ck = if t_guess >= t0 {
             &tb.comp[1]
         } else if t_guess <= t_top {
