@@ -11,7 +11,7 @@ use crate::real::Real;
 impl<R: Real> Finger<R> {
     /// `march_tension` with sub-element j's q solved from K_j q = (f0, f1, M), M = mm - f1 (L + q0)
     /// + f0 q1 the moment about its deformed distal end (linear in q: the third row carries
-    /// it), `kd` the stack stiffness's upper triangle (k00, k01, k02, k11, k12, k22). Refuses
+    /// it), `kd` the stack stiffness's upper triangle (k00, k01 = 0, k02, k11, k12, k22). Refuses
     /// (`Singular`) a non-positive last pivot (`march_tension`'s non-positive `den`) and a
     /// state that is not finite; the caller then takes the compliance path.
     #[inline(always)]
@@ -37,9 +37,11 @@ impl<R: Real> Finger<R> {
         let small = R::from_f64(small_turn(R::EPS));
         let zr = R::zero();
         let m = self.p.m.min(MAX_SUB);
-        let [d00, d01, d02, d11, d12, d22] = *kd;
+        // (the stack couples no shear to the axial force: its k01 is zero, `StackUpper::at`)
+        let [d00, _, d02, d11, d12, d22] = *kd;
+        debug_assert!(kd[1] == zr);
         for (kh, qo) in self.hinge_k[..m].iter().zip(q_out[..m].iter_mut()) {
-            let (k00, k01, k02) = (kh[0][0] + d00, kh[0][1] + d01, kh[0][2] + d02);
+            let (k00, k01, k02) = (kh[0][0] + d00, kh[0][1], kh[0][2] + d02);
             let (k11, k12, k22) = (kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22);
             // rows: K q = (f0, f1, g + f0 q1 - f1 q0), g = mm - f1 L; eliminate below k00, then
             // below u11
