@@ -995,18 +995,24 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
         // and only where it is not converged the compliances and the march from them
         let inside = t_guess < t0 && t_guess > t_top;
         let quick = if inside { g.march_converged_stiff(&stack.at(t_guess), pt, b, angles[k], &mut out.sub_q[k]) } else { None };
-        let ck = if t_guess >= t0 {
-            &tb.comp[1]
-        } else if t_guess <= t_top {
-            &tb.comp[0]
-        } else {
-            if quick.is_none() {
-                g.comp_into(t_guess, &mut c)?;
-            }
-            &c
-        };
         g.iters += 1;
-        let (t, st) = match quick.or_else(|| g.march_converged(k + 1, ck, pt, b, angles[k], &mut out.sub_q[k])) {
+        let marched = match quick {
+            Some(st) => Some(st),
+            None => {
+                let ck = if t_guess >= t0 {
+                    &tb.comp[1]
+                } else if t_guess <= t_top {
+                    &tb.comp[0]
+                } else {
+                    // (a march more: the compliance march after the stiffness march)
+                    g.iters += 1;
+                    g.comp_into(t_guess, &mut c)?;
+                    &c
+                };
+                g.march_converged(k + 1, ck, pt, b, angles[k], &mut out.sub_q[k])
+            }
+        };
+        let (t, st) = match marched {
             Some(st) => (t_guess, st),
             None if tension.is_some() && (0..2).any(|e| (rd[k][e].tension - pt).abs() <= band * pt) => {
                 // a given tension near an unconfirmed end: `solve` confirms the range
