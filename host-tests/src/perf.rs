@@ -548,7 +548,7 @@ pub fn table_cost_section() -> String {
         ) {
             writeln!(
                 w,
-                "- {m}: an inverse with the tension given and one distinct joint (de-1.0N-uni8kV) costs {a:.0}, each further distinct joint {:.0} (de-15N-per2/6/9kV: its reading, compliance evaluation, march and voltage); with the joints at the scene's 0 V (de-0.2N) {z:.0} (where the solved thickness is t0 itself the table's compliances serve, no evaluation); the tension free adds {:.0} with one distinct joint, {:.0} with three (the two confirming marches of the interval's bounds).",
+                "- {m}: an inverse with the tension given and one distinct joint (de-1.0N-uni8kV) costs {a:.0}, each further distinct joint {:.0} (de-15N-per2/6/9kV: its reading, march from the stiffnesses and voltage); with the joints at the scene's 0 V (de-0.2N) {z:.0} (the solved thickness is t0 itself: the compliance march with the table's compliances); the tension free adds {:.0} with one distinct joint, {:.0} with three (the two confirming marches of the interval's bounds).",
                 (b - a) / 2.0,
                 fa - a,
                 fb - b
@@ -575,20 +575,19 @@ pub fn table_cost_section() -> String {
          cheaper than m sub-elements of the full model (fewer sub-elements, or the table itself as the answer), \
          which would no longer be the full model's converged solve. The inverse (`solve_pose_tabled_into`, written in \
          place) spends per distinct joint the table's reading (three branches' cubics at one set of weights), \
-         one compliance evaluation at the thickness the table gives along the level curve (the stack's \
-         stiffness once, then m cofactor inverses of the hinge's and the stack's stiffness in parallel; none \
-         at either end of the stack's range, whose compliances the table holds), one \
-         march that confirms it within the converged solver's tolerance (the quasi-Newton solve only if not) \
-         and the voltage; with the tension free, one march more for each end of the feasible interval that \
-         bounds it (the midpoint rule rests on them: two, each at the table's reading); with a tension given \
-         the ends are not confirmed (step 4's converged solve inside the stack's range shows the tension \
-         within every joint's range; `interval` is then the table's reading). With a given tension and \
-         identical joints that is one march, one compliance evaluation and the rest (the figures above); with \
-         three different voltages at m = 8 it cannot meet 3,000: three marches and three compliance evaluations \
-         (m = 8 3x3 inverses each) exceed 3,000 by themselves; with the tension free the two confirming \
-         marches put even one distinct joint above it. Below that the interval's ends and the sub-element \
-         states would have to be the table's readings instead of the full model's solves \
-         (docs/inverse.md).\n",
+         one march of the full model at the thickness the table gives along the level curve, from the \
+         stiffnesses (`march_stiffness`: per sub-element the parallel sum of the hinge's and the stack's \
+         stiffness and its 3x3 equilibrium by Gaussian elimination, no compliance formed; at either end of the \
+         stack's range the compliance march with the table's compliances), which is the answer where it is \
+         within the converged solver's tolerance (the quasi-Newton solve only if not), and the voltage; with \
+         the tension free, one march more for each end of the feasible interval that bounds it (the midpoint \
+         rule rests on them: two, each at the table's reading); with a tension given the ends are not \
+         confirmed (step 4's converged solve inside the stack's range shows the tension within every joint's \
+         range; `interval` is then the table's reading). docs/inverse-profile.md splits one such solve by \
+         function (QEMU's per-instruction trace): the marches, m sub-elements each, are the largest part. \
+         So at m = 8 three different voltages take three \
+         marches and a free tension two more; below that the interval's ends and the sub-element states \
+         would have to be the table's readings instead of the full model's solves (docs/inverse.md).\n",
         std::mem::size_of::<finger_model::Solution<f32>>()
     )
     .unwrap();

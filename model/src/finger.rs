@@ -32,6 +32,7 @@ use crate::{de, hinge};
 
 mod branch_end;
 mod march;
+mod march_stiffness;
 mod pinned;
 
 use crate::solve::continuation::{self, Step};
@@ -288,6 +289,34 @@ pub struct Finger<R> {
     cal: Calibration<R>,
 }
 
+/// The stack stiffness's upper triangle at thickness t in closed form (`Finger::stack_stiffness`
+/// multiplied out: K_a = g_a EA/L (1, 0, d)ᵀ(1, 0, d) plus g_b EI times the beam's bending
+/// block, d = (t_min + t)/2, EA ∝ t, EI ∝ t³, g = g0 + g1 t).
+#[derive(Clone, Copy)]
+pub(crate) struct StackUpper<R> {
+    /// E_de w / L.
+    ka: R,
+    /// The axial and bending factors' (g0, g1).
+    ga: [R; 2],
+    gb: [R; 2],
+    /// t_min / 2.
+    d0: R,
+    /// E_de w (1/L³, -1/(2 L²), 1/(3 L)): the bending block's entries per t³.
+    kb: [R; 3],
+}
+
+impl<R: Real> StackUpper<R> {
+    /// (k00, k01, k02, k11, k12, k22) at thickness t, mm.
+    #[inline(always)]
+    pub(crate) fn at(&self, t: R) -> [R; 6] {
+        let gka = (self.ga[0] + self.ga[1] * t) * (self.ka * t);
+        let d = self.d0 + t * R::from_f64(0.5);
+        let e3 = (self.gb[0] + self.gb[1] * t) * (t * t * t);
+        let k02 = gka * d;
+        [gka, R::zero(), k02, self.kb[0] * e3, self.kb[1] * e3, self.kb[2] * e3 + k02 * d]
+    }
+}
+
 /// The loads a joint sees besides the cable, in its proximal frame.
 #[derive(Clone, Copy)]
 struct TipLoad<R> {
@@ -394,6 +423,21 @@ impl<R: Real> Finger<R> {
     /// Stiffness of a stack stretch of one sub-element at stack thickness t (mm), calibrated.
     pub fn stack_stiffness(&self, t: R) -> Mat3<R> {
         self.cal.stack_stiffness(&self.p, &de::stack_stiffness(&self.p, self.sub_len, t), self.sub_len, t)
+    }
+
+    /// `stack_stiffness`'s upper triangle as a function of the thickness, its constants taken
+    /// once (`StackUpper::at`).
+    pub(crate) fn stack_upper(&self) -> StackUpper<R> {
+        let (p, l) = (&self.p, self.sub_len);
+        let ew = p.e_de() * p.w;
+        let half = R::from_f64(0.5);
+        StackUpper {
+            ka: ew / l,
+            ga: self.cal.stack_axial,
+            gb: self.cal.stack_bending,
+            d0: p.t_min * half,
+            kb: [ew / (l * l * l), -ew * half / (l * l), ew / (R::from_f64(3.0) * l)],
+        }
     }
 
     /// Hinge compliance of sub-element j (no stack): the Castigliano integrals of MODEL.md
@@ -1375,6 +1419,16 @@ impl<R: Real> Finger<R> {
             }
             Err(_) => self.joint_march(joint, c, tension, b, q),
         }
+    }
+
+    /// Joint `joint`'s march under tension alone from the stiffnesses K_hinge,j + K_de (`kd`
+    /// the stack's upper triangle): `march_stiffness`, with its link's deflection; None where
+    /// it refuses (the caller takes the compliance path).
+    #[inline(always)]
+    pub(crate) fn joint_march_stiffness(&self, kd: &[R; 6], tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+        let (end, hole, _, _) = self.march_stiffness(kd, tension, b, q).ok()?;
+        let link = self.link_q(tension, &end, None);
+        Some(JointMarch { end, hole, link, angle: end.theta + link[2] })
     }
 
     /// Hinge sub-element j's stiffness (the inverse of its compliance, computed in `new`).

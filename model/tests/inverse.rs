@@ -457,6 +457,31 @@ fn branch_table_round_trip_f32() {
     assert!(3 * marches_tabled < marches_untabled, "marches: {marches_tabled} with the table, {marches_untabled} without");
 }
 
+/// With a given tension and three different voltages inside the stack's range, the tabled
+/// inverse marches once per joint, from the stiffnesses: one march each, no compliance march
+/// after it (which `iterations` would count), in f32 (the firmware; in f64 the table's start
+/// is outside the tighter tolerance and step 4 iterates), default and calibrated; and its
+/// voltages are the forward solve's. A stiffness march that missed the equilibrium would fall
+/// back and march twice.
+#[test]
+fn tabled_inverse_marches_once_per_joint() {
+    fn check<R: Real>(f: Finger<R>, tol_v: f64) {
+        let table = inverse::BranchTable::new(&f, &Options::default()).unwrap();
+        for (p, volts) in [(1.0, [2000.0, 5000.0, 8000.0]), (4.0, [1000.0, 6000.0, 9000.0]), (0.5, [3000.0, 4000.0, 7000.0])] {
+            let v = volts.map(R::from_f64);
+            let fw = f.solve(R::from_f64(p), &v, Method::converged()).unwrap();
+            let angles = [fw.joint_angle[0], fw.joint_angle[1], fw.joint_angle[2]];
+            let s = inverse::solve_pose_tabled(&table, &angles, Some(R::from_f64(p))).unwrap();
+            assert_eq!(s.iterations, 3, "P = {p}, {volts:?}: {} marches", s.iterations);
+            for k in 0..3 {
+                assert!((s.volts[k].to_f64() - volts[k]).abs() < tol_v, "P = {p} joint {k}: {} V vs {}", s.volts[k].to_f64(), volts[k]);
+            }
+        }
+    }
+    check(Finger::new(Params::<f32>::default()).unwrap(), 5.0);
+    check(Finger::with_calibration(Params::<f32>::default(), finger_model::Calibration::model_md()).unwrap(), 5.0);
+}
+
 /// The table's interpolation (a cubic through four samples, 1.5° apart) reads a stack end's
 /// tension off to better than 1e-5 relative (far inside the band `TABLE_BAND` = 1e-3 within
 /// which the inverse solves an end instead of trusting it): checked against the untabled

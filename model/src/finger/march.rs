@@ -40,7 +40,7 @@ pub(super) fn small_turn(eps: f64) -> f64 {
 /// sub-elements), else the scalar's sin/cos. The bounds are tested on x², which the series
 /// needs anyway.
 #[inline(always)]
-fn turn<R: Real>(x: R, small: R) -> (R, R) {
+pub(super) fn turn<R: Real>(x: R, small: R) -> (R, R) {
     let z = x * x;
     let small2 = small * small;
     if z < small2 {

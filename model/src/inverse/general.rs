@@ -825,6 +825,20 @@ impl<'a, R: Real> Gen<'a, R> {
     #[inline(never)]
     fn march_converged(&self, joint: usize, c: &[Mat3<R>; MAX_SUB], p: R, b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
         let st = self.f.joint_march_tension(joint, c, p, b, q).ok()?;
+        self.converged(st, b, theta)
+    }
+
+    /// `march_converged` from the stiffnesses at the stack's upper triangle `kd`
+    /// (`Finger::joint_march_stiffness`: no compliance formed).
+    #[inline(never)]
+    fn march_converged_stiff(&self, kd: &[R; 6], p: R, b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+        let st = self.f.joint_march_stiffness(kd, p, b, q)?;
+        self.converged(st, b, theta)
+    }
+
+    /// `st` if its hole is `b` and its angle `theta` within the quasi-Newton solves' tolerance.
+    #[inline(always)]
+    fn converged(&self, st: JointMarch<R>, b: [R; 2], theta: R) -> Option<JointMarch<R>> {
         let atol = self.tol_angle * (theta.abs() + R::from_f64(0.1));
         let htol = self.htol;
         let ok = (b[0] - st.hole[0]).abs() <= htol && (b[1] - st.hole[1]).abs() <= htol && (st.angle - theta).abs() <= atol;
@@ -1010,6 +1024,7 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     // the compliances at each joint's thickness (filled with the table's 0 V ones: every
     // entry is written before it is read, the first m by `comp_into`)
     let mut c = [tb.comp[1][0]; MAX_SUB];
+    let stack = f.stack_upper();
     for k in 0..n {
         if k > 0 && angles[k] == angles[k - 1] {
             out.thickness[k] = out.thickness[k - 1];
@@ -1025,16 +1040,28 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
         let [lo, hi, md] = &rd[k];
         let (t_guess, b) = level_guess((lo.tension, t_top, lo.hole), (hi.tension, t0, hi.hole), Some((md.tension, tm, md.hole)), pt);
         // at either end of the stack's range the table holds the compliances
-        let ck = if t_guess >= t0 {
-            &tb.comp[1]
-        } else if t_guess <= t_top {
-            &tb.comp[0]
-        } else {
-            g.comp_into(t_guess, &mut c)?;
-            &c
-        };
+        // inside the stack's range: one march from the stiffnesses (no compliance formed),
+        // and only where it is not converged the compliances and the march from them
+        let inside = t_guess < t0 && t_guess > t_top;
+        let quick = if inside { g.march_converged_stiff(&stack.at(t_guess), pt, b, angles[k], &mut out.sub_q[k]) } else { None };
         g.iters += 1;
-        let (t, st) = match g.march_converged(k + 1, ck, pt, b, angles[k], &mut out.sub_q[k]) {
+        let marched = match quick {
+            Some(st) => Some(st),
+            None => {
+                let ck = if t_guess >= t0 {
+                    &tb.comp[1]
+                } else if t_guess <= t_top {
+                    &tb.comp[0]
+                } else {
+                    // (a march more: the compliance march after the stiffness march)
+                    g.iters += 1;
+                    g.comp_into(t_guess, &mut c)?;
+                    &c
+                };
+                g.march_converged(k + 1, ck, pt, b, angles[k], &mut out.sub_q[k])
+            }
+        };
+        let (t, st) = match marched {
             Some(st) => (t_guess, st),
             None if tension.is_some() && (0..2).any(|e| (rd[k][e].tension - pt).abs() <= band * pt) => {
                 // a given tension near an unconfirmed end: `solve` confirms the range
