@@ -922,6 +922,35 @@ fn confirm_bounds<R: Real>(
     }
 }
 
+/// Step 4's march of joint `k` (0-based) from compliances at thickness `t`: the table's at either
+/// end of the stack's range, else evaluated (after a stiffness march that was not converged: a
+/// march more). `Gen::march_converged`'s answer.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn compliance_march<R: Real>(
+    g: &mut Gen<'_, R>,
+    tb: &BranchTable<R>,
+    k: usize,
+    t: R,
+    p: R,
+    b: [R; 2],
+    theta: R,
+    q: &mut [[R; 3]; MAX_SUB],
+) -> Result<Option<JointMarch<R>>, Error> {
+    let [t_top, t0, _] = tb.thickness;
+    let mut c = [tb.comp[1][0]; MAX_SUB];
+    let ck = if t >= t0 {
+        &tb.comp[1]
+    } else if t <= t_top {
+        &tb.comp[0]
+    } else {
+        g.iters += 1;
+        g.comp_into(t, &mut c)?;
+        &c
+    };
+    Ok(g.march_converged(k + 1, ck, p, b, theta, q))
+}
+
 /// `solve_pose_tabled`'s path (docs/inverse.md, "The tabled inverse"): every joint's range
 /// ends and step 4's start read off the table; each read confirmed by one march of the full
 /// model where the answer depends on it, the quasi-Newton solve from there only where that
@@ -1021,9 +1050,6 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     //    not within the tolerance; then the voltage
     let lh = p.hinge_len();
     let (v_top, volts) = (tb.v_top, &tb.volts);
-    // the compliances at each joint's thickness (filled with the table's 0 V ones: every
-    // entry is written before it is read, the first m by `comp_into`)
-    let mut c = [tb.comp[1][0]; MAX_SUB];
     let stack = f.stack_upper();
     for k in 0..n {
         if k > 0 && angles[k] == angles[k - 1] {
@@ -1039,27 +1065,14 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
         }
         let [lo, hi, md] = &rd[k];
         let (t_guess, b) = level_guess((lo.tension, t_top, lo.hole), (hi.tension, t0, hi.hole), Some((md.tension, tm, md.hole)), pt);
-        // at either end of the stack's range the table holds the compliances
-        // inside the stack's range: one march from the stiffnesses (no compliance formed),
-        // and only where it is not converged the compliances and the march from them
+        // inside the stack's range one march from the stiffnesses (no compliance formed); the
+        // compliance march at either end, and inside it only where that one is not converged
         let inside = t_guess < t0 && t_guess > t_top;
         let quick = if inside { g.march_converged_stiff(&stack.at(t_guess), pt, b, angles[k], &mut out.sub_q[k]) } else { None };
         g.iters += 1;
         let marched = match quick {
             Some(st) => Some(st),
-            None => {
-                let ck = if t_guess >= t0 {
-                    &tb.comp[1]
-                } else if t_guess <= t_top {
-                    &tb.comp[0]
-                } else {
-                    // (a march more: the compliance march after the stiffness march)
-                    g.iters += 1;
-                    g.comp_into(t_guess, &mut c)?;
-                    &c
-                };
-                g.march_converged(k + 1, ck, pt, b, angles[k], &mut out.sub_q[k])
-            }
+            None => compliance_march(&mut g, tb, k, t_guess, pt, b, angles[k], &mut out.sub_q[k])?,
         };
         let (t, st) = match marched {
             Some(st) => (t_guess, st),
