@@ -1421,14 +1421,19 @@ impl<R: Real> Finger<R> {
         }
     }
 
-    /// Joint `joint`'s march under tension alone from the stiffnesses K_hinge,j + K_de (`kd`
-    /// the stack's upper triangle): `march_stiffness`, with its link's deflection; None where
-    /// it refuses (the caller takes the compliance path).
+    /// A joint's march under tension alone from the stiffnesses K_hinge,j + K_de (`kd` the
+    /// stack's upper triangle): `march_stiffness`, with `link` the link's deflection at that
+    /// tension (`tension_link_q`); None where it refuses (the caller takes the compliance path).
     #[inline(always)]
-    pub(crate) fn joint_march_stiffness(&self, kd: &[R; 6], tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+    pub(crate) fn joint_march_stiffness(&self, kd: &[R; 6], tension: R, link: [R; 3], b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
         let (end, hole, _, _) = self.march_stiffness(kd, tension, b, q).ok()?;
-        let link = self.link_q(tension, &end, None);
         Some(JointMarch { end, hole, link, angle: end.theta + link[2] })
+    }
+
+    /// A link's deflection under tension alone, the same for every joint (`link_q` without a
+    /// tip load).
+    pub(crate) fn tension_link_q(&self, tension: R) -> [R; 3] {
+        self.link_q(tension, &Pose::origin(), None)
     }
 
     /// Hinge sub-element j's stiffness (the inverse of its compliance, computed in `new`).

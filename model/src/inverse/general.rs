@@ -831,8 +831,8 @@ impl<'a, R: Real> Gen<'a, R> {
     /// `march_converged` from the stiffnesses at the stack's upper triangle `kd`
     /// (`Finger::joint_march_stiffness`: no compliance formed).
     #[inline(never)]
-    fn march_converged_stiff(&self, kd: &[R; 6], p: R, b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
-        let st = self.f.joint_march_stiffness(kd, p, b, q)?;
+    fn march_converged_stiff(&self, kd: &[R; 6], p: R, link: [R; 3], b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+        let st = self.f.joint_march_stiffness(kd, p, link, b, q)?;
         self.converged(st, b, theta)
     }
 
@@ -1050,7 +1050,7 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
     //    not within the tolerance; then the voltage
     let lh = p.hinge_len();
     let (v_top, volts) = (tb.v_top, &tb.volts);
-    let stack = f.stack_upper();
+    let (stack, link) = (f.stack_upper(), f.tension_link_q(pt));
     for k in 0..n {
         if k > 0 && angles[k] == angles[k - 1] {
             out.thickness[k] = out.thickness[k - 1];
@@ -1068,7 +1068,7 @@ pub(super) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R], tension: 
         // inside the stack's range one march from the stiffnesses (no compliance formed); the
         // compliance march at either end, and inside it only where that one is not converged
         let inside = t_guess < t0 && t_guess > t_top;
-        let quick = if inside { g.march_converged_stiff(&stack.at(t_guess), pt, b, angles[k], &mut out.sub_q[k]) } else { None };
+        let quick = if inside { g.march_converged_stiff(&stack.at(t_guess), pt, link, b, angles[k], &mut out.sub_q[k]) } else { None };
         g.iters += 1;
         let marched = match quick {
             Some(st) => Some(st),
