@@ -30,9 +30,9 @@ const CASES: &[Case] = &[
 /// (the first part whose fragment a function's name contains; else "the rest").
 const PARTS: &[(&str, &[&str])] = &[
     ("march of the full model", &["march", "turn"]),
-    ("compliance evaluation", &["compliance", "comp_into", "stack_upper", "stack_stiffness", "e_de"]),
+    ("stack stiffness and compliances", &["compliance", "comp_into", "stack_upper", "StackUpper", "stack_stiffness", "e_de"]),
     ("table reading", &["BranchTable", "level_guess"]),
-    ("voltage", &["voltage_for_thickness", "check_voltage"]),
+    ("voltage", &["voltage", "check_below"]),
 ];
 
 fn build(case: &Case) -> PathBuf {
