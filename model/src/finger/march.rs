@@ -167,20 +167,12 @@ impl<R: Real> Finger<R> {
         b: [R; 2],
         q_out: &mut [[R; 3]; MAX_SUB],
     ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
-        let (e, l) = (self.p.e, self.sub_len);
-        let span_v = [b[0], b[1] - e];
-        let span = norm2(span_v);
-        if !(span >= self.p.span_floor) || !(tension > R::zero()) {
-            return Err(MarchError::Contact);
-        }
-        let k = -tension / span;
-        let fc = [span_v[0] * k, span_v[1] * k];
+        let l = self.sub_len;
         // in sub-element j's proximal frame: f the cable's force on the distal chain; with w =
         // B - the sub-element's proximal end, mm = w × f (the moment about that end) and
         // dot = w · f
+        let (fc, mut mm, mut dot) = self.tension_start(tension, b)?;
         let mut f = fc;
-        let mut mm = b[0] * fc[1] - b[1] * fc[0];
-        let mut dot = b[0] * fc[0] + b[1] * fc[1];
         let mut theta = R::zero();
         let small = R::from_f64(small_turn(R::EPS));
         let eps_den = R::from_f64(1e-6);
@@ -207,8 +199,41 @@ impl<R: Real> Finger<R> {
             let (sd, cd) = turn(q[2], small);
             f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
         }
-        // the end's rotation R from f = R^T f_c, and r = B - end in its frame from r · f and
-        // r × f
+        self.tension_end(tension, b, fc, f, dot, mm, theta)
+    }
+
+    /// A tension-alone march's start at hole guess `b`: the cable's force f_c = -P (B - (0, e)) / |B - (0, e)|
+    /// on the distal chain, the moment B × f_c and the dot product B · f_c (refuses a span below
+    /// its floor and P <= 0: `Contact`).
+    #[inline(always)]
+    pub(super) fn tension_start(&self, tension: R, b: [R; 2]) -> Result<([R; 2], R, R), MarchError> {
+        let span_v = [b[0], b[1] - self.p.e];
+        let span = norm2(span_v);
+        if !(span >= self.p.span_floor) || !(tension > R::zero()) {
+            return Err(MarchError::Contact);
+        }
+        let k = -tension / span;
+        let fc = [span_v[0] * k, span_v[1] * k];
+        Ok((fc, b[0] * fc[1] - b[1] * fc[0], b[0] * fc[0] + b[1] * fc[1]))
+    }
+
+    /// A tension-alone march's end from the force f in the last frame, the running dot product
+    /// and moment, and the summed rotation: the end's rotation R from f = Rᵀ f_c, r = B - end in
+    /// its frame from r · f and r × f, the hole B - R (r - (0, e)). Returns the hinge end, the
+    /// hole, (sin, cos) of the end's angle and |b - hole|²; refuses a state that is not finite.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn tension_end(
+        &self,
+        tension: R,
+        b: [R; 2],
+        fc: [R; 2],
+        f: [R; 2],
+        dot: R,
+        mm: R,
+        theta: R,
+    ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
+        let e = self.p.e;
         let inv = R::one() / (tension * tension);
         let co = (f[0] * fc[0] + f[1] * fc[1]) * inv;
         let s = (f[0] * fc[1] - f[1] * fc[0]) * inv;

@@ -4,7 +4,7 @@
 //! inverse, whose thickness is new at every solve: no compliance array is formed. Not the
 //! forward's march (its compliances are set up once per voltage change).
 
-use super::{march::small_turn, march::turn, norm2, Finger, MarchError, Pose};
+use super::{march::small_turn, march::turn, Finger, MarchError, Pose};
 use crate::params::MAX_SUB;
 use crate::real::Real;
 
@@ -22,17 +22,9 @@ impl<R: Real> Finger<R> {
         b: [R; 2],
         q_out: &mut [[R; 3]; MAX_SUB],
     ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
-        let (e, l) = (self.p.e, self.sub_len);
-        let span_v = [b[0], b[1] - e];
-        let span = norm2(span_v);
-        if !(span >= self.p.span_floor) || !(tension > R::zero()) {
-            return Err(MarchError::Contact);
-        }
-        let k = -tension / span;
-        let fc = [span_v[0] * k, span_v[1] * k];
+        let l = self.sub_len;
+        let (fc, mut mm, mut dot) = self.tension_start(tension, b)?;
         let mut f = fc;
-        let mut mm = b[0] * fc[1] - b[1] * fc[0];
-        let mut dot = b[0] * fc[0] + b[1] * fc[1];
         let mut theta = R::zero();
         let small = R::from_f64(small_turn(R::EPS));
         let zr = R::zero();
@@ -71,18 +63,7 @@ impl<R: Real> Finger<R> {
             let (sd, cd) = turn(q2, small);
             f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
         }
-        let inv = R::one() / (tension * tension);
-        let co = (f[0] * fc[0] + f[1] * fc[1]) * inv;
-        let s = (f[0] * fc[1] - f[1] * fc[0]) * inv;
-        let r = [(dot * f[0] + mm * f[1]) * inv, (dot * f[1] - mm * f[0]) * inv];
-        let d = [r[0], r[1] - e];
-        let res2 = d[0] * d[0] + d[1] * d[1];
-        let end = Pose { x: b[0] - (co * r[0] - s * r[1]), y: b[1] - (s * r[0] + co * r[1]), theta };
-        let hole = [end.x - s * e, end.y + co * e];
-        if !(hole[0] + hole[1] + theta + res2).is_finite() {
-            return Err(MarchError::Singular);
-        }
-        Ok((end, hole, [s, co], res2))
+        self.tension_end(tension, b, fc, f, dot, mm, theta)
     }
 }
 
