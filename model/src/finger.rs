@@ -271,6 +271,15 @@ pub(crate) struct JointMarch<R> {
     pub angle: R,
 }
 
+impl<R: Real> JointMarch<R> {
+    /// The state a march arrived at: its hinge end, hole and link deflection, and the joint
+    /// angle end.theta + the link's rotation.
+    #[inline(always)]
+    fn arrived(end: Pose<R>, hole: [R; 2], link: [R; 3]) -> Self {
+        JointMarch { end, hole, link, angle: end.theta + link[2] }
+    }
+}
+
 /// A prepared finger: validated parameters and the hinge compliances, computed once.
 #[derive(Clone, Copy, Debug)]
 pub struct Finger<R> {
@@ -1396,7 +1405,7 @@ impl<R: Real> Finger<R> {
             MarchError::Singular => Error::Singular { what: "joint march" },
         })?;
         let link = self.link_q(tension, &end, None);
-        Ok(JointMarch { end, hole, link, angle: end.theta + link[2] })
+        Ok(JointMarch::arrived(end, hole, link))
     }
 
     /// `joint_march` by `march_tension` (the same equations carried in each sub-element's own
@@ -1415,7 +1424,7 @@ impl<R: Real> Finger<R> {
         match self.march_tension(c, tension, b, q) {
             Ok((end, hole, _, _)) => {
                 let link = self.link_q(tension, &end, None);
-                Ok(JointMarch { end, hole, link, angle: end.theta + link[2] })
+                Ok(JointMarch::arrived(end, hole, link))
             }
             Err(_) => self.joint_march(joint, c, tension, b, q),
         }
@@ -1427,7 +1436,7 @@ impl<R: Real> Finger<R> {
     #[inline(always)]
     pub(crate) fn joint_march_stiffness(&self, kd: &[R; 6], tension: R, link: [R; 3], b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
         let (end, hole, _, _) = self.march_stiffness(kd, tension, b, q).ok()?;
-        Some(JointMarch { end, hole, link, angle: end.theta + link[2] })
+        Some(JointMarch::arrived(end, hole, link))
     }
 
     /// A link's deflection under tension alone, the same for every joint (`link_q` without a

@@ -40,7 +40,7 @@ pub(super) fn small_turn(eps: f64) -> f64 {
 /// sub-elements), else the scalar's sin/cos. The bounds are tested on x², which the series
 /// needs anyway.
 #[inline(always)]
-pub(super) fn turn<R: Real>(x: R, small: R) -> (R, R) {
+fn turn<R: Real>(x: R, small: R) -> (R, R) {
     let z = x * x;
     let small2 = small * small;
     if z < small2 {
@@ -168,16 +168,8 @@ impl<R: Real> Finger<R> {
         q_out: &mut [[R; 3]; MAX_SUB],
     ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
         let l = self.sub_len;
-        // in sub-element j's proximal frame: f the cable's force on the distal chain; with w =
-        // B - the sub-element's proximal end, mm = w × f (the moment about that end) and
-        // dot = w · f
-        let (fc, mut mm, mut dot) = self.tension_start(tension, b)?;
-        let mut f = fc;
-        let mut theta = R::zero();
-        let small = R::from_f64(small_turn(R::EPS));
         let eps_den = R::from_f64(1e-6);
-        let m = self.p.m.min(MAX_SUB);
-        for (cj, qo) in c[..m].iter().zip(q_out[..m].iter_mut()) {
+        self.march_tension_by(c, tension, b, q_out, |cj, f, mm| {
             debug_assert!(cj[1][0] == cj[0][1] && cj[2][0] == cj[0][2] && cj[2][1] == cj[1][2]);
             // q = C (f, M), M the moment about the deformed distal end: M = m0 + f0 q1 - f1 q0
             // with m0 = mm - L f1 the moment about the undeformed one, linear in q, so with
@@ -189,8 +181,40 @@ impl<R: Real> Finger<R> {
             if !(den > eps_den) {
                 return Err(MarchError::Singular);
             }
-            mm = (mm + f[0] * a[1] - f[1] * (a[0] + l)) / den;
-            let q = [a[0] + mm * c02, a[1] + mm * c12, a[2] + mm * c22];
+            let mm = (mm + f[0] * a[1] - f[1] * (a[0] + l)) / den;
+            Ok(([a[0] + mm * c02, a[1] + mm * c12, a[2] + mm * c22], mm))
+        })
+    }
+
+    /// The tension-alone march's recurrences (`march_tension`'s), with sub-element j's
+    /// equilibrium `sub(&per_sub[j], f, mm)`: its q and the moment about its deformed distal
+    /// end from f, the cable's force in its frame, and mm, the moment about its proximal end.
+    /// f is turned by each q's rotation and (B - the proximal end) · f carried along; the end's
+    /// pose, hole, (sin, cos) and |b - hole|² come back once (`tension_end`).
+    #[inline(always)]
+    pub(super) fn march_tension_by<T, S>(
+        &self,
+        per_sub: &[T; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        q_out: &mut [[R; 3]; MAX_SUB],
+        mut sub: S,
+    ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError>
+    where
+        S: FnMut(&T, [R; 2], R) -> Result<([R; 3], R), MarchError>,
+    {
+        let l = self.sub_len;
+        // in sub-element j's proximal frame: f the cable's force on the distal chain; with w =
+        // B - the sub-element's proximal end, mm = w × f (the moment about that end) and
+        // dot = w · f
+        let (fc, mut mm, mut dot) = self.tension_start(tension, b)?;
+        let mut f = fc;
+        let mut theta = R::zero();
+        let small = R::from_f64(small_turn(R::EPS));
+        let m = self.p.m.min(MAX_SUB);
+        for (pj, qo) in per_sub[..m].iter().zip(q_out[..m].iter_mut()) {
+            let (q, m_end) = sub(pj, f, mm)?;
+            mm = m_end;
             *qo = q;
             theta = theta + q[2];
             // B - the deformed distal end (the next proximal end) is w - (L + q0, q1): its dot

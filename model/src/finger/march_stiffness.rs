@@ -4,12 +4,12 @@
 //! inverse, whose thickness is new at every solve: no compliance array is formed. Not the
 //! forward's march (its compliances are set up once per voltage change).
 
-use super::{march::small_turn, march::turn, Finger, MarchError, Pose};
+use super::{Finger, MarchError, Pose};
 use crate::params::MAX_SUB;
 use crate::real::Real;
 
 impl<R: Real> Finger<R> {
-    /// `march_tension` with sub-element j's q solved from K_j q = (f0, f1, M), M = mm - f1 (L + q0)
+    /// `march_tension_by` with sub-element j's q solved from K_j q = (f0, f1, M), M = mm - f1 (L + q0)
     /// + f0 q1 the moment about its deformed distal end (linear in q: the third row carries
     /// it), `kd` the stack stiffness's upper triangle (k00, k01 = 0, k02, k11, k12, k22). Refuses
     /// (`Singular`) a non-positive last pivot (`march_tension`'s non-positive `den`) and a
@@ -23,16 +23,11 @@ impl<R: Real> Finger<R> {
         q_out: &mut [[R; 3]; MAX_SUB],
     ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
         let l = self.sub_len;
-        let (fc, mut mm, mut dot) = self.tension_start(tension, b)?;
-        let mut f = fc;
-        let mut theta = R::zero();
-        let small = R::from_f64(small_turn(R::EPS));
         let zr = R::zero();
-        let m = self.p.m.min(MAX_SUB);
         // (the stack couples no shear to the axial force: its k01 is zero, `StackUpper::at`)
         let [d00, _, d02, d11, d12, d22] = *kd;
         debug_assert!(kd[1] == zr);
-        for (kh, qo) in self.hinge_k[..m].iter().zip(q_out[..m].iter_mut()) {
+        self.march_tension_by(&self.hinge_k, tension, b, q_out, |kh, f, mm| {
             let (k00, k01, k02) = (kh[0][0] + d00, kh[0][1], kh[0][2] + d02);
             let (k11, k12, k22) = (kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22);
             // rows: K q = (f0, f1, g + f0 q1 - f1 q0), g = mm - f1 L; eliminate below k00, then
@@ -56,14 +51,8 @@ impl<R: Real> Finger<R> {
             let q2 = y2 / u22;
             let q1 = (y1 - u12 * q2) * i1;
             let q0 = (f[0] - k01 * q1 - k02 * q2) * i0;
-            mm = g + f[0] * q1 - f[1] * q0;
-            *qo = [q0, q1, q2];
-            theta = theta + q2;
-            dot = dot - (q0 + l) * f[0] - q1 * f[1];
-            let (sd, cd) = turn(q2, small);
-            f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
-        }
-        self.tension_end(tension, b, fc, f, dot, mm, theta)
+            Ok(([q0, q1, q2], g + f[0] * q1 - f[1] * q0))
+        })
     }
 }
 
