@@ -7,7 +7,7 @@
 //!
 //! `cd host-tests && cargo run --release --example inverse_profile`
 
-use host_tests::perf::{bench_dir, target_dir, M4F};
+use host_tests::perf::{build_with_env, M4F};
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -36,26 +36,10 @@ const PARTS: &[(&str, &[&str])] = &[
 ];
 
 fn build(case: &Case) -> PathBuf {
-    let tdir = target_dir().join("profile");
-    let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
-    cmd.current_dir(bench_dir()).env("CARGO_TARGET_DIR", &tdir);
-    for v in ["PROFILE_HARD", "PROFILE_INVERSE", "PROFILE_FREE", "PROFILE_SAME"] {
-        if case.env.contains(&v) {
-            cmd.env(v, "1");
-        } else {
-            cmd.env_remove(v);
-        }
-    }
-    let out = cmd
-        .args(["build", "--release", "--quiet", "--bin", "table", "--target", M4F, "--no-default-features"])
-        .args(["--features", "de,fast-trig,table,profile"])
-        .output()
-        .expect("cargo");
-    assert!(out.status.success(), "build of the profile image failed:\n{}", String::from_utf8_lossy(&out.stderr));
-    let elf = tdir.join(M4F).join("release").join("table");
-    let copy = tdir.join(format!("profile-{}.elf", case.env.join("-").to_lowercase()));
-    std::fs::copy(&elf, &copy).expect("copy the image");
-    copy
+    let env: Vec<(&str, Option<&str>)> =
+        ["PROFILE_HARD", "PROFILE_INVERSE", "PROFILE_FREE", "PROFILE_SAME"].iter().map(|v| (*v, case.env.contains(v).then_some("1"))).collect();
+    let name = format!("profile-{}", case.env.join("-").to_lowercase());
+    build_with_env("table", M4F, "de,fast-trig,table,profile", &name, &env).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// A symbol's (address, size) from `nm -S` (the Thumb bit cleared).

@@ -58,8 +58,21 @@ pub fn target_dir() -> PathBuf {
 /// the ELF to `<target>/perf-images/<name>.elf` (builds with other features overwrite the
 /// cargo output). Returns the copy's path.
 pub fn build(bin: &str, triple: &str, features: &str, name: &str) -> Result<PathBuf, String> {
+    build_with_env(bin, triple, features, name, &[])
+}
+
+/// `build` with build-time variables: each (name, Some(value)) set, each (name, None) removed
+/// (an image that reads `option_env!`, like table.rs's profile cases).
+pub fn build_with_env(bin: &str, triple: &str, features: &str, name: &str, env: &[(&str, Option<&str>)]) -> Result<PathBuf, String> {
     let tdir = target_dir();
-    let out = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+    let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    for (k, v) in env {
+        match v {
+            Some(v) => cmd.env(k, v),
+            None => cmd.env_remove(k),
+        };
+    }
+    let out = cmd
         .current_dir(bench_dir())
         .env("CARGO_TARGET_DIR", &tdir)
         .args(["build", "--release", "--quiet", "--bin", bin, "--target", triple, "--no-default-features"])
