@@ -398,10 +398,33 @@ pub fn voltage_bound_now<R: Real>(law: &StackLaw<R>, state: &StackState<R>, s_fl
     }
 }
 
+/// The control tick's rule for one channel: the voltage `requested` (the slewed setpoint, at
+/// most the hold ceiling, or the shaped voltage) limited to `voltage_bound_now(state, s_floor)`;
+/// the film's thickness now at the voltage applied; the branches relaxed over the tick.
+/// Returns the voltage applied, V (0 for a NaN or negative request).
+pub fn guarded_tick<R: Real>(law: &StackLaw<R>, relaxation: &Relaxation<R>, state: &mut StackState<R>, requested: R, s_floor: R) -> Result<R, Error> {
+    let bound = voltage_bound_now(law, state, s_floor);
+    let v = if requested > R::zero() { requested.min(bound) } else { R::zero() };
+    state.s = ratio_at_voltage(law, &state.a, v, state.s)?;
+    relaxation.relax(state);
+    Ok(v)
+}
+
+/// Shaped actuation's voltage now: the voltage that holds the film at `s_target` with its
+/// branches as they are (above the target's equilibrium voltage until the film has relaxed onto
+/// it), V; 0 V when the film is thinner than the target even at 0 V. The caller caps it with
+/// the supply and passes `s_target` as the floor of [`guarded_tick`].
+pub fn shaped_voltage<R: Real>(law: &StackLaw<R>, state: &StackState<R>, s_target: R) -> R {
+    voltage_at_ratio(law, &state.a, s_target).unwrap_or(R::zero())
+}
+
 /// How [`Relaxation`] advances the branch flow over one step at a held thickness.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Integrator {
-    /// Linearised relaxation: `a <- a* + (a - a*) exp(-dt/tau)`, a* = 1/s (the default).
+    /// Exponential Euler at the branch's relaxation rate 1/tau (the default):
+    /// `a <- a + (1 - exp(-dt/tau)) tau da/dt`. Exact for the relaxation linearised at
+    /// a* = 1/s, where it is `a* + (a - a*) exp(-dt/tau)`; unlike that linearised step it tends
+    /// to the branch flow as dt -> 0, also far from a*.
     Exponential,
     /// Explicit Euler on the branch flow.
     Euler,
@@ -473,7 +496,7 @@ impl<R: Real> Relaxation<R> {
         for i in 0..self.branches {
             let a = state.a[i];
             let delta = match self.integrator {
-                Integrator::Exponential => (inv_s - a) * self.one_minus_decay[i],
+                Integrator::Exponential => self.one_minus_decay[i] * R::from_f64(1.0 / 3.0) * flow(a),
                 Integrator::Euler => self.rate[i] * flow(a),
                 Integrator::Heun => {
                     let k1 = flow(a);

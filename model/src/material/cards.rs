@@ -21,16 +21,17 @@ pub const VHB_4905: Card = Card {
     source: "Wang, Decker, Henann, Chester, J. Mech. Phys. Solids 95 (2016) (moduli, times, eps_r); breakdown: lowest unstretched VHB figure",
 };
 
-/// The paper's card as printed: G = 0.6 MPa, elastic. Kept to reproduce the paper's scenes.
-/// The film is the paper's VHB 4905, so the breakdown field is VHB's.
+/// The paper's card as printed: G = 0.6 MPa, elastic. Kept to reproduce the paper's scenes,
+/// never a board's card. The film is the paper's VHB 4905: its breakdown field is the highest
+/// reported unstretched VHB 4905 figure (the board's card takes the lowest).
 pub const PAPER_ELASTIC: Card = Card {
     name: "paper-elastic",
     g_eq_mpa: 0.6,
     branches: [NO_BRANCH; MAX_BRANCHES],
     branch_count: 0,
     eps_r: 4.7,
-    breakdown: Breakdown { field0_v_per_um: 18.0, stretch_exponent: 0.0 },
-    source: "the paper (G = 0.6 MPa, nu = 0.49, eps_r = 4.7); breakdown: VHB 4905's",
+    breakdown: Breakdown { field0_v_per_um: 35.0, stretch_exponent: 0.0 },
+    source: "the paper (G = 0.6 MPa, nu = 0.49, eps_r = 4.7); breakdown: Smirnov et al., Technical Physics 2018 (VHB 4905, unstretched)",
 };
 
 /// Wacker Elastosil Film 2030 (silicone): nearly elastic and stiffer than the acrylic.
