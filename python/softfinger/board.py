@@ -345,6 +345,11 @@ class Board:
         self._link = _link
         self.timeout_s = timeout_s
         self._closed = False
+        #: the board's ``status`` after the ``stop`` that :meth:`close` sent (None before, or
+        #: when the board did not answer it)
+        self.final_status: Optional[Status] = None
+        #: the lines before the last command's final reply (``help``'s list)
+        self.before: List[str] = []
 
     # -- opening ---------------------------------------------------------------------------
 
@@ -543,7 +548,8 @@ class Board:
 
     def _safe_stop(self) -> None:
         """``stop``, after dropping any late reply of an interrupted command; reads until the
-        stop's own reply (or the time-out)."""
+        stop's own reply (or the time-out), then records the board's ``status``
+        (:attr:`final_status`: HV at 0 and disarmed, as the board reports it)."""
         try:
             self._link.drain()
             self._link.send(b"stop\r\n")
@@ -553,8 +559,9 @@ class Board:
                 if left <= 0:
                     return
                 if self._link.line(left, "stop") == "ok stopped":
-                    return
-        except (BoardTimeout, BoardLinkError):
+                    break
+            self.final_status = self.status()
+        except (BoardTimeout, BoardLinkError, BoardError):
             return
 
     def __enter__(self) -> "Board":
