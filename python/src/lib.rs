@@ -50,6 +50,37 @@ fn solve_row(f: &Model<R>, tension: R, volts: &[R], m: Method<R>, stiffness: boo
     Ok(Row { sol, stiffness })
 }
 
+/// What `solve_many` keeps of one posture (zeros for a refused row: never NaN).
+#[derive(Clone, Copy, Default)]
+struct Compact {
+    tension: R,
+    volts: [R; MAX_JOINTS],
+    joints: [R; MAX_JOINTS],
+    nodes: [[R; 3]; MAX_JOINTS + 1],
+    thickness: [R; MAX_JOINTS],
+    cable: R,
+    stiffness: Mat3<R>,
+    iterations: u32,
+    residual: R,
+}
+
+impl Compact {
+    fn of(r: &Row) -> Self {
+        let s = &r.sol;
+        Compact {
+            tension: s.tension,
+            volts: s.volts,
+            joints: s.joint_angle,
+            nodes: s.nodes.map(|p| [p.x, p.y, p.theta]),
+            thickness: s.thickness,
+            cable: s.cable_excursion,
+            stiffness: r.stiffness.unwrap_or([[0.0; 3]; 3]),
+            iterations: s.iterations,
+            residual: s.residual,
+        }
+    }
+}
+
 fn arr1<'py>(py: Python<'py>, v: &[R]) -> Bound<'py, PyArray1<R>> {
     PyArray1::from_slice(py, v)
 }
@@ -537,13 +568,15 @@ impl Finger {
             (None, None) => 1,
         };
         let f = &self.f;
-        let out: Vec<Result<Row, Error>> = py.detach(|| {
+        // one compact row per posture (not the whole model Solution: its sub-element state is
+        // ~1.5 KB), filled in parallel
+        let out: Vec<Result<Compact, Error>> = py.detach(|| {
             (0..rows)
                 .into_par_iter()
                 .map(|i| {
                     let t = tensions[if p_rows.is_some() { i } else { 0 }];
                     let v = if v_rows.is_some() { &volts[i * n..(i + 1) * n] } else { &volts[..n] };
-                    solve_row(f, t, v, m, stiffness)
+                    solve_row(f, t, v, m, stiffness).map(|r| Compact::of(&r))
                 })
                 .collect()
         });
@@ -557,37 +590,22 @@ impl Finger {
                 err_list.append((i, e.value(py)))?;
             }
         }
-        let empty = ModelSolution::<R>::empty();
-        let get = |i: usize| out[i].as_ref().ok();
-        let sol = |i: usize| get(i).map_or(&empty, |r| &r.sol);
-        let per_joint = |g: &dyn Fn(&ModelSolution<R>, usize) -> R| Array2::from_shape_fn((rows, n), |(i, k)| if get(i).is_some() { g(sol(i), k) } else { 0.0 });
-        let tip = Array2::from_shape_fn((rows, 3), |(i, j)| {
-            let s = sol(i);
-            if s.n == 0 {
-                return 0.0;
-            }
-            let t = s.tip();
-            [t.x, t.y, t.theta][j]
-        });
-        let nodes = Array3::from_shape_fn((rows, n + 1, 3), |(i, k, j)| {
-            let p = sol(i).nodes[k.min(MAX_JOINTS)];
-            [p.x, p.y, p.theta][j]
-        });
-        let stiff = stiffness.then(|| {
-            Array3::from_shape_fn((rows, 3, 3), |(i, a, b)| get(i).and_then(|r| r.stiffness).map_or(0.0, |k| k[a][b])).into_pyarray(py).unbind()
-        });
+        let zero = Compact::default();
+        let c = |i: usize| out[i].as_ref().unwrap_or(&zero);
+        let per_joint = |g: &dyn Fn(&Compact, usize) -> R| Array2::from_shape_fn((rows, n), |(i, k)| g(c(i), k));
+        let stiff = stiffness.then(|| Array3::from_shape_fn((rows, 3, 3), |(i, a, b)| c(i).stiffness[a][b]).into_pyarray(py).unbind());
         Ok(Solutions {
-            tension_N: Array1::from_shape_fn(rows, |i| if get(i).is_some() { sol(i).tension } else { 0.0 }).into_pyarray(py).unbind(),
+            tension_N: Array1::from_shape_fn(rows, |i| c(i).tension).into_pyarray(py).unbind(),
             volts_V: per_joint(&|s, k| s.volts[k]).into_pyarray(py).unbind(),
-            joints_rad: per_joint(&|s, k| s.joint_angle[k]).into_pyarray(py).unbind(),
-            nodes: nodes.into_pyarray(py).unbind(),
-            tip: tip.into_pyarray(py).unbind(),
-            cable_mm: Array1::from_shape_fn(rows, |i| sol(i).cable_excursion).into_pyarray(py).unbind(),
+            joints_rad: per_joint(&|s, k| s.joints[k]).into_pyarray(py).unbind(),
+            nodes: Array3::from_shape_fn((rows, n + 1, 3), |(i, k, j)| c(i).nodes[k][j]).into_pyarray(py).unbind(),
+            tip: Array2::from_shape_fn((rows, 3), |(i, j)| c(i).nodes[n][j]).into_pyarray(py).unbind(),
+            cable_mm: Array1::from_shape_fn(rows, |i| c(i).cable).into_pyarray(py).unbind(),
             thickness_mm: per_joint(&|s, k| s.thickness[k]).into_pyarray(py).unbind(),
             stiffness: stiff,
-            iterations: Array1::from_shape_fn(rows, |i| sol(i).iterations).into_pyarray(py).unbind(),
-            residual_mm: Array1::from_shape_fn(rows, |i| sol(i).residual).into_pyarray(py).unbind(),
-            ok: Array1::from_shape_fn(rows, |i| get(i).is_some()).into_pyarray(py).unbind(),
+            iterations: Array1::from_shape_fn(rows, |i| c(i).iterations).into_pyarray(py).unbind(),
+            residual_mm: Array1::from_shape_fn(rows, |i| c(i).residual).into_pyarray(py).unbind(),
+            ok: Array1::from_shape_fn(rows, |i| out[i].is_ok()).into_pyarray(py).unbind(),
             errors: err_list.unbind(),
         })
     }
