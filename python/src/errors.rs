@@ -16,6 +16,9 @@ fn class_of(e: &Error) -> &'static str {
         Error::Param { .. } | Error::NonFinite { .. } | Error::Input { .. } => "InputError",
         Error::Contact { .. } | Error::LimitPoint { .. } | Error::ForceLimit { .. } => "BranchEndError",
         Error::Singular { .. } => "FingerError",
+        // a variant this package does not know yet: the base class, its text in `detail`
+        #[allow(unreachable_patterns)]
+        _ => "FingerError",
     }
 }
 
@@ -79,6 +82,11 @@ fn fields<'py>(py: Python<'py>, e: &Error) -> PyResult<(&'static str, Bound<'py,
             d.set_item("min", min)?;
             d.set_item("max", max)?;
             "Unreachable"
+        }
+        #[allow(unreachable_patterns)]
+        _ => {
+            d.set_item("detail", format!("{e:?}"))?;
+            "Other"
         }
     };
     Ok((kind, d))
