@@ -13,7 +13,7 @@ Units: lengths mm, forces N, moments N·mm, moduli MPa, voltages V, angles rad (
 a name says so, and at the board's console).
 """
 
-from ._core import BranchLimit, Contact, Finger, PoseSolution, Solution, Solutions, parameter_ranges
+from ._core import BranchLimit, Contact, Finger, PoseSolution, Solution, Solutions, cards, parameter_ranges
 from .board import Board, BoardError, BoardLinkError, BoardTimeout, Limits, Status
 from .errors import (
     BranchEndError,
@@ -33,6 +33,7 @@ __all__ = [
     "Contact",
     "BranchLimit",
     "parameter_ranges",
+    "cards",
     "Board",
     "BoardError",
     "BoardTimeout",

@@ -149,10 +149,17 @@ class Finger:
     other: what the board does) or 8 factors. ``**params``: any parameter by its console name
     (``l``, ``b``, ``w``, ``t_min``, ``a``, ``e_b``, ``e``, ``layers``, ``z0``, ``g``, ``nu``,
     ``eps_r``, ``margin``, ``v_supply``, ``n_inc``, ``m``, ``plate``, ``nu_b``, ``span_floor``,
-    ``flex_links``; mm, MPa, V). Raises :class:`InputError` for a value out of range."""
+    ``flex_links``; mm, MPa, V). Raises :class:`InputError` for a value out of range.
+    ``card``: the DE film's material card (:func:`cards`, e.g. ``"VHB-4905"``; docs/materials.md)
+    on the preset's finger: its equilibrium modulus (``g``) and permittivity (``eps_r``), its
+    breakdown field in the ceiling; default the preset's."""
 
     def __init__(self, preset: Literal["default", "paper", "paper_model"] = "default",
-                 calibration: Union[None, str, Sequence[float]] = None, **params: float) -> None: ...
+                 calibration: Union[None, str, Sequence[float]] = None, card: Optional[str] = None,
+                 **params: float) -> None: ...
+    @property
+    def card(self) -> str:
+        """The film's material card."""
     @property
     def params(self) -> dict[str, float]:
         """Every parameter by its console name (``e_de`` derived, MPa)."""
@@ -188,6 +195,9 @@ class Finger:
         and ``volts`` the force that holds it there."""
     def fmax(self, volts: ArrayLike) -> BranchLimit:
         """The tension (N) where the equilibrium branch ends at ``volts`` (V)."""
+
+def cards() -> List[str]:
+    """Every material card's name (``Finger(card=...)``)."""
 
 def parameter_ranges() -> List[Tuple[str, str]]:
     """Every parameter name with its valid range, as the console states them."""

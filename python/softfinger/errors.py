@@ -35,9 +35,11 @@ class FingerError(Exception):
 
 
 class VoltageCeilingError(FingerError):
-    """A channel voltage at or past its ceiling min(margin × V_pi, v_supply).
+    """A channel voltage at or past its ceiling (the film's hold ceiling with its margin,
+    capped by v_supply), or a film driven past its pull-in.
 
-    Fields: ``joint`` (1-based), ``volts`` (V), ``ceiling`` (V)."""
+    Fields: ``joint`` (1-based), ``volts`` (V), ``ceiling`` (V); for a pull-in (kind
+    ``PullIn``): ``volts``, ``pull_in`` (V)."""
 
 
 class ThicknessLimitError(FingerError):

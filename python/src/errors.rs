@@ -9,7 +9,7 @@ use pyo3::types::PyDict;
 /// The exception class of each variant (`softfinger.errors`).
 fn class_of(e: &Error) -> &'static str {
     match e {
-        Error::VoltageCeiling { .. } => "VoltageCeilingError",
+        Error::VoltageCeiling { .. } | Error::PullIn { .. } => "VoltageCeilingError",
         Error::ThicknessLimit { .. } => "ThicknessLimitError",
         Error::Unreachable { .. } => "UnreachableError",
         Error::NotConverged { .. } => "NotConvergedError",
@@ -45,6 +45,11 @@ fn fields<'py>(py: Python<'py>, e: &Error) -> PyResult<(&'static str, Bound<'py,
             d.set_item("volts", volts)?;
             d.set_item("ceiling", ceiling)?;
             "VoltageCeiling"
+        }
+        Error::PullIn { volts, pull_in } => {
+            d.set_item("volts", volts)?;
+            d.set_item("pull_in", pull_in)?;
+            "PullIn"
         }
         Error::ThicknessLimit { joint, requested_mm, limit_mm } => {
             d.set_item("joint", joint)?;

@@ -8,6 +8,8 @@
 //! mm, N, N·mm, MPa, V, angles in rad (degrees only where a name says `_deg`).
 use finger_model::inverse::{self, contact_force};
 use finger_model::mat3::{self, Mat3};
+use finger_model::material::cards::CARDS;
+use finger_model::material::Card;
 use finger_model::params::PARAMS;
 use finger_model::{BranchEnd, Calibration, Error, Finger as Model, Method, Params, Solution as ModelSolution, MAX_JOINTS};
 use numpy::ndarray::{Array1, Array2, Array3};
@@ -385,13 +387,19 @@ fn calibration_of(obj: Option<&Bound<'_, PyAny>>, p: &Params<R>) -> PyResult<Cal
 
 /// The parameter set: a preset, then the keyword overrides by their console names (MODEL.md's
 /// symbols). An override that is only consistent with a later one is retried after the others.
-fn params_of(preset: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Params<R>> {
+fn params_of(preset: &str, card: Option<&str>, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Params<R>> {
     let mut p = match preset {
         "default" => Params::default(),
         "paper" => Params::paper(),
         "paper_model" => Params::paper_model(),
         _ => return Err(PyValueError::new_err(format!("preset must be \"default\", \"paper\" or \"paper_model\", not {preset:?}"))),
     };
+    if let Some(name) = card {
+        // the film of the card on the preset's finger, as `Params::with_card` does on MODEL.md's
+        let c = card_of(name)?;
+        let with = Params::<R>::with_card(c);
+        p = Params { card: with.card, g: with.g, eps_r: with.eps_r, de_rule: with.de_rule, ..p };
+    }
     let mut pending: Vec<(String, R)> = Vec::new();
     if let Some(kw) = kwargs {
         for (k, v) in kw.iter() {
@@ -420,6 +428,26 @@ fn params_of(preset: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Param
     Ok(p)
 }
 
+/// A material card by its name or a short key (`cards::CARDS`; docs/materials.md).
+fn card_of(name: &str) -> PyResult<&'static Card> {
+    let key = |s: &str| s.chars().filter(|c| c.is_ascii_alphanumeric()).collect::<String>().to_ascii_lowercase();
+    let want = key(name);
+    CARDS
+        .iter()
+        .copied()
+        .find(|c| key(c.name) == want || key(c.name).starts_with(&want) && want.len() >= 3)
+        .ok_or_else(|| {
+            let names: Vec<&str> = CARDS.iter().map(|c| c.name).collect();
+            PyValueError::new_err(format!("unknown card {name:?}; cards: {}", names.join(", ")))
+        })
+}
+
+/// Every material card's name (`Finger(card=...)`).
+#[pyfunction]
+fn cards() -> Vec<&'static str> {
+    CARDS.iter().map(|c| c.name).collect()
+}
+
 /// The finger's model: validated parameters and their hinge compliances, prepared once.
 #[pyclass(module = "softfinger._core", frozen)]
 struct Finger {
@@ -429,9 +457,9 @@ struct Finger {
 #[pymethods]
 impl Finger {
     #[new]
-    #[pyo3(signature = (preset = "default", calibration = None, **params))]
-    fn new(preset: &str, calibration: Option<&Bound<'_, PyAny>>, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
-        let p = params_of(preset, params)?;
+    #[pyo3(signature = (preset = "default", calibration = None, card = None, **params))]
+    fn new(preset: &str, calibration: Option<&Bound<'_, PyAny>>, card: Option<&str>, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let p = params_of(preset, card, params)?;
         let cal = calibration_of(calibration, &p)?;
         Ok(Finger { f: Model::with_calibration(p, cal).map_err(model_err)? })
     }
@@ -460,6 +488,12 @@ impl Finger {
     #[getter]
     fn n(&self) -> usize {
         self.f.params().n
+    }
+
+    /// The film's material card (its name).
+    #[getter]
+    fn card(&self) -> &'static str {
+        self.f.params().card.name
     }
 
     /// The ceiling every channel stays below: min(margin × V_pi, v_supply), V.
@@ -662,7 +696,7 @@ impl Finger {
 
     fn __repr__(&self) -> String {
         let p = self.f.params();
-        format!("Finger(n={}, m={}, layers={}, e_de={:.4} MPa, ceiling={:.1} V)", p.n, p.m, p.layers, p.e_de(), self.f.voltage_ceiling())
+        format!("Finger(n={}, m={}, layers={}, card={:?}, e_de={:.4} MPa, ceiling={:.1} V)", p.n, p.m, p.layers, p.card.name, p.e_de(), self.f.voltage_ceiling())
     }
 }
 
@@ -681,6 +715,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Contact>()?;
     m.add_class::<BranchLimit>()?;
     m.add_function(wrap_pyfunction!(parameter_ranges, m)?)?;
+    m.add_function(wrap_pyfunction!(cards, m)?)?;
     errors::register(m)?;
     Ok(())
 }

@@ -120,7 +120,7 @@ def test_shapes_units_and_no_nan():
 def test_each_exception_is_raised_where_the_model_refuses():
     f = sf.Finger()
     ceiling = f.ceiling()
-    assert ceiling == pytest.approx(min(0.9 * f.pull_in_voltage(), f.params["v_supply"]))
+    assert 0 < ceiling <= f.params["v_supply"] and ceiling < f.pull_in_voltage()
 
     with pytest.raises(sf.VoltageCeilingError) as e:
         f.solve(1.0, [0, 0, ceiling])
@@ -184,3 +184,26 @@ def test_presets_parameters_and_calibration():
     assert not np.array_equal(auto.solve(1.0, 0).joints_rad, sf.Finger().solve(1.0, 0).joints_rad)
     names = [n for n, _ in sf.parameter_ranges()]
     assert "margin" in names and set(names) == set(sf.Finger().params)
+
+
+def test_material_cards():
+    names = sf.cards()
+    assert "VHB-4905" in names and len(names) >= 3
+    default = sf.Finger()
+    vhb = sf.Finger(card="VHB-4905")
+    assert vhb.card == "VHB-4905" and sf.Finger(card="vhb").card == "VHB-4905"
+    # the card's film: its equilibrium modulus by the isotropic rule, a lower ceiling than the
+    # default film's, and (softer) more bending at the same fraction of its ceiling
+    assert vhb.params["e_de"] == pytest.approx(2 * vhb.params["g"] * (1 + vhb.params["nu"]))
+    assert 0 < vhb.ceiling() < default.ceiling() and vhb.ceiling() < vhb.pull_in_voltage()
+    frac = [0.0, 0.5, 0.9]
+    a = vhb.solve(1.0, [x * vhb.ceiling() for x in frac])
+    b = default.solve(1.0, [x * default.ceiling() for x in frac])
+    assert a.joints_rad[2] - a.joints_rad[0] > b.joints_rad[2] - b.joints_rad[0] > 0
+    with pytest.raises(sf.VoltageCeilingError) as e:
+        vhb.solve(1.0, [0, 0, vhb.ceiling()])
+    assert e.value.ceiling == vhb.ceiling()
+    # a card on another preset keeps that preset's structure
+    assert sf.Finger(preset="paper", card="VHB-4905").params["m"] == 1
+    with pytest.raises(ValueError):
+        sf.Finger(card="unobtainium")
