@@ -234,20 +234,18 @@ impl<R: Real> Balance<R> {
     /// voltage that did not fall), else from 1: f is concave, so from the right the iterates
     /// fall monotonically onto the root. `None` past pull-in.
     fn solve(&self, beta: R, s_start: R) -> Result<R, Refusal> {
-        let s_pi = self.pull_in();
-        if !(s_pi.is_finite() && beta.is_finite()) {
+        if !beta.is_finite() {
             return Err(Refusal::NotConverged);
         }
-        if !(beta < self.stress(s_pi)) {
-            return Err(Refusal::PullIn);
-        }
+        // warm start where the branch is stable (slope < 0) at or right of the root
         let mut s = R::one();
-        if s_start > s_pi && s_start < R::one() && self.stress(s_start) <= beta {
+        if s_start > R::zero() && s_start < R::one() && self.slope(s_start) < R::zero() && self.stress(s_start) <= beta {
             s = s_start;
         }
         let tol = R::from_f64(4.0 * R::EPS);
         for k in 0..MAX_NEWTON {
             let d = self.slope(s);
+            // past the end of the stable branch without meeting the root: beta is past pull-in
             if !(d < R::zero()) {
                 return Err(Refusal::PullIn);
             }
@@ -255,14 +253,15 @@ impl<R: Real> Balance<R> {
             // after the first step the iterates lie right of the root and only fall: a step
             // that does not is rounding noise (near pull-in it exceeds `tol`)
             if k > 0 && !(step > R::zero()) {
-                return Ok(s.max(s_pi));
+                return Ok(s);
             }
             s -= step;
             if !s.is_finite() {
                 return Err(Refusal::NotConverged);
             }
             if step.abs() <= tol * s {
-                return Ok(s.max(s_pi));
+                // the root of a beta just past the peak in rounding would lie left of it
+                return if self.slope(s) < R::zero() { Ok(s) } else { Err(Refusal::PullIn) };
             }
         }
         Err(Refusal::NotConverged)
@@ -387,7 +386,9 @@ pub fn voltage_bound_now<R: Real>(law: &StackLaw<R>, state: &StackState<R>, s_fl
         return R::zero();
     }
     let b = Balance::of(law, &state.a);
-    let s = s_floor.max(b.pull_in()).min(R::one());
+    let s_floor = s_floor.min(R::one());
+    // a floor past the branch's end holds at most the pull-in voltage (cold path: a cube root)
+    let s = if b.slope(s_floor) < R::zero() { s_floor } else { b.pull_in() };
     let v_film = voltage_of_balance(law, &b, s).unwrap_or(R::zero());
     let v_field = law.margin * law.breakdown_field(s_floor) * s_floor * law.z0;
     let v = v_film.min(v_field) * (R::one() - R::from_f64(64.0 * R::EPS));
