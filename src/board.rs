@@ -19,6 +19,17 @@ pub const HV_LIMIT_V: f32 = 10_000.0;
 /// in force takes it as its `hv_fs` term, so previews and the board agree.
 pub const HV_MAX_V: f32 = if HV_FULL_SCALE_V < HV_LIMIT_V { HV_FULL_SCALE_V } else { HV_LIMIT_V };
 
+/// The board's film, compiled in (a different film, layer or margin is a different build; the
+/// console's parameters can only lower the ceiling these give, docs/materials.md):
+/// the material card of the stacks' film,
+pub const BOARD_CARD: &finger_model::material::Card = &finger_model::material::VHB_4905;
+/// the thickness of one layer at rest, mm,
+pub const BOARD_Z0_MM: f32 = 0.5;
+/// the layers per stack,
+pub const BOARD_LAYERS: u32 = 4;
+/// and the fraction of the film's hold and breakdown bounds the ceiling allows.
+pub const BOARD_MARGIN: f32 = 0.9;
+
 pub trait Board {
     /// Servo PWM, 50 Hz; the application sets 1.0..2.0 ms pulses.
     type Servo: SetDutyCycle;
