@@ -354,6 +354,7 @@ impl Commands {
             servo_released: self.servo_duty(0.0),
             duty_ceiling: self.duty_max,
             slew: self.fw.slew,
+            shaped: false,
         }
     }
 

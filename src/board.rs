@@ -1,8 +1,12 @@
 //! The board the application drives: one servo PWM, three HV control PWMs, the HV enable
-//! (interlock) and the watchdog. Everything else about the chip stays in `main.rs`.
+//! (interlock) and the watchdog; and the board constants of the HV modules and of the stacks
+//! (their film card, layer thickness and count, the ceiling's margin), from which alone the
+//! board's hold ceiling is computed. Everything else about the chip stays in `main.rs`.
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
+use finger_model::material::{hold_ceiling, StackLaw};
+use finger_model::Error as ModelError;
 
 /// Number of HV channels (DE stacks) the board drives.
 pub const HV_CHANNELS: usize = 3;
@@ -49,5 +53,25 @@ pub trait Board {
     /// Line ending of the replies.
     fn newline(&self) -> &'static str {
         "\r\n"
+    }
+}
+
+/// One layer of the board's stacks as the material law sees it (the card, z0, the margin).
+pub fn board_law() -> Result<StackLaw<f32>, ModelError> {
+    StackLaw::new(BOARD_CARD, BOARD_Z0_MM, BOARD_MARGIN)
+}
+
+/// The board's hold ceiling, V: min(the card's hold ceiling at the board's z0 and margin, the
+/// supply `HV_MAX_V`); 0 when the constants give no law (NaN-proof). Computed once by its
+/// users, from the board constants only.
+pub fn board_hold_ceiling_v() -> f32 {
+    let v = match board_law() {
+        Ok(law) => hold_ceiling(&law, BOARD_MARGIN),
+        Err(_) => 0.0,
+    };
+    if v > 0.0 {
+        v.min(HV_MAX_V)
+    } else {
+        0.0
     }
 }
