@@ -206,6 +206,8 @@ pub struct Commands {
     enable: bool,
     volts: [f32; CHANNELS],
     duty: [u16; CHANNELS],
+    /// Each stack's thickness stretch now, as the control tick integrates it (1 at rest).
+    stack_ratio: [f32; CHANNELS],
     fault: Option<&'static str>,
     locked_out: bool,
     now_ms: u32,
@@ -261,6 +263,7 @@ impl Commands {
             enable: false,
             volts: [0.0; CHANNELS],
             duty: [0; CHANNELS],
+            stack_ratio: [1.0; CHANNELS],
             fault: None,
             locked_out: false,
             now_ms: 0,
@@ -321,6 +324,7 @@ impl Commands {
         self.duty = v.duty;
         self.fault = v.fault;
         self.locked_out = v.locked_out;
+        self.stack_ratio = v.stack_ratio;
         self.now_ms = v.now_ms;
         if v.epoch != self.epoch {
             self.epoch = v.epoch;
@@ -354,7 +358,7 @@ impl Commands {
             servo_released: self.servo_duty(0.0),
             duty_ceiling: self.duty_max,
             slew: self.fw.slew,
-            shaped: false,
+            shaped: self.fw.shaped,
         }
     }
 
@@ -667,9 +671,11 @@ impl Commands {
     fn cmd_status(&self, r: &mut Reply) {
         let _ = w!(r; "armed=", self.armed as u8, " force=", Fixed(self.force, 3), " volts=");
         list(r, &self.volts, 1);
+        // each stack now: the film creeps under a held voltage (the control tick's state)
+        let stack_mm = self.stack_mm();
         let mut thick = [0.0f32; CHANNELS];
         for ch in 0..CHANNELS {
-            thick[ch] = self.finger.stack_thickness(self.volts[ch]).unwrap_or(0.0);
+            thick[ch] = stack_mm * self.stack_ratio[ch];
         }
         let _ = w!(r; " thick=");
         list(r, &thick, 4);
@@ -688,7 +694,6 @@ impl Commands {
         let _ = w!(r; " enable=", self.enable as u8, " target=");
         list(r, &self.target_v, 1);
         // each stack once the film has relaxed at the targets
-        let stack_mm = self.stack_mm();
         let mut eq = [0.0f32; CHANNELS];
         for ch in 0..CHANNELS {
             eq[ch] = stack_mm * self.film.equilibrium_ratio(self.target_v[ch]).unwrap_or(0.0);

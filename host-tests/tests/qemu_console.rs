@@ -21,6 +21,7 @@ host_tests::on_both_images! {
     qemu_console_commands_and_bad_inputs => console_commands_and_bad_inputs;
     qemu_defmt_log_decodes => defmt_log_decodes;
     qemu_ceiling_stays_below_the_cards_hold_ceiling => ceiling_stays_below_the_cards_hold_ceiling;
+    qemu_status_follows_the_creep => status_follows_the_creep;
 }
 
 /// The value of `key=` in a reply, as numbers.
@@ -254,4 +255,30 @@ fn ceiling_stays_below_the_cards_hold_ceiling(img: Image) {
         expect(&mut q, "stop", "ok stopped");
     }
     q.finish();
+}
+
+/// `status` follows the film's creep over two minutes of `wait` under a held voltage: `thick`
+/// (the control tick's thickness now) falls monotonically toward `thick_eq` (the thickness once
+/// relaxed at the target), never below it, and has closed most of the gap after 120 s.
+fn status_follows_the_creep(img: Image) {
+    let mut q = Qemu::boot_on(img, "creep");
+    let v = (0.9 * ceiling(&mut q)).floor();
+    expect(&mut q, "arm", "ok armed=1");
+    expect(&mut q, &format!("volt all {v}"), "ok volts=");
+    let mut thick = Vec::new();
+    let mut eq = 0.0;
+    for _ in 0..12 {
+        expect(&mut q, "wait 10", "ok waited=10");
+        let st = expect(&mut q, "status", "ok armed=1 ");
+        let (t, e) = (field(&st, "thick"), field(&st, "thick_eq"));
+        assert!(t.iter().all(|&x| x == t[0]) && e.iter().all(|&x| x == e[0]), "{st}");
+        assert!(t[0] >= e[0], "thinner than its equilibrium: {st}");
+        thick.push(t[0]);
+        eq = e[0];
+    }
+    expect(&mut q, "stop", "ok stopped");
+    q.finish();
+    assert!(thick.windows(2).all(|w| w[1] <= w[0]), "not monotone: {thick:?}");
+    let (first, last) = (thick[0] - eq, thick[thick.len() - 1] - eq);
+    assert!(first > 0.0 && last < 0.5 * first, "the creep at 10 s and 120 s: {thick:?}, equilibrium {eq}");
 }

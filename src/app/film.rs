@@ -10,13 +10,13 @@
 use finger_model::material::drive::{settling_time, DriveLimits, Mode};
 #[cfg(not(m3))]
 use finger_model::material::Relaxation;
-use finger_model::material::{equilibrium_ratio, hold_ceiling, hold_ratio, StackLaw};
+use finger_model::material::{equilibrium_ratio, hold_ratio, StackLaw};
 use finger_model::Error as ModelError;
 
 use super::Reply;
 #[cfg(not(m3))]
-use crate::board::HV_MAX_V;
-use crate::board::{BOARD_CARD, BOARD_MARGIN, BOARD_Z0_MM};
+use crate::board::HV_LIMIT_V;
+use crate::board::{board_hold_ceiling_v, board_law, BOARD_CARD, BOARD_MARGIN, BOARD_Z0_MM};
 use crate::num::Short;
 
 /// The settling simulation's step, s (the control tick's drive step at a coarser step: the
@@ -43,12 +43,11 @@ impl BoardFilm {
     /// The compiled card's law. The board constants are valid (a host test checks them); a
     /// card the law refuses would leave no voltage at all.
     pub fn new() -> Self {
-        let law = match StackLaw::new(BOARD_CARD, BOARD_Z0_MM, BOARD_MARGIN) {
+        let law = match board_law() {
             Ok(l) => l,
             Err(_) => panic!("board card"),
         };
-        let vhold = hold_ceiling(&law, BOARD_MARGIN);
-        let vhold = if vhold > 0.0 { vhold } else { 0.0 };
+        let vhold = board_hold_ceiling_v();
         let s_hold = hold_ratio(&law).unwrap_or(1.0);
         #[cfg(not(m3))]
         let settle_step = match Relaxation::new(&law, SETTLE_STEP_S) {
@@ -64,8 +63,9 @@ impl BoardFilm {
         }
     }
 
-    /// The board's hold ceiling, V per layer: margin x min(the voltage that holds the relaxed
-    /// film at 2/3 of its thickness, the breakdown bound there).
+    /// The board's hold ceiling, V per layer (`board_hold_ceiling_v`): margin x min(the voltage
+    /// that holds the relaxed film at 2/3 of its thickness, the breakdown bound there), at most
+    /// the HV modules' maximum.
     pub fn hold_ceiling(&self) -> f32 {
         self.vhold
     }
@@ -77,10 +77,10 @@ impl BoardFilm {
 
     /// Settling time from rest to within [`SETTLE_TOL`] of the thickness `target_v` gives once
     /// relaxed, s, slewed at `slew` V/s, plain or shaped (the shaped voltage at most the HV
-    /// modules' maximum, as the control tick has it); None past [`SETTLE_MAX_S`].
+    /// limit, as the control tick has it); None past [`SETTLE_MAX_S`].
     #[cfg(not(m3))]
     pub fn settle(&self, target_v: f32, slew: f32, shaped: bool) -> Result<Option<f32>, ModelError> {
-        let lim = DriveLimits { s_hold: self.s_hold, slew_step: slew * SETTLE_STEP_S, v_cap: HV_MAX_V };
+        let lim = DriveLimits { s_hold: self.s_hold, slew_step: slew * SETTLE_STEP_S, v_cap: HV_LIMIT_V };
         let mode = if shaped { Mode::Shaped } else { Mode::Plain };
         settling_time(&self.law, &self.settle_step, &lim, mode, target_v, SETTLE_TOL, (SETTLE_MAX_S / SETTLE_STEP_S) as u32)
     }

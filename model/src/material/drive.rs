@@ -3,14 +3,15 @@
 //! time to a target found by running that same step (docs/firmware.md, `pose`'s `settle=`).
 //!
 //! Each step, for a target voltage `V_t` (at or below the hold ceiling) whose relaxed stretch is
-//! `s_t`: the goal is `V_t` (plain) or, shaped, `voltage_bound_now(state, s_t)` capped at
+//! `s_t`: the goal is `V_t` (plain) or, shaped, [`shaped_voltage`]`(state, s_t)` capped at
 //! `v_cap` (the voltage that holds the film at `s_t` now: above `V_t` while the branches are
 //! unrelaxed, decaying to it); the voltage slews toward the goal; then [`guarded_tick`] at the
-//! floor `s_hold` (plain) or `s_t` (shaped): the guard, the thickness, the branch flow.
+//! floor `s_hold` (plain) or `s_t` (shaped): the guard, the thickness, the branch flow. The
+//! firmware's control tick (`control::stacks`) is this step at 1 ms.
 //!
 //! What it is not: the PWM, the ceilings' choice, the board's channels (the firmware's).
 
-use super::{equilibrium_ratio, guarded_tick, voltage_bound_now, Relaxation, StackLaw, StackState};
+use super::{equilibrium_ratio, guarded_tick, shaped_voltage, Relaxation, StackLaw, StackState};
 use crate::error::Error;
 use crate::real::Real;
 
@@ -56,7 +57,14 @@ impl<R: Real> Channel<R> {
             Mode::Shaped => s_target,
         };
         let goal = match mode {
-            Mode::Shaped if target_v > R::zero() => voltage_bound_now(law, &self.state, floor).min(lim.v_cap),
+            Mode::Shaped if target_v > R::zero() => {
+                let v = shaped_voltage(law, &self.state, floor);
+                if v > R::zero() {
+                    v.min(lim.v_cap)
+                } else {
+                    R::zero()
+                }
+            }
             _ => target_v,
         };
         let v = self.volts;
