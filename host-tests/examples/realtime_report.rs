@@ -32,7 +32,7 @@ fn main() {
     // a ramp at 100 kV/s while the long commands run
     assert_eq!(q.cmd("param slew 100000"), "ok slew=100000");
     assert_eq!(q.cmd("arm"), "ok armed=1");
-    q.write(b"volt 1 9000\r\nhelp\r\nparam\r\npose 12 12 12\r\nforce 0.3\r\ncontact 1 1.5\r\nlimits\r\nsolve 0.5 0 1000 2000\r\nstatus\r\nversion\r\n");
+    q.write(b"volt 1 5000\r\nhelp\r\nparam\r\npose 12 12 12\r\nforce 0.3\r\ncontact 1 1.5\r\nlimits\r\nsolve 0.5 0 1000 2000\r\nstatus\r\nversion\r\n");
     q.finals(10);
     // setpoints whose fmax is not cached yet: volt and force with a tension, limits
     q.write(b"volt all 2000\r\nforce 0.5\r\nvolt 2 4000\r\nlimits\r\n");
