@@ -15,6 +15,7 @@
 
 pub mod cards;
 pub mod reference;
+pub mod drive;
 
 pub use cards::{CARDS, ELASTOSIL_2030, PAPER_ELASTIC, VHB_4905};
 
