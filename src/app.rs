@@ -47,6 +47,8 @@ macro_rules! err {
 #[cfg(feature = "shape")]
 mod shape;
 mod film;
+#[cfg(feature = "settings")]
+pub mod config;
 #[cfg(m3)]
 mod m3;
 
@@ -238,6 +240,9 @@ pub struct Commands {
     /// inside for a finger without stacks.
     #[cfg(feature = "pose")]
     inv_table: core::cell::OnceCell<Option<finger_model::inverse::BranchTable<f32>>>,
+    /// The settings store and what the boot found in it (app/config.rs).
+    #[cfg(feature = "settings")]
+    cfg: config::ConfigState,
 }
 
 impl Commands {
@@ -282,6 +287,8 @@ impl Commands {
             fmax_computed: Cell::new(0),
             #[cfg(feature = "pose")]
             inv_table: core::cell::OnceCell::new(),
+            #[cfg(feature = "settings")]
+            cfg: config::ConfigState::new(),
         };
         c.recompute();
         c
@@ -646,6 +653,12 @@ impl Commands {
             b"param" => self.cmd_param(args, r, out)?,
             b"preset" => self.cmd_preset(args, r)?,
             b"cal" => self.cmd_cal(args, r)?,
+            #[cfg(feature = "settings")]
+            b"save" => self.cmd_save(args, r)?,
+            #[cfg(feature = "settings")]
+            b"factory" => self.cmd_factory(args, r)?,
+            #[cfg(feature = "settings")]
+            b"config" => self.cmd_config(args, r, out)?,
             b"wait" => {
                 let [s] = args else { return Err(err!("usage"; "wait <seconds>")) };
                 let s = number(s, "seconds")?;
@@ -680,6 +693,10 @@ impl Commands {
         let _ = w!(r; " thick=");
         list(r, &thick, 4);
         let mut fault = self.fault;
+        #[cfg(feature = "settings")]
+        {
+            fault = fault.or(self.config_fault());
+        }
         let shown = self.forward_with(self.force, &self.volts, |s| {
             let _ = w!(r; " joints=");
             joints(r, s);
@@ -1154,6 +1171,12 @@ const HELP: &[&str] = &[
     "preset <default|paper> - model parameters back to a preset; only while disarmed",
     "cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none] - FE calibration factors: read, set or clear (set and clear only while disarmed)",
     "wait <s> - run the control loop for s seconds, then reply",
+    #[cfg(feature = "settings")]
+    "save - keep the settings in force across resets; only while disarmed",
+    #[cfg(feature = "settings")]
+    "config - what is stored, its save counter, what the boot loaded",
+    #[cfg(feature = "settings")]
+    "factory - erase the stored settings, back to the compiled defaults; only while disarmed",
 ];
 
 fn no_args(args: &[&[u8]], cmd: &str) -> Result<(), CmdError> {

@@ -30,6 +30,9 @@
 
 #[path = "mem.rs"]
 mod mem;
+#[cfg(feature = "settings")]
+#[path = "flash_chip.rs"]
+mod flash_chip;
 
 use core::panic::PanicInfo;
 use core::sync::atomic::{AtomicU32, Ordering};
@@ -429,6 +432,9 @@ mod app {
         let servo_max = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(board.servo());
         let mut cmds = Commands::new(board.name(), board.newline(), hv_max, servo_max);
         cmds.set_timing_report(timing_report);
+        // the stored settings, before the control core takes its first setpoints
+        #[cfg(feature = "settings")]
+        let boot = flash_chip::store(dp.FLASH).map(|s| cmds.boot_settings(s));
         let sp = cmds.setpoints();
         let mut ctl = Control::new(board, sp.servo_released, sp.slew);
         if cfg!(feature = "qemu") && real_chip {
@@ -456,6 +462,12 @@ mod app {
         // bytes sent before the USART is enabled, a real UART too).
         tx.push_all(b"# finger-fw ");
         tx.push_all(finger_fw::VERSION.as_bytes());
+        #[cfg(feature = "settings")]
+        if let Some(b) = boot {
+            let mut note: heapless::String<80> = heapless::String::new();
+            let _ = finger_fw::w!(&mut note; " ", b);
+            tx.push_all(note.as_bytes());
+        }
         tx.push_all(b" ready\r\n");
 
         (Shared { ctl, mailbox: Mailbox { setpoints: None, stop: false, view }, rx: RxLines::new(), tx }, Local { cmds })

@@ -3,6 +3,7 @@
 //! re-exported here under their old paths for the fidelity test and report.
 
 pub mod hv;
+pub mod cut_flash;
 pub mod perf;
 pub mod qemu;
 pub mod sim_console;
