@@ -126,6 +126,7 @@ pub fn check(data: &[u8]) {
             continue;
         }
         let line = std::mem::take(&mut s);
+        s.last_cr = line.last_cr; // a CRLF spans two lines' bookkeeping
         let stop = line.first_word_is_stop() && !line.word_broken;
         assert_eq!(ev == RxEvent::Stop, stop, "stop event for {:?} (overrun {})", String::from_utf8_lossy(&line.text), line.broken);
         if stop {
