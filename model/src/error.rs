@@ -17,6 +17,9 @@ pub enum Error {
     /// A requested stack thickness beyond the 33 % pull-in limit (z < 2/3 z0), e.g. the
     /// paper's "2 mm to 1 mm".
     ThicknessLimit { joint: usize, requested_mm: f64, limit_mm: f64 },
+    /// A film voltage at or past the film's pull-in in its present state (the stable branch of
+    /// the film balance ends at `pull_in` volts).
+    PullIn { volts: f64, pull_in: f64 },
     /// A cable span closed to its floor: the links touch (contact) at this joint.
     Contact { joint: usize, tension: f64 },
     /// The equilibrium branch ends (limit point: singular tangent) before this tension.
@@ -39,7 +42,7 @@ impl Error {
             Error::Param { .. } => "usage",
             Error::NonFinite { .. } => "bad-number",
             Error::Input { .. } => "usage",
-            Error::VoltageCeiling { .. } | Error::ThicknessLimit { .. } => "limit",
+            Error::VoltageCeiling { .. } | Error::ThicknessLimit { .. } | Error::PullIn { .. } => "limit",
             Error::Contact { .. } | Error::LimitPoint { .. } | Error::ForceLimit { .. } => "limit",
             Error::NotConverged { .. } | Error::Singular { .. } => "fault",
             Error::Unreachable { .. } => "unreachable",
@@ -61,6 +64,9 @@ impl fmt::Display for Error {
                 f,
                 "joint {joint}: stack thickness {requested_mm:.3} mm is past the 33 % pull-in limit ({limit_mm:.3} mm)"
             ),
+            Error::PullIn { volts, pull_in } => {
+                write!(f, "{volts:.0} V is at or past the film's pull-in {pull_in:.0} V in its present state")
+            }
             Error::Contact { joint, tension } => {
                 write!(f, "joint {joint}: links in contact (cable span at its floor) at {tension:.3} N")
             }

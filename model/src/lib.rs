@@ -6,6 +6,7 @@
 //! - [`params`]: parameters, defaults, the paper preset, validation, access by name.
 //! - [`hinge`]: elliptical notch thickness and compliance (Castigliano integrals).
 //! - [`calibration`]: FE corrections to the sub-element compliances (issue 18).
+//! - [`material`]: the film's material law in time: cards, thinning, creep, ceilings.
 //! - [`de`]: DE layer thinning, pull-in (33 %) limit, ceiling, stack stiffness.
 //! - [`finger`]: joint equilibrium, posture, cable excursion, tip stiffness, two solvers.
 //! - [`inverse`]: joint angles (and a tension) to tension and voltages; stiffness range; contact force.
@@ -27,6 +28,7 @@ pub mod fixed;
 pub mod hinge;
 pub mod inverse;
 pub mod mat3;
+pub mod material;
 pub mod params;
 pub mod real;
 pub mod solve;

@@ -4,6 +4,7 @@
 //! What it is not: derived quantities (compliances, pull-in) live in `hinge`, `de`, `finger`.
 
 use crate::error::Error;
+use crate::material::{Card, StackLaw, PAPER_ELASTIC, VHB_4905};
 use crate::real::Real;
 
 /// Most joints a finger may have (fixed capacity; the paper's finger has 3).
@@ -74,6 +75,9 @@ pub struct Params<R> {
     /// Treat the links as beams of the body material (compression + bending under the cable's
     /// eccentric load) instead of rigid (the paper's model).
     pub flex_links: bool,
+    /// The film's material card: its branches and breakdown field (its equilibrium modulus and
+    /// permittivity are `g`/`nu`/`de_rule` and `eps_r` here).
+    pub card: &'static Card,
 }
 
 impl<R: Real> Default for Params<R> {
@@ -107,6 +111,7 @@ impl<R: Real> Default for Params<R> {
             nu_b: f(0.45),
             span_floor: f(0.1),
             flex_links: true,
+            card: &PAPER_ELASTIC,
         }
     }
 }
@@ -216,6 +221,25 @@ impl<R: Real> Params<R> {
     /// modulus E_b and rigid links (the corrected DE modulus kept).
     pub fn paper_model() -> Self {
         Params { m: 1, plate: false, flex_links: false, ..Self::default() }
+    }
+
+    /// MODEL.md's finger with the film of `card`: its equilibrium modulus (`g`, isotropic
+    /// rule), permittivity, branches and breakdown field.
+    pub fn with_card(card: &'static Card) -> Self {
+        Params { g: R::from_f64(card.g_eq_mpa), eps_r: R::from_f64(card.eps_r), de_rule: DeModulusRule::Isotropic, card, ..Self::default() }
+    }
+
+    /// MODEL.md's finger with the board's film, VHB 4905.
+    pub fn vhb4905() -> Self {
+        Self::with_card(&VHB_4905)
+    }
+
+    /// The film's law for one layer: the card's branches and breakdown with this set's
+    /// equilibrium shear modulus `E_de / (2 (1 + nu))` (= g by the isotropic rule), eps_r, z0
+    /// and margin.
+    pub fn stack_law(&self) -> Result<StackLaw<R>, Error> {
+        let g_eq = self.e_de() / (R::from_f64(2.0) * (R::one() + self.nu));
+        StackLaw::with_film(self.card, g_eq, self.eps_r, self.z0, self.margin)
     }
 
     /// A finger without DE stacks.
@@ -385,6 +409,7 @@ impl<R: Real> Params<R> {
             nu_b: c(self.nu_b),
             span_floor: c(self.span_floor),
             flex_links: self.flex_links,
+            card: self.card,
         }
     }
 }

@@ -63,6 +63,19 @@ pub trait Real:
     }
     fn atan2(self, x: Self) -> Self;
     fn is_finite(self) -> bool;
+    /// e^x (the material's relaxation factors, computed once per time step, never per tick).
+    /// The default goes through f64; f32 and f64 override it with libm.
+    fn exp(self) -> Self {
+        Self::from_f64(libm::exp(self.to_f64()))
+    }
+    /// Natural logarithm (the breakdown field's stretch power).
+    fn ln(self) -> Self {
+        Self::from_f64(libm::log(self.to_f64()))
+    }
+    /// Cube root (the film's pull-in stretch).
+    fn cbrt(self) -> Self {
+        Self::from_f64(libm::cbrt(self.to_f64()))
+    }
 
     #[inline(always)]
     fn zero() -> Self {
@@ -143,6 +156,18 @@ impl Real for f64 {
     fn is_finite(self) -> bool {
         f64::is_finite(self)
     }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        libm::exp(self)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        libm::log(self)
+    }
+    #[inline(always)]
+    fn cbrt(self) -> Self {
+        libm::cbrt(self)
+    }
 }
 
 #[cfg(not(feature = "micromath"))]
@@ -199,6 +224,18 @@ impl Real for f32 {
     fn is_finite(self) -> bool {
         f32::is_finite(self)
     }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        libm::expf(self)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        libm::logf(self)
+    }
+    #[inline(always)]
+    fn cbrt(self) -> Self {
+        libm::cbrtf(self)
+    }
 }
 
 #[cfg(feature = "micromath")]
@@ -242,6 +279,18 @@ impl Real for f32 {
     #[inline(always)]
     fn is_finite(self) -> bool {
         f32::is_finite(self)
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        libm::expf(self)
+    }
+    #[inline(always)]
+    fn ln(self) -> Self {
+        libm::logf(self)
+    }
+    #[inline(always)]
+    fn cbrt(self) -> Self {
+        libm::cbrtf(self)
     }
 }
 

@@ -4,6 +4,7 @@
 //! (the model) → `csv`, `svg` (the outputs); `reference` plugs the continuum reference in.
 
 pub mod csv;
+pub mod drawing;
 pub mod reference;
 pub mod run;
 pub mod scene;

@@ -1,11 +1,13 @@
 //! finger-scene: run scene files (docs/scenes.md, TOML) and write CSV and SVG posture plots.
 //!
 //! ```text
-//! finger-scene SCENE... [--out DIR]            each scene into DIR (default out/)
+//! finger-scene SCENE... [--out DIR]            each scene into DIR (default target/scenes/
+//!                                               at the repo top: git ignores it)
 //! finger-scene --all [--scenes DIR] [--out DIR] every shipped scene (default scenes/ at the
 //!                                               repo top) into DIR (default docs/scenes/),
 //!                                               checks that scenes/refused/ is refused, and
 //!                                               writes DIR/index.md
+//! finger-scene --drawing FILE                  the finger with its dimensions (README's figure)
 //! ```
 //! A scene the model refuses prints `path:line:column: message` to stderr, exits with status 1 and
 //! writes nothing. Usage errors exit with 2.
@@ -14,7 +16,7 @@ use finger_scene::{self as scene, Reference, SceneResult};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-const USAGE: &str = "usage: finger-scene SCENE... [--out DIR]\n       finger-scene --all [--scenes DIR] [--out DIR]";
+const USAGE: &str = "usage: finger-scene SCENE... [--out DIR]   (default DIR: target/scenes/ at the repo top)\n       finger-scene --all [--scenes DIR] [--out DIR]\n       finger-scene --drawing FILE";
 
 fn repo_top() -> PathBuf {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -26,20 +28,25 @@ struct Args {
     scenes: Vec<PathBuf>,
     scenes_dir: Option<PathBuf>,
     out: Option<PathBuf>,
+    drawing: Option<PathBuf>,
 }
 
 fn parse_args() -> Result<Args, String> {
-    let mut a = Args { all: false, scenes: Vec::new(), scenes_dir: None, out: None };
+    let mut a = Args { all: false, scenes: Vec::new(), scenes_dir: None, out: None, drawing: None };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
         match arg.as_str() {
             "--all" => a.all = true,
             "--out" => a.out = Some(it.next().ok_or("--out needs a directory")?.into()),
             "--scenes" => a.scenes_dir = Some(it.next().ok_or("--scenes needs a directory")?.into()),
+            "--drawing" => a.drawing = Some(it.next().ok_or("--drawing needs a file")?.into()),
             "-h" | "--help" => return Err(String::new()),
             s if s.starts_with('-') => return Err(format!("unknown option {s}")),
             s => a.scenes.push(s.into()),
         }
+    }
+    if a.drawing.is_some() {
+        return if a.all || !a.scenes.is_empty() || a.out.is_some() { Err("--drawing goes alone".into()) } else { Ok(a) };
     }
     if a.all == !a.scenes.is_empty() {
         return Err("give scene files, or --all".into());
@@ -264,6 +271,16 @@ fn run_all(a: &Args) -> Result<(), String> {
     Ok(())
 }
 
+/// The front page's drawing: MODEL.md's finger, straight and at 1 N with half the ceiling.
+fn write_drawing(file: &Path) -> Result<(), String> {
+    let params = finger_model::Params::<f64>::default();
+    let half = finger_model::Finger::new(params).map_err(|e| e.to_string())?.voltage_ceiling() / 2.0;
+    let svg = scene::drawing::dimensioned(params, 1.0, (half / 100.0).round() * 100.0).map_err(|e| e.to_string())?;
+    std::fs::write(file, svg).map_err(|e| format!("cannot write {}: {e}", file.display()))?;
+    println!("wrote {}", file.display());
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let a = match parse_args() {
         Ok(a) => a,
@@ -275,10 +292,12 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let res = if a.all {
+    let res = if let Some(file) = &a.drawing {
+        write_drawing(file)
+    } else if a.all {
         run_all(&a)
     } else {
-        let out = a.out.clone().unwrap_or_else(|| PathBuf::from("out"));
+        let out = a.out.clone().unwrap_or_else(|| repo_top().join("target").join("scenes"));
         a.scenes.iter().try_for_each(|p| run_one(p, &out).map(|_| ()))
     };
     match res {

@@ -196,6 +196,14 @@ fn fmt_g(x: f64) -> String {
     if s == "-0" { "0".into() } else { s.to_string() }
 }
 
+/// A finger in words, for a legend: "finger with 4 DE layers" or "finger without DE layers".
+fn describe(spec: &FingerSpec) -> String {
+    match spec.params.layers {
+        0 => "finger without DE layers".into(),
+        n => format!("finger with {n} DE layers"),
+    }
+}
+
 /// Run a scene: every posture it asks for, nothing more. `reference` is the continuum
 /// reference (needed only if the scene says `reference = continuum`).
 pub fn run(scene: &Scene, reference: Option<&dyn ReferenceSolver>) -> Result<SceneResult, SceneError> {
@@ -219,7 +227,7 @@ pub fn run(scene: &Scene, reference: Option<&dyn ReferenceSolver>) -> Result<Sce
             scene,
             tm,
             m.at,
-            format!("{} N: same tip angle as [match] at {} N", fmt_g(tm), fmt_g(m.tension)),
+            format!("{} N: same tip angle as the {} at {} N", fmt_g(tm), describe(&m.finger), fmt_g(m.tension)),
             Kind::Matched,
             reference,
         )?);
@@ -230,7 +238,7 @@ pub fn run(scene: &Scene, reference: Option<&dyn ReferenceSolver>) -> Result<Sce
                 &mscene,
                 m.tension,
                 m.at,
-                format!("[match] finger at {} N", fmt_g(m.tension)),
+                format!("{} at {} N", describe(&m.finger), fmt_g(m.tension)),
                 Kind::MatchTarget,
                 reference,
             )?);

@@ -565,3 +565,94 @@ fn continuum_overlay_is_the_continuum_models_solution() {
     let pc = scene::postures_csv(&r);
     assert_eq!(pc.lines().filter(|l| l.contains(",reference,")).count(), r.postures.iter().map(|p| p.reference.as_ref().unwrap().points.len()).sum::<usize>());
 }
+
+#[test]
+fn svg_draws_the_finger_body_cable_and_clamp() {
+    // the body, one stack per joint coloured by voltage, the clamp, the cable and the pull
+    let c = Finger::new(Params::<f64>::default()).unwrap().voltage_ceiling();
+    let text = format!("[finger]\nvolts = [{}, {}, {}]\n[drive]\ntensions = [0, 0.5]\n", 0.1 * c, 0.5 * c, 0.9 * c);
+    let r = run_text(&text).unwrap();
+    let svg = finger_scene::svg::plot(&r);
+    check_xml(&svg).unwrap();
+    for class in ["class=\"body\"", "class=\"clamp\"", "class=\"cable\"", "class=\"load\"", "class=\"volt-scale\""] {
+        assert!(svg.contains(class), "missing {class}");
+    }
+    let stacks: Vec<&str> = svg.lines().filter(|l| l.contains("class=\"stack\"")).collect();
+    assert_eq!(stacks.len(), 3);
+    // a different voltage, a different colour
+    let fill = |l: &str| l.split("fill=\"").nth(1).unwrap().split('"').next().unwrap().to_string();
+    assert_ne!(fill(stacks[0]), fill(stacks[2]));
+    assert_eq!(svg.matches("class=\"hinge\"").count(), 3);
+    // the pull is the largest tension's
+    assert!(svg.contains("P = 0.5 N"));
+    // a finger without stacks draws none and has no voltage scale
+    let r = run_text("[finger]\nlayers = 0\n[drive]\ntensions = [0.5]\n").unwrap();
+    let svg = finger_scene::svg::plot(&r);
+    assert!(svg.contains("class=\"body\"") && svg.contains("class=\"cable\""));
+    assert!(!svg.contains("class=\"stack\"") && !svg.contains("class=\"volt-scale\""));
+}
+
+#[test]
+fn svg_has_a_stiffness_panel_exactly_when_asked() {
+    let asked = run_text("[drive]\ntensions = [0, 0.5, 1]\n[output]\ntip_stiffness = true\n").unwrap();
+    let svg = finger_scene::svg::plot(&asked);
+    check_xml(&svg).unwrap();
+    assert!(svg.contains("class=\"stiffness-panel\""));
+    // three terms, a bar per posture each, with their units
+    assert_eq!(svg.matches("class=\"stiffness-bar\"").count(), 3 * asked.postures.len());
+    assert!(svg.contains("k_yy (N/mm)") && svg.contains("k_θθ (N·mm/rad)"));
+    let not = run_text("[drive]\ntensions = [0, 0.5, 1]\n[output]\ntip_stiffness = false\n").unwrap();
+    assert!(!finger_scene::svg::plot(&not).contains("stiffness-panel"));
+}
+
+#[test]
+fn svg_tells_coinciding_curves_apart_in_plain_words() {
+    let reference = scene::reference_solver();
+    let r = scene::run_file(&top().join("scenes/paper-no-de.toml"), reference.as_deref()).unwrap();
+    let svg = finger_scene::svg::plot(&r);
+    // no TOML section names in the legend
+    assert!(!svg.contains("[match]"), "legend shows TOML jargon");
+    // every posture line has its own (dash, width) style and node marker shape
+    let polys: Vec<&str> = svg.lines().filter(|l| l.contains("<polyline class=\"posture\"")).collect();
+    let style = |l: &str| {
+        let dash = l.split("stroke-dasharray=\"").nth(1).map(|d| d.split('"').next().unwrap().to_string());
+        let width = l.split("stroke-width=\"").nth(1).unwrap().split('"').next().unwrap().to_string();
+        (dash, width)
+    };
+    let matched = polys.iter().position(|l| l.contains(&format!("data-tension=\"{}\"", r.matched_tension.unwrap()))).unwrap();
+    for (i, l) in polys.iter().enumerate() {
+        if i != matched {
+            assert_ne!(style(l), style(polys[matched]), "a posture drawn like the matched one");
+        }
+    }
+}
+
+#[test]
+fn drawing_shows_the_finger_with_its_dimensions() {
+    let svg = finger_scene::drawing::dimensioned(finger_model::Params::default(), 1.0, 1000.0).unwrap();
+    check_xml(&svg).unwrap();
+    for what in ["class=\"body\"", "class=\"clamp\"", "class=\"cable\"", "class=\"stack\"", "l = 27 mm", "b = 10 mm", "t_min = 1.5 mm", "e = 5 mm"] {
+        assert!(svg.contains(what), "missing {what}");
+    }
+    // the straight finger and the bent one
+    assert_eq!(svg.matches("<g class=\"finger").count(), 2);
+}
+
+#[test]
+fn a_scene_without_out_writes_under_target_not_into_the_current_directory() {
+    let cwd = std::env::temp_dir().join(format!("finger-scene-cwd-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&cwd);
+    std::fs::create_dir_all(&cwd).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene"))
+        .current_dir(&cwd)
+        .arg(top().join("scenes/paper-de-0v.toml"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_dir(&cwd).unwrap().count(), 0, "wrote into the current directory");
+    let svg = top().join("target/scenes/paper-de-0v.svg");
+    assert!(svg.is_file());
+    let st = std::process::Command::new("git").arg("-C").arg(top()).args(["check-ignore", "-q"]).arg(&svg).status().unwrap();
+    assert!(st.success(), "{} is not git-ignored", svg.display());
+    let _ = std::fs::remove_dir_all(&cwd);
+}

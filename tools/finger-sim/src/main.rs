@@ -9,7 +9,11 @@
 //!   stdin goes onto the wire at once and arrives at 115200 baud, the control core ticks every
 //!   1 ms while commands run, each command takes its modelled time (`sim::default_cost`), a
 //!   `stop` acts the moment its line ends. At the end it prints `# t=<ms> ticks=<n>` on stderr.
-use std::io::{Read, Write};
+//!
+//! `--help` prints the usage; any other argument is refused (exit status 2). Typed at a
+//! terminal, it greets on stderr (what it is, `help`, how to quit); piped, it prints nothing
+//! but the board's replies.
+use std::io::{IsTerminal, Read, Write};
 
 use finger_fw::sim::{default_cost, SimBoard, VirtualSim};
 use finger_fw::App;
@@ -22,8 +26,44 @@ impl<W: Write> std::fmt::Write for Out<W> {
     }
 }
 
+const USAGE: &str = "\
+usage: finger-sim [--virtual]
+  The driver board's application on a simulated board: console lines on stdin, replies on
+  stdout (docs/console.md). Exits at the end of input (Ctrl-D at a terminal).
+  --virtual   the real-time core in virtual time: input at 115200 baud, 1 ms control ticks,
+              each command taking its modelled time; `# t=<ms> ticks=<n>` on stderr at the end
+  --help      this text";
+
+/// `Ok(virtual_time)`, or the exit status after printing usage.
+fn parse_args(args: impl Iterator<Item = String>) -> Result<bool, u8> {
+    let mut virtual_time = false;
+    for a in args {
+        match a.as_str() {
+            "--virtual" => virtual_time = true,
+            "-h" | "--help" => {
+                println!("{USAGE}");
+                return Err(0);
+            }
+            other => {
+                eprintln!("finger-sim: unknown argument `{other}`\n{USAGE}");
+                return Err(2);
+            }
+        }
+    }
+    Ok(virtual_time)
+}
+
 fn main() {
-    let virtual_time = std::env::args().skip(1).any(|a| a == "--virtual");
+    let virtual_time = match parse_args(std::env::args().skip(1)) {
+        Ok(v) => v,
+        Err(code) => std::process::exit(code.into()),
+    };
+    if std::io::stdin().is_terminal() {
+        eprintln!(
+            "finger-sim {}: the finger board's console on a simulated board (no hardware). Type `help` for the commands; Ctrl-D quits.",
+            finger_fw::VERSION
+        );
+    }
     let stdout = std::io::stdout();
     let mut out = Out(std::io::BufWriter::new(stdout.lock()));
     let mut stdin = std::io::stdin().lock();

@@ -28,3 +28,42 @@ fn script_on_stdin_replies_on_stdout() {
     assert_eq!(lines[9], "ok stopped");
     assert!(lines[10].starts_with("err unknown:"));
 }
+
+#[test]
+fn help_usage_and_unknown_flags() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_finger-sim");
+    let h = Command::new(bin).arg("--help").output().unwrap();
+    assert!(h.status.success());
+    let t = String::from_utf8(h.stdout).unwrap();
+    assert!(t.starts_with("usage: finger-sim") && t.contains("--virtual"), "{t}");
+    let bad = Command::new(bin).arg("--bogus").output().unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    let e = String::from_utf8(bad.stderr).unwrap();
+    assert!(e.contains("unknown argument `--bogus`"), "{e}");
+    assert!(bad.stdout.is_empty());
+}
+
+#[test]
+fn a_banner_at_a_terminal_and_none_in_a_pipe() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let bin = env!("CARGO_BIN_EXE_finger-sim");
+    // piped: the replies alone (the banner would break scripts that read stdout)
+    let mut c = Command::new(bin).stdin(Stdio::piped()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+    c.stdin.take().unwrap().write_all(b"version\n").unwrap();
+    let out = c.wait_with_output().unwrap();
+    assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+    // at a terminal (util-linux `script` gives it a pseudo-terminal): the banner
+    let mut c = Command::new("script")
+        .args(["-q", "-e", "-c", bin, "/dev/null"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    c.stdin.take().unwrap().write_all(b"version\n").unwrap();
+    let out = c.wait_with_output().unwrap();
+    let t = String::from_utf8_lossy(&out.stdout);
+    assert!(t.contains("Type `help` for the commands; Ctrl-D quits."), "{t}");
+    assert!(t.contains("ok version="), "{t}");
+}

@@ -74,9 +74,10 @@ enum What {
         /// Also drive the outputs: arm, `volt` and `force` to each posture, `status`, then `stop`.
         #[arg(long)]
         drive: bool,
-        /// Where to write the CSV and SVG.
-        #[arg(long, default_value = "out")]
-        out: PathBuf,
+        /// Where to write the CSV and SVG (default: target/runs/ at the repo top, which git
+        /// ignores).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// `status` at a fixed rate as a live view.
     Monitor {
@@ -348,7 +349,10 @@ fn main() -> ExitCode {
                 }
             }
         }
-        What::Run { scene: path, drive, out } => run_scene(&mut con, &path, scene.expect("read above"), drive, &out),
+        What::Run { scene: path, drive, out } => {
+            let out = out.unwrap_or_else(|| repo_root().join("target").join("runs"));
+            run_scene(&mut con, &path, scene.expect("read above"), drive, &out)
+        }
         What::Log { .. } | What::Ports => unreachable!("handled above"),
     }
 }

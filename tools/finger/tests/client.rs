@@ -104,3 +104,16 @@ fn no_board_named_is_a_usage_error() {
     let out = finger(&["--sim", "--port", "/dev/null", "cmd", "status"]);
     assert_eq!(out.status.code(), Some(2), "two boards at once are refused by the argument parser");
 }
+
+#[test]
+fn the_readmes_ramp_script_runs_on_the_sim() {
+    // README: `cargo run -- --port /dev/ttyACM0 script ramp.txt`, the file shipped next to it
+    let ramp = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("ramp.txt");
+    let out = finger(&["--sim", "--sim-bin", sim().to_str().unwrap(), "script", ramp.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let o = text(&out.stdout);
+    // every line answered ok, the ramp read back, and the board stopped at the end
+    assert!(!o.contains("err "), "{o}");
+    assert!(o.contains("volts=1500.0,0.0,0.0"), "{o}");
+    assert!(o.trim_end().ends_with("ok stopped"), "{o}");
+}

@@ -209,3 +209,22 @@ fn ctrl_c_during_a_driven_run_still_stops_the_board() {
     assert!(!out_dir.exists(), "an interrupted run wrote its files");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_run_without_out_writes_under_target_not_into_the_current_directory() {
+    let cwd = scratch("cwd");
+    let scene = root().join("scenes/paper-de-0v.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_finger"))
+        .current_dir(&cwd)
+        .args(["--sim", "--sim-bin", sim().to_str().unwrap(), "run", scene.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(std::fs::read_dir(&cwd).unwrap().count(), 0, "the run wrote into the current directory");
+    let csv = root().join("target/runs/paper-de-0v-board.csv");
+    assert!(csv.is_file(), "no {}", csv.display());
+    // git ignores where it went
+    let st = Command::new("git").arg("-C").arg(root()).args(["check-ignore", "-q"]).arg(&csv).status().unwrap();
+    assert!(st.success(), "{} is not git-ignored", csv.display());
+    let _ = std::fs::remove_dir_all(&cwd);
+}

@@ -1,0 +1,721 @@
+#![allow(non_snake_case)]
+//! `softfinger._core`: the `finger-model` crate (f64) as Python classes. One `Finger` holds a
+//! prepared model; its solves return result objects whose fields are NumPy arrays; the model's
+//! typed errors become the exception classes of `errors.rs`.
+//!
+//! What it is not: a second implementation of any equation (every number comes from
+//! `finger-model`), nor the board (pure Python, `softfinger/board.py`). Units are the model's:
+//! mm, N, N·mm, MPa, V, angles in rad (degrees only where a name says `_deg`).
+use finger_model::inverse::{self, contact_force};
+use finger_model::mat3::{self, Mat3};
+use finger_model::material::cards::CARDS;
+use finger_model::material::Card;
+use finger_model::params::PARAMS;
+use finger_model::{BranchEnd, Calibration, Error, Finger as Model, Method, Params, Solution as ModelSolution, MAX_JOINTS};
+use numpy::ndarray::{Array1, Array2, Array3};
+use numpy::{AllowTypeChange, IntoPyArray, PyArrayMethods, PyUntypedArrayMethods, PyArray1, PyArray2, PyArray3, PyArrayLike1, PyArrayLike2};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use rayon::prelude::*;
+
+mod errors;
+use errors::{model_err, row_err};
+
+type R = f64;
+
+/// Which solver `solve` runs (`finger_model::Method`).
+fn method(name: &str, n_inc: Option<u32>, tol: f64, max_iter: u32, p: &Params<R>) -> PyResult<Method<R>> {
+    match name {
+        "converged" => Ok(Method::Converged { tol, max_iter }),
+        "stepping" => Ok(Method::Stepping { n_inc: n_inc.unwrap_or(p.n_inc) }),
+        _ => Err(PyValueError::new_err(format!("method must be \"converged\" or \"stepping\", not {name:?}"))),
+    }
+}
+
+/// One solved posture, what the Python side keeps of `finger_model::Solution` (and K_tip).
+#[derive(Clone, Copy)]
+struct Row {
+    sol: ModelSolution<R>,
+    stiffness: Option<Mat3<R>>,
+}
+
+/// The forward solve and, when asked, the tip stiffness from the same compliances.
+fn solve_row(f: &Model<R>, tension: R, volts: &[R], m: Method<R>, stiffness: bool) -> Result<Row, Error> {
+    let c = f.compliances(volts)?;
+    let sol = f.solve_with(&c, tension, [0.0; 2], m)?;
+    let stiffness = if stiffness {
+        Some(mat3::inverse_spd(&f.tip_compliance(&c, &sol)).ok_or(Error::Singular { what: "tip compliance" })?)
+    } else {
+        None
+    };
+    Ok(Row { sol, stiffness })
+}
+
+/// What `solve_many` keeps of one posture (zeros for a refused row: never NaN).
+#[derive(Clone, Copy, Default)]
+struct Compact {
+    tension: R,
+    volts: [R; MAX_JOINTS],
+    joints: [R; MAX_JOINTS],
+    nodes: [[R; 3]; MAX_JOINTS + 1],
+    thickness: [R; MAX_JOINTS],
+    cable: R,
+    stiffness: Mat3<R>,
+    iterations: u32,
+    residual: R,
+}
+
+impl Compact {
+    fn of(r: &Row) -> Self {
+        let s = &r.sol;
+        Compact {
+            tension: s.tension,
+            volts: s.volts,
+            joints: s.joint_angle,
+            nodes: s.nodes.map(|p| [p.x, p.y, p.theta]),
+            thickness: s.thickness,
+            cable: s.cable_excursion,
+            stiffness: r.stiffness.unwrap_or([[0.0; 3]; 3]),
+            iterations: s.iterations,
+            residual: s.residual,
+        }
+    }
+}
+
+fn arr1<'py>(py: Python<'py>, v: &[R]) -> Bound<'py, PyArray1<R>> {
+    PyArray1::from_slice(py, v)
+}
+
+fn mat<'py>(py: Python<'py>, k: &Mat3<R>) -> Bound<'py, PyArray2<R>> {
+    Array2::from_shape_fn((3, 3), |(i, j)| k[i][j]).into_pyarray(py)
+}
+
+/// A solved posture (`Finger.solve`). Arrays are fresh copies; angles in rad unless `_deg`.
+#[pyclass(module = "softfinger._core", frozen)]
+struct Solution {
+    row: Row,
+}
+
+#[pymethods]
+impl Solution {
+    /// Number of joints n.
+    #[getter]
+    fn n(&self) -> usize {
+        self.row.sol.n
+    }
+    /// Cable tension P, N.
+    #[getter]
+    fn tension_N(&self) -> R {
+        self.row.sol.tension
+    }
+    /// Channel voltages, V, shape (n,).
+    #[getter]
+    fn volts_V<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, &self.row.sol.volts[..self.row.sol.n])
+    }
+    /// Joint angles Δθ_k, rad, shape (n,).
+    #[getter]
+    fn joints_rad<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, self.row.sol.joint_angles())
+    }
+    /// Joint angles, degrees, shape (n,).
+    #[getter]
+    fn joints_deg<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        let d: Vec<R> = self.row.sol.joint_angles().iter().map(|a| a.to_degrees()).collect();
+        arr1(py, &d)
+    }
+    /// Node poses 0..=n, shape (n+1, 3): x mm, y mm, θ rad (base frame; node n is the tip).
+    #[getter]
+    fn nodes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<R>> {
+        let s = &self.row.sol;
+        Array2::from_shape_fn((s.n + 1, 3), |(k, j)| [s.nodes[k].x, s.nodes[k].y, s.nodes[k].theta][j]).into_pyarray(py)
+    }
+    /// Tip pose, shape (3,): x mm, y mm, θ rad.
+    #[getter]
+    fn tip<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        let t = self.row.sol.tip();
+        arr1(py, &[t.x, t.y, t.theta])
+    }
+    /// Cable the servo must pull in, Σ (L_h − |span k|), mm.
+    #[getter]
+    fn cable_mm(&self) -> R {
+        self.row.sol.cable_excursion
+    }
+    /// Whole-stack thickness per joint, mm, shape (n,) (0 without stacks).
+    #[getter]
+    fn thickness_mm<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, &self.row.sol.thickness[..self.row.sol.n])
+    }
+    /// Linearised tip stiffness K_tip, shape (3, 3), rows/columns (x mm, y mm, θ rad): N/mm,
+    /// N/rad, N·mm/rad. None when solved with `stiffness=False`.
+    #[getter]
+    fn stiffness<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<R>>> {
+        self.row.stiffness.as_ref().map(|k| mat(py, k))
+    }
+    /// Newton iterations (converged) or load steps (stepping).
+    #[getter]
+    fn iterations(&self) -> u32 {
+        self.row.sol.iterations
+    }
+    /// Final equilibrium residual (guide-hole mismatch), mm.
+    #[getter]
+    fn residual_mm(&self) -> R {
+        self.row.sol.residual
+    }
+    fn __repr__(&self) -> String {
+        let s = &self.row.sol;
+        let t = s.tip();
+        let list = |v: &[R], scale: R, prec: usize| v.iter().map(|x| format!("{:.*}", prec, x * scale)).collect::<Vec<_>>().join(", ");
+        let mut out = format!(
+            "Solution(tension_N={}, volts_V=[{}], joints_deg=[{}], tip=({:.3} mm, {:.3} mm, {:.2} deg), cable_mm={:.4}, thickness_mm=[{}]",
+            s.tension,
+            list(&s.volts[..s.n], 1.0, 1),
+            list(s.joint_angles(), 180.0 / core::f64::consts::PI, 3),
+            t.x,
+            t.y,
+            t.theta.to_degrees(),
+            s.cable_excursion,
+            list(&s.thickness[..s.n], 1.0, 4),
+        );
+        if let Some(k) = &self.row.stiffness {
+            out += &format!(", stiffness_diag=({:.4e} N/mm, {:.4e} N/mm, {:.4e} Nmm/rad)", k[0][0], k[1][1], k[2][2]);
+        }
+        out + &format!(", iterations={})", s.iterations)
+    }
+}
+
+/// `solve_many`'s answers: one row per posture, every array's first axis N.
+#[pyclass(module = "softfinger._core", frozen)]
+struct Solutions {
+    #[pyo3(get)]
+    tension_N: Py<PyArray1<R>>,
+    #[pyo3(get)]
+    volts_V: Py<PyArray2<R>>,
+    #[pyo3(get)]
+    joints_rad: Py<PyArray2<R>>,
+    #[pyo3(get)]
+    nodes: Py<PyArray3<R>>,
+    #[pyo3(get)]
+    tip: Py<PyArray2<R>>,
+    #[pyo3(get)]
+    cable_mm: Py<PyArray1<R>>,
+    #[pyo3(get)]
+    thickness_mm: Py<PyArray2<R>>,
+    #[pyo3(get)]
+    stiffness: Option<Py<PyArray3<R>>>,
+    #[pyo3(get)]
+    iterations: Py<PyArray1<u32>>,
+    #[pyo3(get)]
+    residual_mm: Py<PyArray1<R>>,
+    #[pyo3(get)]
+    ok: Py<PyArray1<bool>>,
+    #[pyo3(get)]
+    errors: Py<PyList>,
+}
+
+#[pymethods]
+impl Solutions {
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.ok.bind(py).len()
+    }
+    /// Joint angles, degrees, shape (N, n).
+    #[getter]
+    fn joints_deg<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<R>> {
+        let j = self.joints_rad.bind(py).to_owned_array();
+        j.mapv(|a| a.to_degrees()).into_pyarray(py)
+    }
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let ok = self.ok.bind(py).to_vec().unwrap_or_default();
+        format!("Solutions(N={}, ok={})", ok.len(), ok.iter().filter(|&&b| b).count())
+    }
+}
+
+/// The branch end (`Finger.fmax`): the tension where the equilibrium branch ends, where, how.
+#[pyclass(module = "softfinger._core", frozen, get_all)]
+struct BranchLimit {
+    /// N.
+    tension_N: R,
+    /// 1-based joint where it ends first.
+    joint: usize,
+    /// "contact", "limit-point" or "search-bound".
+    kind: &'static str,
+}
+
+#[pymethods]
+impl BranchLimit {
+    fn __repr__(&self) -> String {
+        format!("BranchLimit(tension_N={}, joint={}, kind={:?})", self.tension_N, self.joint, self.kind)
+    }
+    fn __float__(&self) -> R {
+        self.tension_N
+    }
+}
+
+/// The inverse model's answer (`Finger.pose`).
+#[pyclass(module = "softfinger._core", frozen)]
+struct PoseSolution {
+    pose: inverse::PoseSolution<R>,
+    forward: ModelSolution<R>,
+}
+
+#[pymethods]
+impl PoseSolution {
+    /// The target joint angles, rad, shape (n,).
+    #[getter]
+    fn angles_rad<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, &self.pose.angles[..self.pose.n])
+    }
+    /// The cable tension, N (given, or the midpoint of `interval_N`).
+    #[getter]
+    fn tension_N(&self) -> R {
+        self.pose.tension
+    }
+    /// Whether the tension was given (else chosen by the midpoint rule).
+    #[getter]
+    fn tension_given(&self) -> bool {
+        self.pose.tension_given
+    }
+    /// Channel voltages that hold the posture, V, shape (n,).
+    #[getter]
+    fn volts_V<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, &self.pose.volts[..self.pose.n])
+    }
+    /// Stack thickness per joint, mm, shape (n,).
+    #[getter]
+    fn thickness_mm<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, &self.pose.thickness[..self.pose.n])
+    }
+    /// The feasible interval: the tensions that can hold the posture, [low, high], N.
+    #[getter]
+    fn interval_N<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, &self.pose.interval)
+    }
+    /// The posture as a forward solution (nodes, tip, cable; no tip stiffness).
+    #[getter]
+    fn solution(&self) -> Solution {
+        Solution { row: Row { sol: self.forward, stiffness: None } }
+    }
+    /// Newton iterations spent in all.
+    #[getter]
+    fn iterations(&self) -> u32 {
+        self.pose.iterations
+    }
+    fn __repr__(&self) -> String {
+        let p = &self.pose;
+        let l = |v: &[R], s: R| v.iter().map(|x| format!("{:.3}", x * s)).collect::<Vec<_>>().join(", ");
+        format!(
+            "PoseSolution(angles_deg=[{}], tension_N={:.4}, volts_V=[{}], interval_N=[{:.4}, {:.4}])",
+            l(&p.angles[..p.n], 180.0 / core::f64::consts::PI),
+            p.tension,
+            l(&p.volts[..p.n], 1.0),
+            p.interval[0],
+            p.interval[1]
+        )
+    }
+}
+
+/// The contact force of a tip held at a point (`Finger.contact`).
+#[pyclass(module = "softfinger._core", frozen)]
+struct Contact {
+    c: inverse::Contact<R>,
+}
+
+#[pymethods]
+impl Contact {
+    /// The contact point (the free tip at P0), base frame, mm, shape (2,).
+    #[getter]
+    fn point_mm<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, &self.c.point)
+    }
+    /// The force the object exerts on the tip (base frame), N, shape (2,); the finger presses
+    /// with minus this.
+    #[getter]
+    fn force_N<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, &self.c.force)
+    }
+    /// |force|, N.
+    #[getter]
+    fn magnitude_N(&self) -> R {
+        self.c.magnitude()
+    }
+    /// The loaded equilibrium that holds the tip at the point.
+    #[getter]
+    fn solution(&self) -> Solution {
+        Solution { row: Row { sol: self.c.solution, stiffness: None } }
+    }
+    /// Newton iterations on the force.
+    #[getter]
+    fn iterations(&self) -> u32 {
+        self.c.iterations
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "Contact(point_mm=({:.3}, {:.3}), force_N=({:.4}, {:.4}), magnitude_N={:.4})",
+            self.c.point[0], self.c.point[1], self.c.force[0], self.c.force[1], self.c.magnitude()
+        )
+    }
+}
+
+/// Channel voltages of one posture: a sequence of n numbers, or one number for every joint.
+fn volts_of(obj: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<R>> {
+    if let Ok(v) = obj.extract::<R>() {
+        return Ok(vec![v; n]);
+    }
+    let a = obj.extract::<PyArrayLike1<'_, R, AllowTypeChange>>()?;
+    Ok(a.as_array().to_vec())
+}
+
+/// A calibration given as None, "model_md", "auto" or 8 factors (hinge ×4, stack EA g0 g1,
+/// stack EI g0 g1).
+fn calibration_of(obj: Option<&Bound<'_, PyAny>>, p: &Params<R>) -> PyResult<Calibration<R>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(Calibration::none()) };
+    if let Ok(s) = obj.extract::<String>() {
+        return match s.as_str() {
+            "none" => Ok(Calibration::none()),
+            "model_md" => Ok(Calibration::model_md()),
+            "auto" => Ok(Calibration::for_params(p)),
+            _ => Err(PyValueError::new_err(format!("calibration must be None, \"model_md\", \"auto\" or 8 factors, not {s:?}"))),
+        };
+    }
+    let v: Vec<R> = obj.extract()?;
+    if v.len() != 8 {
+        return Err(PyValueError::new_err("calibration: 8 factors (hinge x4, stack EA g0 g1, stack EI g0 g1)"));
+    }
+    Ok(Calibration { hinge: [v[0], v[1], v[2], v[3]], stack_axial: [v[4], v[5]], stack_bending: [v[6], v[7]] })
+}
+
+/// The parameter set: a preset, then the keyword overrides by their console names (MODEL.md's
+/// symbols). An override that is only consistent with a later one is retried after the others.
+fn params_of(preset: &str, card: Option<&str>, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Params<R>> {
+    let mut p = match preset {
+        "default" => Params::default(),
+        "paper" => Params::paper(),
+        "paper_model" => Params::paper_model(),
+        _ => return Err(PyValueError::new_err(format!("preset must be \"default\", \"paper\" or \"paper_model\", not {preset:?}"))),
+    };
+    if let Some(name) = card {
+        // the film of the card on the preset's finger, as `Params::with_card` does on MODEL.md's
+        let c = card_of(name)?;
+        let with = Params::<R>::with_card(c);
+        p = Params { card: with.card, g: with.g, eps_r: with.eps_r, de_rule: with.de_rule, ..p };
+    }
+    let mut pending: Vec<(String, R)> = Vec::new();
+    if let Some(kw) = kwargs {
+        for (k, v) in kw.iter() {
+            let name: String = k.extract()?;
+            if !PARAMS.iter().any(|i| i.name == name) {
+                let names: Vec<&str> = PARAMS.iter().map(|i| i.name).collect();
+                return Err(PyTypeError::new_err(format!("Finger() got an unknown parameter {name:?}; parameters: {}", names.join(", "))));
+            }
+            pending.push((name, v.extract::<R>()?));
+        }
+    }
+    while !pending.is_empty() {
+        let before = pending.len();
+        let mut first_err = None;
+        pending.retain(|(name, v)| match p.set(name, *v) {
+            Ok(()) => false,
+            Err(e) => {
+                first_err.get_or_insert(e);
+                true
+            }
+        });
+        if pending.len() == before {
+            return Err(model_err(first_err.expect("a failed set")));
+        }
+    }
+    Ok(p)
+}
+
+/// A material card by its name or a short key (`cards::CARDS`; docs/materials.md).
+fn card_of(name: &str) -> PyResult<&'static Card> {
+    let key = |s: &str| s.chars().filter(|c| c.is_ascii_alphanumeric()).collect::<String>().to_ascii_lowercase();
+    let want = key(name);
+    CARDS
+        .iter()
+        .copied()
+        .find(|c| key(c.name) == want || key(c.name).starts_with(&want) && want.len() >= 3)
+        .ok_or_else(|| {
+            let names: Vec<&str> = CARDS.iter().map(|c| c.name).collect();
+            PyValueError::new_err(format!("unknown card {name:?}; cards: {}", names.join(", ")))
+        })
+}
+
+/// Every material card's name (`Finger(card=...)`).
+#[pyfunction]
+fn cards() -> Vec<&'static str> {
+    CARDS.iter().map(|c| c.name).collect()
+}
+
+/// The finger's model: validated parameters and their hinge compliances, prepared once.
+#[pyclass(module = "softfinger._core", frozen)]
+struct Finger {
+    f: Model<R>,
+}
+
+#[pymethods]
+impl Finger {
+    #[new]
+    #[pyo3(signature = (preset = "default", calibration = None, card = None, **params))]
+    fn new(preset: &str, calibration: Option<&Bound<'_, PyAny>>, card: Option<&str>, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let p = params_of(preset, card, params)?;
+        let cal = calibration_of(calibration, &p)?;
+        Ok(Finger { f: Model::with_calibration(p, cal).map_err(model_err)? })
+    }
+
+    /// Every parameter by its console name (`e_de` derived), units as in MODEL.md.
+    #[getter]
+    fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for i in PARAMS {
+            d.set_item(i.name, self.f.params().get(i.name).unwrap_or(0.0))?;
+        }
+        Ok(d)
+    }
+
+    /// The calibration factors: hinge ×4, stack EA (g0, g1 per mm), stack EI (g0, g1 per mm).
+    #[getter]
+    fn calibration(&self) -> Vec<R> {
+        let c = self.f.calibration();
+        let mut v = c.hinge.to_vec();
+        v.extend(c.stack_axial);
+        v.extend(c.stack_bending);
+        v
+    }
+
+    /// Number of joints n.
+    #[getter]
+    fn n(&self) -> usize {
+        self.f.params().n
+    }
+
+    /// The film's material card (its name).
+    #[getter]
+    fn card(&self) -> &'static str {
+        self.f.params().card.name
+    }
+
+    /// The ceiling every channel stays below: min(margin × V_pi, v_supply), V.
+    fn ceiling(&self) -> R {
+        self.f.voltage_ceiling()
+    }
+
+    /// The pull-in voltage V_pi of one layer (the 33 % limit), V (0 without stacks).
+    fn pull_in_voltage(&self) -> R {
+        self.f.pull_in_voltage()
+    }
+
+    /// Whole-stack thickness at `volts` (V), mm.
+    fn stack_thickness(&self, volts: R) -> PyResult<R> {
+        self.f.stack_thickness(volts).map_err(model_err)
+    }
+
+    /// The channel voltages (V, shape (n,)) that thin the stacks to `thickness_mm` (mm per
+    /// joint, or one number for all).
+    fn volts_for_thickness<'py>(&self, py: Python<'py>, thickness_mm: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<R>>> {
+        let n = self.f.params().n;
+        let t = volts_of(thickness_mm, n)?;
+        if t.len() != n {
+            return Err(PyValueError::new_err(format!("thickness_mm: {n} values (one per joint) or one number")));
+        }
+        let mut v = Vec::with_capacity(n);
+        for (k, &tk) in t.iter().enumerate() {
+            v.push(finger_model::de::voltage_for_thickness(self.f.params(), k + 1, tk).map_err(model_err)?);
+        }
+        Ok(arr1(py, &v))
+    }
+
+    /// Solve the posture under cable tension `P` (N) with channel voltages `volts` (V, one per
+    /// joint or one number for all).
+    #[pyo3(signature = (P, volts, *, method = "converged", n_inc = None, tol = 1e-9, max_iter = 200, stiffness = true))]
+    #[allow(non_snake_case, clippy::too_many_arguments)]
+    fn solve(
+        &self,
+        py: Python<'_>,
+        P: R,
+        volts: &Bound<'_, PyAny>,
+        method: &str,
+        n_inc: Option<u32>,
+        tol: R,
+        max_iter: u32,
+        stiffness: bool,
+    ) -> PyResult<Solution> {
+        let v = volts_of(volts, self.f.params().n)?;
+        let m = self::method(method, n_inc, tol, max_iter, self.f.params())?;
+        let f = &self.f;
+        let row = py.detach(|| solve_row(f, P, &v, m, stiffness)).map_err(model_err)?;
+        Ok(Solution { row })
+    }
+
+    /// `solve` over N postures in parallel, without the GIL: `P` shape (N,) or a number,
+    /// `volts` shape (N, n), (n,) or a number.
+    #[pyo3(signature = (P, volts, *, method = "converged", n_inc = None, tol = 1e-9, max_iter = 200, stiffness = true, errors = "raise"))]
+    #[allow(non_snake_case, clippy::too_many_arguments)]
+    fn solve_many(
+        &self,
+        py: Python<'_>,
+        P: &Bound<'_, PyAny>,
+        volts: &Bound<'_, PyAny>,
+        method: &str,
+        n_inc: Option<u32>,
+        tol: R,
+        max_iter: u32,
+        stiffness: bool,
+        errors: &str,
+    ) -> PyResult<Solutions> {
+        let n = self.f.params().n;
+        let raise = match errors {
+            "raise" => true,
+            "mask" => false,
+            _ => return Err(PyValueError::new_err(format!("errors must be \"raise\" or \"mask\", not {errors:?}"))),
+        };
+        let m = self::method(method, n_inc, tol, max_iter, self.f.params())?;
+        // inputs copied out of NumPy before the GIL is released
+        let (tensions, p_rows): (Vec<R>, Option<usize>) = match P.extract::<R>() {
+            Ok(x) => (vec![x], None),
+            Err(_) => {
+                let a = P.extract::<PyArrayLike1<'_, R, AllowTypeChange>>()?;
+                let v = a.as_array().to_vec();
+                let len = v.len();
+                (v, Some(len))
+            }
+        };
+        let (volts, v_rows): (Vec<R>, Option<usize>) = if let Ok(x) = volts.extract::<R>() {
+            (vec![x; n], None)
+        } else if let Ok(a) = volts.extract::<PyArrayLike2<'_, R, AllowTypeChange>>() {
+            let a = a.as_array();
+            if a.ncols() != n {
+                return Err(PyValueError::new_err(format!("volts: shape (N, {n}) expected, got {:?}", a.shape())));
+            }
+            (a.iter().copied().collect(), Some(a.nrows()))
+        } else {
+            let v = volts_of(volts, n)?;
+            if v.len() != n {
+                return Err(PyValueError::new_err(format!("volts: shape (N, {n}), ({n},) or a number expected, got ({},)", v.len())));
+            }
+            (v, None)
+        };
+        let rows = match (p_rows, v_rows) {
+            (Some(a), Some(b)) if a != b => return Err(PyValueError::new_err(format!("P has {a} rows, volts {b}"))),
+            (Some(a), _) | (None, Some(a)) => a,
+            (None, None) => 1,
+        };
+        let f = &self.f;
+        // one compact row per posture (not the whole model Solution: its sub-element state is
+        // ~1.5 KB), filled in parallel
+        let out: Vec<Result<Compact, Error>> = py.detach(|| {
+            (0..rows)
+                .into_par_iter()
+                .map(|i| {
+                    let t = tensions[if p_rows.is_some() { i } else { 0 }];
+                    let v = if v_rows.is_some() { &volts[i * n..(i + 1) * n] } else { &volts[..n] };
+                    solve_row(f, t, v, m, stiffness).map(|r| Compact::of(&r))
+                })
+                .collect()
+        });
+        let err_list = PyList::empty(py);
+        for (i, r) in out.iter().enumerate() {
+            if let Err(e) = r {
+                let e = row_err(py, *e, i);
+                if raise {
+                    return Err(e);
+                }
+                err_list.append((i, e.value(py)))?;
+            }
+        }
+        let zero = Compact::default();
+        let c = |i: usize| out[i].as_ref().unwrap_or(&zero);
+        let per_joint = |g: &dyn Fn(&Compact, usize) -> R| Array2::from_shape_fn((rows, n), |(i, k)| g(c(i), k));
+        let stiff = stiffness.then(|| Array3::from_shape_fn((rows, 3, 3), |(i, a, b)| c(i).stiffness[a][b]).into_pyarray(py).unbind());
+        Ok(Solutions {
+            tension_N: Array1::from_shape_fn(rows, |i| c(i).tension).into_pyarray(py).unbind(),
+            volts_V: per_joint(&|s, k| s.volts[k]).into_pyarray(py).unbind(),
+            joints_rad: per_joint(&|s, k| s.joints[k]).into_pyarray(py).unbind(),
+            nodes: Array3::from_shape_fn((rows, n + 1, 3), |(i, k, j)| c(i).nodes[k][j]).into_pyarray(py).unbind(),
+            tip: Array2::from_shape_fn((rows, 3), |(i, j)| c(i).nodes[n][j]).into_pyarray(py).unbind(),
+            cable_mm: Array1::from_shape_fn(rows, |i| c(i).cable).into_pyarray(py).unbind(),
+            thickness_mm: per_joint(&|s, k| s.thickness[k]).into_pyarray(py).unbind(),
+            stiffness: stiff,
+            iterations: Array1::from_shape_fn(rows, |i| c(i).iterations).into_pyarray(py).unbind(),
+            residual_mm: Array1::from_shape_fn(rows, |i| c(i).residual).into_pyarray(py).unbind(),
+            ok: Array1::from_shape_fn(rows, |i| out[i].is_ok()).into_pyarray(py).unbind(),
+            errors: err_list.unbind(),
+        })
+    }
+
+    /// The inverse: joint angles (rad, or degrees with `degrees=True`) and optionally a
+    /// tension `P` (N) to the tension and voltages that hold them, with the feasible interval.
+    #[pyo3(signature = (angles, P = None, *, degrees = false))]
+    #[allow(non_snake_case)]
+    fn pose(&self, py: Python<'_>, angles: &Bound<'_, PyAny>, P: Option<R>, degrees: bool) -> PyResult<PoseSolution> {
+        let mut a = volts_of(angles, self.f.params().n)?;
+        if degrees {
+            a.iter_mut().for_each(|x| *x = x.to_radians());
+        }
+        let f = &self.f;
+        let (pose, forward) = py
+            .detach(|| -> Result<_, Error> {
+                let pose = inverse::solve_pose(f, &a, P)?;
+                let forward = pose.to_solution(f)?;
+                Ok((pose, forward))
+            })
+            .map_err(model_err)?;
+        Ok(PoseSolution { pose, forward })
+    }
+
+    /// The contact force: the tip stops at the free tip of (`P0`, `volts0`, default `volts`);
+    /// at tension `P` (N) and `volts` (V) the load that holds it there.
+    #[pyo3(signature = (P0, P, volts, volts0 = None))]
+    #[allow(non_snake_case)]
+    fn contact(&self, py: Python<'_>, P0: R, P: R, volts: &Bound<'_, PyAny>, volts0: Option<&Bound<'_, PyAny>>) -> PyResult<Contact> {
+        let n = self.f.params().n;
+        let v = volts_of(volts, n)?;
+        let v0 = match volts0 {
+            Some(o) => volts_of(o, n)?,
+            None => v.clone(),
+        };
+        let f = &self.f;
+        let c = py.detach(|| contact_force(f, P0, &v0, P, &v)).map_err(model_err)?;
+        Ok(Contact { c })
+    }
+
+    /// The tension where the equilibrium branch ends at these voltages (V), with the joint and
+    /// the kind of end.
+    fn fmax(&self, py: Python<'_>, volts: &Bound<'_, PyAny>) -> PyResult<BranchLimit> {
+        let v = volts_of(volts, self.f.params().n)?;
+        let f = &self.f;
+        let b = py.detach(|| f.fmax(&v)).map_err(model_err)?;
+        let kind = match b.kind {
+            BranchEnd::Contact => "contact",
+            BranchEnd::LimitPoint => "limit-point",
+            BranchEnd::SearchBound => "search-bound",
+        };
+        Ok(BranchLimit { tension_N: b.tension, joint: b.joint, kind })
+    }
+
+    fn __repr__(&self) -> String {
+        let p = self.f.params();
+        format!("Finger(n={}, m={}, layers={}, card={:?}, e_de={:.4} MPa, ceiling={:.1} V)", p.n, p.m, p.layers, p.card.name, p.e_de(), self.f.voltage_ceiling())
+    }
+}
+
+/// The parameter names with their valid ranges, as the console states them.
+#[pyfunction]
+fn parameter_ranges() -> Vec<(&'static str, &'static str)> {
+    PARAMS.iter().map(|i| (i.name, i.range)).collect()
+}
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Finger>()?;
+    m.add_class::<Solution>()?;
+    m.add_class::<Solutions>()?;
+    m.add_class::<PoseSolution>()?;
+    m.add_class::<Contact>()?;
+    m.add_class::<BranchLimit>()?;
+    m.add_function(wrap_pyfunction!(parameter_ranges, m)?)?;
+    m.add_function(wrap_pyfunction!(cards, m)?)?;
+    errors::register(m)?;
+    Ok(())
+}

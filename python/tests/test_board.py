@@ -1,0 +1,143 @@
+"""The board from Python: Board.sim() and Board.qemu() pass the console checks the Rust client
+passes (tools/finger/tests/client.rs), refusals come back typed, a mute board raises a
+time-out, and the context manager leaves HV at 0 when its block raises (and on Ctrl-C). Voltages
+come from the board's own `limits`, not constants."""
+
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+
+import softfinger as sf
+
+
+def same_session(board: sf.Board) -> None:
+    """The session of client.rs's `same_session`, on any board."""
+    assert board.fields("version")["name"] == "finger-fw"
+    st = board.status()
+    assert not st.armed and st.fault == "none"
+    lim = board.limits()
+    assert len(lim.vmax_V) == 3 and all(0 < v < lim.vpullin_V for v in lim.vmax_V)
+    assert board.command("solve 0.5 0 1000 2000").startswith("ok joints=")
+    board.arm()
+    v = 0.05 * min(lim.vmax_V)  # below every channel's ceiling, whatever the card
+    assert board.volt("all", v) == (v, v, v)
+    board.wait(0.3)
+    assert board.status().volts_V == pytest.approx((v, v, v), abs=0.05)
+    # a refusal is typed, with its code
+    board.disarm()
+    with pytest.raises(sf.BoardError) as e:
+        board.volt(1, v)
+    assert e.value.code == "not-armed"
+    with pytest.raises(sf.BoardError) as e:
+        board.command("frobnicate")
+    assert e.value.code == "unknown"
+    with pytest.raises(sf.BoardError) as e:
+        board.command("solve 0.5 0 0 nan")
+    assert e.value.code == "bad-number"
+    # the ceiling refuses at the ceiling itself
+    board.arm()
+    with pytest.raises(sf.BoardError) as e:
+        board.volt(2, lim.vmax_V[1])
+    assert e.value.code == "limit"
+
+
+def test_sim_answers_the_console_contract(sim_program):
+    with sf.Board.sim(sim_program) as b:
+        same_session(b)
+    assert b.final_status is not None and not b.final_status.armed
+
+
+def test_qemu_answers_the_same_session(fw_elf):
+    with sf.Board.qemu(fw_elf) as b:
+        assert b.banner.startswith("# finger-fw")
+        same_session(b)
+    assert b.final_status is not None and b.final_status.volts_V == (0.0, 0.0, 0.0)
+
+
+def test_board_solve_equals_the_python_model_to_its_printed_digits(sim_program):
+    """The board's f32 `solve` against the f64 model with the board's calibration: each printed
+    value is the model's rounded to the printed digits, within one unit of the last (f32)."""
+    f = sf.Finger(calibration="auto")
+    with sf.Board.sim(sim_program) as b:
+        lim = b.limits()
+        top = 0.9 * min(lim.vmax_V)
+        for P, volts in [(0.2, [0, 0, 0]), (0.5, [0, 0.3 * top, 0.6 * top]), (1.0, [top, top / 2, 0]), (2.0, [top] * 3)]:
+            r = b.solve(P, volts)
+            s = f.solve(P, volts)
+            line = b.command("solve " + " ".join(repr(float(x)) for x in [P, *volts]))
+            text = dict(kv.split("=", 1) for kv in line.split()[1:])
+            model = {
+                "joints": s.joints_deg,
+                "tip": [s.tip[0], s.tip[1], np.degrees(s.tip[2])],
+                "cable": [s.cable_mm],
+                "thick": s.thickness_mm,
+            }
+            for key, want in model.items():
+                for printed, value in zip(text[key].split(","), want):
+                    decimals = len(printed.split(".")[1]) if "." in printed else 0
+                    unit = 10.0 ** -decimals
+                    assert abs(float(printed) - value) <= unit, (key, printed, value, line)
+            assert r["joints"] == tuple(float(x) for x in text["joints"].split(","))
+
+
+def test_a_mute_board_times_out_and_a_closed_one_says_so(tmp_path):
+    mute = tmp_path / "mute-board"
+    mute.write_text("#!/bin/sh\nexec sleep 30\n")
+    mute.chmod(0o755)
+    b = sf.Board.sim(mute, timeout_s=0.5)
+    t0 = time.monotonic()
+    with pytest.raises(sf.BoardTimeout):
+        b.status()
+    assert time.monotonic() - t0 < 5.0
+    b.close()  # its stop times out too; close does not hang
+    assert time.monotonic() - t0 < 10.0 and b.final_status is None
+    gone = sf.Board.sim("/bin/true", timeout_s=2.0)
+    with pytest.raises(sf.BoardLinkError):
+        gone.status()
+    gone.close()
+    with pytest.raises(sf.BoardLinkError):
+        sf.Board(port="/nonexistent/tty")
+
+
+def test_the_context_manager_leaves_hv_at_0_when_the_block_raises(sim_program):
+    board = sf.Board.sim(sim_program)
+    with pytest.raises(RuntimeError):
+        with board as b:
+            lim = b.limits()
+            b.arm()
+            b.volt("all", 0.5 * min(lim.vmax_V))
+            b.wait(1.0)
+            assert min(b.status().volts_V) > 0.0
+            raise RuntimeError("the experiment failed")
+    st = board.final_status
+    assert st is not None and not st.armed and st.volts_V == (0.0, 0.0, 0.0)
+
+
+def test_ctrl_c_sends_stop(sim_program, tmp_path):
+    """A real SIGINT to a script inside `with Board.sim()`: the board reports HV at 0 after."""
+    script = tmp_path / "drive.py"
+    script.write_text(textwrap.dedent(f"""
+        import time, softfinger as sf
+        board = sf.Board.sim({str(sim_program)!r})
+        try:
+            with board as b:
+                b.arm()
+                b.volt("all", 0.5 * min(b.limits().vmax_V))
+                b.wait(1.0)
+                print("armed", b.status().volts_V, flush=True)
+                time.sleep(60)
+        except KeyboardInterrupt:
+            st = board.final_status
+            print("final", st.armed, st.volts_V, flush=True)
+    """))
+    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True)
+    first = p.stdout.readline()
+    assert first.startswith("armed"), first
+    p.send_signal(signal.SIGINT)
+    out, _ = p.communicate(timeout=30)
+    assert out.strip() == "final False (0.0, 0.0, 0.0)", out

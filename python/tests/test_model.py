@@ -1,0 +1,209 @@
+"""The model from Python: the same numbers as the Rust model (digit for digit on the bench
+scenes), solve_many the same as a loop of solve, each refusal as its exception, no NaN."""
+
+import math
+
+import numpy as np
+import pytest
+
+import softfinger as sf
+
+
+def bench_finger(layers: int, fidelity: bool) -> sf.Finger:
+    """finger-scenes' `params`: MODEL.md's values with the hinge model pinned."""
+    m, plate, flex = (8, 1, 1) if fidelity else (1, 0, 0)
+    return sf.Finger(layers=layers, m=m, plate=plate, flex_links=flex)
+
+
+def parse_reference(line: str):
+    head, *parts = [p.strip() for p in line.split("|")]
+    name, method, *nums = head.split()
+    tension, volts = float(nums[0]), [float(v) for v in nums[1:4]]
+    return name, method, tension, volts, parts
+
+
+SCENE_MODEL = {  # name -> (layers, fidelity), as finger-scenes' SCENES
+    "bare-0.2N": (0, False), "bare-0.5N": (0, False), "bare-1.0N": (0, False),
+    "de-0.2N": (4, False), "de-0.5N": (4, False), "de-1.0N": (4, False),
+    "de-1.0N-uni8kV": (4, False), "de-1.0N-per9/5/0kV": (4, False),
+    "bare-7N": (0, False), "bare-250N-contact": (0, False),
+    "bare-1.0N-fid": (0, True), "de-1.0N-per9/5/0kV-fid": (4, True),
+}
+
+
+def test_results_equal_the_rust_model_digit_for_digit(reference_lines):
+    seen = set()
+    for line in reference_lines:
+        name, method, tension, volts, parts = parse_reference(line)
+        layers, fid = SCENE_MODEL[name]
+        f = bench_finger(layers, fid)
+        kw = {"method": "converged"} if method == "converged" else {"method": "stepping", "n_inc": 20}
+        seen.add((name, method))
+        if parts[0].startswith("err"):
+            with pytest.raises(sf.FingerError) as e:
+                f.solve(tension, volts, **kw)
+            assert parts[0] == f"err {e.value.kind}" or parts[0].startswith(f"err {e.value.kind} "), (line, e.value)
+            continue
+        s = f.solve(tension, volts, **kw)
+        joints, tip, cable, thick, stiff, iters = parts
+        # the reference prints each f64 in Rust's shortest round-trip form: parse it back and
+        # the bits must be the same
+        assert s.joints_rad.tolist() == [float(x) for x in joints.split()], line
+        assert s.tip.tolist() == [float(x) for x in tip.split()], line
+        assert s.cable_mm == float(cable), line
+        assert s.thickness_mm.tolist() == [float(x) for x in thick.split()], line
+        k = s.stiffness
+        assert [k[0, 0], k[1, 1], k[2, 2]] == [float(x) for x in stiff.split()], line
+        assert s.iterations == int(iters), line
+    assert len(seen) == 2 * len(SCENE_MODEL), "every bench scene, both methods"
+
+
+def test_solve_many_equals_a_loop_of_solve():
+    f = sf.Finger()
+    rng = np.random.default_rng(7)
+    n = 64
+    P = rng.uniform(0.0, 3.0, n)
+    V = rng.uniform(0.0, 0.99 * f.ceiling(), (n, 3))
+    many = f.solve_many(P, V)
+    assert len(many) == n and many.ok.all() and many.errors == []
+    for i in range(n):
+        s = f.solve(P[i], V[i])
+        assert np.array_equal(many.joints_rad[i], s.joints_rad)
+        assert np.array_equal(many.nodes[i], s.nodes)
+        assert np.array_equal(many.tip[i], s.tip)
+        assert many.cable_mm[i] == s.cable_mm
+        assert np.array_equal(many.thickness_mm[i], s.thickness_mm)
+        assert np.array_equal(many.stiffness[i], s.stiffness)
+        assert many.iterations[i] == s.iterations and many.residual_mm[i] == s.residual_mm
+    # broadcasting: one tension for every row, one voltage set for every row
+    same = f.solve_many(1.0, np.zeros((4, 3)))
+    assert np.array_equal(same.joints_rad, np.repeat(f.solve(1.0, [0, 0, 0]).joints_rad[None], 4, axis=0))
+    assert f.solve_many([0.5, 1.0], [0, 1000, 2000]).joints_rad.shape == (2, 3)
+    with pytest.raises(ValueError):
+        f.solve_many([0.5, 1.0], np.zeros((3, 3)))
+
+
+def test_shapes_units_and_no_nan():
+    f = sf.Finger()
+    s = f.solve(1.0, [0, 3000, 6000])
+    assert s.joints_rad.shape == (3,) and s.nodes.shape == (4, 3) and s.tip.shape == (3,)
+    assert s.stiffness.shape == (3, 3) and s.thickness_mm.shape == (3,)
+    assert np.allclose(np.degrees(s.joints_rad), s.joints_deg)
+    assert np.array_equal(s.nodes[-1], s.tip) and np.array_equal(s.nodes[0], [0, 0, 0])
+    # a thinner stack (more voltage) bends its joint more: the model's physics, not a constant
+    assert s.joints_rad[2] > s.joints_rad[1] > s.joints_rad[0]
+    assert s.thickness_mm[0] == pytest.approx(2.0) and s.thickness_mm[2] < s.thickness_mm[0]
+    assert "Solution(" in repr(s)
+    # a mask of refused rows leaves zeros, never NaN
+    many = f.solve_many([1.0, 1.0, 50.0], [[0, 0, 0], [0, 0, 2 * f.ceiling()], [0, 0, 0]], errors="mask")
+    assert many.ok.tolist() == [True, False, False]
+    assert [i for i, _ in many.errors] == [1, 2]
+    assert isinstance(many.errors[0][1], sf.VoltageCeilingError) and many.errors[0][1].index == 1
+    for a in (many.joints_rad, many.nodes, many.tip, many.cable_mm, many.thickness_mm, many.stiffness, many.residual_mm):
+        assert np.isfinite(a).all()
+    # pose: the inverse lands on the forward model
+    target = f.solve(1.0, [2000, 5000, 8000]).joints_rad
+    p = f.pose(target)
+    lo, hi = p.interval_N
+    assert lo <= p.tension_N <= hi and not p.tension_given
+    back = f.solve(p.tension_N, p.volts_V)
+    assert np.allclose(back.joints_rad, target, atol=1e-6)
+    given = f.pose(np.degrees(target), P=float(p.interval_N.mean()), degrees=True)
+    assert given.tension_given and np.allclose(given.angles_rad, target)
+    assert np.allclose(f.solve(given.tension_N, given.volts_V).joints_rad, target, atol=1e-6)
+    c = f.contact(1.0, 1.5, [0, 0, 0])
+    assert c.magnitude_N > 0 and np.allclose(c.solution.tip[:2], c.point_mm, atol=1e-6)
+    b = f.fmax([0, 0, 0])
+    assert b.kind in ("contact", "limit-point", "search-bound") and 1 <= b.joint <= 3 and b.tension_N > 1.0
+
+
+def test_each_exception_is_raised_where_the_model_refuses():
+    f = sf.Finger()
+    ceiling = f.ceiling()
+    assert 0 < ceiling <= f.params["v_supply"] and ceiling < f.pull_in_voltage()
+
+    with pytest.raises(sf.VoltageCeilingError) as e:
+        f.solve(1.0, [0, 0, ceiling])
+    assert (e.value.joint, e.value.volts, e.value.ceiling) == (3, ceiling, ceiling)
+    assert e.value.code == "limit" and e.value.kind == "VoltageCeiling"
+
+    # the paper's "2 mm to 1 mm": past the 33 % pull-in limit
+    with pytest.raises(sf.ThicknessLimitError) as e:
+        f.volts_for_thickness([1.0, 2.0, 2.0])
+    assert e.value.joint == 1 and e.value.requested_mm == 1.0
+    assert e.value.limit_mm == pytest.approx(2.0 * 2 / 3)
+
+    # one joint bent far more than the others: no voltage within the ceiling holds it
+    with pytest.raises(sf.UnreachableError) as e:
+        f.pose([0.5, 0.01, 0.01])
+    assert e.value.joint == 1 and e.value.needed > e.value.max >= e.value.min > 0
+    assert e.value.code == "unreachable"
+
+    with pytest.raises(sf.NotConvergedError) as e:
+        f.solve(7.0, [0, 0, 0], max_iter=1)
+    assert e.value.iterations == 1 and e.value.code == "fault"
+
+    with pytest.raises(sf.InputError) as e:
+        f.solve(-1.0, [0, 0, 0])
+    assert isinstance(e.value, ValueError) and e.value.input == "tension"
+    with pytest.raises(sf.InputError) as e:
+        f.solve(math.nan, [0, 0, 0])
+    assert e.value.kind == "NonFinite"
+    with pytest.raises(sf.InputError) as e:
+        sf.Finger(a=100.0)
+    assert e.value.kind == "Param" and e.value.name == "a"
+    with pytest.raises(TypeError):
+        sf.Finger(frobnicate=1.0)
+
+    fmax = f.fmax([0, 0, 0]).tension_N
+    with pytest.raises(sf.BranchEndError) as e:
+        f.contact(1.0, 2 * fmax, [0, 0, 0])
+    assert e.value.kind == "ForceLimit" and e.value.fmax == fmax
+
+    # every subclass is a FingerError
+    for cls in (sf.VoltageCeilingError, sf.ThicknessLimitError, sf.UnreachableError, sf.NotConvergedError, sf.InputError, sf.BranchEndError):
+        assert issubclass(cls, sf.FingerError)
+
+    # solve_many raises the first refused row's exception, with its index
+    with pytest.raises(sf.VoltageCeilingError) as e:
+        f.solve_many([1.0, 1.0, 1.0], [[0, 0, 0], [0, 0, 2 * ceiling], [0, 0, 3 * ceiling]])
+    assert e.value.index == 1
+
+
+def test_presets_parameters_and_calibration():
+    paper = sf.Finger(preset="paper")
+    assert paper.params["e_de"] == pytest.approx(0.6 / (2 * 1.49))
+    assert paper.params["m"] == 1 and sf.Finger().params["m"] == 8
+    # an override only consistent with a later one is retried (a = 15 needs l = 40 first)
+    assert sf.Finger(a=15.0, l=40.0).params["a"] == 15.0
+    assert sf.Finger().calibration == [1, 1, 1, 1, 1, 0, 1, 0]
+    auto = sf.Finger(calibration="auto")
+    assert auto.calibration == sf.Finger(calibration="model_md").calibration != sf.Finger().calibration
+    assert sf.Finger(calibration="auto", layers=2).calibration == [1, 1, 1, 1, 1, 0, 1, 0]
+    # the calibration changes the answer
+    assert not np.array_equal(auto.solve(1.0, 0).joints_rad, sf.Finger().solve(1.0, 0).joints_rad)
+    names = [n for n, _ in sf.parameter_ranges()]
+    assert "margin" in names and set(names) == set(sf.Finger().params)
+
+
+def test_material_cards():
+    names = sf.cards()
+    assert "VHB-4905" in names and len(names) >= 3
+    default = sf.Finger()
+    vhb = sf.Finger(card="VHB-4905")
+    assert vhb.card == "VHB-4905" and sf.Finger(card="vhb").card == "VHB-4905"
+    # the card's film: its equilibrium modulus by the isotropic rule, a lower ceiling than the
+    # default film's, and (softer) more bending at the same fraction of its ceiling
+    assert vhb.params["e_de"] == pytest.approx(2 * vhb.params["g"] * (1 + vhb.params["nu"]))
+    assert 0 < vhb.ceiling() < default.ceiling() and vhb.ceiling() < vhb.pull_in_voltage()
+    frac = [0.0, 0.5, 0.9]
+    a = vhb.solve(1.0, [x * vhb.ceiling() for x in frac])
+    b = default.solve(1.0, [x * default.ceiling() for x in frac])
+    assert a.joints_rad[2] - a.joints_rad[0] > b.joints_rad[2] - b.joints_rad[0] > 0
+    with pytest.raises(sf.VoltageCeilingError) as e:
+        vhb.solve(1.0, [0, 0, vhb.ceiling()])
+    assert e.value.ceiling == vhb.ceiling()
+    # a card on another preset keeps that preset's structure
+    assert sf.Finger(preset="paper", card="VHB-4905").params["m"] == 1
+    with pytest.raises(ValueError):
+        sf.Finger(card="unobtainium")
