@@ -7,6 +7,7 @@
 //! contracts (shared/CONSOLE.md, MODEL.md), written as assertions on what comes out.
 
 pub mod console;
+pub mod material;
 pub mod model;
 pub mod rx;
 pub mod scene;

@@ -39,3 +39,8 @@ fn model_inputs_hold() {
 fn scene_inputs_hold() {
     assert!(run_dir("scene", finger_fuzz::scene::check) > 0);
 }
+
+#[test]
+fn material_inputs_hold() {
+    assert!(run_dir("material", finger_fuzz::material::check) > 0);
+}
