@@ -335,7 +335,8 @@ fn records_with_a_valid_checksum_and_bad_values_are_refused_whole() {
         ("an unknown value", forged(&[], |r| { r.values.push((0xBEEF, 1.0)).unwrap(); }), Reject::Unknown(0xBEEF)),
         ("a repeated value", forged(&[], |r| { let v = r.values[0]; r.values.push(v).unwrap(); }), Reject::Duplicate(tag(b'p', "n"))),
         ("half a calibration", forged(&[], |r| r.values.retain(|v| v.0 != tag(b'c', "ei1"))), Reject::Calibration),
-        ("a raised ceiling (v_supply 20 kV)", forged(&[], |r| set(r, b'p', "v_supply", 20_000.0)), Reject::Ceiling),
+        // (the board's film's hold ceiling binds, not the supply: a higher margin raises it)
+        ("a raised ceiling (margin 0.99)", forged(&[], |r| set(r, b'p', "margin", 0.99)), Reject::Ceiling),
         ("a board constant (hv_fs)", forged(&[], |r| { r.values.push((tag(b'f', "hv_fs"), 20_000.0)).unwrap(); }), Reject::BoardConstant("hv_fs")),
     ];
     for (why, bytes, reject) in cases {
