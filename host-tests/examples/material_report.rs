@@ -59,7 +59,7 @@ fn cards_section(doc: &mut String) {
             equilibrium_pull_in_voltage(&l),
             equilibrium_voltage(&l, s).unwrap(),
             instant,
-            l.breakdown_field(s) * s * Z0,
+            l.breakdown_volts(s),
             hold_ceiling(&l, l.margin),
             hold_ratio(&l).unwrap(),
             v_lin

@@ -15,6 +15,7 @@
 
 pub mod cards;
 pub mod reference;
+pub mod drive;
 
 pub use cards::{CARDS, ELASTOSIL_2030, PAPER_ELASTIC, VHB_4905};
 
@@ -155,6 +156,11 @@ impl<R: Real> StackLaw<R> {
         } else {
             self.field0_v_per_mm * (-self.half_k * s.ln()).exp()
         }
+    }
+
+    /// The voltage of the breakdown field across the film at stretch s, V: `E_B(s) s z0`.
+    pub fn breakdown_volts(&self, s: R) -> R {
+        self.breakdown_field(s) * s * self.z0
     }
 
     /// beta = eps V^2 / z0^2, MPa.
@@ -367,8 +373,7 @@ pub fn hold_ceiling<R: Real>(law: &StackLaw<R>, margin: R) -> R {
     let s = R::from_f64(LIMIT_RATIO);
     // V_eq(2/3) exists: G_eq (s - s^4) > 0 there
     let v_film = law.volts_of(Balance::relaxed(law).stress(s));
-    let v_field = law.breakdown_field(s) * s * law.z0;
-    margin * v_film.min(v_field)
+    margin * v_film.min(law.breakdown_volts(s))
 }
 
 /// s_hold: the thickness stretch at the hold ceiling (with the law's margin) once relaxed, the
@@ -390,7 +395,7 @@ pub fn voltage_bound_now<R: Real>(law: &StackLaw<R>, state: &StackState<R>, s_fl
     // a floor past the branch's end holds at most the pull-in voltage (cold path: a cube root)
     let s = if b.slope(s_floor) < R::zero() { s_floor } else { b.pull_in() };
     let v_film = voltage_of_balance(law, &b, s).unwrap_or(R::zero());
-    let v_field = law.margin * law.breakdown_field(s_floor) * s_floor * law.z0;
+    let v_field = law.margin * law.breakdown_volts(s_floor);
     let v = v_film.min(v_field) * (R::one() - R::from_f64(64.0 * R::EPS));
     if v.is_finite() && v > R::zero() {
         v
@@ -417,6 +422,13 @@ pub fn guarded_tick<R: Real>(law: &StackLaw<R>, relaxation: &Relaxation<R>, stat
 /// the supply and passes `s_target` as the floor of [`guarded_tick`].
 pub fn shaped_voltage<R: Real>(law: &StackLaw<R>, state: &StackState<R>, s_target: R) -> R {
     voltage_at_ratio(law, &state.a, s_target).unwrap_or(R::zero())
+}
+
+/// The branch flow times 3 tau_i: `1/s - s^2 a_i^3` (given 1/s and s^2; zero when relaxed,
+/// a_i = 1/s).
+#[inline(always)]
+pub fn branch_flow<R: Real>(inv_s: R, s2: R, a: R) -> R {
+    inv_s - s2 * a * a * a
 }
 
 /// How [`Relaxation`] advances the branch flow over one step at a held thickness.
@@ -493,7 +505,7 @@ impl<R: Real> Relaxation<R> {
         let s = state.s;
         let inv_s = R::one() / s;
         let s2 = s * s;
-        let flow = |a: R| inv_s - s2 * a * a * a;
+        let flow = |a: R| branch_flow(inv_s, s2, a);
         for i in 0..self.branches {
             let a = state.a[i];
             let delta = match self.integrator {
