@@ -371,6 +371,7 @@ pub fn write_model_error(w: &mut dyn Write, e: &finger_model::Error) -> fmt::Res
         E::NonFinite { input } => w!(w; input, " is not a finite number"),
         E::Input { input, reason } => w!(w; input, ": ", reason),
         E::VoltageCeiling { joint, volts, ceiling } => w!(w; Joint(joint), ": ", Fixed(volts as f32, 0), " V is at or past the ceiling ", Fixed(ceiling as f32, 0), " V (33 % pull-in limit with margin, or supply)"),
+        E::PullIn { volts, pull_in } => w!(w; Fixed(volts as f32, 0), " V is at or past the film's pull-in ", Fixed(pull_in as f32, 0), " V in its present state"),
         E::ThicknessLimit { joint, requested_mm, limit_mm } => w!(w; Joint(joint), ": stack thickness ", Fixed(requested_mm as f32, 3), " mm is past the 33 % pull-in limit (", Fixed(limit_mm as f32, 3), " mm)"),
         E::Contact { joint, tension } => {
             w!(w; Joint(joint), ": links in contact (cable span at its floor) at ", Fixed(tension as f32, 3), " N")

@@ -1,5 +1,6 @@
-//! Writes docs/inverse-tables.md: the stiffness range one posture can be held with on the
-//! default hardware and on variants (higher-voltage supply, softer elastomer, thinner layers,
+//! Writes docs/inverse-tables.md: the stiffness range one posture can be held with for each
+//! material card (the board's VHB 4905 first, stated in one sentence), on the paper's card and on
+//! variants (higher-voltage supply, softer elastomer, thinner layers,
 //! the paper preset), the contact force against the voltages at one tension, and the host
 //! time of one inverse solve.
 //!
@@ -7,6 +8,7 @@
 //! ../docs/inverse-tables.md; pass another path as the first argument to write elsewhere).
 
 use finger_model::inverse::{contact_force, solve_pose, stiffness_range};
+use finger_model::material::{ELASTOSIL_2030, VHB_4905};
 use finger_model::{Finger, Method, Params};
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -22,18 +24,46 @@ fn main() {
         o,
         "Tip stiffness K_tip (`Finger::tip_stiffness`) at the two ends of the tension interval: low end = \
          the softest stacks the ceiling allows (a joint at the top voltage), high end = a joint at 0 V. \
-         kyy in N/mm, kθθ in N·mm/rad. Thinning = stack thickness reduction at the ceiling.\n"
+         kyy in N/mm, kθθ in N·mm/rad. Thinning = stack thickness reduction at the ceiling, relaxed \
+         (the film's law at equilibrium, docs/materials.md). V_pi = the relaxed film's pull-in; the \
+         ceiling = the card's hold ceiling (margin x min(the voltage holding 2/3 of the thickness \
+         relaxed, the breakdown field there)), capped by the supply. E_de = the stack's beam modulus \
+         2 G (1 + nu).\n"
     )
     .unwrap();
-    writeln!(
-        o,
-        "| hardware | E_de MPa | V_pi kV | ceiling kV | thinning % | P interval N | width % | kyy low..high | kyy ratio | kθθ low..high |"
-    )
-    .unwrap();
-    writeln!(o, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |").unwrap();
+    // kyy at 0 V, at the ceiling, and of the finger without stacks, at the same posture
+    let range = |p: Params<f64>| -> Option<(f64, f64, f64)> {
+        let f = Finger::new(p).ok()?;
+        let s = solve_pose(&f, &angles, None).ok()?;
+        let r = stiffness_range(&f, &s).ok()?;
+        let bare = Finger::new(p.without_stacks()).ok()?;
+        let sb = solve_pose(&bare, &angles, None).ok()?;
+        let kb = bare.tip_stiffness(&bare.solve(sb.tension, &[0.0; 3], Method::converged()).ok()?).ok()?;
+        Some((r.stiffness[1][1][1], r.stiffness[0][1][1], kb[1][1]))
+    };
+    match range(Params::vhb4905()) {
+        Some((k_0v, k_top, k_bare)) => writeln!(
+            o,
+            "**With the board's film, VHB 4905 (relaxed shear modulus {:.1} kPa), the stacks make the \
+             default finger's tip {:.2} % stiffer (kyy) than the same finger without stacks, and the whole \
+             voltage range changes that stiffness by {:.2} %: the stacks add almost nothing to the \
+             joint, so voltage cannot vary this finger's stiffness in any useful way.**\n",
+            VHB_4905.g_eq_mpa * 1e3,
+            100.0 * (k_0v / k_bare - 1.0),
+            100.0 * (k_0v / k_top - 1.0),
+        )
+        .unwrap(),
+        None => writeln!(o, "**With the board's film, VHB 4905, the default finger's posture could not be solved.**\n").unwrap(),
+    }
     let d = Params::<f64>::default();
+    let vhb_row = format!(
+        "card VHB 4905, the board's (G_eq {:.1} kPa relaxed; 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)",
+        VHB_4905.g_eq_mpa * 1e3
+    );
     let cases: Vec<(&str, Params<f64>)> = vec![
-        ("default (VHB 4905, G 0.6 MPa, 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)", d),
+        (vhb_row.as_str(), Params::vhb4905()),
+        ("card Elastosil Film 2030 (silicone)", Params::with_card(&ELASTOSIL_2030)),
+        ("card paper-elastic, the model's default (G 0.6 MPa; 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)", d),
         ("supply 20 kV", Params { v_supply: 20_000.0, ..d }),
         ("supply 30 kV", Params { v_supply: 30_000.0, ..d }),
         ("softer elastomer G 0.2 MPa", Params { g: 0.2, ..d }),

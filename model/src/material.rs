@@ -15,6 +15,7 @@
 
 pub mod cards;
 pub mod reference;
+pub mod drive;
 
 pub use cards::{CARDS, ELASTOSIL_2030, PAPER_ELASTIC, VHB_4905};
 
@@ -157,6 +158,11 @@ impl<R: Real> StackLaw<R> {
         }
     }
 
+    /// The voltage of the breakdown field across the film at stretch s, V: `E_B(s) s z0`.
+    pub fn breakdown_volts(&self, s: R) -> R {
+        self.breakdown_field(s) * s * self.z0
+    }
+
     /// beta = eps V^2 / z0^2, MPa.
     fn beta(&self, volts: R) -> R {
         self.eps * volts * volts / (self.z0 * self.z0)
@@ -234,20 +240,18 @@ impl<R: Real> Balance<R> {
     /// voltage that did not fall), else from 1: f is concave, so from the right the iterates
     /// fall monotonically onto the root. `None` past pull-in.
     fn solve(&self, beta: R, s_start: R) -> Result<R, Refusal> {
-        let s_pi = self.pull_in();
-        if !(s_pi.is_finite() && beta.is_finite()) {
+        if !beta.is_finite() {
             return Err(Refusal::NotConverged);
         }
-        if !(beta < self.stress(s_pi)) {
-            return Err(Refusal::PullIn);
-        }
+        // warm start where the branch is stable (slope < 0) at or right of the root
         let mut s = R::one();
-        if s_start > s_pi && s_start < R::one() && self.stress(s_start) <= beta {
+        if s_start > R::zero() && s_start < R::one() && self.slope(s_start) < R::zero() && self.stress(s_start) <= beta {
             s = s_start;
         }
         let tol = R::from_f64(4.0 * R::EPS);
         for k in 0..MAX_NEWTON {
             let d = self.slope(s);
+            // past the end of the stable branch without meeting the root: beta is past pull-in
             if !(d < R::zero()) {
                 return Err(Refusal::PullIn);
             }
@@ -255,14 +259,15 @@ impl<R: Real> Balance<R> {
             // after the first step the iterates lie right of the root and only fall: a step
             // that does not is rounding noise (near pull-in it exceeds `tol`)
             if k > 0 && !(step > R::zero()) {
-                return Ok(s.max(s_pi));
+                return Ok(s);
             }
             s -= step;
             if !s.is_finite() {
                 return Err(Refusal::NotConverged);
             }
             if step.abs() <= tol * s {
-                return Ok(s.max(s_pi));
+                // the root of a beta just past the peak in rounding would lie left of it
+                return if self.slope(s) < R::zero() { Ok(s) } else { Err(Refusal::PullIn) };
             }
         }
         Err(Refusal::NotConverged)
@@ -368,8 +373,7 @@ pub fn hold_ceiling<R: Real>(law: &StackLaw<R>, margin: R) -> R {
     let s = R::from_f64(LIMIT_RATIO);
     // V_eq(2/3) exists: G_eq (s - s^4) > 0 there
     let v_film = law.volts_of(Balance::relaxed(law).stress(s));
-    let v_field = law.breakdown_field(s) * s * law.z0;
-    margin * v_film.min(v_field)
+    margin * v_film.min(law.breakdown_volts(s))
 }
 
 /// s_hold: the thickness stretch at the hold ceiling (with the law's margin) once relaxed, the
@@ -387,9 +391,11 @@ pub fn voltage_bound_now<R: Real>(law: &StackLaw<R>, state: &StackState<R>, s_fl
         return R::zero();
     }
     let b = Balance::of(law, &state.a);
-    let s = s_floor.max(b.pull_in()).min(R::one());
+    let s_floor = s_floor.min(R::one());
+    // a floor past the branch's end holds at most the pull-in voltage (cold path: a cube root)
+    let s = if b.slope(s_floor) < R::zero() { s_floor } else { b.pull_in() };
     let v_film = voltage_of_balance(law, &b, s).unwrap_or(R::zero());
-    let v_field = law.margin * law.breakdown_field(s_floor) * s_floor * law.z0;
+    let v_field = law.margin * law.breakdown_volts(s_floor);
     let v = v_film.min(v_field) * (R::one() - R::from_f64(64.0 * R::EPS));
     if v.is_finite() && v > R::zero() {
         v
@@ -416,6 +422,13 @@ pub fn guarded_tick<R: Real>(law: &StackLaw<R>, relaxation: &Relaxation<R>, stat
 /// the supply and passes `s_target` as the floor of [`guarded_tick`].
 pub fn shaped_voltage<R: Real>(law: &StackLaw<R>, state: &StackState<R>, s_target: R) -> R {
     voltage_at_ratio(law, &state.a, s_target).unwrap_or(R::zero())
+}
+
+/// The branch flow times 3 tau_i: `1/s - s^2 a_i^3` (given 1/s and s^2; zero when relaxed,
+/// a_i = 1/s).
+#[inline(always)]
+pub fn branch_flow<R: Real>(inv_s: R, s2: R, a: R) -> R {
+    inv_s - s2 * a * a * a
 }
 
 /// How [`Relaxation`] advances the branch flow over one step at a held thickness.
@@ -492,7 +505,7 @@ impl<R: Real> Relaxation<R> {
         let s = state.s;
         let inv_s = R::one() / s;
         let s2 = s * s;
-        let flow = |a: R| inv_s - s2 * a * a * a;
+        let flow = |a: R| branch_flow(inv_s, s2, a);
         for i in 0..self.branches {
             let a = state.a[i];
             let delta = match self.integrator {
