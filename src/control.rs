@@ -382,7 +382,7 @@ impl<B: Board> Control<B> {
             let Some(stacks) = self.stacks.as_mut() else { break };
             let (v, t) = (self.volts[ch], self.target[ch]);
             let t0 = clock();
-            let goal = if self.shaped && t > 0.0 { stacks.shaped_goal(ch, self.s_floor[ch]).min(HV_LIMIT_V) } else { t };
+            let goal = if self.shaped && t > 0.0 && !cfg!(m3) { stacks.shaped_goal(ch, self.s_floor[ch]).min(HV_LIMIT_V) } else { t };
             let slewed = if goal > v { (v + step).min(goal) } else { (v - step).max(goal) };
             let applied = stacks.step(ch, slewed, self.s_floor[ch]);
             worst = worst.max(clock().wrapping_sub(t0));

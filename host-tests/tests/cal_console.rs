@@ -113,8 +113,9 @@ fn calibrated_solve_is_the_host_model() {
     let fmax1 = nums(val(&cmd(&mut a, "limits"), "fmax"))[0];
     assert_eq!(a.fmax_evaluations(), evals + 1);
     let want = cal.fmax(&[0.0; 3]).unwrap().tension as f64;
-    // the board's fmax is its branch table's: the full search's to the table's 2e-4 (table_console)
-    assert!((fmax1 - want).abs() <= 2e-4 * want && (fmax1 - fmax0).abs() > 1e-3, "{fmax1} vs {want}, uncalibrated {fmax0}");
+    // the board's fmax is its branch table's: never above the full search's by more than 1e-4 N,
+    // below it by at most the table's 2e-4 (table_console)
+    assert!(fmax1 <= want + 1e-4 && fmax1 >= want * (1.0 - 2e-4) && (fmax1 - fmax0).abs() > 1e-3, "{fmax1} vs {want}, uncalibrated {fmax0}");
     // `cal none` is the uncalibrated model again
     cmd(&mut a, "cal none");
     let r = cmd(&mut a, "solve 0.5 0 1000 2000");

@@ -10,8 +10,15 @@
 //! equilibrium ratio, itself above `s_hold`), and the field at or below the breakdown bound.
 //!
 //! What it is not: the slew, the duties, the ceilings of the command side (`super::Control`).
+//!
+//! On the Cortex-M3 image (`cfg(m3)`) the integration does not fit its 64 KiB of flash
+//! (docs/firmware.md): there the stacks keep the card's hold ceiling and `s_hold` only, a step
+//! applies the voltage asked (the targets are already within the hold ceiling), shaped
+//! actuation is plain, and the thickness now is not known (NaN).
 
-use finger_model::material::{equilibrium_ratio, guarded_tick, shaped_voltage, Relaxation, StackLaw, StackState};
+#[cfg(not(m3))]
+use finger_model::material::{guarded_tick, shaped_voltage, Relaxation, StackState};
+use finger_model::material::{equilibrium_ratio, StackLaw};
 
 use crate::board::{board_hold_ceiling_v, board_law, HV_CHANNELS};
 
@@ -20,10 +27,13 @@ pub const TICK_S: f32 = 1e-3;
 
 /// The board's stacks: one law, one stepper, each channel's state.
 pub struct Stacks {
+    #[cfg_attr(m3, allow(dead_code))]
     law: StackLaw<f32>,
+    #[cfg(not(m3))]
     relax: Relaxation<f32>,
     hold_v: f32,
     s_hold: f32,
+    #[cfg(not(m3))]
     state: [StackState<f32>; HV_CHANNELS],
 }
 
@@ -36,13 +46,16 @@ impl Stacks {
     /// ceiling (the core then never arms).
     pub fn board() -> Option<Self> {
         let law = board_law().ok()?;
-        let relax = Relaxation::new(&law, TICK_S).ok()?;
         let hold_v = board_hold_ceiling_v();
         let s_hold = equilibrium_ratio(&law, hold_v).ok()?;
         if !(hold_v > 0.0 && s_hold > 0.0 && s_hold < 1.0) {
             return None;
         }
-        Some(Stacks { law, relax, hold_v, s_hold, state: [StackState::rest(); HV_CHANNELS] })
+        #[cfg(not(m3))]
+        let stacks = Stacks { law, relax: Relaxation::new(&law, TICK_S).ok()?, hold_v, s_hold, state: [StackState::rest(); HV_CHANNELS] };
+        #[cfg(m3)]
+        let stacks = Stacks { law, hold_v, s_hold };
+        Some(stacks)
     }
 
     /// The board's hold ceiling, V.
@@ -53,7 +66,13 @@ impl Stacks {
     pub fn s_hold(&self) -> f32 {
         self.s_hold
     }
+    /// Each channel's thickness stretch now (NaN on the M3 image: not integrated there).
+    #[cfg(m3)]
+    pub fn ratios(&self) -> [f32; HV_CHANNELS] {
+        [f32::NAN; HV_CHANNELS]
+    }
     /// Each channel's thickness stretch now.
+    #[cfg(not(m3))]
     pub fn ratios(&self) -> [f32; HV_CHANNELS] {
         let mut r = [1.0; HV_CHANNELS];
         for (ch, s) in r.iter_mut().enumerate() {
@@ -65,7 +84,7 @@ impl Stacks {
     /// The floor for a target of `volts`: `s_hold` (plain), or the target's equilibrium
     /// ratio (shaped; never below `s_hold`). None past the law's reach.
     pub fn floor(&self, volts: f32, shaped: bool) -> Option<f32> {
-        if !shaped {
+        if !shaped || cfg!(m3) {
             return Some(self.s_hold);
         }
         let s = equilibrium_ratio(&self.law, volts).ok()?;
@@ -79,6 +98,7 @@ impl Stacks {
     /// Shaped actuation's voltage for channel `ch` now: the voltage that holds its film at
     /// `s_target` with the branches as they are, V (0 when the film is thinner than that even
     /// at 0 V). The caller caps and slews it; [`Stacks::step`] guards it.
+    #[cfg(not(m3))]
     pub fn shaped_goal(&self, ch: usize, s_target: f32) -> f32 {
         let v = shaped_voltage(&self.law, &self.state[ch], s_target);
         if v > 0.0 {
@@ -92,6 +112,7 @@ impl Stacks {
     /// `voltage_bound_now(state, s_floor)`, the thickness at the voltage applied from the last
     /// one, the branches relaxed. The voltage applied, V. Refused (the state past its pull-in,
     /// not expected under the guard): the channel steps at 0 V instead.
+    #[cfg(not(m3))]
     pub fn step(&mut self, ch: usize, requested: f32, s_floor: f32) -> Result<f32, StepRefused> {
         let st = &mut self.state[ch];
         match guarded_tick(&self.law, &self.relax, st, requested, s_floor) {
@@ -101,5 +122,17 @@ impl Stacks {
                 Err(StepRefused)
             }
         }
+    }
+
+    /// The M3 image's step: the voltage asked (NaN or negative: 0), nothing integrated.
+    #[cfg(m3)]
+    pub fn step(&mut self, _ch: usize, requested: f32, _s_floor: f32) -> Result<f32, StepRefused> {
+        Ok(if requested > 0.0 { requested } else { 0.0 })
+    }
+
+    /// The M3 image: shaped actuation is plain (no film state to shape against).
+    #[cfg(m3)]
+    pub fn shaped_goal(&self, _ch: usize, _s_target: f32) -> f32 {
+        0.0
     }
 }

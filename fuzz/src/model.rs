@@ -1,0 +1,247 @@
+//! The model target: arbitrary parameters and inputs into the f64 model's forward solve,
+//! inverse, contact and fmax.
+//!
+//! Input: a parameter set (each value MODEL.md's default scaled by 2^-6..2^6, or a special
+//! value: 0, negative, NaN, infinities, extremes, or raw bits), then up to [`MAX_OPS`]
+//! operations, each with its tension and voltages (fractions of fmax and of the ceiling, or
+//! special values).
+//!
+//! Invariants:
+//! - every call answers a typed error or a finite answer, never a panic;
+//! - an answer's voltages are 0 or below the ceiling (`de::check_voltage`), and a voltage
+//!   that is negative, not finite or at/past the ceiling is refused;
+//! - a forward answer is in equilibrium (`Finger::equilibrium_residual`, 1e-4 of the
+//!   finger's length: evaluated afresh, the residual carries the march's gain, large for the
+//!   most compliant parameter sets drawn here; docs/reliability.md);
+//! - an inverse answer gives back its angles (forward of its tension and voltages, 1e-6 rad);
+//! - a contact answer is in equilibrium under its tip load with the tip on the stop;
+//! - fmax is finite and not negative.
+//!
+//! What it is not: the domain's property tests (model/tests/proptest_domain.rs), which draw
+//! from the documented domain; this draws from everywhere.
+
+use finger_model::inverse::contact_force;
+use finger_model::{de, DeModulusRule, Error, Finger, Method, Params, Solution, MAX_JOINTS, MAX_SUB};
+
+pub const MAX_OPS: usize = 4;
+
+/// Bytes read in order; zeros past the end.
+struct Bytes<'a>(&'a [u8]);
+
+impl Bytes<'_> {
+    fn u8(&mut self) -> u8 {
+        match self.0.split_first() {
+            Some((&b, rest)) => {
+                self.0 = rest;
+                b
+            }
+            None => 0,
+        }
+    }
+    fn raw_f64(&mut self) -> f64 {
+        let mut b = [0u8; 8];
+        for x in &mut b {
+            *x = self.u8();
+        }
+        f64::from_le_bytes(b)
+    }
+    /// `unit` x 2^((s-120)/20) for s < 240, else a special value.
+    fn scaled(&mut self, unit: f64) -> f64 {
+        let s = self.u8();
+        match s {
+            0..=239 => unit * ((s as f64 - 120.0) / 20.0).exp2(),
+            240 => 0.0,
+            241 => -unit,
+            242 => f64::NAN,
+            243 => f64::INFINITY,
+            244 => f64::NEG_INFINITY,
+            245 => 1e-300,
+            246 => 1e300,
+            247 => unit,
+            _ => self.raw_f64(),
+        }
+    }
+    /// `top` x s/200 (s < 240: 0 to 1.2 x top), else a special value.
+    fn fraction(&mut self, top: f64) -> f64 {
+        let s = self.u8();
+        match s {
+            0..=239 => top * s as f64 / 200.0,
+            240 => top,
+            241 => top * (1.0 - 1e-12),
+            242 => -1.0,
+            243 => f64::NAN,
+            244 => f64::INFINITY,
+            245 => top * (1.0 + 1e-12),
+            246 => 1e300,
+            _ => self.raw_f64(),
+        }
+    }
+}
+
+fn params(b: &mut Bytes) -> Params<f64> {
+    let d = Params::<f64>::default();
+    let flags = b.u8();
+    let base = if flags & 1 != 0 { Params::paper() } else { d };
+    let mut p = base;
+    // which values move: one bit per group, so that most inputs stay near a preset
+    let moved = b.u8();
+    if moved & 1 != 0 {
+        p.n = 1 + (b.u8() as usize) % (MAX_JOINTS + 1); // 1..=MAX_JOINTS+1: one past the end
+        p.m = 1 + (b.u8() as usize) % (MAX_SUB + 1);
+    }
+    if moved & 2 != 0 {
+        p.l = b.scaled(base.l);
+        p.b = b.scaled(base.b);
+        p.w = b.scaled(base.w);
+    }
+    if moved & 4 != 0 {
+        p.t_min = b.scaled(base.t_min);
+        p.a = b.scaled(base.a);
+        p.e = b.scaled(base.e);
+    }
+    if moved & 8 != 0 {
+        p.e_b = b.scaled(base.e_b);
+        p.nu_b = b.scaled(base.nu_b);
+        p.span_floor = b.scaled(base.span_floor);
+    }
+    if moved & 16 != 0 {
+        p.layers = b.u8() as u32 % 64;
+        p.z0 = b.scaled(base.z0);
+        p.g = b.scaled(base.g);
+    }
+    if moved & 32 != 0 {
+        p.nu = b.scaled(base.nu);
+        p.eps_r = b.scaled(base.eps_r);
+        p.margin = b.fraction(1.0);
+        p.v_supply = b.scaled(base.v_supply);
+    }
+    if moved & 64 != 0 {
+        p.n_inc = b.u8() as u32 % 64;
+    }
+    p.plate = flags & 2 != 0;
+    p.flex_links = flags & 4 != 0;
+    if flags & 8 != 0 {
+        p.de_rule = DeModulusRule::PaperEq3;
+    }
+    p
+}
+
+/// The voltages refused by `de::check_voltage`: negative, not finite, at or past the ceiling.
+fn volts_refused(f: &Finger<f64>, v: &[f64]) -> bool {
+    v.iter().enumerate().any(|(k, &x)| de::check_voltage(f.params(), k, x).is_err())
+}
+
+fn check_answer_volts(f: &Finger<f64>, v: &[f64], what: &str) {
+    let ceiling = f.voltage_ceiling();
+    for &x in v {
+        assert!(x == 0.0 || (x > 0.0 && x < ceiling), "{what}: voltage {x} with ceiling {ceiling}");
+    }
+}
+
+fn check_finite_solution(s: &Solution<f64>, what: &str) {
+    let n = s.n;
+    let finite = s.nodes[..=n].iter().all(|q| q.x.is_finite() && q.y.is_finite() && q.theta.is_finite())
+        && s.joint_angle[..n].iter().all(|a| a.is_finite())
+        && s.thickness[..n].iter().all(|a| a.is_finite())
+        && s.tension.is_finite()
+        && s.residual.is_finite()
+        && s.cable_excursion.is_finite();
+    assert!(finite, "{what}: non-finite answer {s:?}");
+}
+
+/// Runs one input; panics when an invariant breaks.
+pub fn check(data: &[u8]) {
+    let mut b = Bytes(data);
+    let p = params(&mut b);
+    if std::env::var_os("FUZZ_VERBOSE").is_some() { eprintln!("{p:?}"); }
+    let f = match Finger::new(p) {
+        Ok(f) => f,
+        Err(_) => return, // typed refusal of the parameters
+    };
+    let n = f.params().n;
+    let len = f.params().l * n as f64;
+    let ceiling = f.voltage_ceiling();
+    assert!(!(ceiling < 0.0) && !ceiling.is_nan(), "ceiling {ceiling} of {p:?}");
+    for _ in 0..MAX_OPS {
+        let op = b.u8();
+        if b.0.is_empty() && op == 0 {
+            break;
+        }
+        let v: Vec<f64> = (0..n).map(|_| b.fraction(ceiling)).collect();
+        let refused = volts_refused(&f, &v);
+        // fmax at these voltages (every op needs it for its tension)
+        let fmax = match f.fmax(&v) {
+            Ok(l) => {
+                assert!(!refused, "fmax answered at refused voltages {v:?} (ceiling {ceiling}): {l:?}");
+                assert!(l.tension.is_finite() && l.tension >= 0.0, "fmax {l:?} at {v:?}");
+                Some(l.tension)
+            }
+            Err(_) => None,
+        };
+        let scale = fmax.unwrap_or(1.0);
+        let tension = b.fraction(scale);
+        match op % 4 {
+            0 => forward(&f, tension, &v, refused, len),
+            1 => inverse(&f, tension, &v, len),
+            2 => {
+                let p0 = b.fraction(scale);
+                contact(&f, p0, tension, &v, refused, len);
+            }
+            _ => {}
+        }
+    }
+}
+
+fn forward(f: &Finger<f64>, tension: f64, v: &[f64], refused: bool, len: f64) {
+    match f.solve(tension, v, Method::converged()) {
+        Ok(s) => {
+            assert!(!refused, "forward answered at refused voltages {v:?}");
+            check_finite_solution(&s, "forward");
+            check_answer_volts(f, &s.volts[..s.n], "forward");
+            let r = f.equilibrium_residual(&s);
+            assert!(matches!(r, Ok(r) if r <= 1e-4 * len), "forward P={tension} V={v:?}: not in equilibrium, {r:?} (length {len} mm; solve's residual {:e}, {} iterations)", s.residual, s.iterations);
+        }
+        Err(Error::NotConverged { .. }) | Err(_) => {}
+    }
+}
+
+fn inverse(f: &Finger<f64>, tension: f64, v: &[f64], len: f64) {
+    let n = f.params().n;
+    // angles the forward model reaches (a reachable target), and a given tension or none
+    let Ok(s) = f.solve(tension, v, Method::converged()) else { return };
+    let given = if tension.to_bits() & 1 == 0 { Some(s.tension) } else { None };
+    let _ = len;
+    match finger_model::solve_pose(f, &s.joint_angle[..n], given) {
+        Ok(inv) => {
+            assert!(inv.tension.is_finite() && inv.tension >= 0.0, "inverse tension {}", inv.tension);
+            check_answer_volts(f, &inv.volts[..n], "inverse");
+            match f.solve(inv.tension, &inv.volts[..n], Method::converged()) {
+                Ok(back) => {
+                    for k in 0..n {
+                        let err = (back.joint_angle[k] - s.joint_angle[k]).abs();
+                        assert!(err <= 1e-6, "inverse of P={tension} V={v:?}: joint {k} off by {err:e} rad (answer P={} V={:?})", inv.tension, &inv.volts[..n]);
+                    }
+                }
+                Err(e) => panic!("the forward refuses the inverse's answer P={} V={:?}: {e:?}", inv.tension, &inv.volts[..n]),
+            }
+        }
+        Err(_) => {}
+    }
+}
+
+fn contact(f: &Finger<f64>, p0: f64, tension: f64, v: &[f64], refused: bool, len: f64) {
+    let n = f.params().n;
+    match contact_force(f, p0, &vec![0.0; n], tension, v) {
+        Ok(c) => {
+            assert!(!refused, "contact answered at refused voltages {v:?}");
+            assert!(c.force.iter().all(|x| x.is_finite()), "contact force {:?}", c.force);
+            check_finite_solution(&c.solution, "contact");
+            let r = f.equilibrium_residual(&c.solution);
+            assert!(matches!(r, Ok(r) if r <= 1e-4 * len), "contact P0={p0} P={tension} V={v:?}: not in equilibrium, {r:?}");
+            let tip = c.solution.tip();
+            let on = (tip.x - c.point[0]).hypot(tip.y - c.point[1]);
+            assert!(on <= 1e-4 * len, "contact: tip {on:e} mm off the stop");
+        }
+        Err(_) => {}
+    }
+}

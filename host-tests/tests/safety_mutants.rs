@@ -1,0 +1,213 @@
+//! The safety core's boundaries, one assertion per rule, written against the mutants that
+//! survived the other host tests (scripts/mutants, docs/reliability.md): the control core
+//! (the single duty writer's ceiling and cap, the slew step, stale setpoints, the watchdog's
+//! check-in bound, stop) and the RX ring (overrun counts, a full ring, the `wait` input flag).
+use finger_fw::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V};
+use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Setpoints, CHECKIN_BOUND_MS};
+use finger_fw::rx::{Record, RxEvent, RxLines, RX_RING};
+use finger_fw::sim::SimBoard;
+
+const MAX: u16 = 8_400;
+
+fn core() -> Control<SimBoard> {
+    Control::new(SimBoard::default(), 2_000, 2_000.0)
+}
+
+fn setpoints(c: &Control<SimBoard>, volts: f32, ceiling: u16) -> Setpoints {
+    let v = c.view();
+    Setpoints {
+        seq: v.seq + 1,
+        epoch: v.epoch,
+        armed: true,
+        target_v: [volts; HV_CHANNELS],
+        servo_duty: 2_000,
+        servo_released: 2_000,
+        duty_ceiling: [ceiling; HV_CHANNELS],
+        slew: 2_000.0,
+    }
+}
+
+#[test]
+fn duty_of_a_voltage_and_the_cap() {
+    assert_eq!(hv_duty_for(0.0, MAX), 0);
+    assert_eq!(hv_duty_for(-1.0, MAX), 0);
+    assert_eq!(hv_duty_for(f32::NAN, MAX), 0);
+    assert_eq!(hv_duty_for(HV_FULL_SCALE_V, MAX), MAX);
+    assert_eq!(hv_duty_for(2.0 * HV_FULL_SCALE_V, MAX), MAX);
+    // duty% = zero + (100 - zero) v / full scale, rounded down
+    let v = 0.37 * HV_FULL_SCALE_V;
+    assert_eq!(hv_duty_for(v, MAX), (v / HV_FULL_SCALE_V * MAX as f32) as u16);
+    assert_eq!(hv_duty_for(v, 10_000), (v / HV_FULL_SCALE_V * 10_000.0) as u16);
+    assert_eq!(hv_duty_cap(MAX), hv_duty_for(HV_LIMIT_V, MAX));
+}
+
+#[test]
+fn the_single_writer_refuses_past_the_ceiling_and_accepts_at_it() {
+    let mut c = core();
+    let ceiling = 3_000;
+    assert!(c.apply(&setpoints(&c, 0.0, ceiling)));
+    assert!(c.write_hv_duty(0, ceiling).is_ok());
+    assert_eq!(c.board().hv[0].duty, ceiling);
+    assert_eq!(c.view().duty[0], ceiling);
+    assert!(c.write_hv_duty(1, ceiling + 1).is_err());
+    assert_eq!(c.board().hv[1].duty, 0, "a refused duty is not written");
+    assert_eq!(c.view().fault, Some("hv-refused"));
+    assert!(c.write_hv_duty(HV_CHANNELS, 0).is_err(), "no such channel");
+    c.stop();
+    assert_eq!(c.view().fault, None, "stop clears the latched fault");
+    assert!(c.write_hv_duty(2, 0).is_ok(), "0 is always allowed");
+}
+
+#[test]
+fn slew_moves_exactly_one_step_per_tick_and_stops_at_the_target() {
+    let mut c = core();
+    let ceiling = hv_duty_for(5_000.0, MAX);
+    assert!(c.apply(&setpoints(&c, 3.5, ceiling)));
+    assert!(c.view().enable);
+    c.tick(c.now_ms());
+    // 2000 V/s x 1 ms = 2 V per tick
+    assert_eq!(c.view().volts, [2.0; HV_CHANNELS]);
+    assert_eq!(c.board().hv[0].duty, hv_duty_for(2.0, MAX));
+    c.tick(c.now_ms());
+    assert_eq!(c.view().volts, [3.5; HV_CHANNELS], "no overshoot");
+    // and down
+    assert!(c.apply(&setpoints(&c, 0.5, ceiling)));
+    c.tick(c.now_ms());
+    assert_eq!(c.view().volts, [1.5; HV_CHANNELS]);
+    c.tick(c.now_ms());
+    assert_eq!(c.view().volts, [0.5; HV_CHANNELS]);
+}
+
+#[test]
+fn setpoints_past_the_limit_or_stale_are_refused() {
+    let mut c = core();
+    let ceiling = hv_duty_for(1_000.0, MAX);
+    // a target whose duty is past the ceiling: fault stop
+    assert!(c.apply(&setpoints(&c, 1_200.0, ceiling)));
+    assert_eq!(c.view().fault, Some("hv-refused"));
+    assert!(!c.view().enable);
+    c.stop();
+    assert!(c.apply(&setpoints(&c, f32::NAN, ceiling)));
+    assert_eq!(c.view().fault, Some("hv-refused"), "NaN refused");
+    c.stop();
+    // planned before a stop: dropped
+    let sp = setpoints(&c, 500.0, ceiling);
+    c.stop();
+    let seq = c.view().seq;
+    assert!(!c.apply(&sp));
+    assert_eq!(c.view().seq, seq, "a dropped set is not taken");
+    assert!(!c.view().enable);
+    // a slew out of (0, 1e6] V/s is ignored: the old one stays
+    let mut sp = setpoints(&c, 500.0, ceiling);
+    sp.slew = 0.0;
+    assert!(c.apply(&sp));
+    c.tick(c.now_ms());
+    assert_eq!(c.view().volts[0], 2.0);
+}
+
+#[test]
+fn watchdog_fed_only_within_the_check_in_bound() {
+    let feeds = |c: &Control<SimBoard>| c.board().watchdog_feeds;
+    // the tick that makes now = bound still feeds (checked in `bound` ms ago), the next does not
+    let mut c = core();
+    let mut fed = Vec::new();
+    for _ in 0..CHECKIN_BOUND_MS + 2 {
+        let before = feeds(&c);
+        c.tick(0);
+        fed.push(feeds(&c) > before);
+    }
+    assert!(fed[..CHECKIN_BOUND_MS as usize].iter().all(|&f| f), "fed while checked in");
+    assert!(!fed[CHECKIN_BOUND_MS as usize], "not fed {} ms after the check-in", CHECKIN_BOUND_MS + 1);
+}
+
+#[test]
+fn stop_drops_everything_at_once() {
+    let mut c = core();
+    let ceiling = hv_duty_for(5_000.0, MAX);
+    assert!(c.apply(&setpoints(&c, 100.0, ceiling)));
+    for _ in 0..10 {
+        c.tick(c.now_ms());
+    }
+    assert!(c.board().hv.iter().all(|h| h.duty > 0) && c.board().enable.high);
+    let epoch = c.view().epoch;
+    c.stop();
+    assert!(c.board().hv.iter().all(|h| h.duty == 0) && !c.board().enable.high);
+    assert_eq!(c.view().volts, [0.0; HV_CHANNELS]);
+    assert_eq!(c.view().epoch, epoch + 1);
+    c.tick(c.now_ms());
+    assert!(c.board().hv.iter().all(|h| h.duty == 0), "nothing after the stop's tick");
+}
+
+fn line(rx: &mut RxLines, s: &[u8]) -> RxEvent {
+    let mut ev = RxEvent::Nothing;
+    for &b in s {
+        ev = rx.push(b);
+    }
+    ev
+}
+
+#[test]
+fn rx_overruns_are_counted_per_line() {
+    let mut rx = RxLines::new();
+    for _ in 0..3 {
+        rx.overrun();
+        line(&mut rx, b"volt 1 5\n");
+    }
+    line(&mut rx, b"ok line\n");
+    assert_eq!(rx.pop(), Some(Record::Overrun(3)));
+    assert_eq!(rx.pop(), Some(Record::Line(heapless::Vec::from_slice(b"ok line").unwrap())));
+    assert_eq!(rx.pop(), None);
+    assert!(!rx.pending());
+    // a `stop` whose first word arrived whole acts despite a later overrun
+    line(&mut rx, b"stop ");
+    rx.overrun();
+    assert_eq!(line(&mut rx, b"x\n"), RxEvent::Stop);
+    // ... but not when a byte of the word was lost
+    line(&mut rx, b"st");
+    rx.overrun();
+    assert_eq!(line(&mut rx, b"op\n"), RxEvent::Nothing);
+    assert_eq!(rx.pop(), Some(Record::Overrun(1)));
+}
+
+#[test]
+fn rx_full_ring_loses_whole_lines_only() {
+    let mut rx = RxLines::new();
+    let text = [b'a'; 100];
+    let fits = (RX_RING - 2) / (text.len() + 2);
+    for _ in 0..fits + 3 {
+        line(&mut rx, &text);
+        line(&mut rx, b"\n");
+    }
+    let mut whole = 0;
+    let mut lost = 0;
+    while let Some(r) = rx.pop() {
+        match r {
+            Record::Line(v) => {
+                assert_eq!(&v[..], &text[..]);
+                whole += 1;
+            }
+            Record::Overrun(n) => lost += n as usize,
+            Record::TooLong => panic!("too long"),
+        }
+    }
+    assert_eq!(whole + lost, fits + 3);
+    assert!(whole >= fits - 1 && lost >= 3, "{whole} whole, {lost} lost");
+    // the ring works again once emptied
+    line(&mut rx, b"again\n");
+    assert_eq!(rx.pop(), Some(Record::Line(heapless::Vec::from_slice(b"again").unwrap())));
+}
+
+#[test]
+fn rx_input_flag_for_wait() {
+    let mut rx = RxLines::new();
+    assert!(!rx.take_input_seen());
+    rx.push(b'\n');
+    assert!(!rx.take_input_seen(), "a line ending alone is not input");
+    rx.push(b'x');
+    assert!(rx.take_input_seen());
+    assert!(!rx.take_input_seen(), "the flag clears");
+    rx.push(b'\n');
+    assert!(rx.pending());
+    assert!(rx.take_input_seen(), "a queued line counts");
+    assert_eq!(rx.received, 3);
+}
