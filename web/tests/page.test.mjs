@@ -58,7 +58,9 @@ test('the page loads: simulated board connected, posture, limits and stop shown'
   assert.equal(await page.title(), 'finger-fw: the soft finger, live');
   assert.match(await page.textContent('#source'), /simulated board/);
   assert.ok(await page.isVisible('#stop'));
-  assert.match(await page.textContent('#limits'), /vmax=10000\.0,10000\.0,10000\.0/);
+  const vm = (await board('limits')).kv.vmax;
+  assert.match(vm, /^\d+\.\d,\d+\.\d,\d+\.\d$/);
+  assert.ok((await page.textContent('#limits')).includes(`vmax=${vm}`), 'the limits in force shown');
   assert.match(await page.textContent('#limits'), /fmax=\d/);
   assert.equal(await page.locator('#board-shape circle').count(), 4, 'nodes 0..3 drawn');
   assert.equal(await page.locator('#board-shape .stack').count(), 3, 'three DE stacks drawn');
@@ -275,10 +277,11 @@ test('stop is always reachable and stops the board at once', async () => {
   await page.focus('#v1');
   await page.keyboard.press('End');
   await page.waitForFunction(() => document.getElementById('refusal').textContent.startsWith('volt 1 '));
-  assert.ok(Number((await page.textContent('#refusal')).split(' ')[2]) >= 10000, 'the slider reaches past the ceiling');
-  assert.match(await page.textContent('#refusal'), /^volt 1 \d+ {2}-> {2}err limit: channel 1: \d+\.\d V is at or past the ceiling 10000\.0 V/);
-  assert.equal((await board('status')).kv.target, '6000.0,6000.0,6000.0', 'the refusal changed nothing');
-  await page.waitForFunction(() => document.getElementById('v1').value === '6000');
+  const ceil = (await board('limits')).kv.vmax.split(',')[0];
+  assert.ok(Number((await page.textContent('#refusal')).split(' ')[2]) >= Number(ceil), 'the slider reaches past the ceiling');
+  assert.ok(new RegExp(`^volt 1 \\d+ {2}-> {2}err limit: channel 1: \\d+\\.\\d V is at or past the ceiling ${ceil} V`).test(await page.textContent('#refusal')));
+  assert.equal((await board('status')).kv.target, [v, v, v].map((x) => x.toFixed(1)).join(','), 'the refusal changed nothing');
+  await page.waitForFunction((x) => Math.abs(Number(document.getElementById('v1').value) - x) <= 25, v); // the slider's 50 V step
   await page.waitForFunction(() => Number(window.finger.status.volts.split(',')[0]) >= 2000);
   await shot('armed');
   // commands queued behind each other: stop goes first
