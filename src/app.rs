@@ -1119,7 +1119,8 @@ impl Commands {
 const CAL_NAMES: [&str; 8] = ["h1", "h2", "h3", "h4", "ea0", "ea1", "ei0", "ei1"];
 
 /// The board's default finger: MODEL.md's on the board's film (`Params::with_card`: the card's
-/// equilibrium modulus, permittivity, branches and breakdown field).
+/// equilibrium modulus, permittivity, branches and breakdown field). Generic so that the host's
+/// f64 model (the web view's overlay) is the board's finger too.
 pub fn board_params<R: finger_model::Real>() -> Params<R> {
     Params::with_card(crate::board::BOARD_CARD)
 }

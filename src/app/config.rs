@@ -100,10 +100,11 @@ impl ConfigState {
     }
 }
 
-/// The compiled defaults' finger: MODEL.md's with its FE calibration (as this build holds it).
+/// The compiled defaults' finger: MODEL.md's on the board's film with its FE calibration (as
+/// this build holds it; `preset default`).
 pub fn default_finger() -> Finger<f32> {
-    let p = preset(Params::default());
-    match Finger::with_calibration(p, Calibration::for_params(&p)) {
+    let p = preset(board_params());
+    match Finger::with_calibration(p, calibration_for(&p)) {
         Ok(f) => f,
         Err(_) => panic!("default parameters"),
     }
@@ -123,7 +124,7 @@ fn fw_names() -> impl Iterator<Item = &'static str> {
 /// build of this format).
 pub fn settings_of(rec: &Record) -> Result<(Finger<f32>, FwParams), Reject> {
     let mut p = match rec.preset {
-        0 => preset(Params::default()),
+        0 => preset(board_params()),
         1 => preset(Params::paper()),
         k => return Err(Reject::Preset(k)),
     };
@@ -164,7 +165,7 @@ pub fn settings_of(rec: &Record) -> Result<(Finger<f32>, FwParams), Reject> {
         return Err(Reject::Param("layers"));
     }
     let cal = match cal {
-        [None, None, None, None, None, None, None, None] => Calibration::for_params(&p),
+        [None, None, None, None, None, None, None, None] => calibration_for(&p),
         [Some(h1), Some(h2), Some(h3), Some(h4), Some(a0), Some(a1), Some(b0), Some(b1)] => {
             Calibration { hinge: [h1, h2, h3, h4], stack_axial: [a0, a1], stack_bending: [b0, b1] }
         }
