@@ -318,7 +318,7 @@ pub mod timing {
     pub static TICK_LATENCY_MIN: AtomicU32 = AtomicU32::new(u32::MAX);
     /// Control-task run time, counts.
     pub static TICK_RUN_MAX: AtomicU32 = AtomicU32::new(0);
-    /// The stack part of one channel in a control tick (guard, thickness, relaxation), counts.
+    /// One channel's stack step in a control tick (goal, slew, guard, thickness, relaxation), counts.
     pub static TICK_STACK_MAX: AtomicU32 = AtomicU32::new(0);
     /// Entry to entry of the control task, counts.
     pub static PERIOD_MIN: AtomicU32 = AtomicU32::new(u32::MAX);

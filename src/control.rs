@@ -366,14 +366,14 @@ impl<B: Board> Control<B> {
         self.tick_timed(last_checkin_ms, || 0);
     }
 
-    /// One 1 ms control tick. Each channel: its value moves at most `slew` x 1 ms toward its
-    /// goal (the target; in shaped actuation the voltage that holds the film at the target's
-    /// thickness now, capped by the supply), then the stack steps ([`Stacks::step`]: the guard
-    /// `v <= voltage_bound_now(state, s_floor)`, the thickness, the relaxation; after a stop
-    /// too, at 0 V: the film recovers in time) and the duty of the guarded value is written. Then the servo follows; a disarm ramp that reached
-    /// 0 drops the enable; the watchdog is fed if the command side checked in at
-    /// `last_checkin_ms` within [`CHECKIN_BOUND_MS`]. Returns the longest stack part of a
-    /// channel (guard, step) in `clock` counts.
+    /// One 1 ms control tick. Each channel steps ([`Stacks::step`]): its value moves at most
+    /// `slew` x 1 ms toward its goal (the target; in shaped actuation the voltage that holds
+    /// the film at the target's thickness now, capped by the supply), the guard
+    /// `v <= voltage_bound_now(state, s_floor)`, the thickness, the relaxation (after a stop
+    /// too, at 0 V: the film recovers in time); the duty of the guarded value is written. Then
+    /// the servo follows; a disarm ramp that reached 0 drops the enable; the watchdog is fed if
+    /// the command side checked in at `last_checkin_ms` within [`CHECKIN_BOUND_MS`]. Returns
+    /// the longest stack step of a channel in `clock` counts.
     pub fn tick_timed(&mut self, last_checkin_ms: u32, clock: fn() -> u32) -> u32 {
         self.now_ms = self.now_ms.wrapping_add(1);
         let step = self.slew * 0.001;
@@ -382,9 +382,7 @@ impl<B: Board> Control<B> {
             let Some(stacks) = self.stacks.as_mut() else { break };
             let (v, t) = (self.volts[ch], self.target[ch]);
             let t0 = clock();
-            let goal = if self.shaped && t > 0.0 && !cfg!(m3) { stacks.shaped_goal(ch, self.s_floor[ch]).min(HV_LIMIT_V) } else { t };
-            let slewed = if goal > v { (v + step).min(goal) } else { (v - step).max(goal) };
-            let applied = stacks.step(ch, slewed, self.s_floor[ch]);
+            let applied = stacks.step(ch, v, t, self.s_floor[ch], self.shaped, step);
             worst = worst.max(clock().wrapping_sub(t0));
             // a fault stop zeroes every channel; the later ones still step (at 0 V)
             let nv = match applied {

@@ -70,7 +70,7 @@ fn main() {
     // 1 instruction = 1 ns under -icount shift=0
     let stack_us: f64 = kv(&t, "tick_stack_us").parse().unwrap_or(f64::NAN);
     s.push_str(&format!(
-        "| the stacks in time, one channel's part of a tick (guard, thickness, relaxation), max | {stack_us:.3} us = {:.0} M4F instructions |\n",
+        "| the stacks in time, one channel's step in a tick (goal, slew, guard, thickness, relaxation), max | {stack_us:.3} us = {:.0} M4F instructions |\n",
         stack_us * 1000.0
     ));
     s.push_str(&format!("| control ticks counted | {} |\n", kv(&t, "ticks")));

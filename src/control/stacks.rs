@@ -3,9 +3,10 @@
 //!
 //! What it is: the board's law (the card and geometry of `crate::board`, built once), its
 //! stepper for one 1 ms tick, the board's hold ceiling and `s_hold` (the thinnest a held
-//! voltage ever gets), and per channel the step (the model's `guarded_tick`): guard the
-//! voltage by `voltage_bound_now(state, s_floor)`, solve the thickness at the guarded voltage
-//! from the last one, relax the branches. Invariant: the thickness after every step is at or
+//! voltage ever gets), and per channel the step (the model's drive step,
+//! `material::drive::Channel::step`): slew toward the goal, guard the voltage by
+//! `voltage_bound_now(state, s_floor)`, solve the thickness at the guarded voltage from the
+//! last one, relax the branches. Invariant: the thickness after every step is at or
 //! above the floor given (never below `s_hold`: the floor is `s_hold` or a target's
 //! equilibrium ratio, itself above `s_hold`), and the field at or below the breakdown bound.
 //!
@@ -17,9 +18,13 @@
 //! actuation is plain, and the thickness now is not known (NaN).
 
 #[cfg(not(m3))]
-use finger_model::material::{guarded_tick, shaped_voltage, Relaxation, StackState};
+use finger_model::material::drive::{Channel, DriveLimits, Mode};
+#[cfg(not(m3))]
+use finger_model::material::Relaxation;
 use finger_model::material::{equilibrium_ratio, StackLaw};
 
+#[cfg(not(m3))]
+use crate::board::HV_MAX_V;
 use crate::board::{board_hold_ceiling_v, board_law, HV_CHANNELS};
 
 /// Control tick, s.
@@ -33,8 +38,9 @@ pub struct Stacks {
     relax: Relaxation<f32>,
     hold_v: f32,
     s_hold: f32,
+    /// Each channel's voltage and film state, as the model's drive steps them.
     #[cfg(not(m3))]
-    state: [StackState<f32>; HV_CHANNELS],
+    chan: [Channel<f32>; HV_CHANNELS],
 }
 
 /// A step the model refused (the state past its pull-in at that voltage): the caller stops.
@@ -52,7 +58,7 @@ impl Stacks {
             return None;
         }
         #[cfg(not(m3))]
-        let stacks = Stacks { law, relax: Relaxation::new(&law, TICK_S).ok()?, hold_v, s_hold, state: [StackState::rest(); HV_CHANNELS] };
+        let stacks = Stacks { law, relax: Relaxation::new(&law, TICK_S).ok()?, hold_v, s_hold, chan: [Channel::rest(); HV_CHANNELS] };
         #[cfg(m3)]
         let stacks = Stacks { law, hold_v, s_hold };
         Some(stacks)
@@ -76,7 +82,7 @@ impl Stacks {
     pub fn ratios(&self) -> [f32; HV_CHANNELS] {
         let mut r = [1.0; HV_CHANNELS];
         for (ch, s) in r.iter_mut().enumerate() {
-            *s = self.state[ch].s;
+            *s = self.chan[ch].state.s;
         }
         r
     }
@@ -95,44 +101,32 @@ impl Stacks {
         }
     }
 
-    /// Shaped actuation's voltage for channel `ch` now: the voltage that holds its film at
-    /// `s_target` with the branches as they are, V (0 when the film is thinner than that even
-    /// at 0 V). The caller caps and slews it; [`Stacks::step`] guards it.
+    /// One tick of channel `ch` from `volts_now` toward `target_v` whose floor is `s_floor`
+    /// (`s_hold` plain, the target's equilibrium ratio shaped): the model's drive step
+    /// (`material::drive::Channel::step`: the goal, the target or shaped the voltage that holds
+    /// the film at `s_floor` now capped by the supply; the slew by `slew_step`; `guarded_tick`).
+    /// The voltage applied, V. Refused (the state past its pull-in, not reachable under the
+    /// guard): nothing changes, the caller stops.
     #[cfg(not(m3))]
-    pub fn shaped_goal(&self, ch: usize, s_target: f32) -> f32 {
-        let v = shaped_voltage(&self.law, &self.state[ch], s_target);
-        if v > 0.0 {
-            v
-        } else {
-            0.0
-        }
-    }
-
-    /// One tick of channel `ch` (`guarded_tick`): the voltage `requested` limited to
-    /// `voltage_bound_now(state, s_floor)`, the thickness at the voltage applied from the last
-    /// one, the branches relaxed. The voltage applied, V. Refused (the state past its pull-in,
-    /// not expected under the guard): the channel steps at 0 V instead.
-    #[cfg(not(m3))]
-    pub fn step(&mut self, ch: usize, requested: f32, s_floor: f32) -> Result<f32, StepRefused> {
-        let st = &mut self.state[ch];
-        match guarded_tick(&self.law, &self.relax, st, requested, s_floor) {
-            Ok(v) => Ok(v),
+    pub fn step(&mut self, ch: usize, volts_now: f32, target_v: f32, s_floor: f32, shaped: bool, slew_step: f32) -> Result<f32, StepRefused> {
+        let lim = DriveLimits { s_hold: self.s_hold, slew_step, v_cap: HV_MAX_V };
+        let mode = if shaped { Mode::Shaped } else { Mode::Plain };
+        let c = &mut self.chan[ch];
+        c.volts = volts_now;
+        match c.step(&self.law, &self.relax, &lim, mode, target_v, s_floor) {
+            Ok(()) => Ok(c.volts),
             Err(_) => {
-                let _ = guarded_tick(&self.law, &self.relax, st, 0.0, s_floor);
+                c.volts = 0.0;
                 Err(StepRefused)
             }
         }
     }
 
-    /// The M3 image's step: the voltage asked (NaN or negative: 0), nothing integrated.
+    /// The M3 image's step: the slew toward the target (already within the hold ceiling),
+    /// nothing integrated.
     #[cfg(m3)]
-    pub fn step(&mut self, _ch: usize, requested: f32, _s_floor: f32) -> Result<f32, StepRefused> {
-        Ok(if requested > 0.0 { requested } else { 0.0 })
-    }
-
-    /// The M3 image: shaped actuation is plain (no film state to shape against).
-    #[cfg(m3)]
-    pub fn shaped_goal(&self, _ch: usize, _s_target: f32) -> f32 {
-        0.0
+    pub fn step(&mut self, _ch: usize, volts_now: f32, target_v: f32, _s_floor: f32, _shaped: bool, slew_step: f32) -> Result<f32, StepRefused> {
+        let v = if target_v > volts_now { (volts_now + slew_step).min(target_v) } else { (volts_now - slew_step).max(target_v) };
+        Ok(if v > 0.0 { v } else { 0.0 })
     }
 }
