@@ -63,20 +63,20 @@ fn saved_settings_survive_system_reset_and_factory_restores_defaults() {
     assert_eq!(ok(&mut q, "cal"), CAL_DEFAULT);
 
     // a setting that raises the ceiling is refused at save: the store stays as it was
-    ok(&mut q, "param v_supply 20000");
+    ok(&mut q, "param margin 0.99");
     let r = q.cmd("save");
     assert!(r.starts_with("err limit: save: these settings raise the model's ceiling"), "{r}");
     q.system_reset();
     assert!(q.banner.contains(" config=empty "), "{}", q.banner);
-    assert_eq!(ok(&mut q, "param v_supply"), "ok v_supply=10000");
+    assert_eq!(ok(&mut q, "param margin"), "ok margin=0.9");
 }
 
 #[test]
 fn a_forced_store_that_raises_the_ceiling_is_refused_at_boot() {
-    // the record `save` refuses (v_supply 20 kV), built on the host into the store's pages
+    // the record `save` refuses (margin 0.99), built on the host into the store's pages
     let app = finger_fw::App::new(finger_fw::sim::SimBoard::default());
     let mut rec = record_of(app.finger(), app.fw_params(), 1);
-    rec.values.iter_mut().find(|v| v.0 == tag(b'p', "v_supply")).unwrap().1 = 20_000.0;
+    rec.values.iter_mut().find(|v| v.0 == tag(b'p', "margin")).unwrap().1 = 0.99;
     let mut bytes = [0u8; RECORD_MAX];
     let n = rec.encode(&mut bytes);
     let flash = CutFlash::<PAGE>::new(PAGES);
@@ -92,8 +92,9 @@ fn a_forced_store_that_raises_the_ceiling_is_refused_at_boot() {
     assert_eq!(val(&q.cmd("status"), "fault"), "config-rejected");
     let c = q.cmd("config");
     assert!(c.contains(" boot=rejected reason=ceiling fault=config-rejected "), "{c}");
-    assert_eq!(ok(&mut q, "param v_supply"), "ok v_supply=10000");
-    assert!(ok(&mut q, "limits").starts_with("ok vmax=10000.0,10000.0,10000.0 "));
+    assert_eq!(ok(&mut q, "param margin"), "ok margin=0.9");
+    let fresh = Qemu::boot(&format!("settings-{}", line!())).cmd("limits");
+    assert_eq!(ok(&mut q, "limits"), fresh);
     // a fresh save clears the fault
     assert!(ok(&mut q, "save").starts_with("ok saved=1 "));
     assert_eq!(val(&q.cmd("status"), "fault"), "none");

@@ -3,7 +3,7 @@
 //!
 //! What is stored: every console-settable value (the model's parameters but the read-only ones,
 //! the calibration `cal`, the firmware parameters but the board constants) and the preset's
-//! choice (the DE modulus rule, which no parameter sets). A record is read as a console `param`
+//! choice (the film's card and the DE modulus rule, which no parameter sets). A record is read as a console `param`
 //! reads a value: each model parameter through `Params::set` (its range and the set's
 //! consistency), each firmware parameter through its range, the calibration through
 //! `Finger::with_calibration`, and the ceiling it gives never above the compiled defaults' (the
@@ -100,10 +100,11 @@ impl ConfigState {
     }
 }
 
-/// The compiled defaults' finger: MODEL.md's with its FE calibration (as this build holds it).
+/// The compiled defaults' finger: MODEL.md's on the board's film, with its FE calibration (as
+/// `Commands::new` and `preset default` build it).
 pub fn default_finger() -> Finger<f32> {
-    let p = preset(Params::default());
-    match Finger::with_calibration(p, Calibration::for_params(&p)) {
+    let p = preset(board_params());
+    match Finger::with_calibration(p, calibration_for(&p)) {
         Ok(f) => f,
         Err(_) => panic!("default parameters"),
     }
@@ -123,7 +124,7 @@ fn fw_names() -> impl Iterator<Item = &'static str> {
 /// build of this format).
 pub fn settings_of(rec: &Record) -> Result<(Finger<f32>, FwParams), Reject> {
     let mut p = match rec.preset {
-        0 => preset(Params::default()),
+        0 => preset(board_params()),
         1 => preset(Params::paper()),
         k => return Err(Reject::Preset(k)),
     };
@@ -164,7 +165,7 @@ pub fn settings_of(rec: &Record) -> Result<(Finger<f32>, FwParams), Reject> {
         return Err(Reject::Param("layers"));
     }
     let cal = match cal {
-        [None, None, None, None, None, None, None, None] => Calibration::for_params(&p),
+        [None, None, None, None, None, None, None, None] => calibration_for(&p),
         [Some(h1), Some(h2), Some(h3), Some(h4), Some(a0), Some(a1), Some(b0), Some(b1)] => {
             Calibration { hinge: [h1, h2, h3, h4], stack_axial: [a0, a1], stack_bending: [b0, b1] }
         }
@@ -203,10 +204,9 @@ pub fn record_of(finger: &Finger<f32>, fw: &FwParams, counter: u32) -> Record {
         for name in fw_names() {
             let _ = values.push((tag(b'f', name), fw.get(name).unwrap_or(f32::NAN)));
         }
-        let preset = match p.de_rule {
-            finger_model::DeModulusRule::PaperEq3 => 1,
-            _ => 0,
-        };
+        // the paper's preset is the one on the paper's card (the DE modulus rule and the
+        // film, which no parameter sets); any other started from the board's
+        let preset = if p.card == Params::<f32>::paper().card { 1 } else { 0 };
         Record { counter, preset, values }
 }
 
