@@ -1119,8 +1119,9 @@ impl Commands {
 const CAL_NAMES: [&str; 8] = ["h1", "h2", "h3", "h4", "ea0", "ea1", "ei0", "ei1"];
 
 /// The board's default finger: MODEL.md's on the board's film (`Params::with_card`: the card's
-/// equilibrium modulus, permittivity, branches and breakdown field).
-fn board_params() -> Params<f32> {
+/// equilibrium modulus, permittivity, branches and breakdown field). Generic so that the host's
+/// f64 model (the web view's overlay) is the board's finger too.
+pub fn board_params<R: finger_model::Real>() -> Params<R> {
     Params::with_card(crate::board::BOARD_CARD)
 }
 
@@ -1128,9 +1129,9 @@ fn board_params() -> Params<f32> {
 /// MODEL.md's finger on the board's film has MODEL.md's calibration. Its hinge factors belong
 /// to the geometry; its stack factors were computed for the paper's film, and on VHB 4905 the
 /// stacks add almost nothing to the joints (docs/materials.md), so the film does not clear it.
-fn calibration_for(p: &Params<f32>) -> Calibration<f32> {
-    let d = Params::<f32>::default();
-    let board = board_params();
+pub fn calibration_for<R: finger_model::Real>(p: &Params<R>) -> Calibration<R> {
+    let d = Params::<R>::default();
+    let board = board_params::<R>();
     let film_is_the_boards = p.card == board.card && p.g == board.g && p.nu == board.nu && p.de_rule == board.de_rule;
     if film_is_the_boards {
         Calibration::for_params(&Params { card: d.card, g: d.g, nu: d.nu, de_rule: d.de_rule, ..*p })

@@ -201,7 +201,8 @@ fn shaped_actuation_never_undershoots_and_settles_faster_than_plain() {
         // the shaped voltage goes above the target's and comes back to it
         let vmax = shaped.iter().map(|x| x.1).fold(0.0f32, f32::max);
         assert!(vmax > v, "{v} V: shaped drove at most {vmax} V");
-        let tp = settling_s(&plain, s_target).expect("plain settles within the run");
+        // plain may still be creeping at the end of the run (then it is slower, whatever it takes)
+        let tp = settling_s(&plain, s_target).unwrap_or(f64::INFINITY);
         let ts = settling_s(&shaped, s_target).expect("shaped settles within the run");
         println!("settle to 1 % at {v:.0} V (s_target {s_target:.4}): plain {tp:.2} s, shaped {ts:.2} s");
         assert!(ts < tp, "{v} V: shaped {ts} s, plain {tp} s");

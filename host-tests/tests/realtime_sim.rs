@@ -229,7 +229,7 @@ fn watchdog_fed_only_while_the_command_side_checks_in() {
     assert!(last > feeds_at(1_900) || ticks.last().unwrap().0 < 2_010_000);
 }
 
-/// The servo moves with the slewed voltages: as the excursion at the slewed voltage, not at once.
+/// The servo moves with the slewed voltages: in proportion to the ramp's progress, not at once.
 #[test]
 fn servo_follows_the_slewed_voltages() {
     use finger_model::Method;
@@ -237,7 +237,7 @@ fn servo_follows_the_slewed_voltages() {
     let mut out = Out(String::new());
     // a fine servo scale (2000 counts over 20 deg) and 5 kV (the excursion of a few
     // counts), so the excursion's change shows
-    for l in ["param slew 2000\n", "param spool_r 5\n", "param servo_range 20\n", "arm\n", "force 0.5\n"] {
+    for l in ["param slew 2000\n", "param spool_r 5\n", "param servo_range 20\n", "arm\n", "force 0.4\n"] {
         a.input(l.as_bytes(), &mut out);
     }
     let s0 = a.board().servo.duty;
@@ -253,12 +253,13 @@ fn servo_follows_the_slewed_voltages() {
         }
     }
     let s1 = *servo.last().unwrap();
-    assert!(s1.abs_diff(s0) >= 4, "{s0} -> {s1}");
-    // halfway through the ramp, where the excursion at the voltage then is (thinning grows
-    // with V^2, so about a quarter of the way)
+    assert!(s1.abs_diff(s0) >= 4, "{s0} -> {s1}: {}", out.0);
+    // 80 % through the ramp, the servo 80 % of its way (in proportion to the ramp's
+    // progress: the film creeps, so the excursion is no function of the voltage alone)
     assert!((mid_v - 4000.0).abs() < 10.0, "{mid_v}");
-    let e = |v: f32| a.finger().solve(0.5, &[v; 3], Method::converged()).unwrap().cable_excursion as f64;
-    let frac = (e(mid_v) - e(0.0)) / (e(5000.0) - e(0.0));
+    let e = |v: f32| a.finger().solve(0.4, &[v; 3], Method::converged()).unwrap().cable_excursion as f64;
+    assert!(e(5000.0) > e(0.0), "the stacks thin at 5 kV");
+    let frac = mid_v as f64 / 5000.0;
     let mid = servo[2000] as f64;
     let want = s0 as f64 + (s1 as f64 - s0 as f64) * frac;
     // (s0, s1 and mid each rounded to a count)

@@ -3,9 +3,9 @@
 //!
 //! What is stored: every console-settable value (the model's parameters but the read-only ones,
 //! the calibration `cal`, the firmware parameters but the board constants) and the preset's
-//! choice (the film's card and the DE modulus rule, which no parameter sets). A record is read as a console `param`
-//! reads a value: each model parameter through `Params::set` (its range and the set's
-//! consistency), each firmware parameter through its range, the calibration through
+//! choice (the film's card and the DE modulus rule, which no parameter sets). A record is read
+//! as a console `param` reads a value: each model parameter through `Params::set` (its range
+//! and the set's consistency), each firmware parameter through its range, the calibration through
 //! `Finger::with_calibration`, and the ceiling it gives never above the compiled defaults' (the
 //! board constants'). A record failing any check is refused whole: the board keeps its compiled
 //! defaults and says so (boot banner, `config`, `status` `fault=config-rejected`) until
@@ -100,8 +100,8 @@ impl ConfigState {
     }
 }
 
-/// The compiled defaults' finger: MODEL.md's on the board's film, with its FE calibration (as
-/// `Commands::new` and `preset default` build it).
+/// The compiled defaults' finger: MODEL.md's on the board's film with its FE calibration (as
+/// this build holds it; `preset default`).
 pub fn default_finger() -> Finger<f32> {
     let p = preset(board_params());
     match Finger::with_calibration(p, calibration_for(&p)) {

@@ -58,7 +58,10 @@ test('the page loads: simulated board connected, posture, limits and stop shown'
   assert.equal(await page.title(), 'finger-fw: the soft finger, live');
   assert.match(await page.textContent('#source'), /simulated board/);
   assert.ok(await page.isVisible('#stop'));
-  assert.match(await page.textContent('#limits'), /vmax=10000\.0,10000\.0,10000\.0/);
+  // the ceiling in force: the same on each channel, at most the board's hold ceiling
+  const lim = await page.textContent('#limits');
+  const vm = lim.match(/vmax=(\d+\.\d),(\d+\.\d),(\d+\.\d)/);
+  assert.ok(vm && vm[1] === vm[2] && vm[2] === vm[3] && Number(vm[1]) > 0 && Number(vm[1]) <= Number(lim.match(/vhold=(\d+\.\d)/)[1]), lim);
   assert.match(await page.textContent('#limits'), /fmax=\d/);
   assert.equal(await page.locator('#board-shape circle').count(), 4, 'nodes 0..3 drawn');
   assert.equal(await page.locator('#board-shape .stack').count(), 3, 'three DE stacks drawn');
@@ -254,7 +257,7 @@ test('stop is always reachable and stops the board at once', async () => {
   assert.match((await board('force 1')).line, /^ok force=1\.000 /);
   // a voltage well inside the ceiling in force (`limits`' vmax: the board's film sets it)
   const vmax = Number((await board('limits')).line.match(/ vmax=([0-9.]+),/)[1]);
-  const v = Math.floor(0.6 * vmax);
+  const v = Math.floor(0.6 * vmax / 100) * 100; // on the sliders' 50 V steps
   assert.match((await board(`volt all ${v}`)).line, new RegExp(`^ok volts=${v}\\.0,${v}\\.0,${v}\\.0$`));
   await page.waitForFunction(() => window.finger.status && Number(window.finger.status.volts.split(',')[0]) > 0);
   // visible and on top, in a small window and scrolled to the bottom
@@ -275,10 +278,10 @@ test('stop is always reachable and stops the board at once', async () => {
   await page.focus('#v1');
   await page.keyboard.press('End');
   await page.waitForFunction(() => document.getElementById('refusal').textContent.startsWith('volt 1 '));
-  assert.ok(Number((await page.textContent('#refusal')).split(' ')[2]) >= 10000, 'the slider reaches past the ceiling');
-  assert.match(await page.textContent('#refusal'), /^volt 1 \d+ {2}-> {2}err limit: channel 1: \d+\.\d V is at or past the ceiling 10000\.0 V/);
-  assert.equal((await board('status')).kv.target, '6000.0,6000.0,6000.0', 'the refusal changed nothing');
-  await page.waitForFunction(() => document.getElementById('v1').value === '6000');
+  assert.ok(Number((await page.textContent('#refusal')).split(' ')[2]) >= vmax, 'the slider reaches past the ceiling');
+  assert.match(await page.textContent('#refusal'), new RegExp(`^volt 1 \\d+ {2}-> {2}err limit: channel 1: \\d+\\.\\d V is at or past the ceiling ${vmax.toFixed(1).replace('.', '\\.')} V`));
+  assert.equal((await board('status')).kv.target, `${v}.0,${v}.0,${v}.0`, 'the refusal changed nothing');
+  await page.waitForFunction((x) => document.getElementById('v1').value === String(x), v);
   await page.waitForFunction(() => Number(window.finger.status.volts.split(',')[0]) >= 2000);
   await shot('armed');
   // commands queued behind each other: stop goes first

@@ -94,3 +94,49 @@ pub fn settling_time<R: Real>(law: &StackLaw<R>, relax: &Relaxation<R>, lim: &Dr
     }
     Ok(None)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{hold_ceiling, hold_ratio, VHB_4905};
+
+    fn setup() -> (StackLaw<f64>, Relaxation<f64>, DriveLimits<f64>, f64) {
+        let law = StackLaw::new(&VHB_4905, 0.5, 0.9).unwrap();
+        let relax = Relaxation::new(&law, 0.01).unwrap();
+        let lim = DriveLimits { s_hold: hold_ratio(&law).unwrap(), slew_step: 2000.0 * 0.01, v_cap: 10_000.0 };
+        (law, relax, lim, hold_ceiling(&law, 0.9))
+    }
+
+    #[test]
+    fn shaped_never_thins_past_its_target_and_settles_first() {
+        let (law, relax, lim, hold) = setup();
+        for frac in [0.3, 0.7, 1.0] {
+            let v = frac * hold;
+            let s_t = equilibrium_ratio(&law, v).unwrap();
+            let mut ch = Channel::rest();
+            let mut above = false;
+            for _ in 0..20_000 {
+                ch.step(&law, &relax, &lim, Mode::Shaped, v, s_t).unwrap();
+                assert!(ch.state.s >= s_t * (1.0 - 1e-12), "{v} V: {} < {s_t}", ch.state.s);
+                above |= ch.volts > v * 1.01;
+            }
+            assert!(above, "{v} V: the shaped drive never went above the target");
+            let plain = settling_time(&law, &relax, &lim, Mode::Plain, v, 0.01, 100_000).unwrap().unwrap();
+            let shaped = settling_time(&law, &relax, &lim, Mode::Shaped, v, 0.01, 100_000).unwrap().unwrap();
+            // at a low voltage the film barely creeps: both settle with the slew
+            assert!(shaped <= plain && (frac < 0.5 || shaped < 0.5 * plain), "{v} V: shaped {shaped} s, plain {plain} s");
+        }
+        assert_eq!(settling_time(&law, &relax, &lim, Mode::Plain, 0.0, 0.01, 10).unwrap(), Some(0.0));
+    }
+
+    #[test]
+    fn plain_never_thins_past_s_hold_whatever_the_target() {
+        let (law, relax, lim, hold) = setup();
+        // a target past the hold ceiling (the firmware refuses it first): the guard still holds
+        let mut ch = Channel::rest();
+        for _ in 0..60_000 {
+            ch.step(&law, &relax, &lim, Mode::Plain, 2.0 * hold, lim.s_hold).unwrap();
+            assert!(ch.state.s >= lim.s_hold * (1.0 - 1e-12));
+        }
+    }
+}
