@@ -111,6 +111,7 @@ pub const FW_PARAMS: &[FwParamInfo] = &[
     FwParamInfo { name: "spool_r", min: 0.5, max: 100.0, range: "0.5..100 mm" },
     FwParamInfo { name: "servo_range", min: 10.0, max: 360.0, range: "10..360 deg (1.0..2.0 ms)" },
     FwParamInfo { name: "servo_dir", min: -1.0, max: 1.0, range: "1 or -1" },
+    #[cfg(not(m3))]
     FwParamInfo { name: "shaped", min: 0.0, max: 1.0, range: "0 (plain step) or 1 (shaped actuation)" },
     // read-only: the HV module's calibration is compiled in (crate::board); a set is refused
     FwParamInfo { name: "hv_fs", min: 1.0, max: 0.0, range: "read-only: V at 100 % duty, a board constant (a different HV module is a different build)" },
@@ -124,6 +125,7 @@ impl FwParams {
             "spool_r" => self.spool_r,
             "servo_range" => self.servo_range,
             "servo_dir" => self.servo_dir,
+            #[cfg(not(m3))]
             "shaped" => self.shaped as u8 as f32,
             "hv_fs" => HV_FULL_SCALE_V,
             "hv_zero" => HV_ZERO_DUTY_PCT,
@@ -144,6 +146,7 @@ impl FwParams {
             "spool_r" => self.spool_r = f,
             "servo_range" => self.servo_range = f,
             "servo_dir" if v == 1.0 || v == -1.0 => self.servo_dir = f,
+            #[cfg(not(m3))]
             "shaped" if v == 0.0 || v == 1.0 => self.shaped = v == 1.0,
             _ => return Err(bad()),
         }
@@ -598,6 +601,7 @@ impl Commands {
                 no_args(args, "limits")?;
                 self.cmd_limits(r);
             }
+            #[cfg(not(m3))]
             b"material" => {
                 no_args(args, "material")?;
                 self.film.write_material(r);
@@ -1149,35 +1153,48 @@ fn preset(p: Params<f32>) -> Params<f32> {
     }
 }
 
+/// One `help` line: `syntax - description`; the Cortex-M3 image keeps the syntax alone (its
+/// flash budget).
+macro_rules! help_line {
+    ($syntax:literal, $what:literal) => {
+        if cfg!(m3) {
+            $syntax
+        } else {
+            concat!($syntax, " - ", $what)
+        }
+    };
+}
+
 const HELP: &[&str] = &[
-    "help - this list",
-    "version - firmware name and version",
-    "status - outputs, setpoints, model state, fault",
-    "limits - ceilings in force",
-    "material - the board's film: card, moduli, permittivity, breakdown, hold ceiling",
-    "solve <P> <V1> <V2> <V3> - model only, nothing moves",
+    help_line!("help", "this list"),
+    help_line!("version", "firmware name and version"),
+    help_line!("status", "outputs, setpoints, model state, fault"),
+    help_line!("limits", "ceilings in force"),
+    #[cfg(not(m3))]
+    help_line!("material", "the board's film: card, moduli, permittivity, breakdown, hold ceiling"),
+    help_line!("solve <P> <V1> <V2> <V3>", "model only, nothing moves"),
     #[cfg(feature = "shape")]
-    "shape <P> <V1> <V2> <V3> - model only: node and hinge-end poses of that solve",
-    "arm | disarm - allow HV / ramp HV to 0, then drop the enable",
-    "stop - emergency stop: HV off at once, cable released, disarmed",
-    "volt <1|2|3|all> <V> - HV channel setpoint, slewed; needs arm",
-    "force <P> - cable tension (servo); needs arm",
+    help_line!("shape <P> <V1> <V2> <V3>", "model only: node and hinge-end poses of that solve"),
+    help_line!("arm | disarm", "allow HV / ramp HV to 0, then drop the enable"),
+    help_line!("stop", "emergency stop: HV off at once, cable released, disarmed"),
+    help_line!("volt <1|2|3|all> <V>", "HV channel setpoint, slewed; needs arm"),
+    help_line!("force <P>", "cable tension (servo); needs arm"),
     #[cfg(m3)]
-    "pose <d1> <d2> <d3> [<P>] - inverse (fixed point): tension and voltages for these joint angles (deg); moves only when armed",
+    help_line!("pose <d1> <d2> <d3> [<P>]", "inverse (fixed point): tension and voltages for these joint angles (deg); moves only when armed"),
     #[cfg(feature = "pose")]
-    "pose <d1> <d2> <d3> [<P>] - inverse: tension and voltages for these joint angles (deg); moves only when armed",
+    help_line!("pose <d1> <d2> <d3> [<P>]", "inverse: tension and voltages for these joint angles (deg); moves only when armed"),
     #[cfg(feature = "contact")]
-    "contact <P0> <P> [<V1> <V2> <V3>] - model only: tip force on a stop at the free tip of P0",
-    "param [<name> [<value>]] - list, read or set a parameter; only while disarmed",
-    "preset <default|paper> - model parameters back to a preset; only while disarmed",
-    "cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none] - FE calibration factors: read, set or clear (set and clear only while disarmed)",
-    "wait <s> - run the control loop for s seconds, then reply",
+    help_line!("contact <P0> <P> [<V1> <V2> <V3>]", "model only: tip force on a stop at the free tip of P0"),
+    help_line!("param [<name> [<value>]]", "list, read or set a parameter; only while disarmed"),
+    help_line!("preset <default|paper>", "model parameters back to a preset; only while disarmed"),
+    help_line!("cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]", "FE calibration factors: read, set or clear (set and clear only while disarmed)"),
+    help_line!("wait <s>", "run the control loop for s seconds, then reply"),
     #[cfg(feature = "settings")]
-    "save - keep the settings in force across resets; only while disarmed",
+    help_line!("save", "keep the settings in force across resets; only while disarmed"),
     #[cfg(feature = "settings")]
-    "config - what is stored, its save counter, what the boot loaded",
+    help_line!("config", "what is stored, its save counter, what the boot loaded"),
     #[cfg(feature = "settings")]
-    "factory - erase the stored settings, back to the compiled defaults; only while disarmed",
+    help_line!("factory", "erase the stored settings, back to the compiled defaults; only while disarmed"),
 ];
 
 fn no_args(args: &[&[u8]], cmd: &str) -> Result<(), CmdError> {

@@ -41,12 +41,12 @@ impl Branch {
     pub const NONE: Branch = Branch { g_mpa: 0.0, tau_s: 1.0 };
 }
 
-/// The dielectric breakdown field `E_B = E_B0 lambda^k`, lambda = s^(-1/2) the in-plane stretch
-/// (k = 0 where no source gives the stretch dependence).
+/// The dielectric breakdown field, taken flat in stretch: every source that measured it found
+/// it rising as the film is stretched and thinned, so the unstretched figure is a lower bound
+/// (docs/materials.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Breakdown {
     pub field0_v_per_um: f64,
-    pub stretch_exponent: f64,
 }
 
 /// A film's material card (values in `cards`, sources in docs/materials.md). Cards are told
@@ -96,10 +96,8 @@ pub struct StackLaw<R> {
     pub eps: R,
     /// Layer thickness at rest, mm.
     pub z0: R,
-    /// Unstretched breakdown field, V/mm.
+    /// Breakdown field (unstretched, a lower bound when stretched), V/mm.
     pub field0_v_per_mm: R,
-    /// k / 2: E_B(s) = E_B0 s^(-k/2).
-    pub half_k: R,
     /// Fraction of a bound the ceilings allow, (0, 1].
     pub margin: R,
 }
@@ -129,12 +127,8 @@ impl<R: Real> StackLaw<R> {
         let b = card.breakdown;
         // checked in R: no f64 arithmetic on a target without a double-precision FPU
         let field0_v_per_um = R::from_f64(b.field0_v_per_um);
-        let k = R::from_f64(b.stretch_exponent);
         if card.branch_count > MAX_BRANCHES || !positive(field0_v_per_um) {
             return Err(Error::Param { name: "card", range: "<= 3 branches, breakdown field > 0" });
-        }
-        if !(k >= R::zero() && k < R::from_f64(2.0)) {
-            return Err(Error::Param { name: "card", range: "breakdown stretch exponent 0 <= k < 2" });
         }
         let mut g = [R::zero(); MAX_BRANCHES];
         let mut tau = [R::one(); MAX_BRANCHES];
@@ -154,18 +148,13 @@ impl<R: Real> StackLaw<R> {
             eps: R::from_f64(EPS0) * eps_r,
             z0: z0_mm,
             field0_v_per_mm: field0_v_per_um * R::from_f64(1e3),
-            half_k: k * R::from_f64(0.5),
             margin,
         })
     }
 
-    /// The breakdown field at thickness stretch s, V/mm: `E_B0 s^(-k/2)`.
-    pub fn breakdown_field(&self, s: R) -> R {
-        if self.half_k == R::zero() {
-            self.field0_v_per_mm
-        } else {
-            self.field0_v_per_mm * (-self.half_k * s.ln()).exp()
-        }
+    /// The breakdown field at thickness stretch s, V/mm (flat: `Breakdown`).
+    pub fn breakdown_field(&self, _s: R) -> R {
+        self.field0_v_per_mm
     }
 
     /// The voltage of the breakdown field across the film at stretch s, V: `E_B(s) s z0`.
@@ -662,7 +651,7 @@ mod tests {
             branches: [Branch { g_mpa: 0.03, tau_s: 1.5 }, Branch::NONE, Branch::NONE],
             branch_count: 1,
             eps_r: 4.8,
-            breakdown: Breakdown { field0_v_per_um: 100.0, stretch_exponent: 0.0 },
+            breakdown: Breakdown { field0_v_per_um: 100.0 },
         };
         let law = StackLaw::<f64>::new(&card, 0.5, 0.9).unwrap();
         let (ge, g1, tau) = (0.02, 0.03, 1.5);

@@ -13,10 +13,14 @@ use finger_model::material::Relaxation;
 use finger_model::material::{equilibrium_ratio, hold_ratio, StackLaw};
 use finger_model::Error as ModelError;
 
+#[cfg(not(m3))]
 use super::Reply;
 #[cfg(not(m3))]
 use crate::board::HV_LIMIT_V;
-use crate::board::{board_hold_ceiling_v, board_law, BOARD_CARD, BOARD_MARGIN, BOARD_Z0_MM};
+use crate::board::{board_hold_ceiling_v, board_law};
+#[cfg(not(m3))]
+use crate::board::{BOARD_CARD, BOARD_MARGIN, BOARD_Z0_MM};
+#[cfg(not(m3))]
 use crate::num::Short;
 
 /// The settling simulation's step, s (the control tick's drive step at a coarser step: the
@@ -85,7 +89,8 @@ impl BoardFilm {
         settling_time(&self.law, &self.settle_step, &lim, mode, target_v, SETTLE_TOL, (SETTLE_MAX_S / SETTLE_STEP_S) as u32)
     }
 
-    /// `material`'s reply: `card= g_eq= branches=g:tau,.. eps_r= breakdown= breakdown_k= z0=
+    #[cfg(not(m3))]
+    /// `material`'s reply: `card= g_eq= branches=g:tau,.. eps_r= breakdown= z0=
     /// margin= s_hold= vhold=` (MPa, s, V/um, mm, V; docs/firmware.md).
     pub fn write_material(&self, r: &mut Reply) {
         let c = BOARD_CARD;
@@ -96,7 +101,7 @@ impl BoardFilm {
         for (i, b) in c.branches().iter().enumerate() {
             let _ = w!(r; if i > 0 { "," } else { "" }, Short(b.g_mpa as f32), ":", Short(b.tau_s as f32));
         }
-        let _ = w!(r; " eps_r=", Short(c.eps_r as f32), " breakdown=", Short(c.breakdown.field0_v_per_um as f32), " breakdown_k=", Short(c.breakdown.stretch_exponent as f32));
+        let _ = w!(r; " eps_r=", Short(c.eps_r as f32), " breakdown=", Short(c.breakdown.field0_v_per_um as f32));
         let _ = w!(r; " z0=", Short(BOARD_Z0_MM), " margin=", Short(BOARD_MARGIN), " s_hold=", crate::num::Fixed(self.s_hold, 4), " vhold=", crate::num::Fixed(self.vhold, 1));
     }
 }

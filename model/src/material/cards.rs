@@ -24,7 +24,7 @@ pub const VHB_4905: Card = Card {
     ],
     branch_count: 3,
     eps_r: 4.8,
-    breakdown: Breakdown { field0_v_per_um: 18.0, stretch_exponent: 0.0 },
+    breakdown: Breakdown { field0_v_per_um: 18.0 },
 };
 
 /// The paper's card as printed: G = 0.6 MPa, elastic. Kept to reproduce the paper's scenes,
@@ -40,7 +40,7 @@ pub const PAPER_ELASTIC: Card = Card {
     branches: [NO_BRANCH; MAX_BRANCHES],
     branch_count: 0,
     eps_r: 4.7,
-    breakdown: Breakdown { field0_v_per_um: 35.0, stretch_exponent: 0.0 },
+    breakdown: Breakdown { field0_v_per_um: 35.0 },
 };
 
 /// Wacker Elastosil Film 2030 (silicone): elastic and stiffer than the acrylic.
@@ -55,7 +55,7 @@ pub const ELASTOSIL_2030: Card = Card {
     branches: [NO_BRANCH; MAX_BRANCHES],
     branch_count: 0,
     eps_r: 2.48,
-    breakdown: Breakdown { field0_v_per_um: 70.0, stretch_exponent: 0.0 },
+    breakdown: Breakdown { field0_v_per_um: 70.0 },
 };
 
 /// Every card, for reports and the console.
