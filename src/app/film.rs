@@ -10,7 +10,9 @@
 use finger_model::material::drive::{settling_time, DriveLimits, Mode};
 #[cfg(not(m3))]
 use finger_model::material::Relaxation;
-use finger_model::material::{equilibrium_ratio, hold_ratio, StackLaw};
+#[cfg(not(m3))]
+use finger_model::material::hold_ratio;
+use finger_model::material::{equilibrium_ratio, StackLaw};
 use finger_model::Error as ModelError;
 
 #[cfg(not(m3))]
@@ -38,6 +40,8 @@ pub const SETTLE_TOL: f32 = 0.01;
 pub(crate) struct BoardFilm {
     law: StackLaw<f32>,
     vhold: f32,
+    /// The M3 image neither settles nor replies `material`: no `s_hold` there.
+    #[cfg(not(m3))]
     s_hold: f32,
     #[cfg(not(m3))]
     settle_step: Relaxation<f32>,
@@ -52,6 +56,7 @@ impl BoardFilm {
             Err(_) => panic!("board card"),
         };
         let vhold = board_hold_ceiling_v();
+        #[cfg(not(m3))]
         let s_hold = hold_ratio(&law).unwrap_or(1.0);
         #[cfg(not(m3))]
         let settle_step = match Relaxation::new(&law, SETTLE_STEP_S) {
@@ -61,6 +66,7 @@ impl BoardFilm {
         BoardFilm {
             law,
             vhold,
+            #[cfg(not(m3))]
             s_hold,
             #[cfg(not(m3))]
             settle_step,
