@@ -523,6 +523,20 @@ impl Commands {
         finger_model::inverse::Options { hv_fs: Some(self.board_cap()), ..Default::default() }
     }
 
+    /// The finger of `p` with calibration `cal` as the model (`param`, `preset`, `cal`): the
+    /// servo plan of the present force and setpoints on it, then the ceilings. Refused, nothing
+    /// changes.
+    #[inline(never)]
+    fn adopt_model(&mut self, p: Params<f32>, cal: Calibration<f32>) -> Result<(), CmdError> {
+        let f = Finger::with_calibration(p, cal).map_err(model_err)?;
+        let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
+        self.set_finger(f);
+        self.cable = cable;
+        self.set_servo(deg);
+        self.recompute();
+        Ok(())
+    }
+
     /// A new model (parameter or preset change): the fmax cache no longer holds.
     fn set_finger(&mut self, f: Finger<f32>) {
         self.finger = f;
@@ -1043,11 +1057,7 @@ impl Commands {
                 p.set(name, v.into()).map_err(model_err)?;
                 // the FE calibration belongs to the mechanical parameters it was computed for
                 let cal = if KEEPS_CALIBRATION.contains(&name) { *self.finger.calibration() } else { calibration_for(&p) };
-                let f = Finger::with_calibration(p, cal).map_err(model_err)?;
-                let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
-                self.set_finger(f);
-                self.cable = cable;
-                self.set_servo(deg);
+                self.adopt_model(p, cal)?;
             } else {
                 let mut fw = self.fw;
                 fw.set(name, v)?;
@@ -1055,8 +1065,8 @@ impl Commands {
                 self.fw = fw;
                 self.cable = cable;
                 self.set_servo(deg);
+                self.recompute();
             }
-            self.recompute();
         }
         let v = match self.finger.params().get(name) {
             Some(v) => v as f32,
@@ -1075,12 +1085,7 @@ impl Commands {
             w => return Err(err!("usage"; "preset ", (console::printable(w)), " is not default or paper")),
         };
         self.require_disarmed("preset")?;
-        let f = Finger::with_calibration(p, calibration_for(&p)).map_err(model_err)?;
-        let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
-        self.set_finger(f);
-        self.cable = cable;
-        self.set_servo(deg);
-        self.recompute();
+        self.adopt_model(p, calibration_for(&p))?;
         let _ = w!(r; "preset=", name);
         Ok(())
     }
@@ -1104,12 +1109,7 @@ impl Commands {
         };
         if let Some(cal) = cal {
             self.require_disarmed("cal")?;
-            let f = Finger::with_calibration(*self.finger.params(), cal).map_err(model_err)?;
-            let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
-            self.set_finger(f);
-            self.cable = cable;
-            self.set_servo(deg);
-            self.recompute();
+            self.adopt_model(*self.finger.params(), cal)?;
         }
         let c = self.finger.calibration();
         let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];

@@ -19,7 +19,7 @@ use finger_model::Error as ModelError;
 use super::Reply;
 #[cfg(not(m3))]
 use crate::board::HV_LIMIT_V;
-use crate::board::{board_hold_ceiling_v, board_law};
+use crate::board::{board_hold_ceiling_of, board_law};
 #[cfg(not(m3))]
 use crate::board::{BOARD_CARD, BOARD_MARGIN, BOARD_Z0_MM};
 #[cfg(not(m3))]
@@ -55,7 +55,7 @@ impl BoardFilm {
             Ok(l) => l,
             Err(_) => panic!("board card"),
         };
-        let vhold = board_hold_ceiling_v();
+        let vhold = board_hold_ceiling_of(&law);
         #[cfg(not(m3))]
         let s_hold = hold_ratio(&law).unwrap_or(1.0);
         #[cfg(not(m3))]
@@ -73,7 +73,7 @@ impl BoardFilm {
         }
     }
 
-    /// The board's hold ceiling, V per layer (`board_hold_ceiling_v`): margin x min(the voltage
+    /// The board's hold ceiling, V per layer (`board_hold_ceiling_of`): margin x min(the voltage
     /// that holds the relaxed film at 2/3 of its thickness, the breakdown bound there), at most
     /// the HV modules' maximum.
     pub fn hold_ceiling(&self) -> f32 {

@@ -27,7 +27,7 @@ use finger_model::material::StackLaw;
 
 #[cfg(not(m3))]
 use crate::board::HV_MAX_V;
-use crate::board::{board_hold_ceiling_v, board_law, HV_CHANNELS};
+use crate::board::{board_hold_ceiling_of, board_law, HV_CHANNELS};
 
 /// Control tick, s.
 pub const TICK_S: f32 = 1e-3;
@@ -54,7 +54,7 @@ impl Stacks {
     /// ceiling (the core then never arms).
     pub fn board() -> Option<Self> {
         let law = board_law().ok()?;
-        let hold_v = board_hold_ceiling_v();
+        let hold_v = board_hold_ceiling_of(&law);
         let s_hold = equilibrium_ratio(&law, hold_v).ok()?;
         if !(hold_v > 0.0 && s_hold > 0.0 && s_hold < 1.0) {
             return None;
