@@ -124,7 +124,7 @@ impl<R: Real> StackLaw<R> {
             return Err(Error::Param { name: "margin", range: "0 < margin <= 1" });
         }
         // the card checked in R, as one: no f64 arithmetic or compares on a target without a
-        // double-precision FPU (`positive`/`non_negative` take the value already in R)
+        // double-precision FPU (`finite_sign`)
         let field0_v_per_um = R::from_f64(card.breakdown.field0_v_per_um);
         let mut card_ok = card.branch_count <= MAX_BRANCHES && positive(field0_v_per_um);
         let mut g = [R::zero(); MAX_BRANCHES];
@@ -170,16 +170,21 @@ impl<R: Real> StackLaw<R> {
     }
 }
 
-/// Finite and > 0 (out of line: the check stays in R, see `StackLaw::with_film`).
-#[inline(never)]
+/// Finite and > 0 (`StackLaw::with_film`'s checks).
 fn positive<R: Real>(x: R) -> bool {
-    x.is_finite() && x > R::zero()
+    finite_sign(x, false)
 }
 
-/// Finite and >= 0 (out of line, as `positive`).
-#[inline(never)]
+/// Finite and >= 0.
 fn non_negative<R: Real>(x: R) -> bool {
-    x.is_finite() && x >= R::zero()
+    finite_sign(x, true)
+}
+
+/// Finite and > 0, or 0 when `zero_ok`. Out of line: the check stays in R (a card's f64 value
+/// converted first), no f64 compare on a target without a double-precision FPU.
+#[inline(never)]
+fn finite_sign<R: Real>(x: R, zero_ok: bool) -> bool {
+    x.is_finite() && (x > R::zero() || (zero_ok && x == R::zero()))
 }
 
 /// One layer's state: the branches' a_i (1 at rest) and the thickness stretch s now.
