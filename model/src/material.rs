@@ -126,27 +126,26 @@ impl<R: Real> StackLaw<R> {
         // the card checked in R, as one: no f64 arithmetic or compares on a target without a
         // double-precision FPU (`finite_sign`)
         let field0_v_per_um = R::from_f64(card.breakdown.field0_v_per_um);
-        let mut card_ok = card.branch_count <= MAX_BRANCHES && positive(field0_v_per_um);
-        let mut g = [R::zero(); MAX_BRANCHES];
-        let mut tau = [R::one(); MAX_BRANCHES];
-        for (i, br) in card.branches().iter().enumerate() {
-            g[i] = R::from_f64(br.g_mpa);
-            tau[i] = R::from_f64(br.tau_s);
-            card_ok &= non_negative(g[i]) && positive(tau[i]);
-        }
-        if !card_ok {
-            return Err(Error::Param { name: "card", range: "<= 3 branches, G >= 0, tau > 0, breakdown field > 0" });
-        }
-        Ok(StackLaw {
+        let mut law = StackLaw {
             g_eq: g_eq_mpa,
-            g,
-            tau,
+            g: [R::zero(); MAX_BRANCHES],
+            tau: [R::one(); MAX_BRANCHES],
             branches: card.branch_count,
             eps: R::from_f64(EPS0) * eps_r,
             z0: z0_mm,
             field0_v_per_mm: field0_v_per_um * R::from_f64(1e3),
             margin,
-        })
+        };
+        let mut card_ok = card.branch_count <= MAX_BRANCHES && positive(field0_v_per_um);
+        for (i, br) in card.branches().iter().enumerate() {
+            law.g[i] = R::from_f64(br.g_mpa);
+            law.tau[i] = R::from_f64(br.tau_s);
+            card_ok &= non_negative(law.g[i]) && positive(law.tau[i]);
+        }
+        if !card_ok {
+            return Err(Error::Param { name: "card", range: "<= 3 branches, G >= 0, tau > 0, breakdown field > 0" });
+        }
+        Ok(law)
     }
 
     /// The breakdown field at thickness stretch s, V/mm (flat: `Breakdown`).
