@@ -155,7 +155,7 @@ fn rx_overruns_are_counted_per_line() {
     }
     line(&mut rx, b"ok line\n");
     assert_eq!(rx.pop(), Some(Record::Overrun(3)));
-    assert_eq!(rx.pop(), Some(Record::Line(heapless::Vec::from_slice(b"ok line").unwrap())));
+    assert!(matches!(rx.pop(), Some(Record::Line(v)) if &v[..] == b"ok line"));
     assert_eq!(rx.pop(), None);
     assert!(!rx.pending());
     // a `stop` whose first word arrived whole acts despite a later overrun
@@ -194,7 +194,7 @@ fn rx_full_ring_loses_whole_lines_only() {
     assert!(whole >= fits - 1 && lost >= 3, "{whole} whole, {lost} lost");
     // the ring works again once emptied
     line(&mut rx, b"again\n");
-    assert_eq!(rx.pop(), Some(Record::Line(heapless::Vec::from_slice(b"again").unwrap())));
+    assert!(matches!(rx.pop(), Some(Record::Line(v)) if &v[..] == b"again"));
 }
 
 #[test]

@@ -375,7 +375,7 @@ fn save_refuses_settings_that_raise_the_ceiling() {
     assert!(cmd(&mut a, "save").starts_with("ok saved=1"));
     let ceiling = finger_fw::app::config::board_ceiling();
     let mut raised = false;
-    for line in ["param v_supply 20000", "param margin 0.99", "param g 2", "param z0 0.8", "param eps_r 2", "preset paper"] {
+    for line in ["param margin 0.99", "param v_supply 20000", "param g 2", "param z0 0.8", "param eps_r 2", "preset paper"] {
         let mut b = typed(&[]);
         run(&mut b, &[line]);
         if !(b.finger().ceiling_in_force(None) > ceiling) {

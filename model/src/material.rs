@@ -49,8 +49,9 @@ pub struct Breakdown {
     pub stretch_exponent: f64,
 }
 
-/// A film's material card (values in `cards`, sources in docs/materials.md).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A film's material card (values in `cards`, sources in docs/materials.md). Cards are told
+/// apart by name.
+#[derive(Clone, Copy, Debug)]
 pub struct Card {
     pub name: &'static str,
     /// Equilibrium (long-time) shear modulus, MPa.
@@ -60,7 +61,12 @@ pub struct Card {
     pub branch_count: usize,
     pub eps_r: f64,
     pub breakdown: Breakdown,
-    pub source: &'static str,
+}
+
+impl PartialEq for Card {
+    fn eq(&self, other: &Card) -> bool {
+        self.name == other.name
+    }
 }
 
 impl Card {
@@ -121,20 +127,24 @@ impl<R: Real> StackLaw<R> {
             return Err(Error::Param { name: "margin", range: "0 < margin <= 1" });
         }
         let b = card.breakdown;
-        if card.branch_count > MAX_BRANCHES || !(b.field0_v_per_um > 0.0 && b.field0_v_per_um.is_finite()) {
+        // checked in R: no f64 arithmetic on a target without a double-precision FPU
+        let field0_v_per_um = R::from_f64(b.field0_v_per_um);
+        let k = R::from_f64(b.stretch_exponent);
+        if card.branch_count > MAX_BRANCHES || !positive(field0_v_per_um) {
             return Err(Error::Param { name: "card", range: "<= 3 branches, breakdown field > 0" });
         }
-        if !(0.0..2.0).contains(&b.stretch_exponent) {
+        if !(k >= R::zero() && k < R::from_f64(2.0)) {
             return Err(Error::Param { name: "card", range: "breakdown stretch exponent 0 <= k < 2" });
         }
         let mut g = [R::zero(); MAX_BRANCHES];
         let mut tau = [R::one(); MAX_BRANCHES];
         for (i, br) in card.branches().iter().enumerate() {
-            if !(br.g_mpa >= 0.0 && br.g_mpa.is_finite() && br.tau_s > 0.0 && br.tau_s.is_finite()) {
+            let (g_i, tau_i) = (R::from_f64(br.g_mpa), R::from_f64(br.tau_s));
+            if !(g_i >= R::zero() && g_i.is_finite() && positive(tau_i)) {
                 return Err(Error::Param { name: "card", range: "branch G >= 0, tau > 0" });
             }
-            g[i] = R::from_f64(br.g_mpa);
-            tau[i] = R::from_f64(br.tau_s);
+            g[i] = g_i;
+            tau[i] = tau_i;
         }
         Ok(StackLaw {
             g_eq: g_eq_mpa,
@@ -143,8 +153,8 @@ impl<R: Real> StackLaw<R> {
             branches: card.branch_count,
             eps: R::from_f64(EPS0) * eps_r,
             z0: z0_mm,
-            field0_v_per_mm: R::from_f64(b.field0_v_per_um * 1e3),
-            half_k: R::from_f64(0.5 * b.stretch_exponent),
+            field0_v_per_mm: field0_v_per_um * R::from_f64(1e3),
+            half_k: k * R::from_f64(0.5),
             margin,
         })
     }
@@ -653,7 +663,6 @@ mod tests {
             branch_count: 1,
             eps_r: 4.8,
             breakdown: Breakdown { field0_v_per_um: 100.0, stretch_exponent: 0.0 },
-            source: "test",
         };
         let law = StackLaw::<f64>::new(&card, 0.5, 0.9).unwrap();
         let (ge, g1, tau) = (0.02, 0.03, 1.5);

@@ -3,9 +3,9 @@
 //!
 //! What is stored: every console-settable value (the model's parameters but the read-only ones,
 //! the calibration `cal`, the firmware parameters but the board constants) and the preset's
-//! choice (the DE modulus rule, which no parameter sets). A record is read as a console `param`
-//! reads a value: each model parameter through `Params::set` (its range and the set's
-//! consistency), each firmware parameter through its range, the calibration through
+//! choice (the film's card and the DE modulus rule, which no parameter sets). A record is read
+//! as a console `param` reads a value: each model parameter through `Params::set` (its range
+//! and the set's consistency), each firmware parameter through its range, the calibration through
 //! `Finger::with_calibration`, and the ceiling it gives never above the compiled defaults' (the
 //! board constants'). A record failing any check is refused whole: the board keeps its compiled
 //! defaults and says so (boot banner, `config`, `status` `fault=config-rejected`) until
@@ -204,10 +204,9 @@ pub fn record_of(finger: &Finger<f32>, fw: &FwParams, counter: u32) -> Record {
         for name in fw_names() {
             let _ = values.push((tag(b'f', name), fw.get(name).unwrap_or(f32::NAN)));
         }
-        let preset = match p.de_rule {
-            finger_model::DeModulusRule::PaperEq3 => 1,
-            _ => 0,
-        };
+        // the paper's preset is the one on the paper's card (the DE modulus rule and the
+        // film, which no parameter sets); any other started from the board's
+        let preset = if p.card == Params::<f32>::paper().card { 1 } else { 0 };
         Record { counter, preset, values }
 }
 
