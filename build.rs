@@ -26,6 +26,9 @@ fn main() {
         println!("cargo:rustc-link-arg-{kind}=--nmagic");
         println!("cargo:rustc-link-arg-{kind}=-Tlink.x");
         if m3 {
+            // memory.x: the M3 image's program starts after its vector table, not past the
+            // F405's settings sectors
+            println!("cargo:rustc-link-arg-{kind}=--defsym=_m3_image=1");
             println!("cargo:rustc-link-arg-{kind}=-Tmemory-m3.x");
         }
         if env::var_os("CARGO_FEATURE_LOG").is_some() {

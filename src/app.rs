@@ -2,9 +2,10 @@
 //! model calls, and [`App`], the whole application on one board for the host.
 //!
 //! Safety rules, each in one place:
-//! - The ceiling per channel, `vmax = min(margin x V_pi, v_supply, HV full scale, HV limit)`
-//!   (the last two compiled board constants, `crate::board`), and its duty are recomputed by
-//!   [`Commands::recompute`], called on every parameter change.
+//! - The ceiling per channel, `vmax = min(board hold ceiling, the model's ceiling at its
+//!   parameters, HV full scale, HV limit)` (the hold ceiling from the compiled card, layer
+//!   thickness and margin, `crate::board`, app/film.rs: the console can only lower it), and its
+//!   duty are recomputed by [`Commands::recompute`], called on every parameter change.
 //! - The outputs belong to the control core ([`crate::control::Control`]): the one writer of
 //!   the HV duties, the slew, the servo, the watchdog. The command side plans
 //!   [`Setpoints`]; the core takes them unless a stop came meanwhile.
@@ -45,6 +46,9 @@ macro_rules! err {
 
 #[cfg(feature = "shape")]
 mod shape;
+mod film;
+#[cfg(feature = "settings")]
+pub mod config;
 #[cfg(m3)]
 mod m3;
 
@@ -83,11 +87,14 @@ pub struct FwParams {
     pub servo_range: f32,
     /// Servo direction: +1 (cable pulled in as the pulse grows from 1.0 ms) or -1.
     pub servo_dir: f32,
+    /// Shaped actuation (docs/firmware.md): the control tick drives the voltage that holds
+    /// the target's thickness now, instead of a slewed step to the target voltage.
+    pub shaped: bool,
 }
 
 impl Default for FwParams {
     fn default() -> Self {
-        FwParams { slew: 2000.0, spool_r: 10.0, servo_range: 180.0, servo_dir: 1.0 }
+        FwParams { slew: 2000.0, spool_r: 10.0, servo_range: 180.0, servo_dir: 1.0, shaped: false }
     }
 }
 
@@ -104,6 +111,8 @@ pub const FW_PARAMS: &[FwParamInfo] = &[
     FwParamInfo { name: "spool_r", min: 0.5, max: 100.0, range: "0.5..100 mm" },
     FwParamInfo { name: "servo_range", min: 10.0, max: 360.0, range: "10..360 deg (1.0..2.0 ms)" },
     FwParamInfo { name: "servo_dir", min: -1.0, max: 1.0, range: "1 or -1" },
+    #[cfg(not(m3))]
+    FwParamInfo { name: "shaped", min: 0.0, max: 1.0, range: "0 (plain step) or 1 (shaped actuation)" },
     // read-only: the HV module's calibration is compiled in (crate::board); a set is refused
     FwParamInfo { name: "hv_fs", min: 1.0, max: 0.0, range: "read-only: V at 100 % duty, a board constant (a different HV module is a different build)" },
     FwParamInfo { name: "hv_zero", min: 1.0, max: 0.0, range: "read-only: % duty at 0 V, a board constant (a different HV module is a different build)" },
@@ -116,6 +125,8 @@ impl FwParams {
             "spool_r" => self.spool_r,
             "servo_range" => self.servo_range,
             "servo_dir" => self.servo_dir,
+            #[cfg(not(m3))]
+            "shaped" => self.shaped as u8 as f32,
             "hv_fs" => HV_FULL_SCALE_V,
             "hv_zero" => HV_ZERO_DUTY_PCT,
             _ => return None,
@@ -135,6 +146,8 @@ impl FwParams {
             "spool_r" => self.spool_r = f,
             "servo_range" => self.servo_range = f,
             "servo_dir" if v == 1.0 || v == -1.0 => self.servo_dir = f,
+            #[cfg(not(m3))]
+            "shaped" if v == 0.0 || v == 1.0 => self.shaped = v == 1.0,
             _ => return Err(bad()),
         }
         Ok(())
@@ -185,6 +198,8 @@ struct Wait {
 /// at the lowest priority on the chip (RTIC's idle), inside [`App`] on the host.
 pub struct Commands {
     finger: Finger<f32>,
+    /// The board's film: its law, hold ceiling, settling (app/film.rs).
+    film: film::BoardFilm,
     fw: FwParams,
     board_name: &'static str,
     nl: &'static str,
@@ -196,6 +211,8 @@ pub struct Commands {
     enable: bool,
     volts: [f32; CHANNELS],
     duty: [u16; CHANNELS],
+    /// Each stack's thickness stretch now, as the control tick integrates it (1 at rest).
+    stack_ratio: [f32; CHANNELS],
     fault: Option<&'static str>,
     locked_out: bool,
     now_ms: u32,
@@ -226,6 +243,9 @@ pub struct Commands {
     /// inside for a finger without stacks.
     #[cfg(feature = "pose")]
     inv_table: core::cell::OnceCell<Option<finger_model::inverse::BranchTable<f32>>>,
+    /// The settings store and what the boot found in it (app/config.rs).
+    #[cfg(feature = "settings")]
+    cfg: config::ConfigState,
 }
 
 impl Commands {
@@ -233,14 +253,15 @@ impl Commands {
     /// `hv_max` / `servo_max` its PWMs' full-scale duties.
     pub fn new(board_name: &'static str, nl: &'static str, hv_max: [u16; CHANNELS], servo_max: u16) -> Self {
         // the defaults are valid (a model test); no Debug formatting of the error on the target
-        // MODEL.md's finger with its FE calibration (`Calibration::for_params`, issue 18)
-        let p = preset(Params::default());
-        let finger = match Finger::with_calibration(p, Calibration::for_params(&p)) {
+        // MODEL.md's finger on the board's film, with its FE calibration (`calibration_for`)
+        let p = preset(board_params());
+        let finger = match Finger::with_calibration(p, calibration_for(&p)) {
             Ok(f) => f,
             Err(_) => panic!("default parameters"),
         };
         let mut c = Commands {
             finger,
+            film: film::BoardFilm::new(),
             fw: FwParams::default(),
             board_name,
             nl,
@@ -250,6 +271,7 @@ impl Commands {
             enable: false,
             volts: [0.0; CHANNELS],
             duty: [0; CHANNELS],
+            stack_ratio: [1.0; CHANNELS],
             fault: None,
             locked_out: false,
             now_ms: 0,
@@ -268,6 +290,8 @@ impl Commands {
             fmax_computed: Cell::new(0),
             #[cfg(feature = "pose")]
             inv_table: core::cell::OnceCell::new(),
+            #[cfg(feature = "settings")]
+            cfg: config::ConfigState::new(),
         };
         c.recompute();
         c
@@ -310,6 +334,7 @@ impl Commands {
         self.duty = v.duty;
         self.fault = v.fault;
         self.locked_out = v.locked_out;
+        self.stack_ratio = v.stack_ratio;
         self.now_ms = v.now_ms;
         if v.epoch != self.epoch {
             self.epoch = v.epoch;
@@ -343,6 +368,7 @@ impl Commands {
             servo_released: self.servo_duty(0.0),
             duty_ceiling: self.duty_max,
             slew: self.fw.slew,
+            shaped: self.fw.shaped,
         }
     }
 
@@ -382,12 +408,20 @@ impl Commands {
 
     // ---------------------------------------------------------------- ceilings, servo
 
-    /// The ceilings: per channel `min(margin x V_pi, v_supply, HV full scale, HV limit)` and
-    /// the duty it gives. Called on every parameter change.
+    /// What the board allows whatever the model's parameters: min(the board's hold ceiling,
+    /// the HV modules' full scale and limit), V. The model's ceiling in force takes it as its
+    /// `hv_fs` term (`Finger::ceiling_in_force`), so the inverse and the board agree.
+    fn board_cap(&self) -> f32 {
+        self.film.hold_ceiling().min(HV_MAX_V)
+    }
+
+    /// The ceilings: per channel `min(board hold ceiling, the model's ceiling, HV full scale,
+    /// HV limit)` and the duty it gives. Called on every parameter change.
     fn recompute(&mut self) {
-        // min(margin x V_pi, v_supply, the modules' full scale and limit); NaN-proof
-        let v = self.finger.ceiling_in_force(Some(HV_MAX_V));
+        // min(the model's ceiling, the board's hold ceiling, the modules' full scale and limit); NaN-proof
+        let v = self.finger.ceiling_in_force(Some(self.board_cap()));
         let v = if v >= 0.0 { v } else { 0.0 };
+        let v = v.min(self.board_cap());
         // the inverse's branch table is built for the ceiling in force
         #[cfg(feature = "pose")]
         {
@@ -486,7 +520,7 @@ impl Commands {
     /// The inverse's options on this board: its ceiling is the one in force (HV full scale too).
     #[cfg(feature = "pose")]
     fn inverse_options(&self) -> finger_model::inverse::Options<f32> {
-        finger_model::inverse::Options { hv_fs: Some(HV_MAX_V), ..Default::default() }
+        finger_model::inverse::Options { hv_fs: Some(self.board_cap()), ..Default::default() }
     }
 
     /// A new model (parameter or preset change): the fmax cache no longer holds.
@@ -567,6 +601,11 @@ impl Commands {
                 no_args(args, "limits")?;
                 self.cmd_limits(r);
             }
+            #[cfg(not(m3))]
+            b"material" => {
+                no_args(args, "material")?;
+                self.film.write_material(r);
+            }
             b"solve" => self.cmd_solve(args, r)?,
             #[cfg(feature = "shape")]
             b"shape" => self.cmd_shape(args, r)?,
@@ -618,6 +657,12 @@ impl Commands {
             b"param" => self.cmd_param(args, r, out)?,
             b"preset" => self.cmd_preset(args, r)?,
             b"cal" => self.cmd_cal(args, r)?,
+            #[cfg(feature = "settings")]
+            b"save" => self.cmd_save(args, r)?,
+            #[cfg(feature = "settings")]
+            b"factory" => self.cmd_factory(args, r)?,
+            #[cfg(feature = "settings")]
+            b"config" => self.cmd_config(args, r, out)?,
             b"wait" => {
                 let [s] = args else { return Err(err!("usage"; "wait <seconds>")) };
                 let s = number(s, "seconds")?;
@@ -643,13 +688,19 @@ impl Commands {
     fn cmd_status(&self, r: &mut Reply) {
         let _ = w!(r; "armed=", self.armed as u8, " force=", Fixed(self.force, 3), " volts=");
         list(r, &self.volts, 1);
+        // each stack now: the film creeps under a held voltage (the control tick's state)
+        let stack_mm = self.stack_mm();
         let mut thick = [0.0f32; CHANNELS];
         for ch in 0..CHANNELS {
-            thick[ch] = self.finger.stack_thickness(self.volts[ch]).unwrap_or(0.0);
+            thick[ch] = stack_mm * self.stack_ratio[ch];
         }
         let _ = w!(r; " thick=");
         list(r, &thick, 4);
         let mut fault = self.fault;
+        #[cfg(feature = "settings")]
+        {
+            fault = fault.or(self.config_fault());
+        }
         let shown = self.forward_with(self.force, &self.volts, |s| {
             let _ = w!(r; " joints=");
             joints(r, s);
@@ -663,6 +714,19 @@ impl Commands {
         let _ = w!(r; " cable=", Fixed(self.cable, 3), " servo=", Fixed(self.servo_deg, 2), " fault=", fault.unwrap_or("none"));
         let _ = w!(r; " enable=", self.enable as u8, " target=");
         list(r, &self.target_v, 1);
+        // each stack once the film has relaxed at the targets
+        let mut eq = [0.0f32; CHANNELS];
+        for ch in 0..CHANNELS {
+            eq[ch] = stack_mm * self.film.equilibrium_ratio(self.target_v[ch]).unwrap_or(0.0);
+        }
+        let _ = w!(r; " thick_eq=");
+        list(r, &eq, 4);
+    }
+
+    /// A stack's thickness at rest, mm: layers x z0 of the model (0 without stacks).
+    fn stack_mm(&self) -> f32 {
+        let p = self.finger.params();
+        p.layers as f32 * p.z0
     }
 
     #[inline(never)]
@@ -686,7 +750,7 @@ impl Commands {
         }
         let _ = w!(r; " slew=", Short(self.fw.slew), " servo=0,", Short(self.fw.servo_range), " cable_max=", Fixed(self.fw.servo_range / DEG * self.fw.spool_r, 2), " dutymax=");
         let d = self.duty_max;
-        let _ = w!(r; d[0], ",", d[1], ",", d[2]);
+        let _ = w!(r; d[0], ",", d[1], ",", d[2], " vhold=", Fixed(self.film.hold_ceiling(), 1));
     }
 
     /// Check channel voltages against the ceilings: `limit` at or past.
@@ -847,14 +911,16 @@ impl Commands {
         let table = self.branch_table();
         let armed = self.armed;
         let mut plan = None;
+        let mut answer = None;
         let mut line: String<240> = String::new();
         let this = &*self;
-        let _ = crate::inverse_cmds::pose_with(&mut line, &this.finger, table, &this.inverse_options(), &deg, p, |t, v| {
+        let done = crate::inverse_cmds::pose_with(&mut line, &this.finger, table, &this.inverse_options(), &deg, p, |t, v| {
+            let target = [v[0], v[1], v[2]];
+            answer = Some(target);
             if !armed {
                 return Ok(());
             }
             this.require_armed("pose")?;
-            let target = [v[0], v[1], v[2]];
             // the ceilings as `volt` checks them; 0 V (a joint without stacks) is off, not a request
             this.check_volts_of(&target, true)?;
             let (cable, sdeg) = this.plan_setpoints(t, &target)?;
@@ -867,8 +933,45 @@ impl Commands {
             self.cable = cable;
             self.set_servo(sdeg);
         }
+        // the answer holds the posture once the film has relaxed; how long that takes
+        if let (Ok(true), Some(v)) = (done, answer) {
+            let _ = w!(&mut line; " settle=");
+            self.write_settle(&mut line, &v);
+        }
         let _ = w!(out; line, self.nl);
         Ok(())
+    }
+
+    /// `settle=`'s value: the longest channel's settling time from rest to within 1 % of its
+    /// target thickness, s, in the board's mode (`param shaped`), at the slew in force
+    /// (app/film.rs); `-` past the longest time looked for or for a voltage without an
+    /// equilibrium.
+    #[cfg(not(m3))]
+    #[inline(never)]
+    fn write_settle(&self, out: &mut dyn Write, volts: &[f32; CHANNELS]) {
+        let mut worst = Some(0.0f32);
+        for ch in 0..CHANNELS {
+            // channels at the same voltage settle together
+            if volts[..ch].contains(&volts[ch]) {
+                continue;
+            }
+            let t = match self.film.settle(volts[ch], self.fw.slew, self.fw.shaped) {
+                Ok(Some(t)) => Some(t),
+                _ => None,
+            };
+            worst = match (worst, t) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                _ => None,
+            };
+        }
+        match worst {
+            Some(t) => {
+                let _ = w!(out; Fixed(t, 2));
+            }
+            None => {
+                let _ = w!(out; "-");
+            }
+        }
     }
 
     #[cfg(feature = "contact")]
@@ -939,7 +1042,7 @@ impl Commands {
                 let mut p = *self.finger.params();
                 p.set(name, v.into()).map_err(model_err)?;
                 // the FE calibration belongs to the mechanical parameters it was computed for
-                let cal = if KEEPS_CALIBRATION.contains(&name) { *self.finger.calibration() } else { Calibration::for_params(&p) };
+                let cal = if KEEPS_CALIBRATION.contains(&name) { *self.finger.calibration() } else { calibration_for(&p) };
                 let f = Finger::with_calibration(p, cal).map_err(model_err)?;
                 let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
                 self.set_finger(f);
@@ -967,12 +1070,12 @@ impl Commands {
     fn cmd_preset(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let [which] = args else { return Err(err!("usage"; "preset <default|paper>")) };
         let (p, name) = match *which {
-            b"default" => (preset(Params::<f32>::default()), "default"),
+            b"default" => (preset(board_params()), "default"),
             b"paper" => (preset(Params::<f32>::paper()), "paper"),
             w => return Err(err!("usage"; "preset ", (console::printable(w)), " is not default or paper")),
         };
         self.require_disarmed("preset")?;
-        let f = Finger::with_calibration(p, Calibration::for_params(&p)).map_err(model_err)?;
+        let f = Finger::with_calibration(p, calibration_for(&p)).map_err(model_err)?;
         let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
         self.set_finger(f);
         self.cable = cable;
@@ -1019,6 +1122,28 @@ impl Commands {
 /// `cal`'s factors in console order (`Calibration`: hinge, stack_axial, stack_bending).
 const CAL_NAMES: [&str; 8] = ["h1", "h2", "h3", "h4", "ea0", "ea1", "ei0", "ei1"];
 
+/// The board's default finger: MODEL.md's on the board's film (`Params::with_card`: the card's
+/// equilibrium modulus, permittivity, branches and breakdown field). Generic so that the host's
+/// f64 model (the web view's overlay) is the board's finger too.
+pub fn board_params<R: finger_model::Real>() -> Params<R> {
+    Params::with_card(crate::board::BOARD_CARD)
+}
+
+/// The FE calibration of a parameter set (`Calibration::for_params`) judged by its structure:
+/// MODEL.md's finger on the board's film has MODEL.md's calibration. Its hinge factors belong
+/// to the geometry; its stack factors were computed for the paper's film, and on VHB 4905 the
+/// stacks add almost nothing to the joints (docs/materials.md), so the film does not clear it.
+pub fn calibration_for<R: finger_model::Real>(p: &Params<R>) -> Calibration<R> {
+    let d = Params::<R>::default();
+    let board = board_params::<R>();
+    let film_is_the_boards = p.card == board.card && p.g == board.g && p.nu == board.nu && p.de_rule == board.de_rule;
+    if film_is_the_boards {
+        Calibration::for_params(&Params { card: d.card, g: d.g, nu: d.nu, de_rule: d.de_rule, ..*p })
+    } else {
+        Calibration::for_params(p)
+    }
+}
+
 /// A preset as this build can hold it: without the `de` feature the finger has no stacks.
 fn preset(p: Params<f32>) -> Params<f32> {
     if cfg!(feature = "de") {
@@ -1028,28 +1153,48 @@ fn preset(p: Params<f32>) -> Params<f32> {
     }
 }
 
+/// One `help` line: `syntax - description`; the Cortex-M3 image keeps the syntax alone (its
+/// flash budget).
+macro_rules! help_line {
+    ($syntax:literal, $what:literal) => {
+        if cfg!(m3) {
+            $syntax
+        } else {
+            concat!($syntax, " - ", $what)
+        }
+    };
+}
+
 const HELP: &[&str] = &[
-    "help - this list",
-    "version - firmware name and version",
-    "status - outputs, setpoints, model state, fault",
-    "limits - ceilings in force",
-    "solve <P> <V1> <V2> <V3> - model only, nothing moves",
+    help_line!("help", "this list"),
+    help_line!("version", "firmware name and version"),
+    help_line!("status", "outputs, setpoints, model state, fault"),
+    help_line!("limits", "ceilings in force"),
+    #[cfg(not(m3))]
+    help_line!("material", "the board's film: card, moduli, permittivity, breakdown, hold ceiling"),
+    help_line!("solve <P> <V1> <V2> <V3>", "model only, nothing moves"),
     #[cfg(feature = "shape")]
-    "shape <P> <V1> <V2> <V3> - model only: node and hinge-end poses of that solve",
-    "arm | disarm - allow HV / ramp HV to 0, then drop the enable",
-    "stop - emergency stop: HV off at once, cable released, disarmed",
-    "volt <1|2|3|all> <V> - HV channel setpoint, slewed; needs arm",
-    "force <P> - cable tension (servo); needs arm",
+    help_line!("shape <P> <V1> <V2> <V3>", "model only: node and hinge-end poses of that solve"),
+    help_line!("arm | disarm", "allow HV / ramp HV to 0, then drop the enable"),
+    help_line!("stop", "emergency stop: HV off at once, cable released, disarmed"),
+    help_line!("volt <1|2|3|all> <V>", "HV channel setpoint, slewed; needs arm"),
+    help_line!("force <P>", "cable tension (servo); needs arm"),
     #[cfg(m3)]
-    "pose <d1> <d2> <d3> [<P>] - inverse (fixed point): tension and voltages for these joint angles (deg); moves only when armed",
+    help_line!("pose <d1> <d2> <d3> [<P>]", "inverse (fixed point): tension and voltages for these joint angles (deg); moves only when armed"),
     #[cfg(feature = "pose")]
-    "pose <d1> <d2> <d3> [<P>] - inverse: tension and voltages for these joint angles (deg); moves only when armed",
+    help_line!("pose <d1> <d2> <d3> [<P>]", "inverse: tension and voltages for these joint angles (deg); moves only when armed"),
     #[cfg(feature = "contact")]
-    "contact <P0> <P> [<V1> <V2> <V3>] - model only: tip force on a stop at the free tip of P0",
-    "param [<name> [<value>]] - list, read or set a parameter; only while disarmed",
-    "preset <default|paper> - model parameters back to a preset; only while disarmed",
-    "cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none] - FE calibration factors: read, set or clear (set and clear only while disarmed)",
-    "wait <s> - run the control loop for s seconds, then reply",
+    help_line!("contact <P0> <P> [<V1> <V2> <V3>]", "model only: tip force on a stop at the free tip of P0"),
+    help_line!("param [<name> [<value>]]", "list, read or set a parameter; only while disarmed"),
+    help_line!("preset <default|paper>", "model parameters back to a preset; only while disarmed"),
+    help_line!("cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]", "FE calibration factors: read, set or clear (set and clear only while disarmed)"),
+    help_line!("wait <s>", "run the control loop for s seconds, then reply"),
+    #[cfg(feature = "settings")]
+    help_line!("save", "keep the settings in force across resets; only while disarmed"),
+    #[cfg(feature = "settings")]
+    help_line!("config", "what is stored, its save counter, what the boot loaded"),
+    #[cfg(feature = "settings")]
+    help_line!("factory", "erase the stored settings, back to the compiled defaults; only while disarmed"),
 ];
 
 fn no_args(args: &[&[u8]], cmd: &str) -> Result<(), CmdError> {

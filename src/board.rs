@@ -1,8 +1,12 @@
 //! The board the application drives: one servo PWM, three HV control PWMs, the HV enable
-//! (interlock) and the watchdog. Everything else about the chip stays in `main.rs`.
+//! (interlock) and the watchdog; and the board constants of the HV modules and of the stacks
+//! (their film card, layer thickness and count, the ceiling's margin), from which alone the
+//! board's hold ceiling is computed. Everything else about the chip stays in `main.rs`.
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
+use finger_model::material::{hold_ceiling, StackLaw};
+use finger_model::Error as ModelError;
 
 /// Number of HV channels (DE stacks) the board drives.
 pub const HV_CHANNELS: usize = 3;
@@ -18,6 +22,17 @@ pub const HV_LIMIT_V: f32 = 10_000.0;
 /// What the HV modules can be asked for at all: min(full scale, limit), V. The model's ceiling
 /// in force takes it as its `hv_fs` term, so previews and the board agree.
 pub const HV_MAX_V: f32 = if HV_FULL_SCALE_V < HV_LIMIT_V { HV_FULL_SCALE_V } else { HV_LIMIT_V };
+
+/// The board's film, compiled in (a different film, layer or margin is a different build; the
+/// console's parameters can only lower the ceiling these give, docs/materials.md):
+/// the material card of the stacks' film,
+pub const BOARD_CARD: &finger_model::material::Card = &finger_model::material::VHB_4905;
+/// the thickness of one layer at rest, mm,
+pub const BOARD_Z0_MM: f32 = 0.5;
+/// the layers per stack,
+pub const BOARD_LAYERS: u32 = 4;
+/// and the fraction of the film's hold and breakdown bounds the ceiling allows.
+pub const BOARD_MARGIN: f32 = 0.9;
 
 pub trait Board {
     /// Servo PWM, 50 Hz; the application sets 1.0..2.0 ms pulses.
@@ -38,5 +53,25 @@ pub trait Board {
     /// Line ending of the replies.
     fn newline(&self) -> &'static str {
         "\r\n"
+    }
+}
+
+/// One layer of the board's stacks as the material law sees it (the card, z0, the margin).
+pub fn board_law() -> Result<StackLaw<f32>, ModelError> {
+    StackLaw::new(BOARD_CARD, BOARD_Z0_MM, BOARD_MARGIN)
+}
+
+/// The board's hold ceiling, V: min(the card's hold ceiling at the board's z0 and margin, the
+/// supply `HV_MAX_V`); 0 when the constants give no law (NaN-proof). Computed once by its
+/// users, from the board constants only.
+pub fn board_hold_ceiling_v() -> f32 {
+    let v = match board_law() {
+        Ok(law) => hold_ceiling(&law, BOARD_MARGIN),
+        Err(_) => 0.0,
+    };
+    if v > 0.0 {
+        v.min(HV_MAX_V)
+    } else {
+        0.0
     }
 }

@@ -30,6 +30,9 @@
 
 #[path = "mem.rs"]
 mod mem;
+#[cfg(feature = "settings")]
+#[path = "flash_chip.rs"]
+mod flash_chip;
 
 use core::panic::PanicInfo;
 use core::sync::atomic::{AtomicU32, Ordering};
@@ -315,6 +318,8 @@ pub mod timing {
     pub static TICK_LATENCY_MIN: AtomicU32 = AtomicU32::new(u32::MAX);
     /// Control-task run time, counts.
     pub static TICK_RUN_MAX: AtomicU32 = AtomicU32::new(0);
+    /// One channel's stack step in a control tick (goal, slew, guard, thickness, relaxation), counts.
+    pub static TICK_STACK_MAX: AtomicU32 = AtomicU32::new(0);
     /// Entry to entry of the control task, counts.
     pub static PERIOD_MIN: AtomicU32 = AtomicU32::new(u32::MAX);
     pub static PERIOD_MAX: AtomicU32 = AtomicU32::new(0);
@@ -427,6 +432,9 @@ mod app {
         let servo_max = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(board.servo());
         let mut cmds = Commands::new(board.name(), board.newline(), hv_max, servo_max);
         cmds.set_timing_report(timing_report);
+        // the stored settings, before the control core takes its first setpoints
+        #[cfg(feature = "settings")]
+        let boot = flash_chip::store(dp.FLASH).map(|s| cmds.boot_settings(s));
         let sp = cmds.setpoints();
         let mut ctl = Control::new(board, sp.servo_released, sp.slew);
         if cfg!(feature = "qemu") && real_chip {
@@ -454,6 +462,12 @@ mod app {
         // bytes sent before the USART is enabled, a real UART too).
         tx.push_all(b"# finger-fw ");
         tx.push_all(finger_fw::VERSION.as_bytes());
+        #[cfg(feature = "settings")]
+        if let Some(b) = boot {
+            let mut note: heapless::String<80> = heapless::String::new();
+            let _ = finger_fw::w!(&mut note; " ", b);
+            tx.push_all(note.as_bytes());
+        }
         tx.push_all(b" ready\r\n");
 
         (Shared { ctl, mailbox: Mailbox { setpoints: None, stop: false, view }, rx: RxLines::new(), tx }, Local { cmds })
@@ -480,7 +494,8 @@ mod app {
             if let Some(sp) = mb.setpoints.take() {
                 ctl.apply(&sp);
             }
-            ctl.tick(checkin);
+            let stack = ctl.tick_timed(checkin, systick_elapsed);
+            timing::max(&timing::TICK_STACK_MAX, stack);
             mb.view = ctl.view();
             mb.view.now_ms
         });
@@ -691,7 +706,7 @@ fn timing_report(o: &mut dyn core::fmt::Write) {
     let min = if min == u32::MAX { 0 } else { min };
     let pmin = ld(&timing::PERIOD_MIN);
     let pmin = if pmin == u32::MAX { 0 } else { pmin };
-    let _ = w!(o; "tick_period_us=", us(pmin), ",", us(ld(&timing::PERIOD_MAX)), " tick_latency_us=", us(min), ",", us(ld(&timing::TICK_LATENCY_MAX)), " tick_run_us=", us(ld(&timing::TICK_RUN_MAX)), " ticks=", ld(&timing::TICKS));
+    let _ = w!(o; "tick_period_us=", us(pmin), ",", us(ld(&timing::PERIOD_MAX)), " tick_latency_us=", us(min), ",", us(ld(&timing::TICK_LATENCY_MAX)), " tick_run_us=", us(ld(&timing::TICK_RUN_MAX)), " tick_stack_us=", Fixed(ld(&timing::TICK_STACK_MAX) as f32 / CORE_MHZ as f32, 3), " ticks=", ld(&timing::TICKS));
     let _ = w!(o; " stop_us=", us(ld(&timing::STOP_MAX)), " stops=", ld(&timing::STOPS), " cmd_us=");
     cortex_m::interrupt::free(|cs| {
         let t = durations::TABLE.borrow(cs).borrow();

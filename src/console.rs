@@ -3,6 +3,8 @@
 //! Lines end with CR, LF or CRLF (a CRLF counts once). A line longer than [`LINE_MAX`] bytes
 //! is discarded whole and reported once, at its end, as [`Line::TooLong`]. Bytes are kept as
 //! they come (non-ASCII included); the command layer rejects what it does not understand.
+//! A terminal's escape sequences (arrow and function keys) are dropped before line assembly
+//! ([`EscFilter`]), so an arrow key costs no error line.
 
 use heapless::Vec;
 
@@ -18,6 +20,41 @@ pub enum Line<'a> {
     Text(&'a [u8]),
     /// The end of a line that overflowed the buffer; it was discarded.
     TooLong,
+}
+
+/// Drops a terminal's escape sequences from the byte stream: `ESC [` or `ESC O` then
+/// parameter bytes up to one final byte (0x40..=0x7e), as arrow, Home/End and function keys
+/// send them; `ESC` and any other byte (Alt+key) as a pair. A line ending always passes and
+/// ends the sequence, so a line is never held back.
+#[derive(Default, Clone, Copy)]
+pub struct EscFilter {
+    /// 0: text; 1: after ESC; 2: inside `ESC [` / `ESC O` before the final byte.
+    state: u8,
+}
+
+impl EscFilter {
+    pub const fn new() -> Self {
+        EscFilter { state: 0 }
+    }
+
+    /// Whether `b` is line content (true) or part of an escape sequence (false).
+    pub fn pass(&mut self, b: u8) -> bool {
+        if b == b'\r' || b == b'\n' {
+            self.state = 0;
+            return true;
+        }
+        match self.state {
+            0 if b == 0x1b => self.state = 1,
+            0 => return true,
+            1 => self.state = if b == b'[' || b == b'O' { 2 } else { 0 },
+            _ => {
+                if (0x40..=0x7e).contains(&b) {
+                    self.state = 0;
+                }
+            }
+        }
+        false
+    }
 }
 
 /// Assembles bytes into lines.

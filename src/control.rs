@@ -3,9 +3,10 @@
 //!
 //! What it is: the single writer of the HV duties ([`Control::write_hv_duty`]), the slew of the
 //! HV values toward the command side's setpoints (at most `slew` x 1 ms per tick, whatever
-//! else runs), the servo following the slewed voltages, the disarm ramp, the emergency stop
-//! and the watchdog feed (only while the command side has checked in within
-//! [`CHECKIN_BOUND_MS`]).
+//! else runs), the stacks in time ([`Stacks`]: each channel's film state integrated every
+//! tick, and the guard that keeps it above its floor), the servo following the slewed
+//! voltages, the disarm ramp, the emergency stop and the watchdog feed (only while the
+//! command side has checked in within [`CHECKIN_BOUND_MS`]).
 //!
 //! What it is not: the console or the model. The command side ([`crate::app::Commands`])
 //! plans [`Setpoints`]; the core takes them ([`Control::apply`]) unless a stop came after the
@@ -15,6 +16,9 @@ use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
 
 use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V, HV_ZERO_DUTY_PCT};
+
+pub mod stacks;
+pub use stacks::Stacks;
 
 /// The watchdog is fed only when the command side checked in at most this long ago, ms. The
 /// longest command (a first armed `pose`, ~10 M instructions: ~60 ms at 168 MHz) stays far
@@ -41,6 +45,10 @@ pub struct Setpoints {
     pub duty_ceiling: [u16; HV_CHANNELS],
     /// HV slew, V/s.
     pub slew: f32,
+    /// Shaped actuation: each channel drives the voltage that gives its target's equilibrium
+    /// thickness now (above the target's voltage while the film creeps), never thinner than
+    /// the target's thickness. False: plain slew to the target.
+    pub shaped: bool,
 }
 
 /// What the core reports back.
@@ -59,6 +67,8 @@ pub struct View {
     pub locked_out: bool,
     /// Ticks since start, ms.
     pub now_ms: u32,
+    /// Each stack's predicted thickness stretch now, s = z / z0 (1 at rest).
+    pub stack_ratio: [f32; HV_CHANNELS],
 }
 
 /// The refusal of [`Control::write_hv_duty`].
@@ -88,8 +98,17 @@ pub fn hv_duty_cap(max_duty: u16) -> u16 {
 pub struct Control<B: Board> {
     board: B,
     hv_max: [u16; HV_CHANNELS],
-    /// Refusal threshold per channel: min(compiled cap, command side's ceiling).
+    /// Targets' ceiling per channel: min(compiled cap, the board's hold ceiling, the command
+    /// side's ceiling), as a duty.
     ceiling: [u16; HV_CHANNELS],
+    /// The writer's refusal threshold per channel: the targets' ceiling (plain) or the
+    /// compiled cap (shaped actuation drives above the target; the stack's guard bounds it).
+    write_ceiling: [u16; HV_CHANNELS],
+    /// The stacks in time (None: the board constants gave no law; never arms).
+    stacks: Option<Stacks>,
+    shaped: bool,
+    /// Each channel's floor: `s_hold` (plain) or its target's equilibrium ratio (shaped).
+    s_floor: [f32; HV_CHANNELS],
     volts: [f32; HV_CHANNELS],
     target: [f32; HV_CHANNELS],
     duty: [u16; HV_CHANNELS],
@@ -114,10 +133,16 @@ impl<B: Board> Control<B> {
     /// Take the board: enable low, every HV duty 0, servo at `servo_released`. The ceilings
     /// start at 0 (nothing above 0 V until the command side sends its ceilings).
     pub fn new(board: B, servo_released: u16, slew: f32) -> Self {
+        let stacks = Stacks::board();
+        let s_hold = stacks.as_ref().map(|s| s.s_hold()).unwrap_or(1.0);
         let mut c = Control {
             board,
             hv_max: [0; HV_CHANNELS],
             ceiling: [0; HV_CHANNELS],
+            write_ceiling: [0; HV_CHANNELS],
+            stacks,
+            shaped: false,
+            s_floor: [s_hold; HV_CHANNELS],
             volts: [0.0; HV_CHANNELS],
             target: [0.0; HV_CHANNELS],
             duty: [0; HV_CHANNELS],
@@ -140,6 +165,9 @@ impl<B: Board> Control<B> {
         }
         c.hv_off_now();
         c.write_servo(servo_released);
+        if c.stacks.is_none() {
+            c.lock_out("board card");
+        }
         c
     }
 
@@ -165,13 +193,28 @@ impl<B: Board> Control<B> {
             fault: self.fault,
             locked_out: self.lockout.is_some(),
             now_ms: self.now_ms,
+            stack_ratio: self.stacks.as_ref().map(|s| s.ratios()).unwrap_or([1.0; HV_CHANNELS]),
         }
     }
 
+    /// The board's hold ceiling, V (0 without a law): no target passes it.
+    pub fn hold_ceiling_v(&self) -> f32 {
+        self.stacks.as_ref().map(|s| s.hold_ceiling_v()).unwrap_or(0.0)
+    }
+    /// The thinnest a held voltage ever gets: the invariant's floor.
+    pub fn s_hold(&self) -> f32 {
+        self.stacks.as_ref().map(|s| s.s_hold()).unwrap_or(1.0)
+    }
+    /// The HV writer's refusal threshold per channel, as a duty.
+    pub fn duty_ceiling_now(&self) -> [u16; HV_CHANNELS] {
+        self.write_ceiling
+    }
+
     /// The one function that writes an HV duty. Refuses (writes nothing, latches the fault
-    /// `hv-refused`) a duty above the channel's ceiling or the image's hard cap.
+    /// `hv-refused`) a duty above the channel's ceiling (the targets' ceiling; in shaped
+    /// actuation the compiled cap) or the image's hard cap.
     pub fn write_hv_duty(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
-        if ch >= HV_CHANNELS || (duty > 0 && (duty > self.ceiling[ch] || duty > hv_duty_cap(self.hv_max[ch]))) {
+        if ch >= HV_CHANNELS || (duty > 0 && (duty > self.write_ceiling[ch] || duty > hv_duty_cap(self.hv_max[ch]))) {
             self.fault = Some("hv-refused");
             return Err(HvRefused);
         }
@@ -207,6 +250,7 @@ impl<B: Board> Control<B> {
         self.volts = [0.0; HV_CHANNELS];
         self.target = [0.0; HV_CHANNELS];
         self.v_from = [0.0; HV_CHANNELS];
+        self.s_floor = [self.s_hold(); HV_CHANNELS];
         self.ramping_down = false;
     }
 
@@ -234,28 +278,41 @@ impl<B: Board> Control<B> {
     }
 
     /// Take the command side's setpoints. Dropped (false) when a stop came after they were
-    /// planned. A target that is not finite, negative or past the ceiling is refused: fault
-    /// stop (the command side checks first, so this is a second line).
+    /// planned. A target that is not finite, negative, past the board's hold ceiling or past
+    /// the command side's ceiling is refused: fault stop (the command side checks first, so
+    /// this is a second line).
     pub fn apply(&mut self, sp: &Setpoints) -> bool {
         if sp.epoch != self.epoch {
             return false;
         }
         self.seq = sp.seq;
+        let hold = self.hold_ceiling_v();
         for ch in 0..HV_CHANNELS {
-            self.ceiling[ch] = sp.duty_ceiling[ch].min(hv_duty_cap(self.hv_max[ch]));
+            let cap = hv_duty_cap(self.hv_max[ch]);
+            self.ceiling[ch] = sp.duty_ceiling[ch].min(cap).min(hv_duty_for(hold, self.hv_max[ch]));
+            self.write_ceiling[ch] = if sp.shaped { cap } else { self.ceiling[ch] };
         }
         if sp.slew > 0.0 && sp.slew <= 1e6 {
             self.slew = sp.slew;
         }
         self.servo_released = sp.servo_released;
         if sp.armed && self.lockout.is_none() {
+            let mut floor = [1.0f32; HV_CHANNELS];
             for ch in 0..HV_CHANNELS {
                 let t = sp.target_v[ch];
-                if !(t >= 0.0 && t <= HV_LIMIT_V) || hv_duty_for(t, self.hv_max[ch]) > self.ceiling[ch] {
+                if !(t >= 0.0 && t <= HV_LIMIT_V && t <= hold) || hv_duty_for(t, self.hv_max[ch]) > self.ceiling[ch] {
                     self.fault_stop("hv-refused");
                     return true;
                 }
+                match self.stacks.as_ref().and_then(|s| s.floor(t, sp.shaped)) {
+                    Some(f) => floor[ch] = f,
+                    None => {
+                        self.fault_stop("hv-refused");
+                        return true;
+                    }
+                }
             }
+            self.s_floor = floor;
             if self.fault.is_none() && !self.enable {
                 self.set_enable(true);
             }
@@ -264,7 +321,9 @@ impl<B: Board> Control<B> {
         } else {
             self.target = [0.0; HV_CHANNELS];
             self.ramping_down = self.enable;
+            self.s_floor = [self.s_hold(); HV_CHANNELS];
         }
+        self.shaped = sp.shaped;
         self.v_from = self.volts;
         self.servo_from = self.servo_duty;
         self.servo_to = sp.servo_duty;
@@ -302,31 +361,51 @@ impl<B: Board> Control<B> {
         }
     }
 
-    /// One 1 ms control tick: each HV value moves at most `slew` x 1 ms toward its target
-    /// and its duty is written; the servo follows; a disarm ramp that reached 0 drops the
-    /// enable; the watchdog is fed if the command side checked in at `last_checkin_ms`
-    /// within [`CHECKIN_BOUND_MS`].
+    /// One 1 ms control tick, as [`Control::tick_timed`] without the clock.
     pub fn tick(&mut self, last_checkin_ms: u32) {
+        self.tick_timed(last_checkin_ms, || 0);
+    }
+
+    /// One 1 ms control tick. Each channel steps ([`Stacks::step`]): its value moves at most
+    /// `slew` x 1 ms toward its goal (the target; in shaped actuation the voltage that holds
+    /// the film at the target's thickness now, capped by the supply), the guard
+    /// `v <= voltage_bound_now(state, s_floor)`, the thickness, the relaxation (after a stop
+    /// too, at 0 V: the film recovers in time); the duty of the guarded value is written. Then
+    /// the servo follows; a disarm ramp that reached 0 drops the enable; the watchdog is fed if
+    /// the command side checked in at `last_checkin_ms` within [`CHECKIN_BOUND_MS`]. Returns
+    /// the longest stack step of a channel in `clock` counts.
+    pub fn tick_timed(&mut self, last_checkin_ms: u32, clock: fn() -> u32) -> u32 {
         self.now_ms = self.now_ms.wrapping_add(1);
         let step = self.slew * 0.001;
+        let mut worst = 0u32;
         for ch in 0..HV_CHANNELS {
+            let Some(stacks) = self.stacks.as_mut() else { break };
             let (v, t) = (self.volts[ch], self.target[ch]);
-            if v != t {
-                let nv = if t > v { (v + step).min(t) } else { (v - step).max(t) };
-                let d = hv_duty_for(nv, self.hv_max[ch]);
-                if self.write_hv_duty(ch, d).is_err() {
-                    let f = self.fault.unwrap_or("hv-refused");
-                    self.fault_stop(f);
-                    break;
+            let t0 = clock();
+            let applied = stacks.step(ch, v, t, self.s_floor[ch], self.shaped, step);
+            worst = worst.max(clock().wrapping_sub(t0));
+            // a fault stop zeroes every channel; the later ones still step (at 0 V)
+            let nv = match applied {
+                Ok(nv) if nv >= 0.0 => nv,
+                _ => {
+                    self.fault_stop("hv-model");
+                    continue;
                 }
-                self.volts[ch] = nv;
+            };
+            let d = hv_duty_for(nv, self.hv_max[ch]);
+            if d != self.duty[ch] && self.write_hv_duty(ch, d).is_err() {
+                let f = self.fault.unwrap_or("hv-refused");
+                self.fault_stop(f);
+                continue;
             }
+            self.volts[ch] = nv;
         }
         self.follow_servo();
         self.finish_ramp_down();
         if self.now_ms.wrapping_sub(last_checkin_ms) <= CHECKIN_BOUND_MS {
             self.board.feed_watchdog();
         }
+        worst
     }
 
     pub fn now_ms(&self) -> u32 {

@@ -10,11 +10,12 @@
 //!   ceilings, fmax, servo travel) and moves nothing while disarmed; if `apply` refuses, its
 //!   error is the reply and nothing has moved. Unreachable:
 //!   `err unreachable: joint k: needs compliance ..., the ceiling allows ...`, `apply` is not
-//!   called.
+//!   called; a negative angle is `err unreachable` as such (the cable only flexes a joint).
 //! - `contact <P0> <P> [<V1> <V2> <V3>]` (N, V): model only, nothing moves. The tip stops at
 //!   the free tip of P0 at 0 V; at P with the voltages (default 0 V) the force the tip presses
 //!   with. Reply `ok fx=<N> fy=<N> force=<N> point=<x,y>`: (fx, fy) the force of the finger
-//!   on the object (base frame), force its magnitude, point the contact point (mm).
+//!   on the object (base frame), force its magnitude, point the contact point (mm). P below
+//!   P0 would pull the tip off the stop: `err usage: ... (pull-off)`.
 //!
 //! no_std, no allocation, no core formatting (crate::num, crate::out): replies go to any
 //! `core::fmt::Write`.
@@ -108,6 +109,11 @@ where
         }
         *a = R::from_f64(f64::from(d)) * R::from_f64(core::f64::consts::PI / 180.0);
     }
+    // the cable runs on the flexor side: it flexes a joint, it can never extend one
+    if let Some(k) = degrees.iter().position(|&d| d < 0.0) {
+        w!(out; "err unreachable: joint ", k + 1, ": ", Fixed(degrees[k], 3), " deg is an extension; the cable only flexes the joints (angles >= 0)")?;
+        return Ok(false);
+    }
     let tension = tension.map(|t| R::from_f64(f64::from(t)));
     // (the tabled inverse writes its answer in place: no copy of the solution)
     let mut sol = PoseSolution::empty();
@@ -146,6 +152,12 @@ where
     }
     if !(p0.is_finite() && p.is_finite() && volts.iter().all(|v| v.is_finite())) {
         w!(out; "err bad-number: not a finite number")?;
+        return Ok(false);
+    }
+    // the stop holds the free tip of P0; a lower tension pulls the tip away from it (a
+    // pull-off: the stop cannot pull), so there is no contact force to report
+    if p < p0 {
+        w!(out; "err usage: contact: P ", Fixed(p, 3), " N is below P0 ", Fixed(p0, 3), " N: the tip pulls away from the stop (pull-off); a contact force needs P >= P0")?;
         return Ok(false);
     }
     let zero = [R::zero(); MAX_JOINTS];

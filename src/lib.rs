@@ -15,6 +15,8 @@
 //! - [`board`]: the board trait.
 //! - [`sim`]: a simulated board (records every output).
 //! - [`out`], [`num`]: console text and numbers without core's formatting machinery.
+//! - [`settings`], [`flash_ram`]: the stored settings' record and store, and the emulator's
+//!   RAM flash (feature `settings`).
 #![no_std]
 
 #[macro_use]
@@ -27,6 +29,10 @@ pub mod control;
 pub mod inverse_cmds;
 pub mod num;
 pub mod rx;
+#[cfg(feature = "settings")]
+pub mod settings;
+#[cfg(feature = "settings")]
+pub mod flash_ram;
 pub mod sim;
 
 pub use app::{App, Commands, FwParams, CHANNELS};

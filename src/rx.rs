@@ -12,7 +12,7 @@
 
 use heapless::{Deque, Vec};
 
-use crate::console::{Line, LineBuf, LINE_MAX};
+use crate::console::{EscFilter, Line, LineBuf, LINE_MAX};
 
 /// Bytes of queued lines (each line takes its length + 2); smaller on the Cortex-M3 image
 /// (20 KiB of RAM).
@@ -78,6 +78,7 @@ impl FirstWord {
 
 /// Line assembly, `stop` and the ring of queued lines.
 pub struct RxLines {
+    esc: EscFilter,
     line: LineBuf,
     word: FirstWord,
     /// Bytes of the current line were lost: discard it at its end.
@@ -100,6 +101,7 @@ impl Default for RxLines {
 impl RxLines {
     pub const fn new() -> Self {
         RxLines {
+            esc: EscFilter::new(),
             line: LineBuf::new(),
             word: FirstWord { buf: [0; 5], len: 0, done: false, broken: false },
             broken: false,
@@ -113,6 +115,10 @@ impl RxLines {
     /// One received byte.
     pub fn push(&mut self, b: u8) -> RxEvent {
         self.received = self.received.wrapping_add(1);
+        // arrow and function keys: no part of a line, no reply
+        if !self.esc.pass(b) {
+            return RxEvent::Nothing;
+        }
         // input that ends a `wait`: any byte but a line ending (the LF of a `wait`'s own CRLF
         // arrives after its line)
         if b != b'\r' && b != b'\n' {

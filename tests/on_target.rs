@@ -235,7 +235,8 @@ mod tests {
         let mut rig = Rig::new();
         assert!(ok(&rig.line("arm")));
         let max = rig.ctl.hv_max()[0];
-        let ceiling = rig.cmds.duty_ceiling()[0];
+        // the command side's ceiling, tightened by the board's hold ceiling
+        let ceiling = rig.cmds.duty_ceiling()[0].min(hv_duty_for(rig.ctl.hold_ceiling_v(), max));
         assert!(ceiling > 0 && ceiling <= hv_duty_cap(max));
         let mut cmd = heapless::String::<32>::new();
         write!(cmd, "volt 1 {}", (rig.cmds.vmax()[0] * 1.01) as u32 + 1).unwrap();
@@ -277,6 +278,40 @@ mod tests {
         rig.ctl.stop();
         assert_eq!(ccrs(), [0; 3]);
         assert!(rx.pop().is_none(), "stop acts, it is not queued");
+    }
+
+    /// The stacks in time on the M4F (f32): under a held voltage the predicted thickness falls
+    /// as the film creeps, never below `s_hold`; after `stop` (duties 0 at once) it jumps back
+    /// part of the way and keeps recovering, tick by tick.
+    #[test]
+    fn control_tick_integrates_the_film() {
+        let mut rig = Rig::new();
+        assert!(ok(&rig.line("arm")));
+        let v = (0.9 * rig.ctl.hold_ceiling_v()) as u32;
+        let mut cmd = heapless::String::<32>::new();
+        write!(cmd, "volt 1 {}", v).unwrap();
+        assert!(ok(&rig.line(&cmd)));
+        let s = |rig: &Rig| rig.ctl.view().stack_ratio[0];
+        assert_eq!(s(&rig), 1.0, "at rest");
+        let run = |rig: &mut Rig, ms: u32| {
+            for _ in 0..ms {
+                rig.tick();
+                assert!(s(rig) >= rig.ctl.s_hold());
+            }
+            s(rig)
+        };
+        // the slew (about 2.4 s at 2 kV/s), then the creep
+        let s3 = run(&mut rig, 3_000);
+        assert!(s3 < 0.99 && ccr(0) > 0, "thinned under {} V: {}", v, s3);
+        let s20 = run(&mut rig, 17_000);
+        assert!(s20 < s3 - 0.005, "creeps at a held voltage: {} -> {}", s3, s20);
+        assert_eq!(rig.ctl.view().stack_ratio[1], 1.0, "channel 2 at 0 V stays at rest");
+        rig.ctl.stop();
+        assert_eq!(ccrs(), [0; 3]);
+        let s_off = run(&mut rig, 1);
+        assert!(s_off > s20 && s_off < 1.0, "part of the way back at once: {}", s_off);
+        let s_later = run(&mut rig, 10_000);
+        assert!(s_later > s_off, "recovers in time: {} -> {}", s_off, s_later);
     }
 
     /// The console's line ring on the chip: lines in order, lowercased; a full ring loses

@@ -6,10 +6,11 @@
 //!
 //! `cd host-tests && cargo run --release --example material_report`
 
+use finger_model::material::drive::{Channel, DriveLimits, Mode};
 use finger_model::material::{
     equilibrium_pull_in_voltage, equilibrium_ratio, equilibrium_voltage, guarded_tick, hold_ceiling, hold_ratio,
-    ratio_at_voltage, reference::advance_reference, shaped_voltage, voltage_at_ratio, Card, Integrator, Relaxation,
-    StackLaw, StackState, CARDS, LIMIT_RATIO, VHB_4905,
+    ratio_at_voltage, reference::advance_reference, voltage_at_ratio, Card, Integrator, Relaxation, StackLaw, StackState,
+    CARDS, LIMIT_RATIO, VHB_4905,
 };
 use finger_model::params::EPS0;
 use host_tests::perf::{build, calibration, run_qemu, M3, M4F};
@@ -59,7 +60,7 @@ fn cards_section(doc: &mut String) {
             equilibrium_pull_in_voltage(&l),
             equilibrium_voltage(&l, s).unwrap(),
             instant,
-            l.breakdown_field(s) * s * Z0,
+            l.breakdown_volts(s),
             hold_ceiling(&l, l.margin),
             hold_ratio(&l).unwrap(),
             v_lin
@@ -238,36 +239,25 @@ fn integrator_section(doc: &mut String) {
     writeln!(doc).unwrap();
 }
 
-/// Settling time (s) to within `band` of the target, from a start at rest, with the control
-/// tick's rule at 1 ms: plain (the setpoint slewed at `slew` V/s, `None`: a step) or shaped.
-/// `thickness`: the band is 1 % of the target thickness, else 1 % of the target thinning.
-/// Returns (settling time, peak voltage).
-fn settle(card: &Card, target_v: f64, shaped: bool, slew: Option<f64>, thickness: bool) -> (Option<f64>, f64) {
+/// Settling time (s) from rest with the control tick's step at 1 ms (`material::drive`, the
+/// firmware's), `slew` V/s (`None`: no slew limit): the time after which the predicted thickness
+/// stays within 1 % of the target thickness (`thickness`) or of the target thinning. Returns
+/// (settling time within the horizon, peak voltage).
+fn settle(card: &Card, target_v: f64, mode: Mode, slew: Option<f64>, thickness: bool) -> (Option<f64>, f64) {
     let l = law::<f32>(card);
     let dt = 0.001f32;
     let relax = Relaxation::new(&l, dt).unwrap();
-    let s_hold = hold_ratio(&l).unwrap();
+    let lim = DriveLimits { s_hold: hold_ratio(&l).unwrap(), slew_step: slew.map_or(f32::INFINITY, |r| r as f32 * dt), v_cap: SUPPLY as f32 };
     let target = target_v as f32;
     let s_t = equilibrium_ratio(&l, target).unwrap();
     let band = if thickness { 0.01 * s_t } else { 0.01 * (1.0 - s_t) };
-    let mut st = StackState::<f32>::rest();
-    let (mut v_set, mut peak) = (0f32, 0f32);
+    let mut ch = Channel::<f32>::rest();
+    let mut peak = 0f32;
     let mut settled_at = None;
-    let horizon = 900.0;
-    for k in 0..(horizon / dt as f64) as u64 {
-        let (req, floor) = if shaped {
-            (shaped_voltage(&l, &st, s_t).min(SUPPLY as f32), s_t)
-        } else {
-            v_set = match slew {
-                Some(r) => v_set + (target - v_set).min(r as f32 * dt),
-                None => target,
-            }
-            .min(SUPPLY as f32);
-            (v_set, s_hold)
-        };
-        let v = guarded_tick(&l, &relax, &mut st, req, floor).unwrap();
-        peak = peak.max(v);
-        let inside = (st.s - s_t).abs() <= band;
+    for k in 1..=(HORIZON_S / dt as f64) as u64 {
+        ch.step(&l, &relax, &lim, mode, target, s_t).unwrap();
+        peak = peak.max(ch.volts);
+        let inside = (ch.state.s - s_t).abs() <= band;
         match (inside, settled_at) {
             (true, None) => settled_at = Some(k as f64 * dt as f64),
             (false, Some(_)) => settled_at = None,
@@ -277,44 +267,49 @@ fn settle(card: &Card, target_v: f64, shaped: bool, slew: Option<f64>, thickness
     (settled_at, peak as f64)
 }
 
+const HORIZON_S: f64 = 900.0;
+
 fn settling_section(doc: &mut String) {
     writeln!(doc, "## Shaped actuation: settling time against a plain step\n").unwrap();
     writeln!(
         doc,
-        "From rest, the control tick's rule at 1 ms (`material::guarded_tick`), f32: *plain step*: \
-         the setpoint jumps to the target voltage (the floor s_hold); *plain, 2 kV/s*: the setpoint \
-         slews at the firmware's default 2,000 V/s; *shaped*: the voltage that holds the target \
-         thickness now (`material::shaped_voltage`, capped by the {SUPPLY:.0} V supply; the guard's \
-         floor the target thickness, so the breakdown bound there applies). Settling: the time after \
-         which the predicted thickness stays within 1 % of the target thickness (and, stricter, within \
-         1 % of the target thinning 1 - s); simulated up to 900 s (*> 900*: not within the band by \
-         then). Target voltages as fractions of the ceiling in force, min(the card's hold ceiling, the \
-         supply).\n"
+        "From rest, the control tick's step at 1 ms (`material::drive::Channel::step`, the \
+         firmware's), f32. *Plain*: the setpoint goes to the target voltage, as a step or slewed at \
+         the firmware's default 2,000 V/s (the guard's floor s_hold). *Shaped*: the goal is the \
+         voltage that holds the target thickness now (`material::shaped_voltage`, capped by the \
+         {SUPPLY:.0} V supply; the guard's floor the target thickness, so the breakdown bound there \
+         applies), as a step or slewed at 2,000 V/s. Settling: the time after which the predicted \
+         thickness stays within 1 % of the target thickness, and (stricter) within 1 % of the target \
+         thinning 1 - s; simulated for {HORIZON_S:.0} s (*> {HORIZON_S:.0}*: not settled by then). \
+         Targets: fractions of the ceiling in force, min(the card's hold ceiling, the supply). Times \
+         in s.\n"
     )
     .unwrap();
-    writeln!(doc, "| card | target V | target s | plain step s (1 % z / 1 % thinning) | plain, 2 kV/s | shaped (1 % z / 1 % thinning) | shaped peak V |").unwrap();
-    writeln!(doc, "| --- | --- | --- | --- | --- | --- | --- |").unwrap();
-    let show = |t: Option<f64>| t.map_or("> 900".to_string(), |t| format!("{t:.3}"));
+    writeln!(doc, "| card | target V | target s | plain step (1 % z / 1 % thinning) | plain 2 kV/s (1 % z) | shaped step (1 % z / 1 % thinning) | shaped 2 kV/s (1 % z) | shaped peak V |").unwrap();
+    writeln!(doc, "| --- | --- | --- | --- | --- | --- | --- | --- |").unwrap();
+    let show = |t: Option<f64>| t.map_or(format!("> {HORIZON_S:.0}"), |t| format!("{t:.3}"));
     for card in CARDS {
         let l = law::<f64>(card);
         let ceiling = hold_ceiling(&l, l.margin).min(SUPPLY);
         for frac in [0.5, 0.8, 1.0] {
             let v = (ceiling * frac * (1.0 - 1e-6)).floor();
             let s_t = equilibrium_ratio(&l, v).unwrap();
-            let (p_z, _) = settle(card, v, false, None, true);
-            let (p_thin, _) = settle(card, v, false, None, false);
-            let (slew_z, _) = settle(card, v, false, Some(2000.0), true);
-            let (sh_z, peak) = settle(card, v, true, None, true);
-            let (sh_thin, _) = settle(card, v, true, None, false);
+            let (p_z, _) = settle(card, v, Mode::Plain, None, true);
+            let (p_thin, _) = settle(card, v, Mode::Plain, None, false);
+            let (slew_z, _) = settle(card, v, Mode::Plain, Some(2000.0), true);
+            let (sh_z, peak) = settle(card, v, Mode::Shaped, None, true);
+            let (sh_thin, _) = settle(card, v, Mode::Shaped, None, false);
+            let (sh_slew_z, _) = settle(card, v, Mode::Shaped, Some(2000.0), true);
             writeln!(
                 doc,
-                "| {} | {v:.0} | {s_t:.4} | {} / {} | {} | {} / {} | {peak:.0} |",
+                "| {} | {v:.0} | {s_t:.4} | {} / {} | {} | {} / {} | {} | {peak:.0} |",
                 card.name,
                 show(p_z),
                 show(p_thin),
                 show(slew_z),
                 show(sh_z),
-                show(sh_thin)
+                show(sh_thin),
+                show(sh_slew_z)
             )
             .unwrap();
         }

@@ -32,7 +32,7 @@ fn main() {
     // a ramp at 100 kV/s while the long commands run
     assert_eq!(q.cmd("param slew 100000"), "ok slew=100000");
     assert_eq!(q.cmd("arm"), "ok armed=1");
-    q.write(b"volt 1 9000\r\nhelp\r\nparam\r\npose 12 12 12\r\nforce 0.3\r\ncontact 1 1.5\r\nlimits\r\nsolve 0.5 0 1000 2000\r\nstatus\r\nversion\r\n");
+    q.write(b"volt 1 5000\r\nhelp\r\nparam\r\npose 12 12 12\r\nforce 0.3\r\ncontact 1 1.5\r\nlimits\r\nsolve 0.5 0 1000 2000\r\nstatus\r\nversion\r\n");
     q.finals(10);
     // setpoints whose fmax is not cached yet: volt and force with a tension, limits
     q.write(b"volt all 2000\r\nforce 0.5\r\nvolt 2 4000\r\nlimits\r\n");
@@ -67,6 +67,12 @@ fn main() {
     s.push_str(&format!("| control-tick period (entry to entry), min / max | {} / {} us |\n", period[0], period.get(1).unwrap_or(&"-")));
     s.push_str(&format!("| control-task entry after the SysTick reload (jitter), min / max | {} / {} us |\n", lat[0], lat.get(1).unwrap_or(&"-")));
     s.push_str(&format!("| control-task run time, max | {} us |\n", kv(&t, "tick_run_us")));
+    // 1 instruction = 1 ns under -icount shift=0
+    let stack_us: f64 = kv(&t, "tick_stack_us").parse().unwrap_or(f64::NAN);
+    s.push_str(&format!(
+        "| the stacks in time, one channel's step in a tick (goal, slew, guard, thickness, relaxation), max | {stack_us:.3} us = {:.0} M4F instructions |\n",
+        stack_us * 1000.0
+    ));
     s.push_str(&format!("| control ticks counted | {} |\n", kv(&t, "ticks")));
     s.push_str(&format!("| stop: console interrupt entry to HV off, max ({} stops) | {} us |\n", kv(&t, "stops"), kv(&t, "stop_us")));
     s.push_str(&format!("| stop: control ticks between the stop line's last byte and all duties 0 (trace), worst | {worst_ticks} |\n"));

@@ -56,8 +56,12 @@ fn main() {
         None => writeln!(o, "**With the board's film, VHB 4905, the default finger's posture could not be solved.**\n").unwrap(),
     }
     let d = Params::<f64>::default();
+    let vhb_row = format!(
+        "card VHB 4905, the board's (G_eq {:.1} kPa relaxed; 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)",
+        VHB_4905.g_eq_mpa * 1e3
+    );
     let cases: Vec<(&str, Params<f64>)> = vec![
-        ("card VHB 4905, the board's (G_eq 15.4 kPa relaxed; 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)", Params::vhb4905()),
+        (vhb_row.as_str(), Params::vhb4905()),
         ("card Elastosil Film 2030 (silicone)", Params::with_card(&ELASTOSIL_2030)),
         ("card paper-elastic, the model's default (G 0.6 MPa; 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)", d),
         ("supply 20 kV", Params { v_supply: 20_000.0, ..d }),

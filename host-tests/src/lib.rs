@@ -2,6 +2,8 @@
 //! and the scene runner are crates of their own (tools/continuum, tools/finger-scene),
 //! re-exported here under their old paths for the fidelity test and report.
 
+pub mod hv;
+pub mod cut_flash;
 pub mod perf;
 pub mod qemu;
 pub mod sim_console;

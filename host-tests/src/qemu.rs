@@ -184,6 +184,8 @@ pub struct Qemu {
     dir: PathBuf,
     /// QEMU's stdout: the defmt bytes (semihosting).
     log: Option<std::thread::JoinHandle<Vec<u8>>>,
+    /// The last boot banner (`# finger-fw <version> [config=..] ready`).
+    pub banner: String,
 }
 
 impl Qemu {
@@ -256,10 +258,38 @@ impl Qemu {
         };
         stream.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
         let tx = stream.try_clone().unwrap();
-        let mut q = Qemu { child, con: BufReader::new(stream), tx, dir, log: Some(log) };
-        let banner = q.line();
-        assert!(banner.starts_with("# finger-fw ") && banner.ends_with("ready"), "banner: {banner:?}");
+        let mut q = Qemu { child, con: BufReader::new(stream), tx, dir, log: Some(log), banner: String::new() };
+        q.read_banner();
         q
+    }
+
+    fn read_banner(&mut self) {
+        let banner = self.line();
+        assert!(banner.starts_with("# finger-fw ") && banner.ends_with("ready"), "banner: {banner:?}");
+        self.banner = banner;
+    }
+
+    /// One command to QEMU's monitor (HMP); what it answered within half a second.
+    pub fn monitor(&mut self, command: &str) -> String {
+        let mut mon = UnixStream::connect(self.dir.join("mon.sock")).expect("QEMU monitor socket");
+        mon.set_read_timeout(Some(Duration::from_millis(500))).unwrap();
+        mon.write_all(format!("{command}\n").as_bytes()).unwrap();
+        let mut text = Vec::new();
+        let mut buf = [0u8; 4096];
+        while let Ok(k) = std::io::Read::read(&mut mon, &mut buf) {
+            if k == 0 {
+                break;
+            }
+            text.extend_from_slice(&buf[..k]);
+        }
+        String::from_utf8_lossy(&text).into_owned()
+    }
+
+    /// The monitor's `system_reset` (the CPU and devices reset, RAM as QEMU's reset leaves it:
+    /// docs/firmware.md "Settings"); returns after the new boot banner ([`Qemu::banner`]).
+    pub fn system_reset(&mut self) {
+        self.monitor("system_reset");
+        self.read_banner();
     }
 
     pub fn line(&mut self) -> String {

@@ -53,3 +53,24 @@ pub fn val<'a>(reply: &'a str, key: &str) -> &'a str {
 pub fn nums(s: &str) -> Vec<f64> {
     s.split(',').map(|x| x.parse().unwrap()).collect()
 }
+
+/// The ceiling in force on channel 1, V, as `limits` reports it (`vmax=`).
+pub fn ceiling(a: &mut App<SimBoard>) -> f64 {
+    nums(val(&cmd(a, "limits"), "vmax"))[0]
+}
+
+/// `frac` of the ceiling `vmax`, V, rounded down to a whole volt: a voltage as a test types it,
+/// derived from the ceiling in force so that a test keeps its property whatever the board's card.
+pub fn frac_of(vmax: f64, frac: f64) -> f32 {
+    (vmax * frac).floor() as f32
+}
+
+/// A console line with its voltages given as fractions of the ceiling `vmax`: each word `@f`
+/// becomes [`frac_of`]`(vmax, f)` (`"solve 1 @0.5 0 @0.9"`). Other words stay as they are.
+pub fn at_ceiling(line: &str, vmax: f64) -> String {
+    let word = |w: &str| match w.strip_prefix('@') {
+        Some(f) => format!("{}", frac_of(vmax, f.parse().unwrap())),
+        None => w.to_owned(),
+    };
+    line.split('\n').map(|l| l.split(' ').map(word).collect::<Vec<_>>().join(" ")).collect::<Vec<_>>().join("\n")
+}

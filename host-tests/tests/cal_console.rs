@@ -4,7 +4,7 @@
 //! refusals change nothing.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{cmd, nums, val, Out};
+use host_tests::sim_console::{ceiling, cmd, frac_of, nums, val, Out};
 use finger_model::{Calibration, Finger, Method};
 
 /// MODEL.md's finger, as `fe-calibrate` (tools/calculix) prints it (docs/firmware.md).
@@ -90,7 +90,9 @@ fn calibrated_solve_is_the_host_model() {
     let fmax0 = nums(val(&cmd(&mut a, "limits"), "fmax"))[0];
     let evals = a.fmax_evaluations();
     cmd(&mut a, &format!("cal {FE_CAL}"));
-    for (f, v) in [(0.5f32, [0.0f32, 1000.0, 2000.0]), (1.5, [3000.0, 0.0, 8000.0]), (0.8, [0.0; 3])] {
+    let vm = ceiling(&mut a);
+    let at = |f: [f64; 3]| f.map(|f| frac_of(vm, f));
+    for (f, v) in [(0.5f32, [0.0f32, 1000.0, 2000.0]), (1.5, at([0.3, 0.0, 0.8])), (0.8, [0.0; 3])] {
         let line = format!("solve {f} {} {} {}", v[0], v[1], v[2]);
         let r = cmd(&mut a, &line);
         assert_solve_reply(&r, &cal, f, v);
@@ -111,7 +113,9 @@ fn calibrated_solve_is_the_host_model() {
     let fmax1 = nums(val(&cmd(&mut a, "limits"), "fmax"))[0];
     assert_eq!(a.fmax_evaluations(), evals + 1);
     let want = cal.fmax(&[0.0; 3]).unwrap().tension as f64;
-    assert!((fmax1 - want).abs() <= 1e-4 && (fmax1 - fmax0).abs() > 1e-3, "{fmax1} vs {want}, uncalibrated {fmax0}");
+    // the board's fmax is its branch table's: never above the full search's by more than 1e-4 N,
+    // below it by at most the table's 2e-4 (table_console)
+    assert!(fmax1 <= want + 1e-4 && fmax1 >= want * (1.0 - 2e-4) && (fmax1 - fmax0).abs() > 1e-3, "{fmax1} vs {want}, uncalibrated {fmax0}");
     // `cal none` is the uncalibrated model again
     cmd(&mut a, "cal none");
     let r = cmd(&mut a, "solve 0.5 0 1000 2000");
@@ -219,10 +223,12 @@ fn pose_after_cal_uses_the_calibrated_finger() {
     cmd(&mut a, &format!("cal {FE_CAL}"));
     let cal = Finger::with_calibration(p, fe_cal()).unwrap();
     // a posture of the calibrated finger, typed as a user would
-    let s = cal.solve(1.0, &[2000.0, 5000.0, 8000.0], Method::converged()).unwrap();
+    let vm = ceiling(&mut a);
+    let s = cal.solve(1.0, &[0.2, 0.5, 0.8].map(|f| frac_of(vm, f)), Method::converged()).unwrap();
     let deg = [0, 1, 2].map(|k| format!("{:.6}", (s.joint_angle[k] as f64).to_degrees()).parse::<f64>().unwrap());
     let rad = deg.map(|d| (d as f32) * (std::f64::consts::PI / 180.0) as f32);
-    let opts = finger_model::inverse::Options::default();
+    // the firmware's inverse options: its ceiling in force
+    let opts = finger_model::inverse::Options { hv_fs: Some(vm as f32), ..Default::default() };
     let want = finger_model::inverse::solve_pose_tabled(&finger_model::inverse::BranchTable::new(&cal, &opts).unwrap(), &rad, None).unwrap();
     let line = format!("pose {} {} {}", deg[0], deg[1], deg[2]);
     let r = cmd(&mut a, &line);

@@ -5,19 +5,23 @@
 //! with the same parameters.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::feed_text;
+use host_tests::sim_console::{at_ceiling, ceiling, feed_text};
 use proptest::prelude::*;
 
-/// One command line; its output, every line (the control loop run through any `wait`).
+thread_local!(static VMAX: f64 = ceiling(&mut App::new(SimBoard::default())));
+
+/// One command line; its output, every line (the control loop run through any `wait`). Its
+/// `@f` words are voltages, `f` times the board's ceiling in force at boot (`at_ceiling`).
 fn run(a: &mut App<SimBoard>, line: &str) -> String {
+    let line = VMAX.with(|&v| at_ceiling(line, v));
     feed_text(a, format!("{line}\n").as_bytes())
 }
 
 /// The probes: model-only commands with arguments inside and outside the domain.
 const PROBES: &[&str] = &[
-    "solve 0.5 0 1000 2000",
-    "solve 2 3000 3000 3000",
-    "solve 6 9000 0 4500",
+    "solve 0.5 0 @0.1 @0.2",
+    "solve 2 @0.3 @0.3 @0.3",
+    "solve 6 @0.9 0 @0.45",
     "solve 0 0 0 0",
     "pose 5 5 5",
     "pose 10 10 10",
@@ -26,11 +30,11 @@ const PROBES: &[&str] = &[
     "pose 30 30 30",
     "contact 1 2 0 0 0",
     "contact 2.219 3.9 0 0 0",
-    "contact 0.5 1.5 3000 3000 3000",
+    "contact 0.5 1.5 @0.3 @0.3 @0.3",
     "contact 1 40 0 0 0",
     "limits",
     "shape 1 0 0 0",
-    "shape 3 6000 2000 9000",
+    "shape 3 @0.6 @0.2 @0.9",
 ];
 
 /// Other requests: model-only, reads, refusals, and a parameter changed then restored.
@@ -41,16 +45,16 @@ const OTHERS: &[&str] = &[
     "param l",
     "param layers",
     "help",
-    "solve 1.7 2500 100 9999",
+    "solve 1.7 @0.25 100 @0.9999",
     "solve 9 0 0 0",
     "solve 1 50000 0 0",
     "pose 7 11 3",
     "pose 10 10 10 1.7",
     "pose 1 1",
-    "contact 0.3 4.1 9000 9000 9000",
+    "contact 0.3 4.1 @0.9 @0.9 @0.9",
     "contact 3 2 0 0 0",
-    "shape 0.7 0 8000 8000",
-    "volt 1 1000",
+    "shape 0.7 0 @0.8 @0.8",
+    "volt 1 @0.1",
     "force 1",
     "bogus",
     "param l 30\nparam l 27",
@@ -58,8 +62,8 @@ const OTHERS: &[&str] = &[
     "param layers 0\nparam layers 4",
     "preset paper\npreset default",
     "param m 1\nparam m 8",
-    "arm\nvolt all 3000\nforce 1.2\npose 8 9 10\ndisarm",
-    "arm\nvolt 2 9000\nstop",
+    "arm\nvolt all @0.3\nforce 1.2\npose 8 9 10\ndisarm",
+    "arm\nvolt 2 @0.9\nstop",
     "force 0.8\nstop",
 ];
 

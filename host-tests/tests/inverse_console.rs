@@ -99,7 +99,7 @@ mod console {
     use finger_fw::sim::SimBoard;
     use finger_fw::App;
     use finger_model::Method;
-    use host_tests::sim_console::{cmd, Out};
+    use host_tests::sim_console::{ceiling, cmd, frac_of, Out};
 
     fn outputs(a: &mut App<SimBoard>) -> String {
         let st = cmd(a, "status");
@@ -122,14 +122,15 @@ mod console {
     #[test]
     fn pose_moves_only_when_armed() {
         let mut a = App::new(SimBoard::default());
-        let (angles, deg) = posture(&a, 1.0, [2000.0, 5000.0, 8000.0]);
+        let vm = ceiling(&mut a);
+        let (angles, deg) = posture(&a, 1.0, [0.2, 0.5, 0.8].map(|f| frac_of(vm, f)));
         // the model's answer for the same input
         // the angle as the firmware forms it (f32 degrees times f32 pi/180): the voltages are
         // ill-conditioned in the angle (1 ulp of angle moves them ~0.1 V at a 1 % stiffness
         // range), so the comparison needs the same input, not a nearby one
         let rad = deg.map(|d| (d as f32) * (std::f64::consts::PI / 180.0) as f32);
         // the firmware solves with the finger's branch table (built at the first `pose`)
-        let opts = finger_model::inverse::Options::default();
+        let opts = finger_model::inverse::Options { hv_fs: Some(vm as f32), ..Default::default() };
         let table = finger_model::inverse::BranchTable::new(a.finger(), &opts).unwrap();
         let want = finger_model::inverse::solve_pose_tabled(&table, &rad, None).unwrap();
         // disarmed: the answer, nothing moves
@@ -212,7 +213,8 @@ mod console {
         let free = a.finger().solve(1.0, &[0.0; 3], Method::converged()).unwrap();
         let pt = kv(&r, "point");
         assert!((pt[0] - free.tip().x as f64).abs() < 2e-3 && (pt[1] - free.tip().y as f64).abs() < 2e-3, "{r}");
-        let r = cmd(&mut a, "contact 1 1.5 3000 3000 3000");
+        let v = frac_of(ceiling(&mut a), 0.3);
+        let r = cmd(&mut a, &format!("contact 1 1.5 {v} {v} {v}"));
         assert!(r.starts_with("ok fx="), "{r}");
         for (bad, code) in [("contact 1", "usage"), ("contact 1 2 3", "usage"), ("contact nan 1", "bad-number"), ("contact 1 1.5 20000 0 0", "limit"), ("contact -1 1", "usage")] {
             let r = cmd(&mut a, bad);

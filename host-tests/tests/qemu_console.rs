@@ -20,6 +20,19 @@ fn expect(q: &mut Qemu, line: &str, prefix: &str) -> String {
 host_tests::on_both_images! {
     qemu_console_commands_and_bad_inputs => console_commands_and_bad_inputs;
     qemu_defmt_log_decodes => defmt_log_decodes;
+    qemu_ceiling_stays_below_the_cards_hold_ceiling => ceiling_stays_below_the_cards_hold_ceiling;
+    qemu_status_follows_the_creep => status_follows_the_creep;
+}
+
+/// The value of `key=` in a reply, as numbers.
+fn field(r: &str, key: &str) -> Vec<f64> {
+    let k = format!("{key}=");
+    r.split_whitespace().find_map(|w| w.strip_prefix(k.as_str())).unwrap_or_else(|| panic!("no {key} in {r}")).split(',').map(|x| x.parse().unwrap()).collect()
+}
+
+/// The ceiling in force on channel 1, V (`limits`' vmax).
+fn ceiling(q: &mut Qemu) -> f64 {
+    field(&expect(q, "limits", "ok vmax="), "vmax")[0]
 }
 
 fn console_commands_and_bad_inputs(img: Image) {
@@ -30,7 +43,11 @@ fn console_commands_and_bad_inputs(img: Image) {
     assert!(help.len() > 10 && help.last().unwrap() == "ok", "{help:?}");
     let s = expect(&mut q, "status", "ok armed=0 ");
     assert!(s.contains(" fault=none") && s.contains(" enable=0"), "{s}");
-    expect(&mut q, "limits", "ok vmax=10000.0,10000.0,10000.0 vpullin=");
+    // the ceiling in force: the same on every channel, at most the card's hold ceiling
+    let vhold = field(&expect(&mut q, "material", "ok card="), "vhold")[0];
+    let l = expect(&mut q, "limits", "ok vmax=");
+    let vm = field(&l, "vmax");
+    assert!(vm.iter().all(|&v| v == vm[0]) && vm[0] > 0.0 && vm[0] <= vhold, "{l} (vhold {vhold})");
     solve_stiffness(&mut q);
     fmax_against_f64(&mut q, img);
     // bad inputs
@@ -57,7 +74,7 @@ fn console_commands_and_bad_inputs(img: Image) {
     expect(&mut q, "param margin 1", "err usage:");
     expect(&mut q, "arm", "ok armed=1");
     expect(&mut q, "param l 30", "err armed:");
-    expect(&mut q, "volt 1 10000", "err limit:");
+    expect(&mut q, &format!("volt 1 {}", vm[0]), "err limit:");
     expect(&mut q, "volt 1 -1", "err usage:");
     expect(&mut q, "param slew 100000", "err armed:");
     expect(&mut q, "volt all 1000", "ok volts=1000.0,1000.0,1000.0");
@@ -66,9 +83,9 @@ fn console_commands_and_bad_inputs(img: Image) {
     assert!(s.contains(" volts=1000.0,1000.0,1000.0 ") && s.contains(" enable=1"), "{s}");
     expect(&mut q, "force 0.5", "ok force=0.500 cable=");
     if img.has_inverse() {
-        pose_and_contact(&mut q);
+        pose_and_contact(&mut q, vm[0]);
     } else {
-        pose_at_a_tension(&mut q);
+        pose_at_a_tension(&mut q, vm[0]);
         expect(&mut q, "contact 1 1.5", "err unknown: contact is not in this build");
     }
     expect(&mut q, "stop", "ok stopped");
@@ -80,15 +97,15 @@ fn console_commands_and_bad_inputs(img: Image) {
 }
 
 /// Armed: `pose` at a posture of the host's model, then `contact`.
-fn pose_and_contact(q: &mut Qemu) {
+fn pose_and_contact(q: &mut Qemu, vmax: f64) {
     // pose (the inverse model on the target, armed: it sets the tension and the voltages) at a
     // posture of the host's model; the answer agrees with the host's inverse
-    // the board's default finger: MODEL.md's, with its FE calibration
-    let f = finger_model::Finger::with_calibration(finger_model::Params::<f32>::default(), finger_model::Calibration::model_md()).unwrap();
-    let s = f.solve(0.8, &[1000.0, 3000.0, 5000.0], finger_model::Method::converged()).unwrap();
+    // the board's default finger: MODEL.md's on VHB 4905, with its FE calibration
+    let f = finger_model::Finger::with_calibration(finger_model::Params::<f32>::vhb4905(), finger_model::Calibration::model_md()).unwrap();
+    let s = f.solve(0.8, &[0.1, 0.3, 0.5].map(|x| (x * vmax).floor() as f32), finger_model::Method::converged()).unwrap();
     let deg = [0, 1, 2].map(|k| format!("{:.6}", (s.joint_angle[k] as f64).to_degrees()).parse::<f64>().unwrap());
-    // the firmware solves with the finger's branch table
-    let opts = finger_model::inverse::Options::default();
+    // the firmware solves with the finger's branch table, built for its ceiling in force
+    let opts = finger_model::inverse::Options { hv_fs: Some(vmax as f32), ..Default::default() };
     let table = finger_model::inverse::BranchTable::new(&f, &opts).unwrap();
     let rad = deg.map(|d| (d * std::f64::consts::PI / 180.0) as f32);
     let want = finger_model::inverse::solve_pose_tabled(&table, &rad, None).unwrap();
@@ -129,12 +146,12 @@ fn fmax_against_f64(q: &mut Qemu, img: Image) {
     }
 }
 
-/// The host's f64 model of the board's finger: default parameters, the board's calibration.
+/// The host's f64 model of the board's finger: MODEL.md's on VHB 4905, the board's calibration.
 fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
     let c = expect(q, "cal", "ok cal=");
     let g: Vec<f64> = c["ok cal=".len()..].split(',').map(|x| x.parse().unwrap()).collect();
     let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
-    finger_model::Finger::with_calibration(finger_model::Params::<f64>::default(), cal).unwrap()
+    finger_model::Finger::with_calibration(finger_model::Params::<f64>::vhb4905(), cal).unwrap()
 }
 
 /// The M3 image's `pose` (the fixed-point inverse at the given tension), armed: at a posture
@@ -142,10 +159,10 @@ fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
 /// hold that posture in the f64 model within the inverse's round-trip target (0.05 deg, issue
 /// 14); they are the setpoints afterwards; past the stacks, `unreachable`. Without a tension:
 /// the F405's rule.
-fn pose_at_a_tension(q: &mut Qemu) {
+fn pose_at_a_tension(q: &mut Qemu, vmax: f64) {
     let f = board_finger(q);
     let p = 0.8;
-    let s = f.solve(p, &[1000.0, 3000.0, 5000.0], finger_model::Method::converged()).unwrap();
+    let s = f.solve(p, &[0.1, 0.3, 0.5].map(|x| (x * vmax).floor()), finger_model::Method::converged()).unwrap();
     let deg = [0, 1, 2].map(|k| format!("{:.6}", s.joint_angle[k].to_degrees()).parse::<f64>().unwrap());
     let r = expect(q, &format!("pose {} {} {} {p}", deg[0], deg[1], deg[2]), "ok force=0.8000 volts=");
     let field = |r: &str, k: &str| -> Vec<f64> { r.split_whitespace().find_map(|w| w.strip_prefix(k)).unwrap().split(',').map(|x| x.parse().unwrap()).collect() };
@@ -200,4 +217,68 @@ fn defmt_log_decodes(img: Image) {
         messages.iter().any(|m| m.contains("finger-fw") && m.contains("up") && m.contains(img.board())),
         "decoded: {messages:?}"
     );
+}
+
+/// The ceiling in force never passes the card's hold ceiling (`material`'s vhold): at boot and
+/// after every console command that touches the model (`param`, `preset`, `cal`), `limits`
+/// reports at most it and a `volt` just past it, or at the ceiling in force, is refused.
+fn ceiling_stays_below_the_cards_hold_ceiling(img: Image) {
+    let mut q = Qemu::boot_on(img, "ceiling");
+    let m = expect(&mut q, "material", "ok card=VHB-4905 ");
+    let vhold = field(&m, "vhold")[0];
+    assert!(vhold > 0.0 && vhold < 10_000.0, "{m}");
+    let v0 = ceiling(&mut q);
+    assert!(v0 <= vhold, "{v0} vs {vhold}");
+    for line in [
+        "",
+        "param g 1000",
+        "param z0 50",
+        "param eps_r 1",
+        "param margin 0.999",
+        "param v_supply 100000",
+        "preset paper",
+        "param g 1000",
+        "cal none",
+        "preset default",
+        "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332",
+        "param layers 64",
+    ] {
+        if !line.is_empty() {
+            expect(&mut q, line, "ok ");
+        }
+        let v = ceiling(&mut q);
+        assert!(v <= v0 && v <= vhold, "after {line:?}: ceiling {v} past the card's hold ceiling {vhold}");
+        assert_eq!(field(&expect(&mut q, "material", "ok card="), "vhold")[0], vhold, "{line}");
+        expect(&mut q, "arm", "ok armed=1");
+        expect(&mut q, &format!("volt 1 {:.1}", vhold + 0.1), "err limit:");
+        expect(&mut q, &format!("volt all {v0:.1}"), "err limit:");
+        expect(&mut q, "stop", "ok stopped");
+    }
+    q.finish();
+}
+
+/// `status` follows the film's creep over two minutes of `wait` under a held voltage: `thick`
+/// (the control tick's thickness now) falls monotonically toward `thick_eq` (the thickness once
+/// relaxed at the target), never below it, and has closed most of the gap after 120 s.
+fn status_follows_the_creep(img: Image) {
+    let mut q = Qemu::boot_on(img, "creep");
+    let v = (0.9 * ceiling(&mut q)).floor();
+    expect(&mut q, "arm", "ok armed=1");
+    expect(&mut q, &format!("volt all {v}"), "ok volts=");
+    let mut thick = Vec::new();
+    let mut eq = 0.0;
+    for _ in 0..12 {
+        expect(&mut q, "wait 10", "ok waited=10");
+        let st = expect(&mut q, "status", "ok armed=1 ");
+        let (t, e) = (field(&st, "thick"), field(&st, "thick_eq"));
+        assert!(t.iter().all(|&x| x == t[0]) && e.iter().all(|&x| x == e[0]), "{st}");
+        assert!(t[0] >= e[0], "thinner than its equilibrium: {st}");
+        thick.push(t[0]);
+        eq = e[0];
+    }
+    expect(&mut q, "stop", "ok stopped");
+    q.finish();
+    assert!(thick.windows(2).all(|w| w[1] <= w[0]), "not monotone: {thick:?}");
+    let (first, last) = (thick[0] - eq, thick[thick.len() - 1] - eq);
+    assert!(first > 0.0 && last < 0.5 * first, "the creep at 10 s and 120 s: {thick:?}, equilibrium {eq}");
 }

@@ -48,7 +48,7 @@ fn slew_bound_holds_per_tick_while_long_commands_run() {
     assert_eq!(line(&mut sim, &mut out, "arm"), "ok armed=1");
     // the ramp, with help, param, pose, force and contact queued behind it (issue 12's case)
     let t0 = sim.t_us;
-    assert!(sim.send(b"volt 1 9000\nhelp\nparam\npose 10 10 10\nforce 0.3\ncontact 1 1.5\nvolt 2 9000\nhelp\n"));
+    assert!(sim.send(b"volt 1 5000\nhelp\nparam\npose 10 10 10\nforce 0.3\ncontact 1 1.5\nvolt 2 5000\nhelp\n"));
     let ticks = run(&mut sim, &mut out);
     assert_eq!(finals(&out.0).len(), 2 + 8, "{}", out.0);
     // 100 V per 1 ms tick at 10 kV full scale, 8400 counts: 84 counts, +1 for rounding
@@ -229,19 +229,19 @@ fn watchdog_fed_only_while_the_command_side_checks_in() {
     assert!(last > feeds_at(1_900) || ticks.last().unwrap().0 < 2_010_000);
 }
 
-/// The servo moves with the slewed voltages: as the excursion at the slewed voltage, not at once.
+/// The servo moves with the slewed voltages: in proportion to the ramp's progress, not at once.
 #[test]
 fn servo_follows_the_slewed_voltages() {
     use finger_model::Method;
     let mut a = App::new(SimBoard::default());
     let mut out = Out(String::new());
-    // a fine servo scale (2000 counts over 20 deg) and 8 kV (about 4 um of excursion, 5
+    // a fine servo scale (2000 counts over 20 deg) and 5 kV (the excursion of a few
     // counts), so the excursion's change shows
-    for l in ["param slew 2000\n", "param spool_r 5\n", "param servo_range 20\n", "arm\n", "force 0.5\n"] {
+    for l in ["param slew 2000\n", "param spool_r 5\n", "param servo_range 20\n", "arm\n", "force 0.4\n"] {
         a.input(l.as_bytes(), &mut out);
     }
     let s0 = a.board().servo.duty;
-    a.input(b"volt all 8000\n", &mut out);
+    a.input(b"volt all 5000\n", &mut out);
     assert_eq!(a.board().servo.duty, s0, "no jump before the voltages move");
     let mut servo = vec![s0];
     let mut mid_v = 0.0;
@@ -253,12 +253,13 @@ fn servo_follows_the_slewed_voltages() {
         }
     }
     let s1 = *servo.last().unwrap();
-    assert!(s1.abs_diff(s0) >= 4, "{s0} -> {s1}");
-    // halfway through the ramp, where the excursion at the voltage then is (thinning grows
-    // with V^2, so about a quarter of the way)
+    assert!(s1.abs_diff(s0) >= 4, "{s0} -> {s1}: {}", out.0);
+    // 80 % through the ramp, the servo 80 % of its way (in proportion to the ramp's
+    // progress: the film creeps, so the excursion is no function of the voltage alone)
     assert!((mid_v - 4000.0).abs() < 10.0, "{mid_v}");
-    let e = |v: f32| a.finger().solve(0.5, &[v; 3], Method::converged()).unwrap().cable_excursion as f64;
-    let frac = (e(mid_v) - e(0.0)) / (e(8000.0) - e(0.0));
+    let e = |v: f32| a.finger().solve(0.4, &[v; 3], Method::converged()).unwrap().cable_excursion as f64;
+    assert!(e(5000.0) > e(0.0), "the stacks thin at 5 kV");
+    let frac = mid_v as f64 / 5000.0;
     let mid = servo[2000] as f64;
     let want = s0 as f64 + (s1 as f64 - s0 as f64) * frac;
     // (s0, s1 and mid each rounded to a count)
@@ -268,16 +269,20 @@ fn servo_follows_the_slewed_voltages() {
 }
 
 fn setpoints(target: [f32; 3]) -> Setpoints {
-    Setpoints { seq: 1, epoch: 0, armed: true, target_v: target, servo_duty: 2000, servo_released: 2000, duty_ceiling: [8400; 3], slew: 2000.0 }
+    Setpoints { seq: 1, epoch: 0, armed: true, target_v: target, servo_duty: 2000, servo_released: 2000, duty_ceiling: [8400; 3], slew: 2000.0, shaped: false }
 }
 
-/// The control core refuses targets that are not finite or past the ceiling, whatever the
-/// command side sends; HV stays off.
+/// The control core refuses targets that are not finite or past the ceiling (the command
+/// side's, the board's hold ceiling, the compiled limit), plain or shaped, whatever the command
+/// side sends; HV stays off.
 #[test]
 fn control_core_refuses_non_finite_and_past_ceiling_targets() {
-    for bad in [f32::NAN, f32::INFINITY, -1.0, 10_001.0] {
+    let hold = Control::new(SimBoard::default(), 2000, 2000.0).hold_ceiling_v();
+    assert!(hold > 1000.0 && hold < 10_000.0, "{hold}");
+    let past_hold = f32::from_bits(hold.to_bits() + 1);
+    for (bad, shaped) in [(f32::NAN, false), (f32::INFINITY, false), (-1.0, false), (10_001.0, false), (past_hold, false), (past_hold, true), (9990.0, true)] {
         let mut c = Control::new(SimBoard::default(), 2000, 2000.0);
-        c.apply(&setpoints([bad, 0.0, 0.0]));
+        c.apply(&Setpoints { shaped, ..setpoints([bad, 0.0, 0.0]) });
         for _ in 0..10 {
             c.tick(c.now_ms());
         }

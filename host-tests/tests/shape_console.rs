@@ -3,7 +3,7 @@
 //! sub-elements (the model's posture, MODEL.md "Equilibrium"), the tip as `solve`'s.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{feed, nums, val};
+use host_tests::sim_console::{ceiling, feed, frac_of, nums, val};
 use finger_model::{Calibration, Finger, Method, Params, Pose};
 
 /// One command line: its reply, which must be the only line.
@@ -17,11 +17,13 @@ fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
 #[test]
 fn shape_reports_the_poses_of_the_solve() {
     let mut a = App::new(SimBoard::default());
-    // the board's default finger: MODEL.md's, with its FE calibration
-    let f: Finger<f32> = Finger::with_calibration(Params::default(), Calibration::model_md()).unwrap();
+    // the board's default finger: MODEL.md's on the board's film (VHB 4905), with its FE calibration
+    let f: Finger<f32> = Finger::with_calibration(Params::vhb4905(), Calibration::model_md()).unwrap();
     let p = f.params();
     let sub_len = p.hinge_len() / p.m as f32;
-    for (tension, volts) in [(0.0, [0.0; 3]), (1.0, [0.0; 3]), (3.0, [9000.0, 0.0, 4000.0]), (8.0, [2000.0; 3])] {
+    let vm = ceiling(&mut a);
+    let at = |f: [f64; 3]| f.map(|f| frac_of(vm, f));
+    for (tension, volts) in [(0.0, [0.0; 3]), (1.0, [0.0; 3]), (3.0, at([0.9, 0.0, 0.4])), (5.0, at([0.2; 3]))] {
         let args = format!("{tension} {} {} {}", volts[0], volts[1], volts[2]);
         let r = cmd(&mut a, &format!("shape {args}"));
         assert!(r.starts_with("ok nodes="), "{r}");

@@ -6,7 +6,7 @@
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 use finger_model::Method;
-use host_tests::sim_console::{cmd, nums, val};
+use host_tests::sim_console::{ceiling, cmd, frac_of, nums, val};
 
 /// `solve P V1 V2 V3` against the app's finger's full solve: joints (3 decimals, degrees) and
 /// tip (3 decimals, mm) within a unit of the last digit; returns `iters`.
@@ -26,7 +26,9 @@ fn check_solve(a: &mut App<SimBoard>, p: f32, v: [f32; 3]) -> u32 {
 #[test]
 fn solve_and_fmax_come_from_the_table_and_follow_a_parameter_change() {
     let mut a = App::new(SimBoard::default());
-    for (p, v) in [(1.0, [0.0; 3]), (1.0, [9000.0, 5000.0, 0.0]), (7.0, [2000.0, 6000.0, 9000.0])] {
+    let vm = ceiling(&mut a);
+    let at = |f: [f64; 3]| f.map(|f| frac_of(vm, f));
+    for (p, v) in [(1.0, [0.0; 3]), (1.0, at([0.9, 0.5, 0.0])), (7.0, at([0.2, 0.6, 0.9]))] {
         assert_eq!(check_solve(&mut a, p, v), 0, "P {p} V {v:?}: the table's hole should need no Newton step");
     }
     // fmax at 0 V: the table's (the firmware's) equals the full search's to its 1e-4
@@ -38,7 +40,8 @@ fn solve_and_fmax_come_from_the_table_and_follow_a_parameter_change() {
     // table would answer for the old finger, or need Newton steps)
     let r = cmd(&mut a, "param t_min 1.8");
     assert!(r.starts_with("ok"), "{r}");
-    assert_eq!(check_solve(&mut a, 1.0, [9000.0, 5000.0, 0.0]), 0);
+    let vm = ceiling(&mut a);
+    assert_eq!(check_solve(&mut a, 1.0, [0.9, 0.5, 0.0].map(|f| frac_of(vm, f))), 0);
     let want = a.finger().fmax(&[0.0; 3]).unwrap().tension as f64;
     let got = fmax(&mut a);
     assert!((got - want).abs() <= 2e-4 * want, "after the change: fmax {got} vs {want}");

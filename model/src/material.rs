@@ -15,6 +15,7 @@
 
 pub mod cards;
 pub mod reference;
+pub mod drive;
 
 pub use cards::{CARDS, ELASTOSIL_2030, PAPER_ELASTIC, VHB_4905};
 
@@ -40,16 +41,17 @@ impl Branch {
     pub const NONE: Branch = Branch { g_mpa: 0.0, tau_s: 1.0 };
 }
 
-/// The dielectric breakdown field `E_B = E_B0 lambda^k`, lambda = s^(-1/2) the in-plane stretch
-/// (k = 0 where no source gives the stretch dependence).
+/// The dielectric breakdown field, taken flat in stretch: every source that measured it found
+/// it rising as the film is stretched and thinned, so the unstretched figure is a lower bound
+/// (docs/materials.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Breakdown {
     pub field0_v_per_um: f64,
-    pub stretch_exponent: f64,
 }
 
-/// A film's material card (values in `cards`, sources in docs/materials.md).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A film's material card (values in `cards`, sources in docs/materials.md). Cards are told
+/// apart by name.
+#[derive(Clone, Copy, Debug)]
 pub struct Card {
     pub name: &'static str,
     /// Equilibrium (long-time) shear modulus, MPa.
@@ -59,7 +61,12 @@ pub struct Card {
     pub branch_count: usize,
     pub eps_r: f64,
     pub breakdown: Breakdown,
-    pub source: &'static str,
+}
+
+impl PartialEq for Card {
+    fn eq(&self, other: &Card) -> bool {
+        self.name == other.name
+    }
 }
 
 impl Card {
@@ -89,10 +96,8 @@ pub struct StackLaw<R> {
     pub eps: R,
     /// Layer thickness at rest, mm.
     pub z0: R,
-    /// Unstretched breakdown field, V/mm.
+    /// Breakdown field (unstretched, a lower bound when stretched), V/mm.
     pub field0_v_per_mm: R,
-    /// k / 2: E_B(s) = E_B0 s^(-k/2).
-    pub half_k: R,
     /// Fraction of a bound the ceilings allow, (0, 1].
     pub margin: R,
 }
@@ -120,20 +125,20 @@ impl<R: Real> StackLaw<R> {
             return Err(Error::Param { name: "margin", range: "0 < margin <= 1" });
         }
         let b = card.breakdown;
-        if card.branch_count > MAX_BRANCHES || !(b.field0_v_per_um > 0.0 && b.field0_v_per_um.is_finite()) {
+        // checked in R: no f64 arithmetic on a target without a double-precision FPU
+        let field0_v_per_um = R::from_f64(b.field0_v_per_um);
+        if card.branch_count > MAX_BRANCHES || !positive(field0_v_per_um) {
             return Err(Error::Param { name: "card", range: "<= 3 branches, breakdown field > 0" });
-        }
-        if !(0.0..2.0).contains(&b.stretch_exponent) {
-            return Err(Error::Param { name: "card", range: "breakdown stretch exponent 0 <= k < 2" });
         }
         let mut g = [R::zero(); MAX_BRANCHES];
         let mut tau = [R::one(); MAX_BRANCHES];
         for (i, br) in card.branches().iter().enumerate() {
-            if !(br.g_mpa >= 0.0 && br.g_mpa.is_finite() && br.tau_s > 0.0 && br.tau_s.is_finite()) {
+            let (g_i, tau_i) = (R::from_f64(br.g_mpa), R::from_f64(br.tau_s));
+            if !(g_i >= R::zero() && g_i.is_finite() && positive(tau_i)) {
                 return Err(Error::Param { name: "card", range: "branch G >= 0, tau > 0" });
             }
-            g[i] = R::from_f64(br.g_mpa);
-            tau[i] = R::from_f64(br.tau_s);
+            g[i] = g_i;
+            tau[i] = tau_i;
         }
         Ok(StackLaw {
             g_eq: g_eq_mpa,
@@ -142,19 +147,19 @@ impl<R: Real> StackLaw<R> {
             branches: card.branch_count,
             eps: R::from_f64(EPS0) * eps_r,
             z0: z0_mm,
-            field0_v_per_mm: R::from_f64(b.field0_v_per_um * 1e3),
-            half_k: R::from_f64(0.5 * b.stretch_exponent),
+            field0_v_per_mm: field0_v_per_um * R::from_f64(1e3),
             margin,
         })
     }
 
-    /// The breakdown field at thickness stretch s, V/mm: `E_B0 s^(-k/2)`.
-    pub fn breakdown_field(&self, s: R) -> R {
-        if self.half_k == R::zero() {
-            self.field0_v_per_mm
-        } else {
-            self.field0_v_per_mm * (-self.half_k * s.ln()).exp()
-        }
+    /// The breakdown field at thickness stretch s, V/mm (flat: `Breakdown`).
+    pub fn breakdown_field(&self, _s: R) -> R {
+        self.field0_v_per_mm
+    }
+
+    /// The voltage of the breakdown field across the film at stretch s, V: `E_B(s) s z0`.
+    pub fn breakdown_volts(&self, s: R) -> R {
+        self.breakdown_field(s) * s * self.z0
     }
 
     /// beta = eps V^2 / z0^2, MPa.
@@ -367,8 +372,7 @@ pub fn hold_ceiling<R: Real>(law: &StackLaw<R>, margin: R) -> R {
     let s = R::from_f64(LIMIT_RATIO);
     // V_eq(2/3) exists: G_eq (s - s^4) > 0 there
     let v_film = law.volts_of(Balance::relaxed(law).stress(s));
-    let v_field = law.breakdown_field(s) * s * law.z0;
-    margin * v_film.min(v_field)
+    margin * v_film.min(law.breakdown_volts(s))
 }
 
 /// s_hold: the thickness stretch at the hold ceiling (with the law's margin) once relaxed, the
@@ -390,7 +394,7 @@ pub fn voltage_bound_now<R: Real>(law: &StackLaw<R>, state: &StackState<R>, s_fl
     // a floor past the branch's end holds at most the pull-in voltage (cold path: a cube root)
     let s = if b.slope(s_floor) < R::zero() { s_floor } else { b.pull_in() };
     let v_film = voltage_of_balance(law, &b, s).unwrap_or(R::zero());
-    let v_field = law.margin * law.breakdown_field(s_floor) * s_floor * law.z0;
+    let v_field = law.margin * law.breakdown_volts(s_floor);
     let v = v_film.min(v_field) * (R::one() - R::from_f64(64.0 * R::EPS));
     if v.is_finite() && v > R::zero() {
         v
@@ -417,6 +421,13 @@ pub fn guarded_tick<R: Real>(law: &StackLaw<R>, relaxation: &Relaxation<R>, stat
 /// the supply and passes `s_target` as the floor of [`guarded_tick`].
 pub fn shaped_voltage<R: Real>(law: &StackLaw<R>, state: &StackState<R>, s_target: R) -> R {
     voltage_at_ratio(law, &state.a, s_target).unwrap_or(R::zero())
+}
+
+/// The branch flow times 3 tau_i: `1/s - s^2 a_i^3` (given 1/s and s^2; zero when relaxed,
+/// a_i = 1/s).
+#[inline(always)]
+pub fn branch_flow<R: Real>(inv_s: R, s2: R, a: R) -> R {
+    inv_s - s2 * a * a * a
 }
 
 /// How [`Relaxation`] advances the branch flow over one step at a held thickness.
@@ -493,7 +504,7 @@ impl<R: Real> Relaxation<R> {
         let s = state.s;
         let inv_s = R::one() / s;
         let s2 = s * s;
-        let flow = |a: R| inv_s - s2 * a * a * a;
+        let flow = |a: R| branch_flow(inv_s, s2, a);
         for i in 0..self.branches {
             let a = state.a[i];
             let delta = match self.integrator {
@@ -640,8 +651,7 @@ mod tests {
             branches: [Branch { g_mpa: 0.03, tau_s: 1.5 }, Branch::NONE, Branch::NONE],
             branch_count: 1,
             eps_r: 4.8,
-            breakdown: Breakdown { field0_v_per_um: 100.0, stretch_exponent: 0.0 },
-            source: "test",
+            breakdown: Breakdown { field0_v_per_um: 100.0 },
         };
         let law = StackLaw::<f64>::new(&card, 0.5, 0.9).unwrap();
         let (ge, g1, tau) = (0.02, 0.03, 1.5);

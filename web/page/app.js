@@ -2,7 +2,10 @@
 // firmware's application compiled to WebAssembly (a simulated board, finger-wasm) or a real
 // board over Web Serial; a drawing of the posture from `status` / `shape` (the same solve as
 // `solve`), the controls, the limits and the board's refusals, the tip stiffness across a
-// pose's feasible tension interval, and the host's f64 model as an overlay.
+// pose's feasible tension interval (or, before any pose, across the tension at the present
+// voltages), the host's f64 model as an overlay, and a strip chart of `status` over time.
+// The drawing is in mm, x along the straight finger, the flexor (cable) side up as in the
+// scene figures: the world group is flipped (SVG's y grows downward).
 'use strict';
 
 // ------------------------------------------------------------------ console replies
@@ -149,7 +152,8 @@ class Console {
 const $ = (id) => document.getElementById(id);
 const state = {
   con: null, wasm: null, board: null, armed: false, hasShape: true,
-  params: { l: 27, b: 10, t_min: 1.5, a: 5, e: 5, layers: 4 },
+  params: { l: 27, b: 10, t_min: 1.5, a: 5, e: 5, layers: 4, z0: 0.5 },
+  strip: [], stripT0: null,
   limits: {}, vmax: 10000, drawn: null, host: null, plot: null, busyPreview: false, pendingPreview: false,
 };
 window.finger = state; // for the tests and the curious
@@ -220,6 +224,9 @@ function drawShape(g, s, volts, style) {
       const frac = Math.min(1, (volts[k] || 0) / state.vmax);
       const col = `rgb(${Math.round(238 - 40 * frac)},${Math.round(170 - 120 * frac)},${Math.round(60 - 40 * frac)})`;
       el('path', { d: hingePath(a, h, -(P.t_min / 2 + t / 2)), stroke: col, 'stroke-width': t, fill: 'none', class: 'stack', 'data-thick': t }, g);
+      // the 33 % limit: the stack's outer face may never come closer than 2/3 of its rest thickness
+      const tLim = (2 / 3) * P.layers * P.z0;
+      el('path', { d: hingePath(a, h, -(P.t_min / 2 + tLim)), stroke: '#d00', 'stroke-width': 0.3, 'stroke-dasharray': '1 0.6', fill: 'none', class: 'limit', 'data-joint': k + 1, 'data-limit-mm': tLim.toFixed(4) }, g);
     }
     el('path', { d: hingePath(a, h, 0), stroke: '#345', 'stroke-width': P.t_min, fill: 'none', class: 'hinge' }, g);
   }
@@ -237,7 +244,20 @@ function fitView(s) {
   const xs = s.nodes.map((p) => p.x), ys = s.nodes.map((p) => p.y), m = 14;
   const x0 = Math.min(-20, Math.min(...xs) - m), x1 = Math.max(105, Math.max(...xs) + m);
   const y0 = Math.min(-22, Math.min(...ys) - m), y1 = Math.max(58, Math.max(...ys) + m);
-  $('finger').setAttribute('viewBox', `${x0.toFixed(1)} ${y0.toFixed(1)} ${(x1 - x0).toFixed(1)} ${(y1 - y0).toFixed(1)}`);
+  // the world group is flipped (flexor side up): world y maps to SVG -y
+  $('finger').setAttribute('viewBox', `${x0.toFixed(1)} ${(-y1).toFixed(1)} ${(x1 - x0).toFixed(1)} ${(y1 - y0).toFixed(1)}`);
+  drawScaleBar(x0, -y0);
+}
+
+/** A 10 mm scale bar at the drawing's bottom left (SVG coordinates: x right, y down). */
+function drawScaleBar(left, bottom) {
+  const g = $('scale-bar');
+  g.innerHTML = '';
+  const L = 10, x = left + 4, y = bottom - 5;
+  el('line', { x1: x, y1: y, x2: x + L, y2: y, stroke: '#000', 'stroke-width': 0.6, class: 'bar', 'data-mm': L }, g);
+  for (const xe of [x, x + L]) el('line', { x1: xe, y1: y - 1.2, x2: xe, y2: y + 1.2, stroke: '#000', 'stroke-width': 0.4 }, g);
+  el('text', { x: x + L / 2, y: y - 1.8, 'text-anchor': 'middle', 'font-size': 3.2 }, g).textContent = `${L} mm`;
+  el('text', { x: x + L + 3, y: y + 1.2, 'font-size': 2.6, fill: '#666' }, g).textContent = 'flexor (cable) side up';
 }
 
 function shapeOf(kv) {
@@ -292,14 +312,94 @@ async function drawAt(p, v, mode) {
   g.dataset.p = p;
   g.dataset.v = v.join(',');
   $('view-mode').textContent = mode + (state.hasShape ? '' : ' (board has no shape: host geometry, board tip from solve)');
-  let txt = `${mode}: P=${p} N V=${v.join(',')} V\nboard:  joints=${sol.kv.joints} tip=${sol.kv.tip} stiffness=${sol.kv.stiffness} iters=${sol.kv.iters}`;
+  let txt = `${mode}: P = ${p} N, V = ${v.join(', ')} V\n` + `board:  ${readable(sol.kv)}`;
   if (host && !host.err) {
     const tb = nums(sol.kv.tip), th = host.nodes[host.nodes.length - 1];
-    txt += `\nhost f64: joints=${nums(host.kv.joints).map((x) => x.toFixed(3)).join(',')} stiffness=${host.kv.stiffness}` +
+    txt += `\nhost f64: joints ${nums(host.kv.joints).map((x) => x.toFixed(3)).join(', ')} deg; ${stiffText(host.kv.stiffness)}` +
       `\n  tip board - host: ${Math.hypot(tb[0] - th.x, tb[1] - th.y).toExponential(2)} mm`;
   } else if (host) txt += '\nhost f64: ' + host.err;
   $('readout').textContent = txt;
   return sol;
+}
+
+/** Tip stiffness `kxx,kyy,kθθ` with its units. */
+function stiffText(s) {
+  const k = nums(s);
+  return `tip stiffness k_xx ${k[0].toPrecision(4)} N/mm, k_yy ${k[1].toPrecision(4)} N/mm, k_θθ ${k[2].toPrecision(4)} N·mm/rad`;
+}
+
+/** A `solve` reply in words and units (docs/console.md). */
+function readable(kv) {
+  const tip = nums(kv.tip);
+  return `joints ${nums(kv.joints).join(', ')} deg; tip x ${tip[0]} mm, y ${tip[1]} mm, ${tip[2]} deg; ` +
+    `cable ${kv.cable} mm; stacks ${nums(kv.thick).join(', ')} mm\n        ${stiffText(kv.stiffness)}; ` +
+    `iters ${kv.iters}${kv.iters === '0' ? ' (branch table)' : ''}`;
+}
+
+// ------------------------------------------------------------------ strip chart
+
+const STRIP_MAX = 4800; // 20 min at 4 samples a second
+const STRIP_WINDOW_S = 60;
+
+/** One `status` sample into the strip chart. */
+function stripAdd(kv) {
+  const now = performance.now();
+  if (state.stripT0 == null) state.stripT0 = now;
+  state.strip.push({ t: (now - state.stripT0) / 1000, force: Number(kv.force), volts: nums(kv.volts), thick: nums(kv.thick), joints: nums(kv.joints) });
+  if (state.strip.length > STRIP_MAX) state.strip.shift();
+  drawStrip();
+}
+
+/** The samples as CSV, one row a `status`, units in the header. */
+function stripCsv() {
+  const head = 't_s,tension_N,v1_V,v2_V,v3_V,thick1_mm,thick2_mm,thick3_mm,joint1_deg,joint2_deg,joint3_deg';
+  return [head, ...state.strip.map((r) => [r.t.toFixed(3), r.force, ...r.volts, ...r.thick, ...r.joints].join(','))].join('\n') + '\n';
+}
+state.stripCsv = stripCsv;
+
+function drawStrip() {
+  const svg = $('strip');
+  if (!svg) return;
+  svg.innerHTML = '';
+  const W = 520, L = 64, R = 90, T = 6, H = 300, rows = [
+    { name: 'tension', unit: 'N', get: (r) => [r.force] },
+    { name: 'voltage', unit: 'V', get: (r) => r.volts },
+    { name: 'stack', unit: 'mm', get: (r) => r.thick },
+    { name: 'joints', unit: 'deg', get: (r) => r.joints },
+  ];
+  const cols = ['#06c', '#c60', '#393'], rowH = (H - T - 18) / rows.length;
+  const data = state.strip;
+  $('strip-count').textContent = `${data.length} samples`;
+  const tEnd = data.length ? data[data.length - 1].t : 0, tStart = Math.max(0, tEnd - STRIP_WINDOW_S);
+  const shown = data.filter((r) => r.t >= tStart);
+  const X = (t) => L + (t - tStart) / Math.max(1e-9, Math.max(tEnd - tStart, 1)) * (W - L - R);
+  rows.forEach((row, i) => {
+    const y0 = T + i * rowH, h = rowH - 10;
+    el('rect', { x: L, y: y0, width: W - L - R, height: h, fill: 'none', stroke: '#ccc' }, svg);
+    const vals = shown.flatMap((r) => row.get(r)).filter(Number.isFinite);
+    let lo = vals.length ? Math.min(...vals) : 0, hi = vals.length ? Math.max(...vals) : 1;
+    if (hi - lo < 1e-9) { const m = Math.max(Math.abs(hi) * 0.05, row.unit === 'mm' ? 0.01 : 1); lo -= m; hi += m; }
+    const Y = (v) => y0 + h - (v - lo) / (hi - lo) * h;
+    el('text', { x: L - 4, y: y0 + 10, 'text-anchor': 'end', 'font-size': 10 }, svg).textContent = +hi.toPrecision(5);
+    el('text', { x: L - 4, y: y0 + h, 'text-anchor': 'end', 'font-size': 10 }, svg).textContent = +lo.toPrecision(5);
+    el('text', { x: W - R + 6, y: y0 + 12, 'font-size': 11 }, svg).textContent = `${row.name} (${row.unit})`;
+    const n = row.get(shown[0] || { force: 0, volts: [], thick: [], joints: [] }).length;
+    for (let c = 0; c < n; c++) {
+      const pts = shown.map((r) => `${X(r.t).toFixed(1)},${Y(row.get(r)[c]).toFixed(1)}`).join(' ');
+      el('polyline', { points: pts, fill: 'none', stroke: cols[c % 3], 'stroke-width': 1.4, class: `strip-${row.name}`, 'data-channel': c + 1 }, svg);
+      if (n > 1) el('text', { x: W - R + 6 + 24 * c, y: y0 + 26, 'font-size': 10, fill: cols[c % 3] }, svg).textContent = String(c + 1);
+    }
+  });
+  el('text', { x: (L + W - R) / 2, y: H - 4, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent =
+    `time (s), the last ${STRIP_WINDOW_S} s: ${tStart.toFixed(1)} .. ${tEnd.toFixed(1)}`;
+}
+
+function exportStrip() {
+  const a = document.createElement('a');
+  a.href = URL.createObjectURL(new Blob([stripCsv()], { type: 'text/csv' }));
+  a.download = 'finger-status.csv';
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(a.href), 1000);
 }
 
 // ------------------------------------------------------------------ controls
@@ -351,6 +451,7 @@ async function refreshLimits() {
     $('v' + k + '-ceil').textContent = `(ceiling ${vm[k - 1]} V; the slider reaches past it)`;
   }
   $('force-ceil').textContent = `(fmax ${r.kv.fmax} N at these setpoints)`;
+  $('volt-scale-hi').textContent = `${state.vmax} V (ceiling)`;
   const fmax = Number(r.kv.fmax);
   if (fmax > 0 && !state.fmaxSet) { $('force').max = Math.ceil(fmax * 1.2); state.fmaxSet = true; }
 }
@@ -390,6 +491,7 @@ async function poll(force = false) {
     state.armed = armed;
     $('ctl-mode').textContent = armed ? '(armed: moves the board)' : '(disarmed: preview)';
     state.status = r.kv;
+    stripAdd(r.kv);
     if (armed) {
       // the sliders follow the board's setpoints (tension, HV targets), except one held
       const tv = nums(r.kv.target || r.kv.volts);
@@ -413,7 +515,7 @@ async function doPose() {
   const line = `pose ${d.join(' ')}${pArg ? ' ' + pArg : ''}`;
   const r = showReply(line, await cmd(line, false));
   const out = $('pose-out');
-  if (!r.ok) { out.textContent = r.line; state.plot = null; drawPlot(); return r; }
+  if (!r.ok) { out.textContent = r.line; await sweepPlot(); return r; }
   const [lo, hi] = nums(r.kv.range), volts = nums(r.kv.volts), p = Number(r.kv.force);
   setSliders(p, volts);
   // the ends of the feasible interval: the board's inverse there (model only while disarmed),
@@ -431,7 +533,7 @@ async function doPose() {
   const fmt = (s) => s ? `kxx=${s.k[0].toPrecision(4)} kyy=${s.k[1].toPrecision(4)} ktt=${s.k[2].toPrecision(4)} (volts ${s.volts.map((x) => x.toFixed(0)).join(',')})` : '-';
   out.textContent = `force=${r.kv.force} N volts=${r.kv.volts} V\nfeasible tension ${lo} .. ${hi} N\n` +
     `tip stiffness at ${lo} N: ${fmt(ends[0])}\ntip stiffness at ${hi} N: ${fmt(ends[1])}\n(N/mm, N/mm, N·mm/rad)`;
-  state.plot = { lo, hi, samples, src, d };
+  state.plot = { kind: 'pose', lo, hi, samples, src, d };
   drawPlot();
   if (!state.armed) await drawAt(p, volts, 'pose preview (disarmed, solve)');
   else await poll(true);
@@ -464,7 +566,7 @@ function drawPlot() {
     $('plot-src').textContent = '';
     return;
   }
-  $('plot-src').textContent = `pose ${P.d.join(', ')} deg; from the ${P.src}`;
+  $('plot-src').textContent = P.kind === 'pose' ? `pose ${P.d.join(', ')} deg; from the ${P.src}` : P.src;
   // each stiffness relative to its value at the low end (linear): the interval is often
   // narrow, and the three differ by orders of magnitude
   const names = ['kxx', 'kyy', 'kθθ'], units = ['N/mm', 'N/mm', 'N·mm/rad'], cols = ['#06c', '#c60', '#393'];
@@ -486,7 +588,8 @@ function drawPlot() {
   for (const t of [P.lo, (P.lo + P.hi) / 2, P.hi]) {
     el('text', { x: X(t), y: H - B + 14, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent = t.toFixed(4);
   }
-  el('text', { x: (L + W - R) / 2, y: H - 6, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent = 'cable tension P (N) across the feasible interval';
+  el('text', { x: (L + W - R) / 2, y: H - 6, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent =
+    P.kind === 'pose' ? 'cable tension P (N) across the feasible interval' : 'cable tension P (N), voltages as set';
   el('text', { x: L + 6, y: T + 14, 'font-size': 10, fill: '#555' }, svg).textContent = 'k / k(low end) - 1';
   const last = P.samples[P.samples.length - 1].k;
   for (let c = 0; c < 3; c++) {
@@ -499,6 +602,23 @@ function drawPlot() {
     el('text', { x: W - R + 6, y: T + 25 + 30 * c, fill: cols[c], 'font-size': 10 }, svg).textContent = `${base[c].toPrecision(4)} → ${last[c].toPrecision(4)}`;
   }
   el('text', { x: W - R + 6, y: T + 104, fill: '#555', 'font-size': 10 }, svg).textContent = 'dashed: host f64';
+}
+
+/** Before any pose: the tip stiffness of the present voltages' postures across the tension
+ * (0 .. 0.8 fmax), from the board's `solve` (nothing moves). */
+async function sweepPlot() {
+  const v = state.armed && state.status ? nums(state.status.target || state.status.volts) : sliders().v;
+  const fmax = Number(state.limits.fmax) || 1;
+  const hi = Number((0.8 * fmax).toPrecision(3)), N = 8, samples = [];
+  for (let i = 0; i < N; i++) {
+    const t = Number((hi * i / (N - 1)).toPrecision(4));
+    const s = await cmd(`solve ${t} ${v.join(' ')}`);
+    if (!s.ok) continue;
+    const h = hostShape(t, v);
+    samples.push({ t, k: nums(s.kv.stiffness), host: h && !h.err ? nums(h.kv.stiffness) : null });
+  }
+  state.plot = { kind: 'sweep', lo: 0, hi, samples, src: `solve at V = ${v.join(', ')} V, P from 0 to 0.8 fmax (no pose yet)` };
+  drawPlot();
 }
 
 // ------------------------------------------------------------------ connect
@@ -516,6 +636,7 @@ async function connect(board) {
   await refreshLimits();
   await poll(true);
   if (!state.armed) await preview();
+  await sweepPlot();
   state.ready = true;
 }
 
@@ -575,6 +696,7 @@ function wire() {
     await poll(true);
   });
   $('use-sim').addEventListener('click', () => useSim());
+  $('strip-csv').addEventListener('click', exportStrip);
   $('use-serial').addEventListener('click', () => useSerial().catch((e) => log('note', String(e))));
   if (!('serial' in navigator)) $('use-serial').disabled = true;
   // time: the simulated board's control loop follows the page's clock; status every 250 ms
@@ -587,6 +709,7 @@ function wire() {
     if (state.ready && now - lastPoll > 250) { lastPoll = now; poll(); }
   }, 20);
   drawPlot();
+  drawStrip();
 }
 
 wire();

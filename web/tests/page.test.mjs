@@ -58,7 +58,10 @@ test('the page loads: simulated board connected, posture, limits and stop shown'
   assert.equal(await page.title(), 'finger-fw: the soft finger, live');
   assert.match(await page.textContent('#source'), /simulated board/);
   assert.ok(await page.isVisible('#stop'));
-  assert.match(await page.textContent('#limits'), /vmax=10000\.0,10000\.0,10000\.0/);
+  // the ceiling in force: the same on each channel, at most the board's hold ceiling
+  const lim = await page.textContent('#limits');
+  const vm = lim.match(/vmax=(\d+\.\d),(\d+\.\d),(\d+\.\d)/);
+  assert.ok(vm && vm[1] === vm[2] && vm[2] === vm[3] && Number(vm[1]) > 0 && Number(vm[1]) <= Number(lim.match(/vhold=(\d+\.\d)/)[1]), lim);
   assert.match(await page.textContent('#limits'), /fmax=\d/);
   assert.equal(await page.locator('#board-shape circle').count(), 4, 'nodes 0..3 drawn');
   assert.equal(await page.locator('#board-shape .stack').count(), 3, 'three DE stacks drawn');
@@ -66,6 +69,43 @@ test('the page loads: simulated board connected, posture, limits and stop shown'
   assert.equal(await page.locator('#host-shape .host-line').count(), 1, 'host f64 overlay drawn');
   assert.deepEqual(pageErrors, []);
   await shot('loaded');
+});
+
+test('the drawing has a mm scale bar, the flexor side up, the 33 % limit on every stack; readouts carry units; the stiffness plot is filled from the start', async () => {
+  // the stiffness plot before any pose: the present voltages across the tension
+  await page.waitForFunction(() => window.finger.plot && window.finger.plot.kind === 'sweep');
+  assert.equal(await page.locator('#plot polyline.k1').count(), 1, 'stiffness plot drawn before any pose');
+  assert.ok((await page.evaluate(() => window.finger.plot.samples.length)) >= 5);
+  // a 10 mm scale bar as long on screen as 10 mm of the finger
+  await page.evaluate(() => drawAt(0, [0, 0, 0], 'test'));
+  const bar = await page.evaluate(() => document.querySelector('#scale-bar .bar').getBoundingClientRect().toJSON());
+  assert.match(await page.textContent('#scale-bar'), /10 mm/);
+  const n0 = await page.locator('#node-0').boundingBox(), n3 = await page.locator('#node-3').boundingBox();
+  const straight = await board('solve 0 0 0 0');
+  const tipX = Number(straight.kv.tip.split(',')[0]);
+  const pxPerMm = (n3.x - n0.x) / tipX;
+  assert.ok(Math.abs(bar.width / 10 - pxPerMm) < 0.03 * pxPerMm, `bar ${bar.width} px for 10 mm, finger ${pxPerMm} px/mm`);
+  // flexor side up: a cable tension lifts the tip on screen
+  await page.evaluate(() => drawAt(2, [0, 0, 0], 'test'));
+  const tip = await page.locator('#node-3').boundingBox(), base = await page.locator('#node-0').boundingBox();
+  assert.ok(tip.y < base.y - 5, `tip ${tip.y} above the base ${base.y}`);
+  // the limit on each stack: 2/3 of the stack's rest thickness (the solve at 0 V)
+  const marks = page.locator('#board-shape .limit');
+  assert.equal(await marks.count(), 3);
+  const rest = straight.kv.thick.split(',').map(Number);
+  for (let k = 0; k < 3; k++) {
+    const lim = Number(await marks.nth(k).getAttribute('data-limit-mm'));
+    assert.ok(Math.abs(lim - (2 / 3) * rest[k]) < 1e-3, `joint ${k + 1}: limit ${lim} mm, rest ${rest[k]} mm`);
+  }
+  // readouts with units
+  const ro = await page.textContent('#readout');
+  for (const u of [' deg', ' mm', 'N/mm', 'N·mm/rad', 'iters ']) assert.ok(ro.includes(u), `readout lacks ${u}: ${ro}`);
+  assert.ok(!/stiffness=/.test(ro), 'no raw key=value stiffness');
+  // the voltage colours' scale names the ceiling from limits
+  const vmax = (await board('limits')).kv.vmax.split(',')[0];
+  assert.ok((await page.textContent('#volt-scale')).includes(`${Number(vmax)} V (ceiling)`));
+  // back to the straight finger the next test starts from
+  await page.evaluate(() => drawAt(0, [0, 0, 0], 'preview (disarmed, solve)'));
 });
 
 test('the WebAssembly board answers the console contract', async () => {
@@ -137,14 +177,14 @@ test('moving the tension slider draws the posture that solve returns', async () 
   // the host f64 overlay at the same tension agrees within 0.01 mm at the tip
   const host = tipOf(await page.getAttribute('#host-shape', 'data-tip'));
   assert.ok(Math.hypot(host[0] - sx, host[1] - sy) < 0.01, `host tip ${host}`);
-  assert.match(await page.textContent('#readout'), /board: {2}joints=/);
+  assert.match(await page.textContent('#readout'), /board: {2}joints [\d.]+, [\d.]+, [\d.]+ deg;/);
   await shot('tension');
 });
 
 test('a pose shows its feasible tension interval, the stiffness at both ends, and the plot', async () => {
   for (const [id, v] of [['d1', '10'], ['d2', '10'], ['d3', '10'], ['dp', '']]) await page.fill('#' + id, v);
   await page.click('#pose');
-  await page.waitForFunction(() => window.finger.plot && window.finger.plot.samples.length === 9);
+  await page.waitForFunction(() => window.finger.plot && window.finger.plot.kind === 'pose' && window.finger.plot.samples.length === 9);
   const out = await page.textContent('#pose-out');
   const r = await board('pose 10 10 10');
   const [lo, hi] = r.kv.range.split(',');
@@ -179,11 +219,46 @@ test('a pose outside the range shows the board refusal', async () => {
   assert.ok((await page.textContent('#refusal')).endsWith(lim.line));
 });
 
+test('the strip chart gains points while the board runs, and exports them as CSV', async () => {
+  const lim = await board('limits');
+  const vmax = Math.min(...lim.kv.vmax.split(',').map(Number));
+  const v = Math.round(vmax * 0.4 / 100) * 100;
+  assert.match((await board('arm')).line, /^ok armed=1/);
+  assert.match((await board('force 0.5')).line, /^ok force=/);
+  assert.match((await board(`volt all ${v}`)).line, /^ok volts=/);
+  const n0 = await page.evaluate(() => window.finger.strip.length);
+  await page.waitForFunction((n) => window.finger.strip.length >= n + 8
+    && window.finger.strip[window.finger.strip.length - 1].volts[0] > 0, n0, { timeout: 20000 });
+  const s = await page.evaluate(() => window.finger.strip.slice(-8));
+  for (let i = 1; i < s.length; i++) assert.ok(s[i].t > s[i - 1].t, 'time grows');
+  assert.ok(s[s.length - 1].force === 0.5);
+  assert.ok(s[s.length - 1].volts[0] > s[0].volts[0] || s[0].volts[0] === v, 'the voltage slews up');
+  assert.equal(await page.locator('#strip polyline.strip-tension').count(), 1);
+  assert.equal(await page.locator('#strip polyline.strip-voltage').count(), 3);
+  assert.equal(await page.locator('#strip polyline.strip-stack').count(), 3);
+  assert.equal(await page.locator('#strip polyline.strip-joints').count(), 3);
+  // CSV: units in the header, a row a sample
+  const csv = await page.evaluate(() => window.finger.stripCsv());
+  const rows = csv.trim().split('\n');
+  assert.equal(rows[0], 't_s,tension_N,v1_V,v2_V,v3_V,thick1_mm,thick2_mm,thick3_mm,joint1_deg,joint2_deg,joint3_deg');
+  assert.ok(rows.length - 1 >= n0 + 8);
+  assert.equal(Number(rows[rows.length - 1].split(',')[1]), 0.5);
+  // the button downloads it
+  const [dl] = await Promise.all([page.waitForEvent('download'), page.click('#strip-csv')]);
+  assert.equal(dl.suggestedFilename(), 'finger-status.csv');
+  await shot('strip');
+  assert.match((await board('stop')).line, /^ok stopped$/);
+  await page.waitForFunction(() => window.finger.armed === false);
+});
+
 test('stop is always reachable and stops the board at once', async () => {
   await page.click('#arm');
   await page.waitForFunction(() => window.finger.armed === true);
   assert.match((await board('force 1')).line, /^ok force=1\.000 /);
-  assert.match((await board('volt all 6000')).line, /^ok volts=6000\.0,6000\.0,6000\.0$/);
+  // a voltage well inside the ceiling in force (`limits`' vmax: the board's film sets it)
+  const vmax = Number((await board('limits')).line.match(/ vmax=([0-9.]+),/)[1]);
+  const v = Math.floor(0.6 * vmax / 100) * 100; // on the sliders' 50 V steps
+  assert.match((await board(`volt all ${v}`)).line, new RegExp(`^ok volts=${v}\\.0,${v}\\.0,${v}\\.0$`));
   await page.waitForFunction(() => window.finger.status && Number(window.finger.status.volts.split(',')[0]) > 0);
   // visible and on top, in a small window and scrolled to the bottom
   for (const vp of [{ width: 1280, height: 900 }, { width: 760, height: 520 }]) {
@@ -203,10 +278,10 @@ test('stop is always reachable and stops the board at once', async () => {
   await page.focus('#v1');
   await page.keyboard.press('End');
   await page.waitForFunction(() => document.getElementById('refusal').textContent.startsWith('volt 1 '));
-  assert.ok(Number((await page.textContent('#refusal')).split(' ')[2]) >= 10000, 'the slider reaches past the ceiling');
-  assert.match(await page.textContent('#refusal'), /^volt 1 \d+ {2}-> {2}err limit: channel 1: \d+\.\d V is at or past the ceiling 10000\.0 V/);
-  assert.equal((await board('status')).kv.target, '6000.0,6000.0,6000.0', 'the refusal changed nothing');
-  await page.waitForFunction(() => document.getElementById('v1').value === '6000');
+  assert.ok(Number((await page.textContent('#refusal')).split(' ')[2]) >= vmax, 'the slider reaches past the ceiling');
+  assert.match(await page.textContent('#refusal'), new RegExp(`^volt 1 \\d+ {2}-> {2}err limit: channel 1: \\d+\\.\\d V is at or past the ceiling ${vmax.toFixed(1).replace('.', '\\.')} V`));
+  assert.equal((await board('status')).kv.target, `${v}.0,${v}.0,${v}.0`, 'the refusal changed nothing');
+  await page.waitForFunction((x) => document.getElementById('v1').value === String(x), v);
   await page.waitForFunction(() => Number(window.finger.status.volts.split(',')[0]) >= 2000);
   await shot('armed');
   // commands queued behind each other: stop goes first

@@ -4,7 +4,7 @@
 //!
 //! What it is not: the firmware's stepper (`Relaxation`), which holds the thickness over a tick.
 
-use super::{ratio_at_voltage, StackLaw, StackState, MAX_BRANCHES};
+use super::{branch_flow, ratio_at_voltage, StackLaw, StackState, MAX_BRANCHES};
 use crate::error::Error;
 use crate::real::Real;
 
@@ -15,7 +15,7 @@ fn flow<R: Real>(law: &StackLaw<R>, a: &[R; MAX_BRANCHES], volts: R, s_guess: &m
     *s_guess = s;
     let mut d = [R::zero(); MAX_BRANCHES];
     for i in 0..law.branches.min(MAX_BRANCHES) {
-        d[i] = (R::one() / s - s * s * a[i] * a[i] * a[i]) / (R::from_f64(3.0) * law.tau[i]);
+        d[i] = branch_flow(R::one() / s, s * s, a[i]) / (R::from_f64(3.0) * law.tau[i]);
     }
     Ok(d)
 }

@@ -1,13 +1,14 @@
 //! Random voltage histories for the film's guard (model/tests/material_time.rs and the soak):
-//! one history is a board (card, z0, margin, tick) and a few commanded segments (plain with a
-//! slew, or shaped), run through the control tick's rule in f32 (`material::guarded_tick`) and
+//! one history is a board (card, z0, margin, tick) and a few commanded segments (plain or shaped,
+//! each with a slew), run through the control tick's step in f32 (`material::drive`) and
 //! checked every tick: the predicted film never below s_hold, the field never past margin x the
 //! breakdown field; optionally the f64 reference of the same applied voltages never past the
 //! 33 % limit nor the breakdown field.
 
+use finger_model::material::drive::{Channel, DriveLimits, Mode};
 use finger_model::material::{
-    equilibrium_ratio, guarded_tick, hold_ceiling, hold_ratio, reference::advance_reference, shaped_voltage, Relaxation, StackLaw,
-    StackState, CARDS, LIMIT_RATIO,
+    equilibrium_ratio, hold_ceiling, hold_ratio, reference::advance_reference, Relaxation, StackLaw, StackState, CARDS,
+    LIMIT_RATIO,
 };
 
 /// xorshift64*: a uniform number in [0, 1).
@@ -46,28 +47,27 @@ pub fn guarded_history(rng: &mut Rng, reference: bool) -> Result<Outcome, String
     let hold = hold_ceiling(&law, law.margin);
     let s_hold = hold_ratio(&law).map_err(|e| format!("{e}"))?;
     let supply = 10_000f32;
-    let mut st = StackState::<f32>::rest();
+    let mut ch = Channel::<f32>::rest();
     let mut st64 = StackState::<f64>::rest();
     let mut out = Outcome { min_s_over_hold: f64::INFINITY, ..Outcome::default() };
-    let mut v_set = 0f32;
     for _ in 0..1 + (rng.next() * 6.0) as usize {
         let ticks = 1 + (rng.next() * 300.0) as usize;
         let r = rng.next();
         let command = if r < 0.1 { 0.0 } else if r < 0.2 { 20_000.0 } else { (1.5 * rng.next()) as f32 * hold };
         let target = command.min(hold);
-        let shaped = rng.next() < 0.4;
-        let slew = (10f64.powf(5.0 * rng.next())) as f32 * dt as f32; // 1..1e5 V/s
+        let mode = if rng.next() < 0.4 { Mode::Shaped } else { Mode::Plain };
+        // 1..1e5 V/s, or no slew limit
+        let slew_step = if rng.next() < 0.2 { f32::INFINITY } else { (10f64.powf(5.0 * rng.next()) * dt) as f32 };
+        let lim = DriveLimits { s_hold, slew_step, v_cap: supply };
         let s_target = equilibrium_ratio(&law, target).map_err(|e| format!("target {target}: {e}"))?;
         for _ in 0..ticks {
-            let (requested, floor) = if shaped {
-                (shaped_voltage(&law, &st, s_target).min(supply), s_target)
-            } else {
-                v_set += (target - v_set).max(-slew).min(slew);
-                (v_set, s_hold)
-            };
-            let v = guarded_tick(&law, &relax, &mut st, requested, floor).map_err(|e| format!("tick at {requested} V: {e}"))?;
+            let before = ch.volts;
+            ch.step(&law, &relax, &lim, mode, target, s_target).map_err(|e| format!("step toward {target} V: {e}"))?;
+            let (v, st) = (ch.volts, ch.state);
             out.ticks += 1;
-            if v < requested {
+            // plain: the guard acted when the voltage stands below the slewed setpoint
+            let slewed = if target > before { (before + slew_step).min(target) } else { (before - slew_step).max(target) };
+            if mode == Mode::Plain && v < slewed {
                 out.guarded += 1;
             }
             if !(st.s >= s_hold) {

@@ -79,6 +79,12 @@ enum What {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Keep the settings in force across resets (`save`; the board refuses while armed, and
+    /// settings that would raise a ceiling).
+    Save,
+    /// What the board has stored (`config`): the stored values that differ from the compiled
+    /// defaults, the save counter, what the boot loaded or why it refused the store.
+    Config,
     /// `status` at a fixed rate as a live view.
     Monitor {
         /// Polls per second.
@@ -285,7 +291,12 @@ fn main() -> ExitCode {
         }
     };
     let mut con = Console::new(link, timeout);
-    match cli.what {
+    let what = match cli.what {
+        What::Save => What::Cmd { lines: vec!["save".into()] },
+        What::Config => What::Cmd { lines: vec!["config".into()] },
+        w => w,
+    };
+    match what {
         What::Cmd { lines } => {
             for line in &lines {
                 let r = con.command(line);
@@ -353,6 +364,6 @@ fn main() -> ExitCode {
             let out = out.unwrap_or_else(|| repo_root().join("target").join("runs"));
             run_scene(&mut con, &path, scene.expect("read above"), drive, &out)
         }
-        What::Log { .. } | What::Ports => unreachable!("handled above"),
+        What::Log { .. } | What::Ports | What::Save | What::Config => unreachable!("handled above"),
     }
 }

@@ -117,3 +117,25 @@ fn the_readmes_ramp_script_runs_on_the_sim() {
     assert!(o.contains("volts=1500.0,0.0,0.0"), "{o}");
     assert!(o.trim_end().ends_with("ok stopped"), "{o}");
 }
+
+#[test]
+fn save_and_config_reach_the_store() {
+    // finger-sim has no store: `config` says so, `save` is refused with its code
+    let sim = sim();
+    let out = finger(&["--sim", "--sim-bin", sim.to_str().unwrap(), "config"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).starts_with("ok store=none saves=0 boot=none fault=none"), "{}", text(&out.stdout));
+    let out = finger(&["--sim", "--sim-bin", sim.to_str().unwrap(), "save"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("save: err unknown: save: this board has no settings store"), "{}", text(&out.stderr));
+    // the emulator image stores: a fresh boot has nothing, `save` writes the first record
+    let dir = std::env::temp_dir().join(format!("finger-client-save-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let log = dir.join("defmt.bin");
+    let qemu = ["--qemu", "--elf", image().to_str().unwrap(), "--defmt-log", log.to_str().unwrap()];
+    let out = finger(&[&qemu[..], &["config"]].concat());
+    assert!(text(&out.stdout).starts_with("ok store=empty saves=0 boot=empty"), "{}{}", text(&out.stdout), text(&out.stderr));
+    let out = finger(&[&qemu[..], &["save"]].concat());
+    assert!(text(&out.stdout).starts_with("ok saved=1 bytes="), "{}{}", text(&out.stdout), text(&out.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -17,9 +17,10 @@ use std::cell::RefCell;
 use std::fmt::Write as _;
 
 use finger_fw::sim::SimBoard;
+use finger_fw::app::{board_params, calibration_for};
 use finger_fw::App;
 use finger_model::inverse::stiffness_range;
-use finger_model::{solve_pose, Calibration, Finger, Method, Params, Pose, Solution};
+use finger_model::{solve_pose, Finger, Method, Params, Pose, Solution};
 
 const IO_CAP: usize = 4096;
 
@@ -34,7 +35,7 @@ struct State {
 
 impl State {
     fn new() -> Self {
-        State { app: App::new(SimBoard::default()), pending: Vec::new(), out: String::new(), io: vec![0; IO_CAP], host: Params::default() }
+        State { app: App::new(SimBoard::default()), pending: Vec::new(), out: String::new(), io: vec![0; IO_CAP], host: board_params() }
     }
 
     /// Feed held bytes until the App is busy (glue: `busy`, `input_byte`).
@@ -125,15 +126,15 @@ pub extern "C" fn fw_now_ms() -> f64 {
 // ------------------------------------------------------------------ host f64 model
 
 /// The host's f64 finger at `p`, with the FE calibration the board gives those parameters
-/// (`Calibration::for_params`: MODEL.md's finger is calibrated, issue 18).
+/// (`finger_fw::app::calibration_for`: MODEL.md's finger is calibrated, issue 18).
 fn host_finger(p: &Params<f64>) -> Result<Finger<f64>, finger_model::Error> {
-    Finger::with_calibration(*p, Calibration::for_params(p))
+    Finger::with_calibration(*p, calibration_for(p))
 }
 
-/// Host model parameters back to MODEL.md's defaults.
+/// Host model parameters back to the board's defaults (MODEL.md's finger on the board's film).
 #[no_mangle]
 pub extern "C" fn host_reset() {
-    with(|s| s.host = Params::default())
+    with(|s| s.host = board_params())
 }
 
 /// Set host parameter `io_buf()[..len]` (a name) to `value`; 0 if set, -1 if refused

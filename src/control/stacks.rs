@@ -1,0 +1,132 @@
+//! The board's stacks in time: each channel's film state (`finger_model::material`'s
+//! [`StackState`]) stepped every control tick, and the guard that keeps it above its floor.
+//!
+//! What it is: the board's law (the card and geometry of `crate::board`, built once), its
+//! stepper for one 1 ms tick, the board's hold ceiling and `s_hold` (the thinnest a held
+//! voltage ever gets), and per channel the step (the model's drive step,
+//! `material::drive::Channel::step`): slew toward the goal, guard the voltage by
+//! `voltage_bound_now(state, s_floor)`, solve the thickness at the guarded voltage from the
+//! last one, relax the branches. Invariant: the thickness after every step is at or
+//! above the floor given (never below `s_hold`: the floor is `s_hold` or a target's
+//! equilibrium ratio, itself above `s_hold`), and the field at or below the breakdown bound.
+//!
+//! What it is not: the slew, the duties, the ceilings of the command side (`super::Control`).
+//!
+//! On the Cortex-M3 image (`cfg(m3)`) the integration does not fit its 64 KiB of flash
+//! (docs/firmware.md): there the stacks keep the card's hold ceiling and `s_hold` only, a step
+//! applies the voltage asked (the targets are already within the hold ceiling), shaped
+//! actuation is plain, and the thickness now is not known (NaN).
+
+#[cfg(not(m3))]
+use finger_model::material::drive::{Channel, DriveLimits, Mode};
+#[cfg(not(m3))]
+use finger_model::material::Relaxation;
+use finger_model::material::{equilibrium_ratio, StackLaw};
+
+#[cfg(not(m3))]
+use crate::board::HV_MAX_V;
+use crate::board::{board_hold_ceiling_v, board_law, HV_CHANNELS};
+
+/// Control tick, s.
+pub const TICK_S: f32 = 1e-3;
+
+/// The board's stacks: one law, one stepper, each channel's state.
+pub struct Stacks {
+    #[cfg_attr(m3, allow(dead_code))]
+    law: StackLaw<f32>,
+    #[cfg(not(m3))]
+    relax: Relaxation<f32>,
+    hold_v: f32,
+    s_hold: f32,
+    /// Each channel's voltage and film state, as the model's drive steps them.
+    #[cfg(not(m3))]
+    chan: [Channel<f32>; HV_CHANNELS],
+}
+
+/// A step the model refused (the state past its pull-in at that voltage): the caller stops.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StepRefused;
+
+impl Stacks {
+    /// The board's stacks at rest. None when the board constants give no valid law or
+    /// ceiling (the core then never arms).
+    pub fn board() -> Option<Self> {
+        let law = board_law().ok()?;
+        let hold_v = board_hold_ceiling_v();
+        let s_hold = equilibrium_ratio(&law, hold_v).ok()?;
+        if !(hold_v > 0.0 && s_hold > 0.0 && s_hold < 1.0) {
+            return None;
+        }
+        #[cfg(not(m3))]
+        let stacks = Stacks { law, relax: Relaxation::new(&law, TICK_S).ok()?, hold_v, s_hold, chan: [Channel::rest(); HV_CHANNELS] };
+        #[cfg(m3)]
+        let stacks = Stacks { law, hold_v, s_hold };
+        Some(stacks)
+    }
+
+    /// The board's hold ceiling, V.
+    pub fn hold_ceiling_v(&self) -> f32 {
+        self.hold_v
+    }
+    /// The thinnest a held voltage ever gets (the equilibrium at the hold ceiling).
+    pub fn s_hold(&self) -> f32 {
+        self.s_hold
+    }
+    /// Each channel's thickness stretch now (NaN on the M3 image: not integrated there).
+    #[cfg(m3)]
+    pub fn ratios(&self) -> [f32; HV_CHANNELS] {
+        [f32::NAN; HV_CHANNELS]
+    }
+    /// Each channel's thickness stretch now.
+    #[cfg(not(m3))]
+    pub fn ratios(&self) -> [f32; HV_CHANNELS] {
+        let mut r = [1.0; HV_CHANNELS];
+        for (ch, s) in r.iter_mut().enumerate() {
+            *s = self.chan[ch].state.s;
+        }
+        r
+    }
+
+    /// The floor for a target of `volts`: `s_hold` (plain), or the target's equilibrium
+    /// ratio (shaped; never below `s_hold`). None past the law's reach.
+    pub fn floor(&self, volts: f32, shaped: bool) -> Option<f32> {
+        if !shaped || cfg!(m3) {
+            return Some(self.s_hold);
+        }
+        let s = equilibrium_ratio(&self.law, volts).ok()?;
+        if s >= self.s_hold {
+            Some(s)
+        } else {
+            None
+        }
+    }
+
+    /// One tick of channel `ch` from `volts_now` toward `target_v` whose floor is `s_floor`
+    /// (`s_hold` plain, the target's equilibrium ratio shaped): the model's drive step
+    /// (`material::drive::Channel::step`: the goal, the target or shaped the voltage that holds
+    /// the film at `s_floor` now capped by the supply; the slew by `slew_step`; `guarded_tick`).
+    /// The voltage applied, V. Refused (the state past its pull-in, not reachable under the
+    /// guard): nothing changes, the caller stops.
+    #[cfg(not(m3))]
+    pub fn step(&mut self, ch: usize, volts_now: f32, target_v: f32, s_floor: f32, shaped: bool, slew_step: f32) -> Result<f32, StepRefused> {
+        let lim = DriveLimits { s_hold: self.s_hold, slew_step, v_cap: HV_MAX_V };
+        let mode = if shaped { Mode::Shaped } else { Mode::Plain };
+        let c = &mut self.chan[ch];
+        c.volts = volts_now;
+        match c.step(&self.law, &self.relax, &lim, mode, target_v, s_floor) {
+            Ok(()) => Ok(c.volts),
+            Err(_) => {
+                c.volts = 0.0;
+                Err(StepRefused)
+            }
+        }
+    }
+
+    /// The M3 image's step: the slew toward the target (already within the hold ceiling),
+    /// nothing integrated.
+    #[cfg(m3)]
+    pub fn step(&mut self, _ch: usize, volts_now: f32, target_v: f32, _s_floor: f32, _shaped: bool, slew_step: f32) -> Result<f32, StepRefused> {
+        let v = if target_v > volts_now { (volts_now + slew_step).min(target_v) } else { (volts_now - slew_step).max(target_v) };
+        Ok(if v > 0.0 { v } else { 0.0 })
+    }
+}
