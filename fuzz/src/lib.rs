@@ -6,6 +6,7 @@
 //! What it is not: a second implementation of what it checks. The invariants are the
 //! contracts (shared/CONSOLE.md, MODEL.md), written as assertions on what comes out.
 
+pub mod config;
 pub mod console;
 pub mod material;
 pub mod model;

@@ -44,3 +44,8 @@ fn scene_inputs_hold() {
 fn material_inputs_hold() {
     assert!(run_dir("material", finger_fuzz::material::check) > 0);
 }
+
+#[test]
+fn config_inputs_hold() {
+    assert!(run_dir("config", finger_fuzz::config::check) > 0);
+}
