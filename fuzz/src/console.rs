@@ -5,6 +5,8 @@
 //! (at most [`MAX_TICKS`] per input). At the end a line ending flushes the last line and
 //! blank input lines end any `wait`.
 //!
+//! Terminal escape sequences (arrow keys) are no part of a line ([`crate::Escapes`]).
+//!
 //! Invariants (shared/CONSOLE.md, the safety rules):
 //! - one final reply (`ok ...` / `err <code>: ...`) per non-blank line, none for a blank one;
 //! - no panic;
@@ -32,11 +34,15 @@ const LINE_MAX: usize = finger_fw::console::LINE_MAX;
 struct Lines {
     text: Vec<u8>,
     last_cr: bool,
+    esc: crate::Escapes,
 }
 
 impl Lines {
     /// Feed a byte; the finished line when it ends one.
     fn push(&mut self, b: u8) -> Option<Vec<u8>> {
+        if !self.esc.content(b) {
+            return None;
+        }
         let was_cr = self.last_cr;
         self.last_cr = b == b'\r';
         if b == b'\n' && was_cr {

@@ -6,8 +6,33 @@
 //! What it is not: a second implementation of what it checks. The invariants are the
 //! contracts (shared/CONSOLE.md, MODEL.md), written as assertions on what comes out.
 
+pub mod config;
 pub mod console;
 pub mod material;
 pub mod model;
 pub mod rx;
 pub mod scene;
+
+/// The console's terminal escape sequences as CONSOLE's grammar drops them (arrow, Home/End and
+/// function keys): `ESC [` or `ESC O` then bytes up to a final byte 0x40..=0x7e, or `ESC` and
+/// one other byte; a line ending always passes and ends a sequence. The checks' own model.
+#[derive(Default)]
+pub(crate) struct Escapes(u8);
+
+impl Escapes {
+    /// Whether `b` is line content (or a line ending).
+    pub(crate) fn content(&mut self, b: u8) -> bool {
+        if b == b'\r' || b == b'\n' {
+            self.0 = 0;
+            return true;
+        }
+        match self.0 {
+            0 if b == 0x1b => self.0 = 1,
+            0 => return true,
+            1 => self.0 = if b == b'[' || b == b'O' { 2 } else { 0 },
+            _ if (0x40..=0x7e).contains(&b) => self.0 = 0,
+            _ => {}
+        }
+        false
+    }
+}

@@ -71,6 +71,7 @@ pub fn check(data: &[u8]) {
     // records due, oldest first, and the ring bytes they take
     let mut queued: VecDeque<Want> = VecDeque::new();
     let mut popped = 0usize;
+    let mut esc = crate::Escapes::default();
     let take = |rx: &mut RxLines, queued: &mut VecDeque<Want>, popped: &mut usize| {
         while let Some(rec) = rx.pop() {
             match rec {
@@ -115,6 +116,10 @@ pub fn check(data: &[u8]) {
             _ => {}
         }
         let ev = rx.push(b);
+        if !esc.content(b) {
+            assert_eq!(ev, RxEvent::Nothing, "an event inside an escape sequence");
+            continue;
+        }
         let was_cr = s.last_cr;
         s.last_cr = b == b'\r';
         let ends = (b == b'\r' || b == b'\n') && !(b == b'\n' && was_cr);

@@ -44,3 +44,25 @@ fn scene_inputs_hold() {
 fn material_inputs_hold() {
     assert!(run_dir("material", finger_fuzz::material::check) > 0);
 }
+
+#[test]
+fn config_inputs_hold() {
+    assert!(run_dir("config", finger_fuzz::config::check) > 0);
+}
+
+/// The finds, each by name (docs/reliability.md "Crashes found and fixed").
+#[test]
+fn inverse_never_answers_a_negative_tension() {
+    // four joints, m = 1, rigid links, a soft body: the fast inverse path, tension free, found
+    // a posture's tension at -1118 N
+    let data = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("regressions/model/inverse-negative-tension")).unwrap();
+    finger_fuzz::model::check(&data);
+}
+
+#[test]
+fn escape_sequences_are_no_part_of_a_line() {
+    for (t, check) in [("console", finger_fuzz::console::check as fn(&[u8])), ("rx", finger_fuzz::rx::check)] {
+        let data = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("regressions").join(t).join("escape-sequences")).unwrap();
+        check(&data);
+    }
+}

@@ -24,6 +24,7 @@ fn setpoints(c: &Control<SimBoard>, volts: f32, ceiling: u16) -> Setpoints {
         servo_released: 2_000,
         duty_ceiling: [ceiling; HV_CHANNELS],
         slew: 2_000.0,
+        shaped: false,
     }
 }
 

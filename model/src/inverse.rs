@@ -542,6 +542,10 @@ fn solve<R: Real>(
         ang[k] = Angle { theta: angles[k], s, c };
     }
     let out = if p.layers == 0 { no_stacks(&ctx, &ang, tension, opts, out)? } else { fast(f, &ctx, &ang, tension, opts, out)? };
+    // a posture held only by a pushing cable is no answer (a cable cannot push)
+    if !(out.tension >= R::zero()) {
+        return Err(Error::Input { input: "angles", reason: "the posture needs a pushing cable (tension < 0)" });
+    }
     Ok(fill_sub(out))
 }
 

@@ -4,7 +4,8 @@
 //! checked by the whole solve. Not the float model's `Finger::fmax` (its span and tangent
 //! secants): the tension returned is one the fixed-point branch was seen to hold.
 use super::forward::{FixedFinger, MarchError};
-use super::q::{Nt, Q};
+use super::q::{Mm, Nt, Q};
+use crate::params::MAX_JOINTS;
 use crate::error::Error;
 use crate::finger::BranchEnd;
 
@@ -28,15 +29,20 @@ impl FixedFinger {
     /// fmax: per distinct joint, its branch followed from 0 N ([`FixedFinger::follow_branch`],
     /// each later joint only up to the end found so far) to 2^-14 relative; the lowest end,
     /// `Contact` or `LimitPoint` from the refusal that ended it, `SearchBound` when every joint
-    /// holds the bound. That tension is then checked by the whole solve (the chain, the spans);
-    /// refused there, bisection below it on the solve.
+    /// holds the bound. That tension is then checked by the whole solve (the chain, the spans),
+    /// each joint's Newton from its branch's last hole; refused there, bisection below it on
+    /// that solve (a cold solve's refusals are scattered near an m = 1 stall: not monotone).
     pub fn branch_end(&self) -> Result<FixedBranchEnd, Error> {
         let mut end = FixedBranchEnd { tension: Q(SEARCH_BOUND_N << 22), joint: 0, kind: BranchEnd::SearchBound };
+        // each joint's last hole on its branch: the check's Newton starts there
+        let mut holes = [[Mm::ZERO; 2]; MAX_JOINTS];
         for k in 0..self.n {
             if self.same_as_prev[k] {
+                holes[k] = holes[k - 1];
                 continue;
             }
-            let (p, why) = self.follow_branch(k, end.tension, REL_SHIFT);
+            let (p, hole, why) = self.follow_branch(k, end.tension, REL_SHIFT);
+            holes[k] = hole;
             if let Some(e) = why {
                 let kind = if matches!(e, MarchError::Contact) { BranchEnd::Contact } else { BranchEnd::LimitPoint };
                 end = FixedBranchEnd { tension: p, joint: k + 1, kind };
@@ -45,14 +51,14 @@ impl FixedFinger {
         // the margin: below the end by more than the fixed-point span's error there
         end.tension = Q(end.tension.0 - (end.tension.0 >> MARGIN_SHIFT));
         let mut hi = end.tension;
-        let mut err_hi = match self.solve(hi) {
+        let mut err_hi = match self.solve_from(hi, Some(&holes)) {
             Ok(_) => return Ok(end),
             Err(e) => e,
         };
         let mut lo = Nt::ZERO;
         while hi.0 - lo.0 > (hi.0 >> REL_SHIFT).max(1) {
             let mid: Nt = Q(lo.0 + (hi.0 - lo.0) / 2);
-            match self.solve(mid) {
+            match self.solve_from(mid, Some(&holes)) {
                 Ok(_) => lo = mid,
                 Err(e) => {
                     hi = mid;

@@ -396,8 +396,8 @@ impl FixedFinger {
     /// Joint k's branch followed from 0 N up to `cap`: tension steps that double while they
     /// converge and halve when refused, each a Newton from the hole the last two points
     /// extrapolate to; stops when the step is below 2^-`rel_shift` of the tension. The largest
-    /// tension held, and the refusal that ended the branch there (None: `cap` was held).
-    pub(super) fn follow_branch(&self, k: usize, cap: Nt, rel_shift: u32) -> (Nt, Option<MarchError>) {
+    /// tension held, its hole, and the refusal that ended the branch there (None: `cap` was held).
+    pub(super) fn follow_branch(&self, k: usize, cap: Nt, rel_shift: u32) -> (Nt, [Mm; 2], Option<MarchError>) {
         let c = &self.c[k];
         let mut iters = 0u32;
         // the last two points held: (tension, hole)
@@ -426,14 +426,14 @@ impl FixedFinger {
                 Ok(h) => {
                     (p_prev, hole_prev, p, hole) = (p, hole, t, h);
                     if t >= cap.0 as i64 {
-                        return (cap, None);
+                        return (cap, hole, None);
                     }
                     step *= 2;
                 }
                 Err(e) => {
                     step /= 2;
                     if step <= (p >> rel_shift).max(1) {
-                        return (Q(p as i32), Some(e));
+                        return (Q(p as i32), hole, Some(e));
                     }
                 }
             }
@@ -454,6 +454,12 @@ impl FixedFinger {
 
     /// The converged equilibrium under `tension` (N) alone.
     pub fn solve(&self, tension: Nt) -> Result<FixedSolution, Error> {
+        self.solve_from(tension, None)
+    }
+
+    /// [`FixedFinger::solve`], each joint's Newton first from `holes[k]` (a converged hole
+    /// nearby, e.g. its branch's), then as `solve` from the straight joint.
+    pub(super) fn solve_from(&self, tension: Nt, from: Option<&[[Mm; 2]; MAX_JOINTS]>) -> Result<FixedSolution, Error> {
         if tension.0 < 0 || tension.is_sat() {
             return Err(Error::Input { input: "tension", reason: "tension must be >= 0 and within the fixed-point range" });
         }
@@ -467,7 +473,7 @@ impl FixedFinger {
                 holes[k] = holes[k - 1];
                 continue;
             }
-            let (end, hole) = self.joint(&self.c[k], tension, None, &mut iterations).map_err(|e| match e {
+            let (end, hole) = self.joint(&self.c[k], tension, from.map(|h| h[k]), &mut iterations).map_err(|e| match e {
                 MarchError::Contact => Error::Contact { joint: k + 1, tension: tension.to_report() },
                 MarchError::Singular => Error::NotConverged { iterations, residual: f64::INFINITY },
             })?;
