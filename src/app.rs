@@ -109,7 +109,7 @@ pub struct FwParamInfo {
 pub const FW_PARAMS: &[FwParamInfo] = &[
     FwParamInfo { name: "slew", min: 1.0, max: 1e5, range: "1..1e5 V/s" },
     FwParamInfo { name: "spool_r", min: 0.5, max: 100.0, range: "0.5..100 mm" },
-    FwParamInfo { name: "servo_range", min: 10.0, max: 360.0, range: "10..360 deg (1.0..2.0 ms)" },
+    FwParamInfo { name: "servo_range", min: 10.0, max: 360.0, range: if cfg!(m3) { "10..360 deg" } else { "10..360 deg (1.0..2.0 ms)" } },
     FwParamInfo { name: "servo_dir", min: -1.0, max: 1.0, range: "1 or -1" },
     #[cfg(not(m3))]
     FwParamInfo { name: "shaped", min: 0.0, max: 1.0, range: "0 (plain step) or 1 (shaped actuation)" },
@@ -1137,11 +1137,11 @@ pub fn calibration_for<R: finger_model::Real>(p: &Params<R>) -> Calibration<R> {
     let d = Params::<R>::default();
     let board = board_params::<R>();
     let film_is_the_boards = p.card == board.card && p.g == board.g && p.nu == board.nu && p.de_rule == board.de_rule;
+    let mut q = *p;
     if film_is_the_boards {
-        Calibration::for_params(&Params { card: d.card, g: d.g, nu: d.nu, de_rule: d.de_rule, ..*p })
-    } else {
-        Calibration::for_params(p)
+        (q.card, q.g, q.nu, q.de_rule) = (d.card, d.g, d.nu, d.de_rule);
     }
+    Calibration::for_params(&q)
 }
 
 /// A preset as this build can hold it: without the `de` feature the finger has no stacks.

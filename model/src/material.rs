@@ -112,7 +112,7 @@ impl<R: Real> StackLaw<R> {
     /// (the console's `g`, `eps_r`).
     pub fn with_film(card: &Card, g_eq_mpa: R, eps_r: R, z0_mm: R, margin: R) -> Result<Self, Error> {
         if !positive(g_eq_mpa) {
-            return Err(Error::Param { name: "g", range: "equilibrium shear modulus > 0" });
+            return Err(Error::Param { name: "g", range: "> 0 MPa" });
         }
         if !positive(eps_r) {
             return Err(Error::Param { name: "eps_r", range: "> 0" });
@@ -143,7 +143,7 @@ impl<R: Real> StackLaw<R> {
             card_ok &= non_negative(law.g[i]) && positive(law.tau[i]);
         }
         if !card_ok {
-            return Err(Error::Param { name: "card", range: "<= 3 branches, G >= 0, tau > 0, breakdown field > 0" });
+            return Err(Error::Param { name: "card", range: "<= 3 branches, G >= 0, tau > 0, E_B > 0" });
         }
         Ok(law)
     }
