@@ -109,13 +109,13 @@ pub struct FwParamInfo {
 pub const FW_PARAMS: &[FwParamInfo] = &[
     FwParamInfo { name: "slew", min: 1.0, max: 1e5, range: "1..1e5 V/s" },
     FwParamInfo { name: "spool_r", min: 0.5, max: 100.0, range: "0.5..100 mm" },
-    FwParamInfo { name: "servo_range", min: 10.0, max: 360.0, range: "10..360 deg (1.0..2.0 ms)" },
+    FwParamInfo { name: "servo_range", min: 10.0, max: 360.0, range: if cfg!(m3) { "10..360 deg" } else { "10..360 deg (1.0..2.0 ms)" } },
     FwParamInfo { name: "servo_dir", min: -1.0, max: 1.0, range: "1 or -1" },
     #[cfg(not(m3))]
     FwParamInfo { name: "shaped", min: 0.0, max: 1.0, range: "0 (plain step) or 1 (shaped actuation)" },
     // read-only: the HV module's calibration is compiled in (crate::board); a set is refused
-    FwParamInfo { name: "hv_fs", min: 1.0, max: 0.0, range: "read-only: V at 100 % duty, a board constant (a different HV module is a different build)" },
-    FwParamInfo { name: "hv_zero", min: 1.0, max: 0.0, range: "read-only: % duty at 0 V, a board constant (a different HV module is a different build)" },
+    FwParamInfo { name: "hv_fs", min: 1.0, max: 0.0, range: if cfg!(m3) { "read-only" } else { "read-only: V at 100 % duty, a board constant (a different HV module is a different build)" } },
+    FwParamInfo { name: "hv_zero", min: 1.0, max: 0.0, range: if cfg!(m3) { "read-only" } else { "read-only: % duty at 0 V, a board constant (a different HV module is a different build)" } },
 ];
 
 impl FwParams {
@@ -521,6 +521,20 @@ impl Commands {
     #[cfg(feature = "pose")]
     fn inverse_options(&self) -> finger_model::inverse::Options<f32> {
         finger_model::inverse::Options { hv_fs: Some(self.board_cap()), ..Default::default() }
+    }
+
+    /// The finger of `p` with calibration `cal` as the model (`param`, `preset`, `cal`): the
+    /// servo plan of the present force and setpoints on it, then the ceilings. Refused, nothing
+    /// changes.
+    #[inline(never)]
+    fn adopt_model(&mut self, p: Params<f32>, cal: Calibration<f32>) -> Result<(), CmdError> {
+        let f = Finger::with_calibration(p, cal).map_err(model_err)?;
+        let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
+        self.set_finger(f);
+        self.cable = cable;
+        self.set_servo(deg);
+        self.recompute();
+        Ok(())
     }
 
     /// A new model (parameter or preset change): the fmax cache no longer holds.
@@ -1043,11 +1057,7 @@ impl Commands {
                 p.set(name, v.into()).map_err(model_err)?;
                 // the FE calibration belongs to the mechanical parameters it was computed for
                 let cal = if KEEPS_CALIBRATION.contains(&name) { *self.finger.calibration() } else { calibration_for(&p) };
-                let f = Finger::with_calibration(p, cal).map_err(model_err)?;
-                let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
-                self.set_finger(f);
-                self.cable = cable;
-                self.set_servo(deg);
+                self.adopt_model(p, cal)?;
             } else {
                 let mut fw = self.fw;
                 fw.set(name, v)?;
@@ -1055,8 +1065,8 @@ impl Commands {
                 self.fw = fw;
                 self.cable = cable;
                 self.set_servo(deg);
+                self.recompute();
             }
-            self.recompute();
         }
         let v = match self.finger.params().get(name) {
             Some(v) => v as f32,
@@ -1075,12 +1085,7 @@ impl Commands {
             w => return Err(err!("usage"; "preset ", (console::printable(w)), " is not default or paper")),
         };
         self.require_disarmed("preset")?;
-        let f = Finger::with_calibration(p, calibration_for(&p)).map_err(model_err)?;
-        let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
-        self.set_finger(f);
-        self.cable = cable;
-        self.set_servo(deg);
-        self.recompute();
+        self.adopt_model(p, calibration_for(&p))?;
         let _ = w!(r; "preset=", name);
         Ok(())
     }
@@ -1104,12 +1109,7 @@ impl Commands {
         };
         if let Some(cal) = cal {
             self.require_disarmed("cal")?;
-            let f = Finger::with_calibration(*self.finger.params(), cal).map_err(model_err)?;
-            let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
-            self.set_finger(f);
-            self.cable = cable;
-            self.set_servo(deg);
-            self.recompute();
+            self.adopt_model(*self.finger.params(), cal)?;
         }
         let c = self.finger.calibration();
         let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];
@@ -1137,11 +1137,11 @@ pub fn calibration_for<R: finger_model::Real>(p: &Params<R>) -> Calibration<R> {
     let d = Params::<R>::default();
     let board = board_params::<R>();
     let film_is_the_boards = p.card == board.card && p.g == board.g && p.nu == board.nu && p.de_rule == board.de_rule;
+    let mut q = *p;
     if film_is_the_boards {
-        Calibration::for_params(&Params { card: d.card, g: d.g, nu: d.nu, de_rule: d.de_rule, ..*p })
-    } else {
-        Calibration::for_params(p)
+        (q.card, q.g, q.nu, q.de_rule) = (d.card, d.g, d.nu, d.de_rule);
     }
+    Calibration::for_params(&q)
 }
 
 /// A preset as this build can hold it: without the `de` feature the finger has no stacks.

@@ -65,10 +65,15 @@ pub fn board_law() -> Result<StackLaw<f32>, ModelError> {
 /// supply `HV_MAX_V`); 0 when the constants give no law (NaN-proof). Computed once by its
 /// users, from the board constants only.
 pub fn board_hold_ceiling_v() -> f32 {
-    let v = match board_law() {
-        Ok(law) => hold_ceiling(&law, BOARD_MARGIN),
+    match board_law() {
+        Ok(law) => board_hold_ceiling_of(&law),
         Err(_) => 0.0,
-    };
+    }
+}
+
+/// `board_hold_ceiling_v` from the board's law (`board_law`) its caller already has.
+pub fn board_hold_ceiling_of(law: &StackLaw<f32>) -> f32 {
+    let v = hold_ceiling(law, BOARD_MARGIN);
     if v > 0.0 {
         v.min(HV_MAX_V)
     } else {

@@ -111,9 +111,8 @@ impl<R: Real> StackLaw<R> {
     /// The card's branches and breakdown with another equilibrium modulus and permittivity
     /// (the console's `g`, `eps_r`).
     pub fn with_film(card: &Card, g_eq_mpa: R, eps_r: R, z0_mm: R, margin: R) -> Result<Self, Error> {
-        let positive = |x: R| x.is_finite() && x > R::zero();
         if !positive(g_eq_mpa) {
-            return Err(Error::Param { name: "g", range: "equilibrium shear modulus > 0" });
+            return Err(Error::Param { name: "g", range: "> 0 MPa" });
         }
         if !positive(eps_r) {
             return Err(Error::Param { name: "eps_r", range: "> 0" });
@@ -124,32 +123,29 @@ impl<R: Real> StackLaw<R> {
         if !(positive(margin) && margin <= R::one()) {
             return Err(Error::Param { name: "margin", range: "0 < margin <= 1" });
         }
-        let b = card.breakdown;
-        // checked in R: no f64 arithmetic on a target without a double-precision FPU
-        let field0_v_per_um = R::from_f64(b.field0_v_per_um);
-        if card.branch_count > MAX_BRANCHES || !positive(field0_v_per_um) {
-            return Err(Error::Param { name: "card", range: "<= 3 branches, breakdown field > 0" });
-        }
-        let mut g = [R::zero(); MAX_BRANCHES];
-        let mut tau = [R::one(); MAX_BRANCHES];
-        for (i, br) in card.branches().iter().enumerate() {
-            let (g_i, tau_i) = (R::from_f64(br.g_mpa), R::from_f64(br.tau_s));
-            if !(g_i >= R::zero() && g_i.is_finite() && positive(tau_i)) {
-                return Err(Error::Param { name: "card", range: "branch G >= 0, tau > 0" });
-            }
-            g[i] = g_i;
-            tau[i] = tau_i;
-        }
-        Ok(StackLaw {
+        // the card checked in R, as one: no f64 arithmetic or compares on a target without a
+        // double-precision FPU (`finite_sign`)
+        let field0_v_per_um = R::from_f64(card.breakdown.field0_v_per_um);
+        let mut law = StackLaw {
             g_eq: g_eq_mpa,
-            g,
-            tau,
+            g: [R::zero(); MAX_BRANCHES],
+            tau: [R::one(); MAX_BRANCHES],
             branches: card.branch_count,
             eps: R::from_f64(EPS0) * eps_r,
             z0: z0_mm,
             field0_v_per_mm: field0_v_per_um * R::from_f64(1e3),
             margin,
-        })
+        };
+        let mut card_ok = card.branch_count <= MAX_BRANCHES && positive(field0_v_per_um);
+        for (i, br) in card.branches().iter().enumerate() {
+            law.g[i] = R::from_f64(br.g_mpa);
+            law.tau[i] = R::from_f64(br.tau_s);
+            card_ok &= non_negative(law.g[i]) && positive(law.tau[i]);
+        }
+        if !card_ok {
+            return Err(Error::Param { name: "card", range: "<= 3 branches, G >= 0, tau > 0, E_B > 0" });
+        }
+        Ok(law)
     }
 
     /// The breakdown field at thickness stretch s, V/mm (flat: `Breakdown`).
@@ -171,6 +167,23 @@ impl<R: Real> StackLaw<R> {
     fn volts_of(&self, f: R) -> R {
         self.z0 * (f / self.eps).sqrt()
     }
+}
+
+/// Finite and > 0 (`StackLaw::with_film`'s checks).
+fn positive<R: Real>(x: R) -> bool {
+    finite_sign(x, false)
+}
+
+/// Finite and >= 0.
+fn non_negative<R: Real>(x: R) -> bool {
+    finite_sign(x, true)
+}
+
+/// Finite and > 0, or 0 when `zero_ok`. Out of line: the check stays in R (a card's f64 value
+/// converted first), no f64 compare on a target without a double-precision FPU.
+#[inline(never)]
+fn finite_sign<R: Real>(x: R, zero_ok: bool) -> bool {
+    x.is_finite() && (x > R::zero() || (zero_ok && x == R::zero()))
 }
 
 /// One layer's state: the branches' a_i (1 at rest) and the thickness stretch s now.
@@ -281,12 +294,10 @@ enum Refusal {
 }
 
 impl Refusal {
-    fn error<R: Real>(self, law: &StackLaw<R>, balance: &Balance<R>, volts: R) -> Error {
+    /// The typed error; `pull_in_volts` (the balance's pull-in voltage) is asked only past it.
+    fn error<R: Real>(self, volts: R, pull_in_volts: impl FnOnce() -> R) -> Error {
         match self {
-            Refusal::PullIn => Error::PullIn {
-                volts: volts.to_f64(),
-                pull_in: law.volts_of(balance.stress(balance.pull_in())).to_f64(),
-            },
+            Refusal::PullIn => Error::PullIn { volts: volts.to_f64(), pull_in: pull_in_volts().to_f64() },
             Refusal::NotConverged => Error::NotConverged { iterations: MAX_NEWTON, residual: f64::INFINITY },
         }
     }
@@ -333,14 +344,13 @@ fn voltage_of_balance<R: Real>(law: &StackLaw<R>, b: &Balance<R>, s: R) -> Resul
 pub fn ratio_at_voltage<R: Real>(law: &StackLaw<R>, a: &[R; MAX_BRANCHES], volts: R, s_start: R) -> Result<R, Error> {
     check_volts(volts)?;
     let b = Balance::of(law, a);
-    b.solve(law.beta(volts), s_start).map_err(|r| r.error(law, &b, volts))
+    b.solve(law.beta(volts), s_start).map_err(|r| r.error(volts, || law.volts_of(b.stress(b.pull_in()))))
 }
 
 /// The thickness stretch once fully relaxed at `volts` (a_i = 1/s): `G_eq (s - s^4) = beta`.
 pub fn equilibrium_ratio<R: Real>(law: &StackLaw<R>, volts: R) -> Result<R, Error> {
     check_volts(volts)?;
-    let b = Balance::relaxed(law);
-    b.solve(law.beta(volts), R::one()).map_err(|r| r.error(law, &b, volts))
+    Balance::relaxed(law).solve(law.beta(volts), R::one()).map_err(|r| r.error(volts, || equilibrium_pull_in_voltage(law)))
 }
 
 /// The voltage that holds the film at `s` once fully relaxed, V.
@@ -351,9 +361,12 @@ pub fn equilibrium_voltage<R: Real>(law: &StackLaw<R>, s: R) -> Result<R, Error>
 /// The equilibrium pull-in voltage, V (at s = 4^(-1/3)): no held voltage at or above it has an
 /// equilibrium.
 pub fn equilibrium_pull_in_voltage<R: Real>(law: &StackLaw<R>) -> R {
-    let b = Balance::relaxed(law);
-    law.volts_of(b.stress(b.pull_in()))
+    law.volts_of(Balance::relaxed(law).stress(R::from_f64(EQUILIBRIUM_PULL_IN_RATIO)))
 }
+
+/// `Balance::pull_in` relaxed, where P = Q: s_pi = 4^(-1/3) (a constant: no cube root on the
+/// equilibrium path).
+const EQUILIBRIUM_PULL_IN_RATIO: f64 = 0.629_960_524_947_436_6;
 
 fn check_volts<R: Real>(volts: R) -> Result<(), Error> {
     if !volts.is_finite() {
@@ -545,6 +558,7 @@ mod tests {
             // the slope of the balance vanishes there, and V_eq(s) peaks there
             let b = Balance::relaxed(&law);
             assert!(b.slope(4f64.powf(-1.0 / 3.0)).abs() < 1e-12);
+            assert!((b.pull_in() - EQUILIBRIUM_PULL_IN_RATIO).abs() < 1e-15);
             let v = |s: f64| equilibrium_voltage(&law, s).unwrap();
             assert!(v(0.63) < v_pi && v(0.64) < v_pi);
         }

@@ -10,14 +10,16 @@
 use finger_model::material::drive::{settling_time, DriveLimits, Mode};
 #[cfg(not(m3))]
 use finger_model::material::Relaxation;
-use finger_model::material::{equilibrium_ratio, hold_ratio, StackLaw};
+#[cfg(not(m3))]
+use finger_model::material::hold_ratio;
+use finger_model::material::{equilibrium_ratio, StackLaw};
 use finger_model::Error as ModelError;
 
 #[cfg(not(m3))]
 use super::Reply;
 #[cfg(not(m3))]
 use crate::board::HV_LIMIT_V;
-use crate::board::{board_hold_ceiling_v, board_law};
+use crate::board::{board_hold_ceiling_of, board_law};
 #[cfg(not(m3))]
 use crate::board::{BOARD_CARD, BOARD_MARGIN, BOARD_Z0_MM};
 #[cfg(not(m3))]
@@ -38,6 +40,8 @@ pub const SETTLE_TOL: f32 = 0.01;
 pub(crate) struct BoardFilm {
     law: StackLaw<f32>,
     vhold: f32,
+    /// The M3 image neither settles nor replies `material`: no `s_hold` there.
+    #[cfg(not(m3))]
     s_hold: f32,
     #[cfg(not(m3))]
     settle_step: Relaxation<f32>,
@@ -51,7 +55,8 @@ impl BoardFilm {
             Ok(l) => l,
             Err(_) => panic!("board card"),
         };
-        let vhold = board_hold_ceiling_v();
+        let vhold = board_hold_ceiling_of(&law);
+        #[cfg(not(m3))]
         let s_hold = hold_ratio(&law).unwrap_or(1.0);
         #[cfg(not(m3))]
         let settle_step = match Relaxation::new(&law, SETTLE_STEP_S) {
@@ -61,13 +66,14 @@ impl BoardFilm {
         BoardFilm {
             law,
             vhold,
+            #[cfg(not(m3))]
             s_hold,
             #[cfg(not(m3))]
             settle_step,
         }
     }
 
-    /// The board's hold ceiling, V per layer (`board_hold_ceiling_v`): margin x min(the voltage
+    /// The board's hold ceiling, V per layer (`board_hold_ceiling_of`): margin x min(the voltage
     /// that holds the relaxed film at 2/3 of its thickness, the breakdown bound there), at most
     /// the HV modules' maximum.
     pub fn hold_ceiling(&self) -> f32 {

@@ -21,18 +21,20 @@
 use finger_model::material::drive::{Channel, DriveLimits, Mode};
 #[cfg(not(m3))]
 use finger_model::material::Relaxation;
-use finger_model::material::{equilibrium_ratio, StackLaw};
+use finger_model::material::equilibrium_ratio;
+#[cfg(not(m3))]
+use finger_model::material::StackLaw;
 
 #[cfg(not(m3))]
 use crate::board::HV_MAX_V;
-use crate::board::{board_hold_ceiling_v, board_law, HV_CHANNELS};
+use crate::board::{board_hold_ceiling_of, board_law, HV_CHANNELS};
 
 /// Control tick, s.
 pub const TICK_S: f32 = 1e-3;
 
 /// The board's stacks: one law, one stepper, each channel's state.
 pub struct Stacks {
-    #[cfg_attr(m3, allow(dead_code))]
+    #[cfg(not(m3))]
     law: StackLaw<f32>,
     #[cfg(not(m3))]
     relax: Relaxation<f32>,
@@ -52,7 +54,7 @@ impl Stacks {
     /// ceiling (the core then never arms).
     pub fn board() -> Option<Self> {
         let law = board_law().ok()?;
-        let hold_v = board_hold_ceiling_v();
+        let hold_v = board_hold_ceiling_of(&law);
         let s_hold = equilibrium_ratio(&law, hold_v).ok()?;
         if !(hold_v > 0.0 && s_hold > 0.0 && s_hold < 1.0) {
             return None;
@@ -60,7 +62,7 @@ impl Stacks {
         #[cfg(not(m3))]
         let stacks = Stacks { law, relax: Relaxation::new(&law, TICK_S).ok()?, hold_v, s_hold, chan: [Channel::rest(); HV_CHANNELS] };
         #[cfg(m3)]
-        let stacks = Stacks { law, hold_v, s_hold };
+        let stacks = Stacks { hold_v, s_hold };
         Some(stacks)
     }
 
@@ -89,16 +91,19 @@ impl Stacks {
 
     /// The floor for a target of `volts`: `s_hold` (plain), or the target's equilibrium
     /// ratio (shaped; never below `s_hold`). None past the law's reach.
+    #[cfg_attr(m3, allow(unused_variables))]
     pub fn floor(&self, volts: f32, shaped: bool) -> Option<f32> {
         if !shaped || cfg!(m3) {
             return Some(self.s_hold);
         }
-        let s = equilibrium_ratio(&self.law, volts).ok()?;
-        if s >= self.s_hold {
-            Some(s)
-        } else {
-            None
+        #[cfg(not(m3))]
+        {
+            let s = equilibrium_ratio(&self.law, volts).ok()?;
+            if s >= self.s_hold {
+                return Some(s);
+            }
         }
+        None
     }
 
     /// One tick of channel `ch` from `volts_now` toward `target_v` whose floor is `s_floor`

@@ -461,7 +461,7 @@ impl FixedFinger {
     /// nearby, e.g. its branch's), then as `solve` from the straight joint.
     pub(super) fn solve_from(&self, tension: Nt, from: Option<&[[Mm; 2]; MAX_JOINTS]>) -> Result<FixedSolution, Error> {
         if tension.0 < 0 || tension.is_sat() {
-            return Err(Error::Input { input: "tension", reason: "tension must be >= 0 and within the fixed-point range" });
+            return Err(Error::Input { input: "tension", reason: "must be >= 0 and within the fixed-point range" });
         }
         let n = self.n;
         let mut ends = [FixedPose::default(); MAX_JOINTS];

@@ -49,7 +49,7 @@ impl FixedInverse {
     pub fn new<R: Real>(f: &Finger<R>) -> Result<Self, Error> {
         let p = f.params();
         if p.layers == 0 {
-            return Err(Error::Input { input: "layers", reason: "the fixed-point inverse sets stack thicknesses: it needs stacks" });
+            return Err(Error::Input { input: "layers", reason: "the fixed-point inverse needs stacks" });
         }
         let n = p.n;
         let zero = [R::zero(); MAX_JOINTS];
@@ -163,7 +163,7 @@ impl<'a, R: Real> FixedInverseDirect<'a, R> {
     pub fn new(f: &'a Finger<R>, fwd: &'a FixedFinger, v_top: R) -> Result<Self, Error> {
         let p = f.params();
         if p.layers == 0 {
-            return Err(Error::Input { input: "layers", reason: "the fixed-point inverse sets stack thicknesses: it needs stacks" });
+            return Err(Error::Input { input: "layers", reason: "the fixed-point inverse needs stacks" });
         }
         if fwd.n != p.n || fwd.m != p.m {
             return Err(Error::Input { input: "fwd", reason: "prepared for other parameters" });
@@ -374,7 +374,7 @@ fn solve_by(fwd: &FixedFinger, t_rest: Mm, t_ceiling: Mm, at: impl Fn(i64) -> Re
             return Err(Error::Input { input: "angles", reason: "one angle per joint is required" });
         }
         if tension.0 <= 0 || tension.is_sat() {
-            return Err(Error::Input { input: "tension", reason: "tension must be > 0 and within the fixed-point range" });
+            return Err(Error::Input { input: "tension", reason: "must be > 0 and within the fixed-point range" });
         }
         let link = fwd.link_q(tension).2;
         let mut thickness = [Mm::ZERO; MAX_JOINTS];
