@@ -28,11 +28,14 @@ fn solve_and_fmax_come_from_the_table_and_follow_a_parameter_change() {
     let mut a = App::new(SimBoard::default());
     let vm = ceiling(&mut a);
     let at = |f: [f64; 3]| f.map(|f| frac_of(vm, f));
-    for (p, v) in [(1.0, [0.0; 3]), (1.0, at([0.9, 0.5, 0.0])), (7.0, at([0.2, 0.6, 0.9]))] {
+    let fmax = |a: &mut App<SimBoard>| val(&cmd(a, "limits"), "fmax").parse::<f64>().unwrap();
+    // a high tension: 0.45 of fmax at 0 V, well inside the branch (as 7 N was of the paper
+    // film's 16 N)
+    let high = (0.45 * fmax(&mut a)) as f32;
+    for (p, v) in [(1.0, [0.0; 3]), (1.0, at([0.9, 0.5, 0.0])), (high, at([0.2, 0.6, 0.9]))] {
         assert_eq!(check_solve(&mut a, p, v), 0, "P {p} V {v:?}: the table's hole should need no Newton step");
     }
     // fmax at 0 V: the table's (the firmware's) equals the full search's to its 1e-4
-    let fmax = |a: &mut App<SimBoard>| val(&cmd(a, "limits"), "fmax").parse::<f64>().unwrap();
     let want = a.finger().fmax(&[0.0; 3]).unwrap().tension as f64;
     let got = fmax(&mut a);
     assert!((got - want).abs() <= 2e-4 * want, "fmax {got} vs {want}");
