@@ -8,6 +8,7 @@
 //! is not: a change of any equation; `Calibration::none()` is the uncalibrated model.
 
 use crate::error::Error;
+use crate::material::ELASTOSIL_2030;
 use crate::mat3::Mat3;
 use crate::params::Params;
 use crate::real::Real;
@@ -52,15 +53,31 @@ impl<R: Real> Calibration<R> {
         }
     }
 
+    /// MODEL.md's finger on the Elastosil Film 2030 card, where the stacks still matter: the
+    /// hinge factors are MODEL.md's (the geometry's), the stack's those `fe-calibrate` computes
+    /// for that film (tools/calculix, `--set g=0.3395`; a test checks the line).
+    pub fn elastosil_2030() -> Self {
+        let f = R::from_f64;
+        Calibration {
+            stack_axial: [f(0.744127), f(0.043434)],
+            stack_bending: [f(5.298853), f(-1.838570)],
+            ..Self::model_md()
+        }
+    }
+
     /// The calibration that belongs to a parameter set: [`Calibration::model_md`] for MODEL.md's
-    /// finger (every parameter but those of [`KEEPS_CALIBRATION`] at its default; `layers` the
-    /// default or 0), none for any other finger (the factors were computed for that one).
+    /// finger, [`Calibration::elastosil_2030`] for it on the silicone card (every parameter but
+    /// those of [`KEEPS_CALIBRATION`] at the set's default; `layers` the default or 0), none for
+    /// any other finger (the factors were computed for those two).
     pub fn for_params(p: &Params<R>) -> Self {
-        let d = Params::<R>::default();
-        let layers = if p.layers == 0 { 0 } else { d.layers };
-        let q = Params { margin: d.margin, v_supply: d.v_supply, eps_r: d.eps_r, n_inc: d.n_inc, ..*p };
-        if q == (Params { layers, ..d }) {
+        let is = |d: Params<R>| {
+            let layers = if p.layers == 0 { 0 } else { d.layers };
+            Params { margin: d.margin, v_supply: d.v_supply, eps_r: d.eps_r, n_inc: d.n_inc, ..*p } == Params { layers, ..d }
+        };
+        if is(Params::default()) {
             Self::model_md()
+        } else if is(Params::with_card(&ELASTOSIL_2030)) {
+            Self::elastosil_2030()
         } else {
             Self::none()
         }

@@ -1,5 +1,6 @@
 //! The calibration (issue 18): the calibrated model's small-load element compliance equals the
 //! FE's; the cable's small-load joint angle (NLGEOM springs) agrees with the linear unit loads.
+use finger_model::material::ELASTOSIL_2030;
 use finger_calculix::calibrate::{self, model_element_compliance};
 use finger_calculix::ccx::{Kind, Law};
 use finger_calculix::mesh::Density;
@@ -70,14 +71,17 @@ fn calibrated_finger_reproduces_the_fe_small_load_joint_angle() {
 #[test]
 fn the_boards_default_calibration_is_fe_calibrates_line() {
     // `Calibration::model_md` (the firmware's default) is what `fe-calibrate` computes for
-    // MODEL.md's finger (3D, fine mesh), to the 6 decimals the line prints
-    let p = Params::<f64>::default();
-    let run = calibrate::run(&p, Kind::Half3d, &Density::fine()).unwrap();
-    let (a, b) = (Calibration::<f64>::model_md(), run.cal);
-    let fa = [a.hinge[0], a.hinge[1], a.hinge[2], a.hinge[3], a.stack_axial[0], a.stack_axial[1], a.stack_bending[0], a.stack_bending[1]];
-    let fb = [b.hinge[0], b.hinge[1], b.hinge[2], b.hinge[3], b.stack_axial[0], b.stack_axial[1], b.stack_bending[0], b.stack_bending[1]];
-    for (i, (x, y)) in fa.iter().zip(&fb).enumerate() {
-        assert!((x - y).abs() < 2e-6, "factor {i}: model_md {x}, fe-calibrate {y}");
+    // MODEL.md's finger (3D, fine mesh), to the 6 decimals the line prints; and
+    // `Calibration::elastosil_2030` for it on the silicone card, where the stacks still matter
+    let cases = [(Params::<f64>::default(), Calibration::<f64>::model_md()), (Params::with_card(&ELASTOSIL_2030), Calibration::elastosil_2030())];
+    for (p, a) in cases {
+        let run = calibrate::run(&p, Kind::Half3d, &Density::fine()).unwrap();
+        let b = run.cal;
+        let fa = [a.hinge[0], a.hinge[1], a.hinge[2], a.hinge[3], a.stack_axial[0], a.stack_axial[1], a.stack_bending[0], a.stack_bending[1]];
+        let fb = [b.hinge[0], b.hinge[1], b.hinge[2], b.hinge[3], b.stack_axial[0], b.stack_axial[1], b.stack_bending[0], b.stack_bending[1]];
+        for (i, (x, y)) in fa.iter().zip(&fb).enumerate() {
+            assert!((x - y).abs() < 2e-6, "{}: factor {i}: compiled {x}, fe-calibrate {y}", p.card.name);
+        }
+        assert_eq!(Calibration::for_params(&p), a);
     }
-    assert_eq!(Calibration::for_params(&p), a);
 }
