@@ -8,7 +8,6 @@
 //! is not: a change of any equation; `Calibration::none()` is the uncalibrated model.
 
 use crate::error::Error;
-use crate::material::ELASTOSIL_2030;
 use crate::mat3::Mat3;
 use crate::params::Params;
 use crate::real::Real;
@@ -66,18 +65,16 @@ impl<R: Real> Calibration<R> {
     }
 
     /// The calibration that belongs to a parameter set: [`Calibration::model_md`] for MODEL.md's
-    /// finger, [`Calibration::elastosil_2030`] for it on the silicone card (every parameter but
-    /// those of [`KEEPS_CALIBRATION`] at the set's default; `layers` the default or 0), none for
-    /// any other finger (the factors were computed for those two).
+    /// finger (every parameter but those of [`KEEPS_CALIBRATION`] at its default; `layers` the
+    /// default or 0), none for any other finger (the factors were computed for that one; the
+    /// silicone card's are [`Calibration::elastosil_2030`], given by name: the board's film is
+    /// compiled in, and the Cortex-M3 image has no flash for a second comparison).
     pub fn for_params(p: &Params<R>) -> Self {
-        let is = |d: Params<R>| {
-            let layers = if p.layers == 0 { 0 } else { d.layers };
-            Params { margin: d.margin, v_supply: d.v_supply, eps_r: d.eps_r, n_inc: d.n_inc, ..*p } == Params { layers, ..d }
-        };
-        if is(Params::default()) {
+        let d = Params::<R>::default();
+        let layers = if p.layers == 0 { 0 } else { d.layers };
+        let q = Params { margin: d.margin, v_supply: d.v_supply, eps_r: d.eps_r, n_inc: d.n_inc, ..*p };
+        if q == (Params { layers, ..d }) {
             Self::model_md()
-        } else if is(Params::with_card(&ELASTOSIL_2030)) {
-            Self::elastosil_2030()
         } else {
             Self::none()
         }
