@@ -83,5 +83,5 @@ fn the_boards_default_calibration_is_fe_calibrates_line() {
             assert!((x - y).abs() < 2e-6, "{}: factor {i}: compiled {x}, fe-calibrate {y}", p.card.name);
         }
     }
-    assert_eq!(Calibration::for_params(&Params::default()), Calibration::model_md());
+    assert_eq!(Calibration::for_params(&Params::<f64>::default()), Calibration::<f64>::model_md());
 }
