@@ -60,10 +60,13 @@ def test_qemu_answers_the_same_session(fw_elf):
 
 
 def test_board_solve_equals_the_python_model_to_its_printed_digits(sim_program):
-    """The board's f32 `solve` against the f64 model with the board's calibration: each printed
-    value is the model's rounded to the printed digits, within one unit of the last (f32)."""
-    f = sf.Finger(calibration="auto")
+    """The board's f32 `solve` against the f64 model of the board's finger (its film's card from
+    `material`, its calibration from `cal`): each printed value is the model's rounded to the
+    printed digits, within one unit of the last (f32)."""
     with sf.Board.sim(sim_program) as b:
+        card = b.command("material").split("card=")[1].split()[0]
+        cal = [float(x) for x in b.command("cal").split("cal=")[1].split(",")]
+        f = sf.Finger(card=card, calibration=cal)
         lim = b.limits()
         top = 0.9 * min(lim.vmax_V)
         for P, volts in [(0.2, [0, 0, 0]), (0.5, [0, 0.3 * top, 0.6 * top]), (1.0, [top, top / 2, 0]), (2.0, [top] * 3)]:
