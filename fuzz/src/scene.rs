@@ -16,7 +16,9 @@ pub fn check(data: &[u8]) {
             assert_eq!(pos.column, 0, "a whole-scene error with a column: {e}");
         } else {
             assert!(pos.line <= lines.len(), "error at line {} of {}: {e}", pos.line, lines.len());
-            let chars = lines[pos.line - 1].trim_end_matches('\r').chars().count();
+            // the line as the reader sees it: a bare CR (even several before the LF) is a
+            // character the error may point at
+            let chars = lines[pos.line - 1].chars().count();
             assert!(pos.column >= 1 && pos.column <= chars + 2, "error at {}:{} (line of {chars} chars): {e}", pos.line, pos.column);
         }
     }
