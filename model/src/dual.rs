@@ -177,10 +177,6 @@ impl<R: Real> Real for D<R> {
         let e = self.v.exp();
         D { v: e, d: [e * self.d[0], e * self.d[1]] }
     }
-    fn ln(self) -> Self {
-        let k = R::one() / self.v;
-        D { v: self.v.ln(), d: [self.d[0] * k, self.d[1] * k] }
-    }
     fn cbrt(self) -> Self {
         let c = self.v.cbrt();
         let k = R::one() / (R::from_f64(3.0) * c * c);

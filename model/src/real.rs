@@ -68,10 +68,6 @@ pub trait Real:
     fn exp(self) -> Self {
         Self::from_f64(libm::exp(self.to_f64()))
     }
-    /// Natural logarithm (the breakdown field's stretch power).
-    fn ln(self) -> Self {
-        Self::from_f64(libm::log(self.to_f64()))
-    }
     /// Cube root (the film's pull-in stretch).
     fn cbrt(self) -> Self {
         Self::from_f64(libm::cbrt(self.to_f64()))
@@ -161,10 +157,6 @@ impl Real for f64 {
         libm::exp(self)
     }
     #[inline(always)]
-    fn ln(self) -> Self {
-        libm::log(self)
-    }
-    #[inline(always)]
     fn cbrt(self) -> Self {
         libm::cbrt(self)
     }
@@ -229,10 +221,6 @@ impl Real for f32 {
         libm::expf(self)
     }
     #[inline(always)]
-    fn ln(self) -> Self {
-        libm::logf(self)
-    }
-    #[inline(always)]
     fn cbrt(self) -> Self {
         cbrt_f32(self)
     }
@@ -283,10 +271,6 @@ impl Real for f32 {
     #[inline(always)]
     fn exp(self) -> Self {
         libm::expf(self)
-    }
-    #[inline(always)]
-    fn ln(self) -> Self {
-        libm::logf(self)
     }
     #[inline(always)]
     fn cbrt(self) -> Self {
