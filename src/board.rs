@@ -61,17 +61,9 @@ pub fn board_law() -> Result<StackLaw<f32>, ModelError> {
     StackLaw::new(BOARD_CARD, BOARD_Z0_MM, BOARD_MARGIN)
 }
 
-/// The board's hold ceiling, V: min(the card's hold ceiling at the board's z0 and margin, the
-/// supply `HV_MAX_V`); 0 when the constants give no law (NaN-proof). Computed once by its
-/// users, from the board constants only.
-pub fn board_hold_ceiling_v() -> f32 {
-    match board_law() {
-        Ok(law) => board_hold_ceiling_of(&law),
-        Err(_) => 0.0,
-    }
-}
-
-/// `board_hold_ceiling_v` from the board's law (`board_law`) its caller already has.
+/// The board's hold ceiling, V, from the board's law (`board_law`) its caller already has:
+/// min(the card's hold ceiling at the board's z0 and margin, the supply `HV_MAX_V`); 0 when
+/// the law gives none (NaN-proof).
 pub fn board_hold_ceiling_of(law: &StackLaw<f32>) -> f32 {
     let v = hold_ceiling(law, BOARD_MARGIN);
     if v > 0.0 {
