@@ -66,3 +66,11 @@ fn escape_sequences_are_no_part_of_a_line() {
         check(&data);
     }
 }
+
+#[test]
+fn inverse_refuses_a_joint_past_half_a_turn() {
+    // two joints, 752 mm flexible links, a 58 mm moment arm: the forward reached 14.3 rad per
+    // joint and the inverse answered an equilibrium 2 pi away from the one the finger reaches
+    let data = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("regressions/model/inverse-wrong-branch")).unwrap();
+    finger_fuzz::model::check(&data);
+}

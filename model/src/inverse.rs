@@ -473,6 +473,12 @@ fn check_inputs<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>, opts: 
     if angles.iter().any(|a| !a.is_finite()) {
         return Err(Error::NonFinite { input: "angle" });
     }
+    // past half a turn the links pass through each other, and the hinge's geometry (its sine
+    // and cosine) repeats: such an angle has equilibria the finger cannot reach from rest
+    let half_turn = R::from_f64(core::f64::consts::PI);
+    if angles.iter().any(|a| a.abs() >= half_turn) {
+        return Err(Error::Input { input: "angles", reason: "a joint turns less than half a turn (|angle| < pi rad)" });
+    }
     if let Some(t) = tension {
         if !t.is_finite() {
             return Err(Error::NonFinite { input: "tension" });
