@@ -194,6 +194,11 @@ struct Wait {
     s: f32,
 }
 
+/// What `timing` reports: the runtime's own measurements (the chip's; the host has none).
+pub trait TimingReport {
+    fn write_timing(&mut self, out: &mut dyn Write);
+}
+
 /// The command side: console lines in, replies and [`Setpoints`] out. Owns no output; runs
 /// at the lowest priority on the chip (RTIC's idle), inside [`App`] on the host.
 pub struct Commands {
@@ -231,8 +236,6 @@ pub struct Commands {
     wait: Option<Wait>,
     /// A `stop` line reached [`Commands::execute`] (see [`Commands::take_stop`]).
     stop_asked: bool,
-    /// The `timing` addition: the runtime's own measurements (set by the chip or simulator).
-    report: Option<fn(&mut dyn Write)>,
     /// `Finger::fmax` at the setpoints it was computed for ([`Commands::fmax`]), and how many
     /// times it was computed.
     fmax_cache: Cell<Option<([f32; CHANNELS], Result<BranchLimit<f32>, ModelError>)>>,
@@ -285,7 +288,6 @@ impl Commands {
             seq: 0,
             wait: None,
             stop_asked: false,
-            report: None,
             fmax_cache: Cell::new(None),
             fmax_computed: Cell::new(0),
             #[cfg(feature = "pose")]
@@ -346,11 +348,6 @@ impl Commands {
         }
     }
 
-    /// What `timing` reports (the chip's measurements, or the simulator's).
-    pub fn set_timing_report(&mut self, f: fn(&mut dyn Write)) {
-        self.report = Some(f);
-    }
-
     /// A `stop` was executed as a line: the caller stops the control core.
     pub fn take_stop(&mut self) -> bool {
         core::mem::take(&mut self.stop_asked)
@@ -374,9 +371,14 @@ impl Commands {
 
     /// Run one queued line; its reply (or, for `wait`, nothing yet) goes to `out`.
     pub fn run<W: Write>(&mut self, rec: Record, out: &mut W) {
+        self.run_reporting(rec, out, None)
+    }
+
+    /// [`Commands::run`], with `timing` answered by the runtime's `report`.
+    pub fn run_reporting<W: Write>(&mut self, rec: Record, out: &mut W, report: Option<&mut dyn TimingReport>) {
         let nl = self.nl;
         match rec {
-            Record::Line(l) => self.execute(&l, out),
+            Record::Line(l) => self.execute_reporting(&l, out, report),
             Record::TooLong => {
                 let _ = w!(out; "err too-long: line longer than ", console::LINE_MAX, " bytes discarded", nl);
             }
@@ -568,6 +570,10 @@ impl Commands {
     /// Run one line (without terminator); writes exactly one final reply line (none for a
     /// blank line, and for `wait` the reply comes from `tick` when the time is up).
     pub fn execute<W: Write>(&mut self, line: &[u8], out: &mut W) {
+        self.execute_reporting(line, out, None)
+    }
+
+    fn execute_reporting<W: Write>(&mut self, line: &[u8], out: &mut W, report: Option<&mut dyn TimingReport>) {
         let nl = self.nl;
         let toks = match console::tokens(line) {
             Some(t) => t,
@@ -580,7 +586,7 @@ impl Commands {
             return;
         }
         let mut reply = Reply::new();
-        let r = self.dispatch(&toks, &mut reply, out);
+        let r = self.dispatch(&toks, &mut reply, out, report);
         match r {
             Ok(true) => {}
             Ok(false) => {
@@ -593,7 +599,7 @@ impl Commands {
     }
 
     /// Ok(true): the reply is written already (pose, contact) or comes later (wait).
-    fn dispatch<W: Write>(&mut self, t: &[&[u8]], r: &mut Reply, out: &mut W) -> Result<bool, CmdError> {
+    fn dispatch<W: Write>(&mut self, t: &[&[u8]], r: &mut Reply, out: &mut W, report: Option<&mut dyn TimingReport>) -> Result<bool, CmdError> {
         let args = &t[1..];
         match t[0] {
             b"help" => {
@@ -647,8 +653,8 @@ impl Commands {
             }
             b"timing" => {
                 no_args(args, "timing")?;
-                let Some(f) = self.report else { return Err(err!("unknown"; "timing is not in this build")) };
-                f(r);
+                let Some(f) = report else { return Err(err!("unknown"; "timing is not in this build")) };
+                f.write_timing(r);
             }
             b"volt" => self.cmd_volt(args, r)?,
             b"force" => self.cmd_force(args, r)?,

@@ -1,7 +1,7 @@
 //! The board the application drives: one servo PWM, three HV control PWMs, the HV enable
 //! (interlock) and the watchdog; and the board constants of the HV modules and of the stacks
 //! (their film card, layer thickness and count, the ceiling's margin), from which alone the
-//! board's hold ceiling is computed. Everything else about the chip stays in `main.rs`.
+//! board's hold ceiling is computed. The STM32F405 behind the trait is the `chip` module.
 
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;

@@ -8,7 +8,7 @@
 //! A region that was never formatted (QEMU starts RAM at zero) is erased once, like a new
 //! chip's flash, and marked formatted by a word past the pages.
 //!
-//! What it is not: the board's store (the F405's flash sectors, src/flash_chip.rs).
+//! What it is not: the board's store (the F405's flash sectors, src/chip/flash.rs).
 
 use embedded_storage_async::nor_flash::{ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash};
 

@@ -1,8 +1,8 @@
 //! The driver-board application: serial console, setpoints, slew, safety and model calls.
 //!
-//! No chip code lives here. The application is generic over embedded-hal 1.0 traits
+//! The application holds no chip code: it is generic over embedded-hal 1.0 traits
 //! (`SetDutyCycle` for the servo PWM and the three HV control PWMs, `OutputPin` for the HV
-//! enable) gathered by the small [`Board`] trait; `src/main.rs` implements it for the
+//! enable) gathered by the small [`Board`] trait; `chip` (target only) implements it for the
 //! STM32F405, [`sim::SimBoard`] for the host (`finger-sim`, the host tests).
 //!
 //! - [`console`]: line assembly (CR/LF/CRLF, bounded buffer, overlong lines), tokens, strict
@@ -12,7 +12,7 @@
 //! - [`control`]: the control core, the one owner of the outputs: the single HV-duty writer,
 //!   the slew, the servo, the stop, the watchdog feed.
 //! - [`rx`]: console input at interrupt level: lines, `stop` at once, a bounded ring of lines.
-//! - [`board`]: the board trait.
+//! - [`board`]: the board trait; `chip` (target only): the STM32F405's board support.
 //! - [`sim`]: a simulated board (records every output).
 //! - [`out`], [`num`]: console text and numbers without core's formatting machinery.
 //! - [`settings`], [`flash_ram`]: the stored settings' record and store, and the emulator's
@@ -23,6 +23,8 @@
 pub mod out;
 pub mod app;
 pub mod board;
+#[cfg(target_os = "none")]
+pub mod chip;
 pub mod console;
 pub mod control;
 #[cfg(any(feature = "pose", feature = "contact"))]

@@ -1,19 +1,300 @@
-//! The chip part: STM32F405 (thumbv7em-none-eabihf). Clocks, pins, PWMs, the UART console,
-//! SysTick time, the watchdog, the panic and HardFault handlers. The application is in lib.rs.
-//!
-//! Pin map (docs/firmware.md):
-//! - USART1 TX PA9, RX PA10: console, 115200 8N1
-//! - TIM3 CH1 PA6: servo PWM, 50 Hz, 1.0..2.0 ms
-//! - TIM4 CH1..CH3 PB6, PB7, PB8: HV modules' control inputs (PWM 20 kHz, RC-filtered to 0..5 V)
-//! - PB12: HV enable (interlock), push-pull, low unless armed (external pull-down on the board)
+//! The firmware image: the RTIC 2 real-time core over the chip's board support
+//! (`finger_fw::chip`), and what only the image has: the HV-off reset and fault paths
+//! (image/fault.rs), its `memcpy` (image/mem.rs), the `crash` test command (image/fault_inject.rs).
+//! The tasks, their priorities and resources are stated once, in [`app`] below.
+//! The application is the library (src/lib.rs); on the host this binary is empty.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
 
 #[cfg(target_os = "none")]
-mod chip;
+#[path = "image/fault.rs"]
+mod fault;
+#[cfg(all(target_os = "none", feature = "fault-inject"))]
+#[path = "image/fault_inject.rs"]
+mod fault_inject;
+#[cfg(target_os = "none")]
+#[path = "image/mem.rs"]
+mod mem;
+
+#[cfg(all(target_os = "none", feature = "log", feature = "hw"))]
+use defmt_rtt as _;
+#[cfg(all(target_os = "none", feature = "log", feature = "qemu"))]
+use defmt_semihosting as _;
 
 /// On the host the firmware binary is empty: the application runs in tools/finger-sim.
 #[cfg(not(target_os = "none"))]
 fn main() {
     eprintln!("finger-fw is firmware for thumbv7em-none-eabihf; on the host use tools/finger-sim");
+}
+
+/// Setpoints down to the control core, its view and the command side's check-in across.
+#[cfg(target_os = "none")]
+pub struct Mailbox {
+    setpoints: Option<finger_fw::control::Setpoints>,
+    /// A `stop` executed as a line on the command side.
+    stop: bool,
+    view: finger_fw::control::View,
+    /// The command side's last check-in, control ms (the watchdog feeds only after a recent one).
+    checkin_ms: u32,
+}
+
+/// The real-time core. Priorities and interrupts, the one place they are set:
+///
+/// | prio | task | binds | does |
+/// | --- | --- | --- | --- |
+/// | 3 | `control` | SysTick, 1 kHz | the control core (`finger_fw::control`): takes the setpoints, slew, the HV duties (single writer), servo, stop requests, watchdog feed |
+/// | 2 | `console` | USART1 (RXNE, TXE) | each received byte into `finger_fw::rx` (a `stop` line stops the control core here, at once), the transmit queue out |
+/// | 0 | `idle` | - | the command side (`finger_fw::Commands`): lines, model solves, `wait`, replies into the transmit queue |
+///
+/// Resources: `ctl` (control, console: the console's use is one `stop`), `mailbox` (control,
+/// console after a stop, idle), `timing` (control, console, idle: a copy for `timing`),
+/// `tx` (console, idle), `rx` (console, idle); the console's receive half and the command
+/// side's durations are local. Every lock below the control task's priority holds a copy, a
+/// stop or a line's queueing, never a formatting or a model solve.
+#[cfg(target_os = "none")]
+#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
+mod app {
+    use finger_fw::chip::{f405, f405::F405Board, mpu, time, time::Durations, time::Timing, usart, usart::TxQueue};
+    use finger_fw::control::Control;
+    use finger_fw::rx::{RxEvent, RxLines};
+    use finger_fw::app::TimingReport;
+    use finger_fw::{Board, Commands};
+    use rtic::Mutex;
+
+    #[shared]
+    struct Shared {
+        ctl: Control<F405Board>,
+        mailbox: super::Mailbox,
+        timing: Timing,
+        rx: RxLines,
+        tx: TxQueue,
+    }
+
+    #[local]
+    struct Local {
+        cmds: Commands,
+        usart_rx: f405::ConsoleRx,
+    }
+
+    #[init]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        // the HV pins are low since __pre_init (image/fault.rs)
+        let mut cp = cx.core;
+        let chip = f405::bring_up(cx.device);
+        let mut board = chip.board;
+        let mut hv_max = [0u16; 3];
+        for (ch, m) in hv_max.iter_mut().enumerate() {
+            *m = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(board.hv(ch));
+        }
+        let servo_max = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(board.servo());
+        let mut cmds = Commands::new(board.name(), board.newline(), hv_max, servo_max);
+        // the stored settings, before the control core takes its first setpoints
+        #[cfg(feature = "settings")]
+        let boot = finger_fw::chip::flash::store(chip.flash).map(|s| cmds.boot_settings(s));
+        let sp = cmds.setpoints();
+        let mut ctl = Control::new(board, sp.servo_released, sp.slew);
+        if cfg!(feature = "qemu") && chip.real_chip {
+            // the emulator image has no watchdog: it never arms a real board
+            ctl.lock_out("qemu image on a real chip");
+        }
+        ctl.apply(&sp);
+        let view = ctl.view();
+        cmds.sync(&view);
+
+        let guard = mpu::stack_guard(&mut cp.MPU);
+        time::start_systick(&mut cp.SYST);
+
+        #[cfg(feature = "log")]
+        defmt::info!("finger-fw {=str} up, board {=str}, stack guard at {=u32:#x}", finger_fw::VERSION, ctl.board().name(), guard);
+        let _ = guard;
+
+        let mut tx = TxQueue::new(chip.tx);
+        // Boot banner: not a reply; tells a client that input is now received (QEMU drops
+        // bytes sent before the USART is enabled, a real UART too).
+        tx.push_all(b"# finger-fw ");
+        tx.push_all(finger_fw::VERSION.as_bytes());
+        #[cfg(feature = "settings")]
+        if let Some(b) = boot {
+            let mut note: heapless::String<80> = heapless::String::new();
+            let _ = finger_fw::w!(&mut note; " ", b);
+            tx.push_all(note.as_bytes());
+        }
+        tx.push_all(b" ready\r\n");
+
+        let mailbox = super::Mailbox { setpoints: None, stop: false, view, checkin_ms: 0 };
+        (Shared { ctl, mailbox, timing: Timing::new(), rx: RxLines::new(), tx }, Local { cmds, usart_rx: chip.rx })
+    }
+
+    /// The control task: every 1 ms, at the highest priority (no lock waits here).
+    #[task(binds = SysTick, priority = 3, shared = [ctl, mailbox, timing], local = [last_entry: u64 = 0])]
+    fn control(cx: control::Context) {
+        let entry = time::systick_elapsed();
+        (cx.shared.ctl, cx.shared.mailbox, cx.shared.timing).lock(|ctl, mb, tm| {
+            time::min_max(&mut tm.tick_latency, entry);
+            let at = (mb.view.now_ms as u64 + 1) * time::SYSTICK_PER_MS as u64 + entry as u64;
+            if *cx.local.last_entry > 0 {
+                time::min_max(&mut tm.period, (at - *cx.local.last_entry) as u32);
+            }
+            *cx.local.last_entry = at;
+            if core::mem::take(&mut mb.stop) {
+                ctl.stop();
+            }
+            if let Some(sp) = mb.setpoints.take() {
+                ctl.apply(&sp);
+            }
+            let stack = ctl.tick_timed(mb.checkin_ms, time::systick_elapsed);
+            tm.tick_stack_max = tm.tick_stack_max.max(stack);
+            mb.view = ctl.view();
+            #[cfg(feature = "qemu")]
+            {
+                // tick marker for the register trace (TIM4 CCR4: channel 4 is not an output)
+                // SAFETY: a write of TIM4's fourth compare register, which no pin uses.
+                unsafe { (*stm32f4xx_hal::pac::TIM4::ptr()).ccr(3).write(|w| w.bits(mb.view.now_ms & 0xFFFF)) };
+                rtic::pend(stm32f4xx_hal::pac::Interrupt::USART1); // transmit (chip::usart)
+            }
+            tm.ticks += 1;
+            tm.tick_run_max = tm.tick_run_max.max(time::systick_elapsed().saturating_sub(entry));
+        });
+    }
+
+    /// USART1: received bytes into the line ring (`stop` acts here), the transmit queue out.
+    #[task(binds = USART1, priority = 2, shared = [ctl, mailbox, timing, rx, tx], local = [usart_rx])]
+    fn console(cx: console::Context) {
+        let t0 = time::systick_elapsed();
+        let (ctl, mailbox, mut timing, mut rx, mut tx) = (cx.shared.ctl, cx.shared.mailbox, cx.shared.timing, cx.shared.rx, cx.shared.tx);
+        if let Some((b, overrun)) = usart::receive(cx.local.usart_rx) {
+            let ev = rx.lock(|r| {
+                let ev = r.push(b);
+                if overrun {
+                    r.overrun(); // bytes after b were lost
+                }
+                ev
+            });
+            if ev == RxEvent::Stop {
+                // HV off now; the command side sees the stop in the view before its next line
+                (ctl, mailbox).lock(|c, m| {
+                    c.stop();
+                    m.view = c.view();
+                });
+                let t1 = time::systick_elapsed();
+                timing.lock(|t| {
+                    t.stop_max = t.stop_max.max(t1.wrapping_sub(t0) % time::SYSTICK_PER_MS);
+                    t.stops += 1;
+                });
+                tx.lock(|t| t.push_stop_reply());
+            }
+        }
+        tx.lock(|t| t.send());
+    }
+
+    /// The command side, at the lowest priority: lines, model solves, `wait`, replies.
+    #[idle(shared = [mailbox, timing, rx, tx], local = [cmds, durations: Durations = Durations::new()])]
+    fn idle(cx: idle::Context) -> ! {
+        let (cmds, durations) = (cx.local.cmds, cx.local.durations);
+        let (mailbox, timing, mut rx, tx) = (cx.shared.mailbox, cx.shared.timing, cx.shared.rx, cx.shared.tx);
+        let mut out = TxOut { tx, mailbox, line: heapless::Vec::new() };
+        let mut report = Report { timing, durations };
+        loop {
+            let view = out.check_in();
+            cmds.sync(&view);
+            if cmds.busy() {
+                let input = rx.lock(|r| r.take_input_seen());
+                if !cmds.poll_wait(input, &mut out) {
+                    cortex_m::asm::wfi();
+                    continue;
+                }
+            }
+            let Some(rec) = rx.lock(|r| r.pop()) else {
+                cortex_m::asm::wfi();
+                continue;
+            };
+            let word = Durations::word_of(&rec);
+            #[cfg(feature = "fault-inject")]
+            crate::fault_inject::run(&rec);
+            let t0 = out.now_counts();
+            cmds.run_reporting(rec, &mut out, Some(&mut report));
+            let t1 = out.now_counts();
+            report.durations.record(word, (t1 - t0) as u32);
+            let stop = cmds.take_stop();
+            let sp = cmds.setpoints();
+            out.mailbox.lock(|m| {
+                m.setpoints = Some(sp);
+                m.stop |= stop;
+            });
+            // the next line sees this one's effect: the core takes the setpoints at its next
+            // tick (or drops them after a stop)
+            loop {
+                let v = out.check_in();
+                if v.seq == sp.seq || v.epoch != sp.epoch || stop {
+                    break;
+                }
+                cortex_m::asm::wfi();
+            }
+        }
+    }
+
+    /// `timing`: the tasks' figures copied under their lock, formatted outside it.
+    struct Report<T: Mutex<T = Timing>> {
+        timing: T,
+        durations: &'static mut Durations,
+    }
+
+    impl<T: Mutex<T = Timing>> TimingReport for Report<T> {
+        fn write_timing(&mut self, out: &mut dyn core::fmt::Write) {
+            let t = self.timing.lock(|t| *t);
+            time::write_timing(out, &t, self.durations);
+        }
+    }
+
+    /// Replies into the transmit queue, a whole line at a time (the command side waits for
+    /// room, checking in meanwhile: a slow console is not a stuck one).
+    struct TxOut<Q: Mutex<T = TxQueue>, M: Mutex<T = super::Mailbox>> {
+        tx: Q,
+        mailbox: M,
+        line: heapless::Vec<u8, 512>,
+    }
+
+    impl<Q: Mutex<T = TxQueue>, M: Mutex<T = super::Mailbox>> TxOut<Q, M> {
+        /// The command side is alive: the control core's view, its time now the check-in.
+        fn check_in(&mut self) -> finger_fw::control::View {
+            self.mailbox.lock(|m| {
+                m.checkin_ms = m.view.now_ms;
+                m.view
+            })
+        }
+
+        /// Time now in SysTick counts (control ms x `SYSTICK_PER_MS` + the count within the tick).
+        fn now_counts(&mut self) -> u64 {
+            loop {
+                let ms = self.mailbox.lock(|m| m.view.now_ms);
+                let c = time::systick_elapsed();
+                if self.mailbox.lock(|m| m.view.now_ms) == ms {
+                    return ms as u64 * time::SYSTICK_PER_MS as u64 + c as u64;
+                }
+            }
+        }
+
+        fn flush(&mut self) {
+            while !self.tx.lock(|t| t.push_line(&self.line)) {
+                self.check_in();
+                cortex_m::asm::wfi();
+            }
+            self.line.clear();
+        }
+    }
+
+    impl<Q: Mutex<T = TxQueue>, M: Mutex<T = super::Mailbox>> core::fmt::Write for TxOut<Q, M> {
+        fn write_str(&mut self, s: &str) -> core::fmt::Result {
+            for &b in s.as_bytes() {
+                if self.line.push(b).is_err() {
+                    self.flush();
+                    let _ = self.line.push(b);
+                }
+                if b == b'\n' {
+                    self.flush();
+                }
+            }
+            Ok(())
+        }
+    }
 }

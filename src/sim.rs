@@ -108,10 +108,9 @@ pub const BYTE_US: f64 = 10.0 / 115_200.0 * 1e6;
 /// How long a command takes in virtual time, µs: from its line and the length of its reply.
 pub type CostFn = fn(line: &[u8], reply_bytes: usize) -> u64;
 
-/// The default cost: the compute of the command (instructions at 168 MHz, the issue-12
-/// figures measured in QEMU before the real-time core: fmax 6-8 M, `force`/`volt` with a
-/// tension ~9 M, a first armed `pose` 10 M, `contact` 5-8 M; the rest ~0.1 M) plus its reply
-/// at 115200 baud.
+/// The default cost: the compute of the command (instructions at 168 MHz, round upper
+/// bounds of what QEMU measured before the real-time core; the firmware's `timing` reports
+/// today's, docs/firmware.md "Figures") plus its reply at 115200 baud.
 pub fn default_cost(line: &[u8], reply_bytes: usize) -> u64 {
     let word = line.split(|&c| c == b' ').find(|w| !w.is_empty()).unwrap_or(b"");
     let instr: u64 = match word {

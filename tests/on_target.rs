@@ -4,11 +4,11 @@
 //! run's over QEMU's exit code.
 //!
 //! What runs here and nowhere else: the control core writing the chip's TIM4 compare
-//! registers (CCR1..3, the HV modules' duties) through stm32f4xx-hal's PWM, read back raw;
-//! the console's line ring and the commands as the chip's interrupt and idle task run them;
-//! the model's solve in f32 on the M4F (fast-trig, as the firmware builds it).
-//! What does not: the RTIC app itself (src/chip.rs), which host-tests/tests/qemu_*.rs boot
-//! whole.
+//! registers (CCR1..3, the HV modules' duties) through the image's board support
+//! (`finger_fw::chip`, stm32f4xx-hal's PWM), read back raw; the console's line ring and the
+//! commands as the chip's interrupt and idle task run them; the model's solve in f32 on the
+//! M4F (fast-trig, as the firmware builds it). What does not: the RTIC app itself
+//! (src/main.rs), which host-tests/tests/qemu_*.rs boot whole.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
 
@@ -20,16 +20,11 @@ fn main() {}
 mod chip {
     use cortex_m_rt as _;
     use defmt_semihosting as _;
+    use finger_fw::chip::f405::{bring_up, F405Board};
     use finger_fw::control::Control;
     use finger_fw::rx::RxLines;
     use finger_fw::{Board, Commands};
-    use stm32f4xx_hal::{
-        gpio::{Output, PinState, PB12},
-        pac,
-        prelude::*,
-        rcc::Config,
-        timer::{ErasedChannel, PwmChannel},
-    };
+    use stm32f4xx_hal::pac;
 
     /// TIM4 CCR1..3: the HV modules' control duties.
     pub const TIM4_CCR: [usize; 3] = [0x4000_0834, 0x4000_0838, 0x4000_083C];
@@ -46,57 +41,17 @@ mod chip {
         [ccr(0), ccr(1), ccr(2)]
     }
 
-    /// The chip's board as src/chip.rs builds it: TIM3 CH1 servo at 50 Hz, TIM4 CH1..3 HV
-    /// PWMs at 20 kHz, PB12 the HV enable; no watchdog (QEMU has none).
-    pub struct ChipBoard {
-        servo: PwmChannel<pac::TIM3, 0>,
-        hv: [ErasedChannel<pac::TIM4>; 3],
-        enable: PB12<Output>,
-    }
-
-    impl Board for ChipBoard {
-        type Servo = PwmChannel<pac::TIM3, 0>;
-        type Hv = ErasedChannel<pac::TIM4>;
-        type Enable = PB12<Output>;
-        fn servo(&mut self) -> &mut Self::Servo {
-            &mut self.servo
-        }
-        fn hv(&mut self, ch: usize) -> &mut Self::Hv {
-            &mut self.hv[ch]
-        }
-        fn hv_enable(&mut self) -> &mut Self::Enable {
-            &mut self.enable
-        }
-        fn feed_watchdog(&mut self) {}
-        fn name(&self) -> &'static str {
-            "qemu-netduinoplus2"
-        }
-    }
-
-    /// The board brought up anew (each test starts from the peripherals' bring-up).
-    pub fn board() -> ChipBoard {
+    /// The board brought up anew by the image's own bring-up (each test starts from it).
+    pub fn board() -> F405Board {
         // SAFETY: the tests run one after another on one core; each takes the peripherals
         // whole and drops the previous test's board first.
-        let dp = unsafe { pac::Peripherals::steal() };
-        let mut rcc = dp.RCC.freeze(Config::hsi());
-        let gpioa = dp.GPIOA.split(&mut rcc);
-        let gpiob = dp.GPIOB.split(&mut rcc);
-        let enable = gpiob.pb12.into_push_pull_output_in_state(PinState::Low);
-        let (_, (s1, ..)) = dp.TIM3.pwm_hz(50.Hz(), &mut rcc);
-        let mut servo = s1.with(gpioa.pa6);
-        servo.enable();
-        let (_, (h1, h2, h3, ..)) = dp.TIM4.pwm_hz(20.kHz(), &mut rcc);
-        let mut hv = [h1.with(gpiob.pb6).erase(), h2.with(gpiob.pb7).erase(), h3.with(gpiob.pb8).erase()];
-        for ch in hv.iter_mut() {
-            ch.enable();
-        }
-        ChipBoard { servo, hv, enable }
+        bring_up(unsafe { pac::Peripherals::steal() }).board
     }
 
-    /// The command side and the control core on the chip's board, as src/chip.rs wires them.
+    /// The command side and the control core on the chip's board, as src/main.rs wires them.
     pub struct Rig {
         pub cmds: Commands,
-        pub ctl: Control<ChipBoard>,
+        pub ctl: Control<F405Board>,
         pub rx: RxLines,
     }
 

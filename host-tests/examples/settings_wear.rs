@@ -1,5 +1,5 @@
 //! Regenerates docs/firmware.md's settings wear figures (between the `settings-wear` markers):
-//! the store on the board's geometry (three 16 KiB erase sectors, src/flash_chip.rs) over the
+//! the store on the board's geometry (three 16 KiB erase sectors, src/chip/flash.rs) over the
 //! host's counting flash (host_tests::cut_flash), the firmware's `save` on the simulated board,
 //! repeated: bytes written and sectors erased per save, and the saves the most-erased sector
 //! lasts at the F405's rated 10,000 erase cycles (datasheet DS8626, "Flash memory endurance").

@@ -1,32 +1,32 @@
 //! The settings store's flash on each image (feature `settings`; docs/firmware.md "Settings").
 //!
 //! - Board (`hw`): flash sectors 1-3 of the F405 (three 16 KiB erase sectors that
-//!   memory-f405.x leaves out of the program), through the HAL's flash driver
-//!   (stm32f4xx-hal's `UnlockedFlash`, its `embedded-storage` NorFlash). The HAL's NorFlash
-//!   erases in 128 KiB units (its largest sector); [`SectorFlash`] offers the three 16 KiB
-//!   sectors as pages and erases one at a time, checking the command side in before each (an
-//!   erase stalls the CPU, at most 0.8 s a sector: inside the 1 s watchdog).
+//!   memory.x leaves out of the program), through the HAL's flash driver (stm32f4xx-hal's
+//!   `UnlockedFlash`, its `embedded-storage` NorFlash). The HAL's NorFlash erases in 128 KiB
+//!   units (its largest sector); [`SectorFlash`] offers the three 16 KiB sectors as pages and
+//!   erases one at a time (an erase stalls the CPU, the control tick included, for at most the
+//!   datasheet's 0.8 s a sector: inside the 1 s watchdog, fed by the tick between sectors).
 //! - QEMU (`qemu`): QEMU does not model the flash controller, so the store is RAM
-//!   ([`finger_fw::flash_ram::RamFlash`]) at a fixed address that no ELF segment covers:
+//!   ([`crate::flash_ram::RamFlash`]) at a fixed address that no ELF segment covers:
 //!   QEMU's `system_reset` rewrites only the ELF's segments (and zero-fills their .bss
 //!   part), cortex-m-rt's start-up only .data and .bss, so the store survives a reset. The F405
 //!   image uses the 64 KiB of SRAM QEMU maps above memory.x's 128 KiB (0x2002_0000).
 //!
 //! Not here: the record and the map (src/settings.rs), the commands (src/app/config.rs).
 
-use finger_fw::settings::FlashStore;
+use crate::settings::FlashStore;
 
 /// The store's pages: three of 16 KiB (the F405's sectors 1-3 on the board).
-pub use finger_fw::flash_ram::{PAGE, PAGES};
+pub use crate::flash_ram::{PAGE, PAGES};
 
 #[cfg(feature = "qemu")]
-pub type StoreFlash = finger_fw::flash_ram::RamFlash<PAGE>;
+pub type StoreFlash = crate::flash_ram::RamFlash<PAGE>;
 #[cfg(feature = "hw")]
 pub type StoreFlash = SectorFlash;
 
 /// The emulator's store: RAM past memory.x's (F405 image), the pages then the formatted mark.
 #[cfg(feature = "qemu")]
-pub const SETTINGS_RAM: usize = finger_fw::flash_ram::F405_BASE;
+pub const SETTINGS_RAM: usize = crate::flash_ram::F405_BASE;
 
 /// The store on this image, once (None if called again).
 #[cfg(feature = "qemu")]
@@ -39,7 +39,7 @@ pub fn store(_flash: stm32f4xx_hal::pac::FLASH) -> Option<&'static mut FlashStor
             &mut *((SETTINGS_RAM + PAGES * PAGE) as *mut u32),
         )
     };
-    let flash = finger_fw::flash_ram::RamFlash::<PAGE>::new(mem, mark);
+    let flash = crate::flash_ram::RamFlash::<PAGE>::new(mem, mark);
     cortex_m::singleton!(: FlashStore<StoreFlash> = FlashStore::new(flash, 0..(PAGES * PAGE) as u32))
 }
 
@@ -54,7 +54,7 @@ mod hw {
     #[allow(unused_imports)]
     use FlashExt as _;
 
-    /// The store's first byte: sector 1 (memory-f405.x `_settings_flash_start`), as an offset
+    /// The store's first byte: sector 1 (memory.x `_settings_flash_start`), as an offset
     /// from the start of flash.
     const BASE: u32 = 0x4000;
 
@@ -86,11 +86,9 @@ mod hw {
         async fn erase(&mut self, from: u32, to: u32) -> Result<(), Error> {
             let mut a = from;
             while a < to && a < (PAGES * PAGE) as u32 {
-                super::super::check_in();
                 embedded_storage::nor_flash::NorFlash::erase(&mut self.0.unlocked(), BASE + a, BASE + a + PAGE as u32)?;
                 a += PAGE as u32;
             }
-            super::super::check_in();
             Ok(())
         }
         async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Error> {

@@ -1,8 +1,8 @@
-//! Small `memcpy` / `memmove` for the chip (issue 3: flash). compiler_builtins' versions
-//! (unrolled, aligned and misaligned paths: ~2.3 KB at opt-level z) are weak symbols; these
-//! strong ones replace them: 16 bytes per ldm/stm and then words while both pointers are
-//! word-aligned, then bytes; a backward byte loop only when the destination lies inside the
-//! source (overlap). ~100 bytes.
+//! Small `memcpy` / `memmove` for the image (flash). compiler_builtins' versions (unrolled,
+//! aligned and misaligned paths; `scripts/fw-size --symbols` shows their size) are weak
+//! symbols; these strong ones replace them: 16 bytes per ldm/stm and then words while both
+//! pointers are word-aligned, then bytes; a backward byte loop only when the destination lies
+//! inside the source (overlap).
 //! Written in assembly so the compiler cannot turn the loops back into calls to themselves.
 
 core::arch::global_asm!(

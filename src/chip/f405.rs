@@ -1,0 +1,119 @@
+//! The F405 under `Board`: clocks, pins, the servo and HV PWMs, the HV enable, the console
+//! USART's halves and (board build) the watchdog, brought up once by [`bring_up`].
+//!
+//! Pin map (docs/firmware.md "Pin map and wiring"):
+//! - USART1 TX PA9, RX PA10: console, 115200 8N1
+//! - TIM3 CH1 PA6: servo PWM, 50 Hz, 1.0..2.0 ms
+//! - TIM4 CH1..CH3 PB6, PB7, PB8: HV modules' control inputs (PWM 20 kHz, RC-filtered to 0..5 V)
+//! - PB12: HV enable (interlock), push-pull, low unless armed (external pull-down on the board)
+//!
+//! Not here: the HV-off stores of the reset and fault paths (src/image/fault.rs), which run
+//! before and without this.
+
+use crate::Board;
+use stm32f4xx_hal::{
+    gpio::{Output, PinState, PB12},
+    pac,
+    prelude::*,
+    rcc::Config,
+    serial::{Rx, Tx},
+    timer::{ErasedChannel, PwmChannel},
+};
+
+/// One HV control PWM: the three TIM4 channels, erased to one type.
+pub type HvPwm = ErasedChannel<pac::TIM4>;
+/// The console USART's halves.
+pub type ConsoleRx = Rx<pac::USART1>;
+pub type ConsoleTx = Tx<pac::USART1>;
+
+pub struct F405Board {
+    servo: PwmChannel<pac::TIM3, 0>,
+    hv: [HvPwm; 3],
+    enable: PB12<Output>,
+    #[cfg(feature = "hw")]
+    iwdg: stm32f4xx_hal::watchdog::IndependentWatchdog,
+}
+
+impl Board for F405Board {
+    type Servo = PwmChannel<pac::TIM3, 0>;
+    type Hv = HvPwm;
+    type Enable = PB12<Output>;
+    fn servo(&mut self) -> &mut Self::Servo {
+        &mut self.servo
+    }
+    fn hv(&mut self, ch: usize) -> &mut HvPwm {
+        &mut self.hv[ch]
+    }
+    fn hv_enable(&mut self) -> &mut Self::Enable {
+        &mut self.enable
+    }
+    fn feed_watchdog(&mut self) {
+        #[cfg(feature = "hw")]
+        self.iwdg.feed();
+    }
+    fn name(&self) -> &'static str {
+        if cfg!(m3) {
+            "qemu-netduino2"
+        } else if cfg!(feature = "qemu") {
+            "qemu-netduinoplus2"
+        } else {
+            "stm32f405"
+        }
+    }
+}
+
+/// The chip brought up: the board, the console's halves (receive interrupt on), whether
+/// this is a real chip, and the flash controller (the settings store's).
+pub struct Chip {
+    pub board: F405Board,
+    pub rx: ConsoleRx,
+    pub tx: ConsoleTx,
+    pub real_chip: bool,
+    pub flash: pac::FLASH,
+}
+
+/// Clocks (board: 168 MHz from the 8 MHz crystal's PLL; QEMU: the HSI), the PWMs at duty 0
+/// and running, the HV enable low, USART1 at 115200 with its receive interrupt, and on the
+/// board the IWDG (1 s) started.
+pub fn bring_up(dp: pac::Peripherals) -> Chip {
+    // before the clocks are touched: a real chip answers at RCC, QEMU does not model it
+    let real_chip = dp.RCC.cr().read().hsirdy().bit_is_set();
+    #[cfg(feature = "hw")]
+    let mut rcc = dp.RCC.freeze(Config::hse(8.MHz()).sysclk(168.MHz()));
+    #[cfg(feature = "qemu")]
+    let mut rcc = dp.RCC.freeze(Config::hsi());
+
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let gpiob = dp.GPIOB.split(&mut rcc);
+    let enable = gpiob.pb12.into_push_pull_output_in_state(PinState::Low);
+
+    let (_, (s1, ..)) = dp.TIM3.pwm_hz(50.Hz(), &mut rcc);
+    let mut servo = s1.with(gpioa.pa6);
+    servo.set_duty(0);
+    servo.enable();
+    let (_, (h1, h2, h3, ..)) = dp.TIM4.pwm_hz(20.kHz(), &mut rcc);
+    let mut hv = [h1.with(gpiob.pb6).erase(), h2.with(gpiob.pb7).erase(), h3.with(gpiob.pb8).erase()];
+    for ch in hv.iter_mut() {
+        ch.set_duty(0);
+        ch.enable();
+    }
+
+    let serial: stm32f4xx_hal::serial::Serial<pac::USART1, u8> = dp.USART1.serial((gpioa.pa9, gpioa.pa10), 115_200.bps(), &mut rcc).unwrap();
+    let (tx, mut rx) = serial.split();
+    rx.listen();
+
+    #[cfg(feature = "hw")]
+    let iwdg = {
+        let mut w = stm32f4xx_hal::watchdog::IndependentWatchdog::new(dp.IWDG);
+        w.start(1000.millis());
+        w
+    };
+    let board = F405Board {
+        servo,
+        hv,
+        enable,
+        #[cfg(feature = "hw")]
+        iwdg,
+    };
+    Chip { board, rx, tx, real_chip, flash: dp.FLASH }
+}

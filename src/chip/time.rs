@@ -1,0 +1,134 @@
+//! Time on the chip: SysTick as the 1 kHz control tick and the clock within it, and the
+//! figures the `timing` console addition reports (docs/firmware.md "Real-time core").
+//!
+//! SysTick counts the core clock; QEMU's SysTick runs at the machine's core clock whatever the
+//! RCC says (168 MHz netduinoplus2, 120 MHz netduino2), so a tick is `SYSTICK_PER_MS` counts in
+//! every build. The figures are plain values: the tasks keep them in RTIC resources and the
+//! report formats a copy. Not here: who measures what (src/main.rs).
+
+use crate::num::Fixed;
+use crate::rx::Record;
+use core::fmt::Write;
+use cortex_m::peripheral::{syst::SystClkSource, SYST};
+
+/// Core clock, MHz: 168 on the board and in QEMU netduinoplus2, 120 in QEMU netduino2 (M3).
+#[cfg(not(m3))]
+pub const CORE_MHZ: u32 = 168;
+#[cfg(m3)]
+pub const CORE_MHZ: u32 = 120;
+/// SysTick counts per millisecond.
+pub const SYSTICK_PER_MS: u32 = CORE_MHZ * 1000;
+
+/// SysTick from the core clock, reloading every millisecond, its interrupt on.
+pub fn start_systick(syst: &mut SYST) {
+    syst.set_clock_source(SystClkSource::Core);
+    syst.set_reload(SYSTICK_PER_MS - 1);
+    syst.clear_current();
+    syst.enable_interrupt();
+    syst.enable_counter();
+}
+
+/// SysTick counts since its last reload.
+pub fn systick_elapsed() -> u32 {
+    (SYSTICK_PER_MS - 1).saturating_sub(SYST::get_current())
+}
+
+/// What the control and console tasks measure, SysTick counts.
+#[derive(Clone, Copy)]
+pub struct Timing {
+    /// Control-task entry after the SysTick reload (the tick's jitter), min and max.
+    pub tick_latency: (u32, u32),
+    /// Control-task run time, max.
+    pub tick_run_max: u32,
+    /// One channel's stack step in a control tick (goal, slew, guard, thickness, relaxation), max.
+    pub tick_stack_max: u32,
+    /// Entry to entry of the control task, min and max.
+    pub period: (u32, u32),
+    /// Stop: from the console interrupt's entry to HV off, max; and how many.
+    pub stop_max: u32,
+    pub stops: u32,
+    /// Control ticks counted.
+    pub ticks: u32,
+}
+
+impl Timing {
+    pub const fn new() -> Self {
+        Timing { tick_latency: (u32::MAX, 0), tick_run_max: 0, tick_stack_max: 0, period: (u32::MAX, 0), stop_max: 0, stops: 0, ticks: 0 }
+    }
+}
+
+impl Default for Timing {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// `v` into a (min, max) pair.
+pub fn min_max(m: &mut (u32, u32), v: u32) {
+    m.0 = m.0.min(v);
+    m.1 = m.1.max(v);
+}
+
+/// Worst command durations by command word, SysTick counts (the command side's own).
+pub const DURATION_SLOTS: usize = 12;
+
+#[derive(Clone, Copy)]
+pub struct Durations([([u8; 8], u32); DURATION_SLOTS]);
+
+impl Durations {
+    pub const fn new() -> Self {
+        Durations([([0; 8], 0); DURATION_SLOTS])
+    }
+    /// The first word of a queued line (none for an error record).
+    pub fn word_of(rec: &Record) -> [u8; 8] {
+        let mut w = [0u8; 8];
+        if let Record::Line(l) = rec {
+            for (i, &c) in l.iter().skip_while(|&&c| c == b' ').take_while(|&&c| c != b' ').take(8).enumerate() {
+                w[i] = c;
+            }
+        }
+        w
+    }
+    pub fn record(&mut self, word: [u8; 8], counts: u32) {
+        if word[0] == 0 {
+            return;
+        }
+        for slot in self.0.iter_mut() {
+            if slot.0 == word || slot.0[0] == 0 {
+                slot.0 = word;
+                slot.1 = slot.1.max(counts);
+                return;
+            }
+        }
+    }
+}
+
+impl Default for Durations {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The `timing` reply: `tick_period_us=<min>,<max>` (control-task entry to entry),
+/// `tick_latency_us=<min>,<max>` (control-task entry after the SysTick reload: the tick's
+/// jitter), `tick_run_us=<max>`, `tick_stack_us=<max>`, `ticks=<n>`, `stop_us=<max>` (console
+/// interrupt entry to HV off), `stops=<n>`, `cmd_us=<word>:<max>,...` (the command side, line
+/// run, replies queued).
+pub fn write_timing(o: &mut dyn Write, t: &Timing, d: &Durations) {
+    let us = |c: u32| Fixed(c as f32 / CORE_MHZ as f32, 2);
+    let unset0 = |v: u32| if v == u32::MAX { 0 } else { v };
+    let _ = w!(o; "tick_period_us=", us(unset0(t.period.0)), ",", us(t.period.1), " tick_latency_us=", us(unset0(t.tick_latency.0)), ",", us(t.tick_latency.1), " tick_run_us=", us(t.tick_run_max), " tick_stack_us=", Fixed(t.tick_stack_max as f32 / CORE_MHZ as f32, 3), " ticks=", t.ticks);
+    let _ = w!(o; " stop_us=", us(t.stop_max), " stops=", t.stops, " cmd_us=");
+    let mut first = true;
+    for (word, c) in d.0.iter() {
+        if word[0] == 0 {
+            continue;
+        }
+        if !first {
+            let _ = o.write_str(",");
+        }
+        first = false;
+        let n = word.iter().position(|&b| b == 0).unwrap_or(8);
+        let _ = w!(o; crate::console::printable(&word[..n]), ":", us(*c));
+    }
+}
