@@ -1,7 +1,7 @@
 //! The model target: arbitrary parameters and inputs into the f64 model's forward solve,
 //! inverse, contact and fmax.
 //!
-//! Input: a parameter set (each value MODEL.md's default scaled by 2^-6..2^6, or a special
+//! Input: a parameter set (each value the model's default scaled by 2^-6..2^6, or a special
 //! value: 0, negative, NaN, infinities, extremes, or raw bits), then up to [`MAX_OPS`]
 //! operations, each with its tension and voltages (fractions of fmax and of the ceiling, or
 //! special values).

@@ -23,7 +23,7 @@
 
 use std::fmt;
 
-/// Plain f64 parameters, mirroring the names of MODEL.md (mm, N, MPa).
+/// Plain f64 parameters, mirroring the names of docs/model.md "Geometry" (mm, N, MPa).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContinuumParams {
     /// Number of elements (joints).
@@ -46,7 +46,7 @@ pub struct ContinuumParams {
     pub layers: usize,
     /// DE layer rest thickness (mm, informational).
     pub z0: f64,
-    /// DE Young's modulus (MPa); MODEL.md: 2 G (1 + ν) = 1.788.
+    /// DE Young's modulus (MPa); docs/model.md: 2 G (1 + ν) = 1.788.
     pub e_de: f64,
     /// Use the plate (plane-strain) modulus E_b / (1 - nu_b²) for the body.
     pub plate: bool,
@@ -96,7 +96,7 @@ impl ContinuumParams {
         2.0 * self.a
     }
 
-    /// Notch thickness at x in [0, 2a] (MODEL.md).
+    /// Notch thickness at x in [0, 2a] (docs/model.md "Geometry").
     pub fn notch_thickness(&self, x: f64) -> f64 {
         let u = ((x - self.a) / self.a).clamp(-1.0, 1.0);
         self.t_min + (self.b - self.t_min) * (1.0 - (1.0 - u * u).max(0.0).sqrt())
