@@ -10,9 +10,8 @@
 //! - every call answers a typed error or a finite answer, never a panic;
 //! - an answer's voltages are 0 or below the ceiling (`de::check_voltage`), and a voltage
 //!   that is negative, not finite or at/past the ceiling is refused;
-//! - a forward answer is in equilibrium (`Finger::equilibrium_residual`, 1e-4 of the
-//!   finger's length: evaluated afresh, the residual carries the march's gain, large for the
-//!   most compliant parameter sets drawn here; docs/reliability.md);
+//! - a forward answer is in equilibrium (`Finger::equilibrium_residual` within 1e-4 of the
+//!   finger's length; why that bound: docs/reliability.md);
 //! - an inverse answer gives back its angles (forward of its tension and voltages, 1e-6 rad);
 //! - a contact answer is in equilibrium under its tip load with the tip on the stop;
 //! - fmax is finite and not negative.

@@ -602,8 +602,8 @@ impl Finger {
             (None, None) => 1,
         };
         let f = &self.f;
-        // one compact row per posture (not the whole model Solution: its sub-element state is
-        // ~1.5 KB), filled in parallel
+        // one compact row per posture (not the whole model Solution, which carries every
+        // sub-element's state), filled in parallel
         let out: Vec<Result<Compact, Error>> = py.detach(|| {
             (0..rows)
                 .into_par_iter()

@@ -4,22 +4,13 @@
 //! (elliptical notches of variable thickness, links as thick beams of the body
 //! material, DE stacks as parallel layers bonded over each hinge, the cable as a
 //! follower load through its guide holes) that shares no code with the
-//! three-element model in `finger-model`. The formulation, equations and
-//! measured convergence are documented in `docs/continuum.md`.
+//! three-element model in `finger-model`.
 //!
-//! Formulation in one paragraph: the finger's centreline is an extensible
-//! Kirchhoff (Euler-Bernoulli) elastica, parametrised by the reference arc length
-//! s. Under follower loads that only act at a few points (the guide holes, the
-//! tip), the resultant of all loads distal to a section is a known function of
-//! the positions of those points: on hinge k it is the tension P along span k
-//! (line of action through link k's proximal hole) plus the tip force; on link
-//! k it is P along the cable chord inside link k (through its distal hole) plus
-//! the tip force. The unknowns are therefore the positions of the holes and of
-//! the tip (4n + 2 numbers). Given a guess, the elastica is integrated from the
-//! clamp with RK4 (hinges in the notch angle φ, x = a(1 - cos φ), which makes the
-//! integrand smooth, so RK4 keeps its 4th order), the holes' positions are read
-//! off the integrated shape, and Newton's method (finite-difference Jacobian)
-//! drives the mismatch to zero. The tension is ramped by continuation.
+//! In short: the centreline is an extensible Kirchhoff elastica; the loads distal to a
+//! section are known from the positions of the guide holes and the tip (4n + 2 unknowns),
+//! so the elastica is integrated from the clamp with RK4 (hinges in the notch angle φ) and
+//! Newton drives the holes' mismatch to zero, with the tension ramped by continuation. The
+//! formulation, its equations and its convergence are in `docs/continuum.md`.
 
 use std::fmt;
 
@@ -157,7 +148,7 @@ impl Discretisation {
 }
 
 impl Default for Discretisation {
-    /// Converged to about 1e-9 rad in the joint angles at 2 N (see docs/continuum.md).
+    /// Converged in the joint angles (docs/continuum.md has the figures).
     fn default() -> Self {
         Discretisation::new(128, 32)
     }

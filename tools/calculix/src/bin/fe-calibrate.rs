@@ -4,7 +4,7 @@
 //! (console names, `Params::set`): linear CalculiX unit loads on one element (3D half width by
 //! default), with and without its stack at three thicknesses; prints the factors
 //! (`finger_model::Calibration`), the element compliances before and after, and the factors
-//! as a `cal` console line and a Rust literal. About 10 s (fine mesh).
+//! as a `cal` console line and a Rust literal.
 use finger_calculix::calibrate::{self, model_element_compliance};
 use finger_calculix::ccx::Kind;
 use finger_calculix::mesh::Density;

@@ -1,7 +1,7 @@
 //! `cargo run --bin fe-report [-- --coarse]` (in tools/calculix): writes docs/fidelity-fe.md,
 //! the board's f32 model (calibrated and not) against CalculiX's nonlinear solution of the
-//! same finger, scene by scene. About 20 minutes with the default (fine) 3D mesh on
-//! one core; `--coarse` (a minute) is for trying the tool, not for the report.
+//! same finger, scene by scene. The default (fine) 3D mesh is slow (the report ends with its
+//! run time); `--coarse` is for trying the tool, not for the report.
 use finger_calculix::calibrate::{self, model_element_compliance, CalibrationRun};
 use finger_calculix::ccx::{Kind, Law};
 use finger_calculix::mesh::Density;
