@@ -81,25 +81,16 @@ mod app {
         // the HV pins are low since __pre_init (image/fault.rs)
         let mut cp = cx.core;
         let chip = f405::bring_up(cx.device);
-        let mut board = chip.board;
-        let mut hv_max = [0u16; 3];
-        for (ch, m) in hv_max.iter_mut().enumerate() {
-            *m = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(board.hv(ch));
-        }
-        let servo_max = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(board.servo());
-        let mut cmds = Commands::new(board.name(), board.newline(), hv_max, servo_max);
-        // the stored settings, before the control core takes its first setpoints
+        let (mut cmds, mut ctl) = finger_fw::wire(chip.board);
+        // the stored settings, before the control tick starts
         #[cfg(feature = "settings")]
-        let boot = finger_fw::chip::flash::store(chip.flash).map(|s| cmds.boot_settings(s));
-        let sp = cmds.setpoints();
-        let mut ctl = Control::new(board, sp.servo_released, sp.slew);
+        let boot = finger_fw::chip::flash::store(chip.flash).map(|s| finger_fw::app::config::boot(&mut cmds, &mut ctl, s));
         if cfg!(feature = "qemu") && chip.real_chip {
             // the emulator image has no watchdog: it never arms a real board
             ctl.lock_out("qemu image on a real chip");
+            cmds.sync(&ctl.view());
         }
-        ctl.apply(&sp);
         let view = ctl.view();
-        cmds.sync(&view);
 
         let guard = mpu::stack_guard(&mut cp.MPU);
         time::start_systick(&mut cp.SYST);

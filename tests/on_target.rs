@@ -23,7 +23,7 @@ mod chip {
     use finger_fw::chip::f405::{bring_up, F405Board};
     use finger_fw::control::Control;
     use finger_fw::rx::RxLines;
-    use finger_fw::{Board, Commands};
+    use finger_fw::Commands;
     use stm32f4xx_hal::pac;
 
     /// TIM4 CCR1..3: the HV modules' control duties.
@@ -57,17 +57,7 @@ mod chip {
 
     impl Rig {
         pub fn new() -> Rig {
-            let mut b = board();
-            let mut hv_max = [0u16; 3];
-            for (ch, m) in hv_max.iter_mut().enumerate() {
-                *m = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(b.hv(ch));
-            }
-            let servo_max = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(b.servo());
-            let mut cmds = Commands::new(b.name(), b.newline(), hv_max, servo_max);
-            let sp = cmds.setpoints();
-            let mut ctl = Control::new(b, sp.servo_released, sp.slew);
-            ctl.apply(&sp);
-            cmds.sync(&ctl.view());
+            let (cmds, ctl) = finger_fw::wire(board());
             Rig { cmds, ctl, rx: RxLines::new() }
         }
 
