@@ -58,7 +58,7 @@ mod app {
     use finger_fw::control::Control;
     use finger_fw::rx::{RxEvent, RxLines};
     use finger_fw::app::TimingReport;
-    use finger_fw::{Board, Commands};
+    use finger_fw::Commands;
     use rtic::Mutex;
 
     #[shared]
@@ -96,7 +96,7 @@ mod app {
         time::start_systick(&mut cp.SYST);
 
         #[cfg(feature = "log")]
-        defmt::info!("finger-fw {=str} up, board {=str}, stack guard at {=u32:#x}", finger_fw::VERSION, ctl.board().name(), guard);
+        defmt::info!("finger-fw {=str} up, board {=str}, stack guard at {=u32:#x}", finger_fw::VERSION, finger_fw::Board::name(ctl.board()), guard);
         let _ = guard;
 
         let mut tx = TxQueue::new(chip.tx);
