@@ -69,6 +69,7 @@ pub struct Commands {
     pub(super) duty: [u16; CHANNELS],
     /// Each stack's thickness stretch now, as the control tick integrates it (1 at rest).
     pub(super) stack_ratio: [f32; CHANNELS],
+    /// The core's latched fault, as the console names it.
     pub(super) fault: Option<&'static str>,
     pub(super) locked_out: bool,
     pub(super) now_ms: u32,
@@ -188,7 +189,7 @@ impl Commands {
         self.enable = v.enable;
         self.volts = v.volts;
         self.duty = v.duty;
-        self.fault = v.fault;
+        self.fault = v.fault.text();
         self.locked_out = v.locked_out;
         self.stack_ratio = v.stack_ratio;
         self.now_ms = v.now_ms;
@@ -773,12 +774,10 @@ impl Commands {
             None => {
                 let nl = self.nl;
                 let p = self.finger.params();
-                for i in PARAMS {
-                    let v = p.get(i.name).unwrap_or(f64::NAN) as f32;
-                    let _ = w!(out; i.name, "=", Short(v), " (", i.range, ")", nl);
-                }
-                for i in FW_PARAMS {
-                    let _ = w!(out; i.name, "=", Short(self.fw.get(i.name).unwrap_or(0.0)), " (", i.range, ")", nl);
+                let model = PARAMS.iter().map(|i| (i.name, i.range, p.get(i.name).unwrap_or(f64::NAN) as f32));
+                let fw = FW_PARAMS.iter().map(|i| (i.name, i.range, self.fw.get(i.name).unwrap_or(0.0)));
+                for (name, range, v) in model.chain(fw) {
+                    let _ = w!(out; name, "=", Short(v), " (", range, ")", nl);
                 }
                 let _ = w!(r; "params=", PARAMS.len() + FW_PARAMS.len());
                 return Ok(());

@@ -10,7 +10,9 @@ use super::commands::Commands;
 use super::params::{FwParams, CHANNELS};
 use super::wire::wire;
 use crate::board::Board;
-use crate::control::{Control, HvRefused};
+#[cfg(feature = "hv-door")]
+use crate::control::HvRefused;
+use crate::control::{Control, Latched};
 use crate::rx::{RxEvent, RxLines};
 
 /// The whole application on one board, without threads: the RX part ([`RxLines`], `stop`
@@ -73,7 +75,7 @@ impl<B: Board> App<B> {
     pub fn duties(&self) -> [u16; CHANNELS] {
         self.ctl.view().duty
     }
-    pub fn fault(&self) -> Option<&'static str> {
+    pub fn fault(&self) -> Latched {
         self.ctl.view().fault
     }
     /// A `wait` is running: call `tick` until it ends (input meanwhile ends it early).
@@ -87,7 +89,8 @@ impl<B: Board> App<B> {
         self.cmds.fmax_evaluations()
     }
 
-    /// The single HV writer itself (its refusals are what the tests show).
+    /// The single HV writer called directly: tests only (feature `hv-door`), for its refusals.
+    #[cfg(feature = "hv-door")]
     pub fn write_hv_duty(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
         let r = self.ctl.write_hv_duty(ch, duty);
         self.cmds.sync(&self.ctl.view());
