@@ -679,15 +679,10 @@ impl Commands {
         }
     }
 
-    #[inline(never)]
-    pub(super) fn cmd_disarm(&mut self) -> Result<(), CmdError> {
-        if !self.armed {
-            return Ok(());
-        }
-        // the cable keeps its tension, held at the posture of 0 V; if that cannot be
-        // held, the cable is released
-        let zero = [0.0; CHANNELS];
-        match self.plan_servo(&self.finger, &self.fw, self.force, &zero) {
+    /// The servo where `plan` ([`Commands::plan_servo`] of the present tension) holds it; where
+    /// it cannot be held, the cable released (tension 0).
+    pub(super) fn hold_or_release(&mut self, plan: Result<(f32, f32), CmdError>) {
+        match plan {
             Ok((cable, deg)) => {
                 self.cable = cable;
                 self.set_servo(deg);
@@ -698,6 +693,17 @@ impl Commands {
                 self.set_servo(0.0);
             }
         }
+    }
+
+    #[inline(never)]
+    pub(super) fn cmd_disarm(&mut self) -> Result<(), CmdError> {
+        if !self.armed {
+            return Ok(());
+        }
+        // the cable keeps its tension, held at the posture of 0 V; if that cannot be
+        // held, the cable is released
+        let zero = [0.0; CHANNELS];
+        self.hold_or_release(self.plan_servo(&self.finger, &self.fw, self.force, &zero));
         // the control core ramps the HV to 0, then drops the enable
         self.armed = false;
         self.target_v = zero;

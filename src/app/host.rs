@@ -153,12 +153,7 @@ impl<B: Board> App<B> {
             }
             let Some(rec) = self.rx.pop() else { return };
             self.cmds.run(rec, out);
-            if self.cmds.take_stop() {
-                self.ctl.stop();
-                self.cmds.sync(&self.ctl.view());
-            }
-            let sp = self.cmds.setpoints();
-            self.ctl.apply(&sp);
+            self.hand_over();
         }
     }
 
@@ -166,6 +161,11 @@ impl<B: Board> App<B> {
     pub fn execute<W: Write>(&mut self, line: &[u8], out: &mut W) {
         self.cmds.sync(&self.ctl.view());
         self.cmds.execute(line, out);
+        self.hand_over();
+    }
+
+    /// After a line: a `stop` it executed stops the core; its setpoints to the core.
+    fn hand_over(&mut self) {
         if self.cmds.take_stop() {
             self.ctl.stop();
             self.cmds.sync(&self.ctl.view());

@@ -99,19 +99,7 @@ fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f32>, prec: usize) 
 /// disarmed, nothing) or refuses with a console error. Arguments are the console's f32
 /// numbers (`R::from_f64(f64::from(x))` folds to x for R = f32: no f64 conversion is linked).
 /// Returns whether the command succeeded (and `apply` was called and accepted).
-pub fn pose<R, W, F>(
-    out: &mut W,
-    finger: &Finger<R>,
-    table: Option<&BranchTable<R>>,
-    degrees: &[f32],
-    tension: Option<f32>,
-    apply: F,
-) -> Result<bool, fmt::Error>
-where
-    R: Real,
-    W: Write,
-    F: FnOnce(R, &[R]) -> Result<(), CmdError>,
-{
+pub fn pose<R: Real, W: Write, F: FnOnce(R, &[R]) -> Result<(), CmdError>>(out: &mut W, finger: &Finger<R>, table: Option<&BranchTable<R>>, degrees: &[f32], tension: Option<f32>, apply: F) -> Result<bool, fmt::Error> {
     pose_with(out, finger, table, &Options::default(), degrees, tension, apply)
 }
 
