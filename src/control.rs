@@ -1,8 +1,8 @@
 //! The control core: the one owner of the outputs. Runs every 1 ms tick at the highest
 //! priority (the chip's SysTick task; `App::tick` on the host).
 //!
-//! What it is: the single writer of the HV duties ([`Control::write_duty`]), the slew of the
-//! HV values toward the command side's setpoints (at most `slew` x 1 ms per tick, whatever
+//! What it is: the single writer of the HV duties (`Control::write_hv_duty_checked`), the
+//! slew of the HV values toward the command side's setpoints (at most `slew` x 1 ms per tick, whatever
 //! else runs), the stacks in time ([`Stacks`]: each channel's film state integrated every
 //! tick, and the guard that keeps it above its floor), the servo following the slewed
 //! voltages, the disarm ramp, the emergency stop and the watchdog feed (only while the
@@ -23,8 +23,8 @@ pub use fault::{Fault, Latched};
 pub use stacks::Stacks;
 
 /// The watchdog is fed only when the command side checked in at most this long ago, ms. The
-/// longest command (a first armed `pose`, ~10 M instructions: ~60 ms at 168 MHz) stays far
-/// inside; a stuck solve or console stops the feed and the IWDG (1 s) resets the board.
+/// longest command (a first armed `pose`, docs/inverse-cost.md) stays far inside; a stuck
+/// solve or console stops the feed and the IWDG (1 s) resets the board.
 pub const CHECKIN_BOUND_MS: u32 = 250;
 
 /// What the command side asks of the outputs.
@@ -73,7 +73,7 @@ pub struct View {
     pub stack_ratio: [f32; HV_CHANNELS],
 }
 
-/// The refusal of [`Control::write_duty`].
+/// The refusal of the HV writer (`Control::write_hv_duty_checked`).
 #[derive(Debug, PartialEq, Eq, Clone, Copy)]
 pub struct HvRefused;
 
@@ -215,13 +215,13 @@ impl<B: Board> Control<B> {
     /// The single HV writer called directly: tests only (feature `hv-door`), for its refusals.
     #[cfg(feature = "hv-door")]
     pub fn write_hv_duty(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
-        self.write_duty(ch, duty)
+        self.write_hv_duty_checked(ch, duty)
     }
 
     /// The one function that writes an HV duty. Refuses (writes nothing, latches the fault
     /// `hv-refused`) a duty above the channel's ceiling (the targets' ceiling; in shaped
     /// actuation the compiled cap) or the image's hard cap.
-    fn write_duty(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
+    fn write_hv_duty_checked(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
         if ch >= HV_CHANNELS || (duty > 0 && (duty > self.write_ceiling[ch] || duty > hv_duty_cap(self.hv_max[ch]))) {
             self.fault = Some(Fault::HvRefused);
             return Err(HvRefused);
@@ -253,7 +253,7 @@ impl<B: Board> Control<B> {
     fn hv_off_now(&mut self) {
         self.set_enable(false);
         for ch in 0..HV_CHANNELS {
-            let _ = self.write_duty(ch, 0);
+            let _ = self.write_hv_duty_checked(ch, 0);
         }
         self.volts = [0.0; HV_CHANNELS];
         self.target = [0.0; HV_CHANNELS];
@@ -362,7 +362,7 @@ impl<B: Board> Control<B> {
     fn finish_ramp_down(&mut self) {
         if self.ramping_down && self.volts.iter().all(|&v| v == 0.0) {
             for ch in 0..HV_CHANNELS {
-                let _ = self.write_duty(ch, 0);
+                let _ = self.write_hv_duty_checked(ch, 0);
             }
             self.set_enable(false);
             self.ramping_down = false;
@@ -401,7 +401,7 @@ impl<B: Board> Control<B> {
                 }
             };
             let d = hv_duty_for(nv, self.hv_max[ch]);
-            if d != self.duty[ch] && self.write_duty(ch, d).is_err() {
+            if d != self.duty[ch] && self.write_hv_duty_checked(ch, d).is_err() {
                 let f = self.fault.unwrap_or(Fault::HvRefused);
                 self.fault_stop(f);
                 continue;

@@ -51,7 +51,7 @@ pub(super) struct Wait {
 }
 
 /// The command side: console lines in, replies and [`Setpoints`] out. Owns no output; runs
-/// at the lowest priority on the chip (RTIC's idle), inside [`App`] on the host.
+/// at the lowest priority on the chip (RTIC's idle), inside [`super::App`] on the host.
 pub struct Commands {
     pub(super) finger: Finger<f32>,
     /// The board's film: its law, hold ceiling, settling (app/film.rs).
@@ -110,7 +110,7 @@ impl Commands {
     /// `hv_max` / `servo_max` its PWMs' full-scale duties.
     pub fn new(board_name: &'static str, nl: &'static str, hv_max: [u16; CHANNELS], servo_max: u16) -> Self {
         // the defaults are valid (a model test); no Debug formatting of the error on the target
-        // MODEL.md's finger on the board's film, with its FE calibration (`calibration_for`)
+        // docs/model.md's finger on the board's film, with its FE calibration (`calibration_for`)
         let p = preset(board_params());
         let finger = match Finger::with_calibration(p, calibration_for(&p)) {
             Ok(f) => f,
@@ -406,7 +406,7 @@ impl Commands {
 
     /// The checks every setpoint change passes (`volt`, `force`, an armed `pose`), after
     /// the caller checked new voltages against the ceilings ([`Commands::check_volts`]): the
-    /// tension at most fmax at those setpoints (issue 7: nothing past the end of the branch),
+    /// tension at most fmax at those setpoints (nothing past the end of the branch),
     /// the servo within its travel. Nothing moves; returns where the servo must go
     /// (excursion mm, deg).
     #[inline(never)]
@@ -842,7 +842,7 @@ impl Commands {
     }
 
     /// `cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]`: the model's FE calibration
-    /// (`finger_model::Calibration`, issue 18): read it, or set / clear it while disarmed. A
+    /// (`finger_model::Calibration`): read it, or set / clear it while disarmed. A
     /// change rebuilds the finger, as `param` does; refused, nothing changes.
     #[inline(never)]
     pub(super) fn cmd_cal(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {

@@ -10,7 +10,7 @@ use heapless::String;
 use crate::console::{self, NumError};
 use crate::num::{self, Exp};
 
-/// A refused command: its code (CONSOLE.md) and a human message.
+/// A refused command: its code (docs/console.md) and a human message.
 #[derive(Debug)]
 pub struct CmdError {
     pub code: &'static str,

@@ -1,5 +1,5 @@
 //! `pose` and `contact` (docs/console.md; `contact` an addition, docs/inverse.md): the
-//! arguments parsed once ([`pose_args`]) for both builds, the inverse's answer written as the
+//! arguments parsed once (`pose_args`) for both builds, the inverse's answer written as the
 //! one reply line ([`pose`], [`contact`]: generic over the model's number type, the host tests
 //! call them), and the handlers on [`Commands`]: the f32 inverse, or on the Cortex-M3 image the
 //! fixed-point one.
@@ -206,7 +206,7 @@ where
 
 impl Commands {
     #[cfg(feature = "pose")]
-    /// `pose d1 d2 d3 [P]`: the inverse model (issue 4, [`crate::inverse_cmds::pose`]).
+    /// `pose d1 d2 d3 [P]`: the inverse model ([`pose_with`]).
     /// Writes its reply line itself. Armed, the solution goes through the checks of `volt`
     /// and `force` ([`Commands::plan_setpoints`]) and then moves the outputs; disarmed it answers
     /// and moves nothing; refused or unreachable, nothing moves.
