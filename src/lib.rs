@@ -25,8 +25,6 @@ pub mod app;
 pub mod board;
 pub mod console;
 pub mod control;
-#[cfg(any(feature = "pose", feature = "contact"))]
-pub mod inverse_cmds;
 pub mod num;
 pub mod rx;
 #[cfg(feature = "settings")]
@@ -35,7 +33,7 @@ pub mod settings;
 pub mod flash_ram;
 pub mod sim;
 
-pub use app::{App, Commands, FwParams, CHANNELS};
+pub use app::{wire, App, Commands, FwParams, CHANNELS};
 pub use board::Board;
 
 /// Firmware name, as `version` reports it.

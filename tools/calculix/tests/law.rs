@@ -1,4 +1,4 @@
-//! The FE's material law (issue 18): neo-Hooke and St Venant-Kirchhoff share E and ν, so they
+//! The FE's material law: neo-Hooke and St Venant-Kirchhoff share E and ν, so they
 //! agree at small load; at finite strain (the waist at 2 N) St Venant-Kirchhoff, which softens
 //! in compression, bends more.
 use finger_calculix::ccx::{Kind, Law};

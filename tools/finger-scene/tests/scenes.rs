@@ -1,4 +1,4 @@
-//! Scenes (issue 6): parsing, errors with line numbers, every shipped scene runs, the refused
+//! Scenes: parsing, errors with line numbers, every shipped scene runs, the refused
 //! scene is refused with no output file, the CSV is the model's own numbers, the SVG is
 //! well-formed with one polyline per posture.
 
@@ -62,7 +62,7 @@ fn parses_every_section() {
     assert!(!s.output.postures && s.output.tip_stiffness && !s.output.cable_excursion);
     assert_eq!(s.output.reference, Reference::None);
 
-    // defaults: MODEL.md's preset, 0 V, converged, postures and excursion, no stiffness
+    // defaults: the default preset, 0 V, converged, postures and excursion, no stiffness
     let d = scene::parse("d", "[drive]\ntensions = 0.5\n").unwrap();
     assert_eq!(d.finger.params, Params::<f64>::default());
     assert_eq!(d.finger.drive, Drive::Volts(vec![0.0; 3]));
