@@ -81,14 +81,14 @@ mod app {
         // the HV pins are low since __pre_init (image/fault.rs)
         let mut cp = cx.core;
         let chip = f405::bring_up(cx.device);
+        #[allow(unused_mut)] // mutated by the settings' boot only
         let (mut cmds, mut ctl) = finger_fw::wire(chip.board);
         // the stored settings, before the control tick starts
         #[cfg(feature = "settings")]
         let boot = finger_fw::chip::flash::store(chip.flash).map(|s| finger_fw::app::config::boot(&mut cmds, &mut ctl, s));
         if cfg!(feature = "qemu") && chip.real_chip {
             // the emulator image has no watchdog: it never arms a real board
-            ctl.lock_out("qemu image on a real chip");
-            cmds.sync(&ctl.view());
+            ctl.lock_out(finger_fw::control::Fault::EmulatorOnChip);
         }
         let view = ctl.view();
 
