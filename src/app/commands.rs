@@ -20,7 +20,7 @@ use core::fmt::Write;
 
 use finger_model::calibration::KEEPS_CALIBRATION;
 use finger_model::params::PARAMS;
-#[cfg(not(m3))]
+#[cfg(feature = "pose")]
 use finger_model::Solution;
 use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Params};
 
