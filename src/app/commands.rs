@@ -100,7 +100,7 @@ pub struct Commands {
     /// inside for a finger without stacks.
     #[cfg(feature = "pose")]
     pub(super) inv_table: core::cell::OnceCell<Option<finger_model::inverse::BranchTable<f32>>>,
-    /// The settings store and what the boot found in it (app/config.rs).
+    /// The settings store and what the boot found in it (app/stored.rs, app/config.rs).
     #[cfg(feature = "settings")]
     pub(super) cfg: ConfigState,
 }
