@@ -1,6 +1,6 @@
 //! The host composition: [`App`], the whole application on one board without threads.
 //!
-//! What it is not: the chip's composition (src/chip.rs runs the same parts as RTIC tasks).
+//! What it is not: the chip's composition (src/main.rs runs the same parts as RTIC tasks).
 
 use core::fmt::Write;
 

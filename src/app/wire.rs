@@ -1,5 +1,5 @@
 //! The parts on a board: [`wire`] builds the command side and the control core and hands the
-//! core its first setpoints. The chip (src/chip.rs), [`super::App`] and the on-target tests all
+//! core its first setpoints. The image (src/main.rs), [`super::App`] and the on-target tests all
 //! start from it.
 
 use embedded_hal::pwm::SetDutyCycle;
