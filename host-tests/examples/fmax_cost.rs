@@ -1,10 +1,10 @@
-//! Instructions per fmax (`Finger::fmax`, `BranchTable::fmax`) on the Cortex-M4F (issue 13): builds the bench image
+//! Instructions per fmax (`Finger::fmax`, `BranchTable::fmax`) on the Cortex-M4F: builds the bench image
 //! `bench/src/bin/fmax.rs` with the firmware's trig (fast-trig), runs it in QEMU netduinoplus2
 //! with `-icount shift=0`, and writes docs/fmax-cost.md.
 //!
 //! `cd host-tests && cargo run --example fmax_cost`
 
-use host_tests::perf::{build, calibration, run_qemu, M4F};
+use host_tests::perf::{build, read_bench, run_qemu, M4F};
 use std::fmt::Write as _;
 
 fn main() {
@@ -24,30 +24,20 @@ fn main() {
          sample (model inverse/table.rs), the same search after it. The table is built once per \
          parameter set and shared with the forward and inverse solves; its cost is listed below the \
          table. Voltages as fractions of the ceiling (1 - 1e-4 of it at `top`; `mixed` is 0, 0.5, 1). \
-         Issue 13's target: at most 500,000 instructions.\n"
+         The target: at most 500,000 instructions.\n"
     )
     .unwrap();
     writeln!(doc, "| case | full: instructions | full: fmax | table: instructions | table: fmax | ends at (table) |\n| --- | --- | --- | --- | --- | --- |").unwrap();
-    let (mut k, mut overhead, mut ended) = (None, 0.0, false);
+    let bench = read_bench(&out).unwrap_or_else(|e| panic!("{e}"));
+    let instr = |t: &str| bench.instructions(t.parse().unwrap()).round();
     let (mut worst_full, mut worst_table) = (0.0f64, 0.0f64);
     let mut builds = Vec::new();
     let mut full: Option<(String, f64, String)> = None;
-    for line in out.lines() {
-        let f: Vec<&str> = line.split_whitespace().collect();
-        let instr = |t: &str, per: f64, overhead: f64| ((t.parse::<f64>().unwrap() - overhead).max(0.0) / per).round();
-        match f.first() {
-            Some(&"CAL") => {
-                let (a, b) = calibration(&f).unwrap_or_else(|e| panic!("{e}"));
-                k = Some(a);
-                overhead = b;
-            }
-            Some(&"B") => {
-                let per = k.expect("B before CAL");
-                builds.push(format!("{} {:.0}", f[1], instr(f[2], per, overhead)));
-            }
-            Some(&"F") => {
-                let per = k.expect("F before CAL");
-                let n = instr(f[4], per, overhead);
+    for f in &bench.lines {
+        match f[0] {
+            "B" => builds.push(format!("{} {:.0}", f[1], instr(f[2]))),
+            "F" => {
+                let n = instr(f[4]);
                 let what = if f[3] == "ok" { format!("{:.4} N", f[5].parse::<f64>().unwrap()) } else { format!("err {}", f[5]) };
                 if f[2] == "full" {
                     worst_full = worst_full.max(n);
@@ -59,12 +49,9 @@ fn main() {
                     writeln!(doc, "| {case} | {fi:.0} | {fw} | {n:.0} | {what} | {end} |").unwrap();
                 }
             }
-            Some(&"END") => ended = true,
-            Some(&"PANIC") => panic!("image panicked: {line}"),
             _ => {}
         }
     }
-    assert!(ended, "image did not finish:\n{out}");
     writeln!(doc, "\nAt most {worst_full:.0} instructions (full), {worst_table:.0} from the table (the firmware).").unwrap();
     writeln!(doc, "\nBuilding the branch table (`inverse::BranchTable::new`, once per parameter set), instructions: {}.", builds.join("; ")).unwrap();
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/fmax-cost.md");

@@ -1,4 +1,4 @@
-//! Instructions per inverse solve on the Cortex-M4F (issue 4): builds the bench image
+//! Instructions per inverse solve on the Cortex-M4F: builds the bench image
 //! `bench/src/bin/inverse.rs` in five variants (libm trig with the inverse's m = 1 fast path;
 //! fast-trig with it; libm and fast-trig without it; fast-trig without it and with the branch
 //! table, as the firmware builds and uses the model), runs each in QEMU
@@ -27,7 +27,7 @@ fn main() {
          decided and reported by the untabled steps, which confirm the bounding ends; the table built once \
          per parameter set, its cost below the table), as the firmware does (a solution returned by value; \
          docs/performance.md has `solve_pose_tabled_into`, written in place). The images are built with opt-level 3 (the \
-         firmware's own image with opt-level z). Issue 4's target: at most 20,000 instructions.\n"
+         firmware's own image with opt-level z). The target: at most 20,000 instructions.\n"
     )
     .unwrap();
     doc.push_str(&perf::inverse_cost_table());

@@ -1,4 +1,4 @@
-//! Where the tabled inverse's instructions go on the Cortex-M4F (issue 15): builds the bench
+//! Where the tabled inverse's instructions go on the Cortex-M4F: builds the bench
 //! image `bench/src/bin/table.rs` with its `profile` feature (one `solve_pose_tabled_into`
 //! between the markers `profile_start` and `profile_stop`), runs it in QEMU netduinoplus2 with
 //! `-icount shift=0 -singlestep -d exec,nochain` (one log line per instruction executed), and
@@ -59,14 +59,9 @@ fn symbol(elf: &Path, name: &str) -> (u64, u64) {
 /// The program counters executed between the markers, in order.
 fn trace(elf: &Path) -> Vec<u64> {
     let log = std::env::temp_dir().join(format!("finger-profile-{}.log", std::process::id()));
-    let st = Command::new("timeout")
-        .arg("300")
-        .arg("qemu-system-arm")
-        .args(["-machine", "netduinoplus2", "-nographic", "-semihosting-config", "enable=on,target=native"])
-        .args(["-icount", "shift=0", "-singlestep", "-d", "exec,nochain", "-D"])
+    let st = host_tests::qemu::qemu_command("netduinoplus2", "shift=0", elf, Some(300))
+        .args(["-nographic", "-singlestep", "-d", "exec,nochain", "-D"])
         .arg(&log)
-        .arg("-kernel")
-        .arg(elf)
         .status()
         .expect("qemu-system-arm");
     assert!(st.success(), "QEMU run of {} failed", elf.display());

@@ -1,4 +1,4 @@
-//! Each idealisation against beam theory on a uniform beam (issue 18): a strip clamped at one
+//! Each idealisation against beam theory on a uniform beam: a strip clamped at one
 //! end, L = 10 t, loaded at the other; C_θ-M = L / (E I) (E_eff per idealisation) and
 //! C_x-Fx = L / (E A). Coarse meshes: these assert the idealisation, not the last digit.
 use finger_calculix::beam_compliance;

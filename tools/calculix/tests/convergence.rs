@@ -1,4 +1,4 @@
-//! Mesh convergence by refinement (issue 18): one element's small-load compliance (plane
+//! Mesh convergence by refinement: one element's small-load compliance (plane
 //! strain at three densities, 3D at two) and the finger's joint angles under the cable.
 use finger_calculix::ccx::{Kind, Law};
 use finger_calculix::mesh::Density;

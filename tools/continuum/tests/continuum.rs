@@ -8,7 +8,7 @@ fn max_diff(a: &[f64], b: &[f64]) -> f64 {
 }
 
 // ---------------------------------------------------------------------------
-// Own quadrature of the MODEL.md compliance integrals (independent of the code
+// Own quadrature of the docs/model.md compliance integrals (independent of the code
 // under test): composite Simpson in the notch angle φ, x = a (1 - cos φ).
 // ---------------------------------------------------------------------------
 
@@ -142,7 +142,7 @@ fn finger_converges_at_fourth_order_under_refinement() {
             let rt = dt[i - 1] / dt[i];
             assert!(rt > 12.0 && rt < 20.0, "tip ratio {rt}, diffs {dt:?}");
         }
-        // The default discretisation is converged to ~1e-7 rad.
+        // The default discretisation is converged (docs/continuum.md).
         let def = solve(&p, 1.0, &stacks, [0.0, 0.0], Discretisation::default()).unwrap();
         assert!(max_diff(&def.joint_angles, &sols[3].joint_angles) < 1e-7);
         assert!(def.residual < 1e-9);
@@ -150,7 +150,7 @@ fn finger_converges_at_fourth_order_under_refinement() {
 }
 
 /// At small P the joint angle per unit tension is the linear estimate from the
-/// MODEL.md compliance integrals: the wrench on hinge k's distal end is
+/// docs/model.md compliance integrals: the wrench on hinge k's distal end is
 /// (-P, 0, P e), so Δθ_hinge = C_θ-M e P (C_θ-Fx = 0 by symmetry), and the
 /// link carries N = -P, M = P e, so it adds e (l - 2a) / (E I_b) P.
 #[test]
@@ -185,7 +185,7 @@ fn small_load_limit_matches_the_compliance_integrals() {
     }
 }
 
-/// With a stack, the bonded layer is the continuum limit of MODEL.md's
+/// With a stack, the bonded layer is the continuum limit of docs/model.md's
 /// K = C_h⁻¹ + Tᵀ C_de⁻¹ T: section N = EA ε + B κ, M = B ε + D κ with
 /// B = E_de A_de d, D = E I_h + E_de (I_de + A_de d²). At small P (N = -P, M = P e)
 /// κ = P (EA e + B) / (EA D - B²).

@@ -1,4 +1,4 @@
-//! Scenes (issue 6): parsing, errors with line numbers, every shipped scene runs, the refused
+//! Scenes: parsing, errors with line numbers, every shipped scene runs, the refused
 //! scene is refused with no output file, the CSV is the model's own numbers, the SVG is
 //! well-formed with one polyline per posture.
 
@@ -8,6 +8,11 @@ use std::path::{Path, PathBuf};
 
 fn top() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// `finger-scene <scene> --out <out>`, as a user runs it.
+fn run_cli(scene: &Path, out: &Path) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene")).arg(scene).arg("--out").arg(out).output().unwrap()
 }
 
 fn shipped(dir: &Path) -> Vec<PathBuf> {
@@ -62,7 +67,7 @@ fn parses_every_section() {
     assert!(!s.output.postures && s.output.tip_stiffness && !s.output.cable_excursion);
     assert_eq!(s.output.reference, Reference::None);
 
-    // defaults: MODEL.md's preset, 0 V, converged, postures and excursion, no stiffness
+    // defaults: docs/model.md's preset, 0 V, converged, postures and excursion, no stiffness
     let d = scene::parse("d", "[drive]\ntensions = 0.5\n").unwrap();
     assert_eq!(d.finger.params, Params::<f64>::default());
     assert_eq!(d.finger.drive, Drive::Volts(vec![0.0; 3]));
@@ -135,7 +140,7 @@ fn the_old_format_is_refused_with_a_pointer_to_the_new_one() {
     assert!(e.message.contains("x.scene") && e.message.contains("TOML") && e.message.contains("docs/scenes.md"), "{e}");
     // and the command says so, writing nothing
     let out = dir.join("out");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene")).arg(&f).arg("--out").arg(&out).output().unwrap();
+    let o = run_cli(&f, &out);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("docs/scenes.md"));
     assert!(!out.exists());
@@ -194,12 +199,7 @@ fn the_papers_2mm_to_1mm_request_writes_no_file_and_exits_nonzero() {
     let out = std::env::temp_dir().join(format!("finger-scene-refused-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     let scene = top().join("scenes/refused/paper-2mm-to-1mm.toml");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene"))
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = run_cli(&scene, &out);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "stderr: {err}");
     let p = Params::<f64>::paper();
@@ -211,12 +211,7 @@ fn the_papers_2mm_to_1mm_request_writes_no_file_and_exits_nonzero() {
 
     // the same command on a good scene writes its three files
     let good = top().join("scenes/paper-de-0v.toml");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene"))
-        .arg(&good)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = run_cli(&good, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for f in ["paper-de-0v.csv", "paper-de-0v-postures.csv", "paper-de-0v.svg"] {
         assert!(out.join(f).is_file(), "{f} missing");
