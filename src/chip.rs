@@ -418,32 +418,23 @@ mod app {
             w
         };
 
-        let mut board = F405Board {
+        let board = F405Board {
             servo,
             hv,
             enable,
             #[cfg(feature = "hw")]
             iwdg,
         };
-        let mut hv_max = [0u16; 3];
-        for (ch, m) in hv_max.iter_mut().enumerate() {
-            *m = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(board.hv(ch));
-        }
-        let servo_max = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(board.servo());
-        let mut cmds = Commands::new(board.name(), board.newline(), hv_max, servo_max);
+        let (mut cmds, mut ctl) = finger_fw::wire(board);
         cmds.set_timing_report(timing_report);
-        // the stored settings, before the control core takes its first setpoints
+        // the stored settings, before the control tick starts
         #[cfg(feature = "settings")]
-        let boot = flash_chip::store(dp.FLASH).map(|s| cmds.boot_settings(s));
-        let sp = cmds.setpoints();
-        let mut ctl = Control::new(board, sp.servo_released, sp.slew);
+        let boot = flash_chip::store(dp.FLASH).map(|s| finger_fw::app::config::boot(&mut cmds, &mut ctl, s));
         if cfg!(feature = "qemu") && real_chip {
             // the emulator image has no watchdog: it never arms a real board
-            ctl.lock_out("qemu image on a real chip");
+            ctl.lock_out(finger_fw::control::Fault::EmulatorOnChip);
         }
-        ctl.apply(&sp);
         let view = ctl.view();
-        cmds.sync(&view);
 
         let guard = stack_guard(&mut cp.MPU);
 

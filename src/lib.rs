@@ -7,7 +7,7 @@
 //!
 //! - [`console`]: line assembly (CR/LF/CRLF, bounded buffer, overlong lines), tokens, strict
 //!   number parsing.
-//! - [`app`]: the commands of shared/CONSOLE.md, the HV ceilings, the model calls; [`App`], the
+//! - [`app`]: the commands of docs/console.md, the HV ceilings, the model calls; [`App`], the
 //!   whole application on one board for the host.
 //! - [`control`]: the control core, the one owner of the outputs: the single HV-duty writer,
 //!   the slew, the servo, the stop, the watchdog feed.
@@ -25,8 +25,6 @@ pub mod app;
 pub mod board;
 pub mod console;
 pub mod control;
-#[cfg(any(feature = "pose", feature = "contact"))]
-pub mod inverse_cmds;
 pub mod num;
 pub mod rx;
 #[cfg(feature = "settings")]
@@ -35,7 +33,7 @@ pub mod settings;
 pub mod flash_ram;
 pub mod sim;
 
-pub use app::{App, Commands, FwParams, CHANNELS};
+pub use app::{wire, App, Commands, FwParams, CHANNELS};
 pub use board::Board;
 
 /// Firmware name, as `version` reports it.

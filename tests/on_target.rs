@@ -102,17 +102,7 @@ mod chip {
 
     impl Rig {
         pub fn new() -> Rig {
-            let mut b = board();
-            let mut hv_max = [0u16; 3];
-            for (ch, m) in hv_max.iter_mut().enumerate() {
-                *m = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(b.hv(ch));
-            }
-            let servo_max = embedded_hal::pwm::SetDutyCycle::max_duty_cycle(b.servo());
-            let mut cmds = Commands::new(b.name(), b.newline(), hv_max, servo_max);
-            let sp = cmds.setpoints();
-            let mut ctl = Control::new(b, sp.servo_released, sp.slew);
-            ctl.apply(&sp);
-            cmds.sync(&ctl.view());
+            let (cmds, ctl) = finger_fw::wire(board());
             Rig { cmds, ctl, rx: RxLines::new() }
         }
 

@@ -7,7 +7,7 @@
 //!
 //! Terminal escape sequences (arrow keys) are no part of a line ([`crate::Escapes`]).
 //!
-//! Invariants (shared/CONSOLE.md, the safety rules):
+//! Invariants (docs/console.md, the safety rules):
 //! - one final reply (`ok ...` / `err <code>: ...`) per non-blank line, none for a blank one;
 //! - no panic;
 //! - no NaN or infinity in an `ok` reply;
@@ -26,10 +26,10 @@ use finger_fw::{App, CHANNELS};
 pub const TICK: u8 = 0xFF;
 /// Most control ticks one input runs.
 pub const MAX_TICKS: u32 = 20_000;
-/// CONSOLE.md's receive buffer (the firmware's `console::LINE_MAX`): a longer line is `too-long`.
+/// The console's receive buffer (docs/console.md "Lines") (the firmware's `console::LINE_MAX`): a longer line is `too-long`.
 const LINE_MAX: usize = finger_fw::console::LINE_MAX;
 
-/// The console's lines as CONSOLE.md defines them: CR, LF or CRLF end a line (CRLF once).
+/// The console's lines as docs/console.md defines them: CR, LF or CRLF end a line (CRLF once).
 #[derive(Default)]
 struct Lines {
     text: Vec<u8>,

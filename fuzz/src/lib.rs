@@ -4,7 +4,7 @@
 //! regression input, without libFuzzer.
 //!
 //! What it is not: a second implementation of what it checks. The invariants are the
-//! contracts (shared/CONSOLE.md, MODEL.md), written as assertions on what comes out.
+//! contracts (docs/console.md, docs/model.md), written as assertions on what comes out.
 
 pub mod config;
 pub mod console;

@@ -1,7 +1,7 @@
 //! The model target: arbitrary parameters and inputs into the f64 model's forward solve,
 //! inverse, contact and fmax.
 //!
-//! Input: a parameter set (each value MODEL.md's default scaled by 2^-6..2^6, or a special
+//! Input: a parameter set (each value the model's default scaled by 2^-6..2^6, or a special
 //! value: 0, negative, NaN, infinities, extremes, or raw bits), then up to [`MAX_OPS`]
 //! operations, each with its tension and voltages (fractions of fmax and of the ceiling, or
 //! special values).
@@ -10,9 +10,8 @@
 //! - every call answers a typed error or a finite answer, never a panic;
 //! - an answer's voltages are 0 or below the ceiling (`de::check_voltage`), and a voltage
 //!   that is negative, not finite or at/past the ceiling is refused;
-//! - a forward answer is in equilibrium (`Finger::equilibrium_residual`, 1e-4 of the
-//!   finger's length: evaluated afresh, the residual carries the march's gain, large for the
-//!   most compliant parameter sets drawn here; docs/reliability.md);
+//! - a forward answer is in equilibrium (`Finger::equilibrium_residual` within 1e-4 of the
+//!   finger's length; why that bound: docs/reliability.md);
 //! - an inverse answer gives back its angles (forward of its tension and voltages, 1e-6 rad);
 //! - a contact answer is in equilibrium under its tip load with the tip on the stop;
 //! - fmax is finite and not negative.

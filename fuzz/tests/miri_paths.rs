@@ -3,7 +3,7 @@
 //! on the host (the model's one exception, the M4F's `vsqrt`, is compiled for the chip only;
 //! the chip code is not in the library); the unsafe they reach is heapless's: the RX ring
 //! (`Deque`) wrapping around, overruns and too-long lines, the line and reply buffers
-//! (`Vec`, `String`) of every console command. Small inputs: Miri interprets (~1000x slower).
+//! (`Vec`, `String`) of every console command. Small inputs: Miri interprets, which is slow.
 use finger_fuzz::{console, model, rx};
 
 #[test]

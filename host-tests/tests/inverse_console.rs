@@ -1,10 +1,10 @@
-//! The `pose` and `contact` console handlers (finger-fw's src/inverse_cmds.rs): reply format,
+//! The `pose` and `contact` console handlers (finger-fw's src/app/pose.rs): reply format,
 //! outputs moved only through `apply` and never on an error; and the same commands through
 //! the firmware's console on the simulated board (finger-sim's application): `pose` moves
 //! the outputs only when armed, through the checks of `volt` and `force`.
 
 use finger_fw::app::CmdError;
-use finger_fw::inverse_cmds;
+use finger_fw::app::pose as inverse_cmds;
 
 use finger_model::{Finger, Method, Params};
 

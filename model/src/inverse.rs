@@ -1,69 +1,14 @@
 //! The inverse model: joint angles (and optionally a cable tension) to the tension and the
 //! channel voltages that hold them; the interval of tensions that can hold a posture (its
 //! stiffness range); and the contact force of a tip held at a point (the paper's second
-//! conclusion). docs/inverse.md has the algorithm with its reasons and the figures.
+//! conclusion). docs/inverse.md has the algorithm with its reasons.
 //!
-//! For m > 1 sub-elements per hinge or flexible links the closed solves below do not apply;
-//! `general` (inverse/general.rs) does the same steps by bracketed root finding on the forward
-//! per-joint equilibrium. m = 1 with rigid links keeps this fast path.
-//!
-//! What it is: closed per-joint Newton solves on the joint equilibrium with the joint angle
-//! fixed, no trigonometry inside the loops, cheap enough for the target (issue 4: at most
-//! 20,000 instructions per `solve_pose` on the Cortex-M4F). What it is not: a forward solver
+//! What it is: the entry points, the steps every path shares (the feasible interval, the
+//! tension rule, the unreachable report), and the m = 1 rigid-link fast path: closed per-joint
+//! Newton solves on the joint equilibrium with the joint angle fixed (docs/inverse.md "Module
+//! notes: the m = 1 fast path"). `general` does the same steps for every other parameter set,
+//! `table` holds the branch table, `contact` the pinned tip. What it is not: a forward solver
 //! (see `finger`), or anything that drives hardware.
-//!
-//! ## Why the angle is a good unknown to fix
-//! Under cable tension alone the joints decouple (finger.rs header): joint k's state depends
-//! on its own compliance C_k(t_k) (t_k the stack thickness, set by V_k) and on P. For the
-//! paper's hinge model (m = 1) the state is q = (δax, δtr, θ) and the equilibrium reads
-//!
-//! `K(t) q = P ŵ(q)`,  K(t) = C_hinge⁻¹ + Tᵀ C_de(t)⁻¹ T  (MODEL.md),
-//!
-//! where ŵ is the wrench per newton of tension on the hinge's distal end: the unit vector
-//! along span k toward the hole at node k-1, and its moment about the distal end. With θ
-//! given, sin θ and cos θ are computed once; ŵ then depends on (δax, δtr) through one square
-//! root. Three equations; the unknowns are (δax, δtr) and one of P or t:
-//! - `hold_tension`: t given (a voltage), unknowns (δax, δtr, P). K is constant, the
-//!   equations are linear in P.
-//! - `hold_thickness`: P given, unknowns (δax, δtr, t). K(t) is an explicit polynomial in t
-//!   (EA ∝ t, EI ∝ t³, offset d = (t_min + t)/2), its derivative is written out.
-//! Both are Newton with the analytic Jacobian (`solve::newton::full_steps`), from a guess
-//! that is already close (the deflections δ are small), 2-5 iterations each. The voltage follows from t in closed form
-//! (`de::voltage_for_thickness`, the inverse of the thinning balance).
-//!
-//! ## The algorithm (`solve_pose`)
-//! 1. For every joint, `hold_tension` at the stiffest stack (t0 = N_L z0, 0 V) and at the
-//!    softest the ceiling allows (t_top, at `top` x ceiling): the tensions P_hi,k and P_lo,k
-//!    between which joint k can hold its angle (more voltage, thinner stack, softer joint,
-//!    less tension needed). The implicit derivative dP/dθ must be positive at both (else the
-//!    posture lies past a limit point of the forward branch: `LimitPoint`).
-//! 2. The feasible interval is [max_k P_lo,k, min_k P_hi,k]. Empty: `Unreachable`.
-//! 3. The tension: the one given (checked against every joint's range), or by the rule below.
-//! 4. For every joint, `hold_thickness` at that tension (started from the linear interpolation
-//!    of step 1's two ends), then the voltage from the thickness.
-//!
-//! ## The rule for the tension
-//! Without a tension given, the midpoint of the feasible interval. It keeps every joint as far
-//! from both of its limits (0 V and the ceiling) as the others allow, which leaves the most
-//! room for model error and for trimming the stiffness later in either direction.
-//!
-//! ## Without stacks (layers = 0)
-//! Only the tension is free: joint k holds its angle at one tension P_k. The posture is
-//! reachable if one tension gives every joint angle within `angle_tol` (linearised:
-//! |P - P_k| dθ_k/dP <= angle_tol). The tension chosen minimises the largest angle error (the
-//! weighted Chebyshev centre of the P_k); the interval is the set of tensions within the
-//! tolerance for every joint.
-//!
-//! ## Unreachable: the compliance the joint would need
-//! A joint's effective compliance at a posture is θ/M, M the moment of the cable about the
-//! hinge's distal end (for θ → 0 its linear limit, (C ŵ)_θ / ŵ_M). At the target posture the
-//! ceiling allows the range between θ/M at P_hi,k (0 V, least compliant) and at P_lo,k (top
-//! voltage); the joint would need θ/M at the reference tension: the one given, or the median of
-//! the joints' mid-range tensions (so that the odd joint out is the one named). The joint with
-//! the largest violation (relative to the reference tension) is reported.
-//!
-//! ## Contact force
-//! `contact` (inverse/contact.rs): the tip pinned at a stop, by continuation from the free posture.
 
 use crate::calibration::Calibration;
 use crate::de;
@@ -422,7 +367,7 @@ pub fn solve_pose_with<R: Real>(
     tension: Option<R>,
     opts: &Options<R>,
 ) -> Result<PoseSolution<R>, Error> {
-    solve(f, None, true, angles, tension, opts)
+    solve(f, Table::None, angles, tension, opts)
 }
 
 /// The inverse with a branch table (table.rs), for the finger and the options the table was
@@ -432,7 +377,7 @@ pub fn solve_pose_with<R: Real>(
 /// same tolerance (with a given tension, `interval` is the table's reading), at a fraction of
 /// the cost. The m = 1 fast path does not use it. `solve_pose_tabled_into` without the copy.
 pub fn solve_pose_tabled<R: Real>(table: &BranchTable<R>, angles: &[R], tension: Option<R>) -> Result<PoseSolution<R>, Error> {
-    solve(table.finger(), Some(table), true, angles, tension, table.options())
+    solve(table.finger(), Table::TryTabled(table), angles, tension, table.options())
 }
 
 /// `solve_pose_tabled` written into `out` (the caller's storage, every field set; no copy of
@@ -444,7 +389,7 @@ pub fn solve_pose_tabled_into<R: Real>(table: &BranchTable<R>, angles: &[R], ten
         return Ok(());
     }
     // (the tabled path tried already: not again)
-    *out = solve(f, Some(table), false, angles, tension, table.options())?;
+    *out = solve(f, Table::Tried(table), angles, tension, table.options())?;
     Ok(())
 }
 
@@ -491,21 +436,40 @@ fn check_inputs<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>, opts: 
 }
 
 /// Whether `f`'s inverse takes the general path (inverse/general.rs): sub-divided hinges,
-/// flexible links, a calibrated finger (the fast path's K(t) is MODEL.md's), or a build
+/// flexible links, a calibrated finger (the fast path's K(t) is docs/model.md's), or a build
 /// without the m = 1 fast path.
 fn takes_general<R: Real>(f: &Finger<R>) -> bool {
     let p = f.params();
     !cfg!(feature = "inverse-fast") || p.m != 1 || p.flex_links || *f.calibration() != Calibration::none()
 }
 
-/// `solve_pose_with` and `solve_pose_tabled` (`table`, when given, was built for `f` and
-/// `opts`; with `tabled` the general path's `solve_tabled` is tried first). One copy in the
-/// image for both entry points.
+/// The branch table `solve` has (built for its finger and options), and whether the general
+/// path's `solve_tabled` is still to try.
+#[derive(Clone, Copy)]
+enum Table<'t, R> {
+    /// No table: the general path solves from scratch.
+    None,
+    /// `solve_tabled` first, then the general path with the table's ends.
+    TryTabled(&'t BranchTable<R>),
+    /// `solve_tabled` tried already: the general path with the table's ends.
+    Tried(&'t BranchTable<R>),
+}
+
+impl<'t, R> Table<'t, R> {
+    fn table(self) -> Option<&'t BranchTable<R>> {
+        match self {
+            Table::None => None,
+            Table::TryTabled(tb) | Table::Tried(tb) => Some(tb),
+        }
+    }
+}
+
+/// `solve_pose_with` and `solve_pose_tabled` (`table`: see `Table`). One copy in the image
+/// for both entry points.
 #[inline(never)]
 fn solve<R: Real>(
     f: &Finger<R>,
-    table: Option<&BranchTable<R>>,
-    tabled: bool,
+    table: Table<'_, R>,
     angles: &[R],
     tension: Option<R>,
     opts: &Options<R>,
@@ -533,12 +497,12 @@ fn solve<R: Real>(
         // per-joint equilibrium (`general`). A build without `inverse-fast` (the firmware,
         // whose default model is m = 8) takes this path for m = 1 too and leaves the fast
         // path's code out of the image.
-        if let Some(tb) = table.filter(|_| tabled) {
+        if let Table::TryTabled(tb) = table {
             if general::solve_tabled(tb, angles, tension, &mut out)? {
                 return Ok(out);
             }
         }
-        general::solve(f, table, angles, tension, opts, &mut out)?;
+        general::solve(f, table.table(), angles, tension, opts, &mut out)?;
         return Ok(out);
     }
     let ctx = Ctx::new(f, opts)?;

@@ -2,9 +2,9 @@
 three-element equilibrium (written here, for this benchmark: scipy.optimize per posture) and
 against a Python loop over `Finger.solve`.
 
-The finger is the paper's model (`preset="paper_model"`: MODEL.md's values, one compliance per
+The finger is the paper's model (`preset="paper_model"`: the default values, one compliance per
 hinge, the body modulus, rigid links), the one a SciPy script would write from the paper and
-MODEL.md; the SciPy version's joint angles are checked against the Rust model's first. No tip
+docs/model.md; the SciPy version's joint angles are checked against the Rust model's first. No tip
 stiffness on either side (`stiffness=False`). Postures: tensions uniform in [0, 2] N, voltages
 uniform in [0, 0.9 x ceiling]
 (the ceiling is the model's: `Finger.ceiling()`).
@@ -31,7 +31,7 @@ EPS0 = 8.854e-12  # F/m; with mm and MPa: p[MPa] = EPS0 eps_r V^2 / z[mm]^2
 
 
 class ScipyFinger:
-    """MODEL.md's three-element model (m = 1, rigid links, tension alone), in NumPy/SciPy."""
+    """The three-element model of docs/model.md (m = 1, rigid links, tension alone), in NumPy/SciPy."""
 
     def __init__(self, p: dict):
         self.p = p

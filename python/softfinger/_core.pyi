@@ -142,10 +142,10 @@ class BranchLimit:
 class Finger:
     """The finger's model, prepared once: parameters validated, hinge compliances computed.
 
-    ``preset``: ``"default"`` (MODEL.md's values, m = 8, plate modulus, flexible links),
+    ``preset``: ``"default"`` (the default finger of docs/model.md, m = 8, plate modulus, flexible links),
     ``"paper"`` (the paper's model and its Eq. 3 DE modulus) or ``"paper_model"`` (the paper's
-    model with MODEL.md's DE modulus). ``calibration``: None (none), ``"model_md"`` (the FE
-    factors for MODEL.md's finger), ``"auto"`` (those for MODEL.md's finger, none for any
+    model with the corrected DE modulus). ``calibration``: None (none), ``"model_md"`` (the FE
+    factors for the default finger), ``"auto"`` (those for the default finger, none for any
     other: what the board does) or 8 factors. ``**params``: any parameter by its console name
     (``l``, ``b``, ``w``, ``t_min``, ``a``, ``e_b``, ``e``, ``layers``, ``z0``, ``g``, ``nu``,
     ``eps_r``, ``margin``, ``v_supply``, ``n_inc``, ``m``, ``plate``, ``nu_b``, ``span_floor``,

@@ -1,4 +1,4 @@
-"""The driver board from Python: the console contract (CONSOLE.md) over a serial port (pyserial),
+"""The driver board from Python: the console contract (docs/console.md) over a serial port (pyserial),
 the simulated board (finger-sim, a child process) or the firmware's emulator image (QEMU, its
 console on a local TCP socket that pyserial opens as ``socket://``).
 
@@ -528,7 +528,7 @@ class Board:
         return self.fields(f"param {name} {self._num(value)}")
 
     def preset(self, name: str) -> None:
-        """Every model parameter back to MODEL.md's defaults (``"default"``) or the paper's."""
+        """Every model parameter back to the model's defaults (``"default"``) or the paper's."""
         self.command(f"preset {name}")
 
     def wait(self, s: float) -> None:

@@ -385,8 +385,8 @@ fn calibration_of(obj: Option<&Bound<'_, PyAny>>, p: &Params<R>) -> PyResult<Cal
     Ok(Calibration { hinge: [v[0], v[1], v[2], v[3]], stack_axial: [v[4], v[5]], stack_bending: [v[6], v[7]] })
 }
 
-/// The parameter set: a preset, then the keyword overrides by their console names (MODEL.md's
-/// symbols). An override that is only consistent with a later one is retried after the others.
+/// The parameter set: a preset, then the keyword overrides by their console names (docs/model.md
+/// "Geometry"). An override that is only consistent with a later one is retried after the others.
 fn params_of(preset: &str, card: Option<&str>, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Params<R>> {
     let mut p = match preset {
         "default" => Params::default(),
@@ -395,7 +395,7 @@ fn params_of(preset: &str, card: Option<&str>, kwargs: Option<&Bound<'_, PyDict>
         _ => return Err(PyValueError::new_err(format!("preset must be \"default\", \"paper\" or \"paper_model\", not {preset:?}"))),
     };
     if let Some(name) = card {
-        // the film of the card on the preset's finger, as `Params::with_card` does on MODEL.md's
+        // the film of the card on the preset's finger, as `Params::with_card` does on the default finger
         let c = card_of(name)?;
         let with = Params::<R>::with_card(c);
         p = Params { card: with.card, g: with.g, eps_r: with.eps_r, de_rule: with.de_rule, ..p };
@@ -464,7 +464,7 @@ impl Finger {
         Ok(Finger { f: Model::with_calibration(p, cal).map_err(model_err)? })
     }
 
-    /// Every parameter by its console name (`e_de` derived), units as in MODEL.md.
+    /// Every parameter by its console name (`e_de` derived), units as in docs/model.md.
     #[getter]
     fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -602,8 +602,8 @@ impl Finger {
             (None, None) => 1,
         };
         let f = &self.f;
-        // one compact row per posture (not the whole model Solution: its sub-element state is
-        // ~1.5 KB), filled in parallel
+        // one compact row per posture (not the whole model Solution, which carries every
+        // sub-element's state), filled in parallel
         let out: Vec<Result<Compact, Error>> = py.detach(|| {
             (0..rows)
                 .into_par_iter()

@@ -10,7 +10,7 @@ import softfinger as sf
 
 
 def bench_finger(layers: int, fidelity: bool) -> sf.Finger:
-    """finger-scenes' `params`: MODEL.md's values with the hinge model pinned."""
+    """finger-scenes' `params`: the default values with the hinge model pinned."""
     m, plate, flex = (8, 1, 1) if fidelity else (1, 0, 0)
     return sf.Finger(layers=layers, m=m, plate=plate, flex_links=flex)
 

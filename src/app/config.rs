@@ -1,231 +1,32 @@
-//! The settings in force against the store (a console addition, docs/firmware.md "Settings"):
-//! `save`, `config`, `factory`, and the boot hook that loads a stored record.
+//! The console's commands on the settings store (docs/firmware.md "Settings"): `save`,
+//! `config`, `factory`, and the boot hook that puts a stored record in force
+//! ([`Commands::boot_settings`], [`App::with_store`]). A record is checked as the console checks
+//! each value (`super::stored`); `save` refuses what a boot would refuse.
 //!
-//! What is stored: every console-settable value (the model's parameters but the read-only ones,
-//! the calibration `cal`, the firmware parameters but the board constants) and the preset's
-//! choice (the film's card and the DE modulus rule, which no parameter sets). A record is read
-//! as a console `param` reads a value: each model parameter through `Params::set` (its range
-//! and the set's consistency), each firmware parameter through its range, the calibration through
-//! `Finger::with_calibration`, and the ceiling it gives never above the compiled defaults' (the
-//! board constants'). A record failing any check is refused whole: the board keeps its compiled
-//! defaults and says so (boot banner, `config`, `status` `fault=config-rejected`) until
-//! `factory` or a fresh `save`. `save` refuses, by the same checks, what a boot would refuse.
-//!
-//! What it is not: the record's bytes or the flash (crate::settings).
+//! What it is not: the record's checks (`super::stored`), its bytes or the flash
+//! (`crate::settings`).
 
-use super::*;
-use crate::settings::{tag, ConfigStore, FormatError, Record, StoreError, FORMAT_VERSION, MAX_VALUES, RECORD_MAX};
+use core::fmt::Write;
 
-/// What the boot found in the store.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Boot {
-    /// No store on this board (host `App::new`, a build without one).
-    NoStore,
-    /// Nothing stored: compiled defaults.
-    Empty,
-    /// The stored record is in force.
-    Loaded,
-    /// The stored record was refused: compiled defaults.
-    Rejected(Reject),
-}
+use finger_model::Finger;
 
-/// The boot banner's word: `config=<none|empty|loaded>`, or `config=rejected reason=<why>
-/// defaults`.
-impl Emit for Boot {
-    fn emit(&self, f: &mut dyn Write) {
-        let _ = match self {
-            Boot::NoStore => w!(f; "config=none"),
-            Boot::Empty => w!(f; "config=empty"),
-            Boot::Loaded => w!(f; "config=loaded"),
-            Boot::Rejected(e) => w!(f; "config=rejected reason=", *e, " defaults"),
-        };
-    }
-}
-
-/// Why a record (or the store holding it) was refused.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Reject {
-    /// The flash or the map could not be read.
-    Store(StoreError),
-    /// The bytes are not a record of this format.
-    Format(FormatError),
-    /// A value this build does not know (its tag), or one stored twice.
-    Unknown(u16),
-    Duplicate(u16),
-    /// The preset byte is not a preset.
-    Preset(u8),
-    /// A parameter out of its range or inconsistent with the others.
-    Param(&'static str),
-    /// Calibration factors the model refuses, or only some of them stored.
-    Calibration,
-    /// Its ceiling is above the compiled board constants', before or after the HV modules'
-    /// cap.
-    Ceiling,
-    /// A board constant (never stored: a read-only parameter).
-    BoardConstant(&'static str),
-}
-
-impl Emit for Reject {
-    fn emit(&self, f: &mut dyn Write) {
-        let _ = match *self {
-            Reject::Store(e) => w!(f; "store-", e.name()),
-            Reject::Format(FormatError::Length) => w!(f; "length"),
-            Reject::Format(FormatError::Magic) => w!(f; "not-a-record"),
-            Reject::Format(FormatError::Version(v)) => w!(f; "format-v", v),
-            Reject::Format(FormatError::Checksum) => w!(f; "checksum"),
-            Reject::Unknown(t) => w!(f; "unknown-value-", t),
-            Reject::Duplicate(t) => w!(f; "duplicate-value-", t),
-            Reject::Preset(p) => w!(f; "preset-", p),
-            Reject::Param(n) => w!(f; "param-", n),
-            Reject::Calibration => w!(f; "cal"),
-            Reject::Ceiling => w!(f; "ceiling"),
-            Reject::BoardConstant(n) => w!(f; "board-constant-", n),
-        };
-    }
-}
-
-/// The command side's view of its store.
-pub(crate) struct ConfigState {
-    store: Option<&'static mut dyn ConfigStore>,
-    boot: Boot,
-    /// The counter of the newest record saved or loaded (0: none since boot or `factory`).
-    saves: u32,
-    /// The boot's refusal stands (cleared by `save` and `factory`).
-    rejected: bool,
-}
-
-impl ConfigState {
-    pub(crate) const fn new() -> Self {
-        ConfigState { store: None, boot: Boot::NoStore, saves: 0, rejected: false }
-    }
-}
-
-/// The compiled defaults' finger: MODEL.md's on the board's film with its FE calibration (as
-/// this build holds it; `preset default`).
-pub fn default_finger() -> Finger<f32> {
-    let p = preset(board_params());
-    match Finger::with_calibration(p, calibration_for(&p)) {
-        Ok(f) => f,
-        Err(_) => panic!("default parameters"),
-    }
-}
-
-/// The stored model parameters: every one the console can set.
-fn model_names() -> impl Iterator<Item = &'static str> {
-    PARAMS.iter().filter(|i| !i.read_only).map(|i| i.name)
-}
-/// The stored firmware parameters: every one the console can set (not the board constants).
-fn fw_names() -> impl Iterator<Item = &'static str> {
-    FW_PARAMS.iter().filter(|i| i.min <= i.max).map(|i| i.name)
-}
-
-/// The settings a record holds, checked as the console checks them; refused whole on any
-/// failure. Values the record lacks keep their compiled defaults (a record of an earlier
-/// build of this format).
-pub fn settings_of(rec: &Record) -> Result<(Finger<f32>, FwParams), Reject> {
-    let mut p = match rec.preset {
-        0 => preset(board_params()),
-        1 => preset(Params::paper()),
-        k => return Err(Reject::Preset(k)),
-    };
-    let mut model: heapless::Vec<(&'static str, f32), MAX_VALUES> = heapless::Vec::new();
-    let mut cal = [None; 8];
-    let mut fw = FwParams::default();
-    let mut seen: heapless::Vec<u16, MAX_VALUES> = heapless::Vec::new();
-    for &(t, v) in &rec.values {
-        if seen.contains(&t) {
-            return Err(Reject::Duplicate(t));
-        }
-        let _ = seen.push(t);
-        if let Some(name) = model_names().find(|n| tag(b'p', n) == t) {
-            let _ = model.push((name, v));
-        } else if let Some(k) = CAL_NAMES.iter().position(|n| tag(b'c', n) == t) {
-            cal[k] = Some(v);
-        } else if let Some(name) = fw_names().find(|n| tag(b'f', n) == t) {
-            fw.set(name, v).map_err(|_| Reject::Param(name))?;
-        } else if let Some(i) = PARAMS.iter().map(|i| i.name).chain(FW_PARAMS.iter().map(|i| i.name)).find(|n| tag(b'p', n) == t || tag(b'f', n) == t) {
-            return Err(Reject::BoardConstant(i));
-        } else {
-            return Err(Reject::Unknown(t));
-        }
-    }
-    // each through `Params::set`, in passes: a value the set refuses now may pass once the
-    // others it is tied to (2a < l, t_min < b, ...) are in
-    while !model.is_empty() {
-        let before = model.len();
-        model.retain(|&(name, v)| p.set(name, v as f64).is_err());
-        if model.len() == before {
-            return Err(Reject::Param(model[0].0));
-        }
-    }
-    if p.n != CHANNELS {
-        return Err(Reject::Param("n"));
-    }
-    if !cfg!(feature = "de") && p.layers != 0 {
-        return Err(Reject::Param("layers"));
-    }
-    let cal = match cal {
-        [None, None, None, None, None, None, None, None] => calibration_for(&p),
-        [Some(h1), Some(h2), Some(h3), Some(h4), Some(a0), Some(a1), Some(b0), Some(b1)] => {
-            Calibration { hinge: [h1, h2, h3, h4], stack_axial: [a0, a1], stack_bending: [b0, b1] }
-        }
-        _ => return Err(Reject::Calibration),
-    };
-    let f = Finger::with_calibration(p, cal).map_err(|_| Reject::Calibration)?;
-    // the ceiling in force and the model's own, min(margin x V_pi, v_supply), before the HV
-    // modules' cap: a stored value may lower either, never raise one
-    let d = default_finger();
-    for cap in [Some(HV_MAX_V), None] {
-        if !(f.ceiling_in_force(cap) <= d.ceiling_in_force(cap)) {
-            return Err(Reject::Ceiling);
-        }
-    }
-    Ok((f, fw))
-}
-
-/// The model's ceiling of the compiled defaults before the HV modules' cap, V: what the board
-/// constants allow a stored setting (`save` and the boot refuse more).
-pub fn board_ceiling() -> f32 {
-    default_finger().ceiling_in_force(None)
-}
-
-/// The settings `finger` and `fw` as a record numbered `counter`.
-pub fn record_of(finger: &Finger<f32>, fw: &FwParams, counter: u32) -> Record {
-        let p = finger.params();
-        let mut values = heapless::Vec::new();
-        for name in model_names() {
-            let _ = values.push((tag(b'p', name), p.get(name).unwrap_or(f64::NAN) as f32));
-        }
-        let c = finger.calibration();
-        let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];
-        for (name, v) in CAL_NAMES.iter().zip(g) {
-            let _ = values.push((tag(b'c', name), v));
-        }
-        for name in fw_names() {
-            let _ = values.push((tag(b'f', name), fw.get(name).unwrap_or(f32::NAN)));
-        }
-        // the paper's preset is the one on the paper's card (the DE modulus rule and the
-        // film, which no parameter sets); any other started from the board's
-        let preset = if p.card == Params::<f32>::paper().card { 1 } else { 0 };
-        Record { counter, preset, values }
-}
+use super::commands::Commands;
+use super::errors::{no_args, CmdError};
+use super::help::Reply;
+use super::host::App;
+use super::params::FwParams;
+pub use super::stored::{board_ceiling, default_finger, record_of, settings_of, Boot, Reject};
+use super::stored::name_of;
+use crate::board::Board;
+use crate::control::Control;
+use crate::num::{Fixed, Short};
+use crate::settings::{ConfigStore, Record, FORMAT_VERSION, RECORD_MAX};
 
 impl Commands {
-
     /// Put `finger` and `fw` in force (disarmed: the cable released if the servo cannot hold
     /// its tension there).
     fn put_settings(&mut self, finger: Finger<f32>, fw: FwParams) {
-        match self.plan_servo(&finger, &fw, self.force, &self.target_v) {
-            Ok((cable, deg)) => {
-                self.cable = cable;
-                self.set_servo(deg);
-            }
-            Err(_) => {
-                self.force = 0.0;
-                self.cable = 0.0;
-                self.set_servo(0.0);
-            }
-        }
+        self.hold_or_release(self.plan_servo(&finger, &fw, self.force, &self.target_v));
         self.set_finger(finger);
         self.fw = fw;
         self.recompute();
@@ -372,25 +173,21 @@ impl Commands {
     }
 }
 
-/// A stored value's console name, from its tag (`?` for a tag this build does not know).
-fn name_of(t: u16) -> &'static str {
-    if let Some(n) = model_names().find(|n| tag(b'p', n) == t) {
-        return n;
-    }
-    if let Some(n) = CAL_NAMES.iter().find(|n| tag(b'c', n) == t) {
-        return n;
-    }
-    fw_names().find(|n| tag(b'f', n) == t).unwrap_or("?")
+/// At boot, after [`super::wire`]: the settings from `store` into the command side, then its
+/// setpoints to the core. What the boot found.
+pub fn boot<B: Board>(cmds: &mut Commands, ctl: &mut Control<B>, store: &'static mut dyn ConfigStore) -> Boot {
+    let boot = cmds.boot_settings(store);
+    let sp = cmds.setpoints();
+    ctl.apply(&sp);
+    cmds.sync(&ctl.view());
+    boot
 }
 
 impl<B: Board> App<B> {
     /// Take the board as [`App::new`] does, then the settings from `store` (the boot hook).
     pub fn with_store(board: B, store: &'static mut dyn ConfigStore) -> Self {
         let mut app = Self::new(board);
-        app.cmds.boot_settings(store);
-        let sp = app.cmds.setpoints();
-        app.ctl.apply(&sp);
-        app.cmds.sync(&app.ctl.view());
+        boot(&mut app.cmds, &mut app.ctl, store);
         app
     }
 

@@ -16,7 +16,7 @@ use finger_model::material::{equilibrium_ratio, StackLaw};
 use finger_model::Error as ModelError;
 
 #[cfg(not(m3))]
-use super::Reply;
+use super::help::Reply;
 #[cfg(not(m3))]
 use crate::board::HV_LIMIT_V;
 use crate::board::{board_hold_ceiling_of, board_law};

@@ -4,7 +4,12 @@
 //! `nodes` the n + 1 node poses (node 0 the clamp, node n the tip), `hinges` each hinge's
 //! distal end (where link k starts), mm and degrees in the base frame.
 
-use super::*;
+use finger_model::Method;
+
+use super::commands::Commands;
+use super::errors::{model_err, CmdError};
+use super::help::{list, Reply, Tip};
+use super::params::CHANNELS;
 
 impl Commands {
     #[inline(never)]

@@ -1,4 +1,4 @@
-// The web view of the finger: one console (shared/CONSOLE.md) over two sources, the
+// The web view of the finger: one console (docs/console.md) over two sources, the
 // firmware's application compiled to WebAssembly (a simulated board, finger-wasm) or a real
 // board over Web Serial; a drawing of the posture from `status` / `shape` (the same solve as
 // `solve`), the controls, the limits and the board's refusals, the tip stiffness across a

@@ -1,10 +1,10 @@
-//! Bench image for the fidelity table (docs/fidelity.md, issue 7): the instructions of one
+//! Bench image for the fidelity table (docs/fidelity.md): the instructions of one
 //! forward solve for every sub-element count m = 1, 2, 4, 8 of the hinge, in the paper's
 //! configuration (rigid links, E_b) and the real-structure one (plate modulus, flexible links).
 //! f32 on the M4F. Prints the same `CAL` / `R` / `END` lines as `finger-bench` (so
 //! `host_tests::perf::parse` reads them); the scene field names the configuration and the case:
 //! `m<m>-p<plate>-f<flex>/<case>`; the board's default, m = 8 with plate modulus, flexible links
-//! and MODEL.md's FE calibration (`Calibration::model_md`, issue 18), is `m8-p1-f1-cal/<case>`.
+//! and the default finger's FE calibration (`Calibration::model_md`, docs/model.md "FE calibration"), is `m8-p1-f1-cal/<case>`.
 //!
 //! Every model parameter is set explicitly (m, plate, flex_links, layers), so the counts do not
 //! move when `Params::default()` changes. Driven by `cargo run --release --example fidelity`

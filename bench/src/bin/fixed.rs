@@ -1,4 +1,4 @@
-//! Bench image for docs/fixed-point.md (issue 14): every scene of finger-scenes (host-tests/scenes), for the scene's
+//! Bench image for docs/fixed-point.md: every scene of finger-scenes (host-tests/scenes), for the scene's
 //! pinned model and for the default model (`Params::default()`, the firmware's), solved by
 //! the model's f32 forward solve and by its fixed-point one (`finger_model::fixed`), with the
 //! instruction count of each solve (and of each set-up: the compliances at the scene's

@@ -1,4 +1,4 @@
-//! Bench image for the cost of `Finger::fmax` on the target (issue 13, docs/fmax-cost.md):
+//! Bench image for the cost of `Finger::fmax` on the target (docs/fmax-cost.md):
 //! instructions of one fmax (the end of the equilibrium branch at given voltages), f32, for
 //! the paper's model (m = 1, rigid links, E_b) and the default model (m = 8, plate modulus,
 //! flexible links), at 0 V, uniform and mixed voltages and a tiny span floor; each case

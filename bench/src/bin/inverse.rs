@@ -1,4 +1,4 @@
-//! Bench image for the inverse model's cost on the target (issue 4, docs/inverse-cost.md):
+//! Bench image for the inverse model's cost on the target (docs/inverse-cost.md):
 //! instructions of one `inverse::solve_pose` (joint angles, optionally a tension, to the
 //! tension and the three voltages), f32, for the paper's model (m = 1, rigid links, E_b) and
 //! the default model (m = 8, plate modulus, flexible links). Prints `CAL`, then one line per

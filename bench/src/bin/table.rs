@@ -1,4 +1,4 @@
-//! Bench image for the branch-table path on the target (issue 15): per model of
+//! Bench image for the branch-table path on the target (docs/performance.md): per model of
 //! `scenes::TABLE_MODELS`, the cost of building `inverse::BranchTable` (once per parameter
 //! set), then per scene of `scenes::TABLE_SCENES` the forward solve (full: `Finger::solve_with`;
 //! table: `BranchTable::solve_into` into a solution the caller holds, both after the same `compliances`), the inverse from the

@@ -1,5 +1,5 @@
 //! finger-calculix: the finger in a real finite-element solver (CalculiX `ccx`), to measure the
-//! model against and to calibrate it (issue 18; docs/fidelity-fe.md).
+//! model against and to calibrate it (docs/fidelity-fe.md, docs/model.md "FE calibration").
 //!
 //! - [`mesh`]: the plane mesh from `Params` (notches, links, stacks) and its 3D extrusion.
 //! - [`ccx`]: the input deck, running ccx, reading its `.dat`.

@@ -6,7 +6,7 @@
 //! What it is not: a general mesher. The geometry is a row of segments along x (link or
 //! notch), each meshed by columns with the same number of rows, so neighbours share nodes.
 //!
-//! The stack (MODEL.md: a layer of thickness t_k on the extensor side of the waist, centroid at
+//! The stack (docs/model.md "Joint compliance with the stack": a layer of thickness t_k on the extensor side of the waist, centroid at
 //! d = t_min/2 + t_k/2) is the region between the notch's extensor face and the plane
 //! y = -(t_min/2 + t_k), bonded to the face: a lens under the waist that ends where the notch
 //! is deeper than the stack. Where it ends its elements collapse to a point (8-node quads with

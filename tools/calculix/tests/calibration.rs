@@ -1,4 +1,4 @@
-//! The calibration: the calibrated model's small-load element compliance equals the
+//! The FE calibration: the calibrated model's small-load element compliance equals the
 //! FE's; the cable's small-load joint angle (NLGEOM springs) agrees with the linear unit loads.
 use finger_model::material::ELASTOSIL_2030;
 use finger_calculix::calibrate::{self, model_element_compliance};
@@ -71,7 +71,7 @@ fn calibrated_finger_reproduces_the_fe_small_load_joint_angle() {
 #[test]
 fn the_boards_default_calibration_is_fe_calibrates_line() {
     // `Calibration::model_md` (the firmware's default) is what `fe-calibrate` computes for
-    // docs/model.md's finger (3D, fine mesh), to the 6 decimals the line prints; and
+    // the default finger (docs/model.md "Geometry"; 3D, fine mesh), to the 6 decimals the line prints; and
     // `Calibration::elastosil_2030` for it on the silicone card, where the stacks still matter
     let cases = [(Params::<f64>::default(), Calibration::<f64>::model_md()), (Params::with_card(&ELASTOSIL_2030), Calibration::elastosil_2030())];
     for (p, a) in cases {

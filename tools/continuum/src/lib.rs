@@ -4,26 +4,17 @@
 //! (elliptical notches of variable thickness, links as thick beams of the body
 //! material, DE stacks as parallel layers bonded over each hinge, the cable as a
 //! follower load through its guide holes) that shares no code with the
-//! three-element model in `finger-model`. The formulation, equations and
-//! measured convergence are documented in `docs/continuum.md`.
+//! three-element model in `finger-model`.
 //!
-//! Formulation in one paragraph: the finger's centreline is an extensible
-//! Kirchhoff (Euler-Bernoulli) elastica, parametrised by the reference arc length
-//! s. Under follower loads that only act at a few points (the guide holes, the
-//! tip), the resultant of all loads distal to a section is a known function of
-//! the positions of those points: on hinge k it is the tension P along span k
-//! (line of action through link k's proximal hole) plus the tip force; on link
-//! k it is P along the cable chord inside link k (through its distal hole) plus
-//! the tip force. The unknowns are therefore the positions of the holes and of
-//! the tip (4n + 2 numbers). Given a guess, the elastica is integrated from the
-//! clamp with RK4 (hinges in the notch angle φ, x = a(1 - cos φ), which makes the
-//! integrand smooth, so RK4 keeps its 4th order), the holes' positions are read
-//! off the integrated shape, and Newton's method (finite-difference Jacobian)
-//! drives the mismatch to zero. The tension is ramped by continuation.
+//! In short: the centreline is an extensible Kirchhoff elastica; the loads distal to a
+//! section are known from the positions of the guide holes and the tip (4n + 2 unknowns),
+//! so the elastica is integrated from the clamp with RK4 (hinges in the notch angle φ) and
+//! Newton drives the holes' mismatch to zero, with the tension ramped by continuation. The
+//! formulation, its equations and its convergence are in `docs/continuum.md`.
 
 use std::fmt;
 
-/// Plain f64 parameters, mirroring the names of MODEL.md (mm, N, MPa).
+/// Plain f64 parameters, mirroring the names of docs/model.md "Geometry" (mm, N, MPa).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContinuumParams {
     /// Number of elements (joints).
@@ -46,7 +37,7 @@ pub struct ContinuumParams {
     pub layers: usize,
     /// DE layer rest thickness (mm, informational).
     pub z0: f64,
-    /// DE Young's modulus (MPa); MODEL.md: 2 G (1 + ν) = 1.788.
+    /// DE Young's modulus (MPa); docs/model.md: 2 G (1 + ν) = 1.788.
     pub e_de: f64,
     /// Use the plate (plane-strain) modulus E_b / (1 - nu_b²) for the body.
     pub plate: bool,
@@ -96,7 +87,7 @@ impl ContinuumParams {
         2.0 * self.a
     }
 
-    /// Notch thickness at x in [0, 2a] (MODEL.md).
+    /// Notch thickness at x in [0, 2a] (docs/model.md "Geometry").
     pub fn notch_thickness(&self, x: f64) -> f64 {
         let u = ((x - self.a) / self.a).clamp(-1.0, 1.0);
         self.t_min + (self.b - self.t_min) * (1.0 - (1.0 - u * u).max(0.0).sqrt())
@@ -157,7 +148,7 @@ impl Discretisation {
 }
 
 impl Default for Discretisation {
-    /// Converged to about 1e-9 rad in the joint angles at 2 N (see docs/continuum.md).
+    /// Converged in the joint angles (docs/continuum.md has the figures).
     fn default() -> Self {
         Discretisation::new(128, 32)
     }

@@ -8,7 +8,7 @@ fn max_diff(a: &[f64], b: &[f64]) -> f64 {
 }
 
 // ---------------------------------------------------------------------------
-// Own quadrature of the docs/model.md compliance integrals (independent of the code
+// Own quadrature of the model's compliance integrals (docs/model.md) (independent of the code
 // under test): composite Simpson in the notch angle φ, x = a (1 - cos φ).
 // ---------------------------------------------------------------------------
 
@@ -150,7 +150,7 @@ fn finger_converges_at_fourth_order_under_refinement() {
 }
 
 /// At small P the joint angle per unit tension is the linear estimate from the
-/// docs/model.md compliance integrals: the wrench on hinge k's distal end is
+/// model's compliance integrals (docs/model.md): the wrench on hinge k's distal end is
 /// (-P, 0, P e), so Δθ_hinge = C_θ-M e P (C_θ-Fx = 0 by symmetry), and the
 /// link carries N = -P, M = P e, so it adds e (l - 2a) / (E I_b) P.
 #[test]

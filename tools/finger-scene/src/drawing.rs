@@ -237,7 +237,7 @@ pub fn volt_scale(x: f64, y: f64, v_max: f64) -> String {
     s
 }
 
-/// The stand-alone drawing of the default finger (MODEL.md's geometry) for the front page:
+/// The stand-alone drawing of the default finger (docs/model.md "Geometry") for the front page:
 /// straight and unpowered, with its dimensions (l, b, L_h, t_min, e), and bent at `tension` N
 /// with its stacks at `volts` (V, all three), both from the model's solve.
 pub fn dimensioned(params: Params<f64>, tension: f64, volts: f64) -> Result<String, finger_model::Error> {
@@ -265,7 +265,7 @@ pub fn dimensioned(params: Params<f64>, tension: f64, volts: f64) -> Result<Stri
     let _ = writeln!(s, r#"<rect x="0" y="0" width="{width:.0}" height="{height:.0}" fill="white"/>"#);
     let _ = writeln!(
         s,
-        r#"<text x="20" y="22" font-size="15">The finger (MODEL.md's geometry): straight at 0 N, and at {} N with {:.1} kV on every stack</text>"#,
+        r#"<text x="20" y="22" font-size="15">The finger (the default geometry): straight at 0 N, and at {} N with {:.1} kV on every stack</text>"#,
         g4(tension),
         volts / 1000.0
     );

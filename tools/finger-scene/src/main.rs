@@ -271,7 +271,7 @@ fn run_all(a: &Args) -> Result<(), String> {
     Ok(())
 }
 
-/// The front page's drawing: MODEL.md's finger, straight and at 1 N with half the ceiling.
+/// The front page's drawing: the default finger, straight and at 1 N with half the ceiling.
 fn write_drawing(file: &Path) -> Result<(), String> {
     let params = finger_model::Params::<f64>::default();
     let half = finger_model::Finger::new(params).map_err(|e| e.to_string())?.voltage_ceiling() / 2.0;

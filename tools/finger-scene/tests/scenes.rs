@@ -67,7 +67,7 @@ fn parses_every_section() {
     assert!(!s.output.postures && s.output.tip_stiffness && !s.output.cable_excursion);
     assert_eq!(s.output.reference, Reference::None);
 
-    // defaults: docs/model.md's preset, 0 V, converged, postures and excursion, no stiffness
+    // defaults: the default preset, 0 V, converged, postures and excursion, no stiffness
     let d = scene::parse("d", "[drive]\ntensions = 0.5\n").unwrap();
     assert_eq!(d.finger.params, Params::<f64>::default());
     assert_eq!(d.finger.drive, Drive::Volts(vec![0.0; 3]));

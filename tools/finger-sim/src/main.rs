@@ -1,5 +1,5 @@
 //! finger-sim: the firmware's application (finger-fw's lib) on a simulated board.
-//! Reads console lines from stdin, answers on stdout (the grammar of shared/CONSOLE.md),
+//! Reads console lines from stdin, answers on stdout (the grammar of docs/console.md),
 //! exits at end of input.
 //!
 //! - default: a script, line by line: each line is read when the previous one is answered,

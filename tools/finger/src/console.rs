@@ -1,11 +1,11 @@
-//! The console contract (shared/CONSOLE.md) seen from the host: one command line out, the
+//! The console contract (docs/console.md) seen from the host: one command line out, the
 //! lines before its final reply and the final `ok ...` or `err <code>: ...` back, typed.
 //! Not here: how bytes travel (`link.rs`).
 use std::time::Duration;
 
 use crate::link::{Link, LinkError};
 
-/// The error codes of CONSOLE.md, and any other code a newer firmware may add.
+/// The error codes of docs/console.md, and any other code a newer firmware may add.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ErrorCode {
     Unknown,

@@ -1,4 +1,4 @@
-//! The host client for the finger driver board: the console contract (shared/CONSOLE.md) over
+//! The host client for the finger driver board: the console contract (docs/console.md) over
 //! a serial port (the real board), finger-sim's stdin/stdout, or the QEMU image's console
 //! socket, with the same commands everywhere. `finger --help` lists them.
 pub mod console;

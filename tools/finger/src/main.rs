@@ -11,7 +11,7 @@ use clap::{Args, Parser, Subcommand};
 use finger::{CommandError, Console, Link, LinkError};
 
 #[derive(Parser)]
-#[command(name = "finger", version, about = "Host client for the finger driver board (the console of shared/CONSOLE.md)")]
+#[command(name = "finger", version, about = "Host client for the finger driver board (the console of docs/console.md)")]
 struct Cli {
     #[command(flatten)]
     to: Target,

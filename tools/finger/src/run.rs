@@ -168,8 +168,8 @@ pub fn load_finger(con: &mut Console, p: &Params<f64>) -> Result<(), RunError> {
         }
         pending = failed;
     }
-    // a scene's finger is the model as MODEL.md states it (the host's `Finger::new`, which the
-    // continuum reference cross-checks): without the board's FE calibration (`cal`, issue 18)
+    // a scene's finger is the model as docs/model.md states it (the host's `Finger::new`, which the
+    // continuum reference cross-checks): without the board's FE calibration (`cal`)
     cmd(con, "cal none")?;
     Ok(())
 }

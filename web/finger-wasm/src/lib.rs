@@ -126,12 +126,12 @@ pub extern "C" fn fw_now_ms() -> f64 {
 // ------------------------------------------------------------------ host f64 model
 
 /// The host's f64 finger at `p`, with the FE calibration the board gives those parameters
-/// (`finger_fw::app::calibration_for`: MODEL.md's finger is calibrated, issue 18).
+/// (`finger_fw::app::calibration_for`: the default finger is calibrated, docs/model.md "FE calibration").
 fn host_finger(p: &Params<f64>) -> Result<Finger<f64>, finger_model::Error> {
     Finger::with_calibration(*p, calibration_for(p))
 }
 
-/// Host model parameters back to the board's defaults (MODEL.md's finger on the board's film).
+/// Host model parameters back to the board's defaults (the default finger on the board's film).
 #[no_mangle]
 pub extern "C" fn host_reset() {
     with(|s| s.host = board_params())

@@ -1,10 +1,10 @@
 //! `cargo run --bin fe-calibrate [-- --paper] [--set name=value ...] [--coarse] [--plane-strain]`
-//! (in tools/calculix): the FE calibration of the model's sub-element compliances for MODEL.md's
-//! finger, `--paper` with the paper preset's E_de (Eq. 3), `--set` for any other parameter set
+//! (in tools/calculix): the FE calibration of the model's sub-element compliances for the default
+//! finger (docs/model.md "Geometry"), `--paper` with the paper preset's E_de (Eq. 3), `--set` for any other parameter set
 //! (console names, `Params::set`): linear CalculiX unit loads on one element (3D half width by
 //! default), with and without its stack at three thicknesses; prints the factors
 //! (`finger_model::Calibration`), the element compliances before and after, and the factors
-//! as a `cal` console line and a Rust literal. About 10 s (fine mesh).
+//! as a `cal` console line and a Rust literal.
 use finger_calculix::calibrate::{self, model_element_compliance};
 use finger_calculix::ccx::Kind;
 use finger_calculix::mesh::Density;
@@ -43,7 +43,7 @@ fn main() {
             std::process::exit(1);
         }
     };
-    println!("# FE calibration ({}, {:?}); parameters: {}", kind.name(), d, if has("--paper") { "paper preset's E_de" } else if has("--set") { "MODEL.md defaults with --set" } else { "MODEL.md defaults" });
+    println!("# FE calibration ({}, {:?}); parameters: {}", kind.name(), d, if has("--paper") { "paper preset's E_de" } else if has("--set") { "the defaults (docs/model.md) with --set" } else { "the defaults (docs/model.md)" });
     let c = run.cal;
     println!("hinge factors (C_x-Fx, C_y-Fy, C_y-M, C_θ-M): {:.6} {:.6} {:.6} {:.6}", c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3]);
     println!("stack EA factor: {:.6} + {:.6} t; EI factor: {:.6} + {:.6} t (t in mm)", c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]);

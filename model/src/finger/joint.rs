@@ -1,0 +1,145 @@
+//! One joint's march entry points under a guessed guide hole: the cable's loads on the distal
+//! chain, the plain march, its hole residual and tangent, and the crate-visible marches the
+//! inverse calls. The marches themselves are in `march` and `march_stiffness`.
+
+use super::*;
+
+impl<R: Real> Finger<R> {
+    /// Cable statics, `f = -P (B - A)/|B - A|` along span k (docs/model.md "Cable", "Equilibrium").
+    /// The loads on a joint's distal chain for a guide-hole position `b_hole` (the joint's
+    /// proximal frame): the cable's force P along the span toward the hole at the proximal node,
+    /// the tip load if any, and their sum. A span at its floor is contact.
+    pub(super) fn span_loads(&self, tension: R, b_hole: [R; 2], tip: Option<TipLoad<R>>) -> Result<SpanLoads<R>, MarchError> {
+        let span_v = [b_hole[0], b_hole[1] - self.p.e];
+        let span = norm2(span_v);
+        if !(span >= self.p.span_floor) {
+            return Err(MarchError::Contact);
+        }
+        let fc = [-tension * span_v[0] / span, -tension * span_v[1] / span];
+        let (ft, tp) = match tip {
+            Some(t) => (t.force, t.point),
+            None => ([R::zero(); 2], [R::zero(); 2]),
+        };
+        Ok(SpanLoads { fc, ft, tp, ftot: [fc[0] + ft[0], fc[1] + ft[1]] })
+    }
+
+    /// March through joint k's sub-elements for a guessed guide-hole position `b_hole` (the
+    /// joint's proximal frame): cable force P along the span from `b_hole` to the hole at the
+    /// proximal node, plus an optional tip load. Each sub-element's deflection is the closed
+    /// solution of `q = C (f, M0 + s)` with `s = -f_y δax + f_x δtr` (the moment arm's own
+    /// change, linear in δ).
+    pub(super) fn march(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b_hole: [R; 2],
+        tip: Option<TipLoad<R>>,
+    ) -> Result<JointState<R>, MarchError> {
+        // the arithmetic is `march_t`'s in R (one copy of the march in the image; the test
+        // `march_t_matches_march` keeps the two entry points bit-equal)
+        let mut q = [[R::zero(); 3]; MAX_SUB];
+        let (end, hole, _) = self.march_into(c, tension, b_hole, tip, &mut q)?;
+        Ok(JointState { q, end, hole, tangent: None })
+    }
+
+    /// `march_t` in R: the one plain march in the image (`march` and `joint_march` share it;
+    /// flash).
+    #[inline(never)]
+    pub(super) fn march_into(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b_hole: [R; 2],
+        tip: Option<TipLoad<R>>,
+        q: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<(Pose<R>, [R; 2], [R; 2]), MarchError> {
+        self.march_t::<R>(c, tension, b_hole, tip, q, |x| x)
+    }
+
+    /// Residual of the hole guess: guess - arrived.
+    pub(super) fn hole_residual(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        tip: Option<TipLoad<R>>,
+    ) -> Result<([R; 2], JointState<R>), MarchError> {
+        let st = self.march(c, tension, b, tip)?;
+        Ok(([b[0] - st.hole[0], b[1] - st.hole[1]], st))
+    }
+
+    /// The exact 2x2 tangent of a joint's hole residual (tension alone), from one march on
+    /// dual numbers (see `dual`).
+    pub(super) fn joint_tangent(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        _r: [R; 2],
+    ) -> Result<[[R; 2]; 2], MarchError> {
+        self.eval_dual(c, tension, b).map(|(_, _, jac)| jac)
+    }
+
+    /// One march of joint `joint` (1-based) under tension alone from the hole guess `b` (no
+    /// Newton): the state it arrives at, with `hole` the hole it arrives at (the residual is
+    /// `b - hole`) and `angle` the joint angle (hinge and flexible link). For the inverse
+    /// model's quasi-Newton solves (inverse/general.rs); `iterations` is 0.
+    /// The sub-element displacements go to `q`.
+    pub(crate) fn joint_march(
+        &self,
+        joint: usize,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        q: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<JointMarch<R>, Error> {
+        let (end, hole, _) = self.march_into(c, tension, b, None, q).map_err(|e| match e {
+            MarchError::Contact => Error::Contact { joint, tension: tension.to_f64() },
+            MarchError::Singular => Error::Singular { what: "joint march" },
+        })?;
+        let link = self.link_q(tension, &end, None);
+        Ok(JointMarch::arrived(end, hole, link))
+    }
+
+    /// `joint_march` by `march_tension` (the same equations carried in each sub-element's own
+    /// frame, the same answer to rounding: test `tension_march_matches_march`) where that march
+    /// applies (P > 0 and its `den` positive), else `joint_march`'s plain march, as the branch
+    /// table's forward does (`fill_from_holes`). For the tabled inverse's confirming marches.
+    #[inline(always)]
+    pub(crate) fn joint_march_tension(
+        &self,
+        joint: usize,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [R; 2],
+        q: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<JointMarch<R>, Error> {
+        match self.march_tension(c, tension, b, q) {
+            Ok((end, hole, _, _)) => {
+                let link = self.link_q(tension, &end, None);
+                Ok(JointMarch::arrived(end, hole, link))
+            }
+            Err(_) => self.joint_march(joint, c, tension, b, q),
+        }
+    }
+
+    /// A joint's march under tension alone from the stiffnesses K_hinge,j + K_de (`kd` the
+    /// stack's upper triangle): `march_stiffness`, with `link` the link's deflection at that
+    /// tension (`tension_link_q`); None where it refuses (the caller takes the compliance path).
+    #[inline(always)]
+    pub(crate) fn joint_march_stiffness(&self, kd: &[R; 6], tension: R, link: [R; 3], b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+        let (end, hole, _, _) = self.march_stiffness(kd, tension, b, q).ok()?;
+        Some(JointMarch::arrived(end, hole, link))
+    }
+
+    /// A link's deflection under tension alone, the same for every joint (`link_q` without a
+    /// tip load).
+    pub(crate) fn tension_link_q(&self, tension: R) -> [R; 3] {
+        self.link_q(tension, &Pose::origin(), None)
+    }
+
+    /// Hinge sub-element j's stiffness (the inverse of its compliance, computed in `new`).
+    pub(crate) fn hinge_stiffness(&self, j: usize) -> &Mat3<R> {
+        &self.hinge_k[j]
+    }
+}

@@ -1,0 +1,168 @@
+//! The posture chain (docs/model.md "Equilibrium": node k = node k-1 ∘ hinge ∘ link): link
+//! deflections, node poses, the tip load in a joint's frame, and the assembled `Solution`.
+//! No solving here.
+
+use super::*;
+
+impl<R: Real> Finger<R> {
+    /// Link compliance, `q = C_link w` (a uniform beam; the model's `flex_links`, docs/model.md).
+    /// Deflection of a link (proximal frame `hinge_end`, base frame) when `flex_links` is set:
+    /// the cable inside the link compresses it with P at the offset e (moment P·e about its
+    /// axis), plus the tip load if any; linear, loads in the undeformed link frame.
+    pub(super) fn link_q(&self, tension: R, hinge_end: &Pose<R>, tip: Option<([R; 2], [R; 2])>) -> [R; 3] {
+        if !self.p.flex_links {
+            return [R::zero(); 3];
+        }
+        let mut w = [-tension, R::zero(), tension * self.p.e];
+        if let Some((force, point)) = tip {
+            let end = hinge_end.then(self.link_len, R::zero(), R::zero());
+            let tl = Self::tip_in_frame(&end, force, point);
+            let (s, c) = hinge_end.theta.sin_cos();
+            w[0] += c * force[0] + s * force[1];
+            w[1] += -s * force[0] + c * force[1];
+            w[2] += tl.point[0] * tl.force[1] - tl.point[1] * tl.force[0];
+        }
+        mat3::mul_vec(&self.link_c, &w)
+    }
+
+    /// Node poses 0..=n (node k-1 is joint k's proximal frame; node n the tip) for given joint
+    /// states, and each link's deflection.
+    pub(super) fn chain(
+        &self,
+        states: &[JointState<R>; MAX_JOINTS],
+        tension: R,
+        tip_force: [R; 2],
+        tip_point: Option<[R; 2]>,
+    ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
+        let mut ends = [Pose::origin(); MAX_JOINTS];
+        for k in 0..self.p.n {
+            ends[k] = states[k].end;
+        }
+        self.chain_ends(&ends, tension, tip_force, tip_point)
+    }
+
+    /// `chain` from each joint's hinge end pose alone.
+    pub(super) fn chain_ends(
+        &self,
+        ends: &[Pose<R>; MAX_JOINTS],
+        tension: R,
+        tip_force: [R; 2],
+        tip_point: Option<[R; 2]>,
+    ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
+        let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
+        let mut nodes = [Pose::origin(); MAX_JOINTS + 1];
+        let mut links = [[R::zero(); 3]; MAX_JOINTS];
+        // with a tip load on flexible links the tip point enters the links' loads: the solved
+        // tip when the caller has it (the coupled and pinned solves carry it as an unknown),
+        // else a fixed point on the tip from the rigid-link tip (the load stepping)
+        let n = self.p.n;
+        let given = tip_point.is_some();
+        let passes = if loaded && self.p.flex_links && !given { 8 } else { 1 };
+        let mut tip_point = if loaded && self.p.flex_links { tip_point } else { None };
+        for _ in 0..passes {
+            let tip = if loaded { tip_point.map(|t| (tip_force, t)) } else { None };
+            for k in 0..n {
+                let e = ends[k];
+                let hinge_end = nodes[k].then(e.x, e.y, e.theta);
+                links[k] = if loaded && tip.is_none() { [R::zero(); 3] } else { self.link_q(tension, &hinge_end, tip) };
+                let q = links[k];
+                nodes[k + 1] = hinge_end.then(self.link_len + q[0], q[1], q[2]);
+            }
+            let new_tip = [nodes[n].x, nodes[n].y];
+            if given {
+                break;
+            }
+            if let Some(t) = tip_point {
+                if (new_tip[0] - t[0]).abs() + (new_tip[1] - t[1]).abs() <= self.resolution() {
+                    break;
+                }
+            }
+            tip_point = Some(new_tip);
+        }
+        (nodes, links)
+    }
+
+    /// The tip load as joint k sees it (its proximal frame), from a base-frame force at a
+    /// base-frame point.
+    pub(super) fn tip_in_frame(frame: &Pose<R>, force: [R; 2], point: [R; 2]) -> TipLoad<R> {
+        let (s, c) = frame.theta.sin_cos();
+        let dx = point[0] - frame.x;
+        let dy = point[1] - frame.y;
+        TipLoad {
+            force: [c * force[0] + s * force[1], -s * force[0] + c * force[1]],
+            point: [c * dx + s * dy, -s * dx + c * dy],
+        }
+    }
+
+    /// Collect the solution: nodes, joint angles, spans, excursion, residual, tangents.
+    pub(super) fn assemble(
+        &self,
+        c: &Compliances<R>,
+        tension: R,
+        tip_force: [R; 2],
+        states: &[JointState<R>; MAX_JOINTS],
+        tip_point: Option<[R; 2]>,
+        iterations: u32,
+    ) -> Result<Solution<R>, Error> {
+        let n = self.p.n;
+        let (nodes, links) = self.chain(states, tension, tip_force, tip_point);
+        let mut sol = Solution { n, m: self.p.m, tension, tip_force, nodes, thickness: c.thickness, volts: c.volts, iterations, ..Solution::empty() };
+        let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
+        // the solved tip (the load's point in the joints' residuals), and its mismatch with
+        // the chain's tip in the residual
+        let chain_tip = [nodes[n].x, nodes[n].y];
+        let tip = tip_point.unwrap_or(chain_tip);
+        let mut res2 = (tip[0] - chain_tip[0]).sq() + (tip[1] - chain_tip[1]).sq();
+        // residual and tangent determinant of the joint before (tension alone)
+        let mut prev: Option<([R; 2], R)> = None;
+        for k in 0..n {
+            let st = &states[k];
+            sol.q[k] = st.q;
+            sol.links[k] = links[k];
+            sol.joint_angle[k] = st.end.theta + links[k][2];
+            // the span as the final geometry has it (not the one the loads came from)
+            let span = norm2([st.hole[0], st.hole[1] - self.p.e]);
+            if !(span >= self.p.span_floor) {
+                return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() });
+            }
+            sol.span[k] = span;
+            sol.cable_excursion += self.p.hinge_len() - span;
+            let tl = if loaded { Some(Self::tip_in_frame(&nodes[k], tip_force, tip)) } else { None };
+            // tension alone: one dual march gives the residual and the exact tangent; a joint
+            // equal to the one before (same compliance, same hole) has the same ones
+            let same = k > 0 && c.c[k][..self.p.m] == c.c[k - 1][..self.p.m] && st.hole == states[k - 1].hole;
+            let dual = match (loaded, same, prev) {
+                (true, _, _) => None,
+                (false, true, Some(p)) => Some(p),
+                (false, _, _) => self
+                    .eval_dual(&c.c[k], tension, st.hole)
+                    .ok()
+                    .map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
+            };
+            prev = dual;
+            if let Some((r, det)) = dual {
+                res2 += r[0] * r[0] + r[1] * r[1];
+                sol.tangent_det[k] = det;
+                continue;
+            }
+            match self.hole_residual(&c.c[k], tension, st.hole, tl) {
+                Ok((r, _)) => {
+                    res2 += r[0] * r[0] + r[1] * r[1];
+                    if let Ok(jac) = self.joint_tangent(&c.c[k], tension, st.hole, r) {
+                        sol.tangent_det[k] = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+                    }
+                }
+                Err(_) => return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() }),
+            }
+        }
+        sol.residual = res2.sqrt();
+        let all_finite = nodes.iter().take(n + 1).all(|p| p.x.is_finite() && p.y.is_finite() && p.theta.is_finite())
+            && sol.residual.is_finite()
+            && sol.cable_excursion.is_finite()
+            && sol.tangent_det[..n].iter().all(|d| d.is_finite());
+        if !all_finite {
+            return Err(Error::Singular { what: "solution (non-finite)" });
+        }
+        Ok(sol)
+    }
+}

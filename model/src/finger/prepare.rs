@@ -1,0 +1,192 @@
+//! Preparing a finger: validation, the hinge compliances (once per parameter set), the stack's
+//! stiffness and the sub-element compliances for a set of channel voltages (docs/model.md
+//! "Joint compliance with the DE stack"). No solving here.
+
+use super::*;
+
+/// The stack stiffness's upper triangle at thickness t in closed form (`Finger::stack_stiffness`
+/// multiplied out: K_a = g_a EA/L (1, 0, d)ᵀ(1, 0, d) plus g_b EI times the beam's bending
+/// block, d = (t_min + t)/2, EA ∝ t, EI ∝ t³, g = g0 + g1 t).
+#[derive(Clone, Copy)]
+pub(crate) struct StackUpper<R> {
+    /// E_de w / L.
+    ka: R,
+    /// The axial and bending factors' (g0, g1).
+    ga: [R; 2],
+    gb: [R; 2],
+    /// t_min / 2.
+    d0: R,
+    /// E_de w (1/L³, -1/(2 L²), 1/(3 L)): the bending block's entries per t³.
+    kb: [R; 3],
+}
+
+impl<R: Real> StackUpper<R> {
+    /// (k00, k01, k02, k11, k12, k22) at thickness t, mm.
+    #[inline(always)]
+    pub(crate) fn at(&self, t: R) -> [R; 6] {
+        let gka = (self.ga[0] + self.ga[1] * t) * (self.ka * t);
+        let d = self.d0 + t * R::from_f64(0.5);
+        let e3 = (self.gb[0] + self.gb[1] * t) * (t * t * t);
+        let k02 = gka * d;
+        [gka, R::zero(), k02, self.kb[0] * e3, self.kb[1] * e3, self.kb[2] * e3 + k02 * d]
+    }
+}
+
+impl<R: Real> Finger<R> {
+    /// Validate the parameters and compute the hinge compliances (once per parameter set).
+    pub fn new(p: Params<R>) -> Result<Self, Error> {
+        Self::with_calibration(p, Calibration::none())
+    }
+
+    /// `new` with an FE calibration of the sub-element compliances (`calibration`).
+    pub fn with_calibration(p: Params<R>, cal: Calibration<R>) -> Result<Self, Error> {
+        p.validate()?;
+        cal.validate(&p)?;
+        #[cfg(not(feature = "de"))]
+        if p.layers > 0 {
+            return Err(Error::Param { name: "layers", range: "0 (this build has no DE support)" });
+        }
+        let mut hinge_c = [mat3::zero(); MAX_SUB];
+        let mut hinge_k = [mat3::zero(); MAX_SUB];
+        let e = p.hinge_modulus();
+        for j in 0..p.m {
+            let (x0, x1) = hinge::sub_element_bounds(p.a, p.m, j);
+            hinge_c[j] = cal.hinge_compliance(&hinge::stretch_compliance(p.b, p.t_min, p.a, e, p.w, x0, x1));
+            hinge_k[j] = mat3::inverse_spd(&hinge_c[j]).ok_or(Error::Singular { what: "hinge compliance" })?;
+            if !hinge_c[j].iter().flatten().all(|x| x.is_finite()) {
+                return Err(Error::Singular { what: "hinge compliance" });
+            }
+        }
+        let sub_len = p.hinge_len() / R::from_u32(p.m as u32);
+        let link_len = p.l - p.hinge_len();
+        let link_c = if p.flex_links { uniform_beam_compliance(e, p.w, p.b, link_len) } else { mat3::zero() };
+        Ok(Finger { p, hinge_c, hinge_k, sub_len, link_len, link_c, cal })
+    }
+
+    pub fn params(&self) -> &Params<R> {
+        &self.p
+    }
+
+    /// The same prepared finger in another scalar type: the parameters and the hinge
+    /// compliances computed once in `R` and cast (fixed point cannot hold the quadrature's
+    /// intermediate products).
+    pub fn cast<S: Real>(&self) -> Finger<S> {
+        let mut hinge_c = [mat3::zero(); MAX_SUB];
+        let mut hinge_k = [mat3::zero(); MAX_SUB];
+        for j in 0..MAX_SUB {
+            hinge_c[j] = cast_mat(&self.hinge_c[j]);
+            hinge_k[j] = cast_mat(&self.hinge_k[j]);
+        }
+        Finger {
+            p: self.p.cast(),
+            hinge_c,
+            hinge_k,
+            sub_len: S::from_f64(self.sub_len.to_f64()),
+            link_len: S::from_f64(self.link_len.to_f64()),
+            link_c: cast_mat(&self.link_c),
+            cal: Calibration {
+                hinge: self.cal.hinge.map(|x| S::from_f64(x.to_f64())),
+                stack_axial: self.cal.stack_axial.map(|x| S::from_f64(x.to_f64())),
+                stack_bending: self.cal.stack_bending.map(|x| S::from_f64(x.to_f64())),
+            },
+        }
+    }
+
+    /// The FE calibration this finger was prepared with.
+    pub fn calibration(&self) -> &Calibration<R> {
+        &self.cal
+    }
+
+    /// Stiffness of a stack stretch of one sub-element at stack thickness t (mm), calibrated.
+    pub fn stack_stiffness(&self, t: R) -> Mat3<R> {
+        self.cal.stack_stiffness(&self.p, &de::stack_stiffness(&self.p, self.sub_len, t), self.sub_len, t)
+    }
+
+    /// `stack_stiffness`'s upper triangle as a function of the thickness, its constants taken
+    /// once (`StackUpper::at`).
+    pub(crate) fn stack_upper(&self) -> StackUpper<R> {
+        let (p, l) = (&self.p, self.sub_len);
+        let ew = p.e_de() * p.w;
+        let half = R::from_f64(0.5);
+        StackUpper {
+            ka: ew / l,
+            ga: self.cal.stack_axial,
+            gb: self.cal.stack_bending,
+            d0: p.t_min * half,
+            kb: [ew / (l * l * l), -ew * half / (l * l), ew / (R::from_f64(3.0) * l)],
+        }
+    }
+
+    /// Hinge compliance of sub-element j (no stack): the Castigliano integrals of docs/model.md
+    /// "Hinge compliance".
+    pub fn hinge_compliance(&self, j: usize) -> Mat3<R> {
+        self.hinge_c[j.min(MAX_SUB - 1)]
+    }
+
+    /// Pull-in voltage V_pi of a layer, V (0 without stacks).
+    pub fn pull_in_voltage(&self) -> R {
+        de::pull_in_voltage(&self.p)
+    }
+
+    /// The ceiling every channel stays below: min(margin x V_pi, supply), V.
+    pub fn voltage_ceiling(&self) -> R {
+        de::voltage_ceiling(&self.p)
+    }
+
+    /// The ceiling in force: min(margin x V_pi, v_supply, hv_fs), V (`de::ceiling_in_force`).
+    pub fn ceiling_in_force(&self, hv_fs: Option<R>) -> R {
+        de::ceiling_in_force(&self.p, hv_fs)
+    }
+
+    /// Whole-stack thickness at `volts`, mm (refuses a voltage at or past the ceiling).
+    pub fn stack_thickness(&self, volts: R) -> Result<R, Error> {
+        de::stack_thickness(&self.p, 1, volts)
+    }
+
+    /// The compliance of every sub-element for these channel voltages (one per joint):
+    /// `C = (C_hinge⁻¹ + Tᵀ C_de(t_k)⁻¹ T)⁻¹`, or C_hinge alone without stacks.
+    pub fn compliances(&self, volts: &[R]) -> Result<Compliances<R>, Error> {
+        let p = &self.p;
+        if volts.len() != p.n {
+            return Err(Error::Input { input: "voltages", reason: "one voltage per joint is required" });
+        }
+        let mut out = Compliances {
+            n: p.n,
+            m: p.m,
+            c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS],
+            thickness: [R::zero(); MAX_JOINTS],
+            volts: [R::zero(); MAX_JOINTS],
+        };
+        out.volts[..p.n].copy_from_slice(volts);
+        for (k, &v) in volts.iter().enumerate() {
+            de::check_voltage(p, k + 1, v)?;
+            // a build without the `de` feature refuses stacks in `new`, and leaves the stack's
+            // code (thinning, stack stiffness) out of the image
+            if p.layers == 0 || cfg!(not(feature = "de")) {
+                out.c[k][..p.m].copy_from_slice(&self.hinge_c[..p.m]);
+                continue;
+            }
+            let t = de::stack_thickness(p, k + 1, v)?;
+            out.thickness[k] = t;
+            let k_de = self.stack_stiffness(t);
+            for j in 0..p.m {
+                let k_sum = mat3::add(&self.hinge_k[j], &k_de);
+                out.c[k][j] = mat3::inverse_spd(&k_sum).ok_or(Error::Singular { what: "joint stiffness" })?;
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Compliance of a uniform beam (modulus e, width w, thickness t, length len), clamped at its
+/// proximal end, loads at its distal end: [[L/EA,0,0],[0,L³/3EI,L²/2EI],[0,L²/2EI,L/EI]].
+pub fn uniform_beam_compliance<R: Real>(e: R, w: R, t: R, len: R) -> Mat3<R> {
+    let ea = e * w * t;
+    let ei = e * w * t * t * t / R::from_f64(12.0);
+    let z = R::zero();
+    [
+        [len / ea, z, z],
+        [z, len * len * len / (R::from_f64(3.0) * ei), len * len / (R::from_f64(2.0) * ei)],
+        [z, len * len / (R::from_f64(2.0) * ei), len / ei],
+    ]
+}

@@ -1,0 +1,88 @@
+//! The paper's explicit load stepping (Eq. 29): each step's loads from the geometry of the
+//! step before, first order in 1/n_inc. Not the converged solve.
+
+use super::*;
+
+impl<R: Real> Finger<R> {
+    /// The paper's explicit load stepping (Eq. 29), `n_inc` steps.
+    pub(super) fn solve_stepping(&self, c: &Compliances<R>, tension: R, tip_force: [R; 2], n_inc: u32) -> Result<Solution<R>, Error> {
+        self.check_load(c, tension, tip_force)?;
+        if n_inc == 0 {
+            return Err(Error::Input { input: "n_inc", reason: "at least one load step" });
+        }
+        let states = self.stepping(c, tension, tip_force, n_inc)?;
+        self.assemble(c, tension, tip_force, &states, None, n_inc)
+    }
+
+    /// The paper's load stepping (Eq. 29): P_n = n/n_inc P; each step's loads (direction of the
+    /// span, moment arms, tip-load point) come from the geometry of the step before, and each
+    /// sub-element takes `q = C w` at once.
+    pub(super) fn stepping(
+        &self,
+        c: &Compliances<R>,
+        tension: R,
+        force: [R; 2],
+        n_inc: u32,
+    ) -> Result<[JointState<R>; MAX_JOINTS], Error> {
+        let n = self.p.n;
+        let mut states = [self.straight(); MAX_JOINTS];
+        let loaded = force[0] != R::zero() || force[1] != R::zero();
+        for step in 1..=n_inc {
+            let lam = R::from_u32(step as u32) / R::from_u32(n_inc as u32);
+            let p = tension * lam;
+            let f = [force[0] * lam, force[1] * lam];
+            let (nodes, _) = self.chain(&states, p, f, None);
+            let tip = [nodes[n].x, nodes[n].y];
+            let mut next = states;
+            for k in 0..n {
+                let tl = Self::tip_in_frame(&nodes[k], f, tip);
+                next[k] = self
+                    .explicit_step(&c.c[k], p, &states[k], if loaded { Some(tl) } else { None })
+                    .map_err(|_| Error::Contact { joint: k + 1, tension: p.to_f64() })?;
+            }
+            states = next;
+        }
+        Ok(states)
+    }
+
+    /// One explicit step for a joint: loads from the previous geometry `prev`.
+    pub(super) fn explicit_step(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        prev: &JointState<R>,
+        tip: Option<TipLoad<R>>,
+    ) -> Result<JointState<R>, MarchError> {
+        let e = self.p.e;
+        let b = prev.hole;
+        let SpanLoads { fc, ft, tp, ftot } = self.span_loads(tension, b, tip)?;
+        let mut pose: Pose<R> = Pose::origin();
+        let mut q = [[R::zero(); 3]; MAX_SUB];
+        for j in 0..self.p.m {
+            let (s, co) = pose.theta.sin_cos();
+            let qp = prev.q[j];
+            // previous distal end of this sub-element
+            let d = [
+                pose.x + co * (self.sub_len + qp[0]) - s * qp[1],
+                pose.y + s * (self.sub_len + qp[0]) + co * qp[1],
+            ];
+            let mut mo = (b[0] - d[0]) * fc[1] - (b[1] - d[1]) * fc[0];
+            if tip.is_some() {
+                mo += (tp[0] - d[0]) * ft[1] - (tp[1] - d[1]) * ft[0];
+            }
+            let f = [co * ftot[0] + s * ftot[1], -s * ftot[0] + co * ftot[1]];
+            q[j] = mat3::mul_vec(&c[j], &[f[0], f[1], mo]);
+            pose = Pose { x: d[0], y: d[1], theta: pose.theta + qp[2] };
+        }
+        // new geometry from the new q
+        let mut end = Pose::origin();
+        for qj in q.iter().take(self.p.m) {
+            end = end.then(self.sub_len + qj[0], qj[1], qj[2]);
+        }
+        let hole = end.point(R::zero(), e);
+        if !(hole[0].is_finite() && hole[1].is_finite()) {
+            return Err(MarchError::Singular);
+        }
+        Ok(JointState { q, end, hole, tangent: None })
+    }
+}

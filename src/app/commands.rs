@@ -1,0 +1,871 @@
+//! The command side's state and dispatch: [`Commands`] (console lines in, replies and
+//! [`Setpoints`] out), the ceilings, the servo plan, fmax, and the handlers of the commands
+//! that move or read the outputs and the model (`status`, `limits`, `solve`, `arm`, `volt`,
+//! `force`, `param`, `preset`, `cal`, `wait`). `pose` and `contact` are `super::pose`'s,
+//! `shape` `super::shape`'s, `save`/`config`/`factory` `super::config`'s.
+//!
+//! Safety rules, each in one place:
+//! - The ceiling per channel, `vmax = min(board hold ceiling, the model's ceiling at its
+//!   parameters, HV full scale, HV limit)`, and its duty are recomputed by
+//!   [`Commands::recompute`], called on every parameter change.
+//! - The outputs belong to the control core ([`crate::control::Control`]); the command side
+//!   plans [`Setpoints`]; the core takes them unless a stop came meanwhile.
+//! - A request at or past the ceiling is `err limit` and changes nothing: every command checks
+//!   everything first and changes state only when all checks passed. Comparisons are written
+//!   so that NaN fails them.
+//! - `stop` is acted on where the bytes arrive ([`crate::rx`]), not here.
+
+use core::cell::Cell;
+use core::fmt::Write;
+
+use finger_model::calibration::KEEPS_CALIBRATION;
+use finger_model::params::PARAMS;
+#[cfg(not(m3))]
+use finger_model::Solution;
+use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Params};
+
+use super::errors::{model_err, no_args, number, tension, CmdError};
+use super::film;
+use super::help::{joints, list, solve_reply, Reply, Tip, DEG, HELP};
+use super::params::{board_params, calibration_for, preset, FwParams, CAL_NAMES, CHANNELS, FW_PARAMS};
+use super::solves::{fmax_of, forward, Solved};
+#[cfg(m3)]
+use super::solves::forward_stiffness;
+#[cfg(feature = "settings")]
+use super::stored::ConfigState;
+use crate::board::HV_MAX_V;
+use crate::console;
+use crate::control::{hv_duty_for, Setpoints, View};
+use crate::num::{Fixed, Short};
+use crate::rx::Record;
+
+/// Longest `wait`, s.
+const WAIT_MAX_S: f32 = 600.0;
+
+/// A running `wait`: start (control ms), length (ms), length as asked (s).
+#[derive(Clone, Copy)]
+pub(super) struct Wait {
+    start_ms: u32,
+    ms: u32,
+    s: f32,
+}
+
+/// The command side: console lines in, replies and [`Setpoints`] out. Owns no output; runs
+/// at the lowest priority on the chip (RTIC's idle), inside [`super::App`] on the host.
+pub struct Commands {
+    pub(super) finger: Finger<f32>,
+    /// The board's film: its law, hold ceiling, settling (app/film.rs).
+    pub(super) film: film::BoardFilm,
+    pub(super) fw: FwParams,
+    pub(super) board_name: &'static str,
+    pub(super) nl: &'static str,
+    /// Full-scale duty of each HV PWM and of the servo PWM.
+    pub(super) hv_max: [u16; CHANNELS],
+    pub(super) servo_max: u16,
+    pub(super) armed: bool,
+    /// From the control core's [`View`]: HV enable, slewed values, duties, fault, time.
+    pub(super) enable: bool,
+    pub(super) volts: [f32; CHANNELS],
+    pub(super) duty: [u16; CHANNELS],
+    /// Each stack's thickness stretch now, as the control tick integrates it (1 at rest).
+    pub(super) stack_ratio: [f32; CHANNELS],
+    /// The core's latched fault, as the console names it.
+    pub(super) fault: Option<&'static str>,
+    pub(super) locked_out: bool,
+    pub(super) now_ms: u32,
+    /// HV setpoints (targets), V.
+    pub(super) target_v: [f32; CHANNELS],
+    /// Ceiling per channel, V, and its duty.
+    pub(super) vmax: [f32; CHANNELS],
+    pub(super) duty_max: [u16; CHANNELS],
+    /// Cable tension target, N; the excursion and servo angle it gives.
+    pub(super) force: f32,
+    pub(super) cable: f32,
+    pub(super) servo_deg: f32,
+    /// Stops seen, setpoints sent.
+    pub(super) epoch: u32,
+    pub(super) seq: u32,
+    pub(super) wait: Option<Wait>,
+    /// A `stop` line reached [`Commands::execute`] (see [`Commands::take_stop`]).
+    pub(super) stop_asked: bool,
+    /// The `timing` addition: the runtime's own measurements (set by the chip or simulator).
+    pub(super) report: Option<fn(&mut dyn Write)>,
+    /// `Finger::fmax` at the setpoints it was computed for ([`Commands::fmax`]), and how many
+    /// times it was computed.
+    pub(super) fmax_cache: Cell<Option<([f32; CHANNELS], Result<BranchLimit<f32>, ModelError>)>>,
+    pub(super) fmax_computed: Cell<u32>,
+    /// The finger's branch table (`inverse::BranchTable`: `solve`, `pose`, `force` and fmax
+    /// start from it), built at its first use after a model change (docs/inverse-cost.md has
+    /// its cost) and cleared by [`Commands::set_finger`] and [`Commands::recompute`]. None
+    /// inside for a finger without stacks.
+    #[cfg(feature = "pose")]
+    pub(super) inv_table: core::cell::OnceCell<Option<finger_model::inverse::BranchTable<f32>>>,
+    /// The settings store and what the boot found in it (app/config.rs).
+    #[cfg(feature = "settings")]
+    pub(super) cfg: ConfigState,
+}
+
+impl Commands {
+    /// Default parameters, disarmed. `board_name` and `nl` (line ending) from the board,
+    /// `hv_max` / `servo_max` its PWMs' full-scale duties.
+    pub fn new(board_name: &'static str, nl: &'static str, hv_max: [u16; CHANNELS], servo_max: u16) -> Self {
+        // the defaults are valid (a model test); no Debug formatting of the error on the target
+        // docs/model.md's finger on the board's film, with its FE calibration (`calibration_for`)
+        let p = preset(board_params());
+        let finger = match Finger::with_calibration(p, calibration_for(&p)) {
+            Ok(f) => f,
+            Err(_) => panic!("default parameters"),
+        };
+        let mut c = Commands {
+            finger,
+            film: film::BoardFilm::new(),
+            fw: FwParams::default(),
+            board_name,
+            nl,
+            hv_max,
+            servo_max,
+            armed: false,
+            enable: false,
+            volts: [0.0; CHANNELS],
+            duty: [0; CHANNELS],
+            stack_ratio: [1.0; CHANNELS],
+            fault: None,
+            locked_out: false,
+            now_ms: 0,
+            target_v: [0.0; CHANNELS],
+            vmax: [0.0; CHANNELS],
+            duty_max: [0; CHANNELS],
+            force: 0.0,
+            cable: 0.0,
+            servo_deg: 0.0,
+            epoch: 0,
+            seq: 0,
+            wait: None,
+            stop_asked: false,
+            report: None,
+            fmax_cache: Cell::new(None),
+            fmax_computed: Cell::new(0),
+            #[cfg(feature = "pose")]
+            inv_table: core::cell::OnceCell::new(),
+            #[cfg(feature = "settings")]
+            cfg: ConfigState::new(),
+        };
+        c.recompute();
+        c
+    }
+
+    pub fn finger(&self) -> &Finger<f32> {
+        &self.finger
+    }
+    pub fn fw_params(&self) -> &FwParams {
+        &self.fw
+    }
+    pub fn armed(&self) -> bool {
+        self.armed
+    }
+    pub fn targets(&self) -> [f32; CHANNELS] {
+        self.target_v
+    }
+    /// Ceiling per channel, V.
+    pub fn vmax(&self) -> [f32; CHANNELS] {
+        self.vmax
+    }
+    /// The duty of each channel's ceiling.
+    pub fn duty_ceiling(&self) -> [u16; CHANNELS] {
+        self.duty_max
+    }
+    /// The line ending of the replies.
+    pub fn newline(&self) -> &'static str {
+        self.nl
+    }
+    /// A `wait` is running: no line is taken until it ends ([`Commands::poll_wait`]).
+    pub fn busy(&self) -> bool {
+        self.wait.is_some()
+    }
+
+    /// Take the control core's report. A stop since the last one (a new epoch): disarmed,
+    /// tension 0, targets 0, as the core already is.
+    pub fn sync(&mut self, v: &View) {
+        self.enable = v.enable;
+        self.volts = v.volts;
+        self.duty = v.duty;
+        self.fault = v.fault.text();
+        self.locked_out = v.locked_out;
+        self.stack_ratio = v.stack_ratio;
+        self.now_ms = v.now_ms;
+        if v.epoch != self.epoch {
+            self.epoch = v.epoch;
+            self.armed = false;
+            self.force = 0.0;
+            self.cable = 0.0;
+            self.servo_deg = 0.0;
+            self.target_v = [0.0; CHANNELS];
+        }
+    }
+
+    /// What `timing` reports (the chip's measurements, or the simulator's).
+    pub fn set_timing_report(&mut self, f: fn(&mut dyn Write)) {
+        self.report = Some(f);
+    }
+
+    /// A `stop` was executed as a line: the caller stops the control core.
+    pub fn take_stop(&mut self) -> bool {
+        core::mem::take(&mut self.stop_asked)
+    }
+
+    /// What the outputs should do now (a new `seq` each call).
+    pub fn setpoints(&mut self) -> Setpoints {
+        self.seq = self.seq.wrapping_add(1);
+        Setpoints {
+            seq: self.seq,
+            epoch: self.epoch,
+            armed: self.armed,
+            target_v: self.target_v,
+            servo_duty: self.servo_duty(self.servo_deg),
+            servo_released: self.servo_duty(0.0),
+            duty_ceiling: self.duty_max,
+            slew: self.fw.slew,
+            shaped: self.fw.shaped,
+        }
+    }
+
+    /// Run one queued line; its reply (or, for `wait`, nothing yet) goes to `out`.
+    pub fn run<W: Write>(&mut self, rec: Record, out: &mut W) {
+        let nl = self.nl;
+        match rec {
+            Record::Line(l) => self.execute(&l, out),
+            Record::TooLong => {
+                let _ = w!(out; "err too-long: line longer than ", console::LINE_MAX, " bytes discarded", nl);
+            }
+            Record::Overrun(n) => {
+                for _ in 0..n {
+                    let _ = w!(out; "err overrun: bytes lost while receiving (line discarded); send it again", nl);
+                }
+            }
+        }
+    }
+
+    /// A running `wait` ends when its time is up, or early when input arrived (`input`);
+    /// writes its reply `ok waited=<s>` (early: `ok waited=<s elapsed> early=input`). True
+    /// when it ended.
+    pub fn poll_wait<W: Write>(&mut self, input: bool, out: &mut W) -> bool {
+        let Some(w) = self.wait else { return false };
+        let nl = self.nl;
+        let el = self.now_ms.wrapping_sub(w.start_ms);
+        if el >= w.ms {
+            let _ = w!(out; "ok waited=", Short(w.s), nl);
+        } else if input {
+            let _ = w!(out; "ok waited=", Short(el as f32 / 1000.0), " early=input", nl);
+        } else {
+            return false;
+        }
+        self.wait = None;
+        true
+    }
+
+    // ---------------------------------------------------------------- ceilings, servo
+
+    /// What the board allows whatever the model's parameters: min(the board's hold ceiling,
+    /// the HV modules' full scale and limit), V. The model's ceiling in force takes it as its
+    /// `hv_fs` term (`Finger::ceiling_in_force`), so the inverse and the board agree.
+    pub(super) fn board_cap(&self) -> f32 {
+        self.film.hold_ceiling().min(HV_MAX_V)
+    }
+
+    /// The ceilings: per channel `min(board hold ceiling, the model's ceiling, HV full scale,
+    /// HV limit)` and the duty it gives. Called on every parameter change.
+    pub(super) fn recompute(&mut self) {
+        // min(the model's ceiling, the board's hold ceiling, the modules' full scale and limit); NaN-proof
+        let v = self.finger.ceiling_in_force(Some(self.board_cap()));
+        let v = if v >= 0.0 { v } else { 0.0 };
+        let v = v.min(self.board_cap());
+        // the inverse's branch table is built for the ceiling in force
+        #[cfg(feature = "pose")]
+        {
+            self.inv_table = core::cell::OnceCell::new();
+        }
+        for ch in 0..CHANNELS {
+            self.vmax[ch] = v;
+            self.duty_max[ch] = hv_duty_for(v, self.hv_max[ch]);
+        }
+    }
+
+    /// Servo duty for `deg` (0 = cable released): 1.0..2.0 ms over `servo_range`.
+    pub(super) fn servo_duty(&self, deg: f32) -> u16 {
+        let max = self.servo_max as f32;
+        let frac = deg / self.fw.servo_range;
+        let frac = if frac > 0.0 { frac.min(1.0) } else { 0.0 };
+        let pulse_ms = if self.fw.servo_dir > 0.0 { 1.0 + frac } else { 2.0 - frac };
+        (pulse_ms / 20.0 * max) as u16
+    }
+
+    /// Servo target `deg` (the control core moves it as the voltages slew).
+    pub(super) fn set_servo(&mut self, deg: f32) {
+        self.servo_deg = deg;
+    }
+    #[inline(never)]
+    pub(super) fn plan_servo(&self, finger: &Finger<f32>, fw: &FwParams, force: f32, volts: &[f32; CHANNELS]) -> Result<(f32, f32), CmdError> {
+        if force == 0.0 {
+            return Ok((0.0, 0.0));
+        }
+        let excursion = |s: &Solved| s.cable_excursion;
+        let cable = if core::ptr::eq(finger, &self.finger) { self.forward_with(force, volts, excursion) } else { forward(finger, force, volts).map(|s| excursion(&s)) };
+        let cable = cable.map_err(model_err)?.max(0.0);
+        let deg = cable / fw.spool_r * DEG;
+        if !(deg <= fw.servo_range) {
+            return Err(err!("limit"; "cable excursion ", Fixed(cable, 2), " mm needs ", Fixed(deg, 1), " deg, past the servo travel ", Fixed(fw.servo_range, 0), " deg"));
+        }
+        Ok((cable, deg))
+    }
+
+    /// The end of the equilibrium branch at the HV setpoints `volts` (`Finger::fmax`),
+    /// cached: computed once per model and set of setpoints (the cache is keyed by the
+    /// setpoints and cleared when a parameter changes, [`Commands::set_finger`]).
+    pub(super) fn fmax(&self, volts: &[f32; CHANNELS]) -> Result<BranchLimit<f32>, ModelError> {
+        if let Some((key, r)) = self.fmax_cache.get() {
+            if key == *volts {
+                return r;
+            }
+        }
+        #[cfg(feature = "pose")]
+        let r = match self.branch_table() {
+            Some(t) => t.fmax(volts),
+            None => fmax_of(&self.finger, volts),
+        };
+        #[cfg(not(feature = "pose"))]
+        let r = fmax_of(&self.finger, volts);
+        self.fmax_cache.set(Some((*volts, r)));
+        self.fmax_computed.set(self.fmax_computed.get() + 1);
+        r
+    }
+
+    /// The finger's branch table, built at its first use after a model change (None for a
+    /// finger without stacks, or if it cannot be built: the full solves answer then).
+    #[cfg(feature = "pose")]
+    pub(super) fn branch_table(&self) -> Option<&finger_model::inverse::BranchTable<f32>> {
+        self.inv_table
+            .get_or_init(|| {
+                if self.finger.params().layers > 0 {
+                    finger_model::inverse::BranchTable::new(&self.finger, &self.inverse_options()).ok()
+                } else {
+                    None
+                }
+            })
+            .as_ref()
+    }
+
+    /// The forward solve under tension alone at these voltages, handed to `use_it`: from the
+    /// branch table when there is one (`BranchTable::solve_into`, into storage here: no copy
+    /// of the solution; the full model's converged answer, Newton started at the table's guide
+    /// holes), else the full solve (`forward`: f32, or fixed point on the M3).
+    pub(super) fn forward_with<T>(&self, p: f32, volts: &[f32; CHANNELS], use_it: impl FnOnce(&Solved) -> T) -> Result<T, ModelError> {
+        #[cfg(feature = "pose")]
+        if let Some(t) = self.branch_table() {
+            let c = self.finger.compliances(volts)?;
+            let mut sol = Solution::empty();
+            t.solve_into(&c, p, &mut sol)?;
+            return Ok(use_it(&sol));
+        }
+        forward(&self.finger, p, volts).map(|s| use_it(&s))
+    }
+
+    /// How many times `Finger::fmax` ran (the cache's misses), for the tests.
+    pub fn fmax_evaluations(&self) -> u32 {
+        self.fmax_computed.get()
+    }
+
+    /// The inverse's options on this board: its ceiling is the one in force (HV full scale too).
+    #[cfg(feature = "pose")]
+    pub(super) fn inverse_options(&self) -> finger_model::inverse::Options<f32> {
+        finger_model::inverse::Options { hv_fs: Some(self.board_cap()), ..Default::default() }
+    }
+
+    /// The finger of `p` with calibration `cal` as the model (`param`, `preset`, `cal`): the
+    /// servo plan of the present force and setpoints on it, then the ceilings. Refused, nothing
+    /// changes.
+    #[inline(never)]
+    pub(super) fn adopt_model(&mut self, p: Params<f32>, cal: Calibration<f32>) -> Result<(), CmdError> {
+        let f = Finger::with_calibration(p, cal).map_err(model_err)?;
+        let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
+        self.set_finger(f);
+        self.cable = cable;
+        self.set_servo(deg);
+        self.recompute();
+        Ok(())
+    }
+
+    /// A new model (parameter or preset change): the fmax cache no longer holds.
+    pub(super) fn set_finger(&mut self, f: Finger<f32>) {
+        self.finger = f;
+        self.fmax_cache.set(None);
+        #[cfg(feature = "pose")]
+        {
+            self.inv_table = core::cell::OnceCell::new();
+        }
+    }
+
+    /// The checks every setpoint change passes (`volt`, `force`, an armed `pose`), after
+    /// the caller checked new voltages against the ceilings ([`Commands::check_volts`]): the
+    /// tension at most fmax at those setpoints (nothing past the end of the branch),
+    /// the servo within its travel. Nothing moves; returns where the servo must go
+    /// (excursion mm, deg).
+    #[inline(never)]
+    pub(super) fn plan_setpoints(&self, force: f32, volts: &[f32; CHANNELS]) -> Result<(f32, f32), CmdError> {
+        if force > 0.0 {
+            let end = self.fmax(volts).map_err(model_err)?;
+            if !(force <= end.tension) {
+                return Err(model_err(ModelError::ForceLimit { tension: force.into(), fmax: end.tension.into() }));
+            }
+        }
+        self.plan_servo(&self.finger, &self.fw, force, volts)
+    }
+
+
+    // ---------------------------------------------------------------- console
+    /// Run one line (without terminator); writes exactly one final reply line (none for a
+    /// blank line, and for `wait` the reply comes from `tick` when the time is up).
+    pub fn execute<W: Write>(&mut self, line: &[u8], out: &mut W) {
+        let nl = self.nl;
+        let toks = match console::tokens(line) {
+            Some(t) => t,
+            None => {
+                let _ = w!(out; "err usage: too many arguments", nl);
+                return;
+            }
+        };
+        if toks.is_empty() {
+            return;
+        }
+        let mut reply = Reply::new();
+        let r = self.dispatch(&toks, &mut reply, out);
+        match r {
+            Ok(true) => {}
+            Ok(false) => {
+                let _ = if reply.is_empty() { w!(out; "ok", nl) } else { w!(out; "ok ", reply, nl) };
+            }
+            Err(e) => {
+                let _ = w!(out; "err ", e.code, ": ", e.msg, nl);
+            }
+        }
+    }
+
+    /// Ok(true): the reply is written already (pose, contact) or comes later (wait).
+    pub(super) fn dispatch<W: Write>(&mut self, t: &[&[u8]], r: &mut Reply, out: &mut W) -> Result<bool, CmdError> {
+        let args = &t[1..];
+        match t[0] {
+            b"help" => {
+                no_args(args, "help")?;
+                let nl = self.nl;
+                for l in HELP {
+                    let _ = w!(out; l, nl);
+                }
+            }
+            b"version" => {
+                no_args(args, "version")?;
+                let _ = w!(r; "version=", crate::VERSION, " name=", crate::NAME, " board=", self.board_name);
+            }
+            b"status" => {
+                no_args(args, "status")?;
+                self.cmd_status(r);
+            }
+            b"limits" => {
+                no_args(args, "limits")?;
+                self.cmd_limits(r);
+            }
+            #[cfg(not(m3))]
+            b"material" => {
+                no_args(args, "material")?;
+                self.film.write_material(r);
+            }
+            b"solve" => self.cmd_solve(args, r)?,
+            #[cfg(feature = "shape")]
+            b"shape" => self.cmd_shape(args, r)?,
+            b"arm" => {
+                no_args(args, "arm")?;
+                if let (true, Some(f)) = (self.locked_out, self.fault) {
+                    return Err(err!("fault"; f, ": this image never arms here"));
+                }
+                if let Some(f) = self.fault {
+                    return Err(err!("fault"; "fault ", f, " latched; send stop to clear it"));
+                }
+                self.armed = true;
+                let _ = w!(r; "armed=1");
+            }
+            b"disarm" => {
+                no_args(args, "disarm")?;
+                self.cmd_disarm()?;
+                let _ = w!(r; "armed=0");
+            }
+            b"stop" => {
+                // reached only when a line is executed directly (App::execute): the RX part
+                // acts on `stop` lines before they are queued
+                self.stop_asked = true;
+                let _ = w!(r; "stopped");
+            }
+            b"timing" => {
+                no_args(args, "timing")?;
+                let Some(f) = self.report else { return Err(err!("unknown"; "timing is not in this build")) };
+                f(r);
+            }
+            b"volt" => self.cmd_volt(args, r)?,
+            b"force" => self.cmd_force(args, r)?,
+            #[cfg(feature = "pose")]
+            b"pose" => {
+                self.cmd_pose(args, out)?;
+                return Ok(true);
+            }
+            #[cfg(feature = "contact")]
+            b"contact" => {
+                self.cmd_contact(args, out)?;
+                return Ok(true);
+            }
+            #[cfg(m3)]
+            b"pose" => self.cmd_pose(args, r)?,
+            #[cfg(not(any(feature = "pose", m3)))]
+            b"pose" => return Err(err!("unknown"; "pose is not in this build (feature pose)")),
+            #[cfg(not(feature = "contact"))]
+            b"contact" => return Err(err!("unknown"; "contact is not in this build (feature contact)")),
+            b"param" => self.cmd_param(args, r, out)?,
+            b"preset" => self.cmd_preset(args, r)?,
+            b"cal" => self.cmd_cal(args, r)?,
+            #[cfg(feature = "settings")]
+            b"save" => self.cmd_save(args, r)?,
+            #[cfg(feature = "settings")]
+            b"factory" => self.cmd_factory(args, r)?,
+            #[cfg(feature = "settings")]
+            b"config" => self.cmd_config(args, r, out)?,
+            b"wait" => {
+                let [s] = args else { return Err(err!("usage"; "wait <seconds>")) };
+                let s = number(s, "seconds")?;
+                if !(s >= 0.0 && s <= WAIT_MAX_S) {
+                    return Err(err!("usage"; "wait: 0..", Short(WAIT_MAX_S), " s"));
+                }
+                let ms = (s * 1000.0 + 0.5) as u32;
+                if ms == 0 {
+                    let _ = w!(r; "waited=0");
+                    return Ok(false);
+                }
+                self.wait = Some(Wait { start_ms: self.now_ms, ms, s });
+                return Ok(true);
+            }
+            w => {
+                return Err(err!("unknown"; "unknown command ", (console::printable(w)), "; try help"));
+            }
+        }
+        Ok(false)
+    }
+
+    #[inline(never)]
+    pub(super) fn cmd_status(&self, r: &mut Reply) {
+        let _ = w!(r; "armed=", self.armed as u8, " force=", Fixed(self.force, 3), " volts=");
+        list(r, &self.volts, 1);
+        // each stack now: the film creeps under a held voltage (the control tick's state)
+        let stack_mm = self.stack_mm();
+        let mut thick = [0.0f32; CHANNELS];
+        for ch in 0..CHANNELS {
+            thick[ch] = stack_mm * self.stack_ratio[ch];
+        }
+        let _ = w!(r; " thick=");
+        list(r, &thick, 4);
+        let mut fault = self.fault;
+        #[cfg(feature = "settings")]
+        {
+            fault = fault.or(self.config_fault());
+        }
+        let shown = self.forward_with(self.force, &self.volts, |s| {
+            let _ = w!(r; " joints=");
+            joints(r, s);
+            let tip = s.tip();
+            let _ = w!(r; " tip=", Tip(&tip));
+        });
+        if shown.is_err() {
+            let _ = w!(r; " joints=-,-,- tip=-,-,-");
+            fault = fault.or(Some("model"));
+        }
+        let _ = w!(r; " cable=", Fixed(self.cable, 3), " servo=", Fixed(self.servo_deg, 2), " fault=", fault.unwrap_or("none"));
+        let _ = w!(r; " enable=", self.enable as u8, " target=");
+        list(r, &self.target_v, 1);
+        // each stack once the film has relaxed at the targets
+        let mut eq = [0.0f32; CHANNELS];
+        for ch in 0..CHANNELS {
+            eq[ch] = stack_mm * self.film.equilibrium_ratio(self.target_v[ch]).unwrap_or(0.0);
+        }
+        let _ = w!(r; " thick_eq=");
+        list(r, &eq, 4);
+    }
+
+    /// A stack's thickness at rest, mm: layers x z0 of the model (0 without stacks).
+    pub(super) fn stack_mm(&self) -> f32 {
+        let p = self.finger.params();
+        p.layers as f32 * p.z0
+    }
+
+    #[inline(never)]
+    pub(super) fn cmd_limits(&self, r: &mut Reply) {
+        let _ = w!(r; "vmax=");
+        list(r, &self.vmax, 1);
+        let p = self.finger.params();
+        let _ = w!(r; " vpullin=", Fixed(self.finger.pull_in_voltage(), 1), " supply=", Fixed(p.v_supply, 1), " margin=", Short(p.margin));
+        match self.fmax(&self.target_v) {
+            Ok(b) => {
+                let kind = match b.kind {
+                    finger_model::BranchEnd::Contact => "contact",
+                    finger_model::BranchEnd::LimitPoint => "limit-point",
+                    finger_model::BranchEnd::SearchBound => "search-bound",
+                };
+                let _ = w!(r; " fmax=", Fixed(b.tension, 4), " fmax_end=", kind, ",", b.joint);
+            }
+            Err(_) => {
+                let _ = w!(r; " fmax=- fmax_end=error");
+            }
+        }
+        let _ = w!(r; " slew=", Short(self.fw.slew), " servo=0,", Short(self.fw.servo_range), " cable_max=", Fixed(self.fw.servo_range / DEG * self.fw.spool_r, 2), " dutymax=");
+        let d = self.duty_max;
+        let _ = w!(r; d[0], ",", d[1], ",", d[2], " vhold=", Fixed(self.film.hold_ceiling(), 1));
+    }
+
+    /// Check channel voltages against the ceilings: `limit` at or past.
+    pub(super) fn check_volts(&self, v: &[f32; CHANNELS]) -> Result<(), CmdError> {
+        self.check_volts_of(v, false)
+    }
+
+    /// As [`Commands::check_volts`]; with `zero_is_off`, a channel at 0 V passes whatever its
+    /// ceiling (a computed answer, such as `pose`'s on a finger without stacks).
+    #[inline(never)]
+    pub(super) fn check_volts_of(&self, v: &[f32; CHANNELS], zero_is_off: bool) -> Result<(), CmdError> {
+        for ch in 0..CHANNELS {
+            if zero_is_off && v[ch] == 0.0 {
+                continue;
+            }
+            // NaN-proof: every comparison is written so that NaN fails it
+            if !v[ch].is_finite() {
+                return Err(err!("limit"; "channel ", (ch + 1), ": voltage is not a finite number"));
+            }
+            if !(v[ch] >= 0.0) {
+                return Err(err!("usage"; "channel ", (ch + 1), ": voltage must be >= 0"));
+            }
+            if !(v[ch] < self.vmax[ch]) {
+                return Err(err!("limit"; "channel ", (ch + 1), ": ", Fixed(v[ch], 1), " V is at or past the ceiling ", Fixed(self.vmax[ch], 1), " V (see limits)"));
+            }
+        }
+        Ok(())
+    }
+
+    #[inline(never)]
+    /// The arguments of a model-only solve (`solve`, `shape`): `<P> <V1> <V2> <V3>`, the
+    /// voltages optional on a finger without stacks (layers = 0), where 0 V is off, never a
+    /// request. Checked as every voltage is.
+    pub(super) fn model_request(&self, args: &[&[u8]], usage: &str) -> Result<(f32, [f32; CHANNELS]), CmdError> {
+        let v = match args {
+            [_, v1, v2, v3] => [number(v1, "V1")?, number(v2, "V2")?, number(v3, "V3")?],
+            [_] if self.finger.params().layers == 0 => [0.0; CHANNELS],
+            _ => return Err(err!("usage"; usage, " (", usage.split(' ').next().unwrap_or(""), " <P> without stacks)")),
+        };
+        let p = tension(number(args[0], "P")?)?;
+        self.check_volts_of(&v, true)?;
+        Ok((p, v))
+    }
+
+    #[inline(never)]
+    pub(super) fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
+        let (p, vf) = self.model_request(args, "solve <P> <V1> <V2> <V3>")?;
+        #[cfg(not(m3))]
+        return self.forward_with(p, &vf, |sol| solve_reply(r, sol, self.finger.tip_stiffness(sol).map_err(model_err)?)).map_err(model_err)?;
+        // the M3's: from the fixed-point state (app/m3.rs)
+        #[cfg(m3)]
+        {
+            let (sol, k) = forward_stiffness(&self.finger, p, &vf).map_err(model_err)?;
+            solve_reply(r, &sol, k)
+        }
+    }
+
+    /// The servo where `plan` ([`Commands::plan_servo`] of the present tension) holds it; where
+    /// it cannot be held, the cable released (tension 0).
+    pub(super) fn hold_or_release(&mut self, plan: Result<(f32, f32), CmdError>) {
+        match plan {
+            Ok((cable, deg)) => {
+                self.cable = cable;
+                self.set_servo(deg);
+            }
+            Err(_) => {
+                self.force = 0.0;
+                self.cable = 0.0;
+                self.set_servo(0.0);
+            }
+        }
+    }
+
+    #[inline(never)]
+    pub(super) fn cmd_disarm(&mut self) -> Result<(), CmdError> {
+        if !self.armed {
+            return Ok(());
+        }
+        // the cable keeps its tension, held at the posture of 0 V; if that cannot be
+        // held, the cable is released
+        let zero = [0.0; CHANNELS];
+        self.hold_or_release(self.plan_servo(&self.finger, &self.fw, self.force, &zero));
+        // the control core ramps the HV to 0, then drops the enable
+        self.armed = false;
+        self.target_v = zero;
+        Ok(())
+    }
+
+    #[inline(never)]
+    pub(super) fn cmd_volt(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
+        let [ch, v] = args else { return Err(err!("usage"; "volt <1|2|3|all> <V>")) };
+        let chans: &[usize] = match *ch {
+            b"1" => &[0],
+            b"2" => &[1],
+            b"3" => &[2],
+            b"all" => &[0, 1, 2],
+            c => return Err(err!("usage"; "volt: channel ", (console::printable(c)), " is not 1, 2, 3 or all")),
+        };
+        let v = number(v, "V")?;
+        if !(v >= 0.0) {
+            return Err(err!("usage"; "volt: voltage must be >= 0"));
+        }
+        self.require_armed("volt")?;
+        let mut req = self.target_v;
+        for &c in chans {
+            req[c] = v;
+        }
+        self.check_volts(&req)?;
+        let target = req;
+        let (cable, deg) = self.plan_setpoints(self.force, &target)?;
+        self.target_v = target;
+        self.cable = cable;
+        self.set_servo(deg);
+        let _ = w!(r; "volts=");
+        list(r, &self.target_v, 1);
+        Ok(())
+    }
+
+    pub(super) fn require_armed(&self, what: &str) -> Result<(), CmdError> {
+        if let Some(f) = self.fault {
+            return Err(err!("fault"; "fault ", f, " latched; send stop to clear it"));
+        }
+        if !self.armed {
+            return Err(err!("not-armed"; what, " needs arm"));
+        }
+        Ok(())
+    }
+
+    #[inline(never)]
+    pub(super) fn cmd_force(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
+        let [p] = args else { return Err(err!("usage"; "force <P>")) };
+        let p = tension(number(p, "P")?)?;
+        self.require_armed("force")?;
+        let (cable, deg) = self.plan_setpoints(p, &self.target_v)?;
+        self.force = p;
+        self.cable = cable;
+        self.set_servo(deg);
+        let _ = w!(r; "force=", Fixed(self.force, 3), " cable=", Fixed(self.cable, 3), " servo=", Fixed(self.servo_deg, 2));
+        Ok(())
+    }
+
+    pub(super) fn require_disarmed(&self, what: &str) -> Result<(), CmdError> {
+        if self.armed {
+            return Err(err!("armed"; what, " only while disarmed"));
+        }
+        if self.volts.iter().any(|&v| v != 0.0) || self.enable {
+            return Err(err!("armed"; what, ": HV still ramping down, wait"));
+        }
+        Ok(())
+    }
+
+    #[inline(never)]
+    pub(super) fn cmd_param<W: Write>(&mut self, args: &[&[u8]], r: &mut Reply, out: &mut W) -> Result<(), CmdError> {
+        self.require_disarmed("param")?;
+        let name = match args.first() {
+            None => {
+                let nl = self.nl;
+                let p = self.finger.params();
+                let model = PARAMS.iter().map(|i| (i.name, i.range, p.get(i.name).unwrap_or(f64::NAN) as f32));
+                let fw = FW_PARAMS.iter().map(|i| (i.name, i.range, self.fw.get(i.name).unwrap_or(0.0)));
+                for (name, range, v) in model.chain(fw) {
+                    let _ = w!(out; name, "=", Short(v), " (", range, ")", nl);
+                }
+                let _ = w!(r; "params=", PARAMS.len() + FW_PARAMS.len());
+                return Ok(());
+            }
+            Some(n) => *n,
+        };
+        if args.len() > 2 {
+            return Err(err!("usage"; "param [<name> [<value>]]"));
+        }
+        // the parameter's own name (a &'static str), found by its bytes
+        let name = PARAMS.iter().map(|i| i.name).chain(FW_PARAMS.iter().map(|i| i.name)).find(|n| n.as_bytes() == name);
+        let Some(name) = name else {
+            return Err(err!("usage"; "no parameter ", (console::printable(args[0])), "; param lists them"));
+        };
+        if let Some(v) = args.get(1) {
+            let v = number(v, name)?;
+            if PARAMS.iter().any(|i| i.name == name) {
+                if name == "n" && v != CHANNELS as f32 {
+                    return Err(err!("usage"; "parameter n: the board drives ", CHANNELS, " joints"));
+                }
+                let mut p = *self.finger.params();
+                p.set(name, v.into()).map_err(model_err)?;
+                // the FE calibration belongs to the mechanical parameters it was computed for
+                let cal = if KEEPS_CALIBRATION.contains(&name) { *self.finger.calibration() } else { calibration_for(&p) };
+                self.adopt_model(p, cal)?;
+            } else {
+                let mut fw = self.fw;
+                fw.set(name, v)?;
+                let (cable, deg) = self.plan_servo(&self.finger, &fw, self.force, &self.target_v)?;
+                self.fw = fw;
+                self.cable = cable;
+                self.set_servo(deg);
+                self.recompute();
+            }
+        }
+        let v = match self.finger.params().get(name) {
+            Some(v) => v as f32,
+            None => self.fw.get(name).unwrap_or(0.0),
+        };
+        let _ = w!(r; name, "=", Short(v));
+        Ok(())
+    }
+
+    #[inline(never)]
+    pub(super) fn cmd_preset(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
+        let [which] = args else { return Err(err!("usage"; "preset <default|paper>")) };
+        let (p, name) = match *which {
+            b"default" => (preset(board_params()), "default"),
+            b"paper" => (preset(Params::<f32>::paper()), "paper"),
+            w => return Err(err!("usage"; "preset ", (console::printable(w)), " is not default or paper")),
+        };
+        self.require_disarmed("preset")?;
+        self.adopt_model(p, calibration_for(&p))?;
+        let _ = w!(r; "preset=", name);
+        Ok(())
+    }
+
+    /// `cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]`: the model's FE calibration
+    /// (`finger_model::Calibration`): read it, or set / clear it while disarmed. A
+    /// change rebuilds the finger, as `param` does; refused, nothing changes.
+    #[inline(never)]
+    pub(super) fn cmd_cal(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
+        let cal = match args {
+            [] => None,
+            [w] if *w == b"none" => Some(Calibration::none()),
+            [_, _, _, _, _, _, _, _] => {
+                let mut g = [0.0f32; 8];
+                for k in 0..8 {
+                    g[k] = number(args[k], CAL_NAMES[k])?;
+                }
+                Some(Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] })
+            }
+            _ => return Err(err!("usage"; "cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]")),
+        };
+        if let Some(cal) = cal {
+            self.require_disarmed("cal")?;
+            self.adopt_model(*self.finger.params(), cal)?;
+        }
+        let c = self.finger.calibration();
+        let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];
+        let _ = w!(r; "cal=");
+        list(r, &g, 6);
+        Ok(())
+    }
+}

@@ -1,0 +1,97 @@
+//! `help` and the replies' shared formatting: the command list, number lists, a tip pose, the
+//! joints and `solve`'s reply.
+//!
+//! What it is not: numbers' text itself (`crate::num`, `crate::out`).
+
+use core::fmt::Write;
+
+use heapless::String;
+
+use super::errors::CmdError;
+use super::params::CHANNELS;
+use super::solves::Solved;
+use crate::num::{Exp, Fixed, List};
+use crate::out::Emit;
+
+/// A reply line being built (without `ok ` and the line ending).
+pub(crate) type Reply = String<400>;
+
+/// Radians to degrees.
+pub(crate) const DEG: f32 = 180.0 / core::f32::consts::PI;
+
+/// One `help` line: `syntax - description`; the Cortex-M3 image keeps the syntax alone (its
+/// flash budget).
+macro_rules! help_line {
+    ($syntax:literal, $what:literal) => {
+        if cfg!(m3) {
+            $syntax
+        } else {
+            concat!($syntax, " - ", $what)
+        }
+    };
+}
+
+pub(crate) const HELP: &[&str] = &[
+    help_line!("help", "this list"),
+    help_line!("version", "firmware name and version"),
+    help_line!("status", "outputs, setpoints, model state, fault"),
+    help_line!("limits", "ceilings in force"),
+    #[cfg(not(m3))]
+    help_line!("material", "the board's film: card, moduli, permittivity, breakdown, hold ceiling"),
+    help_line!("solve <P> <V1> <V2> <V3>", "model only, nothing moves"),
+    #[cfg(feature = "shape")]
+    help_line!("shape <P> <V1> <V2> <V3>", "model only: node and hinge-end poses of that solve"),
+    help_line!("arm | disarm", "allow HV / ramp HV to 0, then drop the enable"),
+    help_line!("stop", "emergency stop: HV off at once, cable released, disarmed"),
+    help_line!("volt <1|2|3|all> <V>", "HV channel setpoint, slewed; needs arm"),
+    help_line!("force <P>", "cable tension (servo); needs arm"),
+    #[cfg(m3)]
+    help_line!("pose <d1> <d2> <d3> [<P>]", "inverse (fixed point): tension and voltages for these joint angles (deg); moves only when armed"),
+    #[cfg(feature = "pose")]
+    help_line!("pose <d1> <d2> <d3> [<P>]", "inverse: tension and voltages for these joint angles (deg); moves only when armed"),
+    #[cfg(feature = "contact")]
+    help_line!("contact <P0> <P> [<V1> <V2> <V3>]", "model only: tip force on a stop at the free tip of P0"),
+    help_line!("param [<name> [<value>]]", "list, read or set a parameter; only while disarmed"),
+    help_line!("preset <default|paper>", "model parameters back to a preset; only while disarmed"),
+    help_line!("cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]", "FE calibration factors: read, set or clear (set and clear only while disarmed)"),
+    help_line!("wait <s>", "run the control loop for s seconds, then reply"),
+    #[cfg(feature = "settings")]
+    help_line!("save", "keep the settings in force across resets; only while disarmed"),
+    #[cfg(feature = "settings")]
+    help_line!("config", "what is stored, its save counter, what the boot loaded"),
+    #[cfg(feature = "settings")]
+    help_line!("factory", "erase the stored settings, back to the compiled defaults; only while disarmed"),
+];
+
+pub(crate) fn list(r: &mut Reply, v: &[f32], prec: usize) {
+    let _ = w!(r; List(v, prec));
+}
+
+/// A tip pose as `x,y,deg` (mm, mm, degrees).
+pub(crate) struct Tip<'a>(pub(crate) &'a finger_model::Pose<f32>);
+
+impl Emit for Tip<'_> {
+    fn emit(&self, f: &mut dyn Write) {
+        let t = self.0;
+        let _ = w!(f; Fixed(t.x, 3), ",", Fixed(t.y, 3), ",", Fixed(t.theta * DEG, 2));
+    }
+}
+
+/// `solve`'s reply: joints, tip, cable, thicknesses, tip stiffness, iterations.
+pub(crate) fn solve_reply(r: &mut Reply, sol: &Solved, k: finger_model::mat3::Mat3<f32>) -> Result<(), CmdError> {
+    let _ = w!(r; "joints=");
+    joints(r, sol);
+    let tip = sol.tip();
+    let _ = w!(r; " tip=", Tip(&tip), " cable=", Fixed(sol.cable_excursion, 4), " thick=");
+    list(r, &sol.thickness[..CHANNELS], 4);
+    let _ = w!(r; " stiffness=", Exp(k[0][0], 4), ",", Exp(k[1][1], 4), ",", Exp(k[2][2], 4), " iters=", sol.iterations);
+    Ok(())
+}
+
+pub(crate) fn joints(r: &mut Reply, s: &Solved) {
+    let mut d = [0.0f32; CHANNELS];
+    for ch in 0..CHANNELS {
+        d[ch] = s.joint_angle[ch] * DEG;
+    }
+    list(r, &d, 3);
+}
