@@ -88,6 +88,14 @@ fn drive_scene(what: &str) -> (PathBuf, PathBuf) {
     (dir, scene)
 }
 
+/// finger-sim behind a shell script `dir/name` that logs its input to `dir/in.log` and passes
+/// it through `between` (a shell pipeline stage, or ""): (the script, the log).
+fn logged_sim(dir: &Path, name: &str, between: &str) -> (PathBuf, PathBuf) {
+    let (board, log) = (dir.join(name), dir.join("in.log"));
+    shell_board(&board, &format!("tee {} | {between}{}", log.display(), sim().display()));
+    (board, log)
+}
+
 fn check_driven(dir: &Path) {
     let (head, rows) = csv(&dir.join("drive-board.csv"));
     assert_eq!(rows.len(), 2);
@@ -107,9 +115,7 @@ fn check_driven(dir: &Path) {
 fn drive_arms_drives_reads_back_and_stops_on_the_sim() {
     let (dir, scene) = drive_scene("run-drive");
     // the board's input, as it arrives
-    let log = dir.join("in.log");
-    let board = dir.join("board.sh");
-    shell_board(&board, &format!("tee {} | {}", log.display(), sim().display()));
+    let (board, log) = logged_sim(&dir, "board.sh", "");
     let out = finger(&["--sim", "--sim-bin", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let p = Params::<f64>::default();
@@ -176,9 +182,7 @@ fn a_refused_scene_never_reaches_a_board() {
 fn ctrl_c_during_a_driven_run_still_stops_the_board() {
     let (dir, scene) = drive_scene("run-interrupt");
     // a slow board: each line reaches finger-sim 0.2 s late; what finger sends is logged first
-    let log = dir.join("in.log");
-    let board = dir.join("slow-board.sh");
-    shell_board(&board, &format!("tee {} | while IFS= read -r l; do sleep 0.2; printf '%s\\n' \"$l\"; done | {}", log.display(), sim().display()));
+    let (board, log) = logged_sim(&dir, "slow-board.sh", "while IFS= read -r l; do sleep 0.2; printf '%s\\n' \"$l\"; done | ");
     let out_dir = dir.join("out");
     let child = Command::new(env!("CARGO_BIN_EXE_finger"))
         .args(["--sim", "--sim-bin", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()])
