@@ -44,6 +44,28 @@ pub fn err<C: Console + ?Sized>(c: &mut C, line: &str, code: &str) -> String {
     r
 }
 
+/// Each `(line, code)`: `line`'s reply is `err <code>: ...`.
+pub fn check_refusals<C: Console + ?Sized>(c: &mut C, refusals: &[(&str, &str)]) {
+    for (line, code) in refusals {
+        err(c, line, code);
+    }
+}
+
+/// Refusals every console gives at its defaults, disarmed, and that change nothing.
+pub const REFUSED_DISARMED: [(&str, &str); 11] = [
+    ("frobnicate", "unknown"),
+    ("solve nan 0 0 0", "bad-number"),
+    ("solve inf 0 0 0", "bad-number"),
+    ("solve 0x10 0 0 0", "bad-number"),
+    ("solve 1.5abc 0 0 0", "bad-number"),
+    ("solve 1e999 0 0 0", "bad-number"),
+    ("solve -1 0 0 0", "usage"),
+    ("solve 1e9 0 0 0", "limit"),
+    ("volt 1 100", "not-armed"),
+    ("force 0.5", "not-armed"),
+    ("param margin 1", "usage"),
+];
+
 /// The ceiling in force on channel 1, V, as `limits` reports it (`vmax=`).
 pub fn ceiling<C: Console + ?Sized>(c: &mut C) -> f64 {
     field(&expect(c, "limits", "ok vmax="), "vmax")[0]

@@ -3,7 +3,7 @@
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 use host_tests::sim_console::{cmd, feed, frac_of, Out};
-use host_tests::console::{ceiling, check_ceiling_only_lowers, err, ok};
+use host_tests::console::{ceiling, check_ceiling_only_lowers, check_refusals, err, ok, REFUSED_DISARMED};
 use host_tests::reply::{nums, val};
 
 fn app() -> App<SimBoard> {
@@ -87,30 +87,26 @@ fn every_command_answers() {
 #[test]
 fn error_codes() {
     let mut a = app();
-    err(&mut a, "frobnicate", "unknown");
-    err(&mut a, "solve 1", "usage");
-    err(&mut a, "version 1", "usage");
-    err(&mut a, "volt 4 100", "usage");
-    err(&mut a, "preset other", "usage");
-    err(&mut a, "param nonsense", "usage");
-    err(&mut a, "param l 0.5", "usage"); // 2a < l
-    err(&mut a, "param margin 1", "usage");
-    err(&mut a, "param e_de 2", "usage"); // read-only
-    err(&mut a, "param n 4", "usage");
-    err(&mut a, "volt 1 100", "not-armed");
-    err(&mut a, "volt all 100", "not-armed");
-    err(&mut a, "force 0.5", "not-armed");
-    err(&mut a, "solve 0.5 10000 0 0", "limit");
-    err(&mut a, "solve 1e9 0 0 0", "limit");
-    err(&mut a, "solve 2000 0 0 0", "limit"); // past fmax
+    check_refusals(&mut a, &REFUSED_DISARMED);
+    check_refusals(
+        &mut a,
+        &[
+            ("solve 1", "usage"),
+            ("version 1", "usage"),
+            ("volt 4 100", "usage"),
+            ("preset other", "usage"),
+            ("param nonsense", "usage"),
+            ("param l 0.5", "usage"), // 2a < l
+            ("param e_de 2", "usage"), // read-only
+            ("param n 4", "usage"),
+            ("volt all 100", "not-armed"),
+            ("solve 0.5 10000 0 0", "limit"),
+            ("solve 2000 0 0 0", "limit"), // past fmax
+        ],
+    );
     ok(&mut a, "arm");
-    err(&mut a, "param l 30", "armed");
-    err(&mut a, "param", "armed");
-    err(&mut a, "preset paper", "armed");
-    err(&mut a, "volt 1 10000", "limit");
-    err(&mut a, "volt 1 1e30", "limit");
-    err(&mut a, "force 1e30", "limit");
-    err(&mut a, "force 2000", "limit");
+    let armed = [("param l 30", "armed"), ("param", "armed"), ("preset paper", "armed"), ("volt 1 10000", "limit"), ("volt 1 1e30", "limit"), ("force 1e30", "limit"), ("force 2000", "limit")];
+    check_refusals(&mut a, &armed);
     err(&mut a, &format!("{}\n", "x".repeat(300)), "too-long");
     // fault: a refused HV write latches it; arm refuses until stop
     let d = a.duty_ceiling()[0];
