@@ -1,15 +1,17 @@
 //! The bench images (bench/, a `no_std` firmware of its own) seen from the host: build them
-//! for a core, run them in QEMU with `-icount` (deterministic instruction counts), parse what
-//! they print over semihosting, and compare against the host's f64 reference. Used by the
-//! `perf-report` binary (docs/performance.md) and by the quick test `tests/perf_bench.rs`.
+//! for a core ([`crate::image::cargo_build`]), run them in QEMU with `-icount` (deterministic
+//! instruction counts), read what they print over semihosting ([`read_bench`]: the `CAL`
+//! calibration, the result lines, `END`), and compare against the host's f64 reference. Used
+//! by the `perf-report` binary (docs/performance.md), the reports that count instructions
+//! (examples/*_cost.rs, fixed_report, material_report, fidelity) and `tests/perf_bench.rs`.
 //!
 //! What it is not: a benchmark harness for host nanoseconds (that is criterion, `benches/host_solve.rs`).
 
+use crate::image::{cargo_build, CargoBuild};
+use crate::qemu::qemu_command;
 use finger_model::{Finger, Method, Params};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use crate::image::{cargo_build, CargoBuild};
-use crate::qemu::qemu_command;
 
 pub use finger_scenes as scenes;
 use scenes::Scene;
