@@ -147,7 +147,7 @@ struct Wrench<R> {
 impl<'a, R: Real> Ctx<'a, R> {
     fn new(f: &'a Finger<R>, opts: &Options<R>) -> Result<Self, Error> {
         let p = f.params();
-        let k_hinge = mat3::inverse(&f.hinge_compliance(0)).ok_or(Error::Singular { what: "hinge compliance" })?;
+        let k_hinge = *f.hinge_stiffness(0);
         let rel = R::from_f64(1e-11_f64.max(64.0 * R::EPS));
         Ok(Ctx { p, k_hinge, lh: p.hinge_len(), max_iter: opts.max_iter.max(1), rel })
     }
@@ -259,7 +259,7 @@ impl<'a, R: Real> Ctx<'a, R> {
         if m.abs() > R::from_f64(1e-30_f64.max(R::EPS * 1e-20)) {
             return (ang.theta / m).to_f64();
         }
-        let Some(c) = mat3::inverse(&self.stiffness(t)) else { return 0.0 };
+        let Some(c) = mat3::inverse_spd(&self.stiffness(t)) else { return 0.0 };
         let Ok(w) = self.wrench(ang, [R::zero(); 2], 0, R::zero()) else { return 0.0 };
         let cw = mat3::mul_vec(&c, &w.w);
         (cw[2] / w.w[2]).to_f64()

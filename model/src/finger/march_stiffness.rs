@@ -31,7 +31,7 @@ impl<R: Real> Finger<R> {
             let (k00, k01, k02) = (kh[0][0] + d00, kh[0][1], kh[0][2] + d02);
             let (k11, k12, k22) = (kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22);
             // rows: K q = (f0, f1, g + f0 q1 - f1 q0), g = mm - f1 L; eliminate below k00, then
-            // below u11
+            // below u11 (not `mat3::inverse_spd`: the moment's load terms make the rows unsymmetric)
             let g = mm - f[1] * l;
             let i0 = R::one() / k00;
             let l1 = k01 * i0;
@@ -70,7 +70,7 @@ mod tests {
         let kd = [k[0][0], k[0][1], k[0][2], k[1][1], k[1][2], k[2][2]];
         let mut c = [mat3::zero(); MAX_SUB];
         for j in 0..f.params().m {
-            c[j] = mat3::inverse_spd_of_sum(f.hinge_stiffness(j), &k).unwrap();
+            c[j] = mat3::inverse_spd(&mat3::add(f.hinge_stiffness(j), &k)).unwrap();
         }
         (kd, c)
     }

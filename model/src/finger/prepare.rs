@@ -1,6 +1,6 @@
 //! Preparing a finger: validation, the hinge compliances (once per parameter set), the stack's
 //! stiffness and the sub-element compliances for a set of channel voltages (docs/model.md
-//! "Joint compliance with the DE stack"). No solving here.
+//! "Joint compliance with the stack"). No solving here.
 
 use super::*;
 
