@@ -432,8 +432,7 @@ mod app {
         let boot = flash_chip::store(dp.FLASH).map(|s| finger_fw::app::config::boot(&mut cmds, &mut ctl, s));
         if cfg!(feature = "qemu") && real_chip {
             // the emulator image has no watchdog: it never arms a real board
-            ctl.lock_out("qemu image on a real chip");
-            cmds.sync(&ctl.view());
+            ctl.lock_out(finger_fw::control::Fault::EmulatorOnChip);
         }
         let view = ctl.view();
 

@@ -8,7 +8,7 @@
 
 use heapless::Vec;
 
-/// Receive buffer: the longest line accepted, in bytes (CONSOLE.md asks for at least 120).
+/// Receive buffer: the longest line accepted, in bytes (docs/console.md asks for at least 120).
 pub const LINE_MAX: usize = 128;
 /// Most tokens on a line (command word included): `cal`'s eight factors need nine.
 pub const MAX_TOKENS: usize = 9;
@@ -192,7 +192,7 @@ pub fn parse_number(tok: &[u8]) -> Result<f32, NumError> {
 
 /// A token as text for messages: itself when printable ASCII (at most 24 bytes), else
 /// `(non-printable)`. Written byte by byte from a table of the printable characters, so the
-/// image needs no UTF-8 validation (issue 3: flash).
+/// image needs no UTF-8 validation (its flash).
 pub fn printable(tok: &[u8]) -> Printable<'_> {
     Printable(tok)
 }

@@ -1,8 +1,8 @@
 //! The control core: the one owner of the outputs. Runs every 1 ms tick at the highest
 //! priority (the chip's SysTick task; `App::tick` on the host).
 //!
-//! What it is: the single writer of the HV duties ([`Control::write_hv_duty`]), the slew of the
-//! HV values toward the command side's setpoints (at most `slew` x 1 ms per tick, whatever
+//! What it is: the single writer of the HV duties (`Control::write_hv_duty_checked`), the
+//! slew of the HV values toward the command side's setpoints (at most `slew` x 1 ms per tick, whatever
 //! else runs), the stacks in time ([`Stacks`]: each channel's film state integrated every
 //! tick, and the guard that keeps it above its floor), the servo following the slewed
 //! voltages, the disarm ramp, the emergency stop and the watchdog feed (only while the
@@ -17,12 +17,14 @@ use embedded_hal::pwm::SetDutyCycle;
 
 use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V, HV_ZERO_DUTY_PCT};
 
+pub mod fault;
 pub mod stacks;
+pub use fault::{Fault, Latched};
 pub use stacks::Stacks;
 
 /// The watchdog is fed only when the command side checked in at most this long ago, ms. The
-/// longest command (a first armed `pose`, ~10 M instructions: ~60 ms at 168 MHz) stays far
-/// inside; a stuck solve or console stops the feed and the IWDG (1 s) resets the board.
+/// longest command (a first armed `pose`, docs/inverse-cost.md) stays far inside; a stuck
+/// solve or console stops the feed and the IWDG (1 s) resets the board.
 pub const CHECKIN_BOUND_MS: u32 = 250;
 
 /// What the command side asks of the outputs.
@@ -62,7 +64,7 @@ pub struct View {
     pub duty: [u16; HV_CHANNELS],
     pub enable: bool,
     pub servo_duty: u16,
-    pub fault: Option<&'static str>,
+    pub fault: Latched,
     /// Locked out for good ([`Control::lock_out`]): never arms.
     pub locked_out: bool,
     /// Ticks since start, ms.
@@ -71,7 +73,7 @@ pub struct View {
     pub stack_ratio: [f32; HV_CHANNELS],
 }
 
-/// The refusal of [`Control::write_hv_duty`].
+/// The refusal of the HV writer (`Control::write_hv_duty_checked`).
 #[derive(Debug, PartialEq, Eq, Clone, Copy)]
 pub struct HvRefused;
 
@@ -121,9 +123,9 @@ pub struct Control<B: Board> {
     servo_duty: u16,
     servo_released: u16,
     v_from: [f32; HV_CHANNELS],
-    fault: Option<&'static str>,
+    fault: Option<Fault>,
     /// Never arm (e.g. the emulator image on a real chip): the fault it reports, for good.
-    lockout: Option<&'static str>,
+    lockout: Option<Fault>,
     seq: u32,
     epoch: u32,
     now_ms: u32,
@@ -166,7 +168,7 @@ impl<B: Board> Control<B> {
         c.hv_off_now();
         c.write_servo(servo_released);
         if c.stacks.is_none() {
-            c.lock_out("board card");
+            c.lock_out(Fault::BoardCard);
         }
         c
     }
@@ -190,7 +192,7 @@ impl<B: Board> Control<B> {
             duty: self.duty,
             enable: self.enable,
             servo_duty: self.servo_duty,
-            fault: self.fault,
+            fault: Latched(self.fault),
             locked_out: self.lockout.is_some(),
             now_ms: self.now_ms,
             stack_ratio: self.stacks.as_ref().map(|s| s.ratios()).unwrap_or([1.0; HV_CHANNELS]),
@@ -210,16 +212,22 @@ impl<B: Board> Control<B> {
         self.write_ceiling
     }
 
+    /// The single HV writer called directly: tests only (feature `hv-door`), for its refusals.
+    #[cfg(feature = "hv-door")]
+    pub fn write_hv_duty(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
+        self.write_hv_duty_checked(ch, duty)
+    }
+
     /// The one function that writes an HV duty. Refuses (writes nothing, latches the fault
     /// `hv-refused`) a duty above the channel's ceiling (the targets' ceiling; in shaped
     /// actuation the compiled cap) or the image's hard cap.
-    pub fn write_hv_duty(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
+    fn write_hv_duty_checked(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
         if ch >= HV_CHANNELS || (duty > 0 && (duty > self.write_ceiling[ch] || duty > hv_duty_cap(self.hv_max[ch]))) {
-            self.fault = Some("hv-refused");
+            self.fault = Some(Fault::HvRefused);
             return Err(HvRefused);
         }
         if self.board.hv(ch).set_duty_cycle(duty).is_err() {
-            self.fault = Some("pwm");
+            self.fault = Some(Fault::Pwm);
             return Err(HvRefused);
         }
         self.duty[ch] = duty;
@@ -229,14 +237,14 @@ impl<B: Board> Control<B> {
     fn set_enable(&mut self, on: bool) {
         let r = if on { self.board.hv_enable().set_high() } else { self.board.hv_enable().set_low() };
         if r.is_err() {
-            self.fault = Some("enable");
+            self.fault = Some(Fault::Enable);
         }
         self.enable = on && r.is_ok();
     }
 
     fn write_servo(&mut self, duty: u16) {
         if self.board.servo().set_duty_cycle(duty).is_err() {
-            self.fault = Some("pwm");
+            self.fault = Some(Fault::Pwm);
         }
         self.servo_duty = duty;
     }
@@ -245,7 +253,7 @@ impl<B: Board> Control<B> {
     fn hv_off_now(&mut self) {
         self.set_enable(false);
         for ch in 0..HV_CHANNELS {
-            let _ = self.write_hv_duty(ch, 0);
+            let _ = self.write_hv_duty_checked(ch, 0);
         }
         self.volts = [0.0; HV_CHANNELS];
         self.target = [0.0; HV_CHANNELS];
@@ -266,13 +274,13 @@ impl<B: Board> Control<B> {
     }
 
     /// Never arm from now on; `reason` is the fault reported (a stop does not clear it).
-    pub fn lock_out(&mut self, reason: &'static str) {
+    pub fn lock_out(&mut self, reason: Fault) {
         self.lockout = Some(reason);
         self.fault_stop(reason);
     }
 
     /// A fault stop: as [`Control::stop`], the fault stays latched.
-    fn fault_stop(&mut self, f: &'static str) {
+    fn fault_stop(&mut self, f: Fault) {
         self.stop();
         self.fault = Some(f);
     }
@@ -301,13 +309,13 @@ impl<B: Board> Control<B> {
             for ch in 0..HV_CHANNELS {
                 let t = sp.target_v[ch];
                 if !(t >= 0.0 && t <= HV_LIMIT_V && t <= hold) || hv_duty_for(t, self.hv_max[ch]) > self.ceiling[ch] {
-                    self.fault_stop("hv-refused");
+                    self.fault_stop(Fault::HvRefused);
                     return true;
                 }
                 match self.stacks.as_ref().and_then(|s| s.floor(t, sp.shaped)) {
                     Some(f) => floor[ch] = f,
                     None => {
-                        self.fault_stop("hv-refused");
+                        self.fault_stop(Fault::HvRefused);
                         return true;
                     }
                 }
@@ -354,7 +362,7 @@ impl<B: Board> Control<B> {
     fn finish_ramp_down(&mut self) {
         if self.ramping_down && self.volts.iter().all(|&v| v == 0.0) {
             for ch in 0..HV_CHANNELS {
-                let _ = self.write_hv_duty(ch, 0);
+                let _ = self.write_hv_duty_checked(ch, 0);
             }
             self.set_enable(false);
             self.ramping_down = false;
@@ -388,13 +396,13 @@ impl<B: Board> Control<B> {
             let nv = match applied {
                 Ok(nv) if nv >= 0.0 => nv,
                 _ => {
-                    self.fault_stop("hv-model");
+                    self.fault_stop(Fault::HvModel);
                     continue;
                 }
             };
             let d = hv_duty_for(nv, self.hv_max[ch]);
-            if d != self.duty[ch] && self.write_hv_duty(ch, d).is_err() {
-                let f = self.fault.unwrap_or("hv-refused");
+            if d != self.duty[ch] && self.write_hv_duty_checked(ch, d).is_err() {
+                let f = self.fault.unwrap_or(Fault::HvRefused);
                 self.fault_stop(f);
                 continue;
             }

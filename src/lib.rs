@@ -7,7 +7,7 @@
 //!
 //! - [`console`]: line assembly (CR/LF/CRLF, bounded buffer, overlong lines), tokens, strict
 //!   number parsing.
-//! - [`app`]: the commands of shared/CONSOLE.md, the HV ceilings, the model calls; [`App`], the
+//! - [`app`]: the commands of docs/console.md, the HV ceilings, the model calls; [`App`], the
 //!   whole application on one board for the host.
 //! - [`control`]: the control core, the one owner of the outputs: the single HV-duty writer,
 //!   the slew, the servo, the stop, the watchdog feed.

@@ -1,20 +1,14 @@
 //! Numbers to and from text without core's float parsing and formatting, and without f64
-//! (issue 3: flash).
+//! (the image's flash: docs/firmware.md "Console numbers" says why and how).
 //!
-//! core's `f64::from_str` (dec2flt, ~13 KB with its tables) and float `Display` (grisu and
-//! dragon, ~10 KB) do not fit the 64 KiB image, and f64 arithmetic links ~5 KB of soft-float
-//! on the Cortex-M4F (its FPU is single precision). The console needs much less: decimals of
-//! a few significant digits in, fixed or exponent notation of an f32 out. Everything here is
-//! f32 and u32 arithmetic (u64 only for products and shifts, never a u64 division).
-//!
-//! - [`decimal_to_f32`]: mantissa digits and a decimal exponent to f32. Correctly rounded for
-//!   decimal exponents -16..=10 of the (9-digit) mantissa: Clinger's fast path in f32, else
-//!   the f32 estimate corrected against the exact decimal with u64 products; a few ulp beyond.
+//! - [`decimal_to_f32`]: mantissa digits and a decimal exponent to f32, correctly rounded for
+//!   decimal exponents -16..=10 of the (9-digit) mantissa, a few ulp beyond.
 //! - [`Fixed`], [`Short`], [`Exp`]: `Display` wrappers printing like core's `{:.p}`, `{}` and
-//!   `{:.pe}` of an f32. [`Fixed`] is exact (integer arithmetic on the f32's bits), so it
-//!   prints as core does up to 1e18; [`Short`] as core's `{}` for 1e-8 <= |x| < 1e18 (and
-//!   exponent notation with 9 significant digits outside); [`Exp`] scales in f32, its last digit
-//!   may differ from core's. NaN prints `NaN` and infinities `inf` / `-inf` as core does.
+//!   `{:.pe}` of an f32 ([`Fixed`] exactly up to 1e18, [`Short`] as core's `{}` for
+//!   1e-8 <= |x| < 1e18, [`Exp`] to its last digit). NaN prints `NaN`, infinities `inf` /
+//!   `-inf`, as core does.
+//!
+//! What it is not: the console's tokens (`crate::console`) or the reply's pieces (`crate::out`).
 
 use core::fmt::{self, Write};
 

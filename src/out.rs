@@ -1,10 +1,10 @@
-//! Console text without core::fmt's formatting machinery (issue 3: flash).
+//! Console text without core::fmt's formatting machinery (the image's flash).
 //!
 //! What it is: [`Emit`], "this value as console text", for the few kinds of value a reply
-//! holds (text, unsigned integers, the number formats of [`crate::num`]), and [`w!`], which
+//! holds (text, unsigned integers, the number formats of [`crate::num`]), and [`crate::w!`], which
 //! writes a sequence of them to any `core::fmt::Write` (a `heapless::String`, the UART, a
 //! `Formatter`). `write!` builds `fmt::Arguments` at each call site and runs them through
-//! `core::fmt::write`, `Formatter::pad` and integer `Display`: about 4 KB of the image for
+//! `core::fmt::write`, `Formatter::pad` and integer `Display`: kilobytes of the image for
 //! replies that are only ever pieces in a row. Here each piece is one `write_str` call.
 //!
 //! What it is not: a formatter. No width, padding or alignment; the number formats live in

@@ -314,7 +314,7 @@ fn setpoints_planned_before_a_stop_are_dropped() {
 #[test]
 fn locked_out_core_never_arms() {
     let mut c = Control::new(SimBoard::default(), 2000, 2000.0);
-    c.lock_out("qemu image on a real chip");
+    c.lock_out(finger_fw::control::Fault::EmulatorOnChip);
     c.stop();
     let mut sp = setpoints([1000.0; 3]);
     sp.epoch = c.view().epoch;

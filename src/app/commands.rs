@@ -51,7 +51,7 @@ pub(super) struct Wait {
 }
 
 /// The command side: console lines in, replies and [`Setpoints`] out. Owns no output; runs
-/// at the lowest priority on the chip (RTIC's idle), inside [`App`] on the host.
+/// at the lowest priority on the chip (RTIC's idle), inside [`super::App`] on the host.
 pub struct Commands {
     pub(super) finger: Finger<f32>,
     /// The board's film: its law, hold ceiling, settling (app/film.rs).
@@ -69,6 +69,7 @@ pub struct Commands {
     pub(super) duty: [u16; CHANNELS],
     /// Each stack's thickness stretch now, as the control tick integrates it (1 at rest).
     pub(super) stack_ratio: [f32; CHANNELS],
+    /// The core's latched fault, as the console names it.
     pub(super) fault: Option<&'static str>,
     pub(super) locked_out: bool,
     pub(super) now_ms: u32,
@@ -109,7 +110,7 @@ impl Commands {
     /// `hv_max` / `servo_max` its PWMs' full-scale duties.
     pub fn new(board_name: &'static str, nl: &'static str, hv_max: [u16; CHANNELS], servo_max: u16) -> Self {
         // the defaults are valid (a model test); no Debug formatting of the error on the target
-        // MODEL.md's finger on the board's film, with its FE calibration (`calibration_for`)
+        // docs/model.md's finger on the board's film, with its FE calibration (`calibration_for`)
         let p = preset(board_params());
         let finger = match Finger::with_calibration(p, calibration_for(&p)) {
             Ok(f) => f,
@@ -188,7 +189,7 @@ impl Commands {
         self.enable = v.enable;
         self.volts = v.volts;
         self.duty = v.duty;
-        self.fault = v.fault;
+        self.fault = v.fault.text();
         self.locked_out = v.locked_out;
         self.stack_ratio = v.stack_ratio;
         self.now_ms = v.now_ms;
@@ -405,7 +406,7 @@ impl Commands {
 
     /// The checks every setpoint change passes (`volt`, `force`, an armed `pose`), after
     /// the caller checked new voltages against the ceilings ([`Commands::check_volts`]): the
-    /// tension at most fmax at those setpoints (issue 7: nothing past the end of the branch),
+    /// tension at most fmax at those setpoints (nothing past the end of the branch),
     /// the servo within its travel. Nothing moves; returns where the servo must go
     /// (excursion mm, deg).
     #[inline(never)]
@@ -678,15 +679,10 @@ impl Commands {
         }
     }
 
-    #[inline(never)]
-    pub(super) fn cmd_disarm(&mut self) -> Result<(), CmdError> {
-        if !self.armed {
-            return Ok(());
-        }
-        // the cable keeps its tension, held at the posture of 0 V; if that cannot be
-        // held, the cable is released
-        let zero = [0.0; CHANNELS];
-        match self.plan_servo(&self.finger, &self.fw, self.force, &zero) {
+    /// The servo where `plan` ([`Commands::plan_servo`] of the present tension) holds it; where
+    /// it cannot be held, the cable released (tension 0).
+    pub(super) fn hold_or_release(&mut self, plan: Result<(f32, f32), CmdError>) {
+        match plan {
             Ok((cable, deg)) => {
                 self.cable = cable;
                 self.set_servo(deg);
@@ -697,6 +693,17 @@ impl Commands {
                 self.set_servo(0.0);
             }
         }
+    }
+
+    #[inline(never)]
+    pub(super) fn cmd_disarm(&mut self) -> Result<(), CmdError> {
+        if !self.armed {
+            return Ok(());
+        }
+        // the cable keeps its tension, held at the posture of 0 V; if that cannot be
+        // held, the cable is released
+        let zero = [0.0; CHANNELS];
+        self.hold_or_release(self.plan_servo(&self.finger, &self.fw, self.force, &zero));
         // the control core ramps the HV to 0, then drops the enable
         self.armed = false;
         self.target_v = zero;
@@ -773,12 +780,10 @@ impl Commands {
             None => {
                 let nl = self.nl;
                 let p = self.finger.params();
-                for i in PARAMS {
-                    let v = p.get(i.name).unwrap_or(f64::NAN) as f32;
-                    let _ = w!(out; i.name, "=", Short(v), " (", i.range, ")", nl);
-                }
-                for i in FW_PARAMS {
-                    let _ = w!(out; i.name, "=", Short(self.fw.get(i.name).unwrap_or(0.0)), " (", i.range, ")", nl);
+                let model = PARAMS.iter().map(|i| (i.name, i.range, p.get(i.name).unwrap_or(f64::NAN) as f32));
+                let fw = FW_PARAMS.iter().map(|i| (i.name, i.range, self.fw.get(i.name).unwrap_or(0.0)));
+                for (name, range, v) in model.chain(fw) {
+                    let _ = w!(out; name, "=", Short(v), " (", range, ")", nl);
                 }
                 let _ = w!(r; "params=", PARAMS.len() + FW_PARAMS.len());
                 return Ok(());
@@ -837,7 +842,7 @@ impl Commands {
     }
 
     /// `cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]`: the model's FE calibration
-    /// (`finger_model::Calibration`, issue 18): read it, or set / clear it while disarmed. A
+    /// (`finger_model::Calibration`): read it, or set / clear it while disarmed. A
     /// change rebuilds the finger, as `param` does; refused, nothing changes.
     #[inline(never)]
     pub(super) fn cmd_cal(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {

@@ -23,21 +23,10 @@ use crate::num::{Fixed, Short};
 use crate::settings::{ConfigStore, Record, FORMAT_VERSION, RECORD_MAX};
 
 impl Commands {
-
     /// Put `finger` and `fw` in force (disarmed: the cable released if the servo cannot hold
     /// its tension there).
     fn put_settings(&mut self, finger: Finger<f32>, fw: FwParams) {
-        match self.plan_servo(&finger, &fw, self.force, &self.target_v) {
-            Ok((cable, deg)) => {
-                self.cable = cable;
-                self.set_servo(deg);
-            }
-            Err(_) => {
-                self.force = 0.0;
-                self.cable = 0.0;
-                self.set_servo(0.0);
-            }
-        }
+        self.hold_or_release(self.plan_servo(&finger, &fw, self.force, &self.target_v));
         self.set_finger(finger);
         self.fw = fw;
         self.recompute();

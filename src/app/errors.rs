@@ -10,7 +10,7 @@ use heapless::String;
 use crate::console::{self, NumError};
 use crate::num::{self, Exp};
 
-/// A refused command: its code (CONSOLE.md) and a human message.
+/// A refused command: its code (docs/console.md) and a human message.
 #[derive(Debug)]
 pub struct CmdError {
     pub code: &'static str,
@@ -47,9 +47,12 @@ pub(crate) fn no_args(args: &[&[u8]], cmd: &str) -> Result<(), CmdError> {
 }
 
 pub(crate) fn number(tok: &[u8], what: &str) -> Result<f32, CmdError> {
-    console::parse_number(tok).map_err(|e| match e {
-        NumError::Syntax => err!("bad-number"; what, ": ", (console::printable(tok)), " is not a decimal number"),
-        NumError::Overflow => err!("bad-number"; what, ": ", (console::printable(tok)), " is out of range"),
+    console::parse_number(tok).map_err(|e| {
+        let why = match e {
+            NumError::Syntax => " is not a decimal number",
+            NumError::Overflow => " is out of range",
+        };
+        err!("bad-number"; what, ": ", (console::printable(tok)), why)
     })
 }
 

@@ -10,7 +10,9 @@ use super::commands::Commands;
 use super::params::{FwParams, CHANNELS};
 use super::wire::wire;
 use crate::board::Board;
-use crate::control::{Control, HvRefused};
+#[cfg(feature = "hv-door")]
+use crate::control::HvRefused;
+use crate::control::{Control, Latched};
 use crate::rx::{RxEvent, RxLines};
 
 /// The whole application on one board, without threads: the RX part ([`RxLines`], `stop`
@@ -73,7 +75,7 @@ impl<B: Board> App<B> {
     pub fn duties(&self) -> [u16; CHANNELS] {
         self.ctl.view().duty
     }
-    pub fn fault(&self) -> Option<&'static str> {
+    pub fn fault(&self) -> Latched {
         self.ctl.view().fault
     }
     /// A `wait` is running: call `tick` until it ends (input meanwhile ends it early).
@@ -87,7 +89,8 @@ impl<B: Board> App<B> {
         self.cmds.fmax_evaluations()
     }
 
-    /// The single HV writer itself (its refusals are what the tests show).
+    /// The single HV writer called directly: tests only (feature `hv-door`), for its refusals.
+    #[cfg(feature = "hv-door")]
     pub fn write_hv_duty(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
         let r = self.ctl.write_hv_duty(ch, duty);
         self.cmds.sync(&self.ctl.view());
@@ -150,12 +153,7 @@ impl<B: Board> App<B> {
             }
             let Some(rec) = self.rx.pop() else { return };
             self.cmds.run(rec, out);
-            if self.cmds.take_stop() {
-                self.ctl.stop();
-                self.cmds.sync(&self.ctl.view());
-            }
-            let sp = self.cmds.setpoints();
-            self.ctl.apply(&sp);
+            self.hand_over();
         }
     }
 
@@ -163,6 +161,11 @@ impl<B: Board> App<B> {
     pub fn execute<W: Write>(&mut self, line: &[u8], out: &mut W) {
         self.cmds.sync(&self.ctl.view());
         self.cmds.execute(line, out);
+        self.hand_over();
+    }
+
+    /// After a line: a `stop` it executed stops the core; its setpoints to the core.
+    fn hand_over(&mut self) {
         if self.cmds.take_stop() {
             self.ctl.stop();
             self.cmds.sync(&self.ctl.view());

@@ -94,7 +94,7 @@ impl FwParams {
 /// `cal`'s factors in console order (`Calibration`: hinge, stack_axial, stack_bending).
 pub(crate) const CAL_NAMES: [&str; 8] = ["h1", "h2", "h3", "h4", "ea0", "ea1", "ei0", "ei1"];
 
-/// The board's default finger: MODEL.md's on the board's film (`Params::with_card`: the card's
+/// The board's default finger: docs/model.md's on the board's film (`Params::with_card`: the card's
 /// equilibrium modulus, permittivity, branches and breakdown field). Generic so that the host's
 /// f64 model (the web view's overlay) is the board's finger too.
 pub fn board_params<R: finger_model::Real>() -> Params<R> {
@@ -102,7 +102,7 @@ pub fn board_params<R: finger_model::Real>() -> Params<R> {
 }
 
 /// The FE calibration of a parameter set (`Calibration::for_params`) judged by its structure:
-/// MODEL.md's finger on the board's film has MODEL.md's calibration. Its hinge factors belong
+/// docs/model.md's finger on the board's film has docs/model.md's calibration. Its hinge factors belong
 /// to the geometry; its stack factors were computed for the paper's film, and on VHB 4905 the
 /// stacks add almost nothing to the joints (docs/materials.md), so the film does not clear it.
 pub fn calibration_for<R: finger_model::Real>(p: &Params<R>) -> Calibration<R> {

@@ -1,5 +1,5 @@
 //! `pose` and `contact` (docs/console.md; `contact` an addition, docs/inverse.md): the
-//! arguments parsed once ([`pose_args`]) for both builds, the inverse's answer written as the
+//! arguments parsed once (`pose_args`) for both builds, the inverse's answer written as the
 //! one reply line ([`pose`], [`contact`]: generic over the model's number type, the host tests
 //! call them), and the handlers on [`Commands`]: the f32 inverse, or on the Cortex-M3 image the
 //! fixed-point one.
@@ -99,19 +99,7 @@ fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f32>, prec: usize) 
 /// disarmed, nothing) or refuses with a console error. Arguments are the console's f32
 /// numbers (`R::from_f64(f64::from(x))` folds to x for R = f32: no f64 conversion is linked).
 /// Returns whether the command succeeded (and `apply` was called and accepted).
-pub fn pose<R, W, F>(
-    out: &mut W,
-    finger: &Finger<R>,
-    table: Option<&BranchTable<R>>,
-    degrees: &[f32],
-    tension: Option<f32>,
-    apply: F,
-) -> Result<bool, fmt::Error>
-where
-    R: Real,
-    W: Write,
-    F: FnOnce(R, &[R]) -> Result<(), CmdError>,
-{
+pub fn pose<R: Real, W: Write, F: FnOnce(R, &[R]) -> Result<(), CmdError>>(out: &mut W, finger: &Finger<R>, table: Option<&BranchTable<R>>, degrees: &[f32], tension: Option<f32>, apply: F) -> Result<bool, fmt::Error> {
     pose_with(out, finger, table, &Options::default(), degrees, tension, apply)
 }
 
@@ -218,7 +206,7 @@ where
 
 impl Commands {
     #[cfg(feature = "pose")]
-    /// `pose d1 d2 d3 [P]`: the inverse model (issue 4, [`crate::inverse_cmds::pose`]).
+    /// `pose d1 d2 d3 [P]`: the inverse model ([`pose_with`]).
     /// Writes its reply line itself. Armed, the solution goes through the checks of `volt`
     /// and `force` ([`Commands::plan_setpoints`]) and then moves the outputs; disarmed it answers
     /// and moves nothing; refused or unreachable, nothing moves.

@@ -107,7 +107,7 @@ impl ConfigState {
     }
 }
 
-/// The compiled defaults' finger: MODEL.md's on the board's film with its FE calibration (as
+/// The compiled defaults' finger: docs/model.md's on the board's film with its FE calibration (as
 /// this build holds it; `preset default`).
 pub fn default_finger() -> Finger<f32> {
     let p = preset(board_params());

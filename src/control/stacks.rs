@@ -1,5 +1,5 @@
 //! The board's stacks in time: each channel's film state (`finger_model::material`'s
-//! [`StackState`]) stepped every control tick, and the guard that keeps it above its floor.
+//! `StackState`) stepped every control tick, and the guard that keeps it above its floor.
 //!
 //! What it is: the board's law (the card and geometry of `crate::board`, built once), its
 //! stepper for one 1 ms tick, the board's hold ceiling and `s_hold` (the thinnest a held
