@@ -110,24 +110,6 @@ impl<R: Real> Calibration<R> {
         o[2][2] = c[2][2] * f[3];
         o
     }
-
-    /// The stack stiffness `Tᵀ C_de⁻¹ T` (`de::stack_stiffness`, MODEL.md) with EA scaled by the
-    /// axial factor and EI by the bending factor at thickness `t`: `g_b K + (g_a - g_b) K_a`,
-    /// K_a = EA/L (1, 0, d)ᵀ(1, 0, d) the transformed axial part.
-    pub fn stack_stiffness(&self, p: &Params<R>, k: &Mat3<R>, len: R, t: R) -> Mat3<R> {
-        let ga = self.stack_axial[0] + self.stack_axial[1] * t;
-        let gb = self.stack_bending[0] + self.stack_bending[1] * t;
-        let ka = p.e_de() * p.w * t / len;
-        let d = (p.t_min + t) / R::from_f64(2.0);
-        let v = [R::one(), R::zero(), d];
-        let mut o = *k;
-        for i in 0..3 {
-            for j in 0..3 {
-                o[i][j] = gb * k[i][j] + (ga - gb) * ka * v[i] * v[j];
-            }
-        }
-        o
-    }
 }
 
 #[cfg(test)]

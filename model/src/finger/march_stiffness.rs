@@ -24,7 +24,7 @@ impl<R: Real> Finger<R> {
     ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
         let l = self.sub_len;
         let zr = R::zero();
-        // (the stack couples no shear to the axial force: its k01 is zero, `StackUpper::at`)
+        // (the stack couples no shear to the axial force: its k01 is zero, `de::StackStiffness::upper`)
         let [d00, _, d02, d11, d12, d22] = *kd;
         debug_assert!(kd[1] == zr);
         self.march_tension_by(&self.hinge_k, tension, b, q_out, |kh, f, mm| {
@@ -75,20 +75,21 @@ mod tests {
         (kd, c)
     }
 
-    /// The stack's upper triangle in closed form is `Finger::stack_stiffness`'s to rounding, with
-    /// and without the calibration, over the thicknesses the stacks reach and past them.
+    /// The stack's upper triangle (`Finger::stack`) is the matrix `Finger::stack_stiffness`
+    /// gives to rounding, with and without the calibration, over the thicknesses the stacks
+    /// reach and past them.
     #[test]
     fn stack_upper_is_the_stack_stiffness() {
         for cal in [Calibration::<f64>::none(), Calibration::model_md()] {
             for p in [Params::<f64>::default(), Params { m: 1, ..Params::default() }] {
                 let f = Finger::with_calibration(p, cal).unwrap();
-                let su = f.stack_upper();
+                let su = f.stack();
                 let t0 = f.stack_thickness(0.0).unwrap();
                 for i in 0..=20 {
                     let t = t0 * (0.3 + 0.04 * f64::from(i));
                     let k = f.stack_stiffness(t);
                     let want = [k[0][0], k[0][1], k[0][2], k[1][1], k[1][2], k[2][2]];
-                    let got = su.at(t);
+                    let got = su.upper(t);
                     let scale = want.iter().fold(0.0f64, |a, x| a.max(x.abs()));
                     for (g, w) in got.iter().zip(want) {
                         assert!((g - w).abs() <= 1e-14 * scale, "{got:?} vs {want:?} at t = {t}");

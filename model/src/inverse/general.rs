@@ -58,6 +58,8 @@ pub(super) struct Held<R> {
 pub(super) struct Gen<'a, R> {
     f: &'a Finger<R>,
     p: &'a Params<R>,
+    /// The stack's stiffness as a function of its thickness.
+    stack: de::StackStiffness<R>,
     /// The link's linear rotation per newton of tension (0 for rigid links), rad/N.
     link_rot: R,
     /// Hole tolerance of the per-joint Newton, mm.

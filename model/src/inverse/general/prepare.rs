@@ -28,6 +28,7 @@ impl<'a, R: Real> Gen<'a, R> {
         Gen {
             f,
             p,
+            stack: f.stack(),
             link_rot,
             tol_hole,
             htol: tol_hole.max(f.hole_resolution()),
@@ -55,7 +56,7 @@ impl<'a, R: Real> Gen<'a, R> {
             }
             return Ok(());
         }
-        let kd = self.stack_upper(t)?;
+        let kd = self.stack_at(t)?;
         let mut check = R::zero();
         for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
             let (m, ck) = self.sub_compliance(j, &kd);
@@ -65,16 +66,15 @@ impl<'a, R: Real> Gen<'a, R> {
         Self::checked(check)
     }
 
-    /// The upper triangle of the stack's stiffness at thickness t (K_de ∝ t axially, t³ in
-    /// bending: positive semi-definite for t > 0, so each sum with the positive definite
-    /// hinge has a positive diagonal). It depends on t alone: once per compliance evaluation.
+    /// The upper triangle of the stack's stiffness at thickness t (`de::StackStiffness`:
+    /// K_de ∝ t axially, t³ in bending, positive semi-definite for t > 0, so each sum with the
+    /// positive definite hinge has a positive diagonal). Once per compliance evaluation.
     #[inline(always)]
-    pub(super) fn stack_upper(&self, t: R) -> Result<[R; 6], Error> {
+    pub(super) fn stack_at(&self, t: R) -> Result<[R; 6], Error> {
         if !(t > R::zero() && t.is_finite()) {
             return Err(Error::Singular { what: "joint stiffness" });
         }
-        let kd = self.f.stack_stiffness(t);
-        Ok([kd[0][0], kd[0][1], kd[0][2], kd[1][1], kd[1][2], kd[2][2]])
+        Ok(self.stack.upper(t))
     }
 
     /// Sub-element j's compliance C_j = (K_hinge,j + K_de)⁻¹ (`kd` the stack's upper triangle),
