@@ -1,13 +1,14 @@
 //! The application's command side: every command of docs/console.md, the HV ceilings, the
 //! model calls, and [`App`], the whole application on one board for the host. One idea per
-//! module; each imports only the ones above it in this list:
+//! module; each imports only modules listed before it:
 //!
-//! - `errors`: [`CmdError`], the shared argument checks; `params`: the parameter registry;
-//!   `film`: the board's film; `solves` (`m3` on the Cortex-M3 image): the forward solves;
-//!   `help`: `help` and the replies' formatting.
-//! - `commands`: [`Commands`], its state, the dispatch and the core commands; `pose`, `shape`,
-//!   `config` (with `stored`, the record's checks): the commands that are theirs.
-//! - `host`: [`App`], the host's composition; [`wire`] builds the parts for every composition.
+//! - `errors`: [`CmdError`] and the shared argument checks; `params`: the parameter registry;
+//!   `m3` (Cortex-M3 image) and `solves`: the forward solves; `help`: `help` and the replies'
+//!   formatting; `film`: the board's film; `stored`: the stored record's checks.
+//! - `commands`: [`Commands`], its state, the dispatch and the core commands; `pose`, `shape`:
+//!   the commands that are theirs.
+//! - `wire`: [`wire`], the parts built for a board (the chip, [`App`], the on-target tests);
+//!   `host`: [`App`]; `config`: `save`, `config`, `factory` and the boot hook.
 
 /// `err!(code; pieces...)`: a console error with a message written from pieces
 /// ([`crate::out::Emit`]).
@@ -21,22 +22,22 @@ macro_rules! err {
 
 pub mod errors;
 pub mod params;
-mod film;
 #[cfg(m3)]
 mod m3;
 mod solves;
 mod help;
+mod film;
+#[cfg(feature = "settings")]
+mod stored;
 mod commands;
 #[cfg(any(feature = "pose", feature = "contact", m3))]
 pub mod pose;
 #[cfg(feature = "shape")]
 mod shape;
-#[cfg(feature = "settings")]
-mod stored;
+mod wire;
+mod host;
 #[cfg(feature = "settings")]
 pub mod config;
-mod host;
-mod wire;
 
 pub use commands::Commands;
 pub use errors::CmdError;

@@ -182,6 +182,22 @@ fn sibling_modules_import_without_a_cycle() {
 }
 
 #[test]
+fn app_modules_import_only_those_declared_before_them() {
+    // src/app.rs' header says so: its `mod` lines are in import order
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../src/app.rs")).unwrap();
+    let order: Vec<String> = text
+        .lines()
+        .filter_map(|l| l.trim().trim_start_matches("pub ").strip_prefix("mod ")?.strip_suffix(';').map(str::to_string))
+        .collect();
+    assert!(order.len() >= 10, "{order:?}");
+    let (_, edges) = graph();
+    for (from, to) in &edges[&vec!["app".to_string()]] {
+        let at = |m: &str| order.iter().position(|o| o == m).unwrap_or_else(|| panic!("app::{m} not declared in src/app.rs"));
+        assert!(at(to) < at(from), "app::{from} imports app::{to}, declared after it in src/app.rs");
+    }
+}
+
+#[test]
 fn a_cycle_is_seen() {
     // the check itself: two modules that name each other
     let m = vec!["app".to_string(), "a".to_string()];

@@ -20,14 +20,14 @@ use core::fmt::Write;
 
 use finger_model::calibration::KEEPS_CALIBRATION;
 use finger_model::params::PARAMS;
-#[cfg(not(m3))]
+#[cfg(feature = "pose")]
 use finger_model::Solution;
 use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Params};
 
 use super::errors::{model_err, no_args, number, tension, CmdError};
 use super::film;
 use super::help::{joints, list, solve_reply, Reply, Tip, DEG, HELP};
-use super::params::{board_params, calibration_for, preset, FwParams, CAL_NAMES, CHANNELS, FW_PARAMS};
+use super::params::{board_params, calibration_for, default_finger, preset, FwParams, CAL_NAMES, CHANNELS, FW_PARAMS};
 use super::solves::{fmax_of, forward, Solved};
 #[cfg(m3)]
 use super::solves::forward_stiffness;
@@ -100,7 +100,7 @@ pub struct Commands {
     /// inside for a finger without stacks.
     #[cfg(feature = "pose")]
     pub(super) inv_table: core::cell::OnceCell<Option<finger_model::inverse::BranchTable<f32>>>,
-    /// The settings store and what the boot found in it (app/config.rs).
+    /// The settings store and what the boot found in it (app/stored.rs, app/config.rs).
     #[cfg(feature = "settings")]
     pub(super) cfg: ConfigState,
 }
@@ -109,15 +109,8 @@ impl Commands {
     /// Default parameters, disarmed. `board_name` and `nl` (line ending) from the board,
     /// `hv_max` / `servo_max` its PWMs' full-scale duties.
     pub fn new(board_name: &'static str, nl: &'static str, hv_max: [u16; CHANNELS], servo_max: u16) -> Self {
-        // the defaults are valid (a model test); no Debug formatting of the error on the target
-        // docs/model.md's finger on the board's film, with its FE calibration (`calibration_for`)
-        let p = preset(board_params());
-        let finger = match Finger::with_calibration(p, calibration_for(&p)) {
-            Ok(f) => f,
-            Err(_) => panic!("default parameters"),
-        };
         let mut c = Commands {
-            finger,
+            finger: default_finger(),
             film: film::BoardFilm::new(),
             fw: FwParams::default(),
             board_name,

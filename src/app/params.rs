@@ -5,7 +5,7 @@
 //! What it is not: the `param` command (`super::commands`) or the stored record
 //! (`super::stored`); both set values through the checks here.
 
-use finger_model::{Calibration, Params};
+use finger_model::{Calibration, Finger, Params};
 
 use super::errors::CmdError;
 use crate::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_ZERO_DUTY_PCT};
@@ -122,5 +122,16 @@ pub(crate) fn preset(p: Params<f32>) -> Params<f32> {
         p
     } else {
         p.without_stacks()
+    }
+}
+
+/// The compiled defaults' finger: docs/model.md's on the board's film with its FE calibration
+/// (as this build holds it; `preset default`). The defaults are valid (a model test); no Debug
+/// formatting of the error on the target.
+pub fn default_finger() -> Finger<f32> {
+    let p = preset(board_params());
+    match Finger::with_calibration(p, calibration_for(&p)) {
+        Ok(f) => f,
+        Err(_) => panic!("default parameters"),
     }
 }

@@ -280,7 +280,7 @@ impl Commands {
     }
 
     #[cfg(feature = "contact")]
-    /// `contact <P0> <P> [<V1> <V2> <V3>]`: model only ([`crate::inverse_cmds::contact`]);
+    /// `contact <P0> <P> [<V1> <V2> <V3>]`: model only ([`contact`]);
     /// the voltages are checked against the ceilings as `solve` does. Writes its reply line.
     #[inline(never)]
     pub(super) fn cmd_contact<W: Write>(&self, args: &[&[u8]], out: &mut W) -> Result<(), CmdError> {

@@ -18,7 +18,7 @@ use core::fmt::Write;
 use finger_model::params::PARAMS;
 use finger_model::{Calibration, Finger, Params};
 
-use super::params::{board_params, calibration_for, preset, FwParams, CAL_NAMES, CHANNELS, FW_PARAMS};
+use super::params::{board_params, calibration_for, default_finger, preset, FwParams, CAL_NAMES, CHANNELS, FW_PARAMS};
 use crate::board::HV_MAX_V;
 use crate::out::Emit;
 use crate::settings::{tag, ConfigStore, FormatError, Record, StoreError, MAX_VALUES};
@@ -104,16 +104,6 @@ pub(crate) struct ConfigState {
 impl ConfigState {
     pub(crate) const fn new() -> Self {
         ConfigState { store: None, boot: Boot::NoStore, saves: 0, rejected: false }
-    }
-}
-
-/// The compiled defaults' finger: docs/model.md's on the board's film with its FE calibration (as
-/// this build holds it; `preset default`).
-pub fn default_finger() -> Finger<f32> {
-    let p = preset(board_params());
-    match Finger::with_calibration(p, calibration_for(&p)) {
-        Ok(f) => f,
-        Err(_) => panic!("default parameters"),
     }
 }
 
