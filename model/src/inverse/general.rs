@@ -85,11 +85,6 @@ fn tension_ends<R: Real>(lo: &[Held<R>; MAX_JOINTS], hi: &[Held<R>; MAX_JOINTS],
     ends
 }
 
-/// A march's state of a solved equilibrium.
-fn march_of<R: Real>(eq: &JointEquilibrium<R>) -> JointMarch<R> {
-    JointMarch { end: eq.end, hole: eq.hole, link: eq.link, angle: eq.angle }
-}
-
 /// The hinge end and link deflection of joint k (its sub-element displacements are written
 /// to `out.sub_q[k]` by the solve itself).
 fn record<R: Real>(out: &mut PoseSolution<R>, k: usize, lh: R, h: &Held<R>) {

@@ -122,7 +122,7 @@ impl<'a, R: Real> Gen<'a, R> {
 
     /// The unloaded joint's state.
     pub(super) fn straight_st(&self) -> JointMarch<R> {
-        march_of(&self.straight())
+        JointMarch::of_equilibrium(&self.straight())
     }
 
     /// dθ/dP at P = 0 (straight joint: every sub-element sees the axial force -P and the

@@ -33,7 +33,7 @@ impl<'a, R: Real> Gen<'a, R> {
     /// within the root tolerance. `None` when it does not converge in 16 steps, or a march
     /// fails: the caller falls back to the bracketed root (robust, 3-5x the marches).
     /// Each step costs one march and no derivatives: cheaper than the dual-number Newton
-    /// nested in a secant (issue 4: the inverse's instruction count).
+    /// nested in a secant (the inverse's instruction count).
     /// Returns the solve (if it converged) and the marches it took.
     /// (One instance for both solves: `ev` is a trait object, which keeps the firmware image
     /// small.)
