@@ -1,4 +1,4 @@
-//! Model fidelity (issue 7): the three-element model (`finger-model`, converged solver) against
+//! Model fidelity: the three-element model (`finger-model`, converged solver) against
 //! the continuum reference (`host_tests::continuum`), per scene and tension up to the end of the
 //! equilibrium branch, for m = 1, 2, 4, 8 sub-elements per hinge, with and without the plate
 //! modulus (the reference with the same setting: same physics), with and without flexible links;
@@ -32,7 +32,7 @@ const TOL_PCT: f64 = 3.0;
 const LIMIT_TENSION: f64 = 2.0;
 /// M4F instructions per forward solve allowed.
 const BUDGET: f64 = 10_000.0;
-/// The body's Poisson ratio used throughout (MODEL.md / issue 7 default).
+/// The body's Poisson ratio used throughout (docs/model.md's default).
 const NU_B: f64 = 0.45;
 
 /// A scene: a finger (layers, preset) and its channel voltages.
@@ -81,7 +81,7 @@ fn configs() -> Vec<Config> {
     v
 }
 
-/// The scene's parameters for a configuration: MODEL.md's values (or the paper preset), every
+/// The scene's parameters for a configuration: docs/model.md's values (or the paper preset), every
 /// fidelity switch set explicitly.
 fn params(s: &SceneDef, c: Config) -> Params<f64> {
     let base = if s.paper { Params::<f64>::paper() } else { Params::<f64>::default() };
@@ -371,7 +371,7 @@ from that command. Every number is also in `docs/fidelity/fidelity.csv`. Tests: 
     );
     let _ = writeln!(
         w,
-        "The question (issue 7): how far is `finger-model`'s node-based model (MODEL.md, the paper's \
+        "The question: how far is `finger-model`'s node-based model (docs/model.md, the paper's \
 n-FEM-NI) from the real structure, as a function of the hinge subdivision m, the plate modulus and \
 flexible links, and what does each m cost on the target? The real structure is stood in for by the \
 continuum reference (`host_tests::continuum`, docs/continuum.md): a planar extensible elastica of \
@@ -381,7 +381,7 @@ setting is the model's (the same physics: the plate modulus is a statement about
 so the reference carries it too).\n"
     );
     let _ = writeln!(w, "## What is measured\n");
-    let _ = writeln!(w, "- Scenes (MODEL.md's default finger, 3 joints; voltages inside the 10 kV ceiling):");
+    let _ = writeln!(w, "- Scenes (docs/model.md's default finger, 3 joints; voltages inside the 10 kV ceiling):");
     for s in SCENES {
         let _ = writeln!(w, "  - `{}`: {}", s.name, s.what);
     }
@@ -525,14 +525,14 @@ branch table and is within the budget (docs/performance.md, \"The branch-table p
             fmt_t(LIMIT_TENSION)
         );
     }
-    // the board's default: m = 8, plate, flexible links, with MODEL.md's FE calibration
+    // the board's default: m = 8, plate, flexible links, with docs/model.md's FE calibration
     let plain = Config { plate: true, flex: true, m: 8 };
     let (u, c) = (worst_instr("m4f-fast-trig", plain), worst_named("m4f-fast-trig", &format!("{}-cal", plain.bench_name())));
     let (ul, cl) = (worst_instr("m4f-libm", plain), worst_named("m4f-libm", &format!("{}-cal", plain.bench_name())));
     let g = |x: Option<(f64, f64)>, k: usize| x.map_or(f64::NAN, |x| if k == 0 { x.0 } else { x.1 });
     let _ = writeln!(
         w,
-        "\n**The board's default is calibrated** (issue 18): MODEL.md's finger carries its FE calibration \
+        "\n**The board's default is calibrated**: docs/model.md's finger carries its FE calibration \
 (`Calibration::model_md`, `cal` at the console; docs/fidelity-fe.md for its accuracy against a 3D \
 finite-element solution). The factors change the sub-element compliances once, when the finger is \
 built, and the stack's stiffness once per voltage change (`Finger::compliances`), not the solve: m = 8 \
@@ -590,7 +590,7 @@ about 5 %, against a {:.0} % error for E_b. At w ≈ t (a square section) the fr
 the whole section and E is the right modulus. This is the usual rule for wide plates and flexure \
 hinges: plane strain when the width is much larger than the thickness, plane stress when they are \
 comparable; the issue's independent plane-strain finite-element solution takes the same view for \
-this 20 mm × 1.5 mm hinge. The DE layers keep E_de (MODEL.md).\n",
+this 20 mm × 1.5 mm hinge. The DE layers keep E_de (docs/model.md).\n",
         100.0 * (1.0 / (1.0 - NU_B * NU_B) - 1.0),
         100.0 * (1.0 - (1.0 - NU_B * NU_B))
     );
@@ -749,7 +749,7 @@ smaller of the two branch ends. Drawn by `host_tests::svg::plot` from generated 
     }
 
     // console
-    let _ = writeln!(w, "## Console parameters (CONSOLE.md style)\n");
+    let _ = writeln!(w, "## Console parameters (docs/console.md style)\n");
     let _ = writeln!(
         w,
         "`param <name> [<value>]` reads or sets them (only while disarmed; the ceilings and `fmax` are \

@@ -1,15 +1,14 @@
-//! Writes docs/fixed-point.md's measured sections (issue 14): the bench image `fixed`
+//! Writes docs/fixed-point.md's measured sections: the bench image `fixed`
 //! (bench/src/bin/fixed.rs) built for the Cortex-M3 (thumbv7m-none-eabi, soft float) and run
 //! in QEMU mps2-an385 with `-icount`: per bench scene and model (the scene's pinned model and
 //! the default one), the instructions of the f32 forward solve and of the fixed-point one, and
 //! each one's errors against the host's f64 reference; and the Cortex-M3 firmware image's
 //! flash and RAM. `cd host-tests && cargo run --release --example fixed_report`
 use finger_model::{Finger, Method, Params};
-use host_tests::perf::{build, calibration, elf_sizes, run_qemu, scenes, M3};
+use host_tests::image::Image;
+use host_tests::perf::{build, read_bench, elf_sizes, run_qemu, scenes, M3};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::Path;
-use std::process::Command;
 
 /// One line `F <scene> <model> <scalar> ok|err ...` of the image.
 struct Line {
@@ -27,45 +26,37 @@ fn reference(p: Params<f64>, s: &scenes::Scene) -> Result<([f64; 2], [f64; 3], f
 }
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let root = host_tests::image::root();
     let elf = build("fixed", M3, "de,fast-trig,model-fixed", "m3-fixed-model").unwrap_or_else(|e| panic!("{e}"));
     let out = run_qemu(&elf, "mps2-an385", 4).unwrap_or_else(|e| panic!("{e}"));
-    let mut per_instr = None;
+    let bench = read_bench(&out).unwrap_or_else(|e| panic!("bench image: {e}"));
     let mut lines: BTreeMap<(usize, String, String), Line> = BTreeMap::new();
     // `I pose<i> <scalar> ok|err <ticks> <setup> <V1> <V2> <V3>|<code>`
     let mut inv_lines: BTreeMap<(usize, String), (f64, f64, Result<[f64; 3], String>)> = BTreeMap::new();
     let mut free_tension: BTreeMap<usize, f64> = BTreeMap::new();
     let order: Vec<&str> = scenes::SCENES.iter().map(|s| s.name).collect();
-    for l in out.lines() {
-        let f: Vec<&str> = l.split_whitespace().collect();
-        match f.first() {
-            Some(&"CAL") => per_instr = Some(calibration(&f).unwrap()),
-            Some(&"F") if f.len() >= 8 => {
-                let (tpi, overhead) = per_instr.expect("CAL first");
-                let num = |i: usize| f[i].parse::<f64>().unwrap();
-                let instr = ((num(5) - overhead) / tpi).max(0.0);
-                let setup = ((num(6) - overhead) / tpi).max(0.0);
+    for f in &bench.lines {
+        let num = |i: usize| f[i].parse::<f64>().unwrap();
+        match f[0] {
+            "F" if f.len() >= 8 => {
+                let (instr, setup) = (bench.instructions(num(5)), bench.instructions(num(6)));
                 let ok = (f[4] == "ok").then(|| ([num(7), num(8)], [num(9), num(10), num(11)], num(12), f[13].parse().unwrap()));
                 let code = if f[4] == "ok" { String::new() } else { f[7].to_string() };
                 let k = order.iter().position(|&n| n == f[1]).expect("scene");
                 lines.insert((k, f[2].to_string(), f[3].to_string()), Line { ok, code, instr, setup });
             }
-            Some(&"I") if f.len() >= 8 => {
-                let (tpi, overhead) = per_instr.expect("CAL first");
-                let num = |i: usize| f[i].parse::<f64>().unwrap();
+            "I" if f.len() >= 8 => {
                 let i: usize = f[1].trim_start_matches("pose").parse().unwrap();
                 let r = if f[3] == "ok" { Ok([num(6), num(7), num(8)]) } else { Err(f[6].to_string()) };
                 // `free` (the tension rule): the tension it chose
                 if f[2] == "free" && f[3] == "ok" {
                     free_tension.insert(i, num(9));
                 }
-                inv_lines.insert((i, f[2].to_string()), (((num(4) - overhead) / tpi).max(0.0), ((num(5) - overhead) / tpi).max(0.0), r));
+                inv_lines.insert((i, f[2].to_string()), (bench.instructions(num(4)), bench.instructions(num(5)), r));
             }
-            Some(&"PANIC") => panic!("bench image: {l}"),
             _ => {}
         }
     }
-    assert!(out.contains("END"), "the bench image did not finish:\n{out}");
 
     let mut t = String::new();
     let _ = writeln!(t, "| scene | model | f32 instr | f32 same-algorithm instr | fixed instr | f32 / fixed | same / fixed | tip err f32 (mm) | tip err fixed (mm) | joint err fixed (deg) | excursion err fixed (mm) | fixed set-up instr |");
@@ -233,17 +224,10 @@ fn main() {
     }
 
     // the Cortex-M3 firmware image
-    let st = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
-        .current_dir(&root)
-        .args(["build", "--release", "--quiet", "--target", "thumbv7m-none-eabi", "--no-default-features", "--features", "m3"])
-        .status()
-        .expect("cargo");
-    assert!(st.success(), "M3 firmware build failed");
-    let fw = std::env::var_os("CARGO_TARGET_DIR").map(std::path::PathBuf::from).unwrap_or_else(|| root.join("target")).join("thumbv7m-none-eabi/release/finger-fw");
-    let (flash, ram) = elf_sizes(&fw).unwrap();
+    let (flash, ram) = elf_sizes(Image::M3.elf()).unwrap();
     // the M3 image's stack high-water over the console's commands (stack painted at reset;
     // memory-m3.x: the 16 KiB stack is [0x20000000, 0x20004000))
-    let mut q = host_tests::qemu::Qemu::boot_with(host_tests::qemu::Image::M3.paint_elf(), "stack", &[]);
+    let mut q = host_tests::qemu::Qemu::boot_with(Image::M3.paint_elf(), "stack", &[]);
     // an armed `pose` (the fixed-point inverse) at a posture of the host's model at 0.8 N,
     // with the board's calibration (read with `cal`)
     let c = q.cmd("cal");
@@ -295,7 +279,7 @@ fn main() {
     let _ = writeln!(m, "(bench/src/twin.rs; its stop at the f32 model's resolution); fixed: `finger_model::fixed`.");
     let _ = writeln!(m, "Errors against the host's f64 reference (converged to 1e-12 mm). Set-up: `FixedFinger::new` (the");
     let _ = writeln!(m, "compliances in f32, then scaled), once per parameter or voltage change.\n");
-    let _ = writeln!(m, "| target (issue 14) | measured |");
+    let _ = writeln!(m, "| target | measured |");
     let _ = writeln!(m, "| --- | --- |");
     let _ = writeln!(m, "| forward tip within 1e-3 mm of f64, every bench scene, default model | worst {worst_tip_default:.1e} mm (all models: {worst_tip:.1e} mm) |");
     let _ = writeln!(m, "| >= 3x fewer M3 instructions than soft-float f32 running the same algorithm | same algorithm in f32 (bench/src/twin.rs) / fixed: min {smin:.2}, median {smed:.2}; default model min {dmin:.2} |");

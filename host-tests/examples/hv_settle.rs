@@ -40,10 +40,6 @@ fn main() {
         ));
     }
     s.push_str("<!-- hv-settle:end -->\n");
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/firmware.md");
-    let doc = std::fs::read_to_string(&path).unwrap();
-    let (a, rest) = doc.split_once("<!-- hv-settle:begin").expect("markers in docs/firmware.md");
-    let (_, b) = rest.split_once("<!-- hv-settle:end -->\n").expect("end marker");
-    std::fs::write(&path, format!("{a}{s}{b}")).unwrap();
+    host_tests::report::write_section("docs/firmware.md", "hv-settle", &s);
     print!("{s}");
 }

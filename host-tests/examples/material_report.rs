@@ -13,7 +13,7 @@ use finger_model::material::{
     CARDS, LIMIT_RATIO, VHB_4905,
 };
 use finger_model::params::EPS0;
-use host_tests::perf::{build, calibration, run_qemu, M3, M4F};
+use host_tests::perf::{build, read_bench, run_qemu, M3, M4F};
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -36,7 +36,7 @@ fn cards_section(doc: &mut String) {
          the 33 % limit once fully relaxed and at the first instant (branches unrelaxed); *breakdown at \
          2/3*: E_B(2/3) x 2/3 z0; *hold ceiling*: margin x min(2/3 relaxed, breakdown at 2/3); \
          *s_hold*: the relaxed thickness stretch at the hold ceiling, the thinnest a held voltage ever \
-         gets; *linear law*: MODEL.md's linear balance E (1 - s) = eps V^2 / (s z0)^2 (E = 2 G_eq (1 + 0.49)), \
+         gets; *linear law*: docs/model.md's linear balance E (1 - s) = eps V^2 / (s z0)^2 (E = 2 G_eq (1 + 0.49)), \
          its pull-in at s = 2/3, for comparison.\n"
     )
     .unwrap();
@@ -82,13 +82,8 @@ fn histories() -> Vec<History> {
         History { volts: Box::new(|t| 6000.0 * (t / 5.0).min(1.0)) },
     ];
     // random: piecewise constant, 4-20 s segments, 0..hold ceiling (fixed seed)
-    let mut x = 0x2545_F491_4F6C_DD1Du64;
-    let mut rnd = move || {
-        x ^= x >> 12;
-        x ^= x << 25;
-        x ^= x >> 27;
-        (x.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = finger_model_testkit::material::Rng(0x2545_F491_4F6C_DD1D);
+    let mut rnd = move || rng.next();
     for _ in 0..4 {
         let mut segs = Vec::new();
         let mut t = 0.0;
@@ -151,24 +146,12 @@ fn host_ns_per_tick(integrator: Integrator) -> f64 {
 fn target_counts(triple: &str, machine: &str, shift: u32) -> Result<Vec<(String, String, f64)>, String> {
     let elf = build("material", triple, "de,f32", &format!("material-{triple}"))?;
     let out = run_qemu(&elf, machine, shift)?;
-    let (mut k, mut overhead) = (None, 0.0);
+    let bench = read_bench(&out)?;
     let mut v = Vec::new();
-    for line in out.lines() {
-        let f: Vec<&str> = line.split_whitespace().collect();
-        match f.first() {
-            Some(&"CAL") => {
-                let (a, b) = calibration(&f)?;
-                k = Some(a);
-                overhead = b;
-            }
-            Some(&"T") => {
-                let per = k.ok_or("T before CAL")?;
-                let ticks: f64 = f[3].parse().map_err(|_| "ticks")?;
-                let n: f64 = f[4].parse().map_err(|_| "count")?;
-                v.push((f[1].to_string(), f[2].to_string(), ((ticks - overhead).max(0.0) / per / n).round()));
-            }
-            _ => {}
-        }
+    for f in bench.lines.iter().filter(|f| f[0] == "T") {
+        let ticks: f64 = f[3].parse().map_err(|_| "ticks")?;
+        let n: f64 = f[4].parse().map_err(|_| "count")?;
+        v.push((f[1].to_string(), f[2].to_string(), (bench.instructions(ticks) / n).round()));
     }
     Ok(v)
 }

@@ -6,8 +6,9 @@
 //!   cd host-tests && cargo run --release --example realtime_report
 use host_tests::qemu::{duties_per_tick, hv_full_scale, max_step, stop_latencies, Qemu};
 
+/// The value of `k=` in a reply; "-" where it has none.
 fn kv<'a>(r: &'a str, k: &str) -> &'a str {
-    r.split_whitespace().find_map(|w| w.strip_prefix(k).and_then(|v| v.strip_prefix('='))).unwrap_or("-")
+    host_tests::reply::find(r, k).unwrap_or("-")
 }
 
 fn main() {
@@ -84,10 +85,6 @@ fn main() {
         s.push_str(&format!("| `{w}` | {:.2} ms |\n", us / 1000.0));
     }
     s.push_str("<!-- realtime-report:end -->\n");
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/firmware.md");
-    let doc = std::fs::read_to_string(&path).unwrap();
-    let (a, rest) = doc.split_once("<!-- realtime-report:begin").expect("markers in docs/firmware.md");
-    let (_, b) = rest.split_once("<!-- realtime-report:end -->\n").expect("end marker");
-    std::fs::write(&path, format!("{a}{s}{b}")).unwrap();
+    host_tests::report::write_section("docs/firmware.md", "realtime-report", &s);
     print!("{s}");
 }

@@ -44,9 +44,5 @@ fn main() {
     out.push_str(&format!("| saves until that sector reaches the rated {ENDURANCE} cycles | {:.2e} |\n", saves_to_end));
     out.push_str("<!-- settings-wear:end -->\n");
     print!("{out}");
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/firmware.md");
-    let doc = std::fs::read_to_string(&path).unwrap();
-    let (head, rest) = doc.split_once("<!-- settings-wear:begin").expect("markers in docs/firmware.md");
-    let (_, tail) = rest.split_once("<!-- settings-wear:end -->\n").expect("end marker");
-    std::fs::write(&path, format!("{head}{out}{tail}")).unwrap();
+    host_tests::report::write_section("docs/firmware.md", "settings-wear", &out);
 }

@@ -1,4 +1,4 @@
-//! The soak (issue 13): the property cases of model/testkit/src/domain.rs (forward, fmax, the
+//! The soak: the property cases of model/testkit/src/domain.rs (forward, fmax, the
 //! inverse round trip, contact) drawn at random, by default 1,000,000 of them, and the count of
 //! each outcome (an answer, each typed refusal, each violation). Exits 1 on any violation.
 //!
@@ -9,18 +9,8 @@
 //! tick's rule, every hundredth also against the f64 reference.
 
 use finger_model_testkit::domain;
+use finger_model_testkit::material::Rng;
 use std::collections::BTreeMap;
-
-/// xorshift64*: a uniform number in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -66,9 +56,9 @@ fn main() {
 
 /// The film's guard under random voltage histories; exits 1 on any violation.
 fn material(args: &[String]) {
-    use finger_model_testkit::material::{guarded_history, Rng as HRng};
+    use finger_model_testkit::material::guarded_history;
     let histories: u64 = args.first().map_or(1_000_000, |s| s.parse().expect("histories"));
-    let mut rng = HRng(args.get(1).map_or(0x5DEE_CE66_D1CE_4E5B, |s| s.parse().expect("seed")) | 1);
+    let mut rng = Rng(args.get(1).map_or(0x5DEE_CE66_D1CE_4E5B, |s| s.parse().expect("seed")) | 1);
     let (mut ticks, mut guarded, mut near, mut worst_ref, mut min_margin) = (0u64, 0u64, 0u64, 0f64, f64::INFINITY);
     for i in 0..histories {
         match guarded_history(&mut rng, i % 100 == 0) {

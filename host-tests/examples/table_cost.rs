@@ -1,4 +1,4 @@
-//! The branch-table path on the Cortex-M4F (issue 15): prints the section perf-report puts in
+//! The branch-table path on the Cortex-M4F: prints the section perf-report puts in
 //! docs/performance.md (`host_tests::perf::table_cost_section`), without the rest of the report.
 //!
 //! `cd host-tests && cargo run --example table_cost`

@@ -1,14 +1,17 @@
 //! The bench images (bench/, a `no_std` firmware of its own) seen from the host: build them
-//! for a core, run them in QEMU with `-icount` (deterministic instruction counts), parse what
-//! they print over semihosting, and compare against the host's f64 reference. Used by the
-//! `perf-report` binary (docs/performance.md) and by the quick test `tests/perf_bench.rs`.
+//! for a core ([`crate::image::cargo_build`]), run them in QEMU with `-icount` (deterministic
+//! instruction counts), read what they print over semihosting ([`read_bench`]: the `CAL`
+//! calibration, the result lines, `END`), and compare against the host's f64 reference. Used
+//! by the `perf-report` binary (docs/performance.md), the reports that count instructions
+//! (examples/*_cost.rs, fixed_report, material_report, fidelity) and `tests/perf_bench.rs`.
 //!
 //! What it is not: a benchmark harness for host nanoseconds (that is criterion, `benches/host_solve.rs`).
 
+use crate::image::{cargo_build, CargoBuild};
+use crate::qemu::qemu_command;
 use finger_model::{Finger, Method, Params};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 pub use finger_scenes as scenes;
 use scenes::Scene;
@@ -51,7 +54,7 @@ pub fn bench_dir() -> PathBuf {
 
 /// Where cargo puts the bench builds: $CARGO_TARGET_DIR if set, else bench/target.
 pub fn target_dir() -> PathBuf {
-    crate::qemu::cargo_target_dir(bench_dir().join("target"))
+    crate::image::cargo_target_dir(bench_dir().join("target"))
 }
 
 /// Build binary `bin` of the bench crate for `triple` with `features` (no defaults), and copy
@@ -65,24 +68,8 @@ pub fn build(bin: &str, triple: &str, features: &str, name: &str) -> Result<Path
 /// (an image that reads `option_env!`, like table.rs's profile cases).
 pub fn build_with_env(bin: &str, triple: &str, features: &str, name: &str, env: &[(&str, Option<&str>)]) -> Result<PathBuf, String> {
     let tdir = target_dir();
-    let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
-    for (k, v) in env {
-        match v {
-            Some(v) => cmd.env(k, v),
-            None => cmd.env_remove(k),
-        };
-    }
-    let out = cmd
-        .current_dir(bench_dir())
-        .env("CARGO_TARGET_DIR", &tdir)
-        .args(["build", "--release", "--quiet", "--bin", bin, "--target", triple, "--no-default-features"])
-        .args(["--features", features])
-        .output()
-        .map_err(|e| format!("cargo: {e}"))?;
-    if !out.status.success() {
-        return Err(format!("build of {name} failed:\n{}", String::from_utf8_lossy(&out.stderr)));
-    }
-    let elf = tdir.join(triple).join("release").join(bin);
+    let b = CargoBuild { dir: bench_dir(), bin, target: triple, features: Some(features), target_dir: tdir.clone(), env };
+    let elf = cargo_build(&b).map_err(|e| format!("{name}: {e}"))?;
     let dir = tdir.join("perf-images");
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
     let copy = dir.join(format!("{name}.elf"));
@@ -93,14 +80,8 @@ pub fn build_with_env(bin: &str, triple: &str, features: &str, name: &str, env: 
 /// Run an image in QEMU (semihosting, -icount) and return what it printed. Fails on a
 /// non-zero exit (the image exits 1 on a panic) or a timeout.
 pub fn run_qemu(elf: &Path, machine: &str, shift: u32) -> Result<String, String> {
-    let out = Command::new("timeout")
-        .arg("900")
-        .arg("qemu-system-arm")
-        .args(["-machine", machine, "-nographic"])
-        .args(["-semihosting-config", "enable=on,target=native"])
-        .args(["-icount", &format!("shift={shift}")])
-        .arg("-kernel")
-        .arg(elf)
+    let out = qemu_command(machine, &format!("shift={shift}"), elf, Some(900))
+        .arg("-nographic")
         .output()
         .map_err(|e| format!("qemu-system-arm: {e}"))?;
     // semihosting output comes on QEMU's stdout or stderr depending on its version
@@ -128,7 +109,7 @@ pub struct Rec {
 
 /// A bench image's `CAL <instructions> <ticks> <overhead>` line (a loop of known length):
 /// SysTick ticks per instruction and the timing overhead in ticks.
-pub fn calibration(f: &[&str]) -> Result<(f64, f64), String> {
+fn calibration(f: &[&str]) -> Result<(f64, f64), String> {
     let num = |i: usize| -> Result<f64, String> { f.get(i).and_then(|x| x.parse().ok()).ok_or_else(|| format!("bad CAL line: {f:?}")) };
     let (n, t, overhead) = (num(1)?, num(2)?, num(3)?);
     if !(t > 0.0 && t < 1e12) {
@@ -137,26 +118,54 @@ pub fn calibration(f: &[&str]) -> Result<(f64, f64), String> {
     Ok((t / n, overhead))
 }
 
-/// Parse a bench image's output: the `CAL` line gives ticks per instruction (a loop of known
-/// length) and the timing overhead, which is subtracted.
-pub fn parse(image: &Image, out: &str) -> Result<Vec<Rec>, String> {
-    let mut per_instr = None;
-    let mut overhead = 0.0;
-    let mut recs = Vec::new();
-    let mut ended = false;
+/// A bench image's output, read: the `CAL` line's calibration and the other lines as words.
+pub struct BenchOut<'a> {
+    /// SysTick ticks per instruction and the timing overhead in ticks (the `CAL` line).
+    pub per_instr: f64,
+    pub overhead: f64,
+    /// Every other line but `END`, split into words.
+    pub lines: Vec<Vec<&'a str>>,
+}
+
+/// Read a bench image's output; fails on a `PANIC` line, a bad or missing `CAL` line, or no
+/// `END` (the image did not finish).
+pub fn read_bench(out: &str) -> Result<BenchOut<'_>, String> {
+    let (mut cal, mut ended, mut lines) = (None, false, Vec::new());
     for line in out.lines() {
         let f: Vec<&str> = line.split_whitespace().collect();
         match f.first() {
-            Some(&"CAL") if f.len() == 4 => {
-                let (k, o) = calibration(&f)?;
-                per_instr = Some(k);
-                overhead = o;
-            }
+            Some(&"CAL") => cal = Some(calibration(&f)?),
+            Some(&"END") => ended = true,
+            Some(&"PANIC") => return Err(format!("the image panicked: {line}")),
+            Some(_) => lines.push(f),
+            None => {}
+        }
+    }
+    let (per_instr, overhead) = cal.ok_or("no CAL line")?;
+    if !ended {
+        return Err(format!("the image did not finish (no END):\n{out}"));
+    }
+    Ok(BenchOut { per_instr, overhead, lines })
+}
+
+impl BenchOut<'_> {
+    /// The instructions behind a count of `ticks`: the timing overhead subtracted, never below zero.
+    pub fn instructions(&self, ticks: f64) -> f64 {
+        (ticks - self.overhead).max(0.0) / self.per_instr
+    }
+}
+
+/// Parse a bench image's result lines ([`read_bench`]: ticks per instruction from the `CAL`
+/// line, its timing overhead subtracted).
+pub fn parse(image: &Image, out: &str) -> Result<Vec<Rec>, String> {
+    let bench = read_bench(out)?;
+    let mut recs = Vec::new();
+    for f in &bench.lines {
+        match f.first() {
             Some(&"R") if f.len() >= 8 => {
-                let k = per_instr.ok_or("R before CAL")?;
-                let num = |i: usize| -> Result<f64, String> { f[i].parse::<f64>().map_err(|_| format!("bad number in {line}")) };
-                let instr = ((num(5)? - overhead).max(0.0)) / k;
-                let setup_instr = num(6)? / k;
+                let num = |i: usize| -> Result<f64, String> { f[i].parse::<f64>().map_err(|_| format!("bad number in {f:?}")) };
+                let instr = bench.instructions(num(5)?);
+                let setup_instr = num(6)? / bench.per_instr;
                 let result = if f[4] == "ok" && f.len() >= 13 {
                     Ok(([num(7)?, num(8)?], [num(9)?, num(10)?, num(11)?], num(12)? as u32))
                 } else {
@@ -173,13 +182,8 @@ pub fn parse(image: &Image, out: &str) -> Result<Vec<Rec>, String> {
                     setup_instr,
                 });
             }
-            Some(&"END") => ended = true,
-            Some(&"PANIC") => return Err(format!("the image panicked: {line}")),
             _ => {}
         }
-    }
-    if !ended {
-        return Err("the image did not finish (no END)".into());
     }
     Ok(recs)
 }
@@ -239,7 +243,7 @@ pub fn elf_sizes(path: &Path) -> Result<(u64, u64), String> {
     Ok((flash, ram))
 }
 
-/// Instructions per inverse solve on the Cortex-M4F (issue 4): builds `bench/src/bin/inverse.rs`
+/// Instructions per inverse solve on the Cortex-M4F: builds `bench/src/bin/inverse.rs`
 /// in four variants (libm and fast-trig trig, with and without the m = 1 fast path; fast-trig
 /// without it is the firmware's build), runs each in QEMU netduinoplus2 with `-icount
 /// shift=0`, and returns the markdown table (one row per case, one column per variant).
@@ -260,23 +264,13 @@ pub fn inverse_cost_table() -> String {
         let name = format!("inverse-{}", features.replace(',', "-"));
         let elf = build("inverse", M4F, features, &name).unwrap_or_else(|e| panic!("{e}"));
         let out = run_qemu(&elf, "netduinoplus2", 0).unwrap_or_else(|e| panic!("{e}"));
-        let mut per_instr = None;
-        let mut overhead = 0.0;
+        let bench = read_bench(&out).unwrap_or_else(|e| panic!("{e}"));
         let mut cells = Vec::new();
-        let mut ended = false;
         let mut builds: Vec<String> = Vec::new();
-        for line in out.lines() {
-            let f: Vec<&str> = line.split_whitespace().collect();
+        for f in &bench.lines {
             match f.first() {
-                Some(&"CAL") => {
-                    let (k, o) = calibration(&f).unwrap_or_else(|e| panic!("{e}"));
-                    per_instr = Some(k);
-                    overhead = o;
-                }
                 Some(&"I") => {
-                    let k = per_instr.expect("I before CAL");
-                    let ticks: f64 = f[3].parse().unwrap();
-                    let instr = ((ticks - overhead).max(0.0) / k).round();
+                    let instr = bench.instructions(f[3].parse().unwrap()).round();
                     let cell = if f[2] == "ok" {
                         let t: f64 = f[4].parse().unwrap();
                         let v: Vec<f64> = f[5..8].iter().map(|s| s.parse().unwrap()).collect();
@@ -287,16 +281,12 @@ pub fn inverse_cost_table() -> String {
                     cells.push((f[1].to_string(), cell));
                 }
                 Some(&"T") => {
-                    let k = per_instr.expect("T before CAL");
-                    let ticks: f64 = f[2].parse().unwrap();
-                    builds.push(format!("{} {:.0} instructions ({} samples per branch)", f[1], ((ticks - overhead).max(0.0) / k).round(), f[3]));
+                    let instr = bench.instructions(f[2].parse().unwrap()).round();
+                    builds.push(format!("{} {:.0} instructions ({} samples per branch)", f[1], instr, f[3]));
                 }
-                Some(&"END") => ended = true,
-                Some(&"PANIC") => panic!("image panicked: {line}"),
                 _ => {}
             }
         }
-        assert!(ended, "image did not finish:\n{out}");
         if !builds.is_empty() {
             table_builds = builds;
         }
@@ -352,7 +342,7 @@ pub fn table_finger(m: &scenes::TableModel) -> Result<Finger<f64>, finger_model:
     Finger::with_calibration(p, cal)
 }
 
-/// The branch-table path on the Cortex-M4F (issue 15): builds `bench/src/bin/table.rs` with the
+/// The branch-table path on the Cortex-M4F: builds `bench/src/bin/table.rs` with the
 /// firmware's trig (fast-trig, no inverse fast path or fallback: the firmware's model
 /// features), runs it in QEMU netduinoplus2 with `-icount shift=0`, and returns the report's
 /// section (markdown): per model the table's build, per scene the forward solve without and
@@ -361,9 +351,9 @@ pub fn table_cost_section() -> String {
     use std::fmt::Write as _;
     let elf = build("table", M4F, "de,fast-trig", "table-de-fast-trig").unwrap_or_else(|e| panic!("{e}"));
     let out = run_qemu(&elf, "netduinoplus2", 0).unwrap_or_else(|e| panic!("{e}"));
-    let (mut per, mut overhead, mut ended) = (None, 0.0, false);
-    let instr = |t: &str, per: Option<f64>, o: f64| ((t.parse::<f64>().unwrap() - o).max(0.0) / per.expect("line before CAL")).round();
+    let bench = read_bench(&out).unwrap_or_else(|e| panic!("table image: {e}"));
     let num = |t: &str| t.parse::<f64>().unwrap();
+    let instr = |t: &str| bench.instructions(num(t)).round();
     // (model, scene) -> row cells
     #[derive(Default)]
     struct Row {
@@ -378,49 +368,41 @@ pub fn table_cost_section() -> String {
     let models: Vec<(&str, Finger<f64>)> = scenes::TABLE_MODELS.iter().map(|m| (m.name, table_finger(m).expect("table model"))).collect();
     let finger_of = |name: &str| &models.iter().find(|m| m.0 == name).expect("model").1;
     let scene_of = |name: &str| scenes::TABLE_SCENES.iter().find(|s| s.0 == name).expect("scene");
-    for line in out.lines() {
-        let f: Vec<&str> = line.split_whitespace().collect();
-        let row = |rows: &mut Vec<(String, String, Row)>, m: &str, s: &str| -> usize {
-            match rows.iter().position(|r| r.0 == m && r.1 == s) {
-                Some(i) => i,
-                None => {
-                    rows.push((m.into(), s.into(), Row::default()));
-                    rows.len() - 1
-                }
+    for f in &bench.lines {
+        if f[0] == "B" {
+            builds.push((f[1].into(), instr(f[3]), f.get(4).unwrap_or(&"").to_string()));
+            continue;
+        }
+        // `S`/`I`/`F <model> <scene> <variant> ok|err <ticks> ...`: a row's cell, or its error
+        let what = match f[0] {
+            "S" => "forward",
+            "I" => "inverse",
+            "F" => "fmax",
+            _ => continue,
+        };
+        let i = match rows.iter().position(|r| r.0 == f[1] && r.1 == f[2]) {
+            Some(i) => i,
+            None => {
+                rows.push((f[1].into(), f[2].into(), Row::default()));
+                rows.len() - 1
             }
         };
-        match f.first() {
-            Some(&"CAL") => {
-                let (k, o) = calibration(&f).unwrap_or_else(|e| panic!("{e}"));
-                per = Some(k);
-                overhead = o;
+        if f[4] != "ok" {
+            rows[i].2.err.push(format!("{what} {} {}", f[3], f.last().unwrap()));
+            continue;
+        }
+        let n = instr(f[5]);
+        match f[0] {
+            "S" if f[3] == "full" => rows[i].2.full = Some(n),
+            "S" => {
+                let (_, p, v) = scene_of(f[2]);
+                let reference = finger_of(f[1]).solve(*p, v, Method::Converged { tol: 1e-12, max_iter: 400 }).expect("reference");
+                let (tip, ang) = ([num(f[7]), num(f[8])], [num(f[9]), num(f[10]), num(f[11])]);
+                let a = reference.joint_angles();
+                let (te, ae) = errors(tip, ang, &([reference.tip().x, reference.tip().y], [a[0], a[1], a[2]]));
+                rows[i].2.table = Some((n, te, ae, f[12].parse().unwrap()));
             }
-            Some(&"B") => builds.push((f[1].into(), instr(f[3], per, overhead), f.get(4).unwrap_or(&"").to_string())),
-            Some(&"S") => {
-                let i = row(&mut rows, f[1], f[2]);
-                if f[4] != "ok" {
-                    rows[i].2.err.push(format!("forward {} {}", f[3], f.last().unwrap()));
-                    continue;
-                }
-                let n = instr(f[5], per, overhead);
-                if f[3] == "full" {
-                    rows[i].2.full = Some(n);
-                } else {
-                    let (_, p, v) = scene_of(f[2]);
-                    let reference = finger_of(f[1]).solve(*p, v, Method::Converged { tol: 1e-12, max_iter: 400 }).expect("reference");
-                    let (tip, ang) = ([num(f[7]), num(f[8])], [num(f[9]), num(f[10]), num(f[11])]);
-                    let a = reference.joint_angles();
-                    let (te, ae) = errors(tip, ang, &([reference.tip().x, reference.tip().y], [a[0], a[1], a[2]]));
-                    rows[i].2.table = Some((n, te, ae, f[12].parse().unwrap()));
-                }
-            }
-            Some(&"I") => {
-                let i = row(&mut rows, f[1], f[2]);
-                if f[4] != "ok" {
-                    rows[i].2.err.push(format!("inverse {} {}", f[3], f.last().unwrap()));
-                    continue;
-                }
-                let n = instr(f[5], per, overhead);
+            "I" => {
                 // the round trip: the f64 forward at the inverse's tension and voltages
                 let (p, v, want) = (num(f[6]), [num(f[7]), num(f[8]), num(f[9])], [num(f[10]), num(f[11]), num(f[12])]);
                 let back = finger_of(f[1]).solve(p, &v, Method::Converged { tol: 1e-12, max_iter: 400 });
@@ -430,23 +412,14 @@ pub fn table_cost_section() -> String {
                 };
                 rows[i].2.inv.push((n, e));
             }
-            Some(&"F") => {
-                let i = row(&mut rows, f[1], f[2]);
-                if f[4] != "ok" {
-                    rows[i].2.err.push(format!("fmax {} {}", f[3], f.last().unwrap()));
-                    continue;
-                }
+            _ => {
                 let slot = if f[3] == "full" { 0 } else { 1 };
-                rows[i].2.fmax[slot] = Some((instr(f[5], per, overhead), num(f[6])));
+                rows[i].2.fmax[slot] = Some((n, num(f[6])));
             }
-            Some(&"END") => ended = true,
-            Some(&"PANIC") => panic!("image panicked: {line}"),
-            _ => {}
         }
     }
-    assert!(ended, "table image did not finish:\n{out}");
     let mut w = String::new();
-    writeln!(w, "## The branch-table path on the Cortex-M4F (issue 15)\n").unwrap();
+    writeln!(w, "## The branch-table path on the Cortex-M4F\n").unwrap();
     writeln!(
         w,
         "Under tension alone the joints decouple and a joint's equilibrium depends on the tension and its stack \
@@ -469,8 +442,8 @@ pub fn table_cost_section() -> String {
          `bench/src/bin/table.rs`, f32 with the firmware's model features (fast-trig, general inverse path, \
          no fallback), QEMU netduinoplus2 `-icount shift=0`; errors against the host's f64 full solve at \
          1e-12 mm; the inverse's round trip is the f64 forward solve at the inverse's tension and voltages \
-         against the target angles (the tabled forward's). Models: `m8-default` (MODEL.md's defaults: m = 8, \
-         plate modulus, flexible links), `m8-calibrated` (the same with MODEL.md's FE calibration factors, \
+         against the target angles (the tabled forward's). Models: `m8-default` (docs/model.md's defaults: m = 8, \
+         plate modulus, flexible links), `m8-calibrated` (the same with docs/model.md's FE calibration factors, \
          docs/fidelity-fe.md), `m1-paper` (m = 1, body modulus, rigid links). Compliances (*setup*, once per \
          voltage change) are outside both forward counts, as in the tables above.\n"
     )
@@ -520,7 +493,7 @@ pub fn table_cost_section() -> String {
         )
         .unwrap();
     }
-    writeln!(w, "\nWorst over the scenes, against issue 15's goals (forward and inverse at most 3,000 instructions; within 1e-3 mm and 0.01 deg of the f64 full solve; the build at most 2,000,000):\n").unwrap();
+    writeln!(w, "\nWorst over the scenes, against the goals (forward and inverse at most 3,000 instructions; within 1e-3 mm and 0.01 deg of the f64 full solve; the build at most 2,000,000):\n").unwrap();
     writeln!(w, "| model | forward (table) | tip error mm | inverse | round trip deg | fmax (table) | build | goals |").unwrap();
     writeln!(w, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- |").unwrap();
     for (m, v) in &worst {

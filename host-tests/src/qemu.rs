@@ -1,14 +1,15 @@
 //! The firmware's emulator images in QEMU with `-icount shift=0` and a register trace
 //! (`-trace memory_region_ops_write/read -D FILE`): boot, talk to the console over a Unix
 //! socket, read back every register access in order, and the defmt bytes (semihosting, QEMU's
-//! stdout). Two images ([`Image`]): the F405's (Cortex-M4F, netduinoplus2) and the Cortex-M3
-//! image (netduino2). Used by tests/qemu_console.rs, qemu_realtime.rs, qemu_faults.rs and the
-//! `realtime_report` example (docs/firmware.md's real-time figures).
+//! stdout). Two images ([`Image`], built by [`crate::image`]): the F405's (Cortex-M4F,
+//! netduinoplus2) and the Cortex-M3 image (netduino2). [`qemu_command`] is the one QEMU
+//! command line every run starts from (these tests, the bench runs of [`crate::perf`], the
+//! reports). Used by tests/qemu_*.rs and the `realtime_report` and `fixed_report` examples.
+use crate::image::{image, Image};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
-use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 /// TIM4 compare registers (HV channels 1..3) and the control tick's trace marker (CCR4).
@@ -17,145 +18,20 @@ pub const TIM4_ARR: u64 = 0x4000_082c;
 pub const TICK_MARKER: u64 = 0x4000_0840;
 pub const USART1_DR: u64 = 0x4001_1004;
 
-/// The firmware package's directory (the repository's top).
-pub fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").canonicalize().unwrap()
-}
-
-/// Where cargo puts builds: $CARGO_TARGET_DIR if set (relative to the current directory),
-/// else `default`.
-pub fn cargo_target_dir(default: PathBuf) -> PathBuf {
-    match std::env::var_os("CARGO_TARGET_DIR") {
-        Some(d) if Path::new(&d).is_absolute() => PathBuf::from(d),
-        Some(d) => std::env::current_dir().unwrap_or_default().join(d),
-        None => default,
-    }
-}
-
-/// Where the firmware's builds go: $CARGO_TARGET_DIR if set, else target/ at the top.
-pub fn target_dir() -> PathBuf {
-    cargo_target_dir(root().join("target"))
-}
-
-/// One `#[test]` per image for each `test => check;` (`check(Image)`): `m4f::test` and
-/// `m3::test`, in the test file that invokes it.
-#[macro_export]
-macro_rules! on_both_images {
-    ($($name:ident => $check:ident;)*) => {
-        mod m4f {
-            $(#[test]
-            fn $name() {
-                super::$check($crate::qemu::Image::M4f);
-            })*
+/// `qemu-system-arm` on `machine` with `elf` loaded, semihosting on (its output on QEMU's
+/// stdout) and `-icount <icount>` (deterministic instruction counts); ended after `timeout_s`
+/// seconds (coreutils `timeout`) if given. The caller adds its display, console and log.
+pub fn qemu_command(machine: &str, icount: &str, elf: &Path, timeout_s: Option<u32>) -> Command {
+    let mut c = match timeout_s {
+        Some(s) => {
+            let mut c = Command::new("timeout");
+            c.arg(s.to_string()).arg("qemu-system-arm");
+            c
         }
-        mod m3 {
-            $(#[test]
-            fn $name() {
-                super::$check($crate::qemu::Image::M3);
-            })*
-        }
+        None => Command::new("qemu-system-arm"),
     };
-}
-
-/// The emulator images the QEMU tests run against.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Image {
-    /// The F405's image (`cargo build --release`): Cortex-M4F, QEMU netduinoplus2.
-    M4f,
-    /// The Cortex-M3 image (`--target thumbv7m-none-eabi --features m3`): no FPU, QEMU
-    /// netduino2 (an STM32F205), 64 KiB of flash; the fixed-point model, `pose` at a given
-    /// tension only, no `contact` (docs/firmware.md).
-    M3,
-}
-
-impl Image {
-    pub const ALL: [Image; 2] = [Image::M4f, Image::M3];
-    fn target(self) -> &'static str {
-        match self {
-            Image::M4f => "thumbv7em-none-eabihf",
-            Image::M3 => "thumbv7m-none-eabi",
-        }
-    }
-    /// QEMU's `-machine` and `-cpu`.
-    fn machine(self) -> [&'static str; 2] {
-        match self {
-            Image::M4f => ["netduinoplus2", "cortex-m4"],
-            Image::M3 => ["netduino2", "cortex-m3"],
-        }
-    }
-    /// The board name `version` reports.
-    pub fn board(self) -> &'static str {
-        match self {
-            Image::M4f => "qemu-netduinoplus2",
-            Image::M3 => "qemu-netduino2",
-        }
-    }
-    /// The image has `pose` and `contact` (feature `full`).
-    pub fn has_inverse(self) -> bool {
-        self == Image::M4f
-    }
-    /// QEMU models the STM32's RCC and GPIO on this machine (as unimplemented devices that the
-    /// trace shows with their values); netduino2 does not: those writes are logged without a
-    /// value ([`Access::modelled`] false).
-    pub fn models_gpio(self) -> bool {
-        self == Image::M4f
-    }
-    /// `cargo build` features (after `--no-default-features` for the M3 image).
-    fn features(self, extra: &str) -> String {
-        let base = match self {
-            Image::M4f => "",
-            Image::M3 => "m3",
-        };
-        [base, extra].iter().filter(|f| !f.is_empty()).copied().collect::<Vec<_>>().join(",")
-    }
-    /// Build the image (extra `features`) in `tdir`; its path.
-    fn build(self, extra: &str, tdir: PathBuf) -> PathBuf {
-        let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
-        c.current_dir(root()).env("CARGO_TARGET_DIR", &tdir).args(["build", "--release", "--quiet", "--bin", "finger-fw"]);
-        if self == Image::M3 {
-            c.args(["--target", self.target(), "--no-default-features"]);
-        }
-        let f = self.features(extra);
-        if !f.is_empty() {
-            c.args(["--features", &f]);
-        }
-        let out = c.output().expect("cargo");
-        assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
-        tdir.join(self.target()).join("release").join("finger-fw")
-    }
-    /// The release image, built once per process.
-    pub fn elf(self) -> &'static Path {
-        static IMG: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
-        IMG[self as usize].get_or_init(|| self.build("", target_dir()))
-    }
-    /// The image with its stack painted at reset (cortex-m-rt `paint-stack`; its own target
-    /// dir): [`Qemu::stack_high_water`] reads how deep the stack went.
-    pub fn paint_elf(self) -> &'static Path {
-        static IMG: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
-        IMG[self as usize].get_or_init(|| self.build("cortex-m-rt/paint-stack", target_dir().join("paint")))
-    }
-    /// The image with the `fault-inject` test command (its own target dir).
-    pub fn fault_elf(self) -> &'static Path {
-        static IMG: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
-        IMG[self as usize].get_or_init(|| self.build("fault-inject", target_dir().join("faults")))
-    }
-    fn of(elf: &Path) -> Image {
-        if elf.to_string_lossy().contains(Image::M3.target()) {
-            Image::M3
-        } else {
-            Image::M4f
-        }
-    }
-}
-
-/// The F405 emulator image, built once per process; its path.
-pub fn image() -> &'static Path {
-    Image::M4f.elf()
-}
-
-/// The F405 emulator image with the `fault-inject` test command (its own target dir).
-pub fn fault_image() -> &'static Path {
-    Image::M4f.fault_elf()
+    c.args(["-machine", machine, "-semihosting-config", "enable=on,target=native", "-icount", icount, "-kernel"]).arg(elf);
+    c
 }
 
 /// One register access from the trace.
@@ -221,19 +97,15 @@ impl Qemu {
                 None => extra.extend(["-d".into(), "guest_errors".into()]),
             }
         }
-        let mut child = Command::new("qemu-system-arm")
-            .args(["-machine", machine, "-cpu", cpu, "-display", "none", "-monitor"])
+        let mut child = qemu_command(machine, "shift=0,sleep=off", elf, None)
+            .args(["-cpu", cpu, "-display", "none", "-monitor"])
             .arg(format!("unix:{},server=on,wait=off", dir.join("mon.sock").display()))
             .arg("-chardev")
             .arg(format!("socket,id=con,path={},server=on,wait=on", sock.display()))
             .args(["-serial", "chardev:con"])
-            .args(["-icount", "shift=0,sleep=off"])
-            .args(["-semihosting-config", "enable=on,target=native"])
             .args(["-trace", "memory_region_ops_write", "-trace", "memory_region_ops_read", "-D"])
             .arg(dir.join("trace.log"))
             .args(&extra)
-            .arg("-kernel")
-            .arg(elf)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::null())

@@ -1,6 +1,6 @@
 //! The console of the application on a simulated board, as the host tests drive it: bytes in,
 //! the control loop run through any `wait`, the reply lines out. Not a transport: finger-sim
-//! and tools/finger are what a user runs.
+//! and tools/finger are what a user runs. The checks shared with QEMU are in [`crate::console`].
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 
@@ -39,24 +39,6 @@ pub fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
     let last = lines.last().unwrap();
     assert!(last.starts_with("ok") || last.starts_with("err "), "{line:?} -> {lines:?}");
     last.clone()
-}
-
-/// The value of `key=` in a reply (panics if the reply has none).
-pub fn val<'a>(reply: &'a str, key: &str) -> &'a str {
-    reply
-        .split_whitespace()
-        .find_map(|kv| kv.strip_prefix(key).and_then(|r| r.strip_prefix('=')))
-        .unwrap_or_else(|| panic!("no {key} in {reply}"))
-}
-
-/// A reply's comma-separated list of numbers.
-pub fn nums(s: &str) -> Vec<f64> {
-    s.split(',').map(|x| x.parse().unwrap()).collect()
-}
-
-/// The ceiling in force on channel 1, V, as `limits` reports it (`vmax=`).
-pub fn ceiling(a: &mut App<SimBoard>) -> f64 {
-    nums(val(&cmd(a, "limits"), "vmax"))[0]
 }
 
 /// `frac` of the ceiling `vmax`, V, rounded down to a whole volt: a voltage as a test types it,

@@ -1,23 +1,20 @@
-//! The `cal` console addition (issue 18, docs/firmware.md "Console additions") on the
-//! simulated board: the board boots with MODEL.md's finger's FE calibration; it is read, set
+//! The `cal` console addition (docs/firmware.md "Console additions") on the
+//! simulated board: the board boots with docs/model.md's finger's FE calibration; it is read, set
 //! and cleared; the calibrated finger is the host model's `Finger::with_calibration` in f32;
 //! refusals change nothing.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{ceiling, cmd, frac_of, nums, val, Out};
+use host_tests::sim_console::{cmd, frac_of, Out};
+use host_tests::console::{ceiling, err};
+use host_tests::reply::{nums, val};
 use finger_model::{Calibration, Finger, Method};
 
-/// MODEL.md's finger, as `fe-calibrate` (tools/calculix) prints it (docs/firmware.md).
+/// docs/model.md's finger, as `fe-calibrate` (tools/calculix) prints it (docs/firmware.md).
 /// Another calibration, for the tests that set one.
 const FE_CAL: &str = "1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332";
 const OTHER: &str = "1.5 2 1 1.25 0.5 0 2 -0.25";
 const OTHER_REPLY: &str = "ok cal=1.500000,2.000000,1.000000,1.250000,0.500000,0.000000,2.000000,-0.250000";
 const NONE_REPLY: &str = "ok cal=1.000000,1.000000,1.000000,1.000000,1.000000,0.000000,1.000000,0.000000";
-
-fn err(a: &mut App<SimBoard>, line: &str, code: &str) {
-    let r = cmd(a, line);
-    assert!(r.starts_with(&format!("err {code}: ")), "{line:?} -> {r} (wanted {code})");
-}
 
 /// The FE line as the model's type, parsed as the host parses f32 (correctly rounded, as the
 /// console's parser).
@@ -65,7 +62,7 @@ fn cal_round_trip_and_help() {
     let mut out = Out(String::new());
     a.input(b"help\n", &mut out);
     assert!(out.0.lines().any(|l| l.starts_with("cal ")), "help lacks cal: {}", out.0);
-    // the firmware's default is MODEL.md's finger with its FE calibration
+    // the firmware's default is docs/model.md's finger with its FE calibration
     assert_eq!(cmd(&mut a, "cal"), fe_reply());
     assert_eq!(*a.finger().calibration(), fe_cal());
     assert_eq!(*a.finger().calibration(), Calibration::<f32>::model_md());
@@ -174,7 +171,7 @@ fn bad_cal_changes_nothing() {
 fn preset_and_mechanical_param_give_their_parameters_calibration() {
     let mut a = App::new(SimBoard::default());
     let other = format!("cal {OTHER}");
-    // back to MODEL.md's finger (any mechanical value at its default): its FE calibration
+    // back to docs/model.md's finger (any mechanical value at its default): its FE calibration
     for back in ["preset default", "param l 27", "param a 5", "param m 8", "param layers 0"] {
         cmd(&mut a, "preset default");
         assert_eq!(cmd(&mut a, &other), OTHER_REPLY);
@@ -182,7 +179,7 @@ fn preset_and_mechanical_param_give_their_parameters_calibration() {
         assert_eq!(cmd(&mut a, "cal"), fe_reply(), "{back}");
         assert_eq!(*a.finger().calibration(), fe_cal());
     }
-    // another finger: none (the factors were computed for MODEL.md's)
+    // another finger: none (the factors were computed for docs/model.md's)
     for clear in ["preset paper", "param l 28", "param a 4", "param layers 10", "param m 4", "param e_b 1"] {
         cmd(&mut a, "preset default");
         cmd(&mut a, &other);

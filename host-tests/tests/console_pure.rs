@@ -1,11 +1,12 @@
-//! Issue 13: every model-only console command (`solve`, a disarmed `pose`, `contact`,
+//! Every model-only console command (`solve`, a disarmed `pose`, `contact`,
 //! `limits`, `shape`) is a pure function of the parameters and its arguments. Each probe runs
 //! after a random sequence of other requests (model-only ones, reads, refused requests, and
 //! parameter changes that are undone) and its reply must be byte-identical to a fresh App's
 //! with the same parameters.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{at_ceiling, ceiling, feed_text};
+use host_tests::sim_console::{at_ceiling, feed_text};
+use host_tests::console::ceiling;
 use proptest::prelude::*;
 
 thread_local!(static VMAX: f64 = ceiling(&mut App::new(SimBoard::default())));

@@ -1,23 +1,13 @@
-//! The firmware application (finger-fw's lib) on the simulated board: every CONSOLE.md
-//! command and error code, and the safety rules of issue 3, each shown here.
+//! The firmware application (finger-fw's lib) on the simulated board: every docs/console.md
+//! command and error code, and the board's safety rules, each shown here.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{ceiling, cmd, feed, frac_of, nums, val, Out};
+use host_tests::sim_console::{cmd, feed, frac_of, Out};
+use host_tests::console::{ceiling, check_ceiling_only_lowers, check_refusals, err, ok, REFUSED_DISARMED};
+use host_tests::reply::{nums, val};
 
 fn app() -> App<SimBoard> {
     App::new(SimBoard::default())
-}
-
-fn ok(a: &mut App<SimBoard>, line: &str) -> String {
-    let r = cmd(a, line);
-    assert!(r == "ok" || r.starts_with("ok "), "{line:?} -> {r}");
-    r
-}
-
-fn err(a: &mut App<SimBoard>, line: &str, code: &str) -> String {
-    let r = cmd(a, line);
-    assert!(r.starts_with(&format!("err {code}: ")), "{line:?} -> {r} (wanted {code})");
-    r
 }
 
 
@@ -97,30 +87,26 @@ fn every_command_answers() {
 #[test]
 fn error_codes() {
     let mut a = app();
-    err(&mut a, "frobnicate", "unknown");
-    err(&mut a, "solve 1", "usage");
-    err(&mut a, "version 1", "usage");
-    err(&mut a, "volt 4 100", "usage");
-    err(&mut a, "preset other", "usage");
-    err(&mut a, "param nonsense", "usage");
-    err(&mut a, "param l 0.5", "usage"); // 2a < l
-    err(&mut a, "param margin 1", "usage");
-    err(&mut a, "param e_de 2", "usage"); // read-only
-    err(&mut a, "param n 4", "usage");
-    err(&mut a, "volt 1 100", "not-armed");
-    err(&mut a, "volt all 100", "not-armed");
-    err(&mut a, "force 0.5", "not-armed");
-    err(&mut a, "solve 0.5 10000 0 0", "limit");
-    err(&mut a, "solve 1e9 0 0 0", "limit");
-    err(&mut a, "solve 2000 0 0 0", "limit"); // past fmax
+    check_refusals(&mut a, &REFUSED_DISARMED);
+    check_refusals(
+        &mut a,
+        &[
+            ("solve 1", "usage"),
+            ("version 1", "usage"),
+            ("volt 4 100", "usage"),
+            ("preset other", "usage"),
+            ("param nonsense", "usage"),
+            ("param l 0.5", "usage"), // 2a < l
+            ("param e_de 2", "usage"), // read-only
+            ("param n 4", "usage"),
+            ("volt all 100", "not-armed"),
+            ("solve 0.5 10000 0 0", "limit"),
+            ("solve 2000 0 0 0", "limit"), // past fmax
+        ],
+    );
     ok(&mut a, "arm");
-    err(&mut a, "param l 30", "armed");
-    err(&mut a, "param", "armed");
-    err(&mut a, "preset paper", "armed");
-    err(&mut a, "volt 1 10000", "limit");
-    err(&mut a, "volt 1 1e30", "limit");
-    err(&mut a, "force 1e30", "limit");
-    err(&mut a, "force 2000", "limit");
+    let armed = [("param l 30", "armed"), ("param", "armed"), ("preset paper", "armed"), ("volt 1 10000", "limit"), ("volt 1 1e30", "limit"), ("force 1e30", "limit"), ("force 2000", "limit")];
+    check_refusals(&mut a, &armed);
     err(&mut a, &format!("{}\n", "x".repeat(300)), "too-long");
     // fault: a refused HV write latches it; arm refuses until stop
     let d = a.duty_ceiling()[0];
@@ -256,7 +242,7 @@ fn board_ceiling(a: &mut App<SimBoard>) -> f64 {
 #[test]
 fn ceiling_recomputed_on_every_parameter_change() {
     let mut a = app();
-    let vmax = |a: &mut App<SimBoard>| nums(val(&ok(a, "limits"), "vmax"))[0];
+    let vmax = ceiling;
     let v0 = vmax(&mut a);
     assert!(v0 > 0.0 && v0 == board_ceiling(&mut a), "{v0}");
     ok(&mut a, "param margin 0.1"); // the model's ceiling falls with its margin
@@ -280,7 +266,7 @@ fn ceiling_recomputed_on_every_parameter_change() {
     ok(&mut a, "param z0 0.01");
     let v = vmax(&mut a);
     assert!(v < supply as f64 && v == board_ceiling(&mut a), "{v}");
-    // the HV module's calibration is a compiled board constant (issue 12): a set is refused
+    // the HV module's calibration is a compiled board constant: a set is refused
     // and changes nothing (it used to loosen the ceiling: hv_fs 100 + volt 1 99 gave 99 % duty)
     err(&mut a, "param hv_fs 2000", "usage");
     err(&mut a, "param hv_zero 10", "usage");
@@ -305,29 +291,14 @@ fn console_can_only_lower_the_ceiling() {
     let v0 = ceiling(&mut a);
     assert!(v0 > 0.0 && v0 <= vhold, "{v0} vs vhold {vhold}");
     assert_eq!(val(&ok(&mut a, "limits"), "vhold").parse::<f64>().unwrap(), vhold);
-    for line in [
-        "param g 1000", // a stiffer film: the model's ceiling rises a hundredfold
-        "param z0 50",  // thicker layers
-        "param eps_r 1",
-        "param margin 0.999",
-        "param v_supply 100000",
-        "preset paper",
-        "param g 1000",
-        "cal none",
-        "preset default",
-        "param nu 0",
-        "param layers 64",
-    ] {
-        ok(&mut a, line);
-        let v = ceiling(&mut a);
-        assert!(v <= v0 && v <= vhold, "{line}: ceiling {v} past the board's {v0}");
-        assert_eq!(val(&ok(&mut a, "material"), "vhold").parse::<f64>().unwrap(), vhold, "{line}");
-        ok(&mut a, "arm");
-        err(&mut a, &format!("volt all {v0}"), "limit");
-        err(&mut a, &format!("volt 1 {}", vhold + 0.1), "limit");
-        err(&mut a, &format!("solve 0.5 {} 0 0", vhold + 0.1), "limit");
-        ok(&mut a, "stop");
-    }
+    check_ceiling_only_lowers(
+        &mut a,
+        v0,
+        vhold,
+        &["param nu 0", "param layers 64"],
+        |a| val(&ok(a, "material"), "vhold").parse::<f64>().unwrap(),
+        |v0, vhold| vec![format!("volt all {v0}"), format!("volt 1 {}", vhold + 0.1), format!("solve 0.5 {} 0 0", vhold + 0.1)],
+    );
 }
 
 #[test]
@@ -579,7 +550,7 @@ fn fmax_cached_and_enforced() {
     assert!(ok(&mut a, "force 0.5").starts_with("ok force=0.500"));
 }
 
-/// The fidelity parameters of issue 7 (`m`, `plate`, `nu_b`, `flex_links`) through `param`:
+/// The fidelity parameters (`m`, `plate`, `nu_b`, `flex_links`; docs/fidelity.md) through `param`:
 /// read, set, refused outside their ranges, and the model the console solves with follows.
 #[test]
 fn fidelity_parameters() {
@@ -612,7 +583,7 @@ fn fidelity_parameters() {
     }
 }
 
-/// Issue 13: the inverse takes the ceiling in force (HV full scale too): a disarmed `pose`
+/// The inverse takes the ceiling in force (HV full scale too): a disarmed `pose`
 /// never answers a voltage the armed board would refuse.
 #[test]
 fn pose_preview_stays_below_the_hv_full_scale() {
@@ -631,7 +602,7 @@ fn pose_preview_stays_below_the_hv_full_scale() {
     assert!(nums(val(&r, "volts")).iter().all(|&x| x < fs), "{r}");
 }
 
-/// Issue 13: a finger without stacks solves at the console: `solve <P>`, and 0 V accepted.
+/// A finger without stacks solves at the console: `solve <P>`, and 0 V accepted.
 #[test]
 fn solve_without_stacks_takes_no_voltages_and_accepts_zero() {
     let mut a = app();

@@ -1,4 +1,4 @@
-//! Model fidelity (issue 7), the few solves that pin docs/fidelity.md's conclusions: the
+//! Model fidelity, the few solves that pin docs/fidelity.md's conclusions: the
 //! recommended configuration (m = 8, plate modulus, flexible links) is within 3 % of the
 //! continuum reference up to 2 N on the finger without stacks; the paper's model (m = 1) is
 //! not; the error shrinks as m grows; the model's end of branch (fmax) is near the reference's
@@ -16,8 +16,7 @@ use host_tests::scene::continuum_params;
 
 /// The recommended configuration (docs/fidelity.md).
 const M: usize = 8;
-/// A coarser reference than the default (within ~1e-7 rad of converged at 2 N,
-/// docs/continuum.md): far below the percent-level differences tested here, and fast in debug.
+/// A coarser reference than the default (its distance from converged: docs/continuum.md): far below the percent-level differences tested here, and fast in debug.
 const DISC: Discretisation = Discretisation::new(64, 16);
 
 fn params(m: usize, plate: bool, flex: bool) -> Params<f64> {
@@ -76,8 +75,8 @@ fn error_shrinks_as_m_grows() {
 #[test]
 fn fmax_is_near_the_reference_span_closing_tension_and_refused_past_it() {
     // plate modulus, flexible links, m = 8: the model's branch ends by contact of span 1 within
-    // 6 % of the tension at which the reference's spans close (measured +4.6 %; the model's
-    // remaining stiffness shows most near closure, where its joint angles are ~2 % short)
+    // 6 % of the tension at which the reference's spans close (docs/fidelity.md; the model's
+    // remaining stiffness shows most near closure, where its joint angles fall short)
     let p = params(M, true, true);
     let f = Finger::new(p).unwrap();
     let b = f.fmax(&[0.0; 3]).unwrap();
@@ -135,24 +134,9 @@ fn console_fidelity_parameters_exist_with_their_ranges() {
 fn console_limits_reports_fmax_and_force_refuses_past_it() {
     use finger_fw::sim::SimBoard;
     use finger_fw::App;
-    struct Out(String);
-    impl std::fmt::Write for Out {
-        fn write_str(&mut self, s: &str) -> std::fmt::Result {
-            self.0.push_str(s);
-            Ok(())
-        }
-    }
+    use host_tests::reply::val;
     let mut a = App::new(SimBoard::default());
-    let mut cmd = |line: &str| -> String {
-        let mut out = Out(String::new());
-        for &b in format!("{line}\n").as_bytes() {
-            a.input_byte(b, &mut out);
-            while a.busy() {
-                a.tick(1, &mut out);
-            }
-        }
-        out.0.lines().last().unwrap_or("").to_string()
-    };
+    let mut cmd = |line: &str| host_tests::sim_console::cmd(&mut a, line);
     assert!(cmd("param m 9").starts_with("err usage: "));
     assert!(cmd("param nu_b 0.5").starts_with("err usage: "));
     for set in ["param layers 0", "param m 8", "param plate 1", "param nu_b 0.45", "param flex_links 1"] {
@@ -160,13 +144,10 @@ fn console_limits_reports_fmax_and_force_refuses_past_it() {
         assert!(r.starts_with("ok "), "{set} -> {r}");
     }
     let lim = cmd("limits");
-    let field = |key: &str| -> String {
-        lim.split_whitespace().find_map(|kv| kv.strip_prefix(key)).unwrap_or_else(|| panic!("no {key} in {lim}")).to_string()
-    };
-    let fmax: f64 = field("fmax=").parse().unwrap();
-    assert_eq!(field("fmax_end="), "contact,1");
+    let fmax: f64 = val(&lim, "fmax").parse().unwrap();
+    assert_eq!(val(&lim, "fmax_end"), "contact,1");
     // the model's own fmax for these parameters (f32 on the board, f64 here), with the FE
-    // calibration the board gives them (MODEL.md's finger without stacks: calibrated)
+    // calibration the board gives them (docs/model.md's finger without stacks: calibrated)
     let p = params(M, true, true);
     let f = Finger::with_calibration(p, finger_model::Calibration::for_params(&p)).unwrap();
     let b = f.fmax(&[0.0; 3]).unwrap();

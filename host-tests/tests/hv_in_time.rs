@@ -17,20 +17,19 @@ use finger_model::material::{equilibrium_ratio, hold_ceiling, Relaxation, StackL
 use host_tests::hv::{settling_s, setpoints, step_response};
 use host_tests::sim_console::Out;
 
-/// xorshift64*: the histories are reproducible from their seed.
-struct Rng(u64);
+/// The testkit's xorshift64*: the histories are reproducible from their seed.
+struct Rng(finger_model_testkit::material::Rng);
 impl Rng {
+    /// The generator's whole 64-bit output (the testkit's `next` keeps its top 53 bits).
     fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+        self.0.next();
+        self.0 .0.wrapping_mul(0x2545_F491_4F6C_DD1D)
     }
     fn below(&mut self, n: u64) -> u64 {
         self.next() % n
     }
     fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+        self.0.next()
     }
 }
 
@@ -127,7 +126,7 @@ impl Checker {
 
 /// A random history from `seed`, checked all along.
 fn history(seed: u64, hold: f32) {
-    let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+    let mut rng = Rng(finger_model_testkit::material::Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1));
     let mut a = App::new(SimBoard::default());
     let mut c = Checker::new(&a);
     let ops = 4 + rng.below(12);

@@ -8,13 +8,7 @@ use finger_fw::app::pose as inverse_cmds;
 
 use finger_model::{Finger, Method, Params};
 
-fn kv(reply: &str, key: &str) -> Vec<f64> {
-    let v = reply
-        .split_whitespace()
-        .find_map(|w| w.strip_prefix(&format!("{key}=")))
-        .unwrap_or_else(|| panic!("no {key} in {reply}"));
-    v.split(',').map(|x| x.parse().unwrap()).collect()
-}
+use host_tests::reply::field as kv;
 
 #[test]
 fn pose_replies_and_applies_once() {
@@ -99,7 +93,8 @@ mod console {
     use finger_fw::sim::SimBoard;
     use finger_fw::App;
     use finger_model::Method;
-    use host_tests::sim_console::{ceiling, cmd, frac_of, Out};
+    use host_tests::sim_console::{cmd, frac_of, Out};
+    use host_tests::console::ceiling;
 
     fn outputs(a: &mut App<SimBoard>) -> String {
         let st = cmd(a, "status");
@@ -107,9 +102,7 @@ mod console {
         format!("{st} | {:?} servo={} hv={:?} en={}", a.targets(), b.servo.duty, b.hv.map(|h| h.duty), b.enable.high)
     }
 
-    fn kv(reply: &str, key: &str) -> Vec<f64> {
-        super::kv(reply, key)
-    }
+    use host_tests::reply::field as kv;
 
     /// A posture of the model itself (forward solve at the console's parameters), in degrees
     /// with 6 decimals as a user would type them.

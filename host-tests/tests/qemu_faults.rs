@@ -1,11 +1,12 @@
-//! Every fault path turns the HV off first (issue 12), in QEMU from the register trace: a
+//! Every fault path turns the HV off first, in QEMU from the register trace: a
 //! test image (feature `fault-inject`: `crash <what>`) takes a HardFault, an NMI, an
 //! unhandled interrupt (DefaultHandler) and a stack overflow (the MPU guard) while channel
 //! voltages are up; each time GPIOB BSRR drives PB6-8 and PB12 low and TIM4 CCR1..3 are
 //! written 0, and no control tick runs after (the handler halts; on the board the IWDG resets).
 //! Against both images: the F405's and the Cortex-M3 image (netduino2, where GPIOB is not
 //! modelled: its writes are checked in order, without their values; the guard is below SRAM).
-use host_tests::qemu::{parse_trace, Image, Qemu, TICK_MARKER, TIM4_CCR};
+use host_tests::image::Image;
+use host_tests::qemu::{parse_trace, Qemu, TICK_MARKER, TIM4_CCR};
 
 host_tests::on_both_images! {
     every_fault_path_turns_hv_off => every_fault_path;

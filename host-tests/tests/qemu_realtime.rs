@@ -1,4 +1,4 @@
-//! The real-time core (issue 12) in QEMU with `-icount shift=0`, shown from the registers (the
+//! The real-time core in QEMU with `-icount shift=0`, shown from the registers (the
 //! register trace, host_tests::qemu), not from the console's own report; each test runs
 //! against the F405 image (netduinoplus2) and the Cortex-M3 image (netduino2):
 //! - the largest HV duty step per control tick over a ramp while help, param, pose, force and
@@ -15,8 +15,9 @@
 //!   scale) is below the board card's hold ceiling (computed here in f64).
 use finger_fw::board::{BOARD_CARD, BOARD_MARGIN, BOARD_Z0_MM, HV_FULL_SCALE_V};
 use finger_model::material::{hold_ceiling, StackLaw};
-use host_tests::qemu::{duties_per_tick, hv_full_scale, max_step, stop_latencies, Image, Qemu, TIM4_ARR, TIM4_CCR};
-use host_tests::sim_console::{nums, val};
+use host_tests::image::Image;
+use host_tests::qemu::{duties_per_tick, hv_full_scale, max_step, stop_latencies, Qemu, TIM4_ARR, TIM4_CCR};
+use host_tests::reply::{nums, val};
 
 // one `#[test]` per image for each check below
 host_tests::on_both_images! {

@@ -7,18 +7,14 @@ use finger_fw::app::config::record_of;
 use finger_fw::flash_ram::{F405_BASE, FORMATTED, PAGE, PAGES};
 use finger_fw::settings::{tag, ConfigStore, FlashStore, RECORD_MAX};
 use host_tests::cut_flash::CutFlash;
-use host_tests::qemu::{image, Qemu};
-use host_tests::sim_console::val;
+use host_tests::image::image;
+use host_tests::qemu::Qemu;
+use host_tests::console::ok;
+use host_tests::reply::val;
 
 const CAL: &str = "1.5 2 1 1.25 0.5 0 2 -0.25";
 const CAL_REPLY: &str = "ok cal=1.500000,2.000000,1.000000,1.250000,0.500000,0.000000,2.000000,-0.250000";
 const CAL_DEFAULT: &str = "ok cal=1.540745,6.245597,1.066900,1.154625,0.718260,0.054631,5.254023,-1.756332";
-
-fn ok(q: &mut Qemu, line: &str) -> String {
-    let r = q.cmd(line);
-    assert!(r.starts_with("ok"), "{line} -> {r}");
-    r
-}
 
 #[test]
 fn saved_settings_survive_system_reset_and_factory_restores_defaults() {

@@ -4,7 +4,8 @@
 //! get no reply at all.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{cmd, feed, val};
+use host_tests::sim_console::{cmd, feed};
+use host_tests::reply::val;
 
 fn app() -> App<SimBoard> {
     App::new(SimBoard::default())

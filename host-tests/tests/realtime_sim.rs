@@ -1,4 +1,4 @@
-//! The real-time core (issue 12) on the simulated board in virtual time
+//! The real-time core on the simulated board in virtual time
 //! (`finger_fw::sim::VirtualSim`): commands take time, the control core ticks every 1 ms
 //! meanwhile, bytes arrive at 115200 baud. The properties the chip's RTIC core gives, shown
 //! here quickly: the slew bound per tick whatever runs, `stop` within one tick whatever runs,
@@ -46,7 +46,7 @@ fn slew_bound_holds_per_tick_while_long_commands_run() {
     let mut out = Out(String::new());
     assert_eq!(line(&mut sim, &mut out, "param slew 100000"), "ok slew=100000");
     assert_eq!(line(&mut sim, &mut out, "arm"), "ok armed=1");
-    // the ramp, with help, param, pose, force and contact queued behind it (issue 12's case)
+    // the ramp, with help, param, pose, force and contact queued behind it (the case of a command queue behind a ramp)
     let t0 = sim.t_us;
     assert!(sim.send(b"volt 1 5000\nhelp\nparam\npose 10 10 10\nforce 0.3\ncontact 1 1.5\nvolt 2 5000\nhelp\n"));
     let ticks = run(&mut sim, &mut out);
@@ -222,7 +222,7 @@ fn watchdog_fed_only_while_the_command_side_checks_in() {
     let ticks = run(&mut sim, &mut out);
     let feeds_at = |ms: u64| ticks.iter().find(|t| t.0 >= ms * 1000).unwrap().4;
     let bound = CHECKIN_BOUND_MS as u64;
-    // fed in the first `bound` ms of the solve, then not until it ends at ~2 s
+    // fed in the first `bound` ms of the solve, then not until it ends
     assert!(feeds_at(bound - 10) >= bound - 20);
     assert_eq!(feeds_at(bound + 20), feeds_at(1_900), "fed while the command side was stuck");
     let last = ticks.last().unwrap().4;

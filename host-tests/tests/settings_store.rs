@@ -12,7 +12,8 @@ use finger_fw::settings::{tag, ConfigStore, FlashStore, FormatError, Record, Sto
 use finger_fw::sim::SimBoard;
 use finger_fw::{App, FwParams};
 use host_tests::cut_flash::CutFlash;
-use host_tests::sim_console::{cmd, feed_text, val};
+use host_tests::sim_console::{cmd, feed_text};
+use host_tests::reply::val;
 
 /// Small pages, so a few saves fill one and the map closes, migrates and erases pages.
 const PAGE: usize = 1024;

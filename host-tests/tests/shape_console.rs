@@ -1,9 +1,11 @@
 //! `shape <P> <V1> <V2> <V3>` (console addition, docs/firmware.md): the poses it reports are
 //! the solve's: nodes as `Solution::nodes`, each hinge end as node k marched through its
-//! sub-elements (the model's posture, MODEL.md "Equilibrium"), the tip as `solve`'s.
+//! sub-elements (the model's posture, docs/model.md "Equilibrium"), the tip as `solve`'s.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{ceiling, feed, frac_of, nums, val};
+use host_tests::sim_console::{feed, frac_of};
+use host_tests::console::ceiling;
+use host_tests::reply::{nums, val};
 use finger_model::{Calibration, Finger, Method, Params, Pose};
 
 /// One command line: its reply, which must be the only line.
@@ -17,7 +19,7 @@ fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
 #[test]
 fn shape_reports_the_poses_of_the_solve() {
     let mut a = App::new(SimBoard::default());
-    // the board's default finger: MODEL.md's on the board's film (VHB 4905), with its FE calibration
+    // the board's default finger: docs/model.md's on the board's film (VHB 4905), with its FE calibration
     let f: Finger<f32> = Finger::with_calibration(Params::vhb4905(), Calibration::model_md()).unwrap();
     let p = f.params();
     let sub_len = p.hinge_len() / p.m as f32;

@@ -1,12 +1,14 @@
 //! The firmware answers `solve` and fmax (`limits`) from the finger's cached branch table
-//! (issue 15, model inverse/table.rs), and rebuilds it when a parameter changes: the answers
+//! (model inverse/table.rs), and rebuilds it when a parameter changes: the answers
 //! are the full model's converged ones (`Finger::solve`, `Finger::fmax`) to the printed
 //! digits, and `iters=0` shows the table's hole was already converged (the full solve from the
 //! straight joint iterates).
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 use finger_model::Method;
-use host_tests::sim_console::{ceiling, cmd, frac_of, nums, val};
+use host_tests::sim_console::{cmd, frac_of};
+use host_tests::console::ceiling;
+use host_tests::reply::{nums, val};
 
 /// `solve P V1 V2 V3` against the app's finger's full solve: joints (3 decimals, degrees) and
 /// tip (3 decimals, mm) within a unit of the last digit; returns `iters`.

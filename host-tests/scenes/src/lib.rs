@@ -1,7 +1,7 @@
 //! The fixed scene set of the performance report, a dependency of the bench images (target)
 //! and of perf-report (host reference).
 //!
-//! MODEL.md's finger (3 joints, corrected DE modulus) in the paper's model, pinned here (one
+//! docs/model.md's finger (3 joints, corrected DE modulus) in the paper's model, pinned here (one
 //! compliance per hinge, m = 1, the body modulus, rigid links) so that the report does not move
 //! with the library's defaults; two scenes (`-fid`) use the fidelity model (m = 8 sub-elements,
 //! plate modulus, flexible links) to show its cost. With (`layers` = 4) and without
@@ -29,7 +29,7 @@ const fn fid(name: &'static str, layers: u32, tension: f64, volts: [f64; 3]) -> 
     Scene { name, layers, tension, volts, fidelity: true }
 }
 
-/// The scene's parameters: MODEL.md's values with the hinge model pinned.
+/// The scene's parameters: docs/model.md's values with the hinge model pinned.
 pub fn params(s: &Scene) -> finger_model::Params<f64> {
     let (m, plate, flex_links) = if s.fidelity { (8, true, true) } else { (1, false, false) };
     finger_model::Params { layers: s.layers, m, plate, flex_links, ..finger_model::Params::default() }
@@ -53,16 +53,16 @@ pub const SCENES: &[Scene] = &[
 /// The paper's stepping at these increment counts; plus the converged solver.
 pub const N_INC: &[u32] = &[1, 2, 5, 10, 20, 50, 100, 200];
 
-/// The branch-table path (issue 15, `inverse::BranchTable`): the models it is measured on,
+/// The branch-table path (`inverse::BranchTable`): the models it is measured on,
 /// and the scenes (tension N, channel voltages V). Every model has stacks (the table
 /// tabulates the stack's thickness range).
 #[derive(Clone, Copy, Debug)]
 pub struct TableModel {
     pub name: &'static str,
-    /// m = 8, plate modulus, flexible links (MODEL.md's defaults) if true, else the paper's
+    /// m = 8, plate modulus, flexible links (docs/model.md's defaults) if true, else the paper's
     /// m = 1, body modulus, rigid links.
     pub fidelity: bool,
-    /// MODEL.md's FE calibration factors (docs/fidelity-fe.md) applied.
+    /// docs/model.md's FE calibration factors (docs/fidelity-fe.md) applied.
     pub calibrated: bool,
 }
 

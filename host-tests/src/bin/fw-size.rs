@@ -6,11 +6,10 @@
 //!   cargo run --bin fw-size [-- path/to/elf]            flash and RAM
 //!   cargo run --bin fw-size -- --symbols N [elf]        ... and the N largest symbols
 //!   cargo run --bin fw-size -- --table [out.md]         builds every feature set of the
-//!       firmware (lean builds, issue 5) and prints (or writes) the flash/RAM table
+//!       firmware (lean builds) and prints (or writes) the flash/RAM table
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-use host_tests::qemu::{root, target_dir};
+use host_tests::image::{build_firmware, target_dir, Image};
 use object::{Object, ObjectSection, ObjectSymbol, SectionFlags, SymbolKind};
 
 fn default_elf() -> PathBuf {
@@ -59,24 +58,9 @@ const SETS: &[(&str, &str, &str)] = &[
 /// section (memory-m3.x).
 const M3_SET: (&str, &str, &str) = ("Cortex-M3 (thumbv7m, netduino2)", "m3", "console, defmt, DE, `pose`; fixed-point model; RAM with its 16 KiB stack (budget 64 KiB / 20 KiB)");
 
+/// The F405's firmware with `features`.
 fn build(features: &str) -> PathBuf {
-    build_for(features, None)
-}
-
-/// Build with `features` for `target` (None: the package's default, the F405's).
-fn build_for(features: &str, target: Option<&str>) -> PathBuf {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let mut c = Command::new(cargo);
-    c.current_dir(root()).env("CARGO_TARGET_DIR", target_dir()).args(["build", "--release", "--quiet", "--bin", "finger-fw", "--no-default-features", "--features", features]);
-    if let Some(t) = target {
-        c.args(["--target", t]);
-    }
-    let st = c.status().expect("cargo");
-    assert!(st.success(), "firmware build with features {features} failed");
-    match target {
-        Some(t) => target_dir().join(t).join("release/finger-fw"),
-        None => default_elf(),
-    }
+    build_firmware(Image::M4f.target(), features, target_dir())
 }
 
 fn table() -> String {
@@ -89,7 +73,7 @@ fn table() -> String {
         t.push_str(&format!("| {name} | `{feats}` | {holds} | {flash} | {:.1} | {ram} |\n", flash as f64 / 1024.0));
     }
     let (name, feats, holds) = M3_SET;
-    let (flash, ram) = sizes(&read(&build_for(feats, Some("thumbv7m-none-eabi"))));
+    let (flash, ram) = sizes(&read(&build_firmware(Image::M3.target(), feats, target_dir())));
     eprintln!("{name}: flash={flash} ram={ram}");
     t.push_str(&format!("| {name} | `{feats}` | {holds} | {flash} | {:.1} | {ram} |\n", flash as f64 / 1024.0));
     build("qemu,full"); // leave the default image in place

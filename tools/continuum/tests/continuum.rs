@@ -142,7 +142,7 @@ fn finger_converges_at_fourth_order_under_refinement() {
             let rt = dt[i - 1] / dt[i];
             assert!(rt > 12.0 && rt < 20.0, "tip ratio {rt}, diffs {dt:?}");
         }
-        // The default discretisation is converged to ~1e-7 rad.
+        // The default discretisation is converged (docs/continuum.md).
         let def = solve(&p, 1.0, &stacks, [0.0, 0.0], Discretisation::default()).unwrap();
         assert!(max_diff(&def.joint_angles, &sols[3].joint_angles) < 1e-7);
         assert!(def.residual < 1e-9);

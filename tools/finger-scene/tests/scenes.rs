@@ -10,6 +10,11 @@ fn top() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
+/// `finger-scene <scene> --out <out>`, as a user runs it.
+fn run_cli(scene: &Path, out: &Path) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene")).arg(scene).arg("--out").arg(out).output().unwrap()
+}
+
 fn shipped(dir: &Path) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
@@ -135,7 +140,7 @@ fn the_old_format_is_refused_with_a_pointer_to_the_new_one() {
     assert!(e.message.contains("x.scene") && e.message.contains("TOML") && e.message.contains("docs/scenes.md"), "{e}");
     // and the command says so, writing nothing
     let out = dir.join("out");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene")).arg(&f).arg("--out").arg(&out).output().unwrap();
+    let o = run_cli(&f, &out);
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("docs/scenes.md"));
     assert!(!out.exists());
@@ -194,12 +199,7 @@ fn the_papers_2mm_to_1mm_request_writes_no_file_and_exits_nonzero() {
     let out = std::env::temp_dir().join(format!("finger-scene-refused-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     let scene = top().join("scenes/refused/paper-2mm-to-1mm.toml");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene"))
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = run_cli(&scene, &out);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "stderr: {err}");
     let p = Params::<f64>::paper();
@@ -211,12 +211,7 @@ fn the_papers_2mm_to_1mm_request_writes_no_file_and_exits_nonzero() {
 
     // the same command on a good scene writes its three files
     let good = top().join("scenes/paper-de-0v.toml");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene"))
-        .arg(&good)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = run_cli(&good, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for f in ["paper-de-0v.csv", "paper-de-0v-postures.csv", "paper-de-0v.svg"] {
         assert!(out.join(f).is_file(), "{f} missing");

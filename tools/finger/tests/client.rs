@@ -5,7 +5,7 @@
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{finger, image, sim, text};
+use common::{finger, image, scratch, shell_board, sim, text};
 
 /// The console session both boards get, and what each must answer.
 fn same_session(board: &[&str]) {
@@ -40,8 +40,7 @@ fn sim_answers_the_console_contract() {
 
 #[test]
 fn qemu_answers_the_same_session() {
-    let dir = std::env::temp_dir().join(format!("finger-client-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("client-test");
     let log = dir.join("defmt.bin");
     same_session(&["--qemu", "--elf", image().to_str().unwrap(), "--defmt-log", log.to_str().unwrap()]);
     // what that boot logged, decoded with the image's table
@@ -54,8 +53,7 @@ fn qemu_answers_the_same_session() {
 
 #[test]
 fn script_and_monitor_on_the_sim() {
-    let dir = std::env::temp_dir().join(format!("finger-script-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("script-test");
     let script = dir.join("s.txt");
     std::fs::write(&script, "# a comment\narm\n\nvolt 2 700\nfrobnicate\nstatus\n").unwrap();
     let sim = sim().to_str().unwrap();
@@ -79,12 +77,10 @@ fn script_and_monitor_on_the_sim() {
 
 #[test]
 fn a_board_that_stops_answering_is_reported_after_the_time_out() {
-    let dir = std::env::temp_dir().join(format!("finger-mute-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("mute-test");
     // reads its input and never answers
     let mute = dir.join("mute-board");
-    std::fs::write(&mute, "#!/bin/sh\nexec sleep 30\n").unwrap();
-    std::fs::set_permissions(&mute, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    shell_board(&mute, "exec sleep 30");
     let t0 = Instant::now();
     let out = finger(&["--sim", "--sim-bin", mute.to_str().unwrap(), "--timeout", "0.5", "cmd", "status"]);
     assert!(t0.elapsed() < Duration::from_secs(10));
@@ -129,8 +125,7 @@ fn save_and_config_reach_the_store() {
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("save: err unknown: save: this board has no settings store"), "{}", text(&out.stderr));
     // the emulator image stores: a fresh boot has nothing, `save` writes the first record
-    let dir = std::env::temp_dir().join(format!("finger-client-save-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("client-save");
     let log = dir.join("defmt.bin");
     let qemu = ["--qemu", "--elf", image().to_str().unwrap(), "--defmt-log", log.to_str().unwrap()];
     let out = finger(&[&qemu[..], &["config"]].concat());

@@ -7,16 +7,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 mod common;
-use common::{finger, image, root, sim, text};
+use common::{finger, image, root, scratch, shell_board, sim, text};
 
 use finger_model::{Finger, Method, Params};
-
-fn scratch(what: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("finger-run-{what}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     let t = std::fs::read_to_string(path).unwrap();
@@ -54,7 +47,7 @@ fn check_against_host(csv_path: &Path, params: Params<f64>, volts: &[f64], tensi
 
 #[test]
 fn a_scene_on_the_sim_is_the_host_model_to_print_precision() {
-    let dir = scratch("sim");
+    let dir = scratch("run-sim");
     // the shipped paper-de-joint1-thin scene with joint 1 at 1.96 mm instead of 1.8: the paper
     // preset needs about 9.9 kV for 1.8 mm, past the board film's hold ceiling, which no
     // preset raises; 1.96 mm needs about 4.8 kV
@@ -87,6 +80,22 @@ fn a_scene_on_the_sim_is_the_host_model_to_print_precision() {
 /// A scene small enough to drive quickly (600 V at 2000 V/s).
 const DRIVE_SCENE: &str = "title = \"drive\"\n[finger]\nvolts = [600, 300, 0]\n[drive]\ntensions = [0.3, 0.8]\n";
 
+/// A scratch directory holding [`DRIVE_SCENE`] as drive.toml: (the directory, the scene).
+fn drive_scene(what: &str) -> (PathBuf, PathBuf) {
+    let dir = scratch(what);
+    let scene = dir.join("drive.toml");
+    std::fs::write(&scene, DRIVE_SCENE).unwrap();
+    (dir, scene)
+}
+
+/// finger-sim behind a shell script `dir/name` that logs its input to `dir/in.log` and passes
+/// it through `between` (a shell pipeline stage, or ""): (the script, the log).
+fn logged_sim(dir: &Path, name: &str, between: &str) -> (PathBuf, PathBuf) {
+    let (board, log) = (dir.join(name), dir.join("in.log"));
+    shell_board(&board, &format!("tee {} | {between}{}", log.display(), sim().display()));
+    (board, log)
+}
+
 fn check_driven(dir: &Path) {
     let (head, rows) = csv(&dir.join("drive-board.csv"));
     assert_eq!(rows.len(), 2);
@@ -104,14 +113,9 @@ fn check_driven(dir: &Path) {
 
 #[test]
 fn drive_arms_drives_reads_back_and_stops_on_the_sim() {
-    let dir = scratch("drive");
-    let scene = dir.join("drive.toml");
-    std::fs::write(&scene, DRIVE_SCENE).unwrap();
+    let (dir, scene) = drive_scene("run-drive");
     // the board's input, as it arrives
-    let log = dir.join("in.log");
-    let board = dir.join("board.sh");
-    std::fs::write(&board, format!("#!/bin/sh\ntee {} | {}\n", log.display(), sim().display())).unwrap();
-    std::fs::set_permissions(&board, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let (board, log) = logged_sim(&dir, "board.sh", "");
     let out = finger(&["--sim", "--sim-bin", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let p = Params::<f64>::default();
@@ -130,9 +134,7 @@ fn drive_arms_drives_reads_back_and_stops_on_the_sim() {
 
 #[test]
 fn the_qemu_image_runs_and_drives_the_same_scene() {
-    let dir = scratch("qemu");
-    let scene = dir.join("drive.toml");
-    std::fs::write(&scene, DRIVE_SCENE).unwrap();
+    let (dir, scene) = drive_scene("run-qemu");
     let log = dir.join("defmt.bin");
     let out = finger(&[
         "--qemu",
@@ -158,7 +160,7 @@ fn the_qemu_image_runs_and_drives_the_same_scene() {
 
 #[test]
 fn a_refused_scene_never_reaches_a_board() {
-    let dir = scratch("refused");
+    let dir = scratch("run-refused");
     let out_dir = dir.join("out");
     // the model refuses it; the named board does not even exist
     let scene = root().join("scenes/refused/paper-2mm-to-1mm.toml");
@@ -178,18 +180,9 @@ fn a_refused_scene_never_reaches_a_board() {
 
 #[test]
 fn ctrl_c_during_a_driven_run_still_stops_the_board() {
-    let dir = scratch("interrupt");
-    let scene = dir.join("drive.toml");
-    std::fs::write(&scene, DRIVE_SCENE).unwrap();
+    let (dir, scene) = drive_scene("run-interrupt");
     // a slow board: each line reaches finger-sim 0.2 s late; what finger sends is logged first
-    let log = dir.join("in.log");
-    let board = dir.join("slow-board.sh");
-    std::fs::write(
-        &board,
-        format!("#!/bin/sh\ntee {} | while IFS= read -r l; do sleep 0.2; printf '%s\\n' \"$l\"; done | {}\n", log.display(), sim().display()),
-    )
-    .unwrap();
-    std::fs::set_permissions(&board, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
+    let (board, log) = logged_sim(&dir, "slow-board.sh", "while IFS= read -r l; do sleep 0.2; printf '%s\\n' \"$l\"; done | ");
     let out_dir = dir.join("out");
     let child = Command::new(env!("CARGO_BIN_EXE_finger"))
         .args(["--sim", "--sim-bin", board.to_str().unwrap(), "run", "--drive", scene.to_str().unwrap(), "--out", out_dir.to_str().unwrap()])
@@ -218,7 +211,7 @@ fn ctrl_c_during_a_driven_run_still_stops_the_board() {
 
 #[test]
 fn a_run_without_out_writes_under_target_not_into_the_current_directory() {
-    let cwd = scratch("cwd");
+    let cwd = scratch("run-cwd");
     let scene = root().join("scenes/paper-de-0v.toml");
     let out = Command::new(env!("CARGO_BIN_EXE_finger"))
         .current_dir(&cwd)

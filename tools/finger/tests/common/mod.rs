@@ -1,13 +1,12 @@
 //! What the client's tests share: the finger-sim and firmware images they drive (each built
-//! once per test binary) and the `finger` program itself.
+//! once per test binary; the firmware's by the test harness, host-tests/src/image.rs) and the
+//! `finger` program itself.
 #![allow(dead_code)]
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
 
-pub fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").canonicalize().unwrap()
-}
+pub use host_tests::image::{image, root};
 
 pub fn cargo() -> String {
     std::env::var("CARGO").unwrap_or_else(|_| "cargo".into())
@@ -31,20 +30,18 @@ pub fn sim() -> &'static Path {
     })
 }
 
-/// The emulator firmware image, built once (`cargo build --release` at the top).
-pub fn image() -> &'static Path {
-    static IMG: OnceLock<PathBuf> = OnceLock::new();
-    IMG.get_or_init(|| {
-        let out = Command::new(cargo())
-            .current_dir(root())
-            .args(["build", "--release", "--quiet", "--bin", "finger-fw"])
-            .output()
-            .expect("cargo");
-        assert!(out.status.success(), "firmware build failed:\n{}", String::from_utf8_lossy(&out.stderr));
-        let p = root().join("target/thumbv7em-none-eabihf/release/finger-fw");
-        assert!(p.exists());
-        p
-    })
+/// An empty scratch directory for one test, `finger-<what>-<pid>` under the temporary directory.
+pub fn scratch(what: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("finger-{what}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A board stand-in: `body` as an executable shell script at `path`.
+pub fn shell_board(path: &Path, body: &str) {
+    std::fs::write(path, format!("#!/bin/sh\n{body}\n")).unwrap();
+    std::fs::set_permissions(path, std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
 }
 
 pub fn finger(args: &[&str]) -> Output {
