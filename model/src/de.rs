@@ -6,14 +6,15 @@
 //! `G (s - s^4) = eps0 eps_r V^2 / z0^2` relaxed, G = E_de / (2 (1 + nu)); its stable branch ends
 //! at s = 4^(-1/3) (pull-in) and passes the 33 % limit s = 2/3 before that, so the ceiling is
 //! margin x min(the voltage that holds s = 2/3, the breakdown field there), capped by the supply.
-//! The paper's Eq. 1-2 (Maxwell pressure on z0, linear) and MODEL.md's linear law on the current
+//! The paper's Eq. 1-2 (Maxwell pressure on z0, linear) and the linear law on the current
 //! thickness are not used; docs/materials.md compares them.
 //!
 //! What it is not: the law in time (`material`: the firmware's per-tick state), the joint
 //! assembly (`finger`).
 
 use crate::error::Error;
-use crate::mat3::Mat3;
+use crate::calibration::Calibration;
+use crate::mat3::{self, Mat3};
 use crate::material::{self, StackLaw, LIMIT_RATIO};
 use crate::params::Params;
 use crate::real::Real;
@@ -145,29 +146,127 @@ impl<R: Real> ThicknessVoltage<R> {
     }
 }
 
-/// Stiffness of a stack stretch of length `len` and thickness `t` (mm), a uniform beam of
-/// modulus E_de parallel to the hinge with its centroid offset d = t_min/2 + t/2 to the
-/// extensor side, moved to the hinge centreline: `Tᵀ C_de⁻¹ T`, T = [[1,0,d],[0,1,0],[0,0,1]]
-/// (MODEL.md, replacing the paper's Eq. 24-28).
-/// `C_de⁻¹ = [[EA/L,0,0],[0,12EI/L³,-6EI/L²],[0,-6EI/L²,4EI/L]]`.
-pub fn stack_stiffness<R: Real>(p: &Params<R>, len: R, t: R) -> Mat3<R> {
-    let e = p.e_de();
-    let ea = e * p.w * t;
-    let ei = e * p.w * t * t * t / R::from_f64(12.0);
-    let z = R::zero();
-    let k: Mat3<R> = [
-        [ea / len, z, z],
-        [z, R::from_f64(12.0) * ei / (len * len * len), R::from_f64(-6.0) * ei / (len * len)],
-        [z, R::from_f64(-6.0) * ei / (len * len), R::from_f64(4.0) * ei / len],
-    ];
-    let d = (p.t_min + t) / R::from_f64(2.0);
-    // Tᵀ K T with T = I + d e0 e2ᵀ
-    let mut o = k;
-    for i in 0..3 {
-        o[i][2] += k[i][0] * d;
+/// The stack's stiffness on one sub-element as a function of the stack thickness t (mm), the
+/// one kernel every solve uses (docs/model.md "Joint compliance with the stack", replacing
+/// the paper's Eq. 24-28): a uniform beam of modulus E_de, width w and length L parallel to
+/// the hinge, its centroid offset d = (t_min + t)/2 to the extensor side, moved to the hinge
+/// centreline, `Tᵀ C_de⁻¹ T` with T = [[1,0,d],[0,1,0],[0,0,1]], EA and EI scaled by the FE
+/// calibration's factors g = g0 + g1 t (`Calibration`):
+/// K = g_a EA/L (1, 0, d)ᵀ(1, 0, d) + g_b E w t³ [[0,0,0],[0,1/L³,-1/(2L²)],[0,-1/(2L²),1/(3L)]],
+/// EA = E w t. Its constants are taken once (`new`); `upper` is K's upper triangle at t,
+/// `upper_dt` its derivative in t.
+#[derive(Clone, Copy, Debug)]
+pub struct StackStiffness<R> {
+    /// E_de w.
+    ew: R,
+    /// L, L², L³.
+    len: [R; 3],
+    t_min: R,
+    /// The axial and bending factors' (g0, g1).
+    ga: [R; 2],
+    gb: [R; 2],
+}
+
+impl<R: Real> StackStiffness<R> {
+    /// The constants of parameter set `p`'s stack on a sub-element of length `len` (mm), with
+    /// the calibration `cal` (`Calibration::none()`: the beam as it is).
+    pub fn new(p: &Params<R>, len: R, cal: &Calibration<R>) -> Self {
+        let l2 = len * len;
+        StackStiffness { ew: p.e_de() * p.w, len: [len, l2, l2 * len], t_min: p.t_min, ga: cal.stack_axial, gb: cal.stack_bending }
     }
-    for j in 0..3 {
-        o[2][j] += o[0][j] * d;
+
+    /// K's upper triangle (k00, k01, k02, k11, k12, k22) at thickness t, mm (k01 is zero: the
+    /// stack couples no shear to the axial force): the beam's `C_de⁻¹` = [[EA/L, 0, 0],
+    /// [0, 12EI/L³, -6EI/L²], [0, -6EI/L², 4EI/L]] moved by T, then g_b K + (g_a - g_b) EA/L
+    /// (1, 0, d)ᵀ(1, 0, d).
+    #[inline(always)]
+    pub fn upper(&self, t: R) -> [R; 6] {
+        let [l, l2, l3] = self.len;
+        let ea = self.ew * t;
+        let ei = ea * t * t / R::from_f64(12.0);
+        let ka = ea / l;
+        let (k11, k12, k22) = (R::from_f64(12.0) * ei / l3, R::from_f64(-6.0) * ei / l2, R::from_f64(4.0) * ei / l);
+        let d = (self.t_min + t) / R::from_f64(2.0);
+        // Tᵀ K T, T = I + d e0 e2ᵀ
+        let k02 = ka * d;
+        let k22 = k22 + k02 * d;
+        // the calibration: g_b K + (g_a - g_b) K_a
+        let ga = self.ga[0] + self.ga[1] * t;
+        let gb = self.gb[0] + self.gb[1] * t;
+        let ga_ka = (ga - gb) * ka;
+        [gb * ka + ga_ka, R::zero(), gb * k02 + ga_ka * d, gb * k11, gb * k12, gb * k22 + ga_ka * d * d]
     }
-    o
+
+    /// dK/dt's upper triangle at thickness t (the derivative of `upper`, term by term).
+    pub fn upper_dt(&self, t: R) -> [R; 6] {
+        let [l, l2, l3] = self.len;
+        let half = R::from_f64(0.5);
+        let ga = self.ga[0] + self.ga[1] * t;
+        let gb = self.gb[0] + self.gb[1] * t;
+        // the axial part g_a EA/L (1, 0, d)ᵀ(1, 0, d), EA/L = ew t / L
+        let ka = self.ew / l;
+        let gka = ga * ka * t;
+        let dgka = self.ga[1] * ka * t + ga * ka;
+        let d = (self.t_min + t) * half;
+        let dk02 = dgka * d + gka * half;
+        // the bending part g_b E w t³ (1/L³, -1/(2L²), 1/(3L))
+        let t2 = t * t;
+        let de3 = self.ew * (self.gb[1] * t2 * t + gb * R::from_f64(3.0) * t2);
+        [dgka, R::zero(), dk02, de3 / l3, -de3 * half / l2, de3 / (R::from_f64(3.0) * l) + dk02 * d + gka * d * half]
+    }
+
+    /// K at thickness t, mm.
+    pub fn matrix(&self, t: R) -> Mat3<R> {
+        mat3::from_upper(self.upper(t))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::finger::uniform_beam_compliance;
+
+    /// `StackStiffness` is its definition, `Tᵀ C_de⁻¹ T` of the uniform beam with EA and EI
+    /// scaled, to rounding, and `upper_dt` its derivative (central differences), with and
+    /// without the calibration, for one sub-element of the default finger and for m = 1.
+    #[test]
+    fn stack_stiffness_is_the_calibrated_beam_and_upper_dt_its_derivative() {
+        for cal in [Calibration::<f64>::none(), Calibration::model_md()] {
+            for p in [Params::<f64>::default(), Params { m: 1, ..Params::default() }] {
+                let len = p.hinge_len() / p.m as f64;
+                let k = StackStiffness::new(&p, len, &cal);
+                let t0 = f64::from(p.layers) * p.z0;
+                for i in 0..=10 {
+                    let t = t0 * (0.4 + 0.06 * f64::from(i));
+                    let (ga, gb) = (cal.stack_axial[0] + cal.stack_axial[1] * t, cal.stack_bending[0] + cal.stack_bending[1] * t);
+                    // the beam with EA scaled by g_a (modulus and width g_a E, w) and EI by g_b
+                    let ca = uniform_beam_compliance(ga * p.e_de(), p.w, t, len);
+                    let cb = uniform_beam_compliance(gb * p.e_de(), p.w, t, len);
+                    let kb = mat3::inverse(&cb).unwrap();
+                    let mut c_de = [[1.0 / ca[0][0], 0.0, 0.0], [0.0, kb[1][1], kb[1][2]], [0.0, kb[2][1], kb[2][2]]];
+                    let d = (p.t_min + t) / 2.0;
+                    // Tᵀ K T, T = I + d e0 e2ᵀ
+                    for r in 0..3 {
+                        c_de[r][2] += c_de[r][0] * d;
+                    }
+                    for c in 0..3 {
+                        c_de[2][c] += c_de[0][c] * d;
+                    }
+                    let got = k.matrix(t);
+                    let scale = c_de.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
+                    for r in 0..3 {
+                        for c in 0..3 {
+                            assert!((got[r][c] - c_de[r][c]).abs() <= 1e-12 * scale, "{got:?} vs {c_de:?} at t = {t}");
+                        }
+                    }
+                    let h = 1e-6 * t;
+                    let (up, dn, dt) = (k.upper(t + h), k.upper(t - h), k.upper_dt(t));
+                    for e in 0..6 {
+                        let fd = (up[e] - dn[e]) / (2.0 * h);
+                        assert!((dt[e] - fd).abs() <= 1e-7 * scale / t, "entry {e}: {} vs {fd} at t = {t}", dt[e]);
+                    }
+                }
+            }
+        }
+    }
 }

@@ -1,5 +1,5 @@
 //! The elliptical flexure hinge: notch thickness and its compliance by Castigliano's theorem
-//! (MODEL.md "Hinge compliance"), over the whole hinge or one sub-element's stretch of it.
+//! (docs/model.md "Hinge compliance"), over the whole hinge or one sub-element's stretch of it.
 //!
 //! What it is: the four compliance integrals of a cantilever clamped at the stretch's proximal
 //! end, loaded at its distal end (Euler-Bernoulli, shear neglected), computed once per
@@ -23,7 +23,7 @@ const GL8: [(f64, f64); 4] = [
     (0.960_289_856_497_536_3, 0.101_228_536_290_376_3),
 ];
 
-/// Hinge thickness at x in [0, 2a] (MODEL.md, two-sided elliptical notch):
+/// Hinge thickness at x in [0, 2a] (docs/model.md, two-sided elliptical notch):
 /// `t(x) = t_min + (b - t_min) (1 - sqrt(1 - ((x - a)/a)^2))`.
 pub fn notch_thickness<R: Real>(b: R, t_min: R, a: R, x: R) -> R {
     let u = (x - a) / a;

@@ -125,6 +125,7 @@ struct Hold<R> {
 struct Ctx<'a, R> {
     p: &'a Params<R>,
     k_hinge: Mat3<R>,
+    stack: de::StackStiffness<R>,
     lh: R,
     max_iter: u32,
     rel: R,
@@ -147,39 +148,23 @@ struct Wrench<R> {
 impl<'a, R: Real> Ctx<'a, R> {
     fn new(f: &'a Finger<R>, opts: &Options<R>) -> Result<Self, Error> {
         let p = f.params();
-        let k_hinge = mat3::inverse(&f.hinge_compliance(0)).ok_or(Error::Singular { what: "hinge compliance" })?;
+        let k_hinge = *f.hinge_stiffness(0);
         let rel = R::from_f64(1e-11_f64.max(64.0 * R::EPS));
-        Ok(Ctx { p, k_hinge, lh: p.hinge_len(), max_iter: opts.max_iter.max(1), rel })
+        Ok(Ctx { p, k_hinge, stack: f.stack(), lh: p.hinge_len(), max_iter: opts.max_iter.max(1), rel })
     }
 
-    /// Joint stiffness K(t) = K_hinge + Tᵀ C_de(t)⁻¹ T (K_hinge alone without stacks).
+    /// Joint stiffness K(t) = K_hinge + K_de(t) (`de::StackStiffness`; K_hinge alone without
+    /// stacks).
     fn stiffness(&self, t: R) -> Mat3<R> {
         if self.p.layers == 0 {
             return self.k_hinge;
         }
-        mat3::add(&self.k_hinge, &de::stack_stiffness(self.p, self.lh, t))
+        mat3::add(&self.k_hinge, &self.stack.matrix(t))
     }
 
-    /// dK/dt: the derivative of `de::stack_stiffness` in t, written out. With a = E w t / L,
-    /// b = E w t³ / L³, c = -E w t³ / (2 L²), g = E w t³ / (3 L), d = (t_min + t)/2:
-    /// K_de = [[a, 0, a d], [0, b, c], [a d, c, g + a d²]].
+    /// dK/dt (`de::StackStiffness::upper_dt`).
     fn stiffness_dt(&self, t: R) -> Mat3<R> {
-        let p = self.p;
-        let e = p.e_de();
-        let l = self.lh;
-        let two = R::from_f64(2.0);
-        let a = e * p.w * t / l;
-        let da = e * p.w / l;
-        let t3 = t * t * t;
-        let db = R::from_f64(3.0) * e * p.w * t * t / (l * l * l);
-        let dc = -R::from_f64(3.0) * e * p.w * t * t / (two * l * l);
-        let dg = e * p.w * t * t / l;
-        let _ = t3;
-        let d = (p.t_min + t) / two;
-        let half = R::from_f64(0.5);
-        let z = R::zero();
-        let dad = da * d + a * half;
-        [[da, z, dad], [z, db, dc], [dad, dc, dg + da * d * d + a * d]]
+        mat3::from_upper(self.stack.upper_dt(t))
     }
 
     /// ŵ at (δax, δtr, θ) and its derivatives. v = B - A (A = (0, e) the hole at node k-1,
@@ -259,7 +244,7 @@ impl<'a, R: Real> Ctx<'a, R> {
         if m.abs() > R::from_f64(1e-30_f64.max(R::EPS * 1e-20)) {
             return (ang.theta / m).to_f64();
         }
-        let Some(c) = mat3::inverse(&self.stiffness(t)) else { return 0.0 };
+        let Some(c) = mat3::inverse_spd(&self.stiffness(t)) else { return 0.0 };
         let Ok(w) = self.wrench(ang, [R::zero(); 2], 0, R::zero()) else { return 0.0 };
         let cw = mat3::mul_vec(&c, &w.w);
         (cw[2] / w.w[2]).to_f64()

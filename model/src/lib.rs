@@ -1,11 +1,11 @@
 //! The variable-stiffness soft finger: a `no_std`, allocation-free model of the paper's
-//! three-element iteration (n-FEM-NI) with MODEL.md's corrections.
+//! three-element iteration (n-FEM-NI) with docs/model.md's corrections.
 //!
 //! Modules, each one idea:
 //! - [`real`]: the scalar (f32 on the target, f64 on the host), with explicitly chosen math.
 //! - [`params`]: parameters, defaults, the paper preset, validation, access by name.
 //! - [`hinge`]: elliptical notch thickness and compliance (Castigliano integrals).
-//! - [`calibration`]: FE corrections to the sub-element compliances (issue 18).
+//! - [`calibration`]: FE corrections to the sub-element compliances.
 //! - [`material`]: the film's material law in time: cards, thinning, creep, ceilings.
 //! - [`de`]: DE layer thinning, pull-in (33 %) limit, ceiling, stack stiffness.
 //! - [`finger`]: joint equilibrium, posture, cable excursion, tip stiffness, two solvers.

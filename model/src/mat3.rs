@@ -53,43 +53,47 @@ pub fn det<R: Real>(m: &Mat3<R>) -> R {
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
+/// The symmetric matrix with upper triangle (m00, m01, m02, m11, m12, m22).
+#[inline(always)]
+pub fn from_upper<R: Real>([a, b, c, d, e, f]: [R; 6]) -> Mat3<R> {
+    [[a, b, c], [b, d, e], [c, e, f]]
+}
+
 /// Inverse of a symmetric positive-definite matrix (a stiffness or a compliance), from the
-/// upper triangle by cofactors: no square roots, ~30 operations against ~150 for `inverse`.
-/// `None` unless det > 64 ε Π m_ii (for a positive-definite matrix det ≤ Π m_ii, so this is
-/// the scale-free singularity test, as the diagonal scaling gives `inverse`) and finite.
+/// upper triangle by cofactors: the model's one 3x3 solve for these; `inverse` for any other
+/// 3x3 matrix. `None` unless det > 64 ε Π m_ii (for a positive-definite matrix
+/// det ≤ Π m_ii, so this is a scale-free singularity test), the diagonal is positive and
+/// every entry is finite.
 pub fn inverse_spd<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
-    inverse_spd_upper([m[0][0], m[0][1], m[0][2], m[1][1], m[1][2], m[2][2]])
+    if !(m[0][0] > R::zero() && m[1][1] > R::zero() && m[2][2] > R::zero()) {
+        return None;
+    }
+    let (o, check) = inverse_spd_upper([m[0][0], m[0][1], m[0][2], m[1][1], m[1][2], m[2][2]]);
+    check.is_finite().then_some(from_upper(o))
 }
 
-/// `inverse_spd(&add(a, b))` (a stiffness in parallel with another: a joint's hinge and
-/// stack), inlined into its caller: the upper triangles added, no sum matrix.
+/// `inverse_spd`'s kernel on upper triangles (m00, m01, m02, m11, m12, m22) whose diagonal is
+/// positive (the caller's to know: `inverse_spd` checks it; a positive definite matrix plus a
+/// positive semi-definite one has it), for callers that test many at once: the inverse's upper
+/// triangle and a check value, finite (the determinant plus the entries) when `inverse_spd`
+/// would accept the matrix, else NaN; a finite sum of checks stands for every entry's test.
 #[inline(always)]
-pub fn inverse_spd_of_sum<R: Real>(a: &Mat3<R>, b: &Mat3<R>) -> Option<Mat3<R>> {
-    inverse_spd_upper([a[0][0] + b[0][0], a[0][1] + b[0][1], a[0][2] + b[0][2], a[1][1] + b[1][1], a[1][2] + b[1][2], a[2][2] + b[2][2]])
-}
-
-/// `inverse_spd` from the upper triangle (m00, m01, m02, m11, m12, m22).
-#[inline(always)]
-fn inverse_spd_upper<R: Real>([a, b, c, d, e, f]: [R; 6]) -> Option<Mat3<R>> {
+pub fn inverse_spd_upper<R: Real>([a, b, c, d, e, f]: [R; 6]) -> ([R; 6], R) {
     let ca = d * f - e * e;
     let cb = c * e - b * f;
     let cc = b * e - c * d;
     let det = a * ca + b * cb + c * cc;
-    let diag = a * d * f;
-    if !(a > R::zero() && d > R::zero() && f > R::zero() && det > diag * R::from_f64(64.0 * R::EPS) && det.is_finite()) {
-        return None;
-    }
+    let ok = det > a * d * f * R::from_f64(64.0 * R::EPS);
     let inv = R::one() / det;
     let (cd, ce, cf) = (a * f - c * c, b * c - a * e, a * d - b * b);
-    let o = [[ca * inv, cb * inv, cc * inv], [cb * inv, cd * inv, ce * inv], [cc * inv, ce * inv, cf * inv]];
-    if o.iter().flatten().all(|x| x.is_finite()) {
-        Some(o)
-    } else {
-        None
-    }
+    let o = [ca * inv, cb * inv, cc * inv, cd * inv, ce * inv, cf * inv];
+    let check = if ok { det + o[0] + o[1] + o[2] + o[3] + o[4] + o[5] } else { R::from_f64(f64::NAN) };
+    (o, check)
 }
 
-/// Inverse; `None` if the matrix is singular to working precision or not finite.
+/// Inverse of any 3x3 matrix (a Newton step's Jacobian); `None` if it is singular to working
+/// precision or not finite. A symmetric positive-definite matrix takes `inverse_spd`, larger
+/// systems `solve::lu`.
 ///
 /// Compliance and stiffness matrices mix units (mm/N next to rad/(N·mm)) and their diagonal
 /// spans decades, so a positive-diagonal matrix is first scaled symmetrically to a unit
@@ -121,16 +125,20 @@ pub fn inverse<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
     }
 }
 
-/// Inverse by cofactors; `None` if the determinant is small against the product of the row
-/// norms (Hadamard's bound) or not finite. For matrices whose rows are already of comparable
-/// scale (the inverse model's Jacobians in scaled unknowns); `inverse` scales first.
-pub fn inverse_unscaled<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
-    let d = det(m);
+/// Whether `m`, of determinant `d`, is singular to working precision: d small against the
+/// product of the row norms (Hadamard's bound), or not finite.
+pub fn singular<R: Real>(m: &Mat3<R>, d: R) -> bool {
     let mut scale = R::one();
     for row in m {
         scale *= (row[0].sq() + row[1].sq() + row[2].sq()).sqrt();
     }
-    if !(d.is_finite() && scale.is_finite()) || d.abs() <= scale * R::from_f64(64.0 * R::EPS) {
+    !(d.is_finite() && scale.is_finite()) || d.abs() <= scale * R::from_f64(64.0 * R::EPS)
+}
+
+/// `inverse` by cofactors without the scaling; `None` where `singular`.
+fn inverse_unscaled<R: Real>(m: &Mat3<R>) -> Option<Mat3<R>> {
+    let d = det(m);
+    if singular(m, d) {
         return None;
     }
     let inv_d = R::one() / d;

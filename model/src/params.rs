@@ -1,4 +1,4 @@
-//! The finger's parameters (MODEL.md "Geometry", "Dielectric elastomer stack", "Cable"),
+//! The finger's parameters (docs/model.md "Geometry", "Dielectric elastomer stack", "Cable"),
 //! their defaults, the paper preset, validation, and access by name for the console.
 //!
 //! What it is not: derived quantities (compliances, pull-in) live in `hinge`, `de`, `finger`.
@@ -21,13 +21,13 @@ pub const EPS0: f64 = 8.854e-12;
 /// How the stack's Young's modulus follows from G and nu.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DeModulusRule {
-    /// Isotropic elasticity: E = 2 G (1 + nu) (MODEL.md's correction).
+    /// Isotropic elasticity: E = 2 G (1 + nu) (docs/model.md's correction).
     Isotropic,
     /// The paper's Eq. 3 as printed: E = G / (2 (1 + nu)). Only for reproducing its scenes.
     PaperEq3,
 }
 
-/// Every model parameter. Units: mm, N, MPa, V (MODEL.md "Units and frames").
+/// Every model parameter. Units: mm, N, MPa, V (docs/model.md "Units and frames").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Params<R> {
     /// Number of elements (joints), 1..=MAX_JOINTS.
@@ -81,7 +81,7 @@ pub struct Params<R> {
 }
 
 impl<R: Real> Default for Params<R> {
-    /// MODEL.md's defaults.
+    /// The defaults of docs/model.md.
     fn default() -> Self {
         let f = R::from_f64;
         Params {
@@ -102,7 +102,7 @@ impl<R: Real> Default for Params<R> {
             margin: f(0.9),
             v_supply: f(10_000.0),
             n_inc: 20,
-            // The real structure (issue 7, docs/fidelity.md): 8 sub-elements per hinge, the plate
+            // The real structure (docs/fidelity.md): 8 sub-elements per hinge, the plate
             // modulus (w/t_min = 13.3 >= 10) and flexible links put the joint angles within 3 %
             // of the continuum reference up to 2 N; the paper's model (m = 1, E_b, rigid links)
             // is 32 % off there. `paper()` keeps the paper's model.
@@ -210,26 +210,26 @@ fn is_integer_name(name: &str) -> bool {
 }
 
 impl<R: Real> Params<R> {
-    /// The paper's preset: MODEL.md's geometry with the DE modulus of Eq. 3 as printed
+    /// The paper's preset: the geometry of docs/model.md with the DE modulus of Eq. 3 as printed
     /// (E = G / (2 (1 + nu)) = 0.201 MPa) and the paper's own model (one element per hinge,
     /// E_b, rigid links), to reproduce the paper's scenes.
     pub fn paper() -> Self {
         Params { de_rule: DeModulusRule::PaperEq3, ..Self::paper_model() }
     }
 
-    /// MODEL.md's defaults in the paper's model: one compliance per hinge (m = 1), the body
-    /// modulus E_b and rigid links (the corrected DE modulus kept).
+    /// The defaults of docs/model.md in the paper's model: one compliance per hinge (m = 1), the
+    /// body modulus E_b and rigid links (the corrected DE modulus kept).
     pub fn paper_model() -> Self {
         Params { m: 1, plate: false, flex_links: false, ..Self::default() }
     }
 
-    /// MODEL.md's finger with the film of `card`: its equilibrium modulus (`g`, isotropic
-    /// rule), permittivity, branches and breakdown field.
+    /// The default finger (docs/model.md) with the film of `card`: its equilibrium modulus (`g`,
+    /// isotropic rule), permittivity, branches and breakdown field.
     pub fn with_card(card: &'static Card) -> Self {
         Params { g: R::from_f64(card.g_eq_mpa), eps_r: R::from_f64(card.eps_r), de_rule: DeModulusRule::Isotropic, card, ..Self::default() }
     }
 
-    /// MODEL.md's finger with the board's film, VHB 4905.
+    /// The default finger (docs/model.md) with the board's film, VHB 4905.
     pub fn vhb4905() -> Self {
         Self::with_card(&VHB_4905)
     }

@@ -9,7 +9,7 @@
 //! - `f32`: libm by default; with the `micromath` feature, trig, atan2 and sqrt go through
 //!   micromath (about 50x cheaper on a Cortex-M4F, ~1e-4 relative error on sin/cos).
 //!
-//! What it is not: a general numeric tower. Fixed point implements it elsewhere (issue 5).
+//! What it is not: a general numeric tower. Fixed point implements it elsewhere (`fixed`).
 
 use core::fmt::Debug;
 use core::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
@@ -339,7 +339,7 @@ mod fpu_sqrt {
     }
 }
 
-/// f32 sine and cosine computed in f32 (issue 5, feature `fast-trig`): libm's `sinf`/`cosf`
+/// f32 sine and cosine computed in f32 (feature `fast-trig`): libm's `sinf`/`cosf`
 /// reduce and evaluate in f64, which a Cortex-M4F (single-precision FPU) runs in software
 /// (~1,000 instructions a call). Here: Cody-Waite reduction by pi/2 with a three-part pi/2
 /// (exact for |x| < 2^13 · pi/2), then the Cephes minimax polynomials on [-pi/4, pi/4]
@@ -349,7 +349,7 @@ mod fpu_sqrt {
 /// model's angles are joint and chain angles (a few radians); only a diverging iterate gets
 /// there, and the solvers' finiteness checks turn its NaN into a typed error. Leaving libm's
 /// reduction out keeps its f64 code (and the soft-float kernels under it, ~6 KB) out of the
-/// firmware image (issue 3).
+/// firmware image.
 #[cfg(all(feature = "fast-trig", not(feature = "micromath")))]
 mod fast_trig {
     pub fn sin_cos(x: f32) -> (f32, f32) {

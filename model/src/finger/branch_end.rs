@@ -1,5 +1,5 @@
 //! The end of the equilibrium branch under tension alone (fmax): the lowest tension at which a
-//! joint's cable span closes to its floor (MODEL.md "Contact": the links touch) or its
+//! joint's cable span closes to its floor (docs/model.md "Contact": the links touch) or its
 //! equilibrium tangent turns singular (a limit point: the branch turns back).
 //!
 //! Per distinct joint (joints with the same compliances end at the same tension and are solved

@@ -1,13 +1,20 @@
-//! The joint march (the paper's Eq. 7/15 per sub-element, loads in the deformed geometry) in
-//! any scalar (`march_t`), run on dual numbers (`crate::dual`) to get a joint's hole residual
-//! and its exact 2x2 Jacobian in one pass, and damped Newton (`crate::solve::newton`) on that
-//! (`newton_dual`). Replaces the forward-difference Jacobian (two extra
-//! marches per iteration and a step size that limits the Jacobian to half the digits): one
-//! march per Newton iteration, quadratic convergence to the scalar's resolution (issue 5).
+//! A joint's march: from a guessed guide hole, each sub-element's q = C w under the loads in the
+//! deformed geometry (the paper's Eq. 7/15), to the hole it arrives at. Two recurrences here:
+//! `march_t` (any scalar, an optional tip load; on dual numbers it gives the hole residual's
+//! exact Jacobian for Newton, `eval_dual`, `newton_dual`) and `march_tension_by` (tension
+//! alone, carried in each sub-element's frame). `march_t_matches_march` and
+//! `tension_march_matches_march` hold them equal. Which to call:
 //!
-//! `Finger::march` is `march_t::<R>` (one copy of the march in the image); the test
-//! `march_t_matches_march` checks that the dual march's value part is the plain march, bit
-//! for bit.
+//! | to get                                        | call                                       |
+//! | a converged joint (forward solve)             | `newton_dual`                              |
+//! | one plain march, any load                     | `march`, `march_into` (joint.rs)           |
+//! | the tabled forward's march                    | `march_tension`                            |
+//! | a march from stiffnesses (tabled inverse)     | `march_stiffness` (march_stiffness.rs)     |
+//! | the inverse's evaluation, confirming marches  | `joint_march`, `joint_march_tension`, `joint_march_stiffness` (joint.rs) |
+//! | the paper's Eq. 29 load stepping              | `explicit_step` (stepping.rs)              |
+//! | fixed point (the Cortex-M3)                   | `fixed::forward`'s march                   |
+//!
+//! docs/model.md "Which march to call" has the full table and the small-angle turn rule.
 
 use super::{norm2, Finger, JointState, MarchError, Pose, TipLoad};
 use crate::dual::D;
@@ -19,7 +26,7 @@ use core::ops::{Add, Mul, Sub};
 
 /// Whether the march turns (sin, cos) by the series (below): not on a soft-float core, where
 /// the series' code in the plain and the dual march costs flash the M3 image's 64 KiB does not
-/// have (~1 KB); there each sub-element takes its angle's sin/cos.
+/// have (`scripts/fw-size m3`); there each sub-element takes its angle's sin/cos.
 const SERIES_TURN: bool = !cfg!(target_abi = "eabi");
 
 /// The largest sub-element rotation (rad) whose (sin, cos) the march takes from the Taylor
@@ -68,7 +75,7 @@ pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
 
 impl<R: Real> Finger<R> {
     /// Joint equilibrium march, `q_j = C_j w_j` sub-element by sub-element (the paper's Eq. 7
-    /// and 15, loads in the deformed geometry: MODEL.md "Equilibrium").
+    /// and 15, loads in the deformed geometry: docs/model.md "Equilibrium").
     /// `Finger::march` in the scalar `T` (R itself, or dual numbers over R); parameters and
     /// compliances stay in R. Same operations in the same order as `march`. Returns the hinge
     /// end and the hole in T; the sub-element displacements go to `q_out` as values (`val`),
@@ -146,7 +153,7 @@ impl<R: Real> Finger<R> {
     }
 
     /// The plain march under tension alone (P > 0), carried in each sub-element's own frame:
-    /// the same equations as `march_t` (MODEL.md "Equilibrium", the paper's Eq. 7 and 15), with
+    /// the same equations as `march_t` (docs/model.md "Equilibrium", the paper's Eq. 7 and 15), with
     /// the cable force f turned into each sub-element's frame and the hole B held by two
     /// scalars, the moment about the sub-element's proximal end and the dot product of
     /// (B - that end) with f, each carried to the next sub-element by a rotation-free

@@ -24,14 +24,14 @@ impl<R: Real> Finger<R> {
     ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
         let l = self.sub_len;
         let zr = R::zero();
-        // (the stack couples no shear to the axial force: its k01 is zero, `StackUpper::at`)
+        // (the stack couples no shear to the axial force: its k01 is zero, `de::StackStiffness::upper`)
         let [d00, _, d02, d11, d12, d22] = *kd;
         debug_assert!(kd[1] == zr);
         self.march_tension_by(&self.hinge_k, tension, b, q_out, |kh, f, mm| {
             let (k00, k01, k02) = (kh[0][0] + d00, kh[0][1], kh[0][2] + d02);
             let (k11, k12, k22) = (kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22);
             // rows: K q = (f0, f1, g + f0 q1 - f1 q0), g = mm - f1 L; eliminate below k00, then
-            // below u11
+            // below u11 (not `mat3::inverse_spd`: the moment's load terms make the rows unsymmetric)
             let g = mm - f[1] * l;
             let i0 = R::one() / k00;
             let l1 = k01 * i0;
@@ -70,25 +70,26 @@ mod tests {
         let kd = [k[0][0], k[0][1], k[0][2], k[1][1], k[1][2], k[2][2]];
         let mut c = [mat3::zero(); MAX_SUB];
         for j in 0..f.params().m {
-            c[j] = mat3::inverse_spd_of_sum(f.hinge_stiffness(j), &k).unwrap();
+            c[j] = mat3::inverse_spd(&mat3::add(f.hinge_stiffness(j), &k)).unwrap();
         }
         (kd, c)
     }
 
-    /// The stack's upper triangle in closed form is `Finger::stack_stiffness`'s to rounding, with
-    /// and without the calibration, over the thicknesses the stacks reach and past them.
+    /// The stack's upper triangle (`Finger::stack`) is the matrix `Finger::stack_stiffness`
+    /// gives to rounding, with and without the calibration, over the thicknesses the stacks
+    /// reach and past them.
     #[test]
     fn stack_upper_is_the_stack_stiffness() {
         for cal in [Calibration::<f64>::none(), Calibration::model_md()] {
             for p in [Params::<f64>::default(), Params { m: 1, ..Params::default() }] {
                 let f = Finger::with_calibration(p, cal).unwrap();
-                let su = f.stack_upper();
+                let su = f.stack();
                 let t0 = f.stack_thickness(0.0).unwrap();
                 for i in 0..=20 {
                     let t = t0 * (0.3 + 0.04 * f64::from(i));
                     let k = f.stack_stiffness(t);
                     let want = [k[0][0], k[0][1], k[0][2], k[1][1], k[1][2], k[2][2]];
-                    let got = su.at(t);
+                    let got = su.upper(t);
                     let scale = want.iter().fold(0.0f64, |a, x| a.max(x.abs()));
                     for (g, w) in got.iter().zip(want) {
                         assert!((g - w).abs() <= 1e-14 * scale, "{got:?} vs {want:?} at t = {t}");

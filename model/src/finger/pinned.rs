@@ -1,4 +1,4 @@
-//! The equilibrium with the tip pinned at a point (MODEL.md "Contact"; the paper's second
+//! The equilibrium with the tip pinned at a point (docs/model.md "Contact"; the paper's second
 //! conclusion): unknowns each joint's guide hole and the tip load F that holds the tip there,
 //! residual the coupled hole mismatches and the tip's distance from the point (the tip-loaded
 //! system of `Finger::coupled_residual` with the tip fixed and F unknown). Reached by

@@ -156,6 +156,14 @@ impl<R: Real> Finger<R> {
             }
         }
         sol.residual = res2.sqrt();
+        Self::check_finite(&nodes, &sol)?;
+        Ok(sol)
+    }
+
+    /// A solution's nodes 0..=n, residual, excursion and tangent determinants are finite (no
+    /// `Ok` result carries a NaN or an infinity).
+    pub(super) fn check_finite(nodes: &[Pose<R>; MAX_JOINTS + 1], sol: &Solution<R>) -> Result<(), Error> {
+        let n = sol.n;
         let all_finite = nodes.iter().take(n + 1).all(|p| p.x.is_finite() && p.y.is_finite() && p.theta.is_finite())
             && sol.residual.is_finite()
             && sol.cable_excursion.is_finite()
@@ -163,6 +171,6 @@ impl<R: Real> Finger<R> {
         if !all_finite {
             return Err(Error::Singular { what: "solution (non-finite)" });
         }
-        Ok(sol)
+        Ok(())
     }
 }

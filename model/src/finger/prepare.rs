@@ -1,36 +1,8 @@
 //! Preparing a finger: validation, the hinge compliances (once per parameter set), the stack's
 //! stiffness and the sub-element compliances for a set of channel voltages (docs/model.md
-//! "Joint compliance with the DE stack"). No solving here.
+//! "Joint compliance with the stack"). No solving here.
 
 use super::*;
-
-/// The stack stiffness's upper triangle at thickness t in closed form (`Finger::stack_stiffness`
-/// multiplied out: K_a = g_a EA/L (1, 0, d)ᵀ(1, 0, d) plus g_b EI times the beam's bending
-/// block, d = (t_min + t)/2, EA ∝ t, EI ∝ t³, g = g0 + g1 t).
-#[derive(Clone, Copy)]
-pub(crate) struct StackUpper<R> {
-    /// E_de w / L.
-    ka: R,
-    /// The axial and bending factors' (g0, g1).
-    ga: [R; 2],
-    gb: [R; 2],
-    /// t_min / 2.
-    d0: R,
-    /// E_de w (1/L³, -1/(2 L²), 1/(3 L)): the bending block's entries per t³.
-    kb: [R; 3],
-}
-
-impl<R: Real> StackUpper<R> {
-    /// (k00, k01, k02, k11, k12, k22) at thickness t, mm.
-    #[inline(always)]
-    pub(crate) fn at(&self, t: R) -> [R; 6] {
-        let gka = (self.ga[0] + self.ga[1] * t) * (self.ka * t);
-        let d = self.d0 + t * R::from_f64(0.5);
-        let e3 = (self.gb[0] + self.gb[1] * t) * (t * t * t);
-        let k02 = gka * d;
-        [gka, R::zero(), k02, self.kb[0] * e3, self.kb[1] * e3, self.kb[2] * e3 + k02 * d]
-    }
-}
 
 impl<R: Real> Finger<R> {
     /// Validate the parameters and compute the hinge compliances (once per parameter set).
@@ -97,24 +69,16 @@ impl<R: Real> Finger<R> {
         &self.cal
     }
 
-    /// Stiffness of a stack stretch of one sub-element at stack thickness t (mm), calibrated.
+    /// Stiffness of a stack stretch of one sub-element at stack thickness t (mm), calibrated
+    /// (`de::StackStiffness`).
     pub fn stack_stiffness(&self, t: R) -> Mat3<R> {
-        self.cal.stack_stiffness(&self.p, &de::stack_stiffness(&self.p, self.sub_len, t), self.sub_len, t)
+        self.stack().matrix(t)
     }
 
-    /// `stack_stiffness`'s upper triangle as a function of the thickness, its constants taken
-    /// once (`StackUpper::at`).
-    pub(crate) fn stack_upper(&self) -> StackUpper<R> {
-        let (p, l) = (&self.p, self.sub_len);
-        let ew = p.e_de() * p.w;
-        let half = R::from_f64(0.5);
-        StackUpper {
-            ka: ew / l,
-            ga: self.cal.stack_axial,
-            gb: self.cal.stack_bending,
-            d0: p.t_min * half,
-            kb: [ew / (l * l * l), -ew * half / (l * l), ew / (R::from_f64(3.0) * l)],
-        }
+    /// The stack's stiffness on one sub-element as a function of the thickness, calibrated
+    /// (`de::StackStiffness`, its constants taken once).
+    pub fn stack(&self) -> de::StackStiffness<R> {
+        de::StackStiffness::new(&self.p, self.sub_len, &self.cal)
     }
 
     /// Hinge compliance of sub-element j (no stack): the Castigliano integrals of docs/model.md

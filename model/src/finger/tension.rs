@@ -101,14 +101,7 @@ impl<R: Real> Finger<R> {
             sol.cable_excursion += self.p.hinge_len() - span;
         }
         sol.residual = res2.sqrt();
-        let all_finite = nodes.iter().take(n + 1).all(|p| p.x.is_finite() && p.y.is_finite() && p.theta.is_finite())
-            && sol.residual.is_finite()
-            && sol.cable_excursion.is_finite()
-            && sol.tangent_det[..n].iter().all(|d| d.is_finite());
-        if !all_finite {
-            return Err(Error::Singular { what: "solution (non-finite)" });
-        }
-        Ok(())
+        Self::check_finite(&nodes, sol)
     }
 
     /// Converged equilibrium of joint k under tension alone: Newton on the hole position

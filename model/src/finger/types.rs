@@ -216,4 +216,9 @@ impl<R: Real> JointMarch<R> {
     pub(super) fn arrived(end: Pose<R>, hole: [R; 2], link: [R; 3]) -> Self {
         JointMarch { end, hole, link, angle: end.theta + link[2] }
     }
+
+    /// The state of a solved equilibrium (`Finger::joint_equilibrium`'s).
+    pub(crate) fn of_equilibrium(eq: &JointEquilibrium<R>) -> Self {
+        JointMarch { end: eq.end, hole: eq.hole, link: eq.link, angle: eq.angle }
+    }
 }

@@ -1,5 +1,5 @@
 //! The fixed-point forward solve under tension alone: per joint, Newton on the guide-hole
-//! position with the march of `Finger::march_t` (MODEL.md "Equilibrium"), then the chain of
+//! position with the march of `Finger::march_t` (docs/model.md "Equilibrium"), then the chain of
 //! links and the cable excursion. Same equations as the float model, Q formats of [`q`].
 use super::q::{narrow, shr_round, Mm, Nmm, Nt, Q, Rad, Scaled, Unit};
 use super::trig::{hypot, hypot_inv, sin_cos};
@@ -252,7 +252,6 @@ impl FixedFinger {
         Ok(())
     }
 
-    /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.
     /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.
     pub(super) fn march(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2]) -> Result<(FixedPose, [Mm; 2]), MarchError> {
         let e = self.e;
@@ -517,7 +516,7 @@ impl FixedFinger {
         Ok(ends)
     }
 
-    /// The linearised tip stiffness (`Finger::tip_stiffness`, MODEL.md "Tip stiffness") at the
+    /// The linearised tip stiffness (`Finger::tip_stiffness`, docs/model.md "Tip stiffness") at the
     /// converged fixed-point `sol`: the sub-element end poses and nodes from fixed point,
     /// then C_tip = Σ J C Jᵀ and its inverse once in `R` (the sub-element compliances this
     /// finger was prepared with, unscaled; `f`: the parameters it was prepared from).

@@ -487,7 +487,7 @@ mod tests {
     }
 
     /// Without a tension (the M3 image's `pose` without P): the float inverse's rule at the
-    /// board's finger (MODEL.md's, with its FE calibration): the same interval and midpoint as
+    /// board's finger (docs/model.md's, with its FE calibration): the same interval and midpoint as
     /// the f64 `solve_pose` (the fixed-point joint angles' error over dθ/dP: within 1e-4
     /// relative), and the answer holds the posture through the f64 forward (0.05 deg).
     #[test]

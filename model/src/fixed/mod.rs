@@ -1,4 +1,4 @@
-//! Fixed-point forward model for cores without an FPU (the Cortex-M3 image; issue 14).
+//! Fixed-point forward model for cores without an FPU (the Cortex-M3 image).
 //!
 //! What it is: the converged joint equilibrium under cable tension alone (`Finger::solve`
 //! with no tip load: the march, Newton per joint, the chain, the excursion) in 32-bit words

@@ -58,6 +58,8 @@ pub(super) struct Held<R> {
 pub(super) struct Gen<'a, R> {
     f: &'a Finger<R>,
     p: &'a Params<R>,
+    /// The stack's stiffness as a function of its thickness.
+    stack: de::StackStiffness<R>,
     /// The link's linear rotation per newton of tension (0 for rigid links), rad/N.
     link_rot: R,
     /// Hole tolerance of the per-joint Newton, mm.
@@ -81,11 +83,6 @@ fn tension_ends<R: Real>(lo: &[Held<R>; MAX_JOINTS], hi: &[Held<R>; MAX_JOINTS],
         ends[k] = [lo[k].tension, hi[k].tension];
     }
     ends
-}
-
-/// A march's state of a solved equilibrium.
-fn march_of<R: Real>(eq: &JointEquilibrium<R>) -> JointMarch<R> {
-    JointMarch { end: eq.end, hole: eq.hole, link: eq.link, angle: eq.angle }
 }
 
 /// The hinge end and link deflection of joint k (its sub-element displacements are written

@@ -31,7 +31,7 @@ pub const VHB_4905: Card = Card {
 /// never a board's card. The film is the paper's VHB 4905: its breakdown field is the highest
 /// reported unstretched VHB 4905 figure (the board's card takes the lowest).
 ///
-/// Sources: the paper, section II-A (G = 0.6 MPa, nu = 0.49, z0 = 0.5 mm); eps_r 4.7: MODEL.md
+/// Sources: the paper, section II-A (G = 0.6 MPa, nu = 0.49, z0 = 0.5 mm); eps_r 4.7: docs/model.md
 /// (the paper prints none); breakdown: Smirnov et al., Technical Physics 2018 (VHB 4905,
 /// unstretched, quasi-static: 35 V/um)
 pub const PAPER_ELASTIC: Card = Card {

@@ -141,7 +141,7 @@ impl<'a, R: Real> Gen<'a, R> {
             return Err(Error::LimitPoint { joint, tension: pt.x.to_f64() });
         }
         *q_out = pt.eq.q;
-        Ok(Held { tension: pt.x, thickness: t, st: march_of(&pt.eq), slope: s, jac: None, exact: true })
+        Ok(Held { tension: pt.x, thickness: t, st: JointMarch::of_equilibrium(&pt.eq), slope: s, jac: None, exact: true })
     }
 
     /// Joint held at θ* under tension `pt`: the stack thickness in [t_top, t0], by a root in t.
@@ -215,7 +215,7 @@ impl<'a, R: Real> Gen<'a, R> {
         self.iters += it;
         let (p1, _) = res?;
         *q_out = p1.eq.q;
-        Ok(Held { tension: pt, thickness: p1.x, st: march_of(&p1.eq), slope: hi.slope, jac: None, exact: true })
+        Ok(Held { tension: pt, thickness: p1.x, st: JointMarch::of_equilibrium(&p1.eq), slope: hi.slope, jac: None, exact: true })
     }
 }
 

@@ -28,6 +28,7 @@ impl<'a, R: Real> Gen<'a, R> {
         Gen {
             f,
             p,
+            stack: f.stack(),
             link_rot,
             tol_hole,
             htol: tol_hole.max(f.hole_resolution()),
@@ -55,7 +56,7 @@ impl<'a, R: Real> Gen<'a, R> {
             }
             return Ok(());
         }
-        let kd = self.stack_upper(t)?;
+        let kd = self.stack_at(t)?;
         let mut check = R::zero();
         for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
             let (m, ck) = self.sub_compliance(j, &kd);
@@ -65,37 +66,25 @@ impl<'a, R: Real> Gen<'a, R> {
         Self::checked(check)
     }
 
-    /// The upper triangle of the stack's stiffness at thickness t (K_de ∝ t axially, t³ in
-    /// bending: positive semi-definite for t > 0, so each sum with the positive definite
-    /// hinge has a positive diagonal). It depends on t alone: once per compliance evaluation.
+    /// The upper triangle of the stack's stiffness at thickness t (`de::StackStiffness`:
+    /// K_de ∝ t axially, t³ in bending, positive semi-definite for t > 0, so each sum with the
+    /// positive definite hinge has a positive diagonal). Once per compliance evaluation.
     #[inline(always)]
-    pub(super) fn stack_upper(&self, t: R) -> Result<[R; 6], Error> {
+    pub(super) fn stack_at(&self, t: R) -> Result<[R; 6], Error> {
         if !(t > R::zero() && t.is_finite()) {
             return Err(Error::Singular { what: "joint stiffness" });
         }
-        let kd = self.f.stack_stiffness(t);
-        Ok([kd[0][0], kd[0][1], kd[0][2], kd[1][1], kd[1][2], kd[2][2]])
+        Ok(self.stack.upper(t))
     }
 
-    /// Sub-element j's compliance C_j = (K_hinge,j + K_de)⁻¹ (`kd` the stack's upper triangle):
-    /// the upper triangle's sum and its cofactor inverse, `mat3::inverse_spd_of_sum`'s
-    /// arithmetic (the same numbers). With a check value: finite (the determinant plus the
-    /// entries) when the sum is positive definite to working precision, else NaN; one
-    /// finiteness test of the checks' sum then stands for every entry's.
+    /// Sub-element j's compliance C_j = (K_hinge,j + K_de)⁻¹ (`kd` the stack's upper triangle),
+    /// with `mat3::inverse_spd_upper`'s check value (a finite sum of checks: every sum positive
+    /// definite).
     #[inline(always)]
     pub(super) fn sub_compliance(&self, j: usize, kd: &[R; 6]) -> (Mat3<R>, R) {
         let kh = self.f.hinge_stiffness(j);
-        let (a, b, c, d, e, f) = (kh[0][0] + kd[0], kh[0][1] + kd[1], kh[0][2] + kd[2], kh[1][1] + kd[3], kh[1][2] + kd[4], kh[2][2] + kd[5]);
-        let ca = d * f - e * e;
-        let cb = c * e - b * f;
-        let cc = b * e - c * d;
-        let det = a * ca + b * cb + c * cc;
-        let ok = det > a * d * f * R::from_f64(64.0 * R::EPS);
-        let inv = R::one() / det;
-        let (cd, ce, cf) = (a * f - c * c, b * c - a * e, a * d - b * b);
-        let o = [ca * inv, cb * inv, cc * inv, cd * inv, ce * inv, cf * inv];
-        let check = if ok { det + o[0] + o[1] + o[2] + o[3] + o[4] + o[5] } else { R::from_f64(f64::NAN) };
-        ([[o[0], o[1], o[2]], [o[1], o[3], o[4]], [o[2], o[4], o[5]]], check)
+        let (o, check) = mat3::inverse_spd_upper([kh[0][0] + kd[0], kh[0][1] + kd[1], kh[0][2] + kd[2], kh[1][1] + kd[3], kh[1][2] + kd[4], kh[2][2] + kd[5]]);
+        (mat3::from_upper(o), check)
     }
 
     pub(super) fn checked(check: R) -> Result<(), Error> {
@@ -133,7 +122,7 @@ impl<'a, R: Real> Gen<'a, R> {
 
     /// The unloaded joint's state.
     pub(super) fn straight_st(&self) -> JointMarch<R> {
-        march_of(&self.straight())
+        JointMarch::of_equilibrium(&self.straight())
     }
 
     /// dθ/dP at P = 0 (straight joint: every sub-element sees the axial force -P and the

@@ -33,7 +33,7 @@ impl<'a, R: Real> Gen<'a, R> {
     /// within the root tolerance. `None` when it does not converge in 16 steps, or a march
     /// fails: the caller falls back to the bracketed root (robust, 3-5x the marches).
     /// Each step costs one march and no derivatives: cheaper than the dual-number Newton
-    /// nested in a secant (issue 4: the inverse's instruction count).
+    /// nested in a secant (the inverse's instruction count).
     /// Returns the solve (if it converged) and the marches it took.
     /// (One instance for both solves: `ev` is a trait object, which keeps the firmware image
     /// small.)
@@ -139,9 +139,13 @@ impl<'a, R: Real> Gen<'a, R> {
     /// dθ/dP along the equilibrium at fixed t from a solve's Jacobian (unknowns (b, P)):
     /// J dx = (0, 0, dθ*) gives dP/dθ* = (J⁻¹)[2][2].
     pub(super) fn slope_of(jac: &Mat3<R>) -> R {
-        match mat3::inverse_unscaled(jac) {
-            Some(inv) if inv[2][2] != R::zero() => R::one() / inv[2][2],
-            _ => R::zero(),
+        // (J⁻¹)[2][2] = C22 / det J, C22 = j00 j11 - j01 j10 its cofactor
+        let det = mat3::det(jac);
+        let c22 = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+        if mat3::singular(jac, det) || c22 == R::zero() {
+            R::zero()
+        } else {
+            det / c22
         }
     }
 }

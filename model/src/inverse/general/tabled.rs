@@ -239,7 +239,7 @@ pub(in crate::inverse) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R
     //    not within the tolerance; then the voltage
     let lh = p.hinge_len();
     let (v_top, volts) = (tb.v_top, &tb.volts);
-    let (stack, link) = (f.stack_upper(), f.tension_link_q(pt));
+    let link = f.tension_link_q(pt);
     for k in 0..n {
         if k > 0 && angles[k] == angles[k - 1] {
             out.thickness[k] = out.thickness[k - 1];
@@ -257,7 +257,7 @@ pub(in crate::inverse) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R
         // inside the stack's range one march from the stiffnesses (no compliance formed); the
         // compliance march at either end, and inside it only where that one is not converged
         let inside = t_guess < t0 && t_guess > t_top;
-        let quick = if inside { g.march_converged_stiff(&stack.at(t_guess), pt, link, b, angles[k], &mut out.sub_q[k]) } else { None };
+        let quick = if inside { g.march_converged_stiff(&g.stack.upper(t_guess), pt, link, b, angles[k], &mut out.sub_q[k]) } else { None };
         g.iters += 1;
         let marched = match quick {
             Some(st) => Some(st),
