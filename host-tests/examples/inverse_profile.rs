@@ -30,7 +30,7 @@ const CASES: &[Case] = &[
 /// (the first part whose fragment a function's name contains; else "the rest").
 const PARTS: &[(&str, &[&str])] = &[
     ("march of the full model", &["march", "turn"]),
-    ("stack stiffness and compliances", &["compliance", "comp_into", "stack_upper", "StackUpper", "stack_stiffness", "e_de"]),
+    ("stack stiffness and compliances", &["compliance", "comp_into", "stack_upper", "StackUpper", "StackStiffness", "stack_at", "stack_stiffness", "e_de"]),
     ("table reading", &["BranchTable", "level_guess"]),
     ("voltage", &["voltage", "check_below"]),
 ];
