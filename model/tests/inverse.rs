@@ -1,4 +1,4 @@
-//! The inverse model (issue 4): forward(inverse(angles)) returns the angles; unreachable
+//! The inverse model (docs/inverse.md): forward(inverse(angles)) returns the angles; unreachable
 //! postures are refused with the joint and the compliances; the tension interval of a posture
 //! spans different tip stiffnesses, each consistent with a forward solve; the contact force
 //! grows with P - P0 and changes with the voltages.

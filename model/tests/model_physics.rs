@@ -1,4 +1,4 @@
-//! Host tests that pin the model's physics (issue 2). Each fails if the feature it names breaks.
+//! Host tests that pin the model's physics (docs/model.md). Each fails if the feature it names breaks.
 
 use finger_model::{de, hinge, params::EPS0, Error, Finger, Method, Params};
 use finger_model_testkit::paper;
@@ -54,7 +54,7 @@ fn equal_voltages_give_equal_joints() {
     }
 }
 
-/// Adaptive Simpson in x (an independent quadrature of the MODEL.md integrals, no substitution).
+/// Adaptive Simpson in x (an independent quadrature of docs/model.md's integrals, no substitution).
 fn simpson<F: Fn(f64) -> f64>(f: &F, a: f64, b: f64, tol: f64) -> f64 {
     fn rec<F: Fn(f64) -> f64>(f: &F, a: f64, b: f64, fa: f64, fm: f64, fb: f64, whole: f64, tol: f64, depth: u32) -> f64 {
         let m = 0.5 * (a + b);
@@ -313,7 +313,7 @@ fn bad_inputs_are_typed_errors() {
 #[test]
 fn contact_is_reported_not_divided_by_zero() {
     // With sub-elements the hinge bends as an arc and the flexor-side corners (the guide holes)
-    // meet: the span closes (near 7.5 N with m = 8 and the plate modulus, as issue 7 states).
+    // meet: the span closes (near 7.5 N with m = 8 and the plate modulus).
     // With m = 1 the paper's single linear compliance shears the hinge instead and the span
     // never closes (see docs/model.md), so contact is a sub-element result.
     let f = Finger::new(Params::<f64> { m: 8, plate: true, ..Params::default() }.without_stacks()).unwrap();
@@ -351,7 +351,7 @@ fn tip_load_couples_the_joints() {
     let c = finger_model::mat3::inverse(&k).unwrap();
     let dy_lin = c[1][1] * dfy;
     let dy = sl.tip().y - free.tip().y;
-    // the cable's own geometric stiffness is not in C_tip (MODEL.md), so agree to ~30 %
+    // the cable's own geometric stiffness is not in C_tip (docs/model.md "Tip stiffness"), so agree to ~30 %
     assert!((dy - dy_lin).abs() < 0.3 * dy_lin.abs(), "{dy} vs linear {dy_lin}");
 }
 

@@ -1,4 +1,4 @@
-//! Property tests over the documented domain (issue 13, finger-model-testkit: model/testkit/src/domain.rs): forward,
+//! Property tests over the documented domain (finger-model-testkit: model/testkit/src/domain.rs): forward,
 //! fmax, the inverse round trip and contact, 10,000 cases in all. No panic, no NaN or inf in an
 //! answer, no `NotConverged` or fault: every case answers or is refused with a typed reason.
 //! The soak (`cargo run --example soak` in host-tests) runs the same cases by the

@@ -1,4 +1,4 @@
-//! Property tests over the valid parameter domain (issue 5): no panic, no NaN or infinity in
+//! Property tests over the valid parameter domain: no panic, no NaN or infinity in
 //! any Ok result, every failure a typed error; the converged solver converges or returns its
 //! branch-end (contact, limit point) or non-convergence error in every case. Case counts are
 //! kept moderate so the suite stays fast.
@@ -138,7 +138,7 @@ proptest! {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 64, failure_persistence: None, ..ProptestConfig::default() })]
 
-    /// The inverse (issue 4) of any posture the forward model reaches under tension alone is
+    /// The inverse of any posture the forward model reaches under tension alone is
     /// found and holds it: forward(inverse) within 1e-8 rad in f64. Over the hardware's
     /// parameter sets (the default and the paper preset) with every hinge model (m = 1..8,
     /// plate modulus on/off, flexible links on/off), voltages from 0 to 90 % of the ceiling,

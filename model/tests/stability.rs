@@ -1,4 +1,4 @@
-//! Numerical stability on stiff and extreme cases (issue 5): stiff bodies (E_b up to
+//! Numerical stability on stiff and extreme cases: stiff bodies (E_b up to
 //! 3,500 MPa, like PLA), soft bodies (1 MPa), very thin and very thick hinges, tension up to
 //! contact, voltages at and just below the ceiling, n_inc = 1, tiny and huge geometry at the
 //! ends of the parameters' documented ranges, and non-finite inputs. Every case either returns

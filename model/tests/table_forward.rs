@@ -5,7 +5,7 @@
 use finger_model::inverse::{BranchTable, Options};
 use finger_model::{Calibration, Finger, Method, Params, Real, Solution};
 
-/// MODEL.md's calibration factors (docs/fidelity-fe.md).
+/// The default finger's calibration factors (docs/fidelity-fe.md).
 fn calibration<R: Real>() -> Calibration<R> {
     let r = R::from_f64;
     Calibration { hinge: [r(1.5407), r(6.2456), r(1.0669), r(1.1546)], stack_axial: [r(0.7183), r(0.0546)], stack_bending: [r(5.2540), r(-1.7563)] }

@@ -1,4 +1,4 @@
-//! The documented domain's cases (issue 13), one function per property, shared by the
+//! The documented domain's cases (docs/model.md), one function per property, shared by the
 //! property tests (model/tests/proptest_domain.rs, CI) and the soak
 //! (`cargo run --example soak`). Each returns the outcome's name (an answer, or a
 //! typed refusal) or, as `Err`, a violation: a NaN or infinity in an answer, `NotConverged`,
