@@ -233,13 +233,13 @@ fn main() {
     let c = q.cmd("cal");
     let g: Vec<f64> = c.strip_prefix("ok cal=").expect("cal").split(',').map(|x| x.parse().unwrap()).collect();
     let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
-    let board = Finger::with_calibration(Params::<f64>::default(), cal).unwrap();
+    let board = Finger::with_calibration(Params::<f64>::vhb4905(), cal).unwrap();
     let ps = board.solve(0.8, &[1000.0, 3000.0, 5000.0], Method::converged()).unwrap();
     let pose_cmd = format!("pose {:.6} {:.6} {:.6} 0.8", ps.joint_angle[0].to_degrees(), ps.joint_angle[1].to_degrees(), ps.joint_angle[2].to_degrees());
     let pose_free = format!("pose {:.6} {:.6} {:.6}", ps.joint_angle[0].to_degrees(), ps.joint_angle[1].to_degrees(), ps.joint_angle[2].to_degrees());
     let mut worst_stack: Vec<(String, u64)> = Vec::new();
     let mut prev = 0;
-    for c in ["version", "status", "limits", "help", "param", "solve 0.5 0 1000 2000", "solve 1 0 9000 9000", "solve 7 0 0 0", "arm", "volt all 1000", "wait 0.6", "force 0.5", "force 2", "volt 1 9000", "wait 5", "status", pose_cmd.as_str(), "wait 5", "status", pose_free.as_str(), "wait 5", "status", "stop", "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "solve 1 0 5000 0", "preset paper", "solve 1 0 1000 1000", "limits"] {
+    for c in ["version", "status", "limits", "help", "param", "solve 0.5 0 1000 2000", "solve 1 0 5000 5000", "solve 4 0 0 0", "arm", "volt all 1000", "wait 0.6", "force 0.5", "force 2", "volt 1 5000", "wait 5", "status", pose_cmd.as_str(), "wait 5", "status", pose_free.as_str(), "wait 5", "status", "stop", "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "solve 1 0 5000 0", "preset paper", "solve 1 0 1000 1000", "limits"] {
         let r = q.cmd(c);
         assert!(r.starts_with("ok"), "{c}: {r}");
         let hw = q.stack_high_water(0x2000_0000, 0x2000_4000);

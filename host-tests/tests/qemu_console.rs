@@ -143,7 +143,7 @@ fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
 
 /// The M3 image's `pose` (the fixed-point inverse at the given tension), armed: at a posture
 /// of the host's f64 model (the board's calibration, read with `cal`), the voltages it answers
-/// hold that posture in the f64 model within the inverse's round-trip target (0.05 deg, issue
+/// hold that posture in the f64 model within the inverse's round-trip target (0.05 deg,
 /// 14); they are the setpoints afterwards; past the stacks, `unreachable`. Without a tension:
 /// the F405's rule.
 fn pose_at_a_tension(q: &mut Qemu, vmax: f64) {
