@@ -155,9 +155,17 @@ impl<R: Real> Real for D<R> {
         (D { v: s, d: [c * self.d[0], c * self.d[1]] }, D { v: c, d: [-s * self.d[0], -s * self.d[1]] })
     }
     #[inline(always)]
-    fn sin_cos_small(self) -> (Self, Self) {
+    fn compose_turn((s, c): (Self, Self), (sx, cx): (Self, Self), angle: Self) -> (Self, Self) {
+        // the values composed in R (bit for bit the plain march's), the derivative the angle's
+        // own times cos, -sin
+        let (sv, cv) = R::compose_turn((s.v, c.v), (sx.v, cx.v), angle.v);
+        (D { v: sv, d: [cv * angle.d[0], cv * angle.d[1]] }, D { v: cv, d: [-sv * angle.d[0], -sv * angle.d[1]] })
+    }
+    #[inline(always)]
+    fn turn(self, small: Self) -> (Self, Self) {
         // the value part is R's own (the plain march's, bit for bit), the derivative cos, -sin
-        let (s, c) = self.v.sin_cos_small();
+        // (past twice `small` R's rule is the sine and cosine: taken at once, no series first)
+        let (s, c) = if self.v.abs() < small.v + small.v { self.v.turn(small.v) } else { self.v.sin_cos() };
         (D { v: s, d: [c * self.d[0], c * self.d[1]] }, D { v: c, d: [-s * self.d[0], -s * self.d[1]] })
     }
     fn atan2(self, x: Self) -> Self {

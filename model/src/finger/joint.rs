@@ -35,15 +35,13 @@ impl<R: Real> Finger<R> {
         b_hole: [R; 2],
         tip: Option<TipLoad<R>>,
     ) -> Result<JointState<R>, MarchError> {
-        // the arithmetic is `march_t`'s in R (one copy of the march in the image; the test
-        // `march_t_matches_march` keeps the two entry points bit-equal)
         let mut q = [[R::zero(); 3]; MAX_SUB];
         let (end, hole, _) = self.march_into(c, tension, b_hole, tip, &mut q)?;
         Ok(JointState { q, end, hole, tangent: None })
     }
 
-    /// `march_t` in R: the one plain march in the image (`march` and `joint_march` share it;
-    /// flash).
+    /// The plain march in R (`ByComplianceLoaded` in `PoseFrame`, any load): the one copy in the
+    /// image (`march` and `joint_march` share it; flash).
     #[inline(never)]
     pub(super) fn march_into(
         &self,
@@ -53,7 +51,8 @@ impl<R: Real> Finger<R> {
         tip: Option<TipLoad<R>>,
         q: &mut [[R; 3]; MAX_SUB],
     ) -> Result<(Pose<R>, [R; 2], [R; 2]), MarchError> {
-        self.march_t::<R>(c, tension, b_hole, tip, q, |x| x)
+        let frame = march::PoseFrame::new(self, tension, b_hole, tip)?;
+        self.march_joint(&march::ByComplianceLoaded(c), frame, q, |x| x)?.end(self.p.e)
     }
 
     /// Residual of the hole guess: guess - arrived.

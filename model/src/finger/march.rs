@@ -1,20 +1,18 @@
-//! A joint's march: from a guessed guide hole, each sub-element's q = C w under the loads in the
-//! deformed geometry (the paper's Eq. 7/15), to the hole it arrives at. Two recurrences here:
-//! `march_t` (any scalar, an optional tip load; on dual numbers it gives the hole residual's
-//! exact Jacobian for Newton, `eval_dual`, `newton_dual`) and `march_tension_by` (tension
-//! alone, carried in each sub-element's frame). `march_t_matches_march` and
-//! `tension_march_matches_march` hold them equal. Which to call:
+//! A joint's march: from a guessed guide hole, sub-element by sub-element, each one's
+//! equilibrium q = C w under the loads in the deformed geometry (the paper's Eq. 7/15), to the
+//! hole it arrives at. One loop (`Finger::march_joint`) over two parts:
+//! - a sub-element's equilibrium (`SubElement`) in one of three forms: `ByCompliance` (q from
+//!   C in closed form, the moment about the proximal end), `ByComplianceLoaded` (the same
+//!   equation from the moment about the undeflected distal end: the dual/tip-load form) and
+//!   `ByStiffness` (K q = w eliminated in place, march_stiffness.rs);
+//! - how the loads travel to the next sub-element (`Frame`): `CableFrame` (tension alone, in
+//!   each sub-element's own frame, the end's pose recovered once; with `ByCompliance` or
+//!   `ByStiffness`) or `PoseFrame` (the pose carried, any scalar including dual numbers, an
+//!   optional tip load; with `ByComplianceLoaded`).
 //!
-//! | to get                                        | call                                       |
-//! | a converged joint (forward solve)             | `newton_dual`                              |
-//! | one plain march, any load                     | `march`, `march_into` (joint.rs)           |
-//! | the tabled forward's march                    | `march_tension`                            |
-//! | a march from stiffnesses (tabled inverse)     | `march_stiffness` (march_stiffness.rs)     |
-//! | the inverse's evaluation, confirming marches  | `joint_march`, `joint_march_tension`, `joint_march_stiffness` (joint.rs) |
-//! | the paper's Eq. 29 load stepping              | `explicit_step` (stepping.rs)              |
-//! | fixed point (the Cortex-M3)                   | `fixed::forward`'s march                   |
-//!
-//! docs/model.md "Which march to call" has the full table and the small-angle turn rule.
+//! Both frames turn by one rule (`Real::turn`). Which entry point serves which caller: the table in
+//! docs/model.md "Which march to call"; the fixed-point march (`fixed::forward`) follows the
+//! same recurrence in Q formats.
 
 use super::{norm2, Finger, JointState, MarchError, Pose, TipLoad};
 use crate::dual::D;
@@ -24,13 +22,8 @@ use crate::real::Real;
 use crate::solve::{self, newton::Equations, SolveOptions};
 use core::ops::{Add, Mul, Sub};
 
-/// Whether the march turns (sin, cos) by the series (below): not on a soft-float core, where
-/// the series' code in the plain and the dual march costs flash the M3 image's 64 KiB does not
-/// have (`scripts/fw-size m3`); there each sub-element takes its angle's sin/cos.
-const SERIES_TURN: bool = !cfg!(target_abi = "eabi");
-
-/// The largest sub-element rotation (rad) whose (sin, cos) the march takes from the Taylor
-/// series to x⁵ and x⁶: their truncation errors, x⁷/5040 and x⁸/40320, stay below the scalar's
+/// The largest sub-element rotation (rad) whose (sin, cos) `Real::turn` takes from the Taylor series
+/// to x⁵ and x⁶: their truncation errors, x⁷/5040 and x⁸/40320, stay below the scalar's
 /// resolution `eps` relative (x⁶ < 5040 eps: 0.29 in f32, 0.010 in f64; the bounds below are
 /// inside those).
 pub(super) fn small_turn(eps: f64) -> f64 {
@@ -41,233 +34,131 @@ pub(super) fn small_turn(eps: f64) -> f64 {
     }
 }
 
-/// (sin x, cos x) of a sub-element's rotation: the series (`Real::sin_cos_small`'s) below
-/// `small` (`small_turn`), the series one term longer (to x⁷ and x⁸, exact to the scalar's
-/// resolution up to 0.6 in f32, 0.07 in f64) below 2 `small` (the stiffest scenes' middle
-/// sub-elements), else the scalar's sin/cos. The bounds are tested on x², which the series
-/// needs anyway.
-#[inline(always)]
-fn turn<R: Real>(x: R, small: R) -> (R, R) {
-    let z = x * x;
-    let small2 = small * small;
-    if z < small2 {
-        series_turn(x, z)
-    } else if z < small2 * R::from_f64(4.0) {
-        let s = x * (R::one() - z * (R::from_f64(1.0 / 6.0) - z * (R::from_f64(1.0 / 120.0) - z * R::from_f64(1.0 / 5040.0))));
-        let c = R::one()
-            - z * (R::from_f64(0.5) - z * (R::from_f64(1.0 / 24.0) - z * (R::from_f64(1.0 / 720.0) - z * R::from_f64(1.0 / 40320.0))));
-        (s, c)
-    } else {
-        x.sin_cos()
+/// A march's scalar: R itself, or dual numbers over R (the hole residual's exact Jacobian);
+/// parameters and compliances stay in R.
+pub(super) trait Scalar<R>: Real + Mul<R, Output = Self> + Add<R, Output = Self> + Sub<R, Output = Self> {}
+impl<R, T: Real + Mul<R, Output = T> + Add<R, Output = T> + Sub<R, Output = T>> Scalar<R> for T {}
+
+/// One sub-element's equilibrium in its own frame (the paper's Eq. 7/15, docs/model.md
+/// "Equilibrium"): from f, the force on the distal chain in the sub-element's proximal frame,
+/// and the loads' moment m (about the point the form names), its displacement q = C (f, M)
+/// with M the moment about its deformed distal end (linear in q: M = m0 - f1 q0 + f0 q1, m0
+/// the moment about the undeflected distal end), and M.
+pub(super) trait SubElement<R: Real, T> {
+    /// What each sub-element carries (its compliance, or its hinge's stiffness).
+    fn subs(&self) -> &[Mat3<R>; MAX_SUB];
+    fn equilibrium(&self, sub: &Mat3<R>, f: [T; 2], m: T, sub_len: R) -> Result<([T; 3], T), MarchError>;
+}
+
+/// The compliance form from mm, the moment about the proximal end (m0 = mm - f1 L): q =
+/// C (f, M) in closed form, C symmetric (`Finger::compliances` makes it so: its upper triangle
+/// is read). With a = C (f, 0), M = (mm - f1 L + f0 a1 - f1 a0) / den, den = 1 + f1 C02 - f0 C12;
+/// refuses a non-positive den (the tabled marches: the full model's Newton then takes it).
+pub(super) struct ByCompliance<'a, R>(pub &'a [Mat3<R>; MAX_SUB]);
+
+impl<R: Real> SubElement<R, R> for ByCompliance<'_, R> {
+    #[inline(always)]
+    fn subs(&self) -> &[Mat3<R>; MAX_SUB] {
+        self.0
     }
-}
-
-/// `Real::sin_cos_small` with x² given.
-#[inline(always)]
-fn series_turn<R: Real>(x: R, z: R) -> (R, R) {
-    let s = x * (R::one() - z * (R::from_f64(1.0 / 6.0) - z * R::from_f64(1.0 / 120.0)));
-    let c = R::one() - z * (R::from_f64(0.5) - z * (R::from_f64(1.0 / 24.0) - z * R::from_f64(1.0 / 720.0)));
-    (s, c)
-}
-
-/// A joint state, its hole residual `b - hole` and the residual's Jacobian `I - ∂hole/∂b`.
-pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
-
-impl<R: Real> Finger<R> {
-    /// Joint equilibrium march, `q_j = C_j w_j` sub-element by sub-element (the paper's Eq. 7
-    /// and 15, loads in the deformed geometry: docs/model.md "Equilibrium").
-    /// `Finger::march` in the scalar `T` (R itself, or dual numbers over R); parameters and
-    /// compliances stay in R. Same operations in the same order as `march`. Returns the hinge
-    /// end and the hole in T; the sub-element displacements go to `q_out` as values (`val`),
-    /// which keeps the fixed-capacity array out of T (no zeroing and copying of dual arrays).
-    /// The third value is (sin, cos) of the end's angle (the posture chain reuses it).
-    pub(super) fn march_t<T>(
-        &self,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        b_hole: [T; 2],
-        tip: Option<TipLoad<R>>,
-        q_out: &mut [[R; 3]; MAX_SUB],
-        val: impl Fn(T) -> R,
-    ) -> Result<(Pose<T>, [T; 2], [T; 2]), MarchError>
-    where
-        T: Real + Mul<R, Output = T> + Add<R, Output = T> + Sub<R, Output = T>,
-    {
-        let e = self.p.e;
-        let span_v = [b_hole[0], b_hole[1] - e];
-        let span = norm2(span_v);
-        if !(span >= T::zero() + self.p.span_floor) {
-            return Err(MarchError::Contact);
-        }
-        // force of the cable on the distal chain, toward the proximal hole
-        let fc = [span_v[0] * -tension / span, span_v[1] * -tension / span];
-        let (ft, tp) = match tip {
-            Some(t) => (t.force, t.point),
-            None => ([R::zero(); 2], [R::zero(); 2]),
-        };
-        let ftot = [fc[0] + ft[0], fc[1] + ft[1]];
-        let mut pose: Pose<T> = Pose::origin();
-        let (mut s, mut co) = (T::zero(), T::one());
-        let small = T::from_f64(small_turn(T::EPS));
-        for j in 0..self.p.m {
-            let cj = &c[j];
-            let d0 = [pose.x + co * self.sub_len, pose.y + s * self.sub_len];
-            let mut m0 = (b_hole[0] - d0[0]) * fc[1] - (b_hole[1] - d0[1]) * fc[0];
-            if tip.is_some() {
-                m0 += (d0[1] - tp[1]) * ft[0] - (d0[0] - tp[0]) * ft[1];
-            }
-            let f = [co * ftot[0] + s * ftot[1], -s * ftot[0] + co * ftot[1]];
-            let q0 = [
-                f[0] * cj[0][0] + f[1] * cj[0][1] + m0 * cj[0][2],
-                f[0] * cj[1][0] + f[1] * cj[1][1] + m0 * cj[1][2],
-                f[0] * cj[2][0] + f[1] * cj[2][1] + m0 * cj[2][2],
-            ];
-            let den = (f[1] * cj[0][2] + R::one()) - f[0] * cj[1][2];
-            if !(den.abs() > T::from_f64(1e-6)) {
-                return Err(MarchError::Singular);
-            }
-            let sm = (-f[1] * q0[0] + f[0] * q0[1]) / den;
-            let qj = [q0[0] + sm * cj[0][2], q0[1] + sm * cj[1][2], q0[2] + sm * cj[2][2]];
-            q_out[j] = [val(qj[0]), val(qj[1]), val(qj[2])];
-            pose = Pose {
-                x: pose.x + co * (qj[0] + self.sub_len) - s * qj[1],
-                y: pose.y + s * (qj[0] + self.sub_len) + co * qj[1],
-                theta: pose.theta + qj[2],
-            };
-            // (sin, cos) of the new angle: the old one turned by this sub-element's rotation
-            // (`Real::sin_cos_small`, below `small_turn`'s bound exact to the scalar's
-            // resolution), else the angle's own sin/cos
-            let dth = qj[2];
-            if SERIES_TURN && dth.abs() < small {
-                let (sd, cd) = dth.sin_cos_small();
-                (s, co) = (s * cd + co * sd, co * cd - s * sd);
-            } else {
-                (s, co) = pose.theta.sin_cos();
-            }
-        }
-        let hole = [pose.x - s * e, pose.y + co * e];
-        if !(hole[0].is_finite() && hole[1].is_finite() && pose.theta.is_finite()) {
+    #[inline(always)]
+    fn equilibrium(&self, cj: &Mat3<R>, f: [R; 2], mm: R, l: R) -> Result<([R; 3], R), MarchError> {
+        debug_assert!(cj[1][0] == cj[0][1] && cj[2][0] == cj[0][2] && cj[2][1] == cj[1][2]);
+        let (c00, c01, c02, c11, c12, c22) = (cj[0][0], cj[0][1], cj[0][2], cj[1][1], cj[1][2], cj[2][2]);
+        let a = [f[0] * c00 + f[1] * c01, f[0] * c01 + f[1] * c11, f[0] * c02 + f[1] * c12];
+        let den = (f[1] * c02 + R::one()) - f[0] * c12;
+        if !(den > R::from_f64(1e-6)) {
             return Err(MarchError::Singular);
         }
-        Ok((pose, hole, [s, co]))
+        let m = (mm + f[0] * a[1] - f[1] * (a[0] + l)) / den;
+        Ok(([a[0] + m * c02, a[1] + m * c12, a[2] + m * c22], m))
     }
+}
 
-    /// The plain march under tension alone (P > 0), carried in each sub-element's own frame:
-    /// the same equations as `march_t` (docs/model.md "Equilibrium", the paper's Eq. 7 and 15), with
-    /// the cable force f turned into each sub-element's frame and the hole B held by two
-    /// scalars, the moment about the sub-element's proximal end and the dot product of
-    /// (B - that end) with f, each carried to the next sub-element by a rotation-free
-    /// recurrence: a sub-element costs its closed-form 3x3 equilibrium and one turn of f (no
-    /// pose update, no moment arm rebuilt from the pose). The end's pose comes back once: its
-    /// rotation from f = R^T f_c, B - end from the two scalars. The compliances are symmetric
-    /// (`Finger::compliances` makes them so: `mat3::inverse_spd`), and their upper triangles
-    /// are read. Same answer as `march_into` to the scalar's rounding (test
-    /// `tension_march_matches_march`); the branch table's forward marches with it
-    /// (`Finger::fill_from_holes`), and refuses what it refuses (and a non-positive `den`,
-    /// which the full model's Newton then takes). Returns the hinge end, the hole, (sin, cos)
-    /// of the end's angle, and the squared hole residual |b - hole|².
+/// The compliance form from m0, the moment about the undeflected distal end (the dual/tip-load
+/// form, any scalar): q0 = C (f, m0), then the moment arm's own change s = (-f1 q0_0 + f0 q0_1)
+/// / den, q = q0 + s C(:, 2); refuses only |den| at or below 1e-6.
+pub(super) struct ByComplianceLoaded<'a, R>(pub &'a [Mat3<R>; MAX_SUB]);
+
+impl<R: Real, T: Scalar<R>> SubElement<R, T> for ByComplianceLoaded<'_, R> {
     #[inline(always)]
-    pub(super) fn march_tension(
-        &self,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        b: [R; 2],
-        q_out: &mut [[R; 3]; MAX_SUB],
-    ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
-        let l = self.sub_len;
-        let eps_den = R::from_f64(1e-6);
-        self.march_tension_by(c, tension, b, q_out, |cj, f, mm| {
-            debug_assert!(cj[1][0] == cj[0][1] && cj[2][0] == cj[0][2] && cj[2][1] == cj[1][2]);
-            // q = C (f, M), M the moment about the deformed distal end: M = m0 + f0 q1 - f1 q0
-            // with m0 = mm - L f1 the moment about the undeformed one, linear in q, so with
-            // a = C (f, 0) it is (mm + f0 a1 - f1 (a0 + L)) / den (`march_t`'s closed form, its
-            // terms regrouped)
-            let (c00, c01, c02, c11, c12, c22) = (cj[0][0], cj[0][1], cj[0][2], cj[1][1], cj[1][2], cj[2][2]);
-            let a = [f[0] * c00 + f[1] * c01, f[0] * c01 + f[1] * c11, f[0] * c02 + f[1] * c12];
-            let den = (f[1] * c02 + R::one()) - f[0] * c12;
-            if !(den > eps_den) {
-                return Err(MarchError::Singular);
-            }
-            let mm = (mm + f[0] * a[1] - f[1] * (a[0] + l)) / den;
-            Ok(([a[0] + mm * c02, a[1] + mm * c12, a[2] + mm * c22], mm))
-        })
+    fn subs(&self) -> &[Mat3<R>; MAX_SUB] {
+        self.0
     }
-
-    /// The tension-alone march's recurrences (`march_tension`'s), with sub-element j's
-    /// equilibrium `sub(&per_sub[j], f, mm)`: its q and the moment about its deformed distal
-    /// end from f, the cable's force in its frame, and mm, the moment about its proximal end.
-    /// f is turned by each q's rotation and (B - the proximal end) · f carried along; the end's
-    /// pose, hole, (sin, cos) and |b - hole|² come back once (`tension_end`).
     #[inline(always)]
-    pub(super) fn march_tension_by<T, S>(
-        &self,
-        per_sub: &[T; MAX_SUB],
-        tension: R,
-        b: [R; 2],
-        q_out: &mut [[R; 3]; MAX_SUB],
-        mut sub: S,
-    ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError>
-    where
-        S: FnMut(&T, [R; 2], R) -> Result<([R; 3], R), MarchError>,
-    {
-        let l = self.sub_len;
-        // in sub-element j's proximal frame: f the cable's force on the distal chain; with w =
-        // B - the sub-element's proximal end, mm = w × f (the moment about that end) and
-        // dot = w · f
-        let (fc, mut mm, mut dot) = self.tension_start(tension, b)?;
-        let mut f = fc;
-        let mut theta = R::zero();
-        let small = R::from_f64(small_turn(R::EPS));
-        let m = self.p.m.min(MAX_SUB);
-        for (pj, qo) in per_sub[..m].iter().zip(q_out[..m].iter_mut()) {
-            let (q, m_end) = sub(pj, f, mm)?;
-            mm = m_end;
-            *qo = q;
-            theta = theta + q[2];
-            // B - the deformed distal end (the next proximal end) is w - (L + q0, q1): its dot
-            // with f; then f into the next frame (turned by q[2]; dot and cross products keep)
-            dot = dot - (q[0] + l) * f[0] - q[1] * f[1];
-            let (sd, cd) = turn(q[2], small);
-            f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
+    fn equilibrium(&self, cj: &Mat3<R>, f: [T; 2], m0: T, _l: R) -> Result<([T; 3], T), MarchError> {
+        let q0 = [
+            f[0] * cj[0][0] + f[1] * cj[0][1] + m0 * cj[0][2],
+            f[0] * cj[1][0] + f[1] * cj[1][1] + m0 * cj[1][2],
+            f[0] * cj[2][0] + f[1] * cj[2][1] + m0 * cj[2][2],
+        ];
+        let den = (f[1] * cj[0][2] + R::one()) - f[0] * cj[1][2];
+        if !(den.abs() > T::from_f64(1e-6)) {
+            return Err(MarchError::Singular);
         }
-        self.tension_end(tension, b, fc, f, dot, mm, theta)
+        let sm = (-f[1] * q0[0] + f[0] * q0[1]) / den;
+        Ok(([q0[0] + sm * cj[0][2], q0[1] + sm * cj[1][2], q0[2] + sm * cj[2][2]], m0 + sm))
     }
+}
 
-    /// A tension-alone march's start at hole guess `b`: the cable's force f_c = -P (B - (0, e)) / |B - (0, e)|
-    /// on the distal chain, the moment B × f_c and the dot product B · f_c (refuses a span below
-    /// its floor and P <= 0: `Contact`).
+/// A march's end: the hinge's distal pose, the hole it arrives at, (sin, cos) of the end's
+/// angle and the squared hole residual |b - hole|².
+pub(super) type MarchEnd<T> = (Pose<T>, [T; 2], [T; 2], T);
+
+/// How a march carries the loads from one sub-element to the next.
+pub(super) trait Frame<R, T> {
+    /// The next sub-element's f and moment (the one its `SubElement` form takes).
+    fn loads(&self, sub_len: R) -> ([T; 2], T);
+    /// Past a sub-element displaced by q, with m_end the moment about its distal end; its
+    /// rotation q2 turns by `Real::turn` (series bound `small`).
+    fn advance(&mut self, q: [T; 3], m_end: T, sub_len: R, small: T);
+}
+
+/// Tension alone (P > 0), in each sub-element's own frame: the cable's force f turned into it,
+/// the hole B held by two scalars, mm = w × f and dot = w · f with w = B - the proximal end,
+/// carried by a rotation-free recurrence (no pose update); the end's pose comes back once, its
+/// rotation from f = Rᵀ f_c, B - end from mm and dot.
+pub(super) struct CableFrame<R> {
+    f: [R; 2],
+    mm: R,
+    dot: R,
+    theta: R,
+}
+
+/// A `CableFrame` march's start, for its end: the tension, the hole guess and f_c.
+pub(super) struct CableStart<R> {
+    b: [R; 2],
+    /// 1/P² and k/P² with f_c = k (B - (0, e)), k = -P/|B - (0, e)|: the end's f · f_c and
+    /// f × f_c from B (two values fewer held through the march than P and f_c)
+    inv_p2: R,
+    k_p2: R,
+}
+
+impl<R: Real> CableFrame<R> {
+    /// At hole guess `b`: f_c = -P (B - (0, e)) / |B - (0, e)|, B × f_c and B · f_c. Refuses a
+    /// span below its floor and P <= 0 (`Contact`).
     #[inline(always)]
-    pub(super) fn tension_start(&self, tension: R, b: [R; 2]) -> Result<([R; 2], R, R), MarchError> {
-        let span_v = [b[0], b[1] - self.p.e];
+    pub(super) fn new(finger: &Finger<R>, tension: R, b: [R; 2]) -> Result<(CableStart<R>, Self), MarchError> {
+        let span_v = [b[0], b[1] - finger.p.e];
         let span = norm2(span_v);
-        if !(span >= self.p.span_floor) || !(tension > R::zero()) {
+        if !(span >= finger.p.span_floor) || !(tension > R::zero()) {
             return Err(MarchError::Contact);
         }
         let k = -tension / span;
         let fc = [span_v[0] * k, span_v[1] * k];
-        Ok((fc, b[0] * fc[1] - b[1] * fc[0], b[0] * fc[0] + b[1] * fc[1]))
+        let (mm, dot) = (b[0] * fc[1] - b[1] * fc[0], b[0] * fc[0] + b[1] * fc[1]);
+        let inv_p2 = R::one() / (tension * tension);
+        Ok((CableStart { b, inv_p2, k_p2: k * inv_p2 }, CableFrame { f: fc, mm, dot, theta: R::zero() }))
     }
 
-    /// A tension-alone march's end from the force f in the last frame, the running dot product
-    /// and moment, and the summed rotation: the end's rotation R from f = Rᵀ f_c, r = B - end in
-    /// its frame from r · f and r × f, the hole B - R (r - (0, e)). Returns the hinge end, the
-    /// hole, (sin, cos) of the end's angle and |b - hole|²; refuses a state that is not finite.
+    /// The end (`MarchEnd`) from the march's start, `e` the hole's offset from the hinge's
+    /// axis; refuses a state that is not finite (`Singular`).
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn tension_end(
-        &self,
-        tension: R,
-        b: [R; 2],
-        fc: [R; 2],
-        f: [R; 2],
-        dot: R,
-        mm: R,
-        theta: R,
-    ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
-        let e = self.p.e;
-        let inv = R::one() / (tension * tension);
-        let co = (f[0] * fc[0] + f[1] * fc[1]) * inv;
-        let s = (f[0] * fc[1] - f[1] * fc[0]) * inv;
+    pub(super) fn end(self, start: CableStart<R>, e: R) -> Result<MarchEnd<R>, MarchError> {
+        let (CableStart { b, inv_p2: inv, k_p2 }, CableFrame { f, mm, dot, theta }) = (start, self);
+        let span_v = [b[0], b[1] - e];
+        let co = (f[0] * span_v[0] + f[1] * span_v[1]) * k_p2;
+        let s = (f[0] * span_v[1] - f[1] * span_v[0]) * k_p2;
         let r = [(dot * f[0] + mm * f[1]) * inv, (dot * f[1] - mm * f[0]) * inv];
         // hole - end = R (0, e): b - hole = R (r - (0, e))
         let d = [r[0], r[1] - e];
@@ -280,6 +171,134 @@ impl<R: Real> Finger<R> {
         }
         Ok((end, hole, [s, co], res2))
     }
+}
+
+impl<R: Real> Frame<R, R> for CableFrame<R> {
+    #[inline(always)]
+    fn loads(&self, _l: R) -> ([R; 2], R) {
+        (self.f, self.mm)
+    }
+    #[inline(always)]
+    fn advance(&mut self, q: [R; 3], m_end: R, l: R, small: R) {
+        let f = self.f;
+        self.mm = m_end;
+        self.theta = self.theta + q[2];
+        // w - (L + q0, q1) is B - the next proximal end: its dot with f; then f into the next
+        // frame (dot and cross products keep)
+        self.dot = self.dot - (q[0] + l) * f[0] - q[1] * f[1];
+        let (sd, cd) = q[2].turn(small);
+        self.f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
+    }
+}
+
+/// The pose carried in the joint's proximal frame, any scalar (dual numbers for the exact
+/// Jacobian), the cable's force and an optional tip load, both fixed in that frame; its
+/// moment is about the sub-element's undeflected distal end (`ByComplianceLoaded`).
+pub(super) struct PoseFrame<R, T> {
+    b: [T; 2],
+    fc: [T; 2],
+    tip: Option<TipLoad<R>>,
+    ftot: [T; 2],
+    pose: Pose<T>,
+    s: T,
+    co: T,
+}
+
+impl<R: Real, T: Scalar<R>> PoseFrame<R, T> {
+    /// At hole guess `b`: the cable's force on the distal chain toward the proximal hole, and
+    /// the tip load. Refuses a span below its floor (`Contact`).
+    #[inline(always)]
+    pub(super) fn new(finger: &Finger<R>, tension: R, b: [T; 2], tip: Option<TipLoad<R>>) -> Result<Self, MarchError> {
+        let span_v = [b[0], b[1] - finger.p.e];
+        let span = norm2(span_v);
+        if !(span >= T::zero() + finger.p.span_floor) {
+            return Err(MarchError::Contact);
+        }
+        let fc = [span_v[0] * -tension / span, span_v[1] * -tension / span];
+        let ft = tip.map_or([R::zero(); 2], |t| t.force);
+        let ftot = [fc[0] + ft[0], fc[1] + ft[1]];
+        Ok(PoseFrame { b, fc, tip, ftot, pose: Pose::origin(), s: T::zero(), co: T::one() })
+    }
+
+    #[inline(always)]
+    /// The end (`MarchEnd`), `e` the hole's offset from the hinge's axis; refuses a state
+    /// that is not finite (`Singular`).
+    pub(super) fn end(self, e: R) -> Result<(Pose<T>, [T; 2], [T; 2]), MarchError> {
+        let (p, s, co) = (self.pose, self.s, self.co);
+        let hole = [p.x - s * e, p.y + co * e];
+        if !(hole[0].is_finite() && hole[1].is_finite() && p.theta.is_finite()) {
+            return Err(MarchError::Singular);
+        }
+        Ok((p, hole, [s, co]))
+    }
+}
+
+impl<R: Real, T: Scalar<R>> Frame<R, T> for PoseFrame<R, T> {
+    #[inline(always)]
+    fn loads(&self, l: R) -> ([T; 2], T) {
+        let (s, co, ft) = (self.s, self.co, self.ftot);
+        let d0 = [self.pose.x + co * l, self.pose.y + s * l];
+        let mut m0 = (self.b[0] - d0[0]) * self.fc[1] - (self.b[1] - d0[1]) * self.fc[0];
+        if let Some(t) = self.tip {
+            m0 = m0 + ((d0[1] - t.point[1]) * t.force[0] - (d0[0] - t.point[0]) * t.force[1]);
+        }
+        ([co * ft[0] + s * ft[1], -s * ft[0] + co * ft[1]], m0)
+    }
+    #[inline(always)]
+    fn advance(&mut self, q: [T; 3], _m_end: T, l: R, small: T) {
+        let (p, s, co) = (self.pose, self.s, self.co);
+        let (sd, cd) = q[2].turn(small);
+        let ax = q[0] + l;
+        self.pose = Pose { x: p.x + co * ax - s * q[1], y: p.y + s * ax + co * q[1], theta: p.theta + q[2] };
+        (self.s, self.co) = T::compose_turn((s, co), (sd, cd), self.pose.theta);
+    }
+}
+
+/// A joint state, its hole residual `b - hole` and the residual's Jacobian `I - ∂hole/∂b`.
+pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
+
+impl<R: Real> Finger<R> {
+    /// The march: sub-element by sub-element, `kernel`'s equilibrium under the loads `frame`
+    /// carries, each turn by `Real::turn`; returns the frame at the hinge's end (its `end`
+    /// gives the pose and the hole). The sub-element displacements go to `q_out` as values
+    /// (`val`), which keeps the fixed-capacity array out of T (no zeroing and copying of dual
+    /// arrays).
+    #[inline(always)]
+    pub(super) fn march_joint<T: Real, K: SubElement<R, T>, F: Frame<R, T>>(
+        &self,
+        kernel: &K,
+        mut frame: F,
+        q_out: &mut [[R; 3]; MAX_SUB],
+        val: impl Fn(T) -> R,
+    ) -> Result<F, MarchError> {
+        let l = self.sub_len;
+        let small = T::from_f64(small_turn(T::EPS));
+        let m = self.p.m.min(MAX_SUB);
+        for (sub, qo) in kernel.subs()[..m].iter().zip(q_out[..m].iter_mut()) {
+            let (f, m) = frame.loads(l);
+            let (q, m_end) = kernel.equilibrium(sub, f, m, l)?;
+            *qo = [val(q[0]), val(q[1]), val(q[2])];
+            frame.advance(q, m_end, l, small);
+        }
+        Ok(frame)
+    }
+
+    /// The march under tension alone by compliances in the running frame (`CableFrame`): the
+    /// tabled forward's. Refuses what `CableFrame` and a non-positive den refuse; the full
+    /// model's Newton then takes the joint.
+    #[inline(always)]
+    pub(super) fn march_tension(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], q_out: &mut [[R; 3]; MAX_SUB]) -> Result<MarchEnd<R>, MarchError> {
+        let (start, frame) = CableFrame::new(self, tension, b)?;
+        self.march_joint(&ByCompliance(c), frame, q_out, |x| x)?.end(start, self.p.e)
+    }
+
+    /// The march on dual numbers in `PoseFrame` (tension alone), out of line: one copy in the
+    /// image for its callers (the Newton residual and `eval_dual`).
+    #[inline(never)]
+    fn march_dual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [D<R>; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<D<R>>, [D<R>; 2], [D<R>; 2]), MarchError> {
+        let frame = PoseFrame::new(self, tension, b, None)?;
+        self.march_joint(&ByComplianceLoaded(c), frame, q, |x| x.v)?.end(self.p.e)
+    }
 
     /// One dual march at hole guess `b` (tension alone): state, residual, Jacobian.
     pub(super) fn eval_dual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2]) -> Result<Eval<R>, MarchError> {
@@ -288,7 +307,8 @@ impl<R: Real> Finger<R> {
         Ok((JointState { q, end, hole, tangent: None }, r, jac))
     }
 
-    /// `eval_dual` with the sub-element displacements written to `q` (its first m rows).
+    /// `eval_dual` with the sub-element displacements written to `q` (its first m rows): the
+    /// march in `PoseFrame` on dual numbers.
     #[inline(always)]
     fn eval_dual_into(
         &self,
@@ -299,7 +319,7 @@ impl<R: Real> Finger<R> {
     ) -> Result<(Pose<R>, [R; 2], [R; 2], [[R; 2]; 2]), MarchError> {
         let (z, o) = (R::zero(), R::one());
         let bd = [D { v: b[0], d: [o, z] }, D { v: b[1], d: [z, o] }];
-        let (end_d, hole_d, _) = self.march_t::<D<R>>(c, tension, bd, None, q, |x| x.v)?;
+        let (end_d, hole_d, _) = self.march_dual(c, tension, bd, q)?;
         let end = Pose { x: end_d.x.v, y: end_d.y.v, theta: end_d.theta.v };
         let hole = [hole_d[0].v, hole_d[1].v];
         let r = [b[0] - hole[0], b[1] - hole[1]];
@@ -379,8 +399,10 @@ mod tests {
         [Finger::new(p1).unwrap(), Finger::new(p3).unwrap()]
     }
 
+    /// The plain march (`march`) and its dual run (`eval_dual`) are one march: the same
+    /// displacements, end and hole as the march in `PoseFrame` run directly, in f64 and f32.
     #[test]
-    fn march_t_matches_march() {
+    fn plain_march_is_the_pose_frame_march() {
         for f in fingers() {
             let c = f.compliances(&[0.0; 3]).unwrap();
             let tips = [None, Some(TipLoad { force: [0.3, -0.7], point: [60.0, 12.0] })];
@@ -389,7 +411,7 @@ mod tests {
                     for tip in tips {
                         let a = f.march(&c.c[0], tension, b, tip).ok().unwrap();
                         let mut q = [[0.0; 3]; MAX_SUB];
-                        let t = f.march_t::<f64>(&c.c[0], tension, b, tip, &mut q, |x| x).ok().unwrap();
+                        let t = f.march_joint::<f64, _, _>(&ByComplianceLoaded(&c.c[0]), PoseFrame::new(&f, tension, b, tip).ok().unwrap(), &mut q, |x| x).ok().unwrap().end(f.params().e).ok().unwrap();
                         assert_eq!(a.hole, t.1);
                         assert_eq!(a.end, t.0);
                         assert_eq!(a.q, q);
@@ -405,11 +427,11 @@ mod tests {
         let c = f.compliances(&[0.0; 3]).unwrap();
         let a = f.march(&c.c[0], 1.0, [9.5, 5.5], None).ok().unwrap();
         let mut q = [[0.0; 3]; MAX_SUB];
-        let t = f.march_t::<f32>(&c.c[0], 1.0, [9.5, 5.5], None, &mut q, |x| x).ok().unwrap();
+        let t = f.march_joint::<f32, _, _>(&ByComplianceLoaded(&c.c[0]), PoseFrame::new(&f, 1.0, [9.5, 5.5], None).ok().unwrap(), &mut q, |x| x).ok().unwrap().end(f.params().e).ok().unwrap();
         assert_eq!(a.hole, t.1);
     }
 
-    /// The tension-alone march in the running frame is the plain march (`march_t`) to rounding:
+    /// The tension-alone march in the running frame (`CableFrame`) is the plain march (`PoseFrame`) to rounding:
     /// same sub-element displacements, end, hole and (sin, cos), in f64 and in f32, at the
     /// stiffest and softest stacks, the calibrated finger too, and up to joint angles past the
     /// series turn's bound (m = 1: one turn of the whole joint).
@@ -469,38 +491,20 @@ mod tests {
         assert!(f.march_tension(&c.c[0], 0.0, [10.0, 5.0], &mut q).is_err(), "no tension: not this march's case");
     }
 
-    /// The series turn is the sine and cosine to the scalar's resolution over its whole range.
-    #[test]
-    fn series_turn_matches_sin_cos() {
-        let lim = small_turn(f64::EPSILON);
-        for i in -100..=100 {
-            let x = lim * f64::from(i) / 100.0;
-            let (s, c) = x.sin_cos_small();
-            assert!((s - x.sin()).abs() <= 2.0 * f64::EPSILON && (c - x.cos()).abs() <= 2.0 * f64::EPSILON, "{x}");
-        }
-        let lim = small_turn(f64::from(f32::EPSILON)) as f32;
-        for i in -100..=100 {
-            let x = lim * i as f32 / 100.0;
-            let (s, c) = x.sin_cos_small();
-            let (ws, wc) = (f64::from(x).sin(), f64::from(x).cos());
-            assert!((f64::from(s) - ws).abs() <= 2e-7 && (f64::from(c) - wc).abs() <= 2e-7, "{x}");
-        }
-    }
-
-    /// The tension march's turn (series, longer series, sin/cos) is the sine and cosine to the
+    /// The turn rule (series, longer series, sin/cos) is the sine and cosine to the
     /// scalar's resolution across its branches, in f64 and f32.
     #[test]
     fn turn_matches_sin_cos() {
         let small = small_turn(f64::EPSILON);
         for i in -300..=300 {
             let x = small * f64::from(i) / 100.0;
-            let (s, c) = turn(x, small);
+            let (s, c) = x.turn(small);
             assert!((s - x.sin()).abs() <= 2.0 * f64::EPSILON && (c - x.cos()).abs() <= 2.0 * f64::EPSILON, "{x}");
         }
         let small = small_turn(f64::from(f32::EPSILON)) as f32;
         for i in -300..=300 {
             let x = small * i as f32 / 100.0;
-            let (s, c) = turn(x, small);
+            let (s, c) = x.turn(small);
             let (ws, wc) = (f64::from(x).sin(), f64::from(x).cos());
             assert!((f64::from(s) - ws).abs() <= 2e-7 && (f64::from(c) - wc).abs() <= 2e-7, "{x}");
         }

@@ -1,58 +1,70 @@
-//! The tension-alone march from stiffnesses: `march_tension`'s equations with each
-//! sub-element's equilibrium solved from its stiffness K_j = K_hinge,j + K_de(t) by Gaussian
-//! elimination, instead of multiplying by a compliance computed beforehand. For the tabled
-//! inverse, whose thickness is new at every solve: no compliance array is formed. Not the
-//! forward's march (its compliances are set up once per voltage change).
+//! The stiffness form of a sub-element's equilibrium (`ByStiffness`): K_j q = (f, M) with
+//! K_j = K_hinge,j + K_de(t), solved by Gaussian elimination in place of multiplying by a
+//! compliance computed beforehand. For the tabled inverse, whose thickness is new at every
+//! solve: no compliance array is formed. The march around it is `Finger::march_joint`.
 
-use super::{Finger, MarchError, Pose};
+use super::march::{CableFrame, MarchEnd, SubElement};
+use super::{Finger, MarchError};
+use crate::mat3::Mat3;
 use crate::params::MAX_SUB;
 use crate::real::Real;
 
-impl<R: Real> Finger<R> {
-    /// `march_tension_by` with sub-element j's q solved from K_j q = (f0, f1, M), M = mm - f1 (L + q0)
-    /// + f0 q1 the moment about its deformed distal end (linear in q: the third row carries
-    /// it), `kd` the stack stiffness's upper triangle (k00, k01 = 0, k02, k11, k12, k22). Refuses
-    /// (`Singular`) a non-positive last pivot (`march_tension`'s non-positive `den`) and a
-    /// state that is not finite; the caller then takes the compliance path.
+/// Sub-element j's q from K_j q = (f0, f1, M), M = mm - f1 (L + q0) + f0 q1 the moment about its
+/// deformed distal end (linear in q: the third row carries it); `stack` is the stack
+/// stiffness's upper triangle (k00, k01 = 0, k02, k11, k12, k22). Refuses (`Singular`) a
+/// non-positive last pivot (the compliance form's non-positive den).
+pub(super) struct ByStiffness<'a, R> {
+    pub hinge: &'a [Mat3<R>; MAX_SUB],
+    pub stack: [R; 6],
+}
+
+impl<R: Real> SubElement<R, R> for ByStiffness<'_, R> {
     #[inline(always)]
-    pub(super) fn march_stiffness(
-        &self,
-        kd: &[R; 6],
-        tension: R,
-        b: [R; 2],
-        q_out: &mut [[R; 3]; MAX_SUB],
-    ) -> Result<(Pose<R>, [R; 2], [R; 2], R), MarchError> {
-        let l = self.sub_len;
+    fn subs(&self) -> &[Mat3<R>; MAX_SUB] {
+        self.hinge
+    }
+    #[inline(always)]
+    fn equilibrium(&self, kh: &Mat3<R>, f: [R; 2], mm: R, l: R) -> Result<([R; 3], R), MarchError> {
         let zr = R::zero();
         // (the stack couples no shear to the axial force: its k01 is zero, `de::StackStiffness::upper`)
-        let [d00, _, d02, d11, d12, d22] = *kd;
-        debug_assert!(kd[1] == zr);
-        self.march_tension_by(&self.hinge_k, tension, b, q_out, |kh, f, mm| {
-            let (k00, k01, k02) = (kh[0][0] + d00, kh[0][1], kh[0][2] + d02);
-            let (k11, k12, k22) = (kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22);
-            // rows: K q = (f0, f1, g + f0 q1 - f1 q0), g = mm - f1 L; eliminate below k00, then
-            // below u11 (not `mat3::inverse_spd`: the moment's load terms make the rows unsymmetric)
-            let g = mm - f[1] * l;
-            let i0 = R::one() / k00;
-            let l1 = k01 * i0;
-            let l2 = (k02 + f[1]) * i0;
-            let u11 = k11 - l1 * k01;
-            let u12 = k12 - l1 * k02;
-            let i1 = R::one() / u11;
-            let l3 = ((k12 - f[0]) - l2 * k01) * i1;
-            let u22 = (k22 - l2 * k02) - l3 * u12;
-            let y1 = f[1] - l1 * f[0];
-            let y2 = (g - l2 * f[0]) - l3 * y1;
-            // (k00 and u11 are pivots of the positive definite K: positive; u22 is K's last
-            // pivot less the load's term, `march_tension`'s den times K's own)
-            if !(u22 > zr) {
-                return Err(MarchError::Singular);
-            }
-            let q2 = y2 / u22;
-            let q1 = (y1 - u12 * q2) * i1;
-            let q0 = (f[0] - k01 * q1 - k02 * q2) * i0;
-            Ok(([q0, q1, q2], g + f[0] * q1 - f[1] * q0))
-        })
+        let [d00, _, d02, d11, d12, d22] = self.stack;
+        let (k00, k01, k02) = (kh[0][0] + d00, kh[0][1], kh[0][2] + d02);
+        let (k11, k12, k22) = (kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22);
+        // rows: K q = (f0, f1, g + f0 q1 - f1 q0), g = mm - f1 L; eliminate below k00, then
+        // below u11 (not `mat3::inverse_spd`: the moment's load terms make the rows unsymmetric)
+        let g = mm - f[1] * l;
+        let i0 = R::one() / k00;
+        let l1 = k01 * i0;
+        let l2 = (k02 + f[1]) * i0;
+        let u11 = k11 - l1 * k01;
+        let u12 = k12 - l1 * k02;
+        let i1 = R::one() / u11;
+        let l3 = ((k12 - f[0]) - l2 * k01) * i1;
+        let u22 = (k22 - l2 * k02) - l3 * u12;
+        let y1 = f[1] - l1 * f[0];
+        let y2 = (g - l2 * f[0]) - l3 * y1;
+        // (k00 and u11 are pivots of the positive definite K: positive; u22 is K's last
+        // pivot less the load's term, the compliance form's den times K's own)
+        if !(u22 > zr) {
+            return Err(MarchError::Singular);
+        }
+        let q2 = y2 / u22;
+        let q1 = (y1 - u12 * q2) * i1;
+        let q0 = (f[0] - k01 * q1 - k02 * q2) * i0;
+        Ok(([q0, q1, q2], g + f[0] * q1 - f[1] * q0))
+    }
+}
+
+impl<R: Real> Finger<R> {
+    /// The march under tension alone from stiffnesses (`ByStiffness` in `CableFrame`), `kd` the
+    /// stack's upper triangle. Refuses what `march_tension` refuses and a non-positive last
+    /// pivot; the caller then takes the compliance path.
+    #[inline(always)]
+    pub(super) fn march_stiffness(&self, kd: &[R; 6], tension: R, b: [R; 2], q_out: &mut [[R; 3]; MAX_SUB]) -> Result<MarchEnd<R>, MarchError> {
+        debug_assert!(kd[1] == R::zero());
+        let kernel = ByStiffness { hinge: &self.hinge_k, stack: *kd };
+        let (start, frame) = CableFrame::new(self, tension, b)?;
+        self.march_joint(&kernel, frame, q_out, |x| x)?.end(start, self.p.e)
     }
 }
 

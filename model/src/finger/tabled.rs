@@ -67,14 +67,8 @@ impl<R: Real> Finger<R> {
         sol.thickness = c.thickness;
         sol.volts = c.volts;
         let link = self.link_q(tension, &Pose::origin(), None);
-        // the link's rotation (small: the series turn where it holds, `march::small_turn`)
-        let (ls, lc) = if link[2] == R::zero() {
-            (R::zero(), R::one())
-        } else if link[2].abs() < R::from_f64(march::small_turn(R::EPS)) {
-            link[2].sin_cos_small()
-        } else {
-            link[2].sin_cos()
-        };
+        // the link's rotation by the march's turn rule
+        let (ls, lc) = link[2].turn(R::from_f64(march::small_turn(R::EPS)));
         let (lx, ly) = (self.link_len + link[0], link[1]);
         let mut node = Pose::origin();
         let (mut s, mut co) = (R::zero(), R::one());
