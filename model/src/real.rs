@@ -214,6 +214,7 @@ float_real!(f32, sqrt_eps: 3.4526698300124393e-4, name: F32_NAME, sqrt: sqrt_f32
     }
     // micromath has no joint sine and cosine: `sin`, then `cos`
     #[cfg(feature = "micromath")]
+    #[inline]
     fn sin_cos(self) -> (Self, Self) {
         (self.sin(), self.cos())
     }
