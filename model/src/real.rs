@@ -212,11 +212,11 @@ float_real!(f32, sqrt_eps: 3.4526698300124393e-4, name: F32_NAME, sqrt: sqrt_f32
         #[cfg(not(any(feature = "fast-trig", feature = "micromath")))]
         libm::cosf(self)
     }
-    // micromath has no joint sine and cosine: `sin`, then `cos`
+    // micromath has no joint sine and cosine
     #[cfg(feature = "micromath")]
-    #[inline]
+    #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
-        (self.sin(), self.cos())
+        sin_then_cos(self)
     }
     #[cfg(not(feature = "micromath"))]
     #[inline(always)]
@@ -234,6 +234,13 @@ float_real!(f32, sqrt_eps: 3.4526698300124393e-4, name: F32_NAME, sqrt: sqrt_f32
         libm::atan2f(self, x)
     }
 });
+
+/// (sin x, cos x) as two calls. Generic and without an inline hint, so the optimiser decides
+/// per image whether to inline it (the micromath images' instruction counts depend on it).
+#[cfg(feature = "micromath")]
+fn sin_then_cos<R: Real>(x: R) -> (R, R) {
+    (x.sin(), x.cos())
+}
 
 /// The f32 cube root. Not libm's `cbrtf`: it computes in f64, which is soft-float code (about
 /// 2.5 KB) on a core without a double-precision FPU. Newton from the exponent-thirds guess
