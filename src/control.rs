@@ -54,6 +54,7 @@ pub struct Setpoints {
 }
 
 /// What the core reports back.
+// same shape as the model's `StackLaw` (a documented field list): unrelated data
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
     /// Last setpoints taken.

@@ -283,6 +283,7 @@ impl Short {
 /// `-5.0000e-4`). Scaled in f32: the last digit may differ from core's.
 pub struct Exp(pub f32, pub usize);
 
+// same shape as `Fixed::write` (the non-finite guard, then the digits): another notation
 impl Exp {
     /// Write it (the `Display` and [`Emit`] impls below call this).
     pub fn write(&self, f: &mut dyn Write) -> fmt::Result {

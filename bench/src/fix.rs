@@ -141,6 +141,7 @@ macro_rules! fixed_real {
                     return $name(<$fx>::ZERO);
                 }
                 // sqrt(r 2^-f) = sqrt(r 2^f) 2^-f
+                // same loop as the model's `fixed::trig::isqrt`, which takes u64 only (Q32 needs u128) and is not in these images
                 let n: $uwide = (r as $uwide) << $frac;
                 let mut rem = n;
                 let mut res: $uwide = 0;
@@ -176,14 +177,6 @@ macro_rules! fixed_real {
                     2 => (-s, -c),
                     _ => (-c, s),
                 }
-            }
-            #[inline(always)]
-            fn sin(self) -> Self {
-                self.sin_cos().0
-            }
-            #[inline(always)]
-            fn cos(self) -> Self {
-                self.sin_cos().1
             }
             fn atan2(self, x: Self) -> Self {
                 let y = self;

@@ -178,6 +178,7 @@ impl Twin {
         let mut ends = [Pose::default(); MAX_JOINTS];
         let mut holes = [[0f32; 2]; MAX_JOINTS];
         let mut iterations = 0;
+        // same lines as the fixed forward's `solve_from`: this module is that algorithm in f32, step for step
         for k in 0..n {
             if self.same_as_prev[k] {
                 ends[k] = ends[k - 1];

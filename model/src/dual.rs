@@ -91,30 +91,18 @@ impl<R: Real> Sub<R> for D<R> {
         D { v: self.v - o, d: self.d }
     }
 }
-impl<R: Real> AddAssign for D<R> {
-    #[inline(always)]
-    fn add_assign(&mut self, o: Self) {
-        *self = *self + o;
-    }
+/// `a op= b` as `a = a op b`, for each compound assignment.
+macro_rules! assign_by_op {
+    ($($trait:ident $method:ident $op:tt),*) => {
+        $(impl<R: Real> $trait for D<R> {
+            #[inline(always)]
+            fn $method(&mut self, o: Self) {
+                *self = *self $op o;
+            }
+        })*
+    };
 }
-impl<R: Real> SubAssign for D<R> {
-    #[inline(always)]
-    fn sub_assign(&mut self, o: Self) {
-        *self = *self - o;
-    }
-}
-impl<R: Real> MulAssign for D<R> {
-    #[inline(always)]
-    fn mul_assign(&mut self, o: Self) {
-        *self = *self * o;
-    }
-}
-impl<R: Real> DivAssign for D<R> {
-    #[inline(always)]
-    fn div_assign(&mut self, o: Self) {
-        *self = *self / o;
-    }
-}
+assign_by_op!(AddAssign add_assign +, SubAssign sub_assign -, MulAssign mul_assign *, DivAssign div_assign /);
 
 impl<R: Real> Real for D<R> {
     const EPS: f64 = R::EPS;
@@ -140,14 +128,6 @@ impl<R: Real> Real for D<R> {
         }
         let k = R::one() / (s + s);
         D { v: s, d: [self.d[0] * k, self.d[1] * k] }
-    }
-    #[inline(always)]
-    fn sin(self) -> Self {
-        self.sin_cos().0
-    }
-    #[inline(always)]
-    fn cos(self) -> Self {
-        self.sin_cos().1
     }
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {

@@ -602,6 +602,7 @@ fn fast<R: Real>(
 }
 
 /// The finger without stacks: only the tension is free.
+// same parameters as `fast`: the other branch of one dispatch, another computation
 fn no_stacks<R: Real>(
     ctx: &Ctx<'_, R>,
     ang: &[Angle<R>; MAX_JOINTS],

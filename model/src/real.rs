@@ -47,10 +47,15 @@ pub trait Real:
         self.to_f64() as usize
     }
     fn sqrt(self) -> Self;
-    fn sin(self) -> Self;
-    fn cos(self) -> Self;
-    fn sin_cos(self) -> (Self, Self) {
-        (self.sin(), self.cos())
+    /// (sin x, cos x): the one trig a scalar must give; `sin` and `cos` default to its halves.
+    fn sin_cos(self) -> (Self, Self);
+    #[inline(always)]
+    fn sin(self) -> Self {
+        self.sin_cos().0
+    }
+    #[inline(always)]
+    fn cos(self) -> Self {
+        self.sin_cos().1
     }
     /// The turn rule, (sin x, cos x) of a rotation x (a sub-element's, a link's): the Taylor
     /// series to x⁵ and x⁶ below `small` (`finger::march::small_turn`: exact to the scalar's
@@ -135,26 +140,52 @@ pub trait Real:
     }
 }
 
-impl Real for f64 {
-    const EPS: f64 = f64::EPSILON;
-    const SQRT_EPS: f64 = 1.4901161193847656e-8;
-    const NAME: &'static str = "f64/libm";
-    #[inline(always)]
-    fn from_f64(x: f64) -> Self {
-        x
-    }
-    #[inline(always)]
-    fn from_u32(n: u32) -> Self {
-        n as f64
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        libm::sqrt(self)
-    }
+/// `Real` for a primitive float: the methods f32 and f64 share, written once; each names its
+/// square root, e^x and cube root, and brings its own trig (`sin`, `cos`, `sin_cos`, `atan2`).
+macro_rules! float_real {
+    ($t:ident, sqrt_eps: $sqrt_eps:expr, name: $name:expr, sqrt: $sqrt:path, exp: $exp:path, cbrt: $cbrt:path, trig: { $($trig:tt)* }) => {
+        impl Real for $t {
+            const EPS: f64 = $t::EPSILON as f64;
+            const SQRT_EPS: f64 = $sqrt_eps;
+            const NAME: &'static str = $name;
+            #[inline(always)]
+            fn from_f64(x: f64) -> Self {
+                x as $t
+            }
+            #[inline(always)]
+            fn from_u32(n: u32) -> Self {
+                n as $t
+            }
+            #[inline(always)]
+            fn to_index(self) -> usize {
+                self as usize
+            }
+            #[inline(always)]
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                $sqrt(self)
+            }
+            #[inline(always)]
+            fn is_finite(self) -> bool {
+                $t::is_finite(self)
+            }
+            #[inline(always)]
+            fn exp(self) -> Self {
+                $exp(self)
+            }
+            #[inline(always)]
+            fn cbrt(self) -> Self {
+                $cbrt(self)
+            }
+            $($trig)*
+        }
+    };
+}
+
+float_real!(f64, sqrt_eps: 1.4901161193847656e-8, name: "f64/libm", sqrt: libm::sqrt, exp: libm::exp, cbrt: libm::cbrt, trig: {
     #[inline(always)]
     fn sin(self) -> Self {
         libm::sin(self)
@@ -171,59 +202,46 @@ impl Real for f64 {
     fn atan2(self, x: Self) -> Self {
         libm::atan2(self, x)
     }
-    #[inline(always)]
-    fn is_finite(self) -> bool {
-        f64::is_finite(self)
-    }
-    #[inline(always)]
-    fn exp(self) -> Self {
-        libm::exp(self)
-    }
-    #[inline(always)]
-    fn cbrt(self) -> Self {
-        libm::cbrt(self)
-    }
-}
+});
 
-#[cfg(not(feature = "micromath"))]
-impl Real for f32 {
-    const EPS: f64 = f32::EPSILON as f64;
-    const SQRT_EPS: f64 = 3.4526698300124393e-4;
-    const NAME: &'static str = if cfg!(feature = "fast-trig") { "f32/fast-trig" } else { "f32/libm" };
-    #[inline(always)]
-    fn from_f64(x: f64) -> Self {
-        x as f32
-    }
-    #[inline(always)]
-    fn from_u32(n: u32) -> Self {
-        n as f32
-    }
-    #[inline(always)]
-    fn to_index(self) -> usize {
-        self as usize
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self as f64
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        sqrt_f32(self)
-    }
+/// f32: libm, `fast-trig` or micromath for the trig (with `micromath`, `fast-trig` has no
+/// effect); the square root is `sqrt_f32` in every case (micromath's is an approximation; the
+/// correctly rounded one is cheap).
+const F32_NAME: &str = if cfg!(feature = "micromath") {
+    "f32/micromath"
+} else if cfg!(feature = "fast-trig") {
+    "f32/fast-trig"
+} else {
+    "f32/libm"
+};
+
+float_real!(f32, sqrt_eps: 3.4526698300124393e-4, name: F32_NAME, sqrt: sqrt_f32, exp: libm::expf, cbrt: cbrt_f32, trig: {
+    // same shape as `cos`: each names its own routine of the feature's trig
     #[inline(always)]
     fn sin(self) -> Self {
-        #[cfg(feature = "fast-trig")]
+        #[cfg(feature = "micromath")]
+        return micromath::F32(self).sin().0;
+        #[cfg(all(feature = "fast-trig", not(feature = "micromath")))]
         return fast_trig::sin_cos(self).0;
-        #[cfg(not(feature = "fast-trig"))]
+        #[cfg(not(any(feature = "fast-trig", feature = "micromath")))]
         libm::sinf(self)
     }
     #[inline(always)]
     fn cos(self) -> Self {
-        #[cfg(feature = "fast-trig")]
+        #[cfg(feature = "micromath")]
+        return micromath::F32(self).cos().0;
+        #[cfg(all(feature = "fast-trig", not(feature = "micromath")))]
         return fast_trig::sin_cos(self).1;
-        #[cfg(not(feature = "fast-trig"))]
+        #[cfg(not(any(feature = "fast-trig", feature = "micromath")))]
         libm::cosf(self)
     }
+    // micromath has no joint sine and cosine
+    #[cfg(feature = "micromath")]
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        sin_then_cos(self)
+    }
+    #[cfg(not(feature = "micromath"))]
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
         #[cfg(feature = "fast-trig")]
@@ -233,72 +251,18 @@ impl Real for f32 {
     }
     #[inline(always)]
     fn atan2(self, x: Self) -> Self {
+        #[cfg(feature = "micromath")]
+        return micromath::F32(self).atan2(micromath::F32(x)).0;
+        #[cfg(not(feature = "micromath"))]
         libm::atan2f(self, x)
     }
-    #[inline(always)]
-    fn is_finite(self) -> bool {
-        f32::is_finite(self)
-    }
-    #[inline(always)]
-    fn exp(self) -> Self {
-        libm::expf(self)
-    }
-    #[inline(always)]
-    fn cbrt(self) -> Self {
-        cbrt_f32(self)
-    }
-}
+});
 
+/// (sin x, cos x) as two calls. Generic and without an inline hint, so the optimiser decides
+/// per image whether to inline it (the micromath images' instruction counts depend on it).
 #[cfg(feature = "micromath")]
-impl Real for f32 {
-    const EPS: f64 = f32::EPSILON as f64;
-    const SQRT_EPS: f64 = 3.4526698300124393e-4;
-    const NAME: &'static str = "f32/micromath";
-    #[inline(always)]
-    fn from_f64(x: f64) -> Self {
-        x as f32
-    }
-    #[inline(always)]
-    fn from_u32(n: u32) -> Self {
-        n as f32
-    }
-    #[inline(always)]
-    fn to_index(self) -> usize {
-        self as usize
-    }
-    #[inline(always)]
-    fn to_f64(self) -> f64 {
-        self as f64
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        // micromath's sqrt is an approximation; the correctly rounded one is cheap.
-        sqrt_f32(self)
-    }
-    #[inline(always)]
-    fn sin(self) -> Self {
-        micromath::F32(self).sin().0
-    }
-    #[inline(always)]
-    fn cos(self) -> Self {
-        micromath::F32(self).cos().0
-    }
-    #[inline(always)]
-    fn atan2(self, x: Self) -> Self {
-        micromath::F32(self).atan2(micromath::F32(x)).0
-    }
-    #[inline(always)]
-    fn is_finite(self) -> bool {
-        f32::is_finite(self)
-    }
-    #[inline(always)]
-    fn exp(self) -> Self {
-        libm::expf(self)
-    }
-    #[inline(always)]
-    fn cbrt(self) -> Self {
-        cbrt_f32(self)
-    }
+fn sin_then_cos<R: Real>(x: R) -> (R, R) {
+    (x.sin(), x.cos())
 }
 
 /// The f32 cube root. Not libm's `cbrtf`: it computes in f64, which is soft-float code (about

@@ -31,6 +31,7 @@ macro_rules! help_line {
     };
 }
 
+// same shape entry after entry: one `help_line!` per command, each its own text
 pub(crate) const HELP: &[&str] = &[
     help_line!("help", "this list"),
     help_line!("version", "firmware name and version"),

@@ -453,6 +453,7 @@ fn report(
         )
         .unwrap();
     }
+    // same shape as the converged solver's notes above (writeln! of prose): other text
     writeln!(w, "\nWhy: the paper's stepping is not an incremental method but a fixed-point (Picard) iteration with a").unwrap();
     writeln!(w, "load ramp: step n takes every hinge's displacement as `q = C w`, with the load `w` (cable direction, moment").unwrap();
     writeln!(w, "arms) evaluated on the geometry of step n-1 at the load P n/n_inc. Two things follow.\n").unwrap();

@@ -27,6 +27,7 @@ pub(crate) struct Pinned<R> {
     pub iterations: u32,
 }
 
+// same shape as `loaded`'s `Coupled` (an `Equations` on the coupled residual): the tip pinned, not loaded
 struct PinnedTip<'a, R> {
     f: &'a Finger<R>,
     c: Compliances<R>,

@@ -42,6 +42,7 @@ impl<R: Real> Finger<R> {
     }
 
     /// `chain` from each joint's hinge end pose alone.
+    // same parameters as `chain`, which only gathers the ends and calls this
     pub(super) fn chain_ends(
         &self,
         ends: &[Pose<R>; MAX_JOINTS],

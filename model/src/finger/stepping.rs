@@ -17,6 +17,7 @@ impl<R: Real> Finger<R> {
     /// The paper's load stepping (Eq. 29): P_n = n/n_inc P; each step's loads (direction of the
     /// span, moment arms, tip-load point) come from the geometry of the step before, and each
     /// sub-element takes `q = C w` at once.
+    // same parameters as `newton_coupled` (the finger's loads): the paper's stepping, another solver
     pub(super) fn stepping(
         &self,
         c: &Compliances<R>,

@@ -272,6 +272,29 @@ fn tension_rule(fwd: &FixedFinger, at: impl Fn(i64) -> Result<[CMat; MAX_SUB], E
     Ok(TensionRule { tension, interval, feasible, evaluations: evals })
 }
 
+/// One step of regula falsi, Illinois, on the bracket (a, ga, b, gb) (raw values, g(a) < 0 <=
+/// g(b)): the point `u` with g(u) = `gu` replaces the end of its sign (then runs `lower` if it
+/// was the lower one), and the end that stays twice halves its weight (`side`: the end the
+/// last point replaced, -1 the lower, 1 the upper, 0 none yet).
+macro_rules! illinois {
+    (($a:ident, $ga:ident, $b:ident, $gb:ident, $side:ident) <- ($u:ident, $gu:ident) $(, lower: $($lower:tt)*)?) => {
+        if $gu < 0 {
+            ($a, $ga) = ($u, $gu);
+            $($($lower)*;)?
+            if $side == -1 {
+                $gb /= 2;
+            }
+            $side = -1;
+        } else {
+            ($b, $gb) = ($u, $gu);
+            if $side == 1 {
+                $ga /= 2;
+            }
+            $side = 1;
+        }
+    };
+}
+
 /// The tension at which a joint with compliances `c` holds `angle` (its joint angle: the
 /// hinge's and the link's), following its branch from 0 N (`joint`: 1-based, for errors):
 /// trial tensions from the secant through the origin (past the target by 1/16, at most
@@ -348,19 +371,7 @@ fn hold_tension(fwd: &FixedFinger, c: &[CMat; MAX_SUB], angle: Rad, joint: usize
         if gu.abs() <= TOL_RAW as i64 {
             break;
         }
-        if gu < 0 {
-            (a, ga, ha) = (u, gu, Some(h));
-            if side == -1 {
-                gb /= 2;
-            }
-            side = -1;
-        } else {
-            (b, gb) = (u, gu);
-            if side == 1 {
-                ga /= 2;
-            }
-            side = 1;
-        }
+        illinois!((a, ga, b, gb, side) <- (u, gu), lower: ha = Some(h));
     }
     Ok(Q(u as i32))
 }
@@ -413,26 +424,14 @@ fn solve_by(fwd: &FixedFinger, t_rest: Mm, t_ceiling: Mm, at: impl Fn(i64) -> Re
             let mut u = a;
             let mut side = 0i32;
             for _ in 0..MAX_ITER {
-                // regula falsi, Illinois: the end that stays twice halves its weight
+                // regula falsi, Illinois
                 u = if gb != ga { a + (b - a) * (-ga) / (gb - ga) } else { (a + b) / 2 };
                 u = u.clamp(a, b);
                 let gu = g(u, &mut hole, &mut evals)?;
                 if gu.abs() <= TOL_RAW as i64 || b - a <= 1 {
                     break;
                 }
-                if gu < 0 {
-                    (a, ga) = (u, gu);
-                    if side == -1 {
-                        gb /= 2;
-                    }
-                    side = -1;
-                } else {
-                    (b, gb) = (u, gu);
-                    if side == 1 {
-                        ga /= 2;
-                    }
-                    side = 1;
-                }
+                illinois!((a, ga, b, gb, side) <- (u, gu));
             }
             thickness[k] = thickness_at(t_rest, t_ceiling, u);
         }

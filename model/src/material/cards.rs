@@ -49,6 +49,7 @@ pub const PAPER_ELASTIC: Card = Card {
 /// Table 1) at s=2/3; eps_r: -0.28 lambda + 2.76 at lambda=1 (Hodgins & Seelecke 2016, via Solano
 /// et al. Eq. 32); breakdown: 70 V/um held-DC lifetime field (Albuquerque & Shea 2021); no
 /// relaxation (silicone: negligible viscoelasticity)
+// same shape as PAPER_ELASTIC (an elastic card's fields): another film's values
 pub const ELASTOSIL_2030: Card = Card {
     name: "Elastosil-2030",
     g_eq_mpa: 0.339_5,

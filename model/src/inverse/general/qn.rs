@@ -60,6 +60,7 @@ impl<'a, R: Real> Gen<'a, R> {
     /// The iteration of `broyden`. The iterates' marches write their sub-element displacements
     /// to `q_out` (the converged state is always the last iterate marched), the forward
     /// differences to a scratch buffer.
+    // same parameters as `broyden`, its counting wrapper (one `dyn` instance for both solves)
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     pub(super) fn broyden_steps<F>(
