@@ -487,7 +487,7 @@ instructions per sub-element per distinct joint, the rest is the solver's fixed 
 dual-number Newton iterations, the posture and the tangent determinant of every joint in \
 `assemble`). What bounds it: the number of marches per solve, not the model's arithmetic. \
 A march turns each sub-element's sine and cosine from the previous one by a short series where \
-the step is small (`Real::sin_cos_small`, docs/performance.md), so the trig (libm's f32 `sincosf` \
+the step is small (`Real::turn`, docs/model.md \"Which march to call\"), so the trig (libm's f32 `sincosf` \
 runs its polynomials in f64, in software on the M4F) is called about once per march: a libm \
 sub-element costs {:.1} times a micromath one. The per-joint case (three different \
 joints, no reuse of a solved joint) is the worst case.",

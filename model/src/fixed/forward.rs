@@ -1,5 +1,6 @@
 //! The fixed-point forward solve under tension alone: per joint, Newton on the guide-hole
-//! position with the march of `Finger::march_t` (docs/model.md "Equilibrium"), then the chain of
+//! position with the float march's recurrence (`Finger::march_joint` in `PoseFrame` with
+//! `ByComplianceLoaded`, its turn rule without an FPU; docs/model.md "Which march to call"), then the chain of
 //! links and the cable excursion. Same equations as the float model, Q formats of [`q`].
 use super::q::{narrow, shr_round, Mm, Nmm, Nt, Q, Rad, Scaled, Unit};
 use super::trig::{hypot, hypot_inv, sin_cos};
@@ -293,7 +294,10 @@ impl FixedFinger {
                 y: pose.y + narrow(s.wide(ax) + co.wide(qy), 52),
                 theta: pose.theta + qt,
             };
-            (s, co) = sin_cos(pose.theta);
+            // the turn rule of the float march on a core without an FPU: the sub-element's own
+            // (sin, cos), composed
+            let (sd, cd) = sin_cos(qt);
+            (s, co) = (narrow(s.wide(cd) + co.wide(sd), 60), narrow(co.wide(cd) - s.wide(sd), 60));
         }
         let hole = [pose.x - s.mul_q(e), pose.y + co.mul_q(e)];
         if hole[0].is_sat() || hole[1].is_sat() || pose.theta.is_sat() || pose.x.is_sat() || pose.y.is_sat() {
