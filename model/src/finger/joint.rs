@@ -104,6 +104,7 @@ impl<R: Real> Finger<R> {
     /// frame, the same answer to rounding: test `tension_march_matches_march`) where that march
     /// applies (P > 0 and its `den` positive), else `joint_march`'s plain march, as the branch
     /// table's forward does (`fill_from_holes`). For the tabled inverse's confirming marches.
+    // same parameters as `joint_march`: the same question, answered by the running-frame march
     #[inline(always)]
     pub(crate) fn joint_march_tension(
         &self,

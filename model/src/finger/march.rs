@@ -129,7 +129,7 @@ pub(super) struct CableFrame<R> {
 pub(super) struct CableStart<R> {
     b: [R; 2],
     /// 1/P² and k/P² with f_c = k (B - (0, e)), k = -P/|B - (0, e)|: the end's f · f_c and
-    /// f × f_c from B (two values fewer held through the march than P and f_c)
+    /// f × f_c from B (a value fewer held through the march than P and f_c)
     inv_p2: R,
     k_p2: R,
 }
