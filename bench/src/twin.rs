@@ -97,7 +97,9 @@ impl Twin {
             let (qx, qy, qt) = (q0[0] + cj[0][2] * sm, q0[1] + cj[1][2] * sm, q0[2] + cj[2][2] * sm);
             let ax = qx + self.sub_len;
             pose = Pose { x: pose.x + co * ax - s * qy, y: pose.y + s * ax + co * qy, theta: pose.theta + qt };
-            (s, co) = pose.theta.sin_cos();
+            // the fixed-point march's turn: the sub-element's own (sin, cos), composed
+            let (sd, cd) = qt.sin_cos();
+            (s, co) = (s * cd + co * sd, co * cd - s * sd);
         }
         let hole = [pose.x - s * e, pose.y + co * e];
         (hole[0].is_finite() && hole[1].is_finite() && pose.theta.is_finite()).then_some((pose, hole))

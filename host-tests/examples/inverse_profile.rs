@@ -29,7 +29,7 @@ const CASES: &[Case] = &[
 /// The parts the report groups functions into: a name and the function-name fragments it holds
 /// (the first part whose fragment a function's name contains; else "the rest").
 const PARTS: &[(&str, &[&str])] = &[
-    ("march of the full model", &["march", "turn"]),
+    ("march of the full model", &["march", "turn", "Frame", "equilibrium", "advance", "loads"]),
     ("stack stiffness and compliances", &["compliance", "comp_into", "stack_upper", "StackUpper", "StackStiffness", "stack_at", "stack_stiffness", "e_de"]),
     ("table reading", &["BranchTable", "level_guess"]),
     ("voltage", &["voltage", "check_below"]),
