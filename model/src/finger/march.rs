@@ -125,7 +125,7 @@ pub(super) struct CableFrame<R> {
     theta: R,
 }
 
-/// A `CableFrame` march's start, for its end: the tension, the hole guess and f_c.
+/// A `CableFrame` march's start, for its end: the hole guess and two factors of the tension.
 pub(super) struct CableStart<R> {
     b: [R; 2],
     /// 1/P² and k/P² with f_c = k (B - (0, e)), k = -P/|B - (0, e)|: the end's f · f_c and
