@@ -86,11 +86,11 @@ struct JointState<R> {
 }
 
 /// The loads `Finger::span_loads` finds: cable force, tip force and its point, their sum.
-struct SpanLoads<R> {
-    fc: [R; 2],
+struct SpanLoads<R, T> {
+    fc: [T; 2],
     ft: [R; 2],
     tp: [R; 2],
-    ftot: [R; 2],
+    ftot: [T; 2],
 }
 
 #[derive(Clone, Copy, Debug)]

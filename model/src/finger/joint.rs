@@ -9,13 +9,15 @@ impl<R: Real> Finger<R> {
     /// The loads on a joint's distal chain for a guide-hole position `b_hole` (the joint's
     /// proximal frame): the cable's force P along the span toward the hole at the proximal node,
     /// the tip load if any, and their sum. A span at its floor is contact.
-    pub(super) fn span_loads(&self, tension: R, b_hole: [R; 2], tip: Option<TipLoad<R>>) -> Result<SpanLoads<R>, MarchError> {
+    /// Any march scalar (R, or dual numbers for the exact Jacobian: `march::PoseFrame`).
+    #[inline(always)]
+    pub(super) fn span_loads<T: march::Scalar<R>>(&self, tension: R, b_hole: [T; 2], tip: Option<TipLoad<R>>) -> Result<SpanLoads<R, T>, MarchError> {
         let span_v = [b_hole[0], b_hole[1] - self.p.e];
         let span = norm2(span_v);
-        if !(span >= self.p.span_floor) {
+        if !(span >= T::zero() + self.p.span_floor) {
             return Err(MarchError::Contact);
         }
-        let fc = [-tension * span_v[0] / span, -tension * span_v[1] / span];
+        let fc = [span_v[0] * -tension / span, span_v[1] * -tension / span];
         let (ft, tp) = match tip {
             Some(t) => (t.force, t.point),
             None => ([R::zero(); 2], [R::zero(); 2]),

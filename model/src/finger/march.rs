@@ -206,18 +206,11 @@ pub(super) struct PoseFrame<R, T> {
 
 impl<R: Real, T: Scalar<R>> PoseFrame<R, T> {
     /// At hole guess `b`: the cable's force on the distal chain toward the proximal hole, and
-    /// the tip load. Refuses a span below its floor (`Contact`).
+    /// the tip load (`Finger::span_loads`). Refuses a span below its floor (`Contact`).
     #[inline(always)]
     pub(super) fn new(finger: &Finger<R>, tension: R, b: [T; 2], tip: Option<TipLoad<R>>) -> Result<Self, MarchError> {
-        let span_v = [b[0], b[1] - finger.p.e];
-        let span = norm2(span_v);
-        if !(span >= T::zero() + finger.p.span_floor) {
-            return Err(MarchError::Contact);
-        }
-        let fc = [span_v[0] * -tension / span, span_v[1] * -tension / span];
-        let ft = tip.map_or([R::zero(); 2], |t| t.force);
-        let ftot = [fc[0] + ft[0], fc[1] + ft[1]];
-        Ok(PoseFrame { b, fc, tip, ftot, pose: Pose::origin(), s: T::zero(), co: T::one() })
+        let loads = finger.span_loads(tension, b, tip)?;
+        Ok(PoseFrame { b, fc: loads.fc, tip, ftot: loads.ftot, pose: Pose::origin(), s: T::zero(), co: T::one() })
     }
 
     #[inline(always)]
