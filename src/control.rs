@@ -223,7 +223,7 @@ impl<B: Board> Control<B> {
     /// `hv-refused`) a duty above the channel's ceiling (the targets' ceiling; in shaped
     /// actuation the compiled cap) or the image's hard cap.
     fn write_hv_duty_checked(&mut self, ch: usize, duty: u16) -> Result<(), HvRefused> {
-        if ch >= HV_CHANNELS || (duty > 0 && (duty > self.write_ceiling[ch] || duty > hv_duty_cap(self.hv_max[ch]))) {
+        if ch >= HV_CHANNELS || duty > self.write_ceiling[ch] || duty > hv_duty_cap(self.hv_max[ch]) {
             self.fault = Some(Fault::HvRefused);
             return Err(HvRefused);
         }

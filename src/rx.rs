@@ -24,8 +24,9 @@ pub const RX_RING: usize = 1024;
 const KIND_LINE: u8 = 1;
 const KIND_TOO_LONG: u8 = 2;
 const KIND_OVERRUN: u8 = 3;
-/// Kept free for one overrun record.
-const RESERVE: usize = 2;
+/// Ring bytes of an overrun record (its kind and a u32 count, so that every lost line keeps
+/// its reply); kept free behind every other record.
+pub const OVERRUN_RECORD: usize = 5;
 
 /// What a byte did.
 #[derive(Debug, PartialEq, Eq, Clone, Copy)]
@@ -43,7 +44,7 @@ pub enum Record {
     /// A line longer than LINE_MAX, discarded.
     TooLong,
     /// `n` lines lost to overruns.
-    Overrun(u8),
+    Overrun(u32),
 }
 
 /// The first word of the line being received, for `stop`.
@@ -166,7 +167,7 @@ impl RxLines {
     }
 
     fn record(&mut self, kind: u8, bytes: &[u8]) {
-        if self.ring.capacity() - self.ring.len() < bytes.len() + 2 + RESERVE {
+        if self.ring.capacity() - self.ring.len() < bytes.len() + 2 + OVERRUN_RECORD {
             self.record_overrun();
             return;
         }
@@ -179,15 +180,20 @@ impl RxLines {
     }
 
     fn record_overrun(&mut self) {
+        let mut n = 0u32;
         if self.overrun_open {
-            if let Some(n) = self.ring.back_mut() {
-                *n = n.saturating_add(1);
+            let mut le = [0u8; 4];
+            for b in le.iter_mut().rev() {
+                *b = self.ring.pop_back().unwrap_or(0);
             }
+            n = u32::from_le_bytes(le);
+        } else if self.ring.capacity() - self.ring.len() < OVERRUN_RECORD || self.ring.push_back(KIND_OVERRUN).is_err() {
             return;
         }
-        if self.ring.push_back(KIND_OVERRUN).is_ok() && self.ring.push_back(1).is_ok() {
-            self.overrun_open = true;
+        for b in n.saturating_add(1).to_le_bytes() {
+            let _ = self.ring.push_back(b);
         }
+        self.overrun_open = true;
     }
 
     /// Lines are waiting.
@@ -205,10 +211,18 @@ impl RxLines {
     pub fn pop(&mut self) -> Option<Record> {
         let kind = self.ring.pop_front()?;
         self.seen = false;
-        let n = self.ring.pop_front().unwrap_or(0);
-        if self.ring.is_empty() {
-            self.overrun_open = false;
+        if kind == KIND_OVERRUN {
+            let mut le = [0u8; 4];
+            for b in le.iter_mut() {
+                *b = self.ring.pop_front().unwrap_or(0);
+            }
+            // the open overrun record is the ring's last
+            if self.ring.is_empty() {
+                self.overrun_open = false;
+            }
+            return Some(Record::Overrun(u32::from_le_bytes(le)));
         }
+        let n = self.ring.pop_front().unwrap_or(0);
         Some(match kind {
             KIND_LINE => {
                 let mut v = Vec::new();
@@ -219,8 +233,7 @@ impl RxLines {
                 }
                 Record::Line(v)
             }
-            KIND_TOO_LONG => Record::TooLong,
-            _ => Record::Overrun(n),
+            _ => Record::TooLong,
         })
     }
 }

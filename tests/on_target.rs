@@ -288,7 +288,7 @@ mod tests {
                     assert_eq!(&l[..], &line[..line.len() - 1]);
                     whole += 1;
                 }
-                Record::Overrun(n) => lost += n as u32,
+                Record::Overrun(n) => lost += n,
                 Record::TooLong => panic!("no line was too long"),
             }
         }

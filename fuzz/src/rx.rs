@@ -13,7 +13,7 @@
 //! What it is not: the command side (the console target).
 
 use finger_fw::console::LINE_MAX;
-use finger_fw::rx::{Record, RxEvent, RxLines, RX_RING};
+use finger_fw::rx::{Record, RxEvent, RxLines, OVERRUN_RECORD, RX_RING};
 use std::collections::VecDeque;
 
 pub const OVERRUN: u8 = 0xFE;
@@ -36,7 +36,8 @@ impl Want {
         match self {
             Want::Line(v) => v.len() + 2,
             Want::OrLost(w) => w.ring_bytes(),
-            _ => 2,
+            Want::TooLong => 2,
+            Want::Lost => OVERRUN_RECORD,
         }
     }
 }
@@ -150,7 +151,7 @@ pub fn check(data: &[u8]) {
         // an unbroken line is lost only when the ring cannot take it: the records queued
         // ahead (each overrun counted as its own record: an upper bound) leave too little room
         let ahead: usize = queued.iter().map(Want::ring_bytes).sum();
-        let room = ahead + want.ring_bytes() + 2 <= RX_RING;
+        let room = ahead + want.ring_bytes() + OVERRUN_RECORD <= RX_RING;
         queued.push_back(if want == Want::Lost || room { want } else { Want::OrLost(Box::new(want)) });
     }
     take(&mut rx, &mut queued, &mut popped);

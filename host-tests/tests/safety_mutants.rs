@@ -212,3 +212,82 @@ fn rx_input_flag_for_wait() {
     assert!(rx.take_input_seen(), "a queued line counts");
     assert_eq!(rx.received, 3);
 }
+
+#[test]
+fn a_latched_fault_keeps_the_enable_low_until_a_stop() {
+    let mut c = core();
+    let ceiling = hv_duty_for(1_000.0, MAX);
+    assert!(c.apply(&setpoints(&c, 1_200.0, ceiling)));
+    assert_eq!(c.view().fault, Some("hv-refused"));
+    // armed setpoints of the new epoch while the fault is latched: taken, never enabled
+    assert!(c.apply(&setpoints(&c, 500.0, ceiling)));
+    assert!(!c.view().enable && !c.board().enable.high, "a latched fault arms nothing");
+    c.stop();
+    assert!(c.apply(&setpoints(&c, 500.0, ceiling)));
+    assert!(c.view().enable && c.board().enable.high, "after the stop it arms");
+}
+
+#[test]
+fn the_servo_follows_the_voltages_progress_from_where_they_were() {
+    let mut c = core();
+    let ceiling = hv_duty_for(5_000.0, MAX);
+    assert!(c.apply(&setpoints(&c, 100.0, ceiling)));
+    for _ in 0..60 {
+        c.tick(c.now_ms());
+    }
+    assert_eq!(c.view().volts, [100.0; HV_CHANNELS]);
+    assert_eq!(c.view().servo_duty, 2_000);
+    // 100 V -> 300 V at 2 V per tick while the servo goes 2000 -> 4000: half way after 50 ticks
+    let mut sp = setpoints(&c, 300.0, ceiling);
+    sp.servo_duty = 4_000;
+    assert!(c.apply(&sp));
+    for _ in 0..50 {
+        c.tick(c.now_ms());
+    }
+    assert_eq!(c.view().volts, [200.0; HV_CHANNELS]);
+    assert_eq!(c.view().servo_duty, 3_000);
+    for _ in 0..60 {
+        c.tick(c.now_ms());
+    }
+    assert_eq!(c.view().servo_duty, 4_000);
+}
+
+#[test]
+fn the_core_reports_its_pwms_full_scale_and_the_boards_floor() {
+    let c = core();
+    assert_eq!(c.hv_max(), [MAX; HV_CHANNELS]);
+    // s_hold: the film's equilibrium at the board's hold ceiling, from the board's own law
+    let law = finger_fw::board::board_law().unwrap();
+    let hold = finger_fw::board::board_hold_ceiling_of(&law);
+    assert_eq!(c.hold_ceiling_v(), hold);
+    assert_eq!(c.s_hold(), finger_model::material::equilibrium_ratio(&law, hold).unwrap());
+    assert!(c.s_hold() > 0.0 && c.s_hold() < 1.0);
+}
+
+#[test]
+fn rx_counts_every_lost_line_past_a_byte() {
+    // a full ring, then 300 lines lost in a row before the command side takes anything: each
+    // lost line keeps its own `err overrun`
+    let mut rx = RxLines::new();
+    let text = [b'a'; 100];
+    let mut sent = 0u32;
+    while (sent as usize) < RX_RING / (text.len() + 2) {
+        line(&mut rx, &text);
+        line(&mut rx, b"\n");
+        sent += 1;
+    }
+    for _ in 0..300 {
+        line(&mut rx, b"x\n");
+        sent += 1;
+    }
+    let (mut whole, mut lost) = (0u32, 0u32);
+    while let Some(r) = rx.pop() {
+        match r {
+            Record::Line(_) => whole += 1,
+            Record::Overrun(n) => lost += n,
+            Record::TooLong => panic!("too long"),
+        }
+    }
+    assert_eq!(whole + lost, sent);
+    assert!(lost > 255, "{lost} lost");
+}
