@@ -119,6 +119,7 @@ fn watchdog_fed_only_within_the_check_in_bound() {
     }
     assert!(fed[..CHECKIN_BOUND_MS as usize].iter().all(|&f| f), "fed while checked in");
     assert!(!fed[CHECKIN_BOUND_MS as usize], "not fed {} ms after the check-in", CHECKIN_BOUND_MS + 1);
+    assert_eq!(c.now_ms(), CHECKIN_BOUND_MS + 2, "one ms per tick");
 }
 
 #[test]
@@ -290,4 +291,15 @@ fn rx_counts_every_lost_line_past_a_byte() {
     }
     assert_eq!(whole + lost, sent);
     assert!(lost > 255, "{lost} lost");
+}
+
+#[test]
+fn rx_stop_after_leading_blanks() {
+    let mut rx = RxLines::new();
+    assert_eq!(line(&mut rx, b"  \tstop\n"), RxEvent::Stop);
+    // its first word whole before the overrun: still a stop
+    line(&mut rx, b" stop ");
+    rx.overrun();
+    assert_eq!(line(&mut rx, b"x\n"), RxEvent::Stop);
+    assert!(!rx.pending());
 }
