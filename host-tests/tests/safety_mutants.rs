@@ -4,7 +4,7 @@
 //! check-in bound, stop) and the RX ring (overrun counts, a full ring, the `wait` input flag).
 use finger_fw::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V};
 use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Setpoints, CHECKIN_BOUND_MS};
-use finger_fw::rx::{Record, RxEvent, RxLines, RX_RING};
+use finger_fw::rx::{Record, RxEvent, RxLines, OVERRUN_RECORD, RX_RING};
 use finger_fw::sim::SimBoard;
 
 const MAX: u16 = 8_400;
@@ -302,4 +302,40 @@ fn rx_stop_after_leading_blanks() {
     rx.overrun();
     assert_eq!(line(&mut rx, b"x\n"), RxEvent::Stop);
     assert!(!rx.pending());
+}
+
+#[test]
+fn rx_crlf_lines_and_blank_lines() {
+    let mut rx = RxLines::new();
+    let stops = |rx: &mut RxLines, s: &[u8]| s.iter().filter(|&&b| rx.push(b) == RxEvent::Stop).count();
+    // the LF of a CRLF is no part of the next line's first word
+    assert_eq!(stops(&mut rx, b"stop\r\nstop\r\nvolt 1 5\r\nstop\r\n"), 3);
+    assert!(matches!(rx.pop(), Some(Record::Line(v)) if &v[..] == b"volt 1 5"));
+    // a line of blanks gives nothing
+    line(&mut rx, b"  \t \r\n");
+    assert!(!rx.pending());
+}
+
+#[test]
+fn rx_a_line_that_just_fits_is_kept() {
+    // whole lines until the room left is less than one more; then a line that takes exactly
+    // that room (its record and an overrun record's reserve), then one that does not fit
+    let mut rx = RxLines::new();
+    let text = [b'a'; 100];
+    let n = (RX_RING - OVERRUN_RECORD) / (text.len() + 2);
+    for _ in 0..n {
+        line(&mut rx, &text);
+        line(&mut rx, b"\n");
+    }
+    let free = RX_RING - n * (text.len() + 2);
+    let fits = vec![b'b'; free - 2 - OVERRUN_RECORD];
+    line(&mut rx, &fits);
+    line(&mut rx, b"\n");
+    line(&mut rx, b"c\n");
+    for _ in 0..n {
+        assert!(matches!(rx.pop(), Some(Record::Line(v)) if v[..] == text[..]));
+    }
+    assert!(matches!(rx.pop(), Some(Record::Line(v)) if v[..] == fits[..]), "the line that fits");
+    assert_eq!(rx.pop(), Some(Record::Overrun(1)));
+    assert_eq!(rx.pop(), None);
 }
