@@ -339,3 +339,17 @@ fn rx_a_line_that_just_fits_is_kept() {
     assert_eq!(rx.pop(), Some(Record::Overrun(1)));
     assert_eq!(rx.pop(), None);
 }
+
+#[test]
+fn the_stacks_floor_plain_and_shaped() {
+    use finger_fw::control::Stacks;
+    let st = Stacks::board().unwrap();
+    let law = finger_fw::board::board_law().unwrap();
+    let v = 0.5 * st.hold_ceiling_v();
+    let s_v = finger_model::material::equilibrium_ratio(&law, v).unwrap();
+    assert!(s_v > st.s_hold());
+    // plain: the board's floor whatever the target; shaped: the target's own equilibrium
+    assert_eq!(st.floor(v, false), Some(st.s_hold()));
+    assert_eq!(st.floor(v, true), Some(s_v));
+    assert_eq!(st.floor(2.0 * st.hold_ceiling_v(), true), None, "past the hold ceiling");
+}
