@@ -366,6 +366,12 @@ fn a_record_lacking_values_keeps_their_compiled_defaults() {
     let a = boot_on_record(&bytes);
     assert_eq!(a.config_boot(), Boot::Loaded);
     assert_eq!(settings(&a), settings(&typed(&["param slew 700"])));
+    // none of the calibration factors: the calibration of the stored parameters, as typed
+    let cal = ["h1", "h2", "h3", "h4", "ea0", "ea1", "ei0", "ei1"].map(|n| tag(b'c', n));
+    let bytes = forged(&["param slew 700"], |r| r.values.retain(|v| !cal.contains(&v.0)));
+    let a = boot_on_record(&bytes);
+    assert_eq!(a.config_boot(), Boot::Loaded);
+    assert_eq!(settings(&a), settings(&typed(&["param slew 700"])));
 }
 
 #[test]
