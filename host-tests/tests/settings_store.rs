@@ -125,6 +125,13 @@ fn saved_settings_survive_a_reset_and_factory_erases() {
     let c = cmd(&mut b, "config");
     assert!(c.starts_with("ok store=saved saves=1 boot=loaded fault=none format=1"), "{c}");
     assert_eq!(val(&c, "differ"), "10", "{c}"); // slew, servo_range, the 8 factors
+    // each stored value under its own name
+    let full = feed_text(&mut b, b"config\n");
+    let mut names: Vec<&str> = full.lines().filter_map(|l| l.strip_prefix("stored ")?.split('=').next()).collect();
+    names.sort_unstable();
+    let mut want_names = vec!["h1", "h2", "h3", "h4", "ea0", "ea1", "ei0", "ei1", "slew", "servo_range"];
+    want_names.sort_unstable();
+    assert_eq!(names, want_names, "{full}");
     assert_eq!(cmd(&mut b, "factory"), "ok factory=1 store=empty");
     assert_eq!(transcript(&mut b), transcript(&mut typed(&[])));
     let mut c = boot(&flash);

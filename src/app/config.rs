@@ -60,11 +60,6 @@ impl Commands {
         self.cfg.boot
     }
 
-    /// Give the store back (the host's tests boot a new board on the same flash).
-    pub fn take_store(&mut self) -> Option<&'static mut dyn ConfigStore> {
-        self.cfg.store.take()
-    }
-
     /// `fault=config-rejected` while a refused store's defaults are in force.
     pub(super) fn config_fault(&self) -> Option<&'static str> {
         if self.cfg.rejected {
@@ -190,11 +185,6 @@ impl<B: Board> App<B> {
         let mut app = Self::new(board);
         boot(&mut app.cmds, &mut app.ctl, store);
         app
-    }
-
-    /// Give the store back (a new board on the same flash: a reset).
-    pub fn take_store(&mut self) -> Option<&'static mut dyn ConfigStore> {
-        self.cmds.take_store()
     }
 
     /// What the boot found in the store.
