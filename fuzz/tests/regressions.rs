@@ -74,3 +74,11 @@ fn inverse_refuses_a_joint_past_half_a_turn() {
     let data = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("regressions/model/inverse-wrong-branch")).unwrap();
     finger_fuzz::model::check(&data);
 }
+
+#[test]
+fn every_lost_line_keeps_its_reply() {
+    // more than 255 lines lost in a row while the ring was full: the overrun record's count
+    // saturated at a byte and the lines past it got no `err overrun`
+    let data = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("regressions/rx/overrun-count-past-255")).unwrap();
+    finger_fuzz::rx::check(&data);
+}
