@@ -269,4 +269,17 @@ mod tests {
             }
         }
     }
+
+    /// A thickness outside (0, N_L z0] is refused as an input, not as the thinning limit: the
+    /// stack neither thickens under a voltage nor thins to nothing.
+    #[test]
+    fn voltage_for_thickness_refuses_a_thickness_outside_the_stack() {
+        let p = Params::<f64>::default();
+        let t0 = f64::from(p.layers) * p.z0;
+        for t in [0.0, -0.1, 1.5 * t0] {
+            assert!(matches!(voltage_for_thickness(&p, 1, t), Err(Error::Input { input: "thickness", .. })), "{t}");
+        }
+        assert!(matches!(voltage_for_thickness(&p, 1, 0.5 * t0), Err(Error::ThicknessLimit { .. })));
+    }
+
 }
