@@ -28,6 +28,13 @@ fn setpoints(c: &Control<SimBoard>, volts: f32, ceiling: u16) -> Setpoints {
     }
 }
 
+/// `n` control ticks, the command side checked in at each.
+fn ticks(c: &mut Control<SimBoard>, n: u32) {
+    for _ in 0..n {
+        c.tick(c.now_ms());
+    }
+}
+
 #[test]
 fn duty_of_a_voltage_and_the_cap() {
     assert_eq!(hv_duty_for(0.0, MAX), 0);
@@ -127,9 +134,7 @@ fn stop_drops_everything_at_once() {
     let mut c = core();
     let ceiling = hv_duty_for(5_000.0, MAX);
     assert!(c.apply(&setpoints(&c, 100.0, ceiling)));
-    for _ in 0..10 {
-        c.tick(c.now_ms());
-    }
+    ticks(&mut c, 10);
     assert!(c.board().hv.iter().all(|h| h.duty > 0) && c.board().enable.high);
     let epoch = c.view().epoch;
     c.stop();
@@ -146,6 +151,14 @@ fn line(rx: &mut RxLines, s: &[u8]) -> RxEvent {
         ev = rx.push(b);
     }
     ev
+}
+
+/// `n` lines of `text`, each ended by LF.
+fn send_lines(rx: &mut RxLines, text: &[u8], n: usize) {
+    for _ in 0..n {
+        line(rx, text);
+        line(rx, b"\n");
+    }
 }
 
 #[test]
@@ -176,10 +189,7 @@ fn rx_full_ring_loses_whole_lines_only() {
     let mut rx = RxLines::new();
     let text = [b'a'; 100];
     let fits = (RX_RING - 2) / (text.len() + 2);
-    for _ in 0..fits + 3 {
-        line(&mut rx, &text);
-        line(&mut rx, b"\n");
-    }
+    send_lines(&mut rx, &text, fits + 3);
     let mut whole = 0;
     let mut lost = 0;
     while let Some(r) = rx.pop() {
@@ -233,23 +243,17 @@ fn the_servo_follows_the_voltages_progress_from_where_they_were() {
     let mut c = core();
     let ceiling = hv_duty_for(5_000.0, MAX);
     assert!(c.apply(&setpoints(&c, 100.0, ceiling)));
-    for _ in 0..60 {
-        c.tick(c.now_ms());
-    }
+    ticks(&mut c, 60);
     assert_eq!(c.view().volts, [100.0; HV_CHANNELS]);
     assert_eq!(c.view().servo_duty, 2_000);
     // 100 V -> 300 V at 2 V per tick while the servo goes 2000 -> 4000: half way after 50 ticks
     let mut sp = setpoints(&c, 300.0, ceiling);
     sp.servo_duty = 4_000;
     assert!(c.apply(&sp));
-    for _ in 0..50 {
-        c.tick(c.now_ms());
-    }
+    ticks(&mut c, 50);
     assert_eq!(c.view().volts, [200.0; HV_CHANNELS]);
     assert_eq!(c.view().servo_duty, 3_000);
-    for _ in 0..60 {
-        c.tick(c.now_ms());
-    }
+    ticks(&mut c, 60);
     assert_eq!(c.view().servo_duty, 4_000);
 }
 
@@ -271,12 +275,8 @@ fn rx_counts_every_lost_line_past_a_byte() {
     // lost line keeps its own `err overrun`
     let mut rx = RxLines::new();
     let text = [b'a'; 100];
-    let mut sent = 0u32;
-    while (sent as usize) < RX_RING / (text.len() + 2) {
-        line(&mut rx, &text);
-        line(&mut rx, b"\n");
-        sent += 1;
-    }
+    let mut sent = (RX_RING / (text.len() + 2)) as u32;
+    send_lines(&mut rx, &text, sent as usize);
     for _ in 0..300 {
         line(&mut rx, b"x\n");
         sent += 1;
@@ -323,10 +323,7 @@ fn rx_a_line_that_just_fits_is_kept() {
     let mut rx = RxLines::new();
     let text = [b'a'; 100];
     let n = (RX_RING - OVERRUN_RECORD) / (text.len() + 2);
-    for _ in 0..n {
-        line(&mut rx, &text);
-        line(&mut rx, b"\n");
-    }
+    send_lines(&mut rx, &text, n);
     let free = RX_RING - n * (text.len() + 2);
     let fits = vec![b'b'; free - 2 - OVERRUN_RECORD];
     line(&mut rx, &fits);
