@@ -34,6 +34,44 @@ pub const BOARD_LAYERS: u32 = 4;
 /// and the fraction of the film's hold and breakdown bounds the ceiling allows.
 pub const BOARD_MARGIN: f32 = 0.9;
 
+/// The HV read-back chain, board constants (docs/firmware.md "HV read-back"): each channel's
+/// module output through an HV divider and each stack's return current through a low-side
+/// sense, sampled by the ADCs at [`SENSE_SAMPLES_PER_TICK`] per 1 ms tick and averaged.
+/// The ADC's full-scale code (12 bits).
+pub const ADC_FULL_CODE: f32 = 4095.0;
+/// Voltage monitor: the HV at the ADC's full scale, V (1 GΩ over 301 kΩ into 3.3 V).
+pub const VMON_FULL_SCALE_V: f32 = 10_967.0;
+/// Return-current sense, bipolar (a stack's current flows back as it discharges): the span
+/// of the ADC's codes, µA (-50..+50 µA: 10 kΩ sense, gain 1.65, offset to mid-scale), and the
+/// code of 0 µA.
+pub const IMON_SPAN_UA: f32 = 100.0;
+pub const IMON_ZERO_CODE: f32 = 2048.0;
+/// ADC samples of each reading per tick (10 kHz).
+pub const SENSE_SAMPLES_PER_TICK: u32 = 10;
+/// The analog watchdog's trip on a return current, µA: past any charging current the
+/// module's own slew allows (C at the 2/3 limit x 150 kV/s = 24 µA), below its 100 µA limit.
+pub const TRIP_CURRENT_UA: f32 = 30.0;
+/// Each stack's electrode area (the hinge's width x its length), mm².
+pub const BOARD_STACK_AREA_MM2: f32 = 200.0;
+/// The stray capacitance the return sense sees besides the stack (the HV lead beside the
+/// return lead in the stack's cable: 10 pF/m x 0.5 m), pF.
+pub const SENSE_STRAY_PF: f32 = 5.0;
+
+/// Each stack's capacitance at rest, pF: N_L layers in parallel, eps0 eps_r A / z0 (68 pF).
+pub const BOARD_STACK_C0_PF: f32 = BOARD_LAYERS as f32 * 8.854e-3 * BOARD_CARD.eps_r as f32 * BOARD_STACK_AREA_MM2 / BOARD_Z0_MM;
+
+/// One tick's HV read-back, averaged over the tick.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HvSense {
+    /// Each channel's voltage monitor, the tick's mean ADC code (0..=4095).
+    pub v_code: [f32; HV_CHANNELS],
+    /// Each channel's return-current sense, the tick's mean ADC code.
+    pub i_code: [f32; HV_CHANNELS],
+    /// The analog watchdog fired in the tick (the return current past [`TRIP_CURRENT_UA`];
+    /// the hardware dropped the enable): the channel.
+    pub trip: Option<u8>,
+}
+
 pub trait Board {
     /// Servo PWM, 50 Hz; the application sets 1.0..2.0 ms pulses.
     type Servo: SetDutyCycle;
@@ -53,6 +91,17 @@ pub trait Board {
     /// Line ending of the replies.
     fn newline(&self) -> &'static str {
         "\r\n"
+    }
+    /// The HV read-back of the tick just ended; None on a board without one (the host's
+    /// plain `SimBoard`: the HV runs open loop, as before the read-back).
+    fn hv_sense(&mut self) -> Option<HvSense> {
+        None
+    }
+    /// The simulated plant behind the read-back (`plant ...` on the console): the emulator
+    /// image and the host's plant board only, never the board build.
+    #[cfg(all(not(feature = "hw"), not(m3)))]
+    fn plant(&mut self) -> Option<&mut crate::plant::Plant> {
+        None
     }
 }
 

@@ -18,9 +18,77 @@ use embedded_hal::pwm::SetDutyCycle;
 use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V, HV_ZERO_DUTY_PCT};
 
 pub mod fault;
+#[cfg(not(m3))]
+pub mod hv_loop;
+#[cfg(not(m3))]
+pub mod sense;
 pub mod stacks;
+#[cfg(not(m3))]
+pub mod watch;
 pub use fault::{Fault, Latched};
 pub use stacks::Stacks;
+
+/// What the core makes of the read-back, per channel (boards with one; docs/firmware.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SenseView {
+    /// The measured voltage (V) and return current (µA), the tick's means.
+    pub volts: [f32; HV_CHANNELS],
+    pub current_ua: [f32; HV_CHANNELS],
+    /// The sensed thickness stretch (NaN until measured).
+    pub stack_ratio: [f32; HV_CHANNELS],
+    /// The channel's ceiling now, V: the hold ceiling lowered by its thickness guard.
+    pub ceiling_v: [f32; HV_CHANNELS],
+    /// The sensed film was thinner than the model's past the bound (`watch::DISAGREE_S`).
+    pub disagreed: [bool; HV_CHANNELS],
+}
+
+/// The read-back's per-channel state in the core.
+#[cfg(not(m3))]
+#[derive(Clone, Copy)]
+struct Sensing {
+    /// The thickness guard acts (tests switch it off: feature `hv-door`).
+    guard_on: bool,
+    est: [sense::Estimator; HV_CHANNELS],
+    watch: [watch::Watch; HV_CHANNELS],
+    guard: [watch::ThicknessGuard; HV_CHANNELS],
+    vloop: [hv_loop::VoltageLoop; HV_CHANNELS],
+    cal: [sense::MonitorCal; HV_CHANNELS],
+    /// The voltage the loop drove each channel to in the tick just ended, V.
+    drive: [f32; HV_CHANNELS],
+    /// Windows the estimator had closed when the guard last looked.
+    seen_windows: [u32; HV_CHANNELS],
+    view: SenseView,
+    /// Re-arming after a read-back fault runs the low-voltage check first: until this tick,
+    /// no channel above `LOW_CHECK_V`.
+    check_until_ms: Option<u32>,
+    recheck: bool,
+}
+
+/// The low-voltage check before re-arming after a read-back fault: its voltage (V) and
+/// length (ms).
+#[cfg(not(m3))]
+pub const LOW_CHECK_V: f32 = 200.0;
+#[cfg(not(m3))]
+pub const LOW_CHECK_MS: u32 = 300;
+
+#[cfg(not(m3))]
+impl Sensing {
+    fn new() -> Self {
+        Sensing {
+            guard_on: true,
+            est: [sense::Estimator::new(); HV_CHANNELS],
+            watch: [watch::Watch::new(); HV_CHANNELS],
+            guard: [watch::ThicknessGuard::new(); HV_CHANNELS],
+            vloop: [hv_loop::VoltageLoop::new(); HV_CHANNELS],
+            cal: [sense::MonitorCal::NOMINAL; HV_CHANNELS],
+            drive: [0.0; HV_CHANNELS],
+            seen_windows: [0; HV_CHANNELS],
+            view: SenseView { volts: [0.0; HV_CHANNELS], current_ua: [0.0; HV_CHANNELS], stack_ratio: [f32::NAN; HV_CHANNELS], ceiling_v: [0.0; HV_CHANNELS], disagreed: [false; HV_CHANNELS] },
+            check_until_ms: None,
+            recheck: false,
+        }
+    }
+}
 
 /// The watchdog is fed only when the command side checked in at most this long ago, ms. The
 /// longest command (a first armed `pose`, docs/inverse-cost.md) stays far inside; a stuck
@@ -72,6 +140,11 @@ pub struct View {
     pub now_ms: u32,
     /// Each stack's predicted thickness stretch now, s = z / z0 (1 at rest).
     pub stack_ratio: [f32; HV_CHANNELS],
+    /// The read-back, on a board that has one.
+    pub sense: Option<SenseView>,
+    /// The plant's trip latency (injection to the enable low), worst so far, µs: boards
+    /// with a plant only.
+    pub trip_max_us: Option<u32>,
 }
 
 /// The refusal of the HV writer (`Control::write_hv_duty_checked`).
@@ -130,6 +203,23 @@ pub struct Control<B: Board> {
     seq: u32,
     epoch: u32,
     now_ms: u32,
+    /// The read-back (None: a board without one, open loop).
+    #[cfg(not(m3))]
+    sensing: Option<Sensing>,
+    /// The channel's ceiling in force as a voltage: the writer's ceiling's.
+    write_ceiling_v: [f32; HV_CHANNELS],
+    trip_max_us: Option<u32>,
+}
+
+/// The voltage a duty gives through the compiled calibration (`hv_duty_for`'s inverse).
+pub fn hv_volts_of_duty(duty: u16, max_duty: u16) -> f32 {
+    let z = HV_ZERO_DUTY_PCT / 100.0;
+    let f = duty as f32 / max_duty.max(1) as f32;
+    if f > z {
+        (f - z) / (1.0 - z) * HV_FULL_SCALE_V
+    } else {
+        0.0
+    }
 }
 
 impl<B: Board> Control<B> {
@@ -162,6 +252,10 @@ impl<B: Board> Control<B> {
             seq: 0,
             epoch: 0,
             now_ms: 0,
+            #[cfg(not(m3))]
+            sensing: None,
+            write_ceiling_v: [0.0; HV_CHANNELS],
+            trip_max_us: None,
         };
         for ch in 0..HV_CHANNELS {
             c.hv_max[ch] = c.board.hv(ch).max_duty_cycle();
@@ -197,6 +291,11 @@ impl<B: Board> Control<B> {
             locked_out: self.lockout.is_some(),
             now_ms: self.now_ms,
             stack_ratio: self.stacks.as_ref().map(|s| s.ratios()).unwrap_or([1.0; HV_CHANNELS]),
+            #[cfg(not(m3))]
+            sense: self.sensing.as_ref().map(|s| s.view),
+            #[cfg(m3)]
+            sense: None,
+            trip_max_us: self.trip_max_us,
         }
     }
 
@@ -267,6 +366,16 @@ impl<B: Board> Control<B> {
     /// it are dropped). Clears a latched fault.
     pub fn stop(&mut self) {
         self.hv_off_now();
+        #[cfg(not(m3))]
+        if let Some(sn) = self.sensing.as_mut() {
+            let recheck = sn.recheck || matches!(self.fault, Some(f) if f.is_read_back());
+            sn.watch = [watch::Watch::new(); HV_CHANNELS];
+            sn.guard = [watch::ThicknessGuard::new(); HV_CHANNELS];
+            sn.vloop = [hv_loop::VoltageLoop::new(); HV_CHANNELS];
+            sn.drive = [0.0; HV_CHANNELS];
+            sn.check_until_ms = None;
+            sn.recheck = recheck;
+        }
         self.servo_from = self.servo_released;
         self.servo_to = self.servo_released;
         self.write_servo(self.servo_released);
@@ -300,6 +409,7 @@ impl<B: Board> Control<B> {
             let cap = hv_duty_cap(self.hv_max[ch]);
             self.ceiling[ch] = sp.duty_ceiling[ch].min(cap).min(hv_duty_for(hold, self.hv_max[ch]));
             self.write_ceiling[ch] = if sp.shaped { cap } else { self.ceiling[ch] };
+            self.write_ceiling_v[ch] = hv_volts_of_duty(self.write_ceiling[ch], self.hv_max[ch]);
         }
         if sp.slew > 0.0 && sp.slew <= 1e6 {
             self.slew = sp.slew;
@@ -324,6 +434,12 @@ impl<B: Board> Control<B> {
             self.s_floor = floor;
             if self.fault.is_none() && !self.enable {
                 self.set_enable(true);
+                #[cfg(not(m3))]
+                if let Some(sn) = self.sensing.as_mut() {
+                    if core::mem::take(&mut sn.recheck) {
+                        sn.check_until_ms = Some(self.now_ms.wrapping_add(LOW_CHECK_MS));
+                    }
+                }
             }
             self.ramping_down = false;
             self.target = sp.target_v;
@@ -385,11 +501,23 @@ impl<B: Board> Control<B> {
     /// the longest stack step of a channel in `clock` counts.
     pub fn tick_timed(&mut self, last_checkin_ms: u32, clock: fn() -> u32) -> u32 {
         self.now_ms = self.now_ms.wrapping_add(1);
+        #[cfg(not(m3))]
+        self.read_back();
         let step = self.slew * 0.001;
         let mut worst = 0u32;
         for ch in 0..HV_CHANNELS {
             let Some(stacks) = self.stacks.as_mut() else { break };
-            let (v, t) = (self.volts[ch], self.target[ch]);
+            let v = self.volts[ch];
+            #[allow(unused_mut)]
+            let mut t = self.target[ch];
+            #[cfg(not(m3))]
+            if let Some(sn) = self.sensing.as_ref() {
+                // the thickness guard's ceiling, and the low-voltage check's
+                t = t.min(sn.view.ceiling_v[ch]);
+                if sn.check_until_ms.is_some() {
+                    t = t.min(LOW_CHECK_V);
+                }
+            }
             let t0 = clock();
             let applied = stacks.step(ch, v, t, self.s_floor[ch], self.shaped, step);
             worst = worst.max(clock().wrapping_sub(t0));
@@ -401,6 +529,9 @@ impl<B: Board> Control<B> {
                     continue;
                 }
             };
+            #[cfg(not(m3))]
+            let d = self.loop_duty(ch, nv, t);
+            #[cfg(m3)]
             let d = hv_duty_for(nv, self.hv_max[ch]);
             if d != self.duty[ch] && self.write_hv_duty_checked(ch, d).is_err() {
                 let f = self.fault.unwrap_or(Fault::HvRefused);
@@ -419,5 +550,87 @@ impl<B: Board> Control<B> {
 
     pub fn now_ms(&self) -> u32 {
         self.now_ms
+    }
+
+    /// The thickness guard on or off (tests only, feature `hv-door`: the guard shown to be
+    /// what holds a soft film). Takes effect from the next window.
+    #[cfg(all(feature = "hv-door", not(m3)))]
+    pub fn set_thickness_guard(&mut self, on: bool) {
+        let sn = self.sensing.get_or_insert_with(Sensing::new);
+        sn.guard_on = on;
+    }
+
+    /// Channel `ch`'s estimator (reports and tests).
+    #[cfg(not(m3))]
+    pub fn estimator(&self, ch: usize) -> Option<sense::Estimator> {
+        self.sensing.as_ref().map(|s| s.est[ch])
+    }
+
+    /// The duty of a guarded value `nv` (target `t`): open loop without a read-back; with
+    /// one, the hold ripple below `nv` once it is held, and the voltage loop, clamped to the
+    /// channel's duty ceiling (the loop can ask no more than the open loop could).
+    #[cfg(not(m3))]
+    fn loop_duty(&mut self, ch: usize, nv: f32, t: f32) -> u16 {
+        let max = self.hv_max[ch];
+        let limit = self.write_ceiling[ch];
+        let now = self.now_ms;
+        let Some(sn) = self.sensing.as_mut() else { return hv_duty_for(nv, max) };
+        let held = nv > sense::RIPPLE_MIN_V && (nv - t).abs() < 1.0 && self.enable;
+        let limit_v = hv_volts_of_duty(limit, max);
+        let drive = if held { nv - sense::ripple_v(now) } else { nv }.min(limit_v);
+        sn.drive[ch] = drive;
+        let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v);
+        hv_duty_for(ask, max).min(limit)
+    }
+
+    /// The tick's read-back: the analog watchdog's trip, each channel's reading, estimate,
+    /// checks and thickness guard. A fault cuts the HV at once (latched until `stop`).
+    #[cfg(not(m3))]
+    fn read_back(&mut self) {
+        let Some(hs) = self.board.hv_sense() else { return };
+        #[cfg(not(feature = "hw"))]
+        if let Some(p) = self.board.plant() {
+            self.trip_max_us = Some(p.trip_max_us);
+        }
+        let hold = self.hold_ceiling_v();
+        let sn = self.sensing.get_or_insert_with(Sensing::new);
+        let mut fault = None;
+        if hs.trip.is_some() {
+            fault = Some(Fault::Breakdown);
+        }
+        for ch in 0..HV_CHANNELS {
+            let v = sense::volts_of_code(hs.v_code[ch], &sn.cal[ch]);
+            let i = sense::microamps_of_code(hs.i_code[ch]);
+            sn.view.volts[ch] = v;
+            sn.view.current_ua[ch] = i;
+            sn.est[ch].tick(v, i, sense::ripple_turns(self.now_ms));
+            let reading = watch::Reading { v, i_ua: i, v_code: hs.v_code[ch] };
+            if let Some(f) = sn.watch[ch].check(&reading, sn.drive[ch], self.write_ceiling_v[ch], self.enable, &sn.est[ch]) {
+                fault = fault.or(Some(f));
+            }
+            let s_meas = sn.est[ch].thickness_ratio(crate::board::BOARD_STACK_C0_PF);
+            sn.view.stack_ratio[ch] = s_meas;
+            let windows = sn.est[ch].windows();
+            if windows != sn.seen_windows[ch] {
+                sn.seen_windows[ch] = windows;
+                if let (Some(st), true) = (self.stacks.as_ref(), sn.guard_on) {
+                    let s_model = st.ratios()[ch];
+                    let (at_model, at_meas) = (st.equilibrium_voltage_at(s_model), st.equilibrium_voltage_at(s_meas));
+                    sn.guard[ch].update(s_meas, s_model, self.s_floor[ch], at_model, at_meas);
+                }
+            }
+            sn.view.ceiling_v[ch] = sn.guard[ch].derate * hold;
+            sn.view.disagreed[ch] = sn.guard[ch].disagreed;
+        }
+        if let Some(until) = sn.check_until_ms {
+            if self.now_ms.wrapping_sub(until) < u32::MAX / 2 {
+                sn.check_until_ms = None;
+            }
+        }
+        if let Some(f) = fault {
+            if self.fault.is_none() || self.enable {
+                self.fault_stop(f);
+            }
+        }
     }
 }

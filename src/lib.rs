@@ -13,7 +13,9 @@
 //!   the slew, the servo, the stop, the watchdog feed.
 //! - [`rx`]: console input at interrupt level: lines, `stop` at once, a bounded ring of lines.
 //! - [`board`]: the board trait; `chip` (target only): the STM32F405's board support.
-//! - [`sim`]: a simulated board (records every output).
+//! - [`sim`]: a simulated board (records every output; with [`plant`] behind its read-back).
+//! - [`plant`]: the simulated HV plant (modules, divider, stacks, faults, ADC), never in the
+//!   board build.
 //! - [`out`], [`num`]: console text and numbers without core's formatting machinery.
 //! - [`settings`], [`flash_ram`]: the stored settings' record and store, and the emulator's
 //!   RAM flash (feature `settings`).
@@ -28,6 +30,8 @@ pub mod chip;
 pub mod console;
 pub mod control;
 pub mod num;
+#[cfg(all(not(feature = "hw"), not(m3)))]
+pub mod plant;
 pub mod rx;
 #[cfg(feature = "settings")]
 pub mod settings;

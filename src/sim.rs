@@ -5,7 +5,8 @@ use core::convert::Infallible;
 use embedded_hal::digital::{ErrorType as PinErrorType, OutputPin};
 use embedded_hal::pwm::{ErrorType as PwmErrorType, SetDutyCycle};
 
-use crate::board::{Board, HV_CHANNELS};
+use crate::board::{Board, HvSense, HV_CHANNELS};
+use crate::plant::Plant;
 
 /// A PWM output: the last duty written and how many writes.
 #[derive(Clone, Copy, Debug, Default)]
@@ -61,6 +62,15 @@ pub struct SimBoard {
     pub hv: [SimPwm; HV_CHANNELS],
     pub enable: SimPin,
     pub watchdog_feeds: u64,
+    /// The HV plant behind a read-back (None: no read-back, the HV runs open loop).
+    pub plant: Option<Plant>,
+}
+
+impl SimBoard {
+    /// The board with the plant behind its read-back (finger-sim, the plant's tests).
+    pub fn with_plant(plant: Plant) -> Self {
+        SimBoard { plant: Some(plant), ..SimBoard::default() }
+    }
 }
 
 impl Default for SimBoard {
@@ -68,7 +78,7 @@ impl Default for SimBoard {
         // 0.5 us resolution: 40000 counts per 20 ms period.
         let servo = SimPwm { duty: 0, max: 40_000, writes: 0 };
         let hv = SimPwm { duty: 0, max: 8_400, writes: 0 };
-        SimBoard { servo, hv: [hv; HV_CHANNELS], enable: SimPin::default(), watchdog_feeds: 0 }
+        SimBoard { servo, hv: [hv; HV_CHANNELS], enable: SimPin::default(), watchdog_feeds: 0, plant: None }
     }
 }
 
@@ -93,6 +103,14 @@ impl Board for SimBoard {
     }
     fn newline(&self) -> &'static str {
         "\n"
+    }
+    fn hv_sense(&mut self) -> Option<HvSense> {
+        let duty = [self.hv[0].duty, self.hv[1].duty, self.hv[2].duty];
+        let (max, enable) = (self.hv[0].max, self.enable.high);
+        self.plant.as_mut().map(|p| p.tick(duty, max, enable))
+    }
+    fn plant(&mut self) -> Option<&mut Plant> {
+        self.plant.as_mut()
     }
 }
 

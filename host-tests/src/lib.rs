@@ -15,6 +15,7 @@ pub mod cut_flash;
 pub mod hv;
 pub mod image;
 pub mod perf;
+pub mod plant_runs;
 pub mod qemu;
 pub mod reply;
 pub mod report;

@@ -74,6 +74,8 @@ pub struct Commands {
     pub(super) duty: [u16; CHANNELS],
     /// Each stack's thickness stretch now, as the control tick integrates it (1 at rest).
     pub(super) stack_ratio: [f32; CHANNELS],
+    /// The read-back, on a board that has one.
+    pub(super) sense: Option<crate::control::SenseView>,
     /// The core's latched fault, as the console names it.
     pub(super) fault: Option<&'static str>,
     pub(super) locked_out: bool,
@@ -125,6 +127,7 @@ impl Commands {
             volts: [0.0; CHANNELS],
             duty: [0; CHANNELS],
             stack_ratio: [1.0; CHANNELS],
+            sense: None,
             fault: None,
             locked_out: false,
             now_ms: 0,
@@ -187,6 +190,7 @@ impl Commands {
         self.fault = v.fault.text();
         self.locked_out = v.locked_out;
         self.stack_ratio = v.stack_ratio;
+        self.sense = v.sense;
         self.now_ms = v.now_ms;
         if v.epoch != self.epoch {
             self.epoch = v.epoch;
@@ -591,6 +595,27 @@ impl Commands {
         }
         let _ = w!(r; " thick_eq=");
         list(r, &eq, 4);
+        if let Some(sv) = self.sense {
+            // the read-back (docs/console.md "Measured HV"): measured volts, µA, the sensed
+            // thickness (mm; `-` until measured), each channel's ceiling now and its film check
+            let _ = w!(r; " vmeas=");
+            list(r, &sv.volts, 1);
+            let _ = w!(r; " imeas=");
+            list(r, &sv.current_ua, 3);
+            let _ = w!(r; " thick_meas=");
+            for ch in 0..CHANNELS {
+                let s = sv.stack_ratio[ch];
+                let _ = if ch > 0 { r.write_str(",") } else { Ok(()) };
+                let _ = if s > 0.0 { w!(r; Fixed(stack_mm * s, 4)) } else { r.write_str("-") };
+            }
+            let _ = w!(r; " vceil=");
+            list(r, &sv.ceiling_v, 1);
+            let _ = w!(r; " film_check=");
+            for ch in 0..CHANNELS {
+                let _ = if ch > 0 { r.write_str(",") } else { Ok(()) };
+                let _ = r.write_str(if sv.disagreed[ch] { "thinner" } else { "ok" });
+            }
+        }
     }
 
     /// A stack's thickness at rest, mm: layers x z0 of the model (0 without stacks).

@@ -47,6 +47,11 @@ impl<B: Board> App<B> {
     pub fn control(&self) -> &Control<B> {
         &self.ctl
     }
+    /// The control core itself (tests only: feature `hv-door`).
+    #[cfg(feature = "hv-door")]
+    pub fn control_mut(&mut self) -> &mut Control<B> {
+        &mut self.ctl
+    }
     pub fn finger(&self) -> &Finger<f32> {
         self.cmds.finger()
     }

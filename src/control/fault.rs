@@ -21,15 +21,44 @@ pub enum Fault {
     BoardCard,
     /// The emulator image on a real chip (it has no watchdog): never arms.
     EmulatorOnChip,
+    /// The read-back (docs/firmware.md "Faults of the read-back"): a stack's return current
+    /// past the trip, or its voltage collapsing under a steady command.
+    Breakdown,
+    /// A measured voltage off its command longer than the loop's settling, or past the
+    /// ceiling in force.
+    HvMismatch,
+    /// A stack's sensed capacitance far below the stack's: disconnected.
+    StackOpen,
+    /// A reading at its rail, out of its range, or stuck.
+    Sensor,
+    /// The leakage at a held voltage past its bound.
+    Leakage,
 }
 
 /// Every fault's console text, in the enum's order, end to end; [`FAULT_ENDS`] splits it.
-const FAULT_TEXT: &str = "hv-refusedpwmenablehv-modelboard cardqemu image on a real chip";
-const FAULT_ENDS: [u8; 7] = [0, 10, 13, 19, 27, 37, 62];
+const FAULT_TEXT: &str = "hv-refusedpwmenablehv-modelboard cardqemu image on a real chipbreakdownhv-mismatchstack-opensensorleakage";
+const FAULT_ENDS: [u8; 12] = [0, 10, 13, 19, 27, 37, 62, 71, 82, 92, 98, 105];
 
 impl Fault {
     /// Every fault, in the enum's order.
-    pub const ALL: [Fault; 6] = [Fault::HvRefused, Fault::Pwm, Fault::Enable, Fault::HvModel, Fault::BoardCard, Fault::EmulatorOnChip];
+    pub const ALL: [Fault; 11] = [
+        Fault::HvRefused,
+        Fault::Pwm,
+        Fault::Enable,
+        Fault::HvModel,
+        Fault::BoardCard,
+        Fault::EmulatorOnChip,
+        Fault::Breakdown,
+        Fault::HvMismatch,
+        Fault::StackOpen,
+        Fault::Sensor,
+        Fault::Leakage,
+    ];
+
+    /// A fault of the read-back: re-arming after it runs the low-voltage check first.
+    pub fn is_read_back(self) -> bool {
+        matches!(self, Fault::Breakdown | Fault::HvMismatch | Fault::StackOpen | Fault::Sensor | Fault::Leakage)
+    }
 
     /// The console's word for it (one string for all: the image's flash budget).
     pub fn text(self) -> &'static str {

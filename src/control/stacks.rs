@@ -127,6 +127,12 @@ impl Stacks {
         }
     }
 
+    /// The card's equilibrium voltage of stretch `s`, V (infinite past the film's reach).
+    #[cfg(not(m3))]
+    pub fn equilibrium_voltage_at(&self, s: f32) -> f32 {
+        finger_model::material::equilibrium_voltage(&self.law, s).unwrap_or(f32::INFINITY)
+    }
+
     /// The M3 image's step: the slew toward the target (already within the hold ceiling),
     /// nothing integrated.
     #[cfg(m3)]

@@ -1,0 +1,49 @@
+//! Fault injection and soft films against the HV plant, at scale (docs/reliability.md
+//! "Measured HV"): `cargo run --release --example hv_faults -- [FAULT_HISTORIES] [CLEAN]
+//! [SOFT]` (defaults 1,000,000 / 10,000 / 10,000: the soak). Prints missed trips, the
+//! latency distribution per fault kind, false trips and the soft films' worst thickness.
+use finger_fw::control::Fault;
+use host_tests::plant_runs::{clean_history, fault_history, soft_film_history, Kind};
+use std::time::Instant;
+
+fn arg(k: usize, d: u64) -> u64 {
+    std::env::args().nth(k).and_then(|a| a.parse().ok()).unwrap_or(d)
+}
+
+fn main() {
+    let (n_fault, n_clean, n_soft) = (arg(1, 1_000_000), arg(2, 10_000), arg(3, 10_000));
+    let t0 = Instant::now();
+    let mut lat: Vec<(Kind, u32)> = Vec::new();
+    let mut missed = 0;
+    for seed in 0..n_fault {
+        let r = fault_history(seed, 3000);
+        match (r.fault, r.latency_us) {
+            (Some(_), Some(l)) => lat.push((r.kind, l)),
+            _ => {
+                missed += 1;
+                eprintln!("missed: seed {seed} {:?}", r);
+            }
+        }
+    }
+    println!("fault histories: {n_fault}, missed trips: {missed} ({:.0} s)", t0.elapsed().as_secs_f64());
+    for kind in [Kind::Breakdown, Kind::Stuck, Kind::Open, Kind::Leak] {
+        let mut l: Vec<u32> = lat.iter().filter(|(k, _)| *k == kind).map(|(_, l)| *l).collect();
+        l.sort_unstable();
+        if l.is_empty() {
+            continue;
+        }
+        let q = |p: f64| l[((l.len() - 1) as f64 * p) as usize];
+        println!("  {kind:?}: n={} latency_us median={} p99={} max={}", l.len(), q(0.5), q(0.99), l[l.len() - 1]);
+    }
+    let t1 = Instant::now();
+    let false_trips: Vec<(u64, Fault)> = (0..n_clean).filter_map(|s| clean_history(1_000_000_000 + s, 3000).map(|f| (s, f))).collect();
+    println!("fault-free histories: {n_clean} of 3 s, false trips: {} ({:.0} s) {:?}", false_trips.len(), t1.elapsed().as_secs_f64(), &false_trips[..false_trips.len().min(5)]);
+    for guard in [true, false] {
+        let t2 = Instant::now();
+        let runs: Vec<_> = (0..n_soft).map(|s| soft_film_history(2_000_000_000 + s, 3000, 30.0, guard)).collect();
+        let bad = runs.iter().filter(|r| r.collapsed || r.s_min <= 2.0 / 3.0 || r.field_max >= 18.0).count();
+        let s_min = runs.iter().map(|r| r.s_min).fold(1.0f32, f32::min);
+        let e_max = runs.iter().map(|r| r.field_max).fold(0.0f32, f32::max);
+        println!("soft films (G_eq 6.7..13.4 kPa, 30x fast creep), guard {}: {n_soft} histories, past 2/3 or collapsed: {bad}, thinnest s {s_min:.4}, highest field {e_max:.2} V/um ({:.0} s)", if guard { "on" } else { "off" }, t2.elapsed().as_secs_f64());
+    }
+}

@@ -1,0 +1,166 @@
+//! Random histories of the control core against the HV plant (`finger_fw::plant`): faults
+//! injected at random times (breakdown, a stuck module, an open stack, a leak), fault-free
+//! histories with the plant's noise, and a film softer than the card. Shared by
+//! tests/hv_measured.rs (a fixed count, fixed seeds) and the `hv_faults` example (the soak
+//! and docs/reliability.md's figures).
+use finger_fw::control::{Control, Fault};
+use finger_fw::plant::{Inject, Plant};
+use finger_fw::sim::SimBoard;
+
+use crate::hv::setpoints;
+
+/// A small deterministic generator (splitmix64).
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03)
+    }
+    pub fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [a, b).
+    pub fn range(&mut self, a: f32, b: f32) -> f32 {
+        a + (b - a) * ((self.next() >> 40) as f32 / (1u64 << 24) as f32)
+    }
+    pub fn below(&mut self, n: u32) -> u32 {
+        (self.next() % n as u64) as u32
+    }
+}
+
+/// The core on the plant board, armed at `target` V per channel.
+pub fn armed(plant: Plant, target: [f32; 3]) -> Control<SimBoard> {
+    let mut c = Control::new(SimBoard::with_plant(plant), 2000, 2000.0);
+    let sp = setpoints(&c, target, false, 2000.0);
+    assert!(c.apply(&sp));
+    c
+}
+
+/// Ticks of the core (the command side checks in every tick).
+pub fn run(c: &mut Control<SimBoard>, ms: u32) {
+    for _ in 0..ms {
+        c.tick(c.now_ms());
+    }
+}
+
+/// The kinds of fault a history injects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Kind {
+    Breakdown,
+    Stuck,
+    Open,
+    Leak,
+}
+
+/// One fault history's outcome.
+#[derive(Clone, Copy, Debug)]
+pub struct FaultRun {
+    pub kind: Kind,
+    /// The fault latched (None: missed), and the latency from injection to the enable low, µs.
+    pub fault: Option<Fault>,
+    pub latency_us: Option<u32>,
+}
+
+/// A fault history: random targets, a random time after arming (slewing or held), a random
+/// fault on a random channel; then up to `watch_ms` for the core to cut.
+pub fn fault_history(seed: u64, watch_ms: u32) -> FaultRun {
+    let mut r = Rng::new(seed);
+    let target = [r.range(500.0, 5399.0), r.range(500.0, 5399.0), r.range(500.0, 5399.0)];
+    let mut c = armed(Plant::new(seed as u32), target);
+    run(&mut c, 20 + r.below(3000));
+    let ch = r.below(3) as usize;
+    let kind = [Kind::Breakdown, Kind::Stuck, Kind::Open, Kind::Leak][r.below(4) as usize];
+    let v_now = c.view().volts[ch].max(500.0);
+    let what = match kind {
+        Kind::Breakdown => Inject::Breakdown { clears_after_ms: if r.below(2) == 0 { Some(1 + r.below(5)) } else { None } },
+        Kind::Stuck => Inject::Stuck(r.range(6_000.0, 9_000.0)),
+        Kind::Open => Inject::Open,
+        // 2..20 µA through the film at the voltage now: past the leakage bound
+        Kind::Leak => Inject::Leak(v_now / (r.range(2.0, 20.0) * 1e-6)),
+    };
+    let plant = c.board_mut().plant.as_mut().expect("plant");
+    plant.inject(ch, what).expect("injects");
+    for _ in 0..watch_ms {
+        c.tick(c.now_ms());
+        if !c.view().enable {
+            // the plant sees the enable low in its next tick
+            c.tick(c.now_ms());
+            break;
+        }
+    }
+    let fault = c.view().fault.get();
+    let plant = c.board().plant.as_ref().expect("plant");
+    let latency_us = (!plant.fault_pending()).then_some(plant.trip_last_us);
+    FaultRun { kind, fault, latency_us }
+}
+
+/// A fault-free history: random commands (targets, holds, disarms) for about `ms`; the fault
+/// latched, if any (a false trip).
+pub fn clean_history(seed: u64, ms: u32) -> Option<Fault> {
+    let mut r = Rng::new(seed);
+    let mut c = armed(Plant::new(seed as u32), [0.0; 3]);
+    let mut t = 0;
+    while t < ms {
+        let target = [r.range(0.0, 5399.0), r.range(0.0, 5399.0), r.range(0.0, 5399.0)];
+        let slew = [200.0, 2000.0, 20_000.0, 100_000.0][r.below(4) as usize];
+        let shaped = r.below(4) == 0;
+        let mut sp = setpoints(&c, target, shaped, slew);
+        sp.armed = r.below(8) != 0;
+        c.apply(&sp);
+        let hold = 50 + r.below(800);
+        run(&mut c, hold);
+        t += hold;
+        if c.view().fault.get().is_some() {
+            break;
+        }
+    }
+    c.view().fault.get()
+}
+
+/// A soft-film history's worst: the thinnest the true film got, whether it collapsed, its
+/// highest field (V/µm).
+#[derive(Clone, Copy, Debug)]
+pub struct FilmRun {
+    pub g_eq_kpa: f32,
+    pub s_min: f32,
+    pub collapsed: bool,
+    pub field_max: f32,
+}
+
+/// A film with G_eq in [half the card's, the card's] relaxing `time_scale` times faster than
+/// the card, under random held targets up to the board's ceiling for about `ms`; the
+/// thickness guard `guard` on or off.
+pub fn soft_film_history(seed: u64, ms: u32, time_scale: f32, guard: bool) -> FilmRun {
+    let mut r = Rng::new(seed);
+    let g = r.range(6.7, 13.4);
+    let mut plant = Plant::new(seed as u32);
+    plant.set_film(g, time_scale).expect("film");
+    let mut c = armed(plant, [0.0; 3]);
+    c.set_thickness_guard(guard);
+    let hold_v = c.hold_ceiling_v();
+    let mut t = 0;
+    while t < ms {
+        // mostly near the ceiling: where a soft film is at risk
+        let mut target = [0.0; 3];
+        for v in target.iter_mut() {
+            *v = if r.below(4) == 0 { r.range(0.0, hold_v) } else { r.range(0.85 * hold_v, hold_v - 1.0) };
+        }
+        let sp = setpoints(&c, target, r.below(4) == 0, [2000.0, 20_000.0][r.below(2) as usize]);
+        c.apply(&sp);
+        let hold = 200 + r.below(ms / 2);
+        run(&mut c, hold);
+        t += hold;
+    }
+    let truth = c.board().plant.as_ref().expect("plant").truth();
+    let mut out = FilmRun { g_eq_kpa: g, s_min: 1.0, collapsed: false, field_max: 0.0 };
+    for tr in truth {
+        out.s_min = out.s_min.min(tr.s_min);
+        out.collapsed |= tr.collapsed;
+        out.field_max = out.field_max.max(tr.field_max_v_per_um);
+    }
+    out
+}

@@ -1,0 +1,115 @@
+//! The HV channels against the plant (src/plant.rs): breakdown cut within a millisecond,
+//! a stuck module, an open stack and a leak latched with their codes, no false trip with the
+//! plant's noise, the voltage loop against a module whose gain is off, the read-back's
+//! thickness against the plant's. Fixed seeds; `cargo run --release --example hv_faults`
+//! runs the same histories at scale (docs/reliability.md "Measured HV").
+use finger_fw::control::watch::HV_SETTLE_MS;
+use finger_fw::control::Fault;
+use finger_fw::plant::{Inject, Plant};
+use host_tests::plant_runs::{armed, clean_history, run, Rng};
+
+/// A breakdown on a held or slewing channel above 500 V: the analog watchdog cuts the
+/// enable within 1 ms of board time, and the core latches `breakdown` with every duty 0.
+#[test]
+fn breakdown_is_cut_within_a_millisecond_in_10000_histories() {
+    let mut worst = 0;
+    for seed in 0..10_000u64 {
+        let mut r = Rng::new(seed);
+        let target = [r.range(600.0, 5399.0), r.range(600.0, 5399.0), r.range(600.0, 5399.0)];
+        let mut c = armed(Plant::new(seed as u32), target);
+        // past 500 V on every channel at 2000 V/s, then a random moment (slewing or held)
+        run(&mut c, 300 + r.below(300));
+        let ch = r.below(3) as usize;
+        let clears = if r.below(2) == 0 { Some(1 + r.below(5)) } else { None };
+        c.board_mut().plant.as_mut().unwrap().inject(ch, Inject::Breakdown { clears_after_ms: clears }).unwrap();
+        run(&mut c, 2);
+        let v = c.view();
+        let p = c.board().plant.as_ref().unwrap();
+        assert!(!p.fault_pending(), "seed {seed}: the enable still high 2 ms after a breakdown on channel {ch}");
+        assert!(p.trip_last_us <= 1000, "seed {seed}: cut after {} µs", p.trip_last_us);
+        assert_eq!(v.fault, Some("breakdown"), "seed {seed}");
+        assert!(!v.enable && v.duty == [0; 3], "seed {seed}: {:?}", v.duty);
+        worst = worst.max(p.trip_last_us);
+    }
+    assert!(worst > 0);
+}
+
+/// Fault-free histories with the plant's noise (random targets, slews 200..1e5 V/s, plain
+/// and shaped, disarms): no fault latched.
+#[test]
+fn no_false_trip_in_300_noisy_histories() {
+    for seed in 0..300u64 {
+        assert_eq!(clean_history(1_000_000_000 + seed, 3000), None, "seed {seed}");
+    }
+}
+
+/// A module stuck at 8 kV: `hv-mismatch`, the enable low, within the loop's settling.
+#[test]
+fn a_stuck_module_is_cut_within_the_settling_time() {
+    for seed in 0..20u64 {
+        let mut c = armed(Plant::new(seed as u32), [3000.0; 3]);
+        run(&mut c, 2000);
+        c.board_mut().plant.as_mut().unwrap().inject((seed % 3) as usize, Inject::Stuck(8000.0)).unwrap();
+        run(&mut c, HV_SETTLE_MS + 20);
+        assert_eq!(c.view().fault.get(), Some(Fault::HvMismatch), "seed {seed}");
+        assert!(!c.view().enable && c.view().duty == [0; 3]);
+    }
+}
+
+/// A disconnected stack (`stack-open`) and a film that leaks 10 µA (`leakage`), each
+/// latched, HV off.
+#[test]
+fn an_open_stack_and_a_leak_are_latched() {
+    for (what, want) in [(Inject::Open, Fault::StackOpen), (Inject::Leak(3000.0 / 10e-6), Fault::Leakage)] {
+        let mut c = armed(Plant::new(5), [3000.0; 3]);
+        run(&mut c, 2500);
+        c.board_mut().plant.as_mut().unwrap().inject(1, what).unwrap();
+        run(&mut c, 6000);
+        assert_eq!(c.view().fault.get(), Some(want), "{what:?}");
+        assert!(!c.view().enable);
+    }
+}
+
+/// A monitor reading stuck at one code while the command moves: `sensor`.
+#[test]
+fn a_stuck_monitor_reading_is_a_sensor_fault() {
+    let mut c = armed(Plant::new(3), [4000.0; 3]);
+    c.board_mut().plant.as_mut().unwrap().inject(2, Inject::MonitorStuck(400.0)).unwrap();
+    run(&mut c, 1000);
+    assert_eq!(c.view().fault.get(), Some(Fault::Sensor));
+}
+
+/// The voltage loop: a module 10 % weak holds its command within 1 % once settled (the
+/// mean over a ripple period, the ripple's own mean taken off).
+#[test]
+fn the_loop_holds_a_module_ten_percent_weak() {
+    let mut p = Plant::new(9);
+    for ch in 0..3 {
+        p.inject(ch, Inject::Gain(0.9)).unwrap();
+    }
+    let mut c = armed(p, [4000.0; 3]);
+    run(&mut c, 4000);
+    let mut mean = 0.0;
+    for _ in 0..200 {
+        run(&mut c, 1);
+        mean += c.board().plant.as_ref().unwrap().truth()[0].volts / 200.0;
+    }
+    let want = 4000.0 - finger_fw::control::sense::RIPPLE_PP_V / 2.0;
+    assert!((mean - want).abs() < 0.01 * want, "{mean} V for {want} V");
+    assert_eq!(c.view().fault.get(), None);
+}
+
+/// The sensed thickness follows the plant's film within 1.5 % over a ramp and a hold.
+#[test]
+fn the_sensed_thickness_follows_the_film() {
+    let mut c = armed(Plant::new(11), [5399.0; 3]);
+    run(&mut c, 1000);
+    let mut worst: f32 = 0.0;
+    for _ in 0..60 {
+        run(&mut c, 100);
+        let s_true = c.board().plant.as_ref().unwrap().truth()[0].s;
+        let s_meas = c.view().sense.unwrap().stack_ratio[0];
+        worst = worst.max((s_meas - s_true).abs() / s_true);
+    }
+    assert!(worst < 0.015, "worst {worst}");
+}

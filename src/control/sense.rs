@@ -1,0 +1,171 @@
+//! One HV channel's read-back, interpreted: the tick's ADC means as volts and microamps
+//! (the monitor calibration), the stack's capacitance estimated from its charge, and the
+//! thickness stretch it gives (s = sqrt(C0 / C) for an incompressible film).
+//!
+//! The estimator (docs/firmware.md "Thickness sensed"): the return current is integrated
+//! over windows that close once the voltage has moved [`WINDOW_DV_V`] (a slew, or the hold
+//! ripple of [`RIPPLE_PP_V`] at [`RIPPLE_PERIOD_MS`]); each window gives Q = C ΔV + I_leak T:
+//! a swing's window its capacitance (the leakage known), every window its leakage (the
+//! capacitance known), each kept as a running mean over the windows.
+//!
+//! What it is not: the faults that act on these figures (`super::watch`), the loop
+//! (`super::hv_loop`).
+
+use crate::board::{ADC_FULL_CODE, BOARD_STACK_C0_PF, IMON_SPAN_UA, IMON_ZERO_CODE, SENSE_STRAY_PF, VMON_FULL_SCALE_V};
+
+/// A window closes once the voltage moved this far from its start, V.
+pub const WINDOW_DV_V: f32 = 60.0;
+/// Or after this long (a hold without ripple: the leakage alone), ms.
+pub const WINDOW_MAX_MS: u32 = 400;
+/// The hold ripple: peak to peak below the guarded voltage (never above it), V, and its
+/// period, ms; only above [`RIPPLE_MIN_V`].
+pub const RIPPLE_PP_V: f32 = 100.0;
+pub const RIPPLE_PERIOD_MS: u32 = 200;
+pub const RIPPLE_MIN_V: f32 = 300.0;
+/// Windows with a swing before the capacitance counts as measured.
+pub const WINDOWS_TO_MEASURE: u32 = 3;
+
+/// The voltage monitor's calibration: V = gain x code x (full scale / 4095) + offset. A
+/// calibration can only tighten: a gain below 1 or an offset below 0 (a monitor that reads
+/// low, so the loop would drive the output past what it reads) is refused.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MonitorCal {
+    pub gain: f32,
+    pub offset_v: f32,
+}
+
+impl MonitorCal {
+    pub const NOMINAL: MonitorCal = MonitorCal { gain: 1.0, offset_v: 0.0 };
+
+    /// Accepted only when it reads at or above the nominal chain: gain 1..1.2, offset 0..200 V.
+    pub fn checked(gain: f32, offset_v: f32) -> Option<Self> {
+        (gain >= 1.0 && gain <= 1.2 && offset_v >= 0.0 && offset_v <= 200.0).then_some(MonitorCal { gain, offset_v })
+    }
+}
+
+/// The monitor's code as volts.
+pub fn volts_of_code(code: f32, cal: &MonitorCal) -> f32 {
+    cal.gain * code * (VMON_FULL_SCALE_V / ADC_FULL_CODE) + cal.offset_v
+}
+
+/// The current sense's code as microamps.
+pub fn microamps_of_code(code: f32) -> f32 {
+    (code - IMON_ZERO_CODE) * (IMON_SPAN_UA / ADC_FULL_CODE)
+}
+
+/// One channel's estimate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimator {
+    /// The window: its start voltage, the charge so far (nC), its length (ms).
+    v0: f32,
+    q_nc: f32,
+    t_ms: u32,
+    started: bool,
+    /// The capacitance the sense sees (pF) and the leakage (µA), each window's estimate
+    /// averaged with weights [`C_WEIGHT`] and [`LEAK_WEIGHT`].
+    c_pf: f32,
+    leak_ua: f32,
+    swings: u32,
+    windows: u32,
+}
+
+/// Each new window's weight in the capacitance's and the leakage's running means.
+pub const C_WEIGHT: f32 = 0.1;
+pub const LEAK_WEIGHT: f32 = 0.2;
+
+impl Estimator {
+    pub const fn new() -> Self {
+        Estimator { v0: 0.0, q_nc: 0.0, t_ms: 0, started: false, c_pf: BOARD_STACK_C0_PF + SENSE_STRAY_PF, leak_ua: 0.0, swings: 0, windows: 0 }
+    }
+
+    /// One tick's mean voltage (V) and return current (µA); `turn`: the hold ripple turns
+    /// here (a window ends at each turn, so each spans a half period).
+    pub fn tick(&mut self, v: f32, i_ua: f32, turn: bool) {
+        if !(v.is_finite() && i_ua.is_finite()) {
+            return;
+        }
+        if !self.started {
+            *self = Estimator { v0: v, started: true, ..*self };
+            return;
+        }
+        self.q_nc += i_ua; // µA x 1 ms = nC
+        self.t_ms += 1;
+        let dv = v - self.v0;
+        if dv.abs() >= WINDOW_DV_V || (turn && self.t_ms >= 20) || self.t_ms >= WINDOW_MAX_MS {
+            self.close(dv, self.t_ms as f32, self.q_nc);
+            self.windows = self.windows.wrapping_add(1);
+            self.v0 = v;
+            self.q_nc = 0.0;
+            self.t_ms = 0;
+        }
+    }
+
+    /// A window of swing `dv` (V), length `t` (ms), charge `q` (nC): Q = C ΔV + I_leak T.
+    fn close(&mut self, dv: f32, t: f32, q: f32) {
+        // a swing's capacitance, an outlier (a window cut by a stop, a step) left out
+        if dv.abs() >= 0.5 * WINDOW_DV_V && t >= 5.0 {
+            let c = (q - self.leak_ua * t) / dv * 1e3;
+            let c0 = BOARD_STACK_C0_PF + SENSE_STRAY_PF;
+            if c > 0.05 * c0 && c < 4.0 * c0 {
+                self.c_pf += C_WEIGHT * (c - self.c_pf);
+                self.swings = self.swings.saturating_add(1);
+            }
+        }
+        // the leakage from the slow windows (a hold, its ripple), where it is not lost in
+        // the charging current
+        if t >= 50.0 {
+            let leak = (q - self.c_pf * 1e-3 * dv) / t;
+            if leak.is_finite() {
+                self.leak_ua += LEAK_WEIGHT * (leak - self.leak_ua);
+            }
+        }
+    }
+
+    /// The running capacitance (pF) and swings, measured or not (reports).
+    pub fn raw(&self) -> (f32, u32) {
+        (self.c_pf, self.swings)
+    }
+
+    /// Windows closed so far.
+    pub fn windows(&self) -> u32 {
+        self.windows
+    }
+
+    /// The capacitance the sense sees, pF, once measured.
+    pub fn capacitance_pf(&self) -> Option<f32> {
+        (self.swings >= WINDOWS_TO_MEASURE).then_some(self.c_pf)
+    }
+
+    /// The leakage through the stack, µA, once measured.
+    pub fn leakage_ua(&self) -> Option<f32> {
+        (self.swings >= WINDOWS_TO_MEASURE).then_some(self.leak_ua)
+    }
+
+    /// The stack's thickness stretch from its capacitance: sqrt(C0 / (C - stray)), or NaN
+    /// before it is measured (or for a capacitance at or below the stray: `super::watch`'s
+    /// open stack).
+    pub fn thickness_ratio(&self, c0_pf: f32) -> f32 {
+        match self.capacitance_pf() {
+            Some(c) if c - SENSE_STRAY_PF > 0.0 => libm::sqrtf(c0_pf / (c - SENSE_STRAY_PF)),
+            _ => f32::NAN,
+        }
+    }
+}
+
+impl Default for Estimator {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The hold ripple turns at `now_ms` (a half period ends).
+pub fn ripple_turns(now_ms: u32) -> bool {
+    now_ms % (RIPPLE_PERIOD_MS / 2) == 0
+}
+
+/// The hold ripple's offset below the guarded voltage at `now_ms`, V (a triangle 0..pp).
+pub fn ripple_v(now_ms: u32) -> f32 {
+    let ph = (now_ms % RIPPLE_PERIOD_MS) as f32 / RIPPLE_PERIOD_MS as f32;
+    let tri = if ph < 0.5 { 2.0 * ph } else { 2.0 - 2.0 * ph };
+    RIPPLE_PP_V * tri
+}

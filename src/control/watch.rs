@@ -1,0 +1,163 @@
+//! One HV channel's checks on what it measures, every tick: the faults the read-back shows
+//! (breakdown, a module off its command, an open stack, a sensor at its rail or stuck, a
+//! rising leakage), and the thickness guard that lowers the channel's own ceiling when the
+//! sensed film is thinner than the model's.
+//!
+//! What it is not: the cut itself (`super::Control::fault_stop`), the estimate
+//! (`super::sense`). Every comparison is written so that NaN fails safe.
+
+use super::fault::Fault;
+use super::sense::Estimator;
+use crate::board::{ADC_FULL_CODE, BOARD_STACK_C0_PF, SENSE_STRAY_PF, TRIP_CURRENT_UA};
+
+/// The loop's settling: a measured voltage off its command longer than this is a module
+/// that does not follow, ms.
+pub const HV_SETTLE_MS: u32 = 300;
+/// Off its command: by more than this many volts or this fraction of the command.
+pub const MISMATCH_V: f32 = 300.0;
+pub const MISMATCH_FRAC: f32 = 0.1;
+/// Past the ceiling in force by this fraction plus [`OVER_V`], for [`OVER_MS`]: at once.
+pub const OVER_FRAC: f32 = 0.02;
+pub const OVER_V: f32 = 60.0;
+pub const OVER_MS: u32 = 60;
+/// The module's fall, the time constant the over-ceiling bound decays with after a command
+/// drops (the module's datasheet lag, with margin), ms.
+pub const MODULE_FALL_MS: f32 = 25.0;
+/// A held command whose measured voltage fell under this fraction of it: a collapse.
+pub const COLLAPSE_FRAC: f32 = 0.5;
+/// An open stack: the sensed capacitance under this fraction of the stack's.
+pub const OPEN_FRAC: f32 = 0.3;
+/// The leakage bound at a held voltage, µA (a healthy stack leaks nA).
+pub const LEAK_BOUND_UA: f32 = 1.0;
+/// The sensed and the model's thickness disagree past this (absolute, in s).
+pub const DISAGREE_S: f32 = 0.02;
+
+/// One tick's reading of a channel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reading {
+    pub v: f32,
+    pub i_ua: f32,
+    pub v_code: f32,
+}
+
+/// One channel's counters.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Watch {
+    steady_ms: u32,
+    collapse_ms: u32,
+    mismatch_ms: u32,
+    over_ms: u32,
+    stuck_ms: u32,
+    stuck_from_v: f32,
+    last_code: f32,
+    leak_ms: u32,
+    prev_drive: f32,
+    fall_env: f32,
+}
+
+impl Watch {
+    pub const fn new() -> Self {
+        Watch { steady_ms: 0, collapse_ms: 0, mismatch_ms: 0, over_ms: 0, stuck_ms: 0, stuck_from_v: 0.0, last_code: -1.0, leak_ms: 0, prev_drive: 0.0, fall_env: 0.0 }
+    }
+
+    /// The checks of one tick: `drive_v` the voltage the loop drives to, `ceiling_v` the
+    /// channel's ceiling in force, `enabled` the HV enable.
+    pub fn check(&mut self, r: &Reading, drive_v: f32, ceiling_v: f32, enabled: bool, est: &Estimator) -> Option<Fault> {
+        if !(r.v.is_finite() && r.i_ua.is_finite() && r.v_code >= 0.0) || r.v_code >= ADC_FULL_CODE - 0.5 {
+            return Some(Fault::Sensor);
+        }
+        if !(r.i_ua <= TRIP_CURRENT_UA) {
+            return Some(Fault::Breakdown);
+        }
+        // the ceiling applies to the measured voltage: past it is a module that runs away
+        // a command that drops (a guard's cut, a stop) is followed at the module's own fall:
+        // the bound decays from the last command with MODULE_FALL_MS
+        self.fall_env = if drive_v >= self.fall_env { drive_v } else { self.fall_env + (drive_v - self.fall_env) * (1.0 / MODULE_FALL_MS) };
+        let over_bound = ceiling_v.max(self.fall_env);
+        self.over_ms = if !(r.v <= over_bound * (1.0 + OVER_FRAC) + OVER_V) { self.over_ms + 1 } else { 0 };
+        if self.over_ms >= OVER_MS {
+            return Some(Fault::HvMismatch);
+        }
+        let steady = (drive_v - self.prev_drive).abs() <= 1.0 + 0.01 * drive_v;
+        self.prev_drive = drive_v;
+        self.steady_ms = if steady { self.steady_ms.saturating_add(1) } else { 0 };
+        let off = (r.v - drive_v).abs() > MISMATCH_V.max(MISMATCH_FRAC * drive_v);
+        let want = if enabled { drive_v } else { 0.0 };
+        let off = if enabled { off } else { r.v > 2.0 * MISMATCH_V };
+        self.mismatch_ms = if off { self.mismatch_ms + 1 } else { 0 };
+        if enabled && self.steady_ms >= 30 && drive_v > 1000.0 && r.v < COLLAPSE_FRAC * drive_v {
+            self.collapse_ms += 1;
+            if self.collapse_ms >= 3 {
+                return Some(Fault::Breakdown);
+            }
+        } else {
+            self.collapse_ms = 0;
+        }
+        if self.mismatch_ms > HV_SETTLE_MS {
+            return Some(Fault::HvMismatch);
+        }
+        // a reading that does not move while its command moves by 200 V: stuck
+        if r.v_code == self.last_code {
+            if self.stuck_ms == 0 {
+                self.stuck_from_v = want;
+            }
+            self.stuck_ms += 1;
+            if self.stuck_ms >= 50 && (want - self.stuck_from_v).abs() > 200.0 {
+                return Some(Fault::Sensor);
+            }
+        } else {
+            self.stuck_ms = 0;
+        }
+        self.last_code = r.v_code;
+        if enabled {
+            if let Some(c) = est.capacitance_pf() {
+                if !(c - SENSE_STRAY_PF >= OPEN_FRAC * BOARD_STACK_C0_PF) {
+                    return Some(Fault::StackOpen);
+                }
+            }
+            let leaking = drive_v > 1000.0 && est.leakage_ua().is_some_and(|l| !(l <= LEAK_BOUND_UA));
+            self.leak_ms = if leaking { self.leak_ms + 1 } else { 0 };
+            if self.leak_ms >= 200 {
+                return Some(Fault::Leakage);
+            }
+        }
+        None
+    }
+}
+
+/// The thickness guard of one channel: a factor (0, 1] on its ceiling, lowered when the
+/// sensed film is thinner than the model's (a film softer than the card), never raised until
+/// a stop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThicknessGuard {
+    pub derate: f32,
+    /// The sensed thickness disagreed with the model's past [`DISAGREE_S`].
+    pub disagreed: bool,
+}
+
+impl ThicknessGuard {
+    pub const fn new() -> Self {
+        ThicknessGuard { derate: 1.0, disagreed: false }
+    }
+
+    /// After a window: `s_meas` sensed, `s_model` the model's, `s_floor` the floor, and the
+    /// card's equilibrium voltages of the two thicknesses.
+    pub fn update(&mut self, s_meas: f32, s_model: f32, s_floor: f32, volts_model_at_model: f32, volts_model_at_meas: f32) {
+        if !(s_meas > 0.0 && s_meas <= 1.5) {
+            return;
+        }
+        if s_meas < s_model - DISAGREE_S {
+            self.disagreed = true;
+            // the film's voltage scale: at equilibrium a film g times the card's modulus needs
+            // sqrt(g) times the card's voltage for the same thickness
+            if volts_model_at_meas > volts_model_at_model && volts_model_at_model > 0.0 {
+                self.derate = self.derate.min(volts_model_at_model / volts_model_at_meas);
+            }
+        }
+        // the sensed film at or under its floor: lower the ceiling in proportion
+        if s_meas < s_floor {
+            self.derate *= 1.0 - 4.0 * (s_floor - s_meas);
+        }
+        self.derate = self.derate.clamp(0.0, 1.0);
+    }
+}
