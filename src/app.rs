@@ -34,6 +34,8 @@ mod commands;
 pub mod pose;
 #[cfg(feature = "shape")]
 mod shape;
+#[cfg(all(not(feature = "hw"), not(m3)))]
+mod plant_cmd;
 mod wire;
 mod host;
 #[cfg(feature = "settings")]

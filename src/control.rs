@@ -15,7 +15,7 @@
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
 
-use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V, HV_ZERO_DUTY_PCT};
+use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V, HV_MAX_V, HV_ZERO_DUTY_PCT};
 
 pub mod fault;
 #[cfg(not(m3))]
@@ -42,10 +42,31 @@ pub struct SenseView {
     pub disagreed: [bool; HV_CHANNELS],
 }
 
+/// A change the plant's test console asks of the board's plant (`plant ...`).
+#[cfg(all(not(feature = "hw"), not(m3)))]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PlantRequest {
+    Film { g_eq_kpa: f32, time_scale: f32 },
+    Inject(usize, crate::plant::Inject),
+}
+
+/// What `plant status` shows of the plant: per channel its true voltage (V), current (µA)
+/// and thickness stretch, and its film's G_eq (kPa).
+#[cfg(all(not(feature = "hw"), not(m3)))]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlantView {
+    pub volts: [f32; HV_CHANNELS],
+    pub current_ua: [f32; HV_CHANNELS],
+    pub s: [f32; HV_CHANNELS],
+    pub film_kpa: f32,
+}
+
 /// The read-back's per-channel state in the core.
 #[cfg(not(m3))]
 #[derive(Clone, Copy)]
 struct Sensing {
+    /// The board has a read-back (its first `hv_sense` answered).
+    present: bool,
     /// The thickness guard acts (tests switch it off: feature `hv-door`).
     guard_on: bool,
     est: [sense::Estimator; HV_CHANNELS],
@@ -75,6 +96,7 @@ pub const LOW_CHECK_MS: u32 = 300;
 impl Sensing {
     fn new() -> Self {
         Sensing {
+            present: false,
             guard_on: true,
             est: [sense::Estimator::new(); HV_CHANNELS],
             watch: [watch::Watch::new(); HV_CHANNELS],
@@ -140,11 +162,16 @@ pub struct View {
     pub now_ms: u32,
     /// Each stack's predicted thickness stretch now, s = z / z0 (1 at rest).
     pub stack_ratio: [f32; HV_CHANNELS],
-    /// The read-back, on a board that has one.
+    /// The read-back, on a board that has one (never on the Cortex-M3 image).
+    #[cfg(not(m3))]
     pub sense: Option<SenseView>,
     /// The plant's trip latency (injection to the enable low), worst so far, µs: boards
     /// with a plant only.
+    #[cfg(not(m3))]
     pub trip_max_us: Option<u32>,
+    /// The plant's truth per channel and its film's G_eq (kPa): boards with a plant only.
+    #[cfg(all(not(feature = "hw"), not(m3)))]
+    pub plant: Option<PlantView>,
 }
 
 /// The refusal of the HV writer (`Control::write_hv_duty_checked`).
@@ -203,12 +230,16 @@ pub struct Control<B: Board> {
     seq: u32,
     epoch: u32,
     now_ms: u32,
-    /// The read-back (None: a board without one, open loop).
+    /// The read-back (`present` false: a board without one, open loop).
     #[cfg(not(m3))]
-    sensing: Option<Sensing>,
+    sensing: Sensing,
     /// The channel's ceiling in force as a voltage: the writer's ceiling's.
+    #[cfg(not(m3))]
     write_ceiling_v: [f32; HV_CHANNELS],
+    #[cfg(not(m3))]
     trip_max_us: Option<u32>,
+    #[cfg(all(not(feature = "hw"), not(m3)))]
+    plant_view: Option<PlantView>,
 }
 
 /// The voltage a duty gives through the compiled calibration (`hv_duty_for`'s inverse).
@@ -253,9 +284,13 @@ impl<B: Board> Control<B> {
             epoch: 0,
             now_ms: 0,
             #[cfg(not(m3))]
-            sensing: None,
+            sensing: Sensing::new(),
+            #[cfg(not(m3))]
             write_ceiling_v: [0.0; HV_CHANNELS],
+            #[cfg(not(m3))]
             trip_max_us: None,
+            #[cfg(all(not(feature = "hw"), not(m3)))]
+            plant_view: None,
         };
         for ch in 0..HV_CHANNELS {
             c.hv_max[ch] = c.board.hv(ch).max_duty_cycle();
@@ -292,10 +327,11 @@ impl<B: Board> Control<B> {
             now_ms: self.now_ms,
             stack_ratio: self.stacks.as_ref().map(|s| s.ratios()).unwrap_or([1.0; HV_CHANNELS]),
             #[cfg(not(m3))]
-            sense: self.sensing.as_ref().map(|s| s.view),
-            #[cfg(m3)]
-            sense: None,
+            sense: self.sensing.present.then_some(self.sensing.view),
+            #[cfg(not(m3))]
             trip_max_us: self.trip_max_us,
+            #[cfg(all(not(feature = "hw"), not(m3)))]
+            plant: self.plant_view,
         }
     }
 
@@ -367,7 +403,8 @@ impl<B: Board> Control<B> {
     pub fn stop(&mut self) {
         self.hv_off_now();
         #[cfg(not(m3))]
-        if let Some(sn) = self.sensing.as_mut() {
+        {
+            let sn = &mut self.sensing;
             let recheck = sn.recheck || matches!(self.fault, Some(f) if f.is_read_back());
             sn.watch = [watch::Watch::new(); HV_CHANNELS];
             sn.guard = [watch::ThicknessGuard::new(); HV_CHANNELS];
@@ -409,7 +446,10 @@ impl<B: Board> Control<B> {
             let cap = hv_duty_cap(self.hv_max[ch]);
             self.ceiling[ch] = sp.duty_ceiling[ch].min(cap).min(hv_duty_for(hold, self.hv_max[ch]));
             self.write_ceiling[ch] = if sp.shaped { cap } else { self.ceiling[ch] };
-            self.write_ceiling_v[ch] = hv_volts_of_duty(self.write_ceiling[ch], self.hv_max[ch]);
+            #[cfg(not(m3))]
+            {
+                self.write_ceiling_v[ch] = hv_volts_of_duty(self.write_ceiling[ch], self.hv_max[ch]);
+            }
         }
         if sp.slew > 0.0 && sp.slew <= 1e6 {
             self.slew = sp.slew;
@@ -435,7 +475,8 @@ impl<B: Board> Control<B> {
             if self.fault.is_none() && !self.enable {
                 self.set_enable(true);
                 #[cfg(not(m3))]
-                if let Some(sn) = self.sensing.as_mut() {
+                {
+                    let sn = &mut self.sensing;
                     if core::mem::take(&mut sn.recheck) {
                         sn.check_until_ms = Some(self.now_ms.wrapping_add(LOW_CHECK_MS));
                     }
@@ -505,21 +546,30 @@ impl<B: Board> Control<B> {
         self.read_back();
         let step = self.slew * 0.001;
         let mut worst = 0u32;
+        #[cfg(not(m3))]
+        let hold = self.hold_ceiling_v();
         for ch in 0..HV_CHANNELS {
             let Some(stacks) = self.stacks.as_mut() else { break };
             let v = self.volts[ch];
             #[allow(unused_mut)]
-            let mut t = self.target[ch];
+            let (mut t, mut v_cap) = (self.target[ch], HV_MAX_V);
             #[cfg(not(m3))]
-            if let Some(sn) = self.sensing.as_ref() {
-                // the thickness guard's ceiling, and the low-voltage check's
-                t = t.min(sn.view.ceiling_v[ch]);
+            if self.sensing.present {
+                let sn = &self.sensing;
+                // the thickness guard's ceiling (a shaped drive no higher either), and the
+                // low-voltage check's
+                let ceil = sn.view.ceiling_v[ch];
+                if ceil < hold {
+                    v_cap = ceil;
+                }
+                t = t.min(ceil);
                 if sn.check_until_ms.is_some() {
                     t = t.min(LOW_CHECK_V);
+                    v_cap = LOW_CHECK_V;
                 }
             }
             let t0 = clock();
-            let applied = stacks.step(ch, v, t, self.s_floor[ch], self.shaped, step);
+            let applied = stacks.step(ch, v, t, self.s_floor[ch], self.shaped, step, v_cap);
             worst = worst.max(clock().wrapping_sub(t0));
             // a fault stop zeroes every channel; the later ones still step (at 0 V)
             let nv = match applied {
@@ -556,14 +606,24 @@ impl<B: Board> Control<B> {
     /// what holds a soft film). Takes effect from the next window.
     #[cfg(all(feature = "hv-door", not(m3)))]
     pub fn set_thickness_guard(&mut self, on: bool) {
-        let sn = self.sensing.get_or_insert_with(Sensing::new);
-        sn.guard_on = on;
+        self.sensing.guard_on = on;
+    }
+
+    /// The plant's test console: a change to the board's plant (none without one).
+    #[cfg(all(not(feature = "hw"), not(m3)))]
+    pub fn plant_request(&mut self, req: PlantRequest) {
+        if let Some(p) = self.board.plant() {
+            let _ = match req {
+                PlantRequest::Film { g_eq_kpa, time_scale } => p.set_film(g_eq_kpa, time_scale),
+                PlantRequest::Inject(ch, what) => p.inject(ch, what),
+            };
+        }
     }
 
     /// Channel `ch`'s estimator (reports and tests).
     #[cfg(not(m3))]
     pub fn estimator(&self, ch: usize) -> Option<sense::Estimator> {
-        self.sensing.as_ref().map(|s| s.est[ch])
+        self.sensing.present.then_some(self.sensing.est[ch])
     }
 
     /// The duty of a guarded value `nv` (target `t`): open loop without a read-back; with
@@ -574,7 +634,10 @@ impl<B: Board> Control<B> {
         let max = self.hv_max[ch];
         let limit = self.write_ceiling[ch];
         let now = self.now_ms;
-        let Some(sn) = self.sensing.as_mut() else { return hv_duty_for(nv, max) };
+        if !self.sensing.present {
+            return hv_duty_for(nv, max);
+        }
+        let sn = &mut self.sensing;
         let held = nv > sense::RIPPLE_MIN_V && (nv - t).abs() < 1.0 && self.enable;
         let limit_v = hv_volts_of_duty(limit, max);
         let drive = if held { nv - sense::ripple_v(now) } else { nv }.min(limit_v);
@@ -591,9 +654,17 @@ impl<B: Board> Control<B> {
         #[cfg(not(feature = "hw"))]
         if let Some(p) = self.board.plant() {
             self.trip_max_us = Some(p.trip_max_us);
+            let mut pv = PlantView { volts: [0.0; HV_CHANNELS], current_ua: [0.0; HV_CHANNELS], s: [1.0; HV_CHANNELS], film_kpa: p.film_kpa() };
+            for (ch, t) in p.truth().iter().enumerate() {
+                pv.volts[ch] = t.volts;
+                pv.current_ua[ch] = t.current_ua;
+                pv.s[ch] = t.s;
+            }
+            self.plant_view = Some(pv);
         }
         let hold = self.hold_ceiling_v();
-        let sn = self.sensing.get_or_insert_with(Sensing::new);
+        let sn = &mut self.sensing;
+        sn.present = true;
         let mut fault = None;
         if hs.trip.is_some() {
             fault = Some(Fault::Breakdown);

@@ -36,6 +36,9 @@ pub struct Mailbox {
     view: finger_fw::control::View,
     /// The command side's last check-in, control ms (the watchdog feeds only after a recent one).
     checkin_ms: u32,
+    /// A `plant ...` line's change to the emulator's plant.
+    #[cfg(all(feature = "qemu", not(m3)))]
+    plant: Option<finger_fw::control::PlantRequest>,
 }
 
 /// The real-time core. Priorities and interrupts, the one place they are set:
@@ -112,7 +115,14 @@ mod app {
         }
         tx.push_all(b" ready\r\n");
 
-        let mailbox = super::Mailbox { setpoints: None, stop: false, view, checkin_ms: 0 };
+        let mailbox = super::Mailbox {
+            setpoints: None,
+            stop: false,
+            view,
+            checkin_ms: 0,
+            #[cfg(all(feature = "qemu", not(m3)))]
+            plant: None,
+        };
         (Shared { ctl, mailbox, timing: Timing::new(), rx: RxLines::new(), tx }, Local { cmds, usart_rx: chip.rx })
     }
 
@@ -129,6 +139,10 @@ mod app {
             *cx.local.last_entry = at;
             if core::mem::take(&mut mb.stop) {
                 ctl.stop();
+            }
+            #[cfg(all(feature = "qemu", not(m3)))]
+            if let Some(p) = mb.plant.take() {
+                ctl.plant_request(p);
             }
             if let Some(sp) = mb.setpoints.take() {
                 ctl.apply(&sp);
@@ -208,9 +222,15 @@ mod app {
             report.durations.record(word, (t1 - t0) as u32);
             let stop = cmds.take_stop();
             let sp = cmds.setpoints();
+            #[cfg(all(feature = "qemu", not(m3)))]
+            let plant = cmds.take_plant();
             out.mailbox.lock(|m| {
                 m.setpoints = Some(sp);
                 m.stop |= stop;
+                #[cfg(all(feature = "qemu", not(m3)))]
+                {
+                    m.plant = plant;
+                }
             });
             // the next line sees this one's effect: the core takes the setpoints at its next
             // tick (or drops them after a stop)

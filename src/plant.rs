@@ -144,11 +144,12 @@ pub enum PlantError {
 }
 
 impl Plant {
-    /// The board's film (the card), nominal parts; `seed` for the ADC noise.
-    pub fn new(seed: u32) -> Self {
-        let law = StackLaw::new(BOARD_CARD, BOARD_Z0_MM, BOARD_MARGIN).expect("the board's card is valid");
-        let relax = Relaxation::new(&law, 1e-3).expect("the board's card relaxes");
-        Plant {
+    /// The board's film (the card), nominal parts; `seed` for the ADC noise. None when the
+    /// board's card gives no law (the core never arms then either).
+    pub fn new(seed: u32) -> Option<Self> {
+        let law = StackLaw::new(BOARD_CARD, BOARD_Z0_MM, BOARD_MARGIN).ok()?;
+        let relax = Relaxation::new(&law, 1e-3).ok()?;
+        Some(Plant {
             law,
             relax,
             g_eq_mpa: BOARD_CARD.g_eq_mpa as f32,
@@ -161,7 +162,7 @@ impl Plant {
             pending_since_us: None,
             trip_last_us: 0,
             trip_max_us: 0,
-        }
+        })
     }
 
     /// The film's equilibrium modulus, kPa (the branches stay the card's), and how much

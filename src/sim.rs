@@ -5,7 +5,10 @@ use core::convert::Infallible;
 use embedded_hal::digital::{ErrorType as PinErrorType, OutputPin};
 use embedded_hal::pwm::{ErrorType as PwmErrorType, SetDutyCycle};
 
-use crate::board::{Board, HvSense, HV_CHANNELS};
+#[cfg(all(not(feature = "hw"), not(m3)))]
+use crate::board::HvSense;
+use crate::board::{Board, HV_CHANNELS};
+#[cfg(all(not(feature = "hw"), not(m3)))]
 use crate::plant::Plant;
 
 /// A PWM output: the last duty written and how many writes.
@@ -63,9 +66,11 @@ pub struct SimBoard {
     pub enable: SimPin,
     pub watchdog_feeds: u64,
     /// The HV plant behind a read-back (None: no read-back, the HV runs open loop).
+    #[cfg(all(not(feature = "hw"), not(m3)))]
     pub plant: Option<Plant>,
 }
 
+#[cfg(all(not(feature = "hw"), not(m3)))]
 impl SimBoard {
     /// The board with the plant behind its read-back (finger-sim, the plant's tests).
     pub fn with_plant(plant: Plant) -> Self {
@@ -78,7 +83,14 @@ impl Default for SimBoard {
         // 0.5 us resolution: 40000 counts per 20 ms period.
         let servo = SimPwm { duty: 0, max: 40_000, writes: 0 };
         let hv = SimPwm { duty: 0, max: 8_400, writes: 0 };
-        SimBoard { servo, hv: [hv; HV_CHANNELS], enable: SimPin::default(), watchdog_feeds: 0, plant: None }
+        SimBoard {
+            servo,
+            hv: [hv; HV_CHANNELS],
+            enable: SimPin::default(),
+            watchdog_feeds: 0,
+            #[cfg(all(not(feature = "hw"), not(m3)))]
+            plant: None,
+        }
     }
 }
 
@@ -104,11 +116,13 @@ impl Board for SimBoard {
     fn newline(&self) -> &'static str {
         "\n"
     }
+    #[cfg(all(not(feature = "hw"), not(m3)))]
     fn hv_sense(&mut self) -> Option<HvSense> {
         let duty = [self.hv[0].duty, self.hv[1].duty, self.hv[2].duty];
         let (max, enable) = (self.hv[0].max, self.enable.high);
         self.plant.as_mut().map(|p| p.tick(duty, max, enable))
     }
+    #[cfg(all(not(feature = "hw"), not(m3)))]
     fn plant(&mut self) -> Option<&mut Plant> {
         self.plant.as_mut()
     }
@@ -273,6 +287,10 @@ impl VirtualSim {
         let start_ms = app.ctl.now_ms();
         let mut reply: String<32768> = String::new();
         app.cmds.run(rec, &mut reply);
+        #[cfg(all(not(feature = "hw"), not(m3)))]
+        if let Some(p) = app.cmds.take_plant() {
+            app.ctl.plant_request(p);
+        }
         if app.cmds.take_stop() {
             app.ctl.stop();
             app.cmds.sync(&app.ctl.view());

@@ -70,7 +70,7 @@ pub struct FaultRun {
 pub fn fault_history(seed: u64, watch_ms: u32) -> FaultRun {
     let mut r = Rng::new(seed);
     let target = [r.range(500.0, 5399.0), r.range(500.0, 5399.0), r.range(500.0, 5399.0)];
-    let mut c = armed(Plant::new(seed as u32), target);
+    let mut c = armed(Plant::new(seed as u32).unwrap(), target);
     run(&mut c, 20 + r.below(3000));
     let ch = r.below(3) as usize;
     let kind = [Kind::Breakdown, Kind::Stuck, Kind::Open, Kind::Leak][r.below(4) as usize];
@@ -102,7 +102,7 @@ pub fn fault_history(seed: u64, watch_ms: u32) -> FaultRun {
 /// latched, if any (a false trip).
 pub fn clean_history(seed: u64, ms: u32) -> Option<Fault> {
     let mut r = Rng::new(seed);
-    let mut c = armed(Plant::new(seed as u32), [0.0; 3]);
+    let mut c = armed(Plant::new(seed as u32).unwrap(), [0.0; 3]);
     let mut t = 0;
     while t < ms {
         let target = [r.range(0.0, 5399.0), r.range(0.0, 5399.0), r.range(0.0, 5399.0)];
@@ -137,7 +137,7 @@ pub struct FilmRun {
 pub fn soft_film_history(seed: u64, ms: u32, time_scale: f32, guard: bool) -> FilmRun {
     let mut r = Rng::new(seed);
     let g = r.range(6.7, 13.4);
-    let mut plant = Plant::new(seed as u32);
+    let mut plant = Plant::new(seed as u32).unwrap();
     plant.set_film(g, time_scale).expect("film");
     let mut c = armed(plant, [0.0; 3]);
     c.set_thickness_guard(guard);

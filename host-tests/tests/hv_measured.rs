@@ -16,7 +16,7 @@ fn breakdown_is_cut_within_a_millisecond_in_10000_histories() {
     for seed in 0..10_000u64 {
         let mut r = Rng::new(seed);
         let target = [r.range(600.0, 5399.0), r.range(600.0, 5399.0), r.range(600.0, 5399.0)];
-        let mut c = armed(Plant::new(seed as u32), target);
+        let mut c = armed(Plant::new(seed as u32).unwrap(), target);
         // past 500 V on every channel at 2000 V/s, then a random moment (slewing or held)
         run(&mut c, 300 + r.below(300));
         let ch = r.below(3) as usize;
@@ -47,7 +47,7 @@ fn no_false_trip_in_300_noisy_histories() {
 #[test]
 fn a_stuck_module_is_cut_within_the_settling_time() {
     for seed in 0..20u64 {
-        let mut c = armed(Plant::new(seed as u32), [3000.0; 3]);
+        let mut c = armed(Plant::new(seed as u32).unwrap(), [3000.0; 3]);
         run(&mut c, 2000);
         c.board_mut().plant.as_mut().unwrap().inject((seed % 3) as usize, Inject::Stuck(8000.0)).unwrap();
         run(&mut c, HV_SETTLE_MS + 20);
@@ -61,7 +61,7 @@ fn a_stuck_module_is_cut_within_the_settling_time() {
 #[test]
 fn an_open_stack_and_a_leak_are_latched() {
     for (what, want) in [(Inject::Open, Fault::StackOpen), (Inject::Leak(3000.0 / 10e-6), Fault::Leakage)] {
-        let mut c = armed(Plant::new(5), [3000.0; 3]);
+        let mut c = armed(Plant::new(5).unwrap(), [3000.0; 3]);
         run(&mut c, 2500);
         c.board_mut().plant.as_mut().unwrap().inject(1, what).unwrap();
         run(&mut c, 6000);
@@ -73,7 +73,7 @@ fn an_open_stack_and_a_leak_are_latched() {
 /// A monitor reading stuck at one code while the command moves: `sensor`.
 #[test]
 fn a_stuck_monitor_reading_is_a_sensor_fault() {
-    let mut c = armed(Plant::new(3), [4000.0; 3]);
+    let mut c = armed(Plant::new(3).unwrap(), [4000.0; 3]);
     c.board_mut().plant.as_mut().unwrap().inject(2, Inject::MonitorStuck(400.0)).unwrap();
     run(&mut c, 1000);
     assert_eq!(c.view().fault.get(), Some(Fault::Sensor));
@@ -83,7 +83,7 @@ fn a_stuck_monitor_reading_is_a_sensor_fault() {
 /// mean over a ripple period, the ripple's own mean taken off).
 #[test]
 fn the_loop_holds_a_module_ten_percent_weak() {
-    let mut p = Plant::new(9);
+    let mut p = Plant::new(9).unwrap();
     for ch in 0..3 {
         p.inject(ch, Inject::Gain(0.9)).unwrap();
     }
@@ -102,7 +102,7 @@ fn the_loop_holds_a_module_ten_percent_weak() {
 /// The sensed thickness follows the plant's film within 1.5 % over a ramp and a hold.
 #[test]
 fn the_sensed_thickness_follows_the_film() {
-    let mut c = armed(Plant::new(11), [5399.0; 3]);
+    let mut c = armed(Plant::new(11).unwrap(), [5399.0; 3]);
     run(&mut c, 1000);
     let mut worst: f32 = 0.0;
     for _ in 0..60 {

@@ -75,7 +75,15 @@ pub struct Commands {
     /// Each stack's thickness stretch now, as the control tick integrates it (1 at rest).
     pub(super) stack_ratio: [f32; CHANNELS],
     /// The read-back, on a board that has one.
+    #[cfg(not(m3))]
     pub(super) sense: Option<crate::control::SenseView>,
+    #[cfg(not(m3))]
+    pub(super) trip_max_us: Option<u32>,
+    /// The plant's truth (boards with a plant) and the request of the last `plant` line.
+    #[cfg(all(not(feature = "hw"), not(m3)))]
+    pub(super) plant_view: Option<crate::control::PlantView>,
+    #[cfg(all(not(feature = "hw"), not(m3)))]
+    pub(super) plant_req: Option<crate::control::PlantRequest>,
     /// The core's latched fault, as the console names it.
     pub(super) fault: Option<&'static str>,
     pub(super) locked_out: bool,
@@ -127,7 +135,14 @@ impl Commands {
             volts: [0.0; CHANNELS],
             duty: [0; CHANNELS],
             stack_ratio: [1.0; CHANNELS],
+            #[cfg(not(m3))]
             sense: None,
+            #[cfg(not(m3))]
+            trip_max_us: None,
+            #[cfg(all(not(feature = "hw"), not(m3)))]
+            plant_view: None,
+            #[cfg(all(not(feature = "hw"), not(m3)))]
+            plant_req: None,
             fault: None,
             locked_out: false,
             now_ms: 0,
@@ -190,7 +205,15 @@ impl Commands {
         self.fault = v.fault.text();
         self.locked_out = v.locked_out;
         self.stack_ratio = v.stack_ratio;
-        self.sense = v.sense;
+        #[cfg(not(m3))]
+        {
+            self.sense = v.sense;
+            self.trip_max_us = v.trip_max_us;
+        }
+        #[cfg(all(not(feature = "hw"), not(m3)))]
+        {
+            self.plant_view = v.plant;
+        }
         self.now_ms = v.now_ms;
         if v.epoch != self.epoch {
             self.epoch = v.epoch;
@@ -528,6 +551,10 @@ impl Commands {
             b"pose" => return Err(err!("unknown"; "pose is not in this build (feature pose)")),
             #[cfg(not(feature = "contact"))]
             b"contact" => return Err(err!("unknown"; "contact is not in this build (feature contact)")),
+            #[cfg(all(not(feature = "hw"), not(m3)))]
+            b"plant" => self.cmd_plant(args, r)?,
+            #[cfg(any(feature = "hw", m3))]
+            b"plant" => return Err(err!("unknown"; "plant is not in this build (the simulated plant: finger-sim and the emulator image)")),
             b"param" => self.cmd_param(args, r, out)?,
             b"preset" => self.cmd_preset(args, r)?,
             b"cal" => self.cmd_cal(args, r)?,
@@ -595,6 +622,7 @@ impl Commands {
         }
         let _ = w!(r; " thick_eq=");
         list(r, &eq, 4);
+        #[cfg(not(m3))]
         if let Some(sv) = self.sense {
             // the read-back (docs/console.md "Measured HV"): measured volts, µA, the sensed
             // thickness (mm; `-` until measured), each channel's ceiling now and its film check

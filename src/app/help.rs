@@ -14,7 +14,11 @@ use crate::num::{Exp, Fixed, List};
 use crate::out::Emit;
 
 /// A reply line being built (without `ok ` and the line ending).
+#[cfg(m3)]
 pub(crate) type Reply = String<400>;
+/// (the read-back's fields make `status` longer than the M3 image's)
+#[cfg(not(m3))]
+pub(crate) type Reply = String<480>;
 
 /// Radians to degrees.
 pub(crate) const DEG: f32 = 180.0 / core::f32::consts::PI;

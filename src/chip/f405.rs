@@ -11,6 +11,8 @@
 //! before and without this.
 
 use crate::Board;
+use core::convert::Infallible;
+use embedded_hal::digital::{ErrorType, OutputPin};
 use stm32f4xx_hal::{
     gpio::{Output, PinState, PB12},
     pac,
@@ -26,10 +28,36 @@ pub type HvPwm = ErasedChannel<pac::TIM4>;
 pub type ConsoleRx = Rx<pac::USART1>;
 pub type ConsoleTx = Tx<pac::USART1>;
 
+/// The HV enable pin, and the level last written (QEMU models no GPIO: the plant reads this).
+pub struct EnablePin {
+    pin: PB12<Output>,
+    high: bool,
+}
+
+impl ErrorType for EnablePin {
+    type Error = Infallible;
+}
+
+impl OutputPin for EnablePin {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        self.pin.set_low();
+        self.high = false;
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.pin.set_high();
+        self.high = true;
+        Ok(())
+    }
+}
+
 pub struct F405Board {
     servo: PwmChannel<pac::TIM3, 0>,
     hv: [HvPwm; 3],
-    enable: PB12<Output>,
+    enable: EnablePin,
+    /// The emulator image's HV plant behind the read-back (QEMU's ADC is a sawtooth).
+    #[cfg(all(feature = "qemu", not(m3)))]
+    plant: crate::plant::Plant,
     #[cfg(feature = "hw")]
     iwdg: stm32f4xx_hal::watchdog::IndependentWatchdog,
 }
@@ -37,7 +65,7 @@ pub struct F405Board {
 impl Board for F405Board {
     type Servo = PwmChannel<pac::TIM3, 0>;
     type Hv = HvPwm;
-    type Enable = PB12<Output>;
+    type Enable = EnablePin;
     fn servo(&mut self) -> &mut Self::Servo {
         &mut self.servo
     }
@@ -50,6 +78,22 @@ impl Board for F405Board {
     fn feed_watchdog(&mut self) {
         #[cfg(feature = "hw")]
         self.iwdg.feed();
+    }
+    /// The emulator image: the plant stepped over the tick with the duties in TIM4's compare
+    /// registers and the enable as last written. (The board build's ADC read-back is not
+    /// written yet: it has none, and runs open loop as before.)
+    #[cfg(all(feature = "qemu", not(m3)))]
+    fn hv_sense(&mut self) -> Option<crate::board::HvSense> {
+        use embedded_hal::pwm::SetDutyCycle;
+        // SAFETY: reads of TIM4's compare registers, which only the HV writer sets.
+        let tim4 = unsafe { &*pac::TIM4::ptr() };
+        let duty = [tim4.ccr(0).read().bits() as u16, tim4.ccr(1).read().bits() as u16, tim4.ccr(2).read().bits() as u16];
+        let max = self.hv[0].max_duty_cycle();
+        Some(self.plant.tick(duty, max, self.enable.high))
+    }
+    #[cfg(all(feature = "qemu", not(m3)))]
+    fn plant(&mut self) -> Option<&mut crate::plant::Plant> {
+        Some(&mut self.plant)
     }
     fn name(&self) -> &'static str {
         if cfg!(m3) {
@@ -85,7 +129,7 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
 
     let gpioa = dp.GPIOA.split(&mut rcc);
     let gpiob = dp.GPIOB.split(&mut rcc);
-    let enable = gpiob.pb12.into_push_pull_output_in_state(PinState::Low);
+    let enable = EnablePin { pin: gpiob.pb12.into_push_pull_output_in_state(PinState::Low), high: false };
 
     let (_, (s1, ..)) = dp.TIM3.pwm_hz(50.Hz(), &mut rcc);
     let mut servo = s1.with(gpioa.pa6);
@@ -112,6 +156,11 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
         servo,
         hv,
         enable,
+        #[cfg(all(feature = "qemu", not(m3)))]
+        plant: match crate::plant::Plant::new(1) {
+            Some(p) => p,
+            None => panic!(),
+        },
         #[cfg(feature = "hw")]
         iwdg,
     };

@@ -110,11 +110,13 @@ impl Stacks {
     /// (`s_hold` plain, the target's equilibrium ratio shaped): the model's drive step
     /// (`material::drive::Channel::step`: the goal, the target or shaped the voltage that holds
     /// the film at `s_floor` now capped by the supply; the slew by `slew_step`; `guarded_tick`).
-    /// The voltage applied, V. Refused (the state past its pull-in, not reachable under the
-    /// guard): nothing changes, the caller stops.
+    /// `v_cap`: the most a shaped drive may ask (the supply, or a ceiling the read-back
+    /// lowered). The voltage applied, V. Refused (the state past its pull-in, not reachable
+    /// under the guard): nothing changes, the caller stops.
     #[cfg(not(m3))]
-    pub fn step(&mut self, ch: usize, volts_now: f32, target_v: f32, s_floor: f32, shaped: bool, slew_step: f32) -> Result<f32, StepRefused> {
-        let lim = DriveLimits { s_hold: self.s_hold, slew_step, v_cap: HV_MAX_V };
+    #[allow(clippy::too_many_arguments)]
+    pub fn step(&mut self, ch: usize, volts_now: f32, target_v: f32, s_floor: f32, shaped: bool, slew_step: f32, v_cap: f32) -> Result<f32, StepRefused> {
+        let lim = DriveLimits { s_hold: self.s_hold, slew_step, v_cap: v_cap.min(HV_MAX_V) };
         let mode = if shaped { Mode::Shaped } else { Mode::Plain };
         let c = &mut self.chan[ch];
         c.volts = volts_now;
@@ -136,7 +138,8 @@ impl Stacks {
     /// The M3 image's step: the slew toward the target (already within the hold ceiling),
     /// nothing integrated.
     #[cfg(m3)]
-    pub fn step(&mut self, _ch: usize, volts_now: f32, target_v: f32, _s_floor: f32, _shaped: bool, slew_step: f32) -> Result<f32, StepRefused> {
+    #[allow(clippy::too_many_arguments)]
+    pub fn step(&mut self, _ch: usize, volts_now: f32, target_v: f32, _s_floor: f32, _shaped: bool, slew_step: f32, _v_cap: f32) -> Result<f32, StepRefused> {
         let v = if target_v > volts_now { (volts_now + slew_step).min(target_v) } else { (volts_now - slew_step).max(target_v) };
         Ok(if v > 0.0 { v } else { 0.0 })
     }
