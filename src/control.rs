@@ -558,10 +558,10 @@ impl<B: Board> Control<B> {
                 let sn = &self.sensing;
                 // the thickness guard's ceiling (a shaped drive no higher either), and the
                 // low-voltage check's
+                // a shaped drive's overdrive stays under the hold ceiling: past it the film's
+                // response is the card's guess, which the read-back checks only after it
                 let ceil = sn.view.ceiling_v[ch];
-                if ceil < hold {
-                    v_cap = ceil;
-                }
+                v_cap = ceil.min(hold);
                 t = t.min(ceil);
                 if sn.check_until_ms.is_some() {
                     t = t.min(LOW_CHECK_V);
@@ -580,7 +580,7 @@ impl<B: Board> Control<B> {
                 }
             };
             #[cfg(not(m3))]
-            let d = self.loop_duty(ch, nv, t);
+            let d = self.loop_duty(ch, nv);
             #[cfg(m3)]
             let d = hv_duty_for(nv, self.hv_max[ch]);
             if d != self.duty[ch] && self.write_hv_duty_checked(ch, d).is_err() {
@@ -630,7 +630,7 @@ impl<B: Board> Control<B> {
     /// one, the hold ripple below `nv` once it is held, and the voltage loop, clamped to the
     /// channel's duty ceiling (the loop can ask no more than the open loop could).
     #[cfg(not(m3))]
-    fn loop_duty(&mut self, ch: usize, nv: f32, t: f32) -> u16 {
+    fn loop_duty(&mut self, ch: usize, nv: f32) -> u16 {
         let max = self.hv_max[ch];
         let limit = self.write_ceiling[ch];
         let now = self.now_ms;
@@ -638,7 +638,8 @@ impl<B: Board> Control<B> {
             return hv_duty_for(nv, max);
         }
         let sn = &mut self.sensing;
-        let held = nv > sense::RIPPLE_MIN_V && (nv - t).abs() < 1.0 && self.enable;
+        // steady (held, or a shaped or guarded voltage that creeps): the ripple measures it
+        let held = nv > sense::RIPPLE_MIN_V && (nv - self.volts[ch]).abs() < 1.0 && self.enable;
         let limit_v = hv_volts_of_duty(limit, max);
         let drive = if held { nv - sense::ripple_v(now) } else { nv }.min(limit_v);
         sn.drive[ch] = drive;

@@ -150,6 +150,10 @@ mod app {
             let stack = ctl.tick_timed(mb.checkin_ms, time::systick_elapsed);
             tm.tick_stack_max = tm.tick_stack_max.max(stack);
             mb.view = ctl.view();
+            #[cfg(not(m3))]
+            {
+                tm.trip_max_us = mb.view.trip_max_us;
+            }
             #[cfg(feature = "qemu")]
             {
                 // tick marker for the register trace (TIM4 CCR4: channel 4 is not an output)

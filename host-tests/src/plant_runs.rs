@@ -144,14 +144,14 @@ pub fn soft_film_history(seed: u64, ms: u32, time_scale: f32, guard: bool) -> Fi
     let hold_v = c.hold_ceiling_v();
     let mut t = 0;
     while t < ms {
-        // mostly near the ceiling: where a soft film is at risk
+        // mostly near the ceiling, held long: where a soft film is at risk
         let mut target = [0.0; 3];
         for v in target.iter_mut() {
-            *v = if r.below(4) == 0 { r.range(0.0, hold_v) } else { r.range(0.85 * hold_v, hold_v - 1.0) };
+            *v = if r.below(4) == 0 { r.range(0.0, hold_v) } else { r.range(0.95 * hold_v, hold_v - 1.0) };
         }
         let sp = setpoints(&c, target, r.below(4) == 0, [2000.0, 20_000.0][r.below(2) as usize]);
         c.apply(&sp);
-        let hold = 200 + r.below(ms / 2);
+        let hold = (ms / 8 + r.below(ms / 2)).min(ms - t);
         run(&mut c, hold);
         t += hold;
     }

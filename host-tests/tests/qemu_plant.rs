@@ -50,7 +50,10 @@ fn a_film_half_the_cards_modulus_stays_above_two_thirds_for_600_s() {
     let vmax: f32 = field(&lim, "vmax").split(',').next().unwrap().parse().unwrap();
     let v = vmax - 0.1;
     assert!(q.cmd(&format!("volt all {v:.1}")).starts_with("ok volts="), "{v}");
-    assert_eq!(q.cmd("wait 600"), "ok waited=600");
+    // 600 s in ten waits (each reply inside the harness's read time-out)
+    for _ in 0..10 {
+        assert_eq!(q.cmd("wait 60"), "ok waited=60");
+    }
     let st = q.cmd("status");
     assert_eq!(field(&st, "fault"), "none", "{st}");
     let plant = q.cmd("plant status");

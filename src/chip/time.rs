@@ -49,11 +49,14 @@ pub struct Timing {
     pub stops: u32,
     /// Control ticks counted.
     pub ticks: u32,
+    /// The plant's trip latency, injection to the enable low, worst so far, µs (the emulator
+    /// image: its faults come from its plant).
+    pub trip_max_us: Option<u32>,
 }
 
 impl Timing {
     pub const fn new() -> Self {
-        Timing { tick_latency: (u32::MAX, 0), tick_run_max: 0, tick_stack_max: 0, period: (u32::MAX, 0), stop_max: 0, stops: 0, ticks: 0 }
+        Timing { tick_latency: (u32::MAX, 0), tick_run_max: 0, tick_stack_max: 0, period: (u32::MAX, 0), stop_max: 0, stops: 0, ticks: 0, trip_max_us: None }
     }
 }
 
@@ -112,13 +115,18 @@ impl Default for Durations {
 /// The `timing` reply: `tick_period_us=<min>,<max>` (control-task entry to entry),
 /// `tick_latency_us=<min>,<max>` (control-task entry after the SysTick reload: the tick's
 /// jitter), `tick_run_us=<max>`, `tick_stack_us=<max>`, `ticks=<n>`, `stop_us=<max>` (console
-/// interrupt entry to HV off), `stops=<n>`, `cmd_us=<word>:<max>,...` (the command side, line
-/// run, replies queued).
+/// interrupt entry to HV off), `stops=<n>`, `trip_us=<max>` (a plant's fault, injection to the
+/// enable low: the emulator image), `cmd_us=<word>:<max>,...` (the command side, line run,
+/// replies queued).
 pub fn write_timing(o: &mut dyn Write, t: &Timing, d: &Durations) {
     let us = |c: u32| Fixed(c as f32 / CORE_MHZ as f32, 2);
     let unset0 = |v: u32| if v == u32::MAX { 0 } else { v };
     let _ = w!(o; "tick_period_us=", us(unset0(t.period.0)), ",", us(t.period.1), " tick_latency_us=", us(unset0(t.tick_latency.0)), ",", us(t.tick_latency.1), " tick_run_us=", us(t.tick_run_max), " tick_stack_us=", Fixed(t.tick_stack_max as f32 / CORE_MHZ as f32, 3), " ticks=", t.ticks);
-    let _ = w!(o; " stop_us=", us(t.stop_max), " stops=", t.stops, " cmd_us=");
+    let _ = w!(o; " stop_us=", us(t.stop_max), " stops=", t.stops);
+    if let Some(trip) = t.trip_max_us {
+        let _ = w!(o; " trip_us=", trip);
+    }
+    let _ = w!(o; " cmd_us=");
     let mut first = true;
     for (word, c) in d.0.iter() {
         if word[0] == 0 {

@@ -29,6 +29,8 @@ pub const COLLAPSE_FRAC: f32 = 0.5;
 pub const OPEN_FRAC: f32 = 0.3;
 /// The leakage bound at a held voltage, µA (a healthy stack leaks nA).
 pub const LEAK_BOUND_UA: f32 = 1.0;
+/// The thickness guard lowers the ceiling once the sensed film is within this of its floor.
+pub const FLOOR_MARGIN_S: f32 = 0.03;
 /// The sensed and the model's thickness disagree past this (absolute, in s).
 pub const DISAGREE_S: f32 = 0.02;
 
@@ -150,13 +152,16 @@ impl ThicknessGuard {
             self.disagreed = true;
             // the film's voltage scale: at equilibrium a film g times the card's modulus needs
             // sqrt(g) times the card's voltage for the same thickness
+            // (to the power 1.5: while both films creep, the ratio understates the softness)
             if volts_model_at_meas > volts_model_at_model && volts_model_at_model > 0.0 {
-                self.derate = self.derate.min(volts_model_at_model / volts_model_at_meas);
+                let c = volts_model_at_model / volts_model_at_meas;
+                self.derate = self.derate.min(c * libm::sqrtf(c));
             }
         }
-        // the sensed film at or under its floor: lower the ceiling in proportion
-        if s_meas < s_floor {
-            self.derate *= 1.0 - 4.0 * (s_floor - s_meas);
+        // the sensed film near or under its floor: lower the ceiling in proportion
+        let near = s_floor + FLOOR_MARGIN_S;
+        if s_meas < near {
+            self.derate *= 1.0 - 4.0 * (near - s_meas);
         }
         self.derate = self.derate.clamp(0.0, 1.0);
     }
