@@ -125,7 +125,7 @@ def evaluate(card: str, inputs: Dict[str, Sequence[float]] | Sequence[Design], *
             safe(r["field_V_per_um"] / r["breakdown_V_per_um"] - 1.0),
             safe(2.0 / 3.0 - r["s_min"]),
             safe((fmax_floor_N - r["fmax_N"]) / fmax_floor_N),
-            cols["layers"] * cols["z0"] / np.where(depth > 0, depth, 1e-9) - 1.0,
+            np.where(depth > 0, cols["layers"] * cols["z0"] / np.where(depth > 0, depth, 1.0) - 1.0, 1.0),
         ],
         axis=1,
     )

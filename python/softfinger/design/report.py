@@ -226,6 +226,11 @@ def write(res: Dict, root: Path) -> None:
     if oks:
         worst = max(abs(ch["errors"]["ratio_kyy_pct"]) for ch in oks)
         w(f"\nOver the {len(oks)} designs FE-checked, the model's k_yy ratio is within {worst:.1f} % of CalculiX's.\n")
+    w("## From a design to a board\n")
+    w("A design is a TOML file: `card` plus the console's parameter names (`t_min`, `a`, `e_b`, `w`, `layers`, `z0`, `v_supply`, `margin`; `softfinger.design.Design.to_toml`). The best design per card is `designs/<card>.toml`. The firmware builds for one with\n")
+    w("```sh\nFINGER_DESIGN=designs/Elastosil-2030.toml cargo build --release\n```\n")
+    w("build.rs reads the file (a relative path from the repository's top; an unknown key, a missing one, a value outside the model's range or `paper-elastic` stops the build with the reason) and writes the board constants src/board.rs includes: `BOARD_CARD`, `BOARD_Z0_MM`, `BOARD_LAYERS`, `BOARD_MARGIN`, the HV modules' `HV_FULL_SCALE_V` and `HV_LIMIT_V` (the design's supply) and `BOARD_FINGER` (the design's values, which the board's default parameters take, `preset default` too). Without `FINGER_DESIGN` the constants are the paper's finger on VHB 4905, as before. On that image `material` reports the design's card, z0 and margin, and `limits` its ceiling (`vmax` = `vhold` = the design's ceiling); they stay board constants: `param v_supply`, `param margin` or `param z0` can only lower the ceiling in force, never raise it past `vhold`.\n")
+    w("Tests (`python/tests/test_design.py`, in `scripts/test`'s pytest): a 48-trial study finds a design that meets every constraint; designs the model refuses come back infeasible with their error, the other rows unchanged; a study killed (SIGKILL) mid-run resumes with every stored trial; `Finger` and `Design` pickle and round-trip; `designs/Elastosil-2030.toml` builds the board's application (finger-sim, the same build.rs and board.rs constants as the release image, host build in target/design) whose `limits` equals the design's ceiling and which `param` cannot raise.\n")
     w("## Cost and benchmark\n")
     m = res["machine"]
     w(f"This machine: {m['cores']} cores (shared with other jobs while this ran), {m['arch']}, Python {m['python']}. Heavy runs under `nice -n 10`.\n")
