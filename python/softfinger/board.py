@@ -178,13 +178,19 @@ class Limits:
 
 
 class _Link:
-    """Bytes out; lines in through a reader thread and a queue, so every read has a deadline."""
+    """Bytes out; lines in through a reader thread and a queue, so every read has a deadline.
+
+    ``close`` ends the far side; the reader thread then sees the end of its input and stops,
+    and only after it has stopped does ``release`` free what it reads from (a pipe's file
+    descriptor): a descriptor freed under a reader that is still running can be reused by the
+    next board's pipe, and the old reader would take that board's replies."""
 
     _CLOSED = object()
 
-    def __init__(self, write, read_some, close):
+    def __init__(self, write, read_some, close, release=None):
         self._write = write
         self._close = close
+        self._release = release
         self._lines: "queue.Queue[object]" = queue.Queue()
         self._thread = threading.Thread(target=self._pump, args=(read_some,), daemon=True)
         self._thread.start()
@@ -222,6 +228,9 @@ class _Link:
 
     def close(self) -> None:
         self._close()
+        self._thread.join(timeout=10.0)
+        if self._release is not None and not self._thread.is_alive():
+            self._release()
 
 
 def _serial_link(port: serial.SerialBase) -> _Link:
@@ -245,18 +254,21 @@ def _process_link(proc: subprocess.Popen, on_close=None) -> _Link:
         return data or None
 
     def close():
-        for f in (proc.stdin, proc.stdout):
-            try:
-                f.close()
-            except OSError:
-                pass
+        try:
+            proc.stdin.close()
+        except OSError:
+            pass
         if proc.poll() is None:
             proc.kill()
         proc.wait(timeout=10)
+
+    def release():
+        # the reader has stopped: its descriptor can go
+        proc.stdout.close()
         if on_close:
             on_close()
 
-    return _Link(write, read_some, close)
+    return _Link(write, read_some, close, release)
 
 
 def _repo_roots() -> List[Path]:
