@@ -358,9 +358,11 @@ class Board:
     # -- opening ---------------------------------------------------------------------------
 
     @classmethod
-    def sim(cls, program: Union[str, Path, None] = None, *, timeout_s: float = 5.0) -> "Board":
+    def sim(cls, program: Union[str, Path, None] = None, *, timeout_s: float = 30.0) -> "Board":
         """finger-sim (the firmware's application on a simulated board) as a child process,
         over its stdin and stdout. Time passes only through :meth:`wait` (1 ms control ticks).
+        ``timeout_s`` finds a board that hangs, not a slow one: a local child process on a
+        loaded machine can wait seconds for the CPU.
         ``program``: default :func:`find_sim`."""
         prog = Path(program) if program else find_sim()
         try:
@@ -370,7 +372,7 @@ class Board:
         return cls(timeout_s=timeout_s, _link=_process_link(proc))
 
     @classmethod
-    def qemu(cls, elf: Union[str, Path, None] = None, *, timeout_s: float = 10.0, boot_timeout_s: float = 30.0,
+    def qemu(cls, elf: Union[str, Path, None] = None, *, timeout_s: float = 30.0, boot_timeout_s: float = 30.0,
              defmt_log: Union[str, Path, None] = None) -> "Board":
         """The firmware's emulator image booted in QEMU netduinoplus2 (deterministic ``-icount``),
         its console on a local TCP port opened with pyserial (``socket://``), its defmt log
