@@ -180,7 +180,10 @@ def test_ctrl_c_sends_stop(sim_program, tmp_path):
             st = board.final_status
             print("final", st.armed, st.volts_V, flush=True)
     """))
-    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True)
+    # SIGINT as a terminal's Ctrl-C delivers it, even where this runs with SIGINT ignored (a
+    # background job of a script): the child would inherit that and never see the signal
+    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     first = p.stdout.readline()
     assert first.startswith("armed"), first
     p.send_signal(signal.SIGINT)
