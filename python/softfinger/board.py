@@ -178,13 +178,19 @@ class Limits:
 
 
 class _Link:
-    """Bytes out; lines in through a reader thread and a queue, so every read has a deadline."""
+    """Bytes out; lines in through a reader thread and a queue, so every read has a deadline.
+
+    ``close`` ends the far side; the reader thread then sees the end of its input and stops,
+    and only after it has stopped does ``release`` free what it reads from (a pipe's file
+    descriptor): a descriptor freed under a reader that is still running can be reused by the
+    next board's pipe, and the old reader would take that board's replies."""
 
     _CLOSED = object()
 
-    def __init__(self, write, read_some, close):
+    def __init__(self, write, read_some, close, release=None):
         self._write = write
         self._close = close
+        self._release = release
         self._lines: "queue.Queue[object]" = queue.Queue()
         self._thread = threading.Thread(target=self._pump, args=(read_some,), daemon=True)
         self._thread.start()
@@ -220,19 +226,11 @@ class _Link:
             raise BoardLinkError("the board's link closed")
         return str(item)
 
-    def drain(self) -> None:
-        """Drop the lines already received (late replies to an interrupted command)."""
-        while True:
-            try:
-                item = self._lines.get_nowait()
-            except queue.Empty:
-                return
-            if item is self._CLOSED:
-                self._lines.put(item)
-                return
-
     def close(self) -> None:
         self._close()
+        self._thread.join(timeout=10.0)
+        if self._release is not None and not self._thread.is_alive():
+            self._release()
 
 
 def _serial_link(port: serial.SerialBase) -> _Link:
@@ -256,18 +254,21 @@ def _process_link(proc: subprocess.Popen, on_close=None) -> _Link:
         return data or None
 
     def close():
-        for f in (proc.stdin, proc.stdout):
-            try:
-                f.close()
-            except OSError:
-                pass
+        try:
+            proc.stdin.close()
+        except OSError:
+            pass
         if proc.poll() is None:
             proc.kill()
         proc.wait(timeout=10)
+
+    def release():
+        # the reader has stopped: its descriptor can go
+        proc.stdout.close()
         if on_close:
             on_close()
 
-    return _Link(write, read_some, close)
+    return _Link(write, read_some, close, release)
 
 
 def _repo_roots() -> List[Path]:
@@ -350,13 +351,18 @@ class Board:
         self.final_status: Optional[Status] = None
         #: the lines before the last command's final reply (``help``'s list)
         self.before: List[str] = []
+        #: final replies still to come for lines sent earlier (a command that timed out or was
+        #: interrupted); the next command skips them
+        self._late = 0
 
     # -- opening ---------------------------------------------------------------------------
 
     @classmethod
-    def sim(cls, program: Union[str, Path, None] = None, *, timeout_s: float = 5.0) -> "Board":
+    def sim(cls, program: Union[str, Path, None] = None, *, timeout_s: float = 30.0) -> "Board":
         """finger-sim (the firmware's application on a simulated board) as a child process,
         over its stdin and stdout. Time passes only through :meth:`wait` (1 ms control ticks).
+        ``timeout_s`` finds a board that hangs, not a slow one: a local child process on a
+        loaded machine can wait seconds for the CPU.
         ``program``: default :func:`find_sim`."""
         prog = Path(program) if program else find_sim()
         try:
@@ -366,7 +372,7 @@ class Board:
         return cls(timeout_s=timeout_s, _link=_process_link(proc))
 
     @classmethod
-    def qemu(cls, elf: Union[str, Path, None] = None, *, timeout_s: float = 10.0, boot_timeout_s: float = 30.0,
+    def qemu(cls, elf: Union[str, Path, None] = None, *, timeout_s: float = 30.0, boot_timeout_s: float = 30.0,
              defmt_log: Union[str, Path, None] = None) -> "Board":
         """The firmware's emulator image booted in QEMU netduinoplus2 (deterministic ``-icount``),
         its console on a local TCP port opened with pyserial (``socket://``), its defmt log
@@ -449,17 +455,33 @@ class Board:
                 t += min(max(float(words[1]), 0.0), 3600.0) + WAIT_SLACK_S
             except ValueError:
                 pass
+        # Final replies come in the order of their lines, but for ``ok stopped``, which comes as
+        # soon as the stop's line ends (docs/console.md "Lines"): the late replies of earlier
+        # lines are skipped, and this line's reply is owed until it is read.
+        earlier = self._late
+        stop = words[0].lower() == "stop"
         self._link.send(f"{line}\r\n".encode("ascii"))
+        self._late += 1
         before: List[str] = []
         while True:
             reply = self._link.line(t, line)
-            if reply == "ok" or reply.startswith("ok "):
+            final = reply == "ok" or reply.startswith("ok ") or reply.startswith("err ")
+            if not final:
+                before.append(reply)
+                continue
+            self._late -= 1
+            if stop and reply == "ok stopped":
                 self.before = before
                 return reply
+            if earlier > 0:
+                earlier -= 1
+                before = []
+                continue
             if reply.startswith("err "):
                 code, _, msg = reply[4:].partition(":")
                 raise BoardError(code.strip(), msg.strip(), line)
-            before.append(reply)
+            self.before = before
+            return reply
 
     def fields(self, line: str) -> Dict[str, Value]:
         """:meth:`command`, its reply's ``key=value`` fields parsed (numbers, tuples, text)."""
@@ -547,19 +569,11 @@ class Board:
         self._link.close()
 
     def _safe_stop(self) -> None:
-        """``stop``, after dropping any late reply of an interrupted command; reads until the
-        stop's own reply (or the time-out), then records the board's ``status``
-        (:attr:`final_status`: HV at 0 and disarmed, as the board reports it)."""
+        """``stop`` (its ``ok stopped`` wherever it comes among the late replies of an
+        interrupted command), then the board's ``status`` (:attr:`final_status`: HV at 0 and
+        disarmed, as the board reports it), read past those late replies."""
         try:
-            self._link.drain()
-            self._link.send(b"stop\r\n")
-            deadline = time.monotonic() + self.timeout_s
-            while True:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return
-                if self._link.line(left, "stop") == "ok stopped":
-                    break
+            self.command("stop")
             self.final_status = self.status()
         except (BoardTimeout, BoardLinkError, BoardError):
             return
