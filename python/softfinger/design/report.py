@@ -68,7 +68,9 @@ def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_pe
     chosen: List[Design] = []
     if search is not None:
         out["cards"] = search["cards"]
-        chosen = [Design(**d) for c in search["cards"].values() for d in c["fe_designs"]]
+        for c in out["cards"].values():
+            c["fe_designs"] = c["fe_designs"][:fe_per_card]
+        chosen = [Design(**d) for c in out["cards"].values() for d in c["fe_designs"]]
     for card in CARDS if search is None else ():
         c: Dict = {}
         t0 = time.perf_counter()
@@ -148,7 +150,8 @@ def figure(res: Dict, png: Path, svg: Path) -> None:
             ax.scatter(fr[:, 2], fr[:, j], s=18, color=colors[card], edgecolors="black", linewidths=0.4, label=f"{card}: Pareto front")
             fed = [ch for ch in res["fe"]["checks"] if ch["design"]["card"] == card and ch["ok"]]
             ax.scatter([next(r["grip_N"] for r in c["front"] if r["design"] == ch["design"]) for ch in fed], [ch["ratio_" + ("kyy" if j == 0 else "ktt")]["fe"] for ch in fed], marker="x", s=40, color=colors[card], label=f"{card}: FE (direct stiffness)")
-            ax.set_xlabel("grip force at fmax, N")
+            ax.set_xscale("log")
+            ax.set_xlabel("grip force at fmax, N (log scale)")
             ax.set_ylabel(f"{name} ratio (max / min over the voltages)")
             ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="upper right")
