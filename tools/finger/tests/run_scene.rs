@@ -54,7 +54,9 @@ fn a_scene_on_the_sim_is_the_host_model_to_print_precision() {
     let shipped = std::fs::read_to_string(root().join("scenes/paper-de-joint1-thin.toml")).unwrap();
     assert!(shipped.contains("thickness = [1.8, 2.0, 2.0]"));
     let scene = dir.join("paper-de-joint1-thin.toml");
-    std::fs::write(&scene, shipped.replace("thickness = [1.8, 2.0, 2.0]", "thickness = [1.96, 2.0, 2.0]")).unwrap();
+    assert!(shipped.contains("board = false"));
+    let reachable = shipped.replace("thickness = [1.8, 2.0, 2.0]", "thickness = [1.96, 2.0, 2.0]").replace("board = false", "board = true");
+    std::fs::write(&scene, reachable).unwrap();
     let out = finger(&["--sim", "--sim-bin", sim().to_str().unwrap(), "run", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     // the paper preset with 4 layers and joint 1 at 1.96 mm: the board computed that finger
