@@ -356,8 +356,12 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             let live = std::io::stdout().is_terminal();
+            let demo = cli.to.sim;
+            if demo {
+                eprintln!("{}", finger::monitor::DEMO);
+            }
             let mut out = std::io::stdout().lock();
-            match finger::monitor::run(&mut con, rate, count, live, &mut out) {
+            match finger::monitor::run(&mut con, rate, count, live, demo, &mut out) {
                 Ok(()) => {
                     let _ = out.flush();
                     ExitCode::SUCCESS

@@ -68,10 +68,16 @@ fn script_and_monitor_on_the_sim() {
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stdout).contains("> status\nok armed=1 "));
 
+    // on the simulated board, which nothing else drives, monitor says so and runs its demo:
+    // armed, the voltages slewing up poll after poll
     let out = finger(&["--sim", "--sim-bin", sim, "monitor", "--rate", "50", "--count", "4"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("nothing else drives it, so this is a demo"), "{}", text(&out.stderr));
     let so = text(&out.stdout);
-    assert_eq!(so.lines().filter(|l| l.starts_with("ok armed=0 ")).count(), 4, "{so}");
+    let polls: Vec<&str> = so.lines().filter(|l| l.starts_with("ok armed=1 ")).collect();
+    assert_eq!(polls.len(), 4, "{so}");
+    let volts: Vec<f64> = polls.iter().map(|l| l.split(" volts=").nth(1).unwrap().split(',').next().unwrap().parse().unwrap()).collect();
+    assert!(volts.windows(2).all(|w| w[1] > w[0]) && volts[0] > 0.0, "the slew plays out: {volts:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
