@@ -58,7 +58,7 @@ fn main() {
     }
     let d = Params::<f64>::default();
     let vhb_row = format!(
-        "card VHB 4905, the board's (G_eq {:.1} kPa relaxed; 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)",
+        "card VHB 4905, the board's film, uncalibrated (G_eq {:.1} kPa relaxed; 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)",
         VHB_4905.g_eq_mpa * 1e3
     );
     let cases: Vec<(&str, Params<f64>)> = vec![

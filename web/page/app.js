@@ -244,7 +244,7 @@ function drawShape(g, s, volts, style) {
 function fitView(s) {
   const xs = s.nodes.map((p) => p.x), ys = s.nodes.map((p) => p.y), m = 9;
   const x0 = Math.min(-16, Math.min(...xs) - m), x1 = Math.max(92, Math.max(...xs) + m);
-  const y0 = Math.min(-17, Math.min(...ys) - m), y1 = Math.max(14, Math.max(...ys) + m);
+  const y0 = Math.min(-24, Math.min(...ys) - m), y1 = Math.max(14, Math.max(...ys) + m);
   // the world group is flipped (flexor side up): world y maps to SVG -y
   $('finger').setAttribute('viewBox', `${x0.toFixed(1)} ${(-y1).toFixed(1)} ${(x1 - x0).toFixed(1)} ${(y1 - y0).toFixed(1)}`);
   drawScaleBar(x0, -y0);
@@ -410,7 +410,7 @@ function drawStrip() {
     const vals = shown.flatMap((r) => row.get(r)).filter(Number.isFinite);
     const [lo, hi] = axisRange(vals, row.span);
     const Y = (v) => y0 + h - (v - lo) / (hi - lo) * h;
-    const ticks = niceTicks(lo, hi, 2);
+    const ticks = niceTicks(lo, hi, 3);
     for (const t of ticks) {
       el('line', { x1: L, x2: W - R, y1: Y(t), y2: Y(t), stroke: '#eee' }, svg);
       el('text', { x: L - 4, y: Y(t) + 3, 'text-anchor': 'end', 'font-size': 10, class: 'tick' }, svg).textContent = tickLabel(t, ticks);
@@ -622,13 +622,13 @@ function drawPlot() {
     el('line', { x1: L, x2: W - R, y1: Y(q), y2: Y(q), stroke: '#eee' }, svg);
     el('text', { x: L - 4, y: Y(q) + 4, 'text-anchor': 'end', 'font-size': 11, class: 'tick' }, svg).textContent = tickLabel(q, yt) + ' %';
   }
-  const xt = niceTicks(x0, x1, 4);
+  const xt = niceTicks(x0, x1, 5);
   for (const x of xt) {
     el('text', { x: X(x), y: H - B + 14, 'text-anchor': 'middle', 'font-size': 11, class: 'xtick' }, svg).textContent = tickLabel(x, xt);
   }
   el('text', { x: (L + W - R) / 2, y: H - 6, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent =
     P.kind === 'pose' ? `mean channel voltage (V) across the feasible interval, P ${P.lo}..${P.hi} N` : `channel voltage (V), all three alike, at P = ${P.p} N`;
-  el('text', { x: L + 6, y: T + 14, 'font-size': 10, fill: '#555' }, svg).textContent = P.kind === 'pose' ? 'k / k(first) - 1' : 'k / k(0 V) - 1';
+  el('text', { x: L + 6, y: T + 14, 'font-size': 10, fill: '#555' }, svg).textContent = P.kind === 'pose' ? 'k / k(softest end) - 1' : 'k / k(0 V) - 1';
   const last = P.samples[P.samples.length - 1].k;
   for (let c = 0; c < 3; c++) {
     const pts = P.samples.map((s) => `${X(xv(s)).toFixed(1)},${Y((rel(s, c) - 1) * 100).toFixed(1)}`).join(' ');
@@ -644,7 +644,8 @@ function drawPlot() {
     el('polyline', { points: hs.map((s) => `${X(xv(s)).toFixed(1)},${Y((rel(s, c, s.host) - 1) * 100).toFixed(1)}`).join(' '), fill: 'none', stroke: '#000', 'stroke-dasharray': '3 3', 'stroke-width': 1, class: 'host-k' + c }, svg);
     hs.forEach((s) => el('rect', { x: X(xv(s)) - 2.5, y: Y((rel(s, c, s.host) - 1) * 100) - 2.5, width: 5, height: 5, fill: 'none', stroke: '#000', 'stroke-width': 0.8, class: 'host-mark' }, svg));
   }
-  el('text', { x: W - R + 6, y: T + 104, fill: '#000', 'font-size': 10 }, svg).textContent = 'black dashes, □: host f64';
+  el('text', { x: W - R + 6, y: T + 104, fill: '#000', 'font-size': 10 }, svg).textContent = 'black dashes, □:';
+  el('text', { x: W - R + 6, y: T + 116, fill: '#000', 'font-size': 10 }, svg).textContent = 'host f64 model';
 }
 
 /** Before any pose: the tip stiffness at the present tension (1 N when it is 0) with all three
