@@ -308,17 +308,6 @@ class _Link:
             raise BoardLinkError("the board's link closed")
         return str(item)
 
-    def drain(self) -> None:
-        """Drop the lines already received (late replies to an interrupted command)."""
-        while True:
-            try:
-                item = self._lines.get_nowait()
-            except queue.Empty:
-                return
-            if item is self._CLOSED:
-                self._lines.put(item)
-                return
-
     def close(self) -> None:
         self._close()
 
@@ -438,6 +427,9 @@ class Board:
         self.final_status: Optional[Status] = None
         #: the lines before the last command's final reply (``help``'s list)
         self.before: List[str] = []
+        #: final replies still to come for lines sent earlier (a command that timed out or was
+        #: interrupted); the next command skips them
+        self._late = 0
 
     # -- opening ---------------------------------------------------------------------------
 
@@ -537,17 +529,33 @@ class Board:
                 t += min(max(float(words[1]), 0.0), 3600.0) + WAIT_SLACK_S
             except ValueError:
                 pass
+        # Final replies come in the order of their lines, but for ``ok stopped``, which comes as
+        # soon as the stop's line ends (docs/console.md "Lines"): the late replies of earlier
+        # lines are skipped, and this line's reply is owed until it is read.
+        earlier = self._late
+        stop = words[0].lower() == "stop"
         self._link.send(f"{line}\r\n".encode("ascii"))
+        self._late += 1
         before: List[str] = []
         while True:
             reply = self._link.line(t, line)
-            if reply == "ok" or reply.startswith("ok "):
+            final = reply == "ok" or reply.startswith("ok ") or reply.startswith("err ")
+            if not final:
+                before.append(reply)
+                continue
+            self._late -= 1
+            if stop and reply == "ok stopped":
                 self.before = before
                 return reply
+            if earlier > 0:
+                earlier -= 1
+                before = []
+                continue
             if reply.startswith("err "):
                 code, _, msg = reply[4:].partition(":")
                 raise BoardError(code.strip(), msg.strip(), line)
-            before.append(reply)
+            self.before = before
+            return reply
 
     def fields(self, line: str) -> Dict[str, Value]:
         """:meth:`command`, its reply's ``key=value`` fields parsed (numbers, tuples, text)."""
@@ -634,19 +642,11 @@ class Board:
         self._link.close()
 
     def _safe_stop(self) -> None:
-        """``stop``, after dropping any late reply of an interrupted command; reads until the
-        stop's own reply (or the time-out), then records the board's ``status``
-        (:attr:`final_status`: HV at 0 and disarmed, as the board reports it)."""
+        """``stop`` (its ``ok stopped`` wherever it comes among the late replies of an
+        interrupted command), then the board's ``status`` (:attr:`final_status`: HV at 0 and
+        disarmed, as the board reports it), read past those late replies."""
         try:
-            self._link.drain()
-            self._link.send(b"stop\r\n")
-            deadline = time.monotonic() + self.timeout_s
-            while True:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return
-                if self._link.line(left, "stop") == "ok stopped":
-                    break
+            self.command("stop")
             self.final_status = self.status()
         except (BoardTimeout, BoardLinkError, BoardError):
             return

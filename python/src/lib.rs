@@ -11,7 +11,7 @@ use finger_model::mat3::{self, Mat3};
 use finger_model::material::cards::CARDS;
 use finger_model::material::Card;
 use finger_model::params::PARAMS;
-use finger_model::{BranchEnd, Calibration, Error, Finger as Model, Method, Params, Solution as ModelSolution, MAX_JOINTS};
+use finger_model::{BranchEnd, Calibration, DeModulusRule, Error, Finger as Model, Method, Params, Solution as ModelSolution, MAX_JOINTS};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayMethods, PyUntypedArrayMethods, PyArray1, PyArray2, PyArray3, PyArrayLike1, PyArrayLike2};
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -19,6 +19,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use rayon::prelude::*;
 
+mod design;
 mod errors;
 use errors::{model_err, row_err};
 
@@ -463,6 +464,12 @@ fn params_of(preset: &str, card: Option<&str>, kwargs: Option<&Bound<'_, PyDict>
             pending.push((name, v.extract::<R>()?));
         }
     }
+    set_all(&mut p, pending)?;
+    Ok(p)
+}
+
+/// Set parameters by name; one only consistent with a later one is retried after the others.
+fn set_all(p: &mut Params<R>, mut pending: Vec<(String, R)>) -> PyResult<()> {
     while !pending.is_empty() {
         let before = pending.len();
         let mut first_err = None;
@@ -477,7 +484,40 @@ fn params_of(preset: &str, card: Option<&str>, kwargs: Option<&Bound<'_, PyDict>
             return Err(model_err(first_err.expect("a failed set")));
         }
     }
-    Ok(p)
+    Ok(())
+}
+
+/// A pickled `Finger` rebuilt (`Finger.__reduce__`): the card, the DE modulus rule, every
+/// settable parameter by name, the 8 calibration factors, the preset and how the calibration
+/// was given (the repr's; the board's hold ceiling follows the preset).
+#[pyfunction]
+#[pyo3(signature = (card, de_rule, params, calibration, preset = "default", cal_name = "factors"))]
+fn _finger_from_state(card: &str, de_rule: &str, params: Vec<(String, R)>, calibration: Vec<R>, preset: &str, cal_name: &str) -> PyResult<Finger> {
+    let de_rule = match de_rule {
+        "isotropic" => DeModulusRule::Isotropic,
+        "paper_eq3" => DeModulusRule::PaperEq3,
+        _ => return Err(PyValueError::new_err(format!("de_rule {de_rule:?}"))),
+    };
+    let mut p = Params { card: card_of(card)?, de_rule, ..Params::default() };
+    set_all(&mut p, params)?;
+    if calibration.len() != 8 {
+        return Err(PyValueError::new_err("calibration: 8 factors"));
+    }
+    let c = &calibration;
+    let cal = Calibration { hinge: [c[0], c[1], c[2], c[3]], stack_axial: [c[4], c[5]], stack_bending: [c[6], c[7]] };
+    let preset = match preset {
+        "board" => "board",
+        "paper" => "paper",
+        "paper_model" => "paper_model",
+        _ => "default",
+    };
+    let cal_name = match cal_name {
+        "model_md" => "model_md",
+        "none" => "none",
+        _ => "factors",
+    };
+    let hold = if preset == "board" && p.layers > 0 { Some(hold_ceiling_of(&p)?) } else { None };
+    Ok(Finger { f: Model::with_calibration(p, cal).map_err(model_err)?, preset, cal_name, hold })
 }
 
 /// A material card by its name or a short key (`cards::CARDS`; docs/materials.md).
@@ -801,6 +841,20 @@ impl Finger {
         Ok(BranchLimit { tension_N: b.tension, joint: b.joint, kind })
     }
 
+    /// Pickling (and so Dask and multiprocessing): the state `_finger_from_state` rebuilds the
+    /// same model from, every parameter's f64 value exactly.
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (&'static str, &'static str, Vec<(&'static str, R)>, Vec<R>, &'static str, &'static str))> {
+        let p = self.f.params();
+        let rule = match p.de_rule {
+            DeModulusRule::Isotropic => "isotropic",
+            DeModulusRule::PaperEq3 => "paper_eq3",
+        };
+        let params = PARAMS.iter().filter(|i| !i.read_only).filter_map(|i| p.get(i.name).map(|v| (i.name, v))).collect();
+        let make = py.import("softfinger._core")?.getattr("_finger_from_state")?;
+        Ok((make, (p.card.name, rule, params, self.calibration(), self.preset, self.cal_name)))
+    }
+
     fn __repr__(&self) -> String {
         let p = self.f.params();
         let why = match self.hold {
@@ -839,6 +893,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<BranchLimit>()?;
     m.add_function(wrap_pyfunction!(parameter_ranges, m)?)?;
     m.add_function(wrap_pyfunction!(cards, m)?)?;
+    m.add_function(wrap_pyfunction!(_finger_from_state, m)?)?;
+    m.add_function(wrap_pyfunction!(design::evaluate_designs, m)?)?;
     errors::register(m)?;
     Ok(())
 }

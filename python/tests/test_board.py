@@ -67,6 +67,26 @@ def test_qemu_answers_the_same_session(fw_elf):
     assert b.final_status is not None and b.final_status.volts_V == (0.0, 0.0, 0.0)
 
 
+def test_late_replies_and_a_flushing_stop_keep_replies_matched(fw_elf):
+    """On the emulator image, whose command side takes time: a command that timed out still
+    answers later, a line queued behind it is dropped by the `stop` (`err stopped`), and `ok
+    stopped` comes before both (docs/console.md "Lines"); every later command still gets its
+    own reply."""
+    with sf.Board.qemu(fw_elf) as b:
+        with pytest.raises(sf.BoardTimeout):
+            b.command("limits", timeout_s=0.001)  # its fmax search: milliseconds of QEMU time
+        try:
+            b.command("arm", timeout_s=0.001)  # queued behind limits
+        except sf.BoardTimeout:
+            pass
+        b.stop()
+        st = b.status()
+        assert not st.armed and st.volts_V == (0.0, 0.0, 0.0)
+        assert b.fields("version")["name"] == "finger-fw"
+        assert b.limits().vmax_V[0] > 0
+    assert b.final_status is not None and not b.final_status.armed
+
+
 def test_board_solve_equals_the_python_model_to_its_printed_digits(sim_program):
     """The board's f32 `solve` against `Finger()`, the f64 model of the board's finger: its
     film's card is the board's (`material`), its calibration the board's (`cal`), its ceiling

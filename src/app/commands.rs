@@ -237,6 +237,11 @@ impl Commands {
                     let _ = w!(out; "err overrun: bytes lost while receiving (line discarded); send it again", nl);
                 }
             }
+            Record::Stopped(n) => {
+                for _ in 0..n {
+                    let _ = w!(out; "err stopped: not run, a stop came after it", nl);
+                }
+            }
         }
     }
 

@@ -131,18 +131,23 @@ class Console {
     }
   }
   line(l) {
-    const c = this.sent[0];
-    if (l.startsWith('#') || !c) { log('note', l); return; }
+    const c0 = this.sent[0];
+    if (l.startsWith('#') || !c0) { log('note', l); return; }
     if (/^(ok|err)\b/.test(l)) {
-      this.sent.shift();
+      // `ok stopped` answers the stop wherever it comes, ahead of the lines sent before the
+      // stop; every other final line answers the oldest other line (docs/console.md "Lines")
+      const isStop = (x) => /^\s*stop\b/i.test(x.line);
+      const i = l === 'ok stopped' ? this.sent.findIndex(isStop) : this.sent.findIndex((x) => !isStop(x));
+      if (i < 0) { log('note', l); return; }
+      const c = this.sent.splice(i, 1)[0];
       clearTimeout(c.timer);
       if (c.quiet && l.startsWith('err')) log('tx', '> ' + c.line); // a refusal is always logged
       if (!c.quiet || l.startsWith('err')) log(l.startsWith('err') ? 'err' : 'rx', l);
       c.resolve({ ok: l.startsWith('ok'), line: l, kv: parseKv(l), lines: c.lines });
       this.pump();
     } else {
-      c.lines.push(l);
-      if (!c.quiet) log('rx', l);
+      c0.lines.push(l);
+      if (!c0.quiet) log('rx', l);
     }
   }
 }

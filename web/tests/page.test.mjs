@@ -346,20 +346,25 @@ test('a board over Web Serial (a stand-in port: a second wasm board behind CRLF,
         const enc = new TextEncoder(), dec = new TextDecoder();
         let rx, line = '';
         this.readable = new ReadableStream({ start(c) { rx = c; } });
-        const out = () => {
+        const take = () => {
           const p = e.out_ptr(), n = e.out_len();
-          if (!n) return;
+          if (!n) return null;
           const t = dec.decode(new Uint8Array(e.memory.buffer, p, n).slice());
           e.out_clear();
-          rx.enqueue(enc.encode(t.replace(/\n/g, '\r\n')));
+          return enc.encode(t.replace(/\n/g, '\r\n'));
         };
-        const feed = (s) => { const b = enc.encode(s); const p = e.io_buf(); new Uint8Array(e.memory.buffer, p, b.length).set(b); e.fw_input(b.length); out(); };
+        const out = () => { const t = take(); if (t) rx.enqueue(t); };
+        const run = (s) => { const b = enc.encode(s); const p = e.io_buf(); new Uint8Array(e.memory.buffer, p, b.length).set(b); e.fw_input(b.length); };
+        const feed = (s) => { run(s); out(); };
         this.writable = new WritableStream({
           write(chunk) {
             for (const ch of dec.decode(chunk)) {
               line += ch;
               if (ch !== '\n') continue;
               if (/^shape\b/i.test(line.trim())) rx.enqueue(enc.encode('err unknown: unknown command shape; try help\r\n'));
+              // `solve` as a board's busy command side answers it: late, so that a `stop` sent
+              // meanwhile is answered first (docs/console.md "Lines")
+              else if (/^solve\b/i.test(line.trim())) { run(line); const t = take(); setTimeout(() => rx.enqueue(t), 300); }
               else feed(line);
               line = '';
             }
@@ -387,8 +392,13 @@ test('a board over Web Serial (a stand-in port: a second wasm board behind CRLF,
   const [sx, sy] = tipOf(s.kv.tip), [dx, dy] = tipOf(await p2.getAttribute('#board-shape', 'data-tip'));
   assert.ok(Math.hypot(sx - dx, sy - dy) < 0.01, `${s.kv.tip} vs drawn ${dx},${dy}`);
   assert.match((await cmd2('arm')).line, /^ok armed=1$/);
+  // a stop while a command runs: `ok stopped` comes first, then the command's own reply;
+  // each goes to its own command
+  const solving = p2.evaluate(() => window.finger.con.command('solve 0.5 0 0 0', true));
+  await p2.waitForFunction(() => window.finger.con.sent.some((c) => c.line === 'solve 0.5 0 0 0'));
   await p2.click('#stop');
   await p2.waitForFunction(() => document.getElementById('refusal').textContent === 'stop  ->  ok stopped');
+  assert.match((await solving).line, /^ok joints=/);
   assert.equal((await cmd2('status')).kv.armed, '0');
   assert.deepEqual(errs, []);
   await p2.close();
