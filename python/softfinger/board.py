@@ -266,13 +266,19 @@ class Pose:
 
 
 class _Link:
-    """Bytes out; lines in through a reader thread and a queue, so every read has a deadline."""
+    """Bytes out; lines in through a reader thread and a queue, so every read has a deadline.
+
+    ``close`` ends the far side; the reader thread then sees the end of its input and stops,
+    and only after it has stopped does ``release`` free what it reads from (a pipe's file
+    descriptor): a descriptor freed under a reader that is still running can be reused by the
+    next board's pipe, and the old reader would take that board's replies."""
 
     _CLOSED = object()
 
-    def __init__(self, write, read_some, close):
+    def __init__(self, write, read_some, close, release=None):
         self._write = write
         self._close = close
+        self._release = release
         self._lines: "queue.Queue[object]" = queue.Queue()
         self._thread = threading.Thread(target=self._pump, args=(read_some,), daemon=True)
         self._thread.start()
@@ -310,6 +316,9 @@ class _Link:
 
     def close(self) -> None:
         self._close()
+        self._thread.join(timeout=10.0)
+        if self._release is not None and not self._thread.is_alive():
+            self._release()
 
 
 def _serial_link(port: serial.SerialBase) -> _Link:
@@ -333,18 +342,21 @@ def _process_link(proc: subprocess.Popen, on_close=None) -> _Link:
         return data or None
 
     def close():
-        for f in (proc.stdin, proc.stdout):
-            try:
-                f.close()
-            except OSError:
-                pass
+        try:
+            proc.stdin.close()
+        except OSError:
+            pass
         if proc.poll() is None:
             proc.kill()
         proc.wait(timeout=10)
+
+    def release():
+        # the reader has stopped: its descriptor can go
+        proc.stdout.close()
         if on_close:
             on_close()
 
-    return _Link(write, read_some, close)
+    return _Link(write, read_some, close, release)
 
 
 def _repo_roots() -> List[Path]:
@@ -434,9 +446,11 @@ class Board:
     # -- opening ---------------------------------------------------------------------------
 
     @classmethod
-    def sim(cls, program: Union[str, Path, None] = None, *, timeout_s: float = 5.0) -> "Board":
+    def sim(cls, program: Union[str, Path, None] = None, *, timeout_s: float = 30.0) -> "Board":
         """finger-sim (the firmware's application on a simulated board) as a child process,
         over its stdin and stdout. Time passes only through :meth:`wait` (1 ms control ticks).
+        ``timeout_s`` finds a board that hangs, not a slow one: a local child process on a
+        loaded machine can wait seconds for the CPU.
         ``program``: default :func:`find_sim`."""
         prog = Path(program) if program else find_sim()
         try:
@@ -446,7 +460,7 @@ class Board:
         return cls(timeout_s=timeout_s, _link=_process_link(proc))
 
     @classmethod
-    def qemu(cls, elf: Union[str, Path, None] = None, *, timeout_s: float = 10.0, boot_timeout_s: float = 30.0,
+    def qemu(cls, elf: Union[str, Path, None] = None, *, timeout_s: float = 30.0, boot_timeout_s: float = 30.0,
              defmt_log: Union[str, Path, None] = None) -> "Board":
         """The firmware's emulator image booted in QEMU netduinoplus2 (deterministic ``-icount``),
         its console on a local TCP port opened with pyserial (``socket://``), its defmt log
