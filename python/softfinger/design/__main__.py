@@ -43,6 +43,7 @@ def main(argv=None) -> int:
     r.add_argument("--storage", default=None)
     r.add_argument("--scheduler", default=None)
     r.add_argument("--from", dest="from_json", default=None, help="rewrite the page from a results.json, running nothing")
+    r.add_argument("--fe-only", dest="fe_only", default=None, help="keep the search of a results.json, run the FE stage again")
     a = ap.parse_args(argv)
     root = repo_root()
     if a.cmd == "study":
@@ -75,7 +76,8 @@ def main(argv=None) -> int:
         if a.from_json:
             res = json.loads(Path(a.from_json).read_text())
         else:
-            res = report.run(root, trials=a.trials, grid=a.grid, fe_per_card=a.fe_per_card, storage=a.storage, scheduler=a.scheduler)
+            search = json.loads(Path(a.fe_only).read_text()) if a.fe_only else None
+            res = report.run(root, trials=a.trials, grid=a.grid, fe_per_card=a.fe_per_card, storage=a.storage, scheduler=a.scheduler, search=search)
             out = root / "out" / "design" / "results.json"
             out.parent.mkdir(parents=True, exist_ok=True)
             out.write_text(json.dumps(res, indent=1, default=float))

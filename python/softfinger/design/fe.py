@@ -66,7 +66,7 @@ class Case:
     model_joints_rad: tuple
     model_direct: tuple  # (1/C_yy N/mm, 1/C_θθ N·mm/rad), the model's
     kind: str = "3d"
-    density: str = "coarse"
+    density: str = "notch"
 
 
 @dataclass
@@ -97,7 +97,7 @@ def run_case(case: Case, program: Optional[str] = None) -> CaseResult:
     return CaseResult(case, True, joints_rad=tuple(num("joints")), direct=(1.0 / c[1, 1], 1.0 / c[2, 2]), seconds=secs, nodes=int(kv["nodes"]))
 
 
-def cases_of(design: Design, *, kind: str = "3d", density: str = "coarse", reference_deg: float = REFERENCE_DEG) -> List[Case]:
+def cases_of(design: Design, *, kind: str = "3d", density: str = "notch", reference_deg: float = REFERENCE_DEG) -> List[Case]:
     """The two FE cases of a design: its reference posture by the model's inverse at both ends
     of the tension interval (the ends `evaluate` takes its ratios at)."""
     f = design.finger()
@@ -160,7 +160,7 @@ def client_of(scheduler: Optional[str] = None, workers: int = 2):
     return Client(cluster), cluster
 
 
-def check(designs: Sequence[Design], *, scheduler: Optional[str] = None, workers: int = 2, kind: str = "3d", density: str = "coarse", progress: bool = True):
+def check(designs: Sequence[Design], *, scheduler: Optional[str] = None, workers: int = 2, kind: str = "3d", density: str = "notch", progress: bool = True):
     """FE-check `designs` on a Dask cluster; returns ([DesignCheck], wall seconds of the FE
     stage, the cluster's worker count)."""
     from dask.distributed import as_completed

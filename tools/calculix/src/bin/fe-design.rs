@@ -1,5 +1,5 @@
 //! `fe-design card=<card> <name>=<value> ... tension=<N> stack=<mm>,<mm>,<mm> [kind=3d|pe]
-//! [density=coarse|fine]` (in tools/calculix): one design of the design study (python's
+//! [density=coarse|notch|fine]` (in tools/calculix): one design of the design study (python's
 //! `softfinger.design.fe`, docs/design.md) in CalculiX at one end of its reference posture:
 //! the finger on the card's film with the console parameters given (`Params::set`), its stacks
 //! at the thicknesses that end's voltages give, under the cable tension; then its tip
@@ -42,7 +42,10 @@ fn main() {
                 density = match v {
                     "coarse" => Density::coarse(),
                     "fine" => Density::fine(),
-                    _ => usage("density: coarse or fine"),
+                    // coarse, with the notch's columns of the fine mesh: a stack that nearly
+                    // fills its notch ends in a column too thin for 8 (ccx diverges)
+                    "notch" => Density { notch_cols: Density::fine().notch_cols, ..Density::coarse() },
+                    _ => usage("density: coarse, notch or fine"),
                 }
             }
             _ => sets.push((k.to_string(), v.parse::<f64>().unwrap_or_else(|_| usage(&format!("{k}: a number"))))),
