@@ -13,12 +13,12 @@ pub const HV_CHANNELS: usize = 3;
 
 /// Board constants of the HV modules, compiled in (a different module is a different build;
 /// no console parameter changes them):
-/// the module's output at 100 % control duty, V,
-pub const HV_FULL_SCALE_V: f32 = 10_000.0;
+/// the module's output at 100 % control duty, V (a design's supply, docs/design.md),
+pub const HV_FULL_SCALE_V: f32 = design::HV_FULL_SCALE_V;
 /// the control duty that gives 0 V, percent,
 pub const HV_ZERO_DUTY_PCT: f32 = 0.0;
 /// and the most the board may ever output, V: its duty is the hard cap of the HV writer.
-pub const HV_LIMIT_V: f32 = 10_000.0;
+pub const HV_LIMIT_V: f32 = design::HV_LIMIT_V;
 /// What the HV modules can be asked for at all: min(full scale, limit), V. The model's ceiling
 /// in force takes it as its `hv_fs` term, so previews and the board agree.
 pub const HV_MAX_V: f32 = if HV_FULL_SCALE_V < HV_LIMIT_V { HV_FULL_SCALE_V } else { HV_LIMIT_V };
@@ -26,13 +26,22 @@ pub const HV_MAX_V: f32 = if HV_FULL_SCALE_V < HV_LIMIT_V { HV_FULL_SCALE_V } el
 /// The board's film, compiled in (a different film, layer or margin is a different build; the
 /// console's parameters can only lower the ceiling these give, docs/materials.md):
 /// the material card of the stacks' film,
-pub const BOARD_CARD: &finger_model::material::Card = &finger_model::material::VHB_4905;
+pub const BOARD_CARD: &finger_model::material::Card = design::BOARD_CARD;
 /// the thickness of one layer at rest, mm,
-pub const BOARD_Z0_MM: f32 = 0.5;
+pub const BOARD_Z0_MM: f32 = design::BOARD_Z0_MM;
 /// the layers per stack,
-pub const BOARD_LAYERS: u32 = 4;
+pub const BOARD_LAYERS: u32 = design::BOARD_LAYERS;
 /// and the fraction of the film's hold and breakdown bounds the ceiling allows.
-pub const BOARD_MARGIN: f32 = 0.9;
+pub const BOARD_MARGIN: f32 = design::BOARD_MARGIN;
+/// The design's finger (console names and values) the board's default parameters take
+/// (`app::params::board_params`); empty for the paper's finger.
+pub const BOARD_FINGER: &[(&str, f32)] = design::BOARD_FINGER;
+
+/// The constants above as build.rs wrote them from the design file (`FINGER_DESIGN`,
+/// docs/design.md), or the paper's finger on VHB 4905 without one.
+mod design {
+    include!(concat!(env!("OUT_DIR"), "/board_design.rs"));
+}
 
 /// The HV read-back chain, board constants (docs/firmware.md "HV read-back"): each channel's
 /// module output through an HV divider and each stack's return current through a low-side

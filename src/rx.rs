@@ -7,6 +7,8 @@
 //! `heapless::Deque`) as a record the command side pops ([`RxLines::pop`]).
 //! A line lost to an overrun (a byte the UART dropped, [`RxLines::overrun`], or no room left
 //! in the ring) is discarded whole and queued as [`Record::Overrun`], answered `err overrun`.
+//! A `stop` flushes the ring: every line queued before it (not yet popped) is dropped, and the
+//! ring keeps one [`Record::Stopped`] with their count, answered `err stopped` once per line.
 //!
 //! What it is not: the command parser (`crate::app`).
 
@@ -24,8 +26,9 @@ pub const RX_RING: usize = 1024;
 const KIND_LINE: u8 = 1;
 const KIND_TOO_LONG: u8 = 2;
 const KIND_OVERRUN: u8 = 3;
+const KIND_STOPPED: u8 = 4;
 /// Ring bytes of an overrun record (its kind and a u32 count, so that every lost line keeps
-/// its reply); kept free behind every other record.
+/// its reply); kept free behind every other record. A stopped record is the same size.
 pub const OVERRUN_RECORD: usize = 5;
 
 /// What a byte did.
@@ -45,6 +48,8 @@ pub enum Record {
     TooLong,
     /// `n` lines lost to overruns.
     Overrun(u32),
+    /// `n` lines received before a `stop` and dropped by it, in the ring's place of the first.
+    Stopped(u32),
 }
 
 /// The first word of the line being received, for `stop`.
@@ -87,6 +92,8 @@ pub struct RxLines {
     ring: Deque<u8, RX_RING>,
     /// The ring's last record is an overrun record (its count may grow).
     overrun_open: bool,
+    /// Lines the ring's records stand for (an overrun or stopped record: its count).
+    queued: u32,
     /// A byte arrived since the last [`RxLines::pop`].
     seen: bool,
     /// Bytes received (for tests and the report).
@@ -108,6 +115,7 @@ impl RxLines {
             broken: false,
             ring: Deque::new(),
             overrun_open: false,
+            queued: 0,
             seen: false,
             received: 0,
         }
@@ -144,6 +152,7 @@ impl RxLines {
         self.word = FirstWord::default();
         self.broken = false;
         if stop {
+            self.flush();
             return RxEvent::Stop;
         }
         if broken {
@@ -177,6 +186,20 @@ impl RxLines {
             let _ = self.ring.push_back(b);
         }
         self.overrun_open = false;
+        self.queued = self.queued.saturating_add(1);
+    }
+
+    /// A `stop` ended: every queued record becomes one stopped record of all their lines
+    /// (constant time: the ring's bytes are not read).
+    fn flush(&mut self) {
+        self.ring.clear();
+        self.overrun_open = false;
+        if self.queued > 0 {
+            let _ = self.ring.push_back(KIND_STOPPED);
+            for b in self.queued.to_le_bytes() {
+                let _ = self.ring.push_back(b);
+            }
+        }
     }
 
     fn record_overrun(&mut self) {
@@ -194,6 +217,7 @@ impl RxLines {
             let _ = self.ring.push_back(b);
         }
         self.overrun_open = true;
+        self.queued = self.queued.saturating_add(1);
     }
 
     /// Lines are waiting.
@@ -211,7 +235,7 @@ impl RxLines {
     pub fn pop(&mut self) -> Option<Record> {
         let kind = self.ring.pop_front()?;
         self.seen = false;
-        if kind == KIND_OVERRUN {
+        if kind == KIND_OVERRUN || kind == KIND_STOPPED {
             let mut le = [0u8; 4];
             for b in le.iter_mut() {
                 *b = self.ring.pop_front().unwrap_or(0);
@@ -220,8 +244,11 @@ impl RxLines {
             if self.ring.is_empty() {
                 self.overrun_open = false;
             }
-            return Some(Record::Overrun(u32::from_le_bytes(le)));
+            let n = u32::from_le_bytes(le);
+            self.queued = self.queued.saturating_sub(n);
+            return Some(if kind == KIND_STOPPED { Record::Stopped(n) } else { Record::Overrun(n) });
         }
+        self.queued = self.queued.saturating_sub(1);
         let n = self.ring.pop_front().unwrap_or(0);
         Some(match kind {
             KIND_LINE => {

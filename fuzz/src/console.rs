@@ -2,8 +2,10 @@
 //! control ticks interleaved.
 //!
 //! Input: bytes go to `App::input_byte` as they are, except [`TICK`] `n`: `n` control ticks
-//! (at most [`MAX_TICKS`] per input). At the end a line ending flushes the last line and
-//! blank input lines end any `wait`.
+//! (at most [`MAX_TICKS`] per input), and [`HOLD`]: the bytes up to the next `HOLD` or `TICK`
+//! only reach the RX part (`App::receive`), as while a slow command runs, and their lines
+//! queue; the command side runs them then (`App::run_commands`). At the end a line ending
+//! flushes the last line and blank input lines end any `wait`.
 //!
 //! Terminal escape sequences (arrow keys) are no part of a line ([`crate::Escapes`]).
 //!
@@ -13,6 +15,8 @@
 //! - no NaN or infinity in an `ok` reply;
 //! - no HV target, value or duty at or past the ceiling in force (duty: past the ceiling's duty);
 //! - `stop` leaves every duty at 0 and the enable low at once and after the next tick;
+//! - `stop` drops the lines queued ahead of it: each answered `err stopped`, in their place,
+//!   none run (the board is still stopped when the command side comes to them);
 //! - the model-only commands (`solve`, `shape`, `contact`) answer what a board that saw only
 //!   the same parameter changes answers.
 //!
@@ -24,6 +28,8 @@ use finger_fw::{App, CHANNELS};
 
 /// The tick marker: the next byte is a number of ticks.
 pub const TICK: u8 = 0xFF;
+/// The hold marker: the command side does not run until the next one (or a tick).
+pub const HOLD: u8 = 0xFE;
 /// Most control ticks one input runs.
 pub const MAX_TICKS: u32 = 20_000;
 /// The console's receive buffer (docs/console.md "Lines") (the firmware's `console::LINE_MAX`): a longer line is `too-long`.
@@ -121,74 +127,204 @@ impl Reference {
     }
 }
 
+/// The finals of `text` (`ok ...`/`err ...` lines), each with the lines before it.
+fn chunks(text: &str) -> Vec<String> {
+    let mut v = Vec::new();
+    let mut cur = String::new();
+    for l in text.lines() {
+        cur.push_str(l);
+        cur.push('\n');
+        if is_final(l) {
+            v.push(std::mem::take(&mut cur));
+        }
+    }
+    v
+}
+
+/// The checker's state across one input.
+struct Run {
+    app: App<SimBoard>,
+    reference: Reference,
+    out: String,
+    lines: Lines,
+    /// Final replies due so far.
+    due: usize,
+    /// `err stopped` replies due so far.
+    stopped_due: usize,
+    /// The command side is held: lines queue.
+    held: bool,
+    /// Lines queued while held (after the last stop), in order.
+    queued: Vec<Vec<u8>>,
+    /// Lines dropped by stops while held, answered when the command side runs.
+    dropped: usize,
+    /// A stop came while held, and no line after it.
+    stop_last: bool,
+}
+
+impl Run {
+    fn finals(&self) -> usize {
+        self.out.lines().filter(|l| is_final(l)).count()
+    }
+
+    fn check_counts(&self, when: &str) {
+        if !self.app.busy() {
+            assert_eq!(self.finals(), self.due, "replies {when}:\n{}", self.out);
+        }
+        let stopped = self.out.lines().filter(|l| l.starts_with("err stopped: ")).count();
+        assert_eq!(stopped, self.stopped_due, "`err stopped` replies {when}:\n{}", self.out);
+    }
+
+    /// A model-only line's reply against the reference board's; a parameter change that took
+    /// to the reference board too.
+    fn against_reference(&mut self, line: &[u8], reply: &str) {
+        if line.len() > LINE_MAX {
+            return;
+        }
+        match &first_word(line)[..] {
+            b"solve" | b"shape" | b"contact" => {
+                let want = self.reference.run(line);
+                assert_eq!(reply, want, "model-only {:?} differs from the reference board's", String::from_utf8_lossy(line));
+            }
+            b"param" | b"preset" | b"cal" if reply.starts_with("ok") => {
+                let want = self.reference.run(line);
+                assert_eq!(reply, want, "{:?} on the reference board", String::from_utf8_lossy(line));
+            }
+            _ => {}
+        }
+    }
+
+    fn feed(&mut self, b: u8) {
+        let was_busy = self.app.busy();
+        let start = self.out.len();
+        if self.held {
+            self.app.receive(b, &mut self.out);
+        } else {
+            self.app.input_byte(b, &mut self.out);
+        }
+        let new = self.out[start..].to_string();
+        check_reply_values(&new);
+        check_outputs(&self.app);
+        let stopped_now = new.lines().any(|l| l == "ok stopped");
+        if stopped_now {
+            check_stopped(&self.app, "at stop");
+            if !self.held {
+                self.app.tick(1, &mut self.out);
+                check_stopped(&self.app, "one tick after stop");
+            }
+        }
+        let Some(line) = self.lines.push(b) else {
+            assert!(!stopped_now, "`ok stopped` inside a line");
+            return;
+        };
+        assert_eq!(stopped_now, first_word(&line) == b"stop", "stop for {:?}", String::from_utf8_lossy(&line));
+        let due = replies_due(&line);
+        self.due += due;
+        if self.held {
+            if stopped_now {
+                // every line queued ahead of the stop is dropped, answered `err stopped`
+                self.dropped += self.queued.len();
+                self.stopped_due += self.queued.len();
+                self.queued.clear();
+                self.stop_last = true;
+            } else if due > 0 {
+                self.queued.push(line);
+                self.stop_last = false;
+            }
+            return;
+        }
+        self.check_counts(&format!("after line {:?}", String::from_utf8_lossy(&line)));
+        // the reply to this line alone: no wait ran before it, none runs now
+        if !was_busy && !self.app.busy() {
+            self.against_reference(&line, &new);
+        }
+    }
+
+    /// The command side runs what queued while held.
+    fn release(&mut self) {
+        if !self.held {
+            return;
+        }
+        self.held = false;
+        let was_busy = self.app.busy();
+        let start = self.out.len();
+        self.app.run_commands(&mut self.out);
+        let new = self.out[start..].to_string();
+        check_reply_values(&new);
+        check_outputs(&self.app);
+        let mut ch = chunks(&new);
+        // a `wait` that ran while held ends first (input came), with its own reply
+        if was_busy && !ch.is_empty() {
+            let w = ch.remove(0);
+            assert!(w.starts_with("ok waited="), "the held wait's reply: {w:?}");
+        }
+        let dropped = std::mem::take(&mut self.dropped);
+        for (k, c) in ch.iter().take(dropped).enumerate() {
+            assert!(c.starts_with("err stopped: ") && c.lines().count() == 1, "dropped line {k}'s reply: {c:?}\n{}", self.out);
+        }
+        if std::mem::take(&mut self.stop_last) {
+            check_stopped(&self.app, "after the lines a stop dropped");
+            assert!(!self.app.armed(), "armed after the lines a stop dropped");
+        }
+        let queued = std::mem::take(&mut self.queued);
+        for (line, c) in queued.iter().zip(ch.iter().skip(dropped)) {
+            assert!(!c.starts_with("err stopped: "), "{:?} dropped, no stop after it", String::from_utf8_lossy(line));
+            self.against_reference(line, c);
+        }
+        self.check_counts("after the held lines ran");
+    }
+}
+
 /// Runs one input; panics when an invariant breaks.
 pub fn check(data: &[u8]) {
-    let mut app = App::new(SimBoard::default());
-    let mut reference = Reference { app: App::new(SimBoard::default()) };
-    let mut out = String::new();
-    let mut lines = Lines::default();
-    let mut due = 0usize;
+    let mut r = Run {
+        app: App::new(SimBoard::default()),
+        reference: Reference { app: App::new(SimBoard::default()) },
+        out: String::new(),
+        lines: Lines::default(),
+        due: 0,
+        stopped_due: 0,
+        held: false,
+        queued: Vec::new(),
+        dropped: 0,
+        stop_last: false,
+    };
     let mut ticks = 0u32;
     let mut i = 0;
-    let mut feed = |app: &mut App<SimBoard>, b: u8, out: &mut String, due: &mut usize| {
-        let was_busy = app.busy();
-        let start = out.len();
-        app.input_byte(b, out);
-        let new = out[start..].to_string();
-        check_reply_values(&new);
-        check_outputs(app);
-        if new.lines().any(|l| l == "ok stopped") {
-            check_stopped(app, "at stop");
-            app.tick(1, out);
-            check_stopped(app, "one tick after stop");
-        }
-        if let Some(line) = lines.push(b) {
-            *due += replies_due(&line);
-            if !app.busy() {
-                let finals = out.lines().filter(|l| is_final(l)).count();
-                assert_eq!(finals, *due, "replies after line {:?}:\n{out}", String::from_utf8_lossy(&line));
-            }
-            // the reply to this line alone: no wait ran before it, none runs now
-            if !was_busy && !app.busy() && line.len() <= LINE_MAX {
-                let word = first_word(&line);
-                match &word[..] {
-                    b"solve" | b"shape" | b"contact" => {
-                        let want = reference.run(&line);
-                        assert_eq!(new, want, "model-only {:?} differs from the reference board's", String::from_utf8_lossy(&line));
-                    }
-                    b"param" | b"preset" | b"cal" if new.starts_with("ok") => {
-                        let want = reference.run(&line);
-                        assert_eq!(new, want, "{:?} on the reference board", String::from_utf8_lossy(&line));
-                    }
-                    _ => {}
-                }
-            }
-        }
-    };
     while i < data.len() {
         let b = data[i];
         i += 1;
+        if b == HOLD {
+            if r.held {
+                r.release();
+            } else {
+                r.held = true;
+            }
+            continue;
+        }
         if b == TICK {
+            r.release();
             let n = (data.get(i).copied().unwrap_or(1) as u32).min(MAX_TICKS - ticks);
             i += 1;
             for _ in 0..n {
-                app.tick(1, &mut out);
-                check_outputs(&app);
+                r.app.tick(1, &mut r.out);
+                check_outputs(&r.app);
             }
             ticks += n;
             continue;
         }
-        feed(&mut app, b, &mut out, &mut due);
+        r.feed(b);
     }
-    feed(&mut app, b'\n', &mut out, &mut due);
+    r.feed(b'\n');
+    r.release();
     // blank lines end the `wait`s still running (input ends a wait early)
     let mut guard = 0;
-    while app.busy() {
-        feed(&mut app, b' ', &mut out, &mut due);
-        feed(&mut app, b'\n', &mut out, &mut due);
+    while r.app.busy() {
+        r.feed(b' ');
+        r.feed(b'\n');
         guard += 1;
         assert!(guard < 10_000, "a wait never ends");
     }
-    let finals = out.lines().filter(|l| is_final(l)).count();
-    assert_eq!(finals, due, "replies at the end:\n{out}");
+    let finals = r.finals();
+    assert_eq!(finals, r.due, "replies at the end:\n{}", r.out);
+    r.check_counts("at the end");
 }

@@ -8,7 +8,8 @@
 //! `err overrun` count, never mixed with another; a line with an overrun in it never comes out;
 //! an unbroken line is lost only when the ring is full; an overlong line is one `too-long`;
 //! blank lines give nothing; a `stop` line is `RxEvent::Stop` at its end (unless a byte of its
-//! first word was lost) and never queued.
+//! first word was lost) and never queued; a `stop` drops every line queued ahead of it (not yet
+//! taken): they come out as one `err stopped` count, in their place, whatever they were.
 //!
 //! What it is not: the command side (the console target).
 
@@ -28,6 +29,8 @@ enum Want {
     Lost,
     /// Sent whole while the ring was nearly full: as sent, or lost.
     OrLost(Box<Want>),
+    /// Queued when a `stop` came: only `err stopped`.
+    Stopped,
 }
 
 impl Want {
@@ -38,6 +41,8 @@ impl Want {
             Want::OrLost(w) => w.ring_bytes(),
             Want::TooLong => 2,
             Want::Lost => OVERRUN_RECORD,
+            // the stopped lines share one record (counted once, below)
+            Want::Stopped => 0,
         }
     }
 }
@@ -96,6 +101,14 @@ pub fn check(data: &[u8]) {
                         *popped += 1;
                     }
                 }
+                Record::Stopped(n) => {
+                    assert!(n > 0, "a stopped record of 0 lines");
+                    for _ in 0..n {
+                        let w = queued.pop_front().expect("more lines stopped than sent");
+                        assert_eq!(w, Want::Stopped, "record {popped}: reported stopped");
+                        *popped += 1;
+                    }
+                }
             }
         }
         assert!(queued.is_empty(), "lines sent but never given: {queued:?}");
@@ -136,6 +149,10 @@ pub fn check(data: &[u8]) {
         let stop = line.first_word_is_stop() && !line.word_broken;
         assert_eq!(ev == RxEvent::Stop, stop, "stop event for {:?} (overrun {})", String::from_utf8_lossy(&line.text), line.broken);
         if stop {
+            // every line not yet taken is dropped
+            for w in queued.iter_mut() {
+                *w = Want::Stopped;
+            }
             continue;
         }
         let blank = line.text.iter().all(|&c| c == b' ' || c == b'\t');
@@ -150,7 +167,8 @@ pub fn check(data: &[u8]) {
         };
         // an unbroken line is lost only when the ring cannot take it: the records queued
         // ahead (each overrun counted as its own record: an upper bound) leave too little room
-        let ahead: usize = queued.iter().map(Want::ring_bytes).sum();
+        let stopped = queued.iter().any(|w| *w == Want::Stopped);
+        let ahead: usize = queued.iter().map(Want::ring_bytes).sum::<usize>() + if stopped { OVERRUN_RECORD } else { 0 };
         let room = ahead + want.ring_bytes() + OVERRUN_RECORD <= RX_RING;
         queued.push_back(if want == Want::Lost || room { want } else { Want::OrLost(Box::new(want)) });
     }

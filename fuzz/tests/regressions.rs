@@ -82,3 +82,14 @@ fn every_lost_line_keeps_its_reply() {
     let data = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("regressions/rx/overrun-count-past-255")).unwrap();
     finger_fuzz::rx::check(&data);
 }
+
+#[test]
+fn a_stop_drops_the_lines_queued_ahead_of_it() {
+    // `arm`, `volt all 3000`, `stop` received before the command side ran: the stop drops the
+    // two lines ahead of it (each answered `err stopped`); the board stays disarmed, HV at 0
+    for t in ["console", "rx"] {
+        let data = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("regressions").join(t).join("stop-drops-queued-lines")).unwrap();
+        let check = if t == "console" { finger_fuzz::console::check as fn(&[u8]) } else { finger_fuzz::rx::check };
+        check(&data);
+    }
+}

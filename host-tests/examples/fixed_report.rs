@@ -248,7 +248,7 @@ fn main() {
             prev = hw;
         }
     }
-    q.finish();
+    q.end();
     let stack = prev;
 
     // fmax (host): the fixed-point branch end against the f64 model's, and whether the f64

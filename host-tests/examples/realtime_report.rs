@@ -12,7 +12,7 @@ fn kv<'a>(r: &'a str, k: &str) -> &'a str {
 }
 
 fn main() {
-    let mut q = Qemu::boot("report");
+    let mut q = Qemu::boot_traced(host_tests::image::Image::M4f, "report");
     let arm = |q: &mut Qemu| {
         assert_eq!(q.cmd("arm"), "ok armed=1");
         assert!(q.cmd("volt all 3000").starts_with("ok"));

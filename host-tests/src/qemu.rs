@@ -1,12 +1,18 @@
-//! The firmware's emulator images in QEMU with `-icount shift=0` and a register trace
-//! (`-trace memory_region_ops_write/read -D FILE`): boot, talk to the console over a Unix
-//! socket, read back every register access in order, and the defmt bytes (semihosting, QEMU's
-//! stdout). Two images ([`Image`], built by [`crate::image`]): the F405's (Cortex-M4F,
-//! netduinoplus2) and the Cortex-M3 image (netduino2). [`qemu_command`] is the one QEMU
-//! command line every run starts from (these tests, the bench runs of [`crate::perf`], the
-//! reports). Used by tests/qemu_*.rs and the `realtime_report` and `fixed_report` examples.
+//! The firmware's emulator images in QEMU with `-icount shift=0`: boot, talk to the console
+//! over a Unix socket, read the defmt bytes (semihosting, QEMU's stdout) and, when a run asks
+//! for it ([`Qemu::boot_traced`]), every register access in order (`-trace
+//! memory_region_ops_write/read -D FILE`). Two images ([`Image`], built by [`crate::image`]):
+//! the F405's (Cortex-M4F, netduinoplus2) and the Cortex-M3 image (netduino2).
+//! [`qemu_command`] is the one QEMU command line every run starts from (these tests, the bench
+//! runs of [`crate::perf`], the reports). Used by tests/qemu_*.rs and the `realtime_report`
+//! and `fixed_report` examples.
+//!
+//! QEMU runs under a keeper ([`KEEPER`]): its log file is capped at [`LOG_CAP_BYTES`] (a run
+//! that reaches it fails), and however the run ends (a finish, a failed assertion, the test process
+//! killed) QEMU is stopped and the run's directory removed.
 use crate::image::{image, Image};
-use std::io::{BufRead, BufReader, Read, Write};
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read, Seek, Write};
 use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -53,11 +59,30 @@ impl Access {
     }
 }
 
+/// The most bytes QEMU's log file (the register trace and any `-d` output) may take
+/// (`prlimit --fsize`: QEMU's writes past it fail; it blocks the SIGXFSZ that would end it);
+/// a run whose log got there fails saying so. The traced tests write 0.03 to 12 MB each.
+pub const LOG_CAP_BYTES: u64 = 256 << 20;
+
+/// The keeper QEMU runs under (`sh -c KEEPER keeper DIR QEMU...`): QEMU with its stdin from
+/// /dev/null; when the keeper's stdin closes (the harness ends the run, or its process is gone
+/// however it ended) it stops QEMU (SIGTERM: the log is flushed), removes DIR and exits with
+/// QEMU's status.
+pub const KEEPER: &str = r#"dir=$1; shift; "$@" </dev/null & q=$!; cat >/dev/null; kill -TERM $q 2>/dev/null; wait $q; rc=$?; rm -rf "$dir"; exit $rc"#;
+
 pub struct Qemu {
+    /// The keeper (QEMU under it); its stdin, closed, ends the run.
     child: Child,
     con: BufReader<UnixStream>,
     tx: UnixStream,
     dir: PathBuf,
+    /// QEMU's log file (`-D`), opened before QEMU started, so it is read at the end after the
+    /// keeper removed the directory; `None`: no log asked for.
+    log_file: Option<File>,
+    /// The register trace is in the log.
+    traced: bool,
+    /// The log's cap, bytes.
+    cap: u64,
     /// QEMU's stdout: the defmt bytes (semihosting).
     log: Option<std::thread::JoinHandle<Vec<u8>>>,
     /// The last boot banner (`# finger-fw <version> [config=..] ready`).
@@ -65,52 +90,88 @@ pub struct Qemu {
 }
 
 impl Qemu {
-    /// Boot the F405 image with the register trace on; returns after the banner.
+    /// Boot the F405 image (no trace); returns after the banner.
     pub fn boot(tag: &str) -> Qemu {
         Self::boot_image(image(), tag)
     }
 
-    /// Boot `img`'s release image with the register trace on.
+    /// Boot `img`'s release image (no trace).
     pub fn boot_on(img: Image, tag: &str) -> Qemu {
         Self::boot_image(img.elf(), tag)
     }
 
-    /// Boot `elf` with the register trace on.
+    /// Boot `img`'s release image with the register trace on ([`Qemu::finish`] reads it).
+    pub fn boot_traced(img: Image, tag: &str) -> Qemu {
+        Self::start(img.elf(), tag, &[], true, LOG_CAP_BYTES)
+    }
+
+    /// [`Qemu::boot_traced`] with its log capped at `cap_bytes` (the cap's own test).
+    pub fn boot_traced_capped(img: Image, tag: &str, cap_bytes: u64) -> Qemu {
+        Self::start(img.elf(), tag, &[], true, cap_bytes)
+    }
+
+    /// Boot `elf` (no trace).
     pub fn boot_image(elf: &Path, tag: &str) -> Qemu {
         Self::boot_with(elf, tag, &[])
     }
 
-    /// Boot `elf` (its machine by its target) with the register trace and `extra` QEMU
-    /// arguments (e.g. `-d int`, whose log goes into the same file: [`Qemu::finish_log`]).
+    /// Boot `elf` (its machine by its target) with `extra` QEMU arguments (no trace; a `-d`
+    /// among them writes the log file, [`Qemu::finish_log`]).
     pub fn boot_with(elf: &Path, tag: &str, extra: &[&str]) -> Qemu {
+        Self::start(elf, tag, extra, false, LOG_CAP_BYTES)
+    }
+
+    /// [`Qemu::boot_with`] with the register trace on.
+    pub fn boot_traced_with(elf: &Path, tag: &str, extra: &[&str]) -> Qemu {
+        Self::start(elf, tag, extra, true, LOG_CAP_BYTES)
+    }
+
+    /// The run's directory (sockets, log), removed when the run ends.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    fn start(elf: &Path, tag: &str, extra: &[&str], traced: bool, cap: u64) -> Qemu {
         let img = Image::of(elf);
         let dir = std::env::temp_dir().join(format!("finger-rt-{}-{img:?}-{tag}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let sock = dir.join("con.sock");
         let [machine, cpu] = img.machine();
-        // netduino2 leaves RCC and GPIO unmapped: its accesses there are guest errors
         let mut extra: Vec<String> = extra.iter().map(|a| a.to_string()).collect();
-        if !img.models_gpio() {
+        // netduino2 leaves RCC and GPIO unmapped: its accesses there are guest errors, in the trace
+        if traced && !img.models_gpio() {
             match extra.iter().position(|a| a == "-d") {
                 Some(i) => extra[i + 1].push_str(",guest_errors"),
                 None => extra.extend(["-d".into(), "guest_errors".into()]),
             }
         }
-        let mut child = qemu_command(machine, "shift=0,sleep=off", elf, None)
-            .args(["-cpu", cpu, "-display", "none", "-monitor"])
+        let mut q = qemu_command(machine, "shift=0,sleep=off", elf, None);
+        q.args(["-cpu", cpu, "-display", "none", "-monitor"])
             .arg(format!("unix:{},server=on,wait=off", dir.join("mon.sock").display()))
             .arg("-chardev")
             .arg(format!("socket,id=con,path={},server=on,wait=on", sock.display()))
-            .args(["-serial", "chardev:con"])
-            .args(["-trace", "memory_region_ops_write", "-trace", "memory_region_ops_read", "-D"])
-            .arg(dir.join("trace.log"))
-            .args(&extra)
-            .stdin(Stdio::null())
+            .args(["-serial", "chardev:con"]);
+        if traced {
+            q.args(["-trace", "memory_region_ops_write", "-trace", "memory_region_ops_read"]);
+        }
+        let log_file = (traced || extra.iter().any(|a| a == "-d")).then(|| {
+            let path = dir.join("qemu.log");
+            q.arg("-D").arg(&path);
+            File::options().read(true).write(true).create(true).truncate(true).open(&path).unwrap()
+        });
+        q.args(&extra);
+        let mut child = Command::new("sh")
+            .args(["-c", KEEPER, "keeper"])
+            .arg(&dir)
+            .args(["prlimit", "--core=0", &format!("--fsize={cap}"), "--"])
+            .arg(q.get_program())
+            .args(q.get_args())
+            .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
-            .expect("qemu-system-arm: run scripts/setup");
+            .expect("sh, prlimit, qemu-system-arm: run scripts/setup");
         let mut stdout = child.stdout.take().unwrap();
         let log = std::thread::spawn(move || {
             let mut v = Vec::new();
@@ -123,14 +184,15 @@ impl Qemu {
                 Ok(s) => break s,
                 Err(_) if t0.elapsed() < Duration::from_secs(20) => std::thread::sleep(Duration::from_millis(20)),
                 Err(e) => {
-                    let _ = child.kill();
+                    drop(child.stdin.take());
+                    let _ = child.wait();
                     panic!("QEMU console socket: {e}");
                 }
             }
         };
         stream.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
         let tx = stream.try_clone().unwrap();
-        let mut q = Qemu { child, con: BufReader::new(stream), tx, dir, log: Some(log), banner: String::new() };
+        let mut q = Qemu { child, con: BufReader::new(stream), tx, dir, log_file, traced, cap, log: Some(log), banner: String::new() };
         q.read_banner();
         q
     }
@@ -237,8 +299,10 @@ impl Qemu {
         }
     }
 
-    /// Stop QEMU (SIGTERM: it flushes the trace); every register access, in order.
+    /// Stop QEMU (SIGTERM: it flushes the trace); every register access, in order. Only for a
+    /// run booted with the trace on.
     pub fn finish(self) -> Vec<Access> {
+        assert!(self.traced, "no register trace: boot with Qemu::boot_traced");
         parse_trace(&self.finish_log())
     }
 
@@ -252,11 +316,32 @@ impl Qemu {
         self.finish_all().1
     }
 
-    fn finish_all(mut self) -> (String, Vec<u8>) {
-        let _ = Command::new("kill").arg(self.child.id().to_string()).status();
+    /// Stop QEMU, reading nothing back.
+    pub fn end(self) {}
+
+    /// Close the keeper's stdin: QEMU stopped, the directory removed.
+    fn stop(&mut self) {
+        drop(self.child.stdin.take());
         let _ = self.child.wait();
-        let text = std::fs::read_to_string(self.dir.join("trace.log")).unwrap_or_default();
         let _ = std::fs::remove_dir_all(&self.dir);
+    }
+
+    /// Bytes in QEMU's log file now (0 without one).
+    pub fn log_size(&self) -> u64 {
+        self.log_file.as_ref().and_then(|f| f.metadata().ok()).map_or(0, |m| m.len())
+    }
+
+    fn finish_all(mut self) -> (String, Vec<u8>) {
+        self.stop();
+        let size = self.log_size();
+        assert!(size < self.cap, "QEMU's log reached the cap of {} bytes ({size}): the trace is cut (trace a shorter run)", self.cap);
+        let mut text = String::new();
+        if let Some(f) = self.log_file.as_mut() {
+            let mut bytes = Vec::new();
+            f.rewind().unwrap();
+            f.read_to_end(&mut bytes).unwrap();
+            text = String::from_utf8_lossy(&bytes).into_owned();
+        }
         let defmt = self.log.take().map(|h| h.join().unwrap_or_default()).unwrap_or_default();
         (text, defmt)
     }
@@ -264,7 +349,9 @@ impl Qemu {
 
 impl Drop for Qemu {
     fn drop(&mut self) {
-        let _ = self.child.kill();
+        if self.child.stdin.is_some() {
+            self.stop();
+        }
     }
 }
 

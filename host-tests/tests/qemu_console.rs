@@ -19,6 +19,58 @@ host_tests::on_both_images! {
     qemu_defmt_log_decodes => defmt_log_decodes;
     qemu_ceiling_stays_below_the_cards_hold_ceiling => ceiling_stays_below_the_cards_hold_ceiling;
     qemu_status_follows_the_creep => status_follows_the_creep;
+    qemu_stop_drops_a_pasted_arm => stop_drops_a_pasted_arm;
+}
+
+/// `stop` drops the lines queued ahead of it (docs/console.md "Lines"). Armed, `arm`, `volt
+/// all 3000` and `stop` pasted behind a command that keeps the command side busy (the boot's
+/// first armed `pose`, which builds the branch table; `force`'s fixed-point fmax bisection on
+/// the M3 image): the lines the stop finds queued are answered `err stopped`, after `ok
+/// stopped`, and never run; the board ends disarmed with HV at 0. Whether the first lines were
+/// taken before the stop came depends on QEMU's byte timing, so every outcome is checked and at
+/// least one of three boots must find lines queued.
+fn stop_drops_a_pasted_arm(img: Image) {
+    let front = if img.has_inverse() { "pose 10 10 10" } else { "force 0.5" };
+    let lines = [front, "arm", "volt all 3000"];
+    let mut dropped_any = false;
+    for attempt in 0..3 {
+        let mut q = Qemu::boot_on(img, &format!("paste-{attempt}"));
+        expect(&mut q, "arm", "ok armed=1");
+        let r = send(&mut q, format!("{front}\r\narm\r\nvolt all 3000\r\nstop\r\n").as_bytes(), 4);
+        let f: Vec<&String> = r.iter().filter(|l| l.starts_with("ok") || l.starts_with("err ")).collect();
+        let at = f.iter().position(|l| *l == "ok stopped").unwrap_or_else(|| panic!("no ok stopped: {r:?}"));
+        let own: Vec<&&String> = f.iter().enumerate().filter(|&(i, _)| i != at).map(|(_, l)| l).collect();
+        // in line order: the lines taken before the stop answered, then the dropped ones
+        let k = own.iter().position(|l| l.starts_with("err stopped: ")).unwrap_or(own.len());
+        assert!(own[k..].iter().all(|l| l.starts_with("err stopped: ")), "dropped lines not a tail: {r:?}");
+        assert!(own[..k].iter().all(|l| l.starts_with("ok")), "{:?} -> {r:?}", &lines[..k]);
+        assert!(f[..at].iter().all(|l| !l.starts_with("err stopped: ")), "`err stopped` before `ok stopped`: {r:?}");
+        dropped_any |= k < own.len();
+        hv_stays_off(&mut q);
+        q.end();
+        if dropped_any {
+            break;
+        }
+    }
+    assert!(dropped_any, "in three boots the stop never found a line queued");
+    // pasted alone (no busy command ahead): one final each, and off at the end
+    let mut q = Qemu::boot_on(img, "paste");
+    let r = send(&mut q, b"arm\r\nvolt all 3000\r\nstop\r\n", 3);
+    assert!(r.iter().any(|l| l == "ok stopped"), "{r:?}");
+    hv_stays_off(&mut q);
+    q.end();
+}
+
+/// Disarmed, every HV duty 0 (TIM4's compare registers), and still so a while later.
+fn hv_stays_off(q: &mut Qemu) {
+    for _ in 0..2 {
+        let s = expect(q, "status", "ok armed=0 force=0.000 volts=0.0,0.0,0.0 ");
+        assert!(s.contains(" enable=0"), "{s}");
+        assert_eq!(q.read_words(host_tests::qemu::TIM4_CCR[0], 3), [0, 0, 0]);
+        expect(q, "wait 0.05", "ok waited=0.05");
+    }
+    // nothing more came: the next reply is the next line's
+    expect(q, "version", "ok version=");
 }
 
 /// The card's hold ceiling, V: `limits`'s `vhold=` (both images; the F405's `material` reports
@@ -37,6 +89,10 @@ fn console_commands_and_bad_inputs(img: Image) {
     assert!(v.contains(&format!("board={}", img.board())), "{v}");
     let help = send(&mut q, b"help\n", 1);
     assert!(help.len() > 10 && help.last().unwrap() == "ok", "{help:?}");
+    // every command of the image, `timing` (the chip's own) too
+    for c in ["status", "limits", "solve", "arm", "stop", "volt", "force", "pose", "param", "preset", "cal", "wait", "timing"] {
+        assert!(help.iter().any(|l| l.starts_with(c)), "help lacks {c}: {help:?}");
+    }
     let s = expect(&mut q, "status", "ok armed=0 ");
     assert!(s.contains(" fault=none") && s.contains(" enable=0"), "{s}");
     // the ceiling in force: the same on every channel, at most the card's hold ceiling
@@ -54,6 +110,16 @@ fn console_commands_and_bad_inputs(img: Image) {
     let r = send(&mut q, long.as_bytes(), 1);
     assert_eq!(r.len(), 1);
     assert!(r[0].starts_with("err too-long:"), "{r:?}");
+    // mistyped words are timed under one `unknown`, not each under its own name (the M3
+    // image files each under its own: its flash)
+    expect(&mut q, "frobnicate 1", "err unknown:");
+    let t = expect(&mut q, "timing", "ok tick_period_us=");
+    let words = t.split(" cmd_us=").nth(1).unwrap_or("");
+    assert!(words.contains("version:"), "{t}");
+    if img != Image::M3 {
+        assert!(words.contains("unknown:"), "{t}");
+        assert!(!words.contains("frobnic") && !words.contains("non-printable") && !words.contains("garbage"), "{t}");
+    }
     // CR, LF, CRLF: one reply each; blank lines none
     let r = send(&mut q, b"version\rversion\nversion\r\n\r\n\n", 3);
     assert_eq!(r.len(), 3, "{r:?}");
@@ -79,7 +145,7 @@ fn console_commands_and_bad_inputs(img: Image) {
     assert!(s.contains(" servo=0.00 ") && s.contains(" enable=0"), "{s}");
     expect(&mut q, "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "ok cal=1.540745,6.245597,1.066900,1.154625,0.718260,0.054631,5.254023,-1.756332");
     expect(&mut q, "preset paper", "ok preset=paper");
-    q.finish();
+    q.end();
 }
 
 /// Armed: `pose` at a posture of the host's model, then `contact`.
@@ -219,7 +285,7 @@ fn ceiling_stays_below_the_cards_hold_ceiling(img: Image) {
     check_ceiling_only_lowers(&mut q, v0, vhold, &extra, |q| card_vhold(q, img), |v0, vhold| {
         vec![format!("volt 1 {:.1}", vhold + 0.1), format!("volt all {v0:.1}")]
     });
-    q.finish();
+    q.end();
 }
 
 /// `status` follows the film's creep over two minutes of `wait` under a held voltage: `thick`
@@ -239,7 +305,7 @@ fn status_follows_the_creep(img: Image) {
         let (t, e) = (field(&st, "thick"), field(&st, "thick_eq"));
         assert!(t.iter().all(|x| x.is_nan()) && e.iter().all(|&x| x > 0.0 && x < rest), "{st} (rest {rest})");
         expect(&mut q, "stop", "ok stopped");
-        q.finish();
+        q.end();
         return;
     }
     let mut thick = Vec::new();
@@ -254,7 +320,7 @@ fn status_follows_the_creep(img: Image) {
         eq = e[0];
     }
     expect(&mut q, "stop", "ok stopped");
-    q.finish();
+    q.end();
     assert!(thick.windows(2).all(|w| w[1] <= w[0]), "not monotone: {thick:?}");
     let (first, last) = (thick[0] - eq, thick[thick.len() - 1] - eq);
     assert!(first > 0.0 && last < 0.5 * first, "the creep at 10 s and 120 s: {thick:?}, equilibrium {eq}");

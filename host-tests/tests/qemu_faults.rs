@@ -15,7 +15,7 @@ host_tests::on_both_images! {
 fn every_fault_path(img: Image) {
     for what in ["hardfault", "nmi", "irq", "overflow"] {
         // QEMU's exception log (-d int) goes into the trace file too
-        let mut q = Qemu::boot_with(img.fault_elf(), what, &["-d", "int"]);
+        let mut q = Qemu::boot_traced_with(img.fault_elf(), what, &["-d", "int"]);
         assert_eq!(q.cmd("arm"), "ok armed=1");
         assert!(q.cmd("volt all 3000").starts_with("ok volts="));
         assert_eq!(q.cmd("wait 1"), "ok waited=1");

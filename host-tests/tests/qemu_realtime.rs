@@ -12,7 +12,9 @@
 //! - right after reset, the first register writes drive the HV pins low (GPIOB clock on first);
 //! - at boot, `volt all 9990` is refused and the largest voltage a channel holds after a long
 //!   `wait` (the TIM4 compare registers read with the monitor's `xp`, in volts at the HV full
-//!   scale) is below the board card's hold ceiling (computed here in f64).
+//!   scale) is below the board card's hold ceiling (computed here in f64);
+//! - the harness itself: a traced run stops QEMU at its log's cap and says so, and a test
+//!   process that aborts with QEMU running leaves neither QEMU nor its files behind.
 use finger_fw::board::{BOARD_CARD, BOARD_MARGIN, BOARD_Z0_MM, HV_FULL_SCALE_V};
 use finger_model::material::{hold_ceiling, StackLaw};
 use host_tests::image::Image;
@@ -51,11 +53,11 @@ fn held_below_hold_ceiling(img: Image) {
         assert!(volts > 0.95 * v, "channel {}: {volts} V held for {v} V", ch + 1);
     }
     assert!(q.cmd("status").starts_with("ok armed=1"));
-    q.finish();
+    q.end();
 }
 
 fn duty_step_within_slew(img: Image) {
-    let mut q = Qemu::boot_on(img, "ramp");
+    let mut q = Qemu::boot_traced(img, "ramp");
     assert_eq!(q.cmd("param slew 100000"), "ok slew=100000");
     assert_eq!(q.cmd("arm"), "ok armed=1");
     q.write(b"volt 1 5000\r\nhelp\r\nparam\r\npose 10 10 10\r\nforce 0.3\r\ncontact 1 1.5\r\nvolt 2 5000\r\n");
@@ -95,7 +97,7 @@ fn assert_stopped_within_a_tick(trace: &[host_tests::qemu::Access], what: &str) 
 
 fn stop_within_one_tick(img: Image) {
     // during `wait 600`
-    let mut q = Qemu::boot_on(img, "wait");
+    let mut q = Qemu::boot_traced(img, "wait");
     armed_at_3kv(&mut q);
     q.write(b"wait 600\r\n");
     std::thread::sleep(std::time::Duration::from_millis(300));
@@ -109,7 +111,7 @@ fn stop_within_one_tick(img: Image) {
 
     // during the first armed pose (the branch table is built then); on the M3 image (no
     // table), during `force` (its fmax bisection: many fixed-point solves)
-    let mut q = Qemu::boot_on(img, "pose");
+    let mut q = Qemu::boot_traced(img, "pose");
     armed_at_3kv(&mut q);
     let long = if img.has_inverse() { "pose 10 10 10" } else { "force 0.5" };
     q.write(format!("{long}\r\nstop\r\n").as_bytes());
@@ -120,7 +122,7 @@ fn stop_within_one_tick(img: Image) {
     assert_stopped_within_a_tick(&q.finish(), long);
 
     // in the middle of the help output
-    let mut q = Qemu::boot_on(img, "help");
+    let mut q = Qemu::boot_traced(img, "help");
     armed_at_3kv(&mut q);
     q.write(b"help\r\nstop\r\n");
     let r = q.finals(2);
@@ -153,11 +155,11 @@ fn burst_one_reply_each(img: Image) {
     }
     // nothing more: exactly one each
     assert_eq!(q.cmd("version").split_whitespace().next(), Some("ok"));
-    q.finish();
+    q.end();
 }
 
 fn hv_pins_low_after_reset(img: Image) {
-    let q = Qemu::boot_on(img, "reset");
+    let q = Qemu::boot_traced(img, "reset");
     let trace = q.finish();
     let writes: Vec<_> = trace.iter().filter(|a| a.write).collect();
     // RCC AHB1ENR: GPIOB clock on; then GPIOB BSRR: PB6-8 and PB12 low; MODER: outputs (the
@@ -173,4 +175,70 @@ fn hv_pins_low_after_reset(img: Image) {
     for (k, &r) in TIM4_CCR.iter().enumerate() {
         assert_eq!((writes[3 + k].addr, writes[3 + k].value, writes[3 + k].modelled), (r, 0, true), "{:x?}", &writes[..8]);
     }
+}
+
+/// QEMU processes whose command line names `dir` (the run's directory is in its socket paths).
+fn qemu_processes_of(dir: &std::path::Path) -> Vec<String> {
+    let want = dir.to_string_lossy().into_owned();
+    let mut found = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(cmd) = std::fs::read(e.path().join("cmdline")) else { continue };
+        let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
+        if cmd.starts_with("qemu-system-arm") && cmd.contains(&want) {
+            found.push(e.file_name().to_string_lossy().into_owned());
+        }
+    }
+    found
+}
+
+/// Polls `gone` for up to 10 s.
+fn within_10_s(gone: impl Fn() -> bool) -> bool {
+    let t0 = std::time::Instant::now();
+    while t0.elapsed() < std::time::Duration::from_secs(10) {
+        if gone() {
+            return true;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    false
+}
+
+#[test]
+fn a_traced_run_keeps_its_log_within_the_cap_and_fails_saying_so() {
+    // a second of control ticks writes far more than 16 KiB of register trace
+    let cap = 16 << 10;
+    let mut q = Qemu::boot_traced_capped(Image::M4f, "cap", cap);
+    assert_eq!(q.cmd("wait 1"), "ok waited=1");
+    assert!(q.cmd("version").starts_with("ok version="), "QEMU runs on past the cap");
+    assert_eq!(q.log_size(), cap, "the log stops at its cap");
+    let dir = q.dir().to_path_buf();
+    let msg = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| q.finish())) {
+        Ok(t) => panic!("a cut trace of {} accesses read as whole", t.len()),
+        Err(e) => e.downcast_ref::<String>().cloned().unwrap_or_default(),
+    };
+    assert!(msg.contains("reached the cap of 16384 bytes"), "{msg}");
+    assert!(within_10_s(|| !dir.exists() && qemu_processes_of(&dir).is_empty()), "{} left behind", dir.display());
+}
+
+#[test]
+fn an_aborted_run_leaves_no_qemu_and_no_files() {
+    const CHILD: &str = "FINGER_QEMU_ABORT_CHILD";
+    if std::env::var_os(CHILD).is_some() {
+        // the child: a traced run, then the process aborts (no unwinding, no Drop)
+        let mut q = Qemu::boot_traced(Image::M4f, "abort");
+        assert_eq!(q.cmd("arm"), "ok armed=1");
+        println!("dir={}", q.dir().display());
+        std::process::abort();
+    }
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["an_aborted_run_leaves_no_qemu_and_no_files", "--exact", "--nocapture", "--test-threads=1"])
+        .env(CHILD, "1")
+        .output()
+        .unwrap();
+    assert!(!out.status.success(), "the child did not abort");
+    let so = String::from_utf8_lossy(&out.stdout);
+    let dir = so.lines().find_map(|l| l.split_once("dir=")).map(|(_, d)| d).unwrap_or_else(|| panic!("child: {so}"));
+    let dir = std::path::PathBuf::from(dir);
+    assert!(within_10_s(|| qemu_processes_of(&dir).is_empty()), "QEMU still running for {}", dir.display());
+    assert!(within_10_s(|| !dir.exists()), "{} left behind", dir.display());
 }

@@ -113,6 +113,27 @@ fn stop_acts_within_one_tick_during_wait_table_build_and_help() {
     stop_during(&setup, "help", 30_000);
 }
 
+/// `arm`, `volt all 3000`, `stop` pasted at once behind a command that takes time: the stop
+/// drops the two lines queued ahead of it, so nothing re-arms the board after the stop. The
+/// replies: `ok stopped` at once, the running command's own reply, then `err stopped` for
+/// each dropped line, in the order sent; a line after the stop runs.
+#[test]
+fn stop_drops_the_lines_queued_ahead_of_it() {
+    let mut sim = VirtualSim::new(default_cost);
+    let mut out = Out(String::new());
+    assert!(sim.send(b"limits\narm\nvolt all 3000\nstop\n"));
+    let ticks = run(&mut sim, &mut out);
+    assert!(!sim.app.armed() && !sim.app.hv_enabled(), "{}", out.0);
+    assert_eq!(sim.app.targets(), [0.0; 3]);
+    assert!(ticks.iter().all(|t| t.1 == [0; 3] && !t.2), "HV on after the paste");
+    let f = finals(&out.0);
+    assert_eq!(f.len(), 4, "{}", out.0);
+    assert_eq!(f[0], "ok stopped");
+    assert!(f[1].starts_with("ok vmax="), "{f:?}");
+    assert!(f[2..].iter().all(|l| l.starts_with("err stopped: ")), "{f:?}");
+    assert!(line(&mut sim, &mut out, "arm").starts_with("ok armed=1"), "a line after the stop runs");
+}
+
 #[test]
 fn stop_first_word_any_case_any_arguments() {
     let mut a = App::new(SimBoard::default());

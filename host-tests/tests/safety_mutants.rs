@@ -5,6 +5,7 @@
 use finger_fw::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V};
 use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Setpoints, CHECKIN_BOUND_MS};
 use finger_fw::rx::{Record, RxEvent, RxLines, OVERRUN_RECORD, RX_RING};
+use finger_fw::console::LINE_MAX;
 use finger_fw::sim::SimBoard;
 
 const MAX: u16 = 8_400;
@@ -199,7 +200,7 @@ fn rx_full_ring_loses_whole_lines_only() {
                 whole += 1;
             }
             Record::Overrun(n) => lost += n as usize,
-            Record::TooLong => panic!("too long"),
+            Record::TooLong | Record::Stopped(_) => panic!("{r:?}"),
         }
     }
     assert_eq!(whole + lost, fits + 3);
@@ -286,7 +287,7 @@ fn rx_counts_every_lost_line_past_a_byte() {
         match r {
             Record::Line(_) => whole += 1,
             Record::Overrun(n) => lost += n,
-            Record::TooLong => panic!("too long"),
+            r => panic!("{r:?}"),
         }
     }
     assert_eq!(whole + lost, sent);
@@ -309,8 +310,10 @@ fn rx_crlf_lines_and_blank_lines() {
     let mut rx = RxLines::new();
     let stops = |rx: &mut RxLines, s: &[u8]| s.iter().filter(|&&b| rx.push(b) == RxEvent::Stop).count();
     // the LF of a CRLF is no part of the next line's first word
-    assert_eq!(stops(&mut rx, b"stop\r\nstop\r\nvolt 1 5\r\nstop\r\n"), 3);
-    assert!(matches!(rx.pop(), Some(Record::Line(v)) if &v[..] == b"volt 1 5"));
+    assert_eq!(stops(&mut rx, b"stop\r\nstop\r\nvolt 1 5\r\nstop\r\nvolt 1 6\r\n"), 3);
+    // the line before the last stop dropped by it, the one after it whole
+    assert_eq!(rx.pop(), Some(Record::Stopped(1)));
+    assert!(matches!(rx.pop(), Some(Record::Line(v)) if &v[..] == b"volt 1 6"));
     // a line of blanks gives nothing
     line(&mut rx, b"  \t \r\n");
     assert!(!rx.pending());
@@ -334,6 +337,62 @@ fn rx_a_line_that_just_fits_is_kept() {
     }
     assert!(matches!(rx.pop(), Some(Record::Line(v)) if v[..] == fits[..]), "the line that fits");
     assert_eq!(rx.pop(), Some(Record::Overrun(1)));
+    assert_eq!(rx.pop(), None);
+}
+
+/// `stop` flushes: the lines queued ahead of it (whole, too long or lost) become one
+/// stopped record of their count, in their place; the lines after it queue as before.
+#[test]
+fn rx_stop_drops_every_line_queued_ahead_of_it() {
+    let mut rx = RxLines::new();
+    line(&mut rx, b"arm\nvolt all 3000\n");
+    line(&mut rx, &[b'x'; LINE_MAX + 1]);
+    line(&mut rx, b"\n");
+    rx.overrun();
+    line(&mut rx, b"volt 1 5\n");
+    line(&mut rx, b"  \n"); // blank: nothing queued, nothing to answer
+    assert_eq!(line(&mut rx, b"stop\n"), RxEvent::Stop);
+    line(&mut rx, b"status\n");
+    assert_eq!(rx.pop(), Some(Record::Stopped(4)));
+    assert!(matches!(rx.pop(), Some(Record::Line(v)) if &v[..] == b"status"));
+    assert_eq!(rx.pop(), None);
+    // nothing queued: a stop leaves nothing to answer
+    assert_eq!(line(&mut rx, b"stop\n"), RxEvent::Stop);
+    assert_eq!(rx.pop(), None);
+    assert!(!rx.pending());
+    // two stops before the command side takes anything: one record of every line before the second
+    line(&mut rx, b"arm\n");
+    line(&mut rx, b"stop\n");
+    line(&mut rx, b"arm\nvolt 1 5\n");
+    line(&mut rx, b"stop\n");
+    assert_eq!(rx.pop(), Some(Record::Stopped(3)));
+    assert_eq!(rx.pop(), None);
+    // a record taken before the stop is the command side's: only the rest is dropped
+    line(&mut rx, b"pose 1 2 3\narm\n");
+    assert!(matches!(rx.pop(), Some(Record::Line(v)) if &v[..] == b"pose 1 2 3"));
+    line(&mut rx, b"stop\n");
+    assert_eq!(rx.pop(), Some(Record::Stopped(1)));
+    // the count drops with what is taken: a later stop counts only what is queued then
+    line(&mut rx, b"a\nb\n");
+    assert!(rx.pop().is_some());
+    line(&mut rx, b"stop\n");
+    assert_eq!(rx.pop(), Some(Record::Stopped(1)));
+}
+
+/// A full ring and an open overrun record, flushed: every line they stood for is counted
+/// once, and the ring takes whole lines again at once.
+#[test]
+fn rx_stop_flushes_a_full_ring_with_its_overruns() {
+    let mut rx = RxLines::new();
+    let text = [b'a'; 100];
+    let fits = (RX_RING - OVERRUN_RECORD) / (text.len() + 2);
+    send_lines(&mut rx, &text, fits + 300);
+    assert_eq!(line(&mut rx, b"STOP now\n"), RxEvent::Stop);
+    send_lines(&mut rx, &text, fits);
+    assert_eq!(rx.pop(), Some(Record::Stopped(fits as u32 + 300)));
+    for _ in 0..fits {
+        assert!(matches!(rx.pop(), Some(Record::Line(v)) if v[..] == text[..]));
+    }
     assert_eq!(rx.pop(), None);
 }
 

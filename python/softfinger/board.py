@@ -177,14 +177,108 @@ class Limits:
         )
 
 
+@dataclass(frozen=True)
+class BoardSolution:
+    """The board's ``solve``: its own model (f32) at a tension and voltages; nothing moves."""
+
+    #: joint angles, degrees
+    joints_deg: Tuple[float, ...]
+    #: tip pose: x mm, y mm, angle degrees
+    tip: Tuple[float, ...]
+    #: cable excursion, mm
+    cable_mm: float
+    #: stack thicknesses (relaxed), mm
+    thick_mm: Tuple[float, ...]
+    #: tip stiffness diagonal: k_xx N/mm, k_yy N/mm, k_θθ N·mm/rad
+    stiffness: Tuple[float, ...]
+    #: solver iterations (0: the board's branch table answered)
+    iters: int
+    #: every field of the reply, parsed
+    fields: Dict[str, Value] = field(default_factory=dict, compare=False)
+
+    @classmethod
+    def parse(cls, line: str) -> "BoardSolution":
+        f = parse_fields(line)
+        return cls(
+            joints_deg=_tuple(f["joints"]),
+            tip=_tuple(f["tip"]),
+            cable_mm=_float(f["cable"]),
+            thick_mm=_tuple(f["thick"]),
+            stiffness=_tuple(f["stiffness"]),
+            iters=int(_float(f["iters"])),
+            fields=f,
+        )
+
+
+@dataclass(frozen=True)
+class Force:
+    """The board's ``force``: the tension target and where the servo goes for it."""
+
+    #: cable tension target, N
+    force_N: float
+    #: cable the servo pulls in, mm
+    cable_mm: float
+    #: servo angle, degrees
+    servo_deg: float
+    #: every field of the reply, parsed
+    fields: Dict[str, Value] = field(default_factory=dict, compare=False)
+
+    @classmethod
+    def parse(cls, line: str) -> "Force":
+        f = parse_fields(line)
+        return cls(force_N=_float(f["force"]), cable_mm=_float(f["cable"]), servo_deg=_float(f["servo"]), fields=f)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """The board's ``pose``: the inverse's tension and voltages for joint angles."""
+
+    #: cable tension, N
+    force_N: float
+    #: channel voltages, V
+    volts_V: Tuple[float, ...]
+    #: the joint angles held, degrees
+    joints_deg: Tuple[float, ...]
+    #: the tensions that hold the posture (lo, hi), N; None when the tension was given
+    range_N: Optional[Tuple[float, ...]]
+    #: time from rest until every stack is within 1 % of its target thickness, s (None: past 600 s)
+    settle_s: Optional[float]
+    #: the reply set the board's targets (armed); False: nothing moved (disarmed). None from a
+    #: firmware that does not say
+    moved: Optional[bool]
+    #: every field of the reply, parsed
+    fields: Dict[str, Value] = field(default_factory=dict, compare=False)
+
+    @classmethod
+    def parse(cls, line: str) -> "Pose":
+        f = parse_fields(line)
+        settle = f.get("settle")
+        moved = f.get("moved")
+        return cls(
+            force_N=_float(f["force"]),
+            volts_V=_tuple(f["volts"]),
+            joints_deg=_tuple(f["joints"]),
+            range_N=_tuple(f["range"]) if "range" in f else None,
+            settle_s=settle if isinstance(settle, float) else None,
+            moved=None if moved is None else _float(moved) != 0.0,
+            fields=f,
+        )
+
+
 class _Link:
-    """Bytes out; lines in through a reader thread and a queue, so every read has a deadline."""
+    """Bytes out; lines in through a reader thread and a queue, so every read has a deadline.
+
+    ``close`` ends the far side; the reader thread then sees the end of its input and stops,
+    and only after it has stopped does ``release`` free what it reads from (a pipe's file
+    descriptor): a descriptor freed under a reader that is still running can be reused by the
+    next board's pipe, and the old reader would take that board's replies."""
 
     _CLOSED = object()
 
-    def __init__(self, write, read_some, close):
+    def __init__(self, write, read_some, close, release=None):
         self._write = write
         self._close = close
+        self._release = release
         self._lines: "queue.Queue[object]" = queue.Queue()
         self._thread = threading.Thread(target=self._pump, args=(read_some,), daemon=True)
         self._thread.start()
@@ -220,19 +314,11 @@ class _Link:
             raise BoardLinkError("the board's link closed")
         return str(item)
 
-    def drain(self) -> None:
-        """Drop the lines already received (late replies to an interrupted command)."""
-        while True:
-            try:
-                item = self._lines.get_nowait()
-            except queue.Empty:
-                return
-            if item is self._CLOSED:
-                self._lines.put(item)
-                return
-
     def close(self) -> None:
         self._close()
+        self._thread.join(timeout=10.0)
+        if self._release is not None and not self._thread.is_alive():
+            self._release()
 
 
 def _serial_link(port: serial.SerialBase) -> _Link:
@@ -256,18 +342,21 @@ def _process_link(proc: subprocess.Popen, on_close=None) -> _Link:
         return data or None
 
     def close():
-        for f in (proc.stdin, proc.stdout):
-            try:
-                f.close()
-            except OSError:
-                pass
+        try:
+            proc.stdin.close()
+        except OSError:
+            pass
         if proc.poll() is None:
             proc.kill()
         proc.wait(timeout=10)
+
+    def release():
+        # the reader has stopped: its descriptor can go
+        proc.stdout.close()
         if on_close:
             on_close()
 
-    return _Link(write, read_some, close)
+    return _Link(write, read_some, close, release)
 
 
 def _repo_roots() -> List[Path]:
@@ -350,13 +439,18 @@ class Board:
         self.final_status: Optional[Status] = None
         #: the lines before the last command's final reply (``help``'s list)
         self.before: List[str] = []
+        #: final replies still to come for lines sent earlier (a command that timed out or was
+        #: interrupted); the next command skips them
+        self._late = 0
 
     # -- opening ---------------------------------------------------------------------------
 
     @classmethod
-    def sim(cls, program: Union[str, Path, None] = None, *, timeout_s: float = 5.0) -> "Board":
+    def sim(cls, program: Union[str, Path, None] = None, *, timeout_s: float = 30.0) -> "Board":
         """finger-sim (the firmware's application on a simulated board) as a child process,
         over its stdin and stdout. Time passes only through :meth:`wait` (1 ms control ticks).
+        ``timeout_s`` finds a board that hangs, not a slow one: a local child process on a
+        loaded machine can wait seconds for the CPU.
         ``program``: default :func:`find_sim`."""
         prog = Path(program) if program else find_sim()
         try:
@@ -366,7 +460,7 @@ class Board:
         return cls(timeout_s=timeout_s, _link=_process_link(proc))
 
     @classmethod
-    def qemu(cls, elf: Union[str, Path, None] = None, *, timeout_s: float = 10.0, boot_timeout_s: float = 30.0,
+    def qemu(cls, elf: Union[str, Path, None] = None, *, timeout_s: float = 30.0, boot_timeout_s: float = 30.0,
              defmt_log: Union[str, Path, None] = None) -> "Board":
         """The firmware's emulator image booted in QEMU netduinoplus2 (deterministic ``-icount``),
         its console on a local TCP port opened with pyserial (``socket://``), its defmt log
@@ -449,17 +543,33 @@ class Board:
                 t += min(max(float(words[1]), 0.0), 3600.0) + WAIT_SLACK_S
             except ValueError:
                 pass
+        # Final replies come in the order of their lines, but for ``ok stopped``, which comes as
+        # soon as the stop's line ends (docs/console.md "Lines"): the late replies of earlier
+        # lines are skipped, and this line's reply is owed until it is read.
+        earlier = self._late
+        stop = words[0].lower() == "stop"
         self._link.send(f"{line}\r\n".encode("ascii"))
+        self._late += 1
         before: List[str] = []
         while True:
             reply = self._link.line(t, line)
-            if reply == "ok" or reply.startswith("ok "):
+            final = reply == "ok" or reply.startswith("ok ") or reply.startswith("err ")
+            if not final:
+                before.append(reply)
+                continue
+            self._late -= 1
+            if stop and reply == "ok stopped":
                 self.before = before
                 return reply
+            if earlier > 0:
+                earlier -= 1
+                before = []
+                continue
             if reply.startswith("err "):
                 code, _, msg = reply[4:].partition(":")
                 raise BoardError(code.strip(), msg.strip(), line)
-            before.append(reply)
+            self.before = before
+            return reply
 
     def fields(self, line: str) -> Dict[str, Value]:
         """:meth:`command`, its reply's ``key=value`` fields parsed (numbers, tuples, text)."""
@@ -484,11 +594,10 @@ class Board:
         """The ceilings in force (:class:`Limits`)."""
         return Limits.parse(self.command("limits"))
 
-    def solve(self, P: float, volts: Sequence[float]) -> Dict[str, Value]:
+    def solve(self, P: float, volts: Sequence[float]) -> BoardSolution:
         """The board's model at tension ``P`` (N) and channel voltages ``volts`` (V); nothing
-        moves. Fields ``joints`` (deg), ``tip`` (mm, mm, deg), ``cable`` (mm), ``thick`` (mm),
-        ``stiffness`` (k_xx N/mm, k_yy N/mm, k_θθ N·mm/rad), ``iters``."""
-        return self.fields("solve " + " ".join(self._num(x) for x in [P, *volts]))
+        moves (:class:`BoardSolution`)."""
+        return BoardSolution.parse(self.command("solve " + " ".join(self._num(x) for x in [P, *volts])))
 
     def arm(self) -> None:
         """Allow the HV outputs."""
@@ -509,15 +618,15 @@ class Board:
             raise ValueError(f"channel must be 1, 2, 3 or 'all', not {ch!r}")
         return _tuple(self.fields(f"volt {ch} {self._num(V)}")["volts"])
 
-    def force(self, P: float) -> Dict[str, Value]:
-        """Cable tension target ``P`` (N): fields ``force`` (N), ``cable`` (mm), ``servo`` (deg)."""
-        return self.fields(f"force {self._num(P)}")
+    def force(self, P: float) -> Force:
+        """Cable tension target ``P`` (N); needs :meth:`arm` (:class:`Force`)."""
+        return Force.parse(self.command(f"force {self._num(P)}"))
 
-    def pose(self, d1: float, d2: float, d3: float, P: Optional[float] = None) -> Dict[str, Value]:
+    def pose(self, d1: float, d2: float, d3: float, P: Optional[float] = None) -> Pose:
         """The inverse at the board: joint angles in degrees (and optionally the tension, N) to
-        the force and voltages that hold them: fields ``force``, ``volts``, ``joints``."""
+        the force and voltages that hold them (:class:`Pose`; armed, the board moves there)."""
         args = [d1, d2, d3] + ([] if P is None else [P])
-        return self.fields("pose " + " ".join(self._num(x) for x in args))
+        return Pose.parse(self.command("pose " + " ".join(self._num(x) for x in args)))
 
     def param(self, name: Optional[str] = None, value: Optional[float] = None) -> Dict[str, Value]:
         """List every parameter (no name), read one, or set one (only while disarmed)."""
@@ -547,19 +656,11 @@ class Board:
         self._link.close()
 
     def _safe_stop(self) -> None:
-        """``stop``, after dropping any late reply of an interrupted command; reads until the
-        stop's own reply (or the time-out), then records the board's ``status``
-        (:attr:`final_status`: HV at 0 and disarmed, as the board reports it)."""
+        """``stop`` (its ``ok stopped`` wherever it comes among the late replies of an
+        interrupted command), then the board's ``status`` (:attr:`final_status`: HV at 0 and
+        disarmed, as the board reports it), read past those late replies."""
         try:
-            self._link.drain()
-            self._link.send(b"stop\r\n")
-            deadline = time.monotonic() + self.timeout_s
-            while True:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return
-                if self._link.line(left, "stop") == "ok stopped":
-                    break
+            self.command("stop")
             self.final_status = self.status()
         except (BoardTimeout, BoardLinkError, BoardError):
             return

@@ -138,8 +138,10 @@ impl<B: Board> App<B> {
         self.rx.overrun();
     }
 
-    /// The RX interrupt's part of a byte.
-    pub(crate) fn receive<W: Write>(&mut self, b: u8, out: &mut W) {
+    /// The RX interrupt's part of a byte (a `stop` acts here and drops the lines queued ahead
+    /// of it); the line queues until the command side's turn ([`App::run_commands`]), as on a
+    /// board whose command side is busy while bytes arrive.
+    pub fn receive<W: Write>(&mut self, b: u8, out: &mut W) {
         if self.rx.push(b) == RxEvent::Stop {
             self.ctl.stop();
             let _ = w!(out; "ok stopped", self.cmds.nl);
@@ -147,7 +149,7 @@ impl<B: Board> App<B> {
     }
 
     /// The command side: every queued line in turn, each one's setpoints to the core.
-    pub(crate) fn run_commands<W: Write>(&mut self, out: &mut W) {
+    pub fn run_commands<W: Write>(&mut self, out: &mut W) {
         loop {
             self.cmds.sync(&self.ctl.view());
             if self.cmds.busy() {

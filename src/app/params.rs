@@ -95,10 +95,16 @@ impl FwParams {
 pub(crate) const CAL_NAMES: [&str; 8] = ["h1", "h2", "h3", "h4", "ea0", "ea1", "ei0", "ei1"];
 
 /// The board's default finger: docs/model.md's on the board's film (`Params::with_card`: the card's
-/// equilibrium modulus, permittivity, branches and breakdown field). Generic so that the host's
-/// f64 model (the web view's overlay) is the board's finger too.
+/// equilibrium modulus, permittivity, branches and breakdown field), with a design's values
+/// (`board::BOARD_FINGER`, docs/design.md) set as the console sets them. Generic so that the
+/// host's f64 model (the web view's overlay) is the board's finger too.
 pub fn board_params<R: finger_model::Real>() -> Params<R> {
-    Params::with_card(crate::board::BOARD_CARD)
+    let mut p = Params::with_card(crate::board::BOARD_CARD);
+    for &(name, v) in crate::board::BOARD_FINGER {
+        // build.rs checked the ranges; a refused value would keep the default's
+        let _ = p.set(name, v.into());
+    }
+    p
 }
 
 /// The FE calibration of a parameter set (`Calibration::for_params`) judged by its structure:

@@ -23,6 +23,7 @@ use finger_model::mat3::Mat3;
 use finger_model::Params;
 use mesh::{Density, Segment};
 use std::collections::BTreeMap;
+use std::fmt::Write as _;
 
 /// A section's rigid motion: centre position (mm, base frame) and angle (rad).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -312,4 +313,84 @@ pub fn face_loads(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, xf: f64, w: [f64;
         }
     }
     Ok(f.into_iter().map(|(i, v)| (i, v[0], v[1])).collect())
+}
+
+/// The finger under one cable tension and its tip stiffness there: the NLGEOM cable step, then
+/// three steps each adding one small tip load to it (Fx, Fy, a moment M, `perturb` = (N, N,
+/// N·mm), whole width) on the end face; the tip's motion per load is a column of the tip
+/// compliance in the base frame (x mm, y mm, θ rad per Fx N, Fy N, M N·mm), as the model's
+/// `Finger::tip_compliance`. The cable's springs keep their tension through the load steps,
+/// so the FE's compliance includes the cable's geometric stiffness, which the model's does
+/// not (docs/model.md "Tip stiffness").
+pub fn tip_compliance_under_cable(
+    p: &Params<f64>,
+    stack_mm: &[f64],
+    kind: Kind,
+    d: &Density,
+    law: Law,
+    tension: f64,
+    perturb: [f64; 3],
+) -> Result<(FeState, Mat3<f64>), FeError> {
+    let mesh = finger_mesh(p, stack_mm, kind, d);
+    let mut holes = vec![mesh.find(0.0, p.e)?];
+    for k in 0..p.n {
+        let x0 = k as f64 * p.l;
+        holes.push(mesh.find(x0 + 2.0 * p.a, p.e)?);
+        holes.push(mesh.find(x0 + p.l, p.e)?);
+    }
+    let x_tip = p.n as f64 * p.l;
+    let sections: Vec<Vec<usize>> = (0..=p.n).map(|k| mesh.at_x(k as f64 * p.l)).collect();
+    let mut out_nodes: Vec<usize> = sections.iter().flatten().copied().chain(holes.iter().copied()).collect();
+    out_nodes.sort();
+    out_nodes.dedup();
+    let loads = Loads::Cable { holes: holes.clone(), tensions: vec![tension], law };
+    let mut deck = ccx::deck(p, kind, &mesh, 0.0, &loads, out_nodes);
+    for (j, f) in perturb.iter().enumerate() {
+        let mut w = [0.0; 3];
+        w[j] = *f;
+        let _ = writeln!(deck.text, "*STEP, NLGEOM, INC=2000\n*STATIC\n0.5, 1., 1.e-6, 1.\n*CLOAD, OP=NEW");
+        for (n, fx, fy) in face_loads(p, kind, &mesh, x_tip, w)? {
+            let _ = writeln!(deck.text, "{}, 1, {fx:.12e}\n{}, 2, {fy:.12e}", n + 1, n + 1);
+        }
+        let _ = writeln!(deck.text, "*NODE PRINT, NSET=NOUT\nU\n*END STEP");
+        deck.times.push((j + 2) as f64);
+    }
+    let res = ccx::run(&deck)?;
+    let poses: Vec<Vec<SectionPose>> = res
+        .iter()
+        .map(|u| {
+            let mut nodes: Vec<SectionPose> = sections.iter().map(|s| section_pose(&mesh, s, u)).collect();
+            for k in 1..nodes.len() {
+                let d = nodes[k].theta - nodes[k - 1].theta;
+                let d = d - (2.0 * std::f64::consts::PI) * (d / (2.0 * std::f64::consts::PI)).round();
+                nodes[k].theta = nodes[k - 1].theta + d;
+            }
+            nodes
+        })
+        .collect();
+    let base = &poses[0];
+    let tip0 = base[p.n];
+    let mut c = [[0.0; 3]; 3];
+    for j in 0..3 {
+        let t = poses[j + 1][p.n];
+        // the moment's couple (x forces linear in the face's reference y) turns with the face:
+        // it applies M cos θ
+        let f = if j == 2 { perturb[j] * tip0.theta.cos() } else { perturb[j] };
+        let du = [t.x - tip0.x, t.y - tip0.y, t.theta - tip0.theta];
+        for i in 0..3 {
+            c[i][j] = du[i] / f;
+        }
+    }
+    let joint_angle = (1..=p.n).map(|k| base[k].theta - base[k - 1].theta).collect();
+    let pos = |i: usize| {
+        let r = mesh.xy(i);
+        [r[0] + res[0][&i][0], r[1] + res[0][&i][1]]
+    };
+    let span = (0..p.n)
+        .map(|k| {
+            let (a, b) = (pos(holes[2 * k]), pos(holes[2 * k + 1]));
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+        })
+        .collect();
+    Ok((FeState { tension, nodes: base.clone(), joint_angle, span }, c))
 }

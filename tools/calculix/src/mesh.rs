@@ -154,7 +154,12 @@ pub fn mesh2(p: &Params<f64>, segs: &[Segment], d: &Density) -> Mesh2 {
             match *seg {
                 Segment::Link { .. } => (p.b, 0.0),
                 Segment::Notch { x0, stack_mm } => {
-                    (notch_thickness(p.b, p.t_min, p.a, x - x0), stack_depth(p, stack_mm, (x - x0).clamp(0.0, 2.0 * p.a)))
+                    // the notch's ends exactly: x0 + 2a - x0 rounds off 2a, and the ellipse's
+                    // thickness there (a square root at zero) would move the end's nodes off the
+                    // link's, leaving the mesh in two pieces
+                    let (u, l) = (x - x0, 2.0 * p.a);
+                    let u = if u < 1e-9 * l { 0.0 } else if u > l * (1.0 - 1e-9) { l } else { u };
+                    (notch_thickness(p.b, p.t_min, p.a, u), stack_depth(p, stack_mm, u))
                 }
             }
         };

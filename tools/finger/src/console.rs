@@ -17,6 +17,10 @@ pub enum ErrorCode {
     Armed,
     Unreachable,
     Fault,
+    /// A line lost while receiving.
+    Overrun,
+    /// A line a later `stop` dropped before it ran.
+    Stopped,
     Other(String),
 }
 
@@ -32,6 +36,8 @@ impl ErrorCode {
             "armed" => ErrorCode::Armed,
             "unreachable" => ErrorCode::Unreachable,
             "fault" => ErrorCode::Fault,
+            "overrun" => ErrorCode::Overrun,
+            "stopped" => ErrorCode::Stopped,
             other => ErrorCode::Other(other.to_owned()),
         }
     }
@@ -47,6 +53,8 @@ impl ErrorCode {
             ErrorCode::Armed => "armed",
             ErrorCode::Unreachable => "unreachable",
             ErrorCode::Fault => "fault",
+            ErrorCode::Overrun => "overrun",
+            ErrorCode::Stopped => "stopped",
             ErrorCode::Other(s) => s,
         }
     }
@@ -167,10 +175,11 @@ mod tests {
 
     #[test]
     fn error_codes_round_trip() {
-        for c in ["unknown", "usage", "bad-number", "too-long", "limit", "not-armed", "armed", "unreachable", "fault", "new-one"] {
+        for c in ["unknown", "usage", "bad-number", "too-long", "limit", "not-armed", "armed", "unreachable", "fault", "overrun", "stopped", "new-one"] {
             assert_eq!(ErrorCode::parse(c).as_str(), c);
         }
         assert_eq!(ErrorCode::parse("limit"), ErrorCode::Limit);
+        assert_eq!(ErrorCode::parse("stopped"), ErrorCode::Stopped);
     }
 
     #[test]

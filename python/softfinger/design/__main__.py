@@ -1,0 +1,90 @@
+"""``python -m softfinger.design``: the design study's command line (docs/design.md).
+
+- ``study --card C [--trials N] [--storage PATH|URL] [--batch B] [--sampler nsga2|tpe]``: run or
+  resume a card's Optuna study (journal file out/design/studies.journal by default);
+- ``sweep --card C [--grid 7]``: the exhaustive grid, its rate and best design;
+- ``fe DESIGN.toml ... [--scheduler tcp://...] [--workers 2]``: FE-check designs on Dask;
+- ``report [--trials N] [--grid 7] [--scheduler ...] [--from results.json]``: everything, then
+  docs/design.md, its figure and designs/<card>.toml.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from .fe import repo_root
+from .space import CARDS, Design
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m softfinger.design", description="The design study (docs/design.md).")
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    s = sub.add_parser("study", help="run or resume a card's Optuna study")
+    s.add_argument("--card", choices=CARDS, required=True)
+    s.add_argument("--trials", type=int, default=2048)
+    s.add_argument("--storage", default=None, help="a journal file (default out/design/studies.journal) or an RDB URL (sqlite:///x.db)")
+    s.add_argument("--batch", type=int, default=64)
+    s.add_argument("--sampler", choices=("nsga2", "tpe"), default="nsga2")
+    s.add_argument("--seed", type=int, default=0)
+    g = sub.add_parser("sweep", help="the exhaustive grid of a card")
+    g.add_argument("--card", choices=CARDS, required=True)
+    g.add_argument("--grid", type=int, default=7)
+    f = sub.add_parser("fe", help="FE-check designs (TOML files) on a Dask cluster")
+    f.add_argument("designs", nargs="+")
+    f.add_argument("--scheduler", default=None, help="a Dask scheduler's address (default: a LocalCluster)")
+    f.add_argument("--workers", type=int, default=2)
+    r = sub.add_parser("report", help="everything, then docs/design.md, its figure and designs/<card>.toml")
+    r.add_argument("--trials", type=int, default=2048)
+    r.add_argument("--grid", type=int, default=7)
+    r.add_argument("--fe-per-card", type=int, default=5)
+    r.add_argument("--storage", default=None)
+    r.add_argument("--scheduler", default=None)
+    r.add_argument("--from", dest="from_json", default=None, help="rewrite the page from a results.json, running nothing")
+    r.add_argument("--fe-only", dest="fe_only", default=None, help="keep the search of a results.json, run the FE stage again")
+    a = ap.parse_args(argv)
+    root = repo_root()
+    if a.cmd == "study":
+        from .study import feasible_trials, run_study, storage_of
+
+        st = run_study(a.card, a.trials, storage_of(a.storage or root / "out" / "design" / "studies.journal"), batch=a.batch, seed=a.seed, sampler=a.sampler)
+        ft = feasible_trials(st)
+        best = max(ft, key=lambda t: t.values[0], default=None)
+        print(f"{len(st.trials)} trials, {len(ft)} feasible" + (f"; best k_yy ratio {best.values[0]:.4f}: {best.params}" if best else ""))
+    elif a.cmd == "sweep":
+        from .study import sweep
+
+        sw = sweep(a.card, a.grid)
+        print(f"{sw.candidates:,} candidates in {sw.seconds:.1f} s ({sw.rate_per_min:,.0f}/min), {sw.feasible:,} feasible")
+        ev = sw.evaluation
+        if ev is not None and len(ev):
+            i = int(ev.objectives[:, 0].argmax())
+            print(f"best k_yy ratio {ev.objectives[i, 0]:.4f} (k_tt {ev.objectives[i, 1]:.4f}, grip {ev.objectives[i, 2]:.2f} N): {ev.design(i)}")
+    elif a.cmd == "fe":
+        from . import fe
+
+        designs = [Design.load(p) for p in a.designs]
+        checks, wall, n = fe.check(designs, scheduler=a.scheduler, workers=a.workers)
+        print(f"FE stage: {wall:.1f} s on {n} worker(s)")
+        for ch in checks:
+            print(ch.design.card, "ok" if ch.ok else [r.error for r in ch.results], "k_yy ratio (direct)", ch.ratio("kyy"), "errors %", ch.errors())
+    elif a.cmd == "report":
+        from . import report
+
+        if a.from_json:
+            res = json.loads(Path(a.from_json).read_text())
+        else:
+            search = json.loads(Path(a.fe_only).read_text()) if a.fe_only else None
+            res = report.run(root, trials=a.trials, grid=a.grid, fe_per_card=a.fe_per_card, storage=a.storage, scheduler=a.scheduler, search=search)
+            out = root / "out" / "design" / "results.json"
+            out.parent.mkdir(parents=True, exist_ok=True)
+            out.write_text(json.dumps(res, indent=1, default=float))
+        report.write(res, root)
+        print("wrote docs/design.md, docs/design-pareto.png, docs/design-pareto.svg, designs/*.toml")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,283 @@
+"""docs/design.md, its Pareto figure (PNG and SVG) and designs/<card>.toml, from one run:
+the Optuna study per card (resumed from its storage), the exhaustive grid sweep per card, the
+Pareto front, the FE check of the front on a Dask LocalCluster with 2 workers and again with 1
+(the benchmark), and the best design per card. ``python -m softfinger.design report`` runs it;
+the run's numbers are also kept in out/design/results.json (``--from`` rewrites the page from
+them without running anything).
+
+Not here: the search or the FE themselves (``study``, ``fe``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import time
+from dataclasses import asdict
+from pathlib import Path
+from typing import Dict, List
+
+import numpy as np
+
+from . import fe
+from .evaluate import CONSTRAINTS, FMAX_FLOOR_N, OBJECTIVES, REFERENCE_DEG, evaluate
+from .space import CARDS, MARGIN, SPACE, Design, grid_size, variables
+from .study import design_of_trial, feasible_trials, pareto_mask, run_study, storage_of, sweep
+
+COMMAND = "target/pyenv/bin/python -m softfinger.design report"
+
+
+def _snap(d: Design) -> Design:
+    """A design's values on their buildable steps (Optuna's float steps carry binary noise)."""
+    kw = {v.name: v.snap(getattr(d, v.name)) for v in variables(d.card)}
+    kw["layers"] = int(kw["layers"])
+    return d.replace(**kw)
+
+
+def _front_rows(card: str, designs: List[Design]) -> List[Dict]:
+    """Model rows (objectives, constraints, outputs) of `designs`, feasible ones only."""
+    if not designs:
+        return []
+    ev = evaluate(card, designs)
+    # a supply above the card's hold ceiling is never used: the smallest on the step that
+    # reaches the ceiling gives the same finger (the same objectives), and a smaller HV module
+    step = next(v for v in variables(card) if v.name == "v_supply")
+    tidy = []
+    for i, d in enumerate(designs):
+        c = float(ev.raw["ceiling_V"][i])
+        if ev.feasible[i] and c < d.v_supply:
+            d = d.replace(v_supply=max(step.low, step.step * np.ceil(c / step.step)))
+        tidy.append(d)
+    if tidy != designs:
+        designs = list(dict.fromkeys(tidy))
+        ev = evaluate(card, designs)
+    rows = []
+    for i, d in enumerate(designs):
+        if ev.feasible[i]:
+            rows.append({"design": asdict(d), **ev.row(i)})
+    return rows
+
+
+def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_per_card: int = 5, storage: str | None = None, scheduler: str | None = None, progress: bool = True, search: Dict | None = None) -> Dict:
+    """Everything the page reports, as plain data (saved to out/design/results.json).
+    `search`: a previous run's results whose search (studies, sweep, front) is kept; only the
+    FE stage runs again."""
+    out: Dict = {"machine": {"cores": os.cpu_count(), "python": platform.python_version(), "arch": platform.machine()}, "cards": {}}
+    storage = storage or str(root / "out" / "design" / "studies.journal")
+    chosen: List[Design] = []
+    if search is not None:
+        out["cards"] = search["cards"]
+        for c in out["cards"].values():
+            c["fe_designs"] = c["fe_designs"][:fe_per_card]
+        chosen = [Design(**d) for c in out["cards"].values() for d in c["fe_designs"]]
+    for card in CARDS if search is None else ():
+        c: Dict = {}
+        t0 = time.perf_counter()
+        st = run_study(card, trials, storage_of(storage), batch=batch, progress=progress)
+        c["study"] = {"trials": len(st.trials), "seconds_this_run": time.perf_counter() - t0, "feasible": len(feasible_trials(st)), "storage": str(storage), "sampler": "NSGA-II", "batch": batch}
+        t0 = time.perf_counter()
+        sw = sweep(card, grid, progress=progress)
+        c["sweep"] = {"candidates": sw.candidates, "seconds": sw.seconds, "feasible": sw.feasible, "per_min": sw.rate_per_min, "grid": grid}
+        # the front: the study's feasible trials and the sweep's non-dominated ones
+        designs = [_snap(design_of_trial(card, t)) for t in feasible_trials(st)]
+        if sw.evaluation is not None:
+            designs += [sw.evaluation.design(i) for i in range(len(sw.evaluation))]
+        designs = list(dict.fromkeys(designs))
+        rows = _front_rows(card, designs)
+        vals = np.array([[r[k] for k in OBJECTIVES] for r in rows]) if rows else np.zeros((0, 3))
+        front = pareto_mask(vals) if len(rows) else np.zeros(0, dtype=bool)
+        c["all"] = [[r["ratio_kyy"], r["ratio_ktt"], r["grip_N"]] for r in rows]
+        c["front"] = [rows[i] for i in np.flatnonzero(front)]
+        c["front"].sort(key=lambda r: -r["ratio_kyy"])
+        c["best"] = c["front"][0] if c["front"] else None
+        # FE: the best, then front designs spread over the grip force
+        picks = c["front"][:1]
+        rest = sorted(c["front"][1:], key=lambda r: r["grip_N"])
+        if rest and fe_per_card > 1:
+            idx = np.unique(np.linspace(0, len(rest) - 1, min(fe_per_card - 1, len(rest))).round().astype(int))
+            picks += [rest[i] for i in idx]
+        c["fe_designs"] = [p["design"] for p in picks]
+        chosen += [Design(**p["design"]) for p in picks]
+        out["cards"][card] = c
+    # the FE stage on 2 workers (the report's results), then on 1 (the benchmark)
+    load = {}
+    load["2"] = os.getloadavg()[0]
+    checks, wall2, n2 = fe.check(chosen, scheduler=scheduler, workers=2, progress=progress)
+    out["fe"] = {"kind": "3D half width, C3D20R, the coarse mesh with 16 columns per notch (`Density::coarse`, notch_cols of `fine`)", "runs": 2 * len(chosen), "wall": {str(n2): wall2}, "load": load}
+    if scheduler is None:
+        load["1"] = os.getloadavg()[0]
+        _, wall1, n1 = fe.check(chosen, workers=1, progress=progress)
+        out["fe"]["wall"][str(n1)] = wall1
+    out["fe"]["checks"] = [
+        {
+            "design": asdict(ch.design),
+            "ok": ch.ok,
+            "errors": ch.errors(),
+            "ratio_kyy": ch.ratio("kyy"),
+            "ratio_ktt": ch.ratio("ktt"),
+            "ends": [{"end": r.case.end, "tension_N": r.case.tension_N, "ok": r.ok, "error": r.error, "seconds": r.seconds, "nodes": r.nodes, "model_direct": r.case.model_direct, "fe_direct": r.direct, "model_joints_deg": np.degrees(r.case.model_joints_rad).tolist(), "fe_joints_deg": np.degrees(r.joints_rad).tolist() if r.ok else []} for r in ch.results],
+        }
+        for ch in checks
+    ]
+    return out
+
+
+def _fmt_design(d: Dict) -> str:
+    return f"t_min {d['t_min']:g} mm, a {d['a']:g} mm, E_b {d['e_b']:g} MPa, w {d['w']:g} mm, {d['layers']} × {d['z0']:g} mm layers, {d['v_supply'] / 1e3:g} kV supply"
+
+
+def _check_of(res: Dict, design: Dict):
+    for ch in res["fe"]["checks"]:
+        if ch["design"] == design:
+            return ch
+    return None
+
+
+def figure(res: Dict, png: Path, svg: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
+    colors = {"VHB-4905": "tab:red", "Elastosil-2030": "tab:blue"}
+    for card, c in res["cards"].items():
+        allv = np.array(c["all"]) if c["all"] else np.zeros((0, 3))
+        fr = np.array([[r["ratio_kyy"], r["ratio_ktt"], r["grip_N"]] for r in c["front"]]) if c["front"] else np.zeros((0, 3))
+        for ax, j, name in ((axes[0], 0, "k_yy"), (axes[1], 1, "k_θθ")):
+            ax.scatter(allv[:, 2], allv[:, j], s=4, color=colors[card], alpha=0.15, linewidths=0)
+            ax.scatter(fr[:, 2], fr[:, j], s=18, color=colors[card], edgecolors="black", linewidths=0.4, label=f"{card}: Pareto front")
+            fed = [ch for ch in res["fe"]["checks"] if ch["design"]["card"] == card and ch["ok"]]
+            ax.scatter([next(r["grip_N"] for r in c["front"] if r["design"] == ch["design"]) for ch in fed], [ch["ratio_" + ("kyy" if j == 0 else "ktt")]["fe"] for ch in fed], marker="x", s=40, color=colors[card], label=f"{card}: FE (direct stiffness)")
+            ax.set_xscale("log")
+            ax.set_xlabel("grip force at fmax, N (log scale)")
+            ax.set_ylabel(f"{name} ratio (max / min over the voltages)")
+            ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, loc="upper right")
+    fig.suptitle(f"Feasible designs (faint) and the Pareto front, reference posture {REFERENCE_DEG:g}° per joint")
+    fig.tight_layout()
+    png.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(png, dpi=110)
+    fig.savefig(svg)
+    plt.close(fig)
+
+
+def write(res: Dict, root: Path) -> None:
+    """docs/design.md, docs/design-pareto.{png,svg}, designs/<card>.toml from `res`."""
+    docs = root / "docs"
+    figure(res, docs / "design-pareto.png", docs / "design-pareto.svg")
+    (root / "designs").mkdir(exist_ok=True)
+    L: List[str] = []
+    w = L.append
+    w(f"<!-- generated by `{COMMAND}`; do not edit -->")
+    w("# Design study: which finger of this kind varies its stiffness, inside its HV safety bounds\n")
+    bests = {card: c["best"] for card, c in res["cards"].items() if c["best"]}
+    top_card = max(bests, key=lambda k: bests[k]["ratio_kyy"]) if bests else None
+    if top_card:
+        b = bests[top_card]
+        ch = _check_of(res, b["design"])
+        fe_txt = f"; CalculiX gives {ch['ratio_kyy']['fe']:.2f}× for the same design (the direct stiffness 1/C_yy: model {ch['ratio_kyy']['model']:.2f}×)" if ch and ch["ok"] else ""
+        other = [f"{k} {v['ratio_kyy']:.2f}×" for k, v in bests.items() if k != top_card]
+        w(
+            f"**The largest stiffness change this finger gives inside its HV safety bounds is {b['ratio_kyy']:.2f}× in k_yy ({b['ratio_ktt']:.2f}× in k_θθ), "
+            f"on {top_card} with {_fmt_design(b['design'])} (`designs/{top_card}.toml`){fe_txt}; the best on {', '.join(other)}. "
+            f"Literature variable-stiffness joints reach 4-8× by electrostatic layer jamming (about 22× at best), 4-5.5× at finger level and up to ~10× where the DE is itself the load path: "
+            f"the change this concept makes (its ratio's excess over 1, {b['ratio_kyy'] - 1:.2f}) is about {3.0 / (b['ratio_kyy'] - 1):.0f}× smaller than the smallest of theirs (4×: an excess of 3).**\n"
+        )
+    w("## What was searched\n")
+    w(f"Each design is the paper's finger (n = 3, l = 27 mm, b = {10:g} mm, e = 5 mm; the model's defaults: m = 8, plate modulus, flexible links, uncalibrated) with these variables, per film card (`softfinger.design.space`):\n")
+    w("| variable | VHB-4905 | Elastosil-2030 | grid (7 values) | why |")
+    w("| --- | --- | --- | --- | --- |")
+    for i, v in enumerate(SPACE["VHB-4905"]):
+        e = SPACE["Elastosil-2030"][i]
+        rng = lambda x: ", ".join(f"{c:g}" for c in x.choices) if x.choices else (f"{x.low:g}" if x.low == x.high else f"{x.low:g}..{x.high:g}" + (f" step {x.step:g}" if x.step else "") + (" (integer)" if x.integer else ""))
+        grid = " / ".join(", ".join(f"{g:g}" for g in x.grid()) for x in ((v,) if v.grid() == e.grid() else (v, e)))
+        w(f"| `{v.name}` ({v.unit}) | {rng(v)} | {rng(e)} | {grid} | {e.why} |")
+    w(f"\nThe margin is the board's, {MARGIN:g}, on every design (a safety factor is not traded for stiffness). `paper-elastic` (the paper's 0.6 MPa as printed) is not a film and is not designed for.\n")
+    w(f"**Objectives** (maximised): the tip stiffness ratio max/min of k_yy and of k_θθ (K_tip, `Finger::tip_stiffness`) at the reference posture, every joint at {REFERENCE_DEG:g}°, held by the inverse at both ends of its tension interval (one joint at the top voltage the ceiling allows, and 0 V: `inverse::stiffness_range`, as docs/inverse-tables.md); the grip force at fmax (the tip stopped where the 0 V end puts it, the cable pulled to fmax, `contact`).\n")
+    w(f"**Constraints**, each a number the model computes, feasible at <= 0 (`softfinger.design.evaluate`): `refused` (the model refused the design at any step: its typed error, e.g. an unreachable posture or a branch end, counts as infeasible, never as a crash); `ceiling` (highest voltage used / the card's hold ceiling with the margin, capped by the supply, − 1); `breakdown` (highest field across a thinned layer / the card's breakdown field, − 1); `thinning` (2/3 − the thinnest stack's thickness stretch: the 33 % limit); `fmax` (fmax at both ends above {FMAX_FLOOR_N:g} N); `fits` (the stack, layers × z0, inside the notch depth (b − t_min)/2).\n")
+    w("## Results per card\n")
+    w("| card | study trials (feasible) | grid candidates (feasible) | best k_yy ratio | its k_θθ ratio | its grip N | its fmax N | ceiling V | thinning at the top % | FE: direct k_yy ratio, model / FE | FE: k_θθ, model / FE |")
+    w("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for card, c in res["cards"].items():
+        b = c["best"]
+        if not b:
+            w(f"| {card} | {c['study']['trials']} ({c['study']['feasible']}) | {c['sweep']['candidates']:,} ({c['sweep']['feasible']:,}) | none feasible | | | | | | | |")
+            continue
+        ch = _check_of(res, b["design"])
+        fe_y = f"{ch['ratio_kyy']['model']:.3f} / {ch['ratio_kyy']['fe']:.3f}" if ch and ch["ok"] else "failed"
+        fe_t = f"{ch['ratio_ktt']['model']:.3f} / {ch['ratio_ktt']['fe']:.3f}" if ch and ch["ok"] else "failed"
+        w(f"| {card} | {c['study']['trials']} ({c['study']['feasible']}) | {c['sweep']['candidates']:,} ({c['sweep']['feasible']:,}) | **{b['ratio_kyy']:.3f}** | {b['ratio_ktt']:.3f} | {b['grip_N']:.2f} | {b['fmax_N']:.2f} | {b['ceiling_V']:.0f} | {100 * (1 - b['s_min']):.1f} | {fe_y} | {fe_t} |")
+    w("")
+    for card, c in res["cards"].items():
+        if c["best"]:
+            w(f"- **{card}**: {_fmt_design(c['best']['design'])}: `designs/{card}.toml`.")
+    w("\n![Pareto front](design-pareto.png)\n")
+    w("[SVG](design-pareto.svg). Faint: every feasible design the study and the grid found; ringed: the Pareto front (the three objectives); crosses: the FE's ratio of the direct stiffness for the designs checked.\n")
+    w("Why the ratios are small: the stack changes the joint's stiffness only by its own share of it, and the voltage changes that share only by the film's thinning at the ceiling (VHB 4905: 18 % at its hold ceiling, s_hold 0.818; Elastosil 2030: 4 %, docs/materials.md). A bonded stack's bending stiffness falls about as the cube of its thickness, so even a stack that carries the whole joint gives at most about 1/0.818³ = 1.8× on VHB 4905 and 1/0.959³ = 1.13× on Elastosil; the hinge's own TPU, the posture's tension and the fmax floor take part of that.\n")
+    w("## FE check of the front\n")
+    f = res["fe"]
+    w(f"Each design's reference posture at both ends of its voltage range re-solved by CalculiX (`fe-design` in tools/calculix: NLGEOM, neo-Hookean body and stacks, the stacks at the thicknesses the end's voltages give, under the end's tension; {f['kind']}), then three small tip loads on top of it for the tip compliance C. Compared: the joint angles (the posture), and the tip's direct stiffness to a single load, 1/C_yy and 1/C_θθ, at each end and as a ratio over the ends. The model's K_tip entries (the objectives) invert the whole 3×3 compliance and amplify its small differences (and the FE's follower cable adds a geometric stiffness the model leaves out, docs/model.md \"Tip stiffness\"), so the check compares the quantity both compute directly; the table gives the objective (the model's K_tip ratio) beside it.\n")
+    w("Errors are model minus FE in % of FE: *joint* the worst joint angle over both ends; *1/C_yy*, *1/C_θθ* the worse end; *ratio* the ratio's error, *excess* the error of the ratio's excess over 1 (the part the voltage makes).\n")
+    w("| card | design | objective: K_tip k_yy ratio | FE ok | joint % | 1/C_yy % | 1/C_θθ % | 1/C_yy ratio model / FE | excess % | 1/C_θθ ratio model / FE | excess % |")
+    w("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    objective = {json.dumps(r["design"], sort_keys=True): r["ratio_kyy"] for c in res["cards"].values() for r in c["front"]}
+    for ch in f["checks"]:
+        d = ch["design"]
+        obj = objective.get(json.dumps(d, sort_keys=True), float("nan"))
+        if not ch["ok"]:
+            why = sorted({e["error"].split("*ERROR: ")[-1].split(" |")[0] for e in ch["ends"] if e["error"]})
+            w(f"| {d['card']} | {_fmt_design(d)} | {obj:.3f} | no: ccx: {'; '.join(why)} | | | | | | | |")
+            continue
+        e = ch["errors"]
+        w(f"| {d['card']} | {_fmt_design(d)} | {obj:.3f} | yes | {e['joint_pct']:+.1f} | {e['kyy_pct']:+.1f} | {e['ktt_pct']:+.1f} | {ch['ratio_kyy']['model']:.3f} / {ch['ratio_kyy']['fe']:.3f} | {e['excess_kyy_pct']:+.0f} | {ch['ratio_ktt']['model']:.3f} / {ch['ratio_ktt']['fe']:.3f} | {e['excess_ktt_pct']:+.0f} |")
+    oks = [ch for ch in f["checks"] if ch["ok"]]
+    if oks:
+        worst = max(abs(ch["errors"]["ratio_kyy_pct"]) for ch in oks)
+        worst_t = max(abs(ch["errors"]["ratio_ktt_pct"]) for ch in oks)
+        failed = len(f["checks"]) - len(oks)
+        w(f"\nOver the {len(oks)} designs CalculiX solved{f' ({failed} did not converge)' if failed else ''}, the model's ratio of the direct stiffness is within {worst:.1f} % (1/C_yy) and {worst_t:.1f} % (1/C_θθ) of CalculiX's; the stiffnesses themselves differ more (the columns 1/C_yy and 1/C_θθ: the uncalibrated model on a coarse mesh), and that difference largely cancels in the ratio.\n")
+    w("## From a design to a board\n")
+    w("A design is a TOML file: `card` plus the console's parameter names (`t_min`, `a`, `e_b`, `w`, `layers`, `z0`, `v_supply`, `margin`; `softfinger.design.Design.to_toml`). The best design per card is `designs/<card>.toml`. The firmware builds for one with\n")
+    w("```sh\nFINGER_DESIGN=designs/Elastosil-2030.toml cargo build --release\n```\n")
+    w("build.rs reads the file (a relative path from the repository's top; an unknown key, a missing one, a value outside the model's range or `paper-elastic` stops the build with the reason) and writes the board constants src/board.rs includes: `BOARD_CARD`, `BOARD_Z0_MM`, `BOARD_LAYERS`, `BOARD_MARGIN`, the HV modules' `HV_FULL_SCALE_V` and `HV_LIMIT_V` (the design's supply) and `BOARD_FINGER` (the design's values, which the board's default parameters take, `preset default` too). Without `FINGER_DESIGN` the constants are the paper's finger on VHB 4905, as before. On that image `material` reports the design's card, z0 and margin, and `limits` its ceiling (`vmax` = `vhold` = the design's ceiling); they stay board constants: `param v_supply`, `param margin` or `param z0` can only lower the ceiling in force, never raise it past `vhold`.\n")
+    w("Tests (`python/tests/test_design.py`, in `scripts/test`'s pytest): a 48-trial study finds a design that meets every constraint; designs the model refuses come back infeasible with their error, the other rows unchanged; a study killed (SIGKILL) mid-run resumes with every stored trial; `Finger` and `Design` pickle and round-trip; `designs/Elastosil-2030.toml` builds the board's application (finger-sim, the same build.rs and board.rs constants as the release image, host build in target/design) whose `limits` equals the design's ceiling and which `param` cannot raise.\n")
+    w("## Cost and benchmark\n")
+    m = res["machine"]
+    w(f"This machine: {m['cores']} cores (shared with other jobs while this ran), {m['arch']}, Python {m['python']}. Heavy runs under `nice -n 10`.\n")
+    w("| stage | work | wall time | rate |")
+    w("| --- | --- | --- | --- |")
+    tot_c, tot_s = 0, 0.0
+    for card, c in res["cards"].items():
+        s = c["sweep"]
+        tot_c += s["candidates"]
+        tot_s += s["seconds"]
+        w(f"| grid sweep, {card} (no grip force) | {s['candidates']:,} candidates ({s['grid']} values per variable) | {s['seconds']:.0f} s | {s['per_min']:,.0f} candidates/min |")
+    w(f"| grid sweep, both cards | {tot_c:,} candidates | {tot_s:.0f} s | {60 * tot_c / tot_s:,.0f} candidates/min |")
+    for card, c in res["cards"].items():
+        s = c["study"]
+        if s["seconds_this_run"] > 1:
+            w(f"| Optuna study, {card} (NSGA-II, batches of {s['batch']}, with the grip force; journal storage) | {s['trials']} trials | {s['seconds_this_run']:.0f} s (this run; resumed studies count only new trials) | {60 * s['trials'] / s['seconds_this_run']:,.0f} trials/min |")
+        else:
+            w(f"| Optuna study, {card} | {s['trials']} trials, resumed complete from its storage | - | - |")
+    walls = f["wall"]
+    line = "; ".join(f"{n} worker(s) {walls[n]:.0f} s" for n in sorted(walls))
+    sp = f" (speed-up {walls['1'] / walls['2']:.2f}×)" if "1" in walls and "2" in walls else ""
+    ld = f.get("load", {})
+    lds = ", ".join(f"{ld[n]:.1f} before the {n}-worker run" for n in sorted(ld))
+    w(f"| FE stage on a Dask LocalCluster | {f['runs']} ccx runs | {line}{sp} | load average {lds} (2 cores) |")
+    goal = 1_000_000
+    rate = 60 * tot_c / tot_s
+    w(f"\n**The goal of 1,000,000 candidates in 10 minutes**: the grid sweep evaluates {rate:,.0f} candidates per minute here (one candidate: the finger, the inverse's posture and tension interval, K_tip at both ends, fmax at both ends), so 1,000,000 take {goal / rate:.1f} minutes: the goal is {'met' if goal / rate <= 10 else 'not met'} without the grip force. The grip force (a pinned-tip contact solve at fmax) costs about 25× the rest of a candidate, so it is computed only for the sweep's non-dominated designs and in the study's trials. Optuna's own overhead (ask, tell, the storage) is about 10 ms a trial, so the sampler is for the search around the front, not for covering the space; the grid is.\n")
+    w(f"Regenerate: `{COMMAND}` (the studies resume from out/design/studies.journal; `--trials`, `--grid`, `--scheduler tcp://host:8786` for a Dask cluster; `--from out/design/results.json` rewrites this page and the figure from the last run's numbers).\n")
+    (docs / "design.md").write_text("\n".join(L) + "\n")
+    for card, c in res["cards"].items():
+        b = c["best"]
+        if not b:
+            continue
+        d = Design(**b["design"])
+        ch = _check_of(res, b["design"])
+        fe_txt = f"FE (CalculiX, direct stiffness 1/C_yy): model {ch['ratio_kyy']['model']:.3f}x, FE {ch['ratio_kyy']['fe']:.3f}x" if ch and ch["ok"] else "FE: not checked"
+        comment = f"The best design on {card} of the design study (docs/design.md; generated by `{COMMAND}`).\nk_yy ratio {b['ratio_kyy']:.3f}x, k_tt ratio {b['ratio_ktt']:.3f}x at every joint {REFERENCE_DEG:g} deg; grip {b['grip_N']:.2f} N at fmax; ceiling {b['ceiling_V']:.0f} V.\n{fe_txt}.\nBuild the board for it: FINGER_DESIGN=designs/{card}.toml cargo build --release"
+        (root / "designs" / f"{card}.toml").write_text(d.to_toml(comment))

@@ -1,0 +1,132 @@
+"""The design study (softfinger.design, docs/design.md): a small study finds a design that
+meets every constraint, a design the model refuses is infeasible and not a crash, a killed
+study resumes with its trials, the model pickles, and a design file builds a board whose
+ceiling is the design's."""
+
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import softfinger as sf
+from softfinger.design import CONSTRAINTS, Design, evaluate, run_study, storage_of
+from softfinger.design.study import feasible_trials
+
+from conftest import ROOT, cargo, host_target_dir
+
+
+def test_a_small_study_finds_a_feasible_design(tmp_path):
+    st = run_study("Elastosil-2030", 48, storage_of(tmp_path / "s.journal"), batch=16, progress=False)
+    assert len(st.trials) == 48
+    ok = feasible_trials(st)
+    assert ok, "no feasible design in 48 trials"
+    best = max(ok, key=lambda t: t.values[0])
+    # the stored constraints are the sampler's (Trial.set_constraint) and all hold
+    cons = [best.system_attrs[f"constraints:{c}"] for c in CONSTRAINTS]
+    assert all(c <= 0 for c in cons), cons
+    # the design evaluated again: feasible, the same ratio, a real change of stiffness
+    d = Design(card="Elastosil-2030", margin=0.9, **{k: (int(v) if k == "layers" else v) for k, v in best.params.items()})
+    ev = evaluate("Elastosil-2030", [d])
+    assert ev.feasible[0] and ev.objectives[0, 0] == pytest.approx(best.values[0], rel=1e-12)
+    assert ev.objectives[0, 0] > 1.001
+    r = ev.row(0)
+    assert r["volts_top_V"] < r["ceiling_V"] and r["s_min"] > 2 / 3 and r["fmax_N"] >= 2.0
+
+
+def test_a_refused_design_is_infeasible_not_a_crash():
+    good = Design(card="VHB-4905")
+    designs = [Design(card="VHB-4905", t_min=12.0), good, Design(card="VHB-4905", t_min=0.5, e_b=4.0, a=10.0, layers=1)]
+    ev = evaluate("VHB-4905", designs)
+    # the model's own refusals, by stage and kind: t_min >= b, and the grip's branch ending
+    assert ev.error[0] == "params:Param" and ev.error[2].startswith("grip:")
+    assert not ev.feasible[0] and not ev.feasible[2] and ev.feasible[1]
+    assert ev.constraints[0, CONSTRAINTS.index("refused")] == 1.0
+    assert np.all(np.isfinite(ev.constraints)) and np.all(np.isfinite(ev.objectives))
+    # the refused rows cost the good one nothing: the same numbers as alone
+    alone = evaluate("VHB-4905", [good])
+    assert ev.objectives[1].tolist() == alone.objectives[0].tolist()
+    # the same refusal raises its typed exception from the plain model
+    with pytest.raises(sf.InputError):
+        designs[0].finger()
+
+
+def test_a_killed_study_resumes_with_its_trials(tmp_path):
+    journal = tmp_path / "s.journal"
+    code = (
+        "from softfinger.design import run_study, storage_of\n"
+        f"run_study('VHB-4905', 100000, storage_of({str(journal)!r}), batch=16, progress=False)\n"
+    )
+    proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path)
+    import optuna
+
+    def stored():
+        if not journal.exists():
+            return []
+        try:
+            return optuna.load_study(study_name="design-VHB-4905", storage=storage_of(journal)).get_trials(deepcopy=False)
+        except KeyError:
+            return []
+
+    deadline = time.monotonic() + 120
+    while len(stored()) < 48 and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    before = stored()
+    assert len(before) >= 48, "the study stored too few trials to test"
+    assert all(t.state == optuna.trial.TrialState.COMPLETE for t in before)
+    n = len(before)
+    st = run_study("VHB-4905", n + 16, storage_of(journal), batch=16, progress=False)
+    after = st.get_trials(deepcopy=False)
+    assert len(after) == n + 16
+    assert [t.params for t in after[:n]] == [t.params for t in before]
+    assert [t.values for t in after[:n]] == [t.values for t in before]
+
+
+def test_the_model_and_a_design_pickle():
+    for f in (sf.Finger(card="Elastosil-2030", t_min=0.8, layers=12, z0=0.1), sf.Finger(preset="paper"), sf.Finger(calibration="auto")):
+        g = pickle.loads(pickle.dumps(f))
+        assert g.params == f.params and g.calibration == f.calibration and g.card == f.card
+        a, b = f.solve(0.5, [0, 1000, 2000]), g.solve(0.5, [0, 1000, 2000])
+        assert a.joints_rad.tolist() == b.joints_rad.tolist() and a.stiffness.tolist() == b.stiffness.tolist()
+        assert g.ceiling() == f.ceiling()
+    d = Design(card="Elastosil-2030", layers=12, z0=0.1)
+    assert pickle.loads(pickle.dumps(d)) == d
+    assert Design.from_toml(d.to_toml("a comment")) == d
+    with pytest.raises(ValueError):
+        Design.from_toml(d.to_toml() + "t_mni = 1.0\n")
+
+
+def sim_lines(program, lines):
+    out = subprocess.run([str(program)], input="".join(l + "\n" for l in lines), capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    return out.stdout.splitlines()
+
+
+def fields(line):
+    return dict(kv.split("=", 1) for kv in line.split()[1:])
+
+
+def test_the_design_file_builds_a_board_whose_ceiling_is_the_designs():
+    path = ROOT / "designs" / "Elastosil-2030.toml"
+    d = Design.load(path)
+    # the board's console on the host (finger-sim: the firmware's application and its
+    # board.rs constants, from the same build.rs), built for this design in its own target dir
+    env = {**os.environ, "FINGER_DESIGN": str(path)}
+    out = subprocess.run(["cargo", "build", "--quiet", "-p", "finger-sim", "--target", "host-tuple", "--target-dir", "target/design"], cwd=ROOT, env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    program = host_target_dir(ROOT / "target" / "design", "debug") / "finger-sim"
+    lim, mat, *_, lim2 = sim_lines(program, ["limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"])
+    ceiling = d.finger().ceiling()
+    vmax = [float(v) for v in fields(lim)["vmax"].split(",")]
+    assert vmax == [pytest.approx(ceiling, abs=0.15)] * 3, (lim, ceiling)
+    assert float(fields(lim)["vhold"]) == pytest.approx(min(ceiling, d.v_supply), abs=0.15)
+    m = fields(mat)
+    assert m["card"] == d.card and float(m["z0"]) == pytest.approx(d.z0) and float(m["margin"]) == pytest.approx(d.margin)
+    # the design's ceiling is a board constant: the console's parameters cannot raise it
+    assert [float(v) for v in fields(lim2)["vmax"].split(",")] == vmax, lim2
