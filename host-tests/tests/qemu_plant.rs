@@ -40,20 +40,20 @@ fn a_stuck_module_is_cut_within_the_settling_time() {
     assert_eq!(duties(&mut q), vec![0, 0, 0]);
 }
 
+/// 600 s of the film's creep: the plant's film relaxes 10 times faster than the card's
+/// (`plant film 6.7 10`), so a `wait 60` covers it (the board's model keeps the card's times:
+/// a harder case than the film at its own speed, `hv_measured`'s histories cover both).
 #[test]
 fn a_film_half_the_cards_modulus_stays_above_two_thirds_for_600_s() {
     let mut q = Qemu::boot("plant-film");
-    assert_eq!(q.cmd("plant film 6.7"), "ok plant film 6.7");
+    assert_eq!(q.cmd("plant film 6.7 10"), "ok plant film 6.7 10");
     assert_eq!(q.cmd("arm"), "ok armed=1");
     // the largest voltage the board takes: its ceiling is exclusive
     let lim = q.cmd("limits");
     let vmax: f32 = field(&lim, "vmax").split(',').next().unwrap().parse().unwrap();
     let v = vmax - 0.1;
     assert!(q.cmd(&format!("volt all {v:.1}")).starts_with("ok volts="), "{v}");
-    // 600 s in ten waits (each reply inside the harness's read time-out)
-    for _ in 0..10 {
-        assert_eq!(q.cmd("wait 60"), "ok waited=60");
-    }
+    assert_eq!(q.cmd("wait 60"), "ok waited=60");
     let st = q.cmd("status");
     assert_eq!(field(&st, "fault"), "none", "{st}");
     let plant = q.cmd("plant status");
