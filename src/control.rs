@@ -300,6 +300,8 @@ impl<B: Board> Control<B> {
         if c.stacks.is_none() {
             c.lock_out(Fault::BoardCard);
         }
+        #[cfg(all(not(feature = "hw"), not(m3)))]
+        c.read_plant();
         c
     }
 
@@ -609,6 +611,21 @@ impl<B: Board> Control<B> {
         self.sensing.guard_on = on;
     }
 
+    /// The plant's truth into the view (boards with a plant).
+    #[cfg(all(not(feature = "hw"), not(m3)))]
+    fn read_plant(&mut self) {
+        if let Some(p) = self.board.plant() {
+            self.trip_max_us = Some(p.trip_max_us);
+            let mut pv = PlantView { volts: [0.0; HV_CHANNELS], current_ua: [0.0; HV_CHANNELS], s: [1.0; HV_CHANNELS], film_kpa: p.film_kpa() };
+            for (ch, t) in p.truth().iter().enumerate() {
+                pv.volts[ch] = t.volts;
+                pv.current_ua[ch] = t.current_ua;
+                pv.s[ch] = t.s;
+            }
+            self.plant_view = Some(pv);
+        }
+    }
+
     /// The plant's test console: a change to the board's plant (none without one).
     #[cfg(all(not(feature = "hw"), not(m3)))]
     pub fn plant_request(&mut self, req: PlantRequest) {
@@ -653,16 +670,7 @@ impl<B: Board> Control<B> {
     fn read_back(&mut self) {
         let Some(hs) = self.board.hv_sense() else { return };
         #[cfg(not(feature = "hw"))]
-        if let Some(p) = self.board.plant() {
-            self.trip_max_us = Some(p.trip_max_us);
-            let mut pv = PlantView { volts: [0.0; HV_CHANNELS], current_ua: [0.0; HV_CHANNELS], s: [1.0; HV_CHANNELS], film_kpa: p.film_kpa() };
-            for (ch, t) in p.truth().iter().enumerate() {
-                pv.volts[ch] = t.volts;
-                pv.current_ua[ch] = t.current_ua;
-                pv.s[ch] = t.s;
-            }
-            self.plant_view = Some(pv);
-        }
+        self.read_plant();
         let hold = self.hold_ceiling_v();
         let sn = &mut self.sensing;
         sn.present = true;

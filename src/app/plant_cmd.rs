@@ -27,6 +27,9 @@ const USAGE: &str = "plant film <G_eq kPa> [time scale] | breakdown <ch> [clears
 impl Commands {
     #[inline(never)]
     pub(super) fn cmd_plant(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
+        if self.plant_view.is_none() {
+            return Err(err!("unknown"; "plant: this board has no plant"));
+        }
         let Some((&what, rest)) = args.split_first() else { return Err(err!("usage"; USAGE)) };
         let req = match (what, rest) {
             (b"status", []) => {
@@ -88,9 +91,6 @@ impl Commands {
             }
             _ => return Err(err!("usage"; USAGE)),
         };
-        if self.plant_view.is_none() {
-            return Err(err!("unknown"; "plant: this board has no plant"));
-        }
         self.plant_req = Some(req);
         let _ = w!(r; "plant ", (console::printable(what)));
         for a in rest {
