@@ -116,8 +116,21 @@ class Status:
     servo_deg: float
     #: "none" or the fault's name
     fault: str
+    #: the HV read-back (boards that have one; None otherwise): measured voltages, V
+    vmeas_V: Optional[Tuple[float, ...]] = None
+    #: each stack's return current, µA
+    imeas_uA: Optional[Tuple[float, ...]] = None
+    #: each stack's thickness sensed from its capacitance, mm (nan until measured)
+    thick_meas_mm: Optional[Tuple[float, ...]] = None
     #: every field of the reply, parsed (newer firmware may add some)
     fields: Dict[str, Value] = field(default_factory=dict, compare=False)
+
+    @staticmethod
+    def _measured(line: str, key: str) -> Optional[Tuple[float, ...]]:
+        for kv in line.split()[1:]:
+            if kv.startswith(key + "="):
+                return tuple(float("nan") if x == "-" else float(x) for x in kv.split("=", 1)[1].split(","))
+        return None
 
     @classmethod
     def parse(cls, line: str) -> "Status":
@@ -132,6 +145,9 @@ class Status:
             cable_mm=_float(f["cable"]),
             servo_deg=_float(f["servo"]),
             fault=str(f["fault"]),
+            vmeas_V=cls._measured(line, "vmeas"),
+            imeas_uA=cls._measured(line, "imeas"),
+            thick_meas_mm=cls._measured(line, "thick_meas"),
             fields=f,
         )
 

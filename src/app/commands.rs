@@ -583,7 +583,7 @@ impl Commands {
             b"contact" => return Err(err!("unknown"; "contact is not in this build (feature contact)")),
             #[cfg(all(not(feature = "hw"), not(m3)))]
             b"plant" => self.cmd_plant(args, r)?,
-            #[cfg(any(feature = "hw", m3))]
+            #[cfg(feature = "hw")]
             b"plant" => return Err(err!("unknown"; "plant is not in this build (the simulated plant: finger-sim and the emulator image)")),
             b"param" => self.cmd_param(args, r, out)?,
             b"preset" => self.cmd_preset(args, r)?,
