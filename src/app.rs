@@ -41,6 +41,7 @@ pub mod config;
 
 pub use commands::{Commands, TimingReport};
 pub use errors::CmdError;
+pub use help::is_command;
 pub use host::App;
 pub use wire::wire;
 pub use params::{board_params, calibration_for, FwParamInfo, FwParams, CHANNELS, FW_PARAMS};

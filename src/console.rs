@@ -3,8 +3,9 @@
 //! Lines end with CR, LF or CRLF (a CRLF counts once). A line longer than [`LINE_MAX`] bytes
 //! is discarded whole and reported once, at its end, as [`Line::TooLong`]. Bytes are kept as
 //! they come (non-ASCII included); the command layer rejects what it does not understand.
-//! A terminal's escape sequences (arrow and function keys) are dropped before line assembly
-//! ([`EscFilter`]), so an arrow key costs no error line.
+//! A terminal's escape sequences (arrow and function keys) and its other control characters
+//! (Ctrl-L, backspace, NUL; tab is a separator) are dropped before line assembly
+//! ([`EscFilter`]), so a key of the terminal's costs no error line.
 
 use heapless::Vec;
 
@@ -24,8 +25,9 @@ pub enum Line<'a> {
 
 /// Drops a terminal's escape sequences from the byte stream: `ESC [` or `ESC O` then
 /// parameter bytes up to one final byte (0x40..=0x7e), as arrow, Home/End and function keys
-/// send them; `ESC` and any other byte (Alt+key) as a pair. A line ending always passes and
-/// ends the sequence, so a line is never held back.
+/// send them; `ESC` and any other byte (Alt+key) as a pair; any other control character
+/// (0x00..0x1f but tab, and DEL) alone. A line ending always passes and ends the sequence, so
+/// a line is never held back.
 #[derive(Default, Clone, Copy)]
 pub struct EscFilter {
     /// 0: text; 1: after ESC; 2: inside `ESC [` / `ESC O` before the final byte.
@@ -45,7 +47,7 @@ impl EscFilter {
         }
         match self.state {
             0 if b == 0x1b => self.state = 1,
-            0 => return true,
+            0 => return !(b < 0x20 && b != b'\t' || b == 0x7f),
             1 => self.state = if b == b'[' || b == b'O' { 2 } else { 0 },
             _ => {
                 if (0x40..=0x7e).contains(&b) {

@@ -15,7 +15,8 @@ pub mod scene;
 
 /// The console's terminal escape sequences as CONSOLE's grammar drops them (arrow, Home/End and
 /// function keys): `ESC [` or `ESC O` then bytes up to a final byte 0x40..=0x7e, or `ESC` and
-/// one other byte; a line ending always passes and ends a sequence. The checks' own model.
+/// one other byte; and any other control character alone (0x00..0x1f but tab, and DEL); a line
+/// ending always passes and ends a sequence. The checks' own model.
 #[derive(Default)]
 pub(crate) struct Escapes(u8);
 
@@ -28,7 +29,7 @@ impl Escapes {
         }
         match self.0 {
             0 if b == 0x1b => self.0 = 1,
-            0 => return true,
+            0 => return !(b < 0x20 && b != b'\t' || b == 0x7f),
             1 => self.0 = if b == b'[' || b == b'O' { 2 } else { 0 },
             _ if (0x40..=0x7e).contains(&b) => self.0 = 0,
             _ => {}

@@ -9,7 +9,7 @@
 
 use finger_model::inverse::{contact_force, solve_pose, stiffness_range};
 use finger_model::material::{ELASTOSIL_2030, VHB_4905};
-use finger_model::{Finger, Method, Params};
+use finger_model::{Calibration, Finger, Method, Params};
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -30,15 +30,18 @@ fn main() {
     )
     .unwrap();
     // kyy at 0 V, at the ceiling, and of the finger without stacks, at the same posture
-    let range = |p: Params<f64>| -> Option<(f64, f64, f64)> {
-        let f = Finger::new(p).ok()?;
+    let range_cal = |p: Params<f64>, cal: Calibration<f64>| -> Option<(f64, f64, f64)> {
+        let f = Finger::with_calibration(p, cal).ok()?;
         let s = solve_pose(&f, &angles, None).ok()?;
         let r = stiffness_range(&f, &s).ok()?;
-        let bare = Finger::new(p.without_stacks()).ok()?;
+        let bare = Finger::with_calibration(p.without_stacks(), cal).ok()?;
         let sb = solve_pose(&bare, &angles, None).ok()?;
         let kb = bare.tip_stiffness(&bare.solve(sb.tension, &[0.0; 3], Method::converged()).ok()?).ok()?;
         Some((r.stiffness[1][1][1], r.stiffness[0][1][1], kb[1][1]))
     };
+    let range = |p: Params<f64>| range_cal(p, Calibration::none());
+    // the board's finger: VHB 4905 with the board's FE calibration (src/app/params.rs)
+    let board = range_cal(Params::vhb4905(), Calibration::model_md());
     match range(Params::vhb4905()) {
         Some((k_0v, k_top, k_bare)) => writeln!(
             o,
@@ -55,7 +58,7 @@ fn main() {
     }
     let d = Params::<f64>::default();
     let vhb_row = format!(
-        "card VHB 4905, the board's (G_eq {:.1} kPa relaxed; 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)",
+        "card VHB 4905, the board's film, uncalibrated (G_eq {:.1} kPa relaxed; 4 x 0.5 mm, 10 kV; m = 8, plate, flexible links)",
         VHB_4905.g_eq_mpa * 1e3
     );
     let cases: Vec<(&str, Params<f64>)> = vec![
@@ -76,8 +79,22 @@ fn main() {
         ("m = 8, plate modulus, rigid links", Params { m: 8, plate: true, flex_links: false, ..d }),
         ("supply 30 kV, paper's model (m = 1)", Params { v_supply: 30_000.0, ..Params::paper_model() }),
     ];
-    for (name, p) in &cases {
-        let f = Finger::new(*p).unwrap();
+    writeln!(
+        o,
+        "| hardware | E_de MPa | V_pi kV | ceiling kV | thinning at the ceiling % | tension interval N | tension window % | \
+         kyy at the top voltage..at 0 V, N/mm | kyy change over the voltage range (0 V / top) | kθθ at the top voltage..at 0 V, N·mm/rad |"
+    )
+    .unwrap();
+    writeln!(o, "| --- | ---: | ---: | ---: | ---: | --- | ---: | --- | ---: | --- |").unwrap();
+    let mut rows: Vec<(String, Params<f64>, Calibration<f64>)> = cases.iter().map(|(n, p)| (n.to_string(), *p, Calibration::none())).collect();
+    rows.insert(
+        1,
+        ("card VHB 4905 with the board's FE calibration (`cal`): the board's finger, what `solve`, `pose` and the web view show".to_string(), Params::vhb4905(), Calibration::model_md()),
+    );
+    // (kθθ low..high, the kyy ratio) of each row, for the note on the calibration below
+    let mut seen: Vec<Option<(f64, f64, f64)>> = Vec::new();
+    for (name, p, cal) in &rows {
+        let f = Finger::with_calibration(*p, *cal).unwrap();
         let ceil = f.voltage_ceiling();
         let t0 = p.layers as f64 * p.z0;
         let thin = 100.0 * (1.0 - f.stack_thickness(ceil * (1.0 - 1e-4)).unwrap() / t0);
@@ -85,6 +102,7 @@ fn main() {
             Ok((s, r)) => {
                 let (lo, hi) = (s.interval[0], s.interval[1]);
                 let (k0, k1) = (r.stiffness[0], r.stiffness[1]);
+                seen.push(Some((k0[2][2], k1[2][2], k1[1][1] / k0[1][1])));
                 writeln!(
                     o,
                     "| {name} | {:.3} | {:.1} | {:.1} | {:.2} | {:.4}..{:.4} | {:.2} | {:.4}..{:.4} | {:.4} | {:.1}..{:.1} |",
@@ -103,10 +121,30 @@ fn main() {
                 )
                 .unwrap();
             }
-            Err(e) => writeln!(o, "| {name} | {:.3} | | {:.1} | {thin:.2} | err: {e} | | | | |", p.e_de(), ceil / 1e3).unwrap(),
+            Err(e) => {
+                seen.push(None);
+                writeln!(o, "| {name} | {:.3} | | {:.1} | {thin:.2} | err: {e} | | | | |", p.e_de(), ceil / 1e3).unwrap()
+            }
         }
     }
 
+    if let (Some(Some(plain)), Some(Some(cal))) = (seen.first(), seen.get(1)) {
+        writeln!(
+            o,
+            "\nEvery row but the second is the uncalibrated model (`Finger::new`), as docs/inverse.md's figures are; the \
+             second is the board's finger with its FE calibration (docs/model.md \"FE calibration\"), which changes the \
+             hinges' compliances: that is why the board, the Python `Finger()` and the web view give kθθ {:.1}..{:.1} \
+             N·mm/rad at this posture where the first row gives {:.1}..{:.1}, for the same film and about the same change \
+             over the voltage range ({:.2} % calibrated, {:.2} % not).",
+            cal.0,
+            cal.1,
+            plain.0,
+            plain.1,
+            100.0 * (cal.2 - 1.0),
+            100.0 * (plain.2 - 1.0)
+        )
+        .unwrap();
+    }
     writeln!(o, "\n## Contact force against the voltages at one tension\n").unwrap();
     writeln!(
         o,
@@ -240,4 +278,20 @@ fn main() {
     }
     std::fs::write(&path, o).unwrap();
     println!("wrote {path}");
+    // the front page's finding (README.md, between its markers), from the board's finger
+    if let (Some((k_0v, k_top, _)), true) = (board, std::env::args().nth(1).is_none()) {
+        let readme = "../README.md";
+        let text = std::fs::read_to_string(readme).unwrap();
+        let (begin, end) = ("<!-- BEGIN generated by host-tests stiffness_range: the finding -->\n", "<!-- END generated -->");
+        let (a, b) = (text.find(begin).expect("README's finding markers") + begin.len(), text.find(end).expect("README's finding markers"));
+        let line = format!(
+            "**On the board's film, VHB 4905, the whole voltage range changes this finger's tip stiffness by {:.1} %** \
+             (k_yy, all three joints at {deg}°, the board's calibrated finger: [docs/inverse-tables.md](docs/inverse-tables.md), \
+             generated). The stacks' film is too soft to stiffen the joints it sits on, so a voltage can thin a stack but \
+             barely change how stiff the finger is; [docs/materials.md](docs/materials.md) says why and what film would.\n",
+            100.0 * (k_0v / k_top - 1.0)
+        );
+        std::fs::write(readme, format!("{}{line}{}", &text[..a], &text[b..])).unwrap();
+        println!("wrote {readme} (the finding)");
+    }
 }

@@ -89,6 +89,10 @@ fn console_commands_and_bad_inputs(img: Image) {
     assert!(v.contains(&format!("board={}", img.board())), "{v}");
     let help = send(&mut q, b"help\n", 1);
     assert!(help.len() > 10 && help.last().unwrap() == "ok", "{help:?}");
+    // every command of the image, `timing` (the chip's own) too
+    for c in ["status", "limits", "solve", "arm", "stop", "volt", "force", "pose", "param", "preset", "cal", "wait", "timing"] {
+        assert!(help.iter().any(|l| l.starts_with(c)), "help lacks {c}: {help:?}");
+    }
     let s = expect(&mut q, "status", "ok armed=0 ");
     assert!(s.contains(" fault=none") && s.contains(" enable=0"), "{s}");
     // the ceiling in force: the same on every channel, at most the card's hold ceiling
@@ -106,6 +110,16 @@ fn console_commands_and_bad_inputs(img: Image) {
     let r = send(&mut q, long.as_bytes(), 1);
     assert_eq!(r.len(), 1);
     assert!(r[0].starts_with("err too-long:"), "{r:?}");
+    // mistyped words are timed under one `unknown`, not each under its own name (the M3
+    // image files each under its own: its flash)
+    expect(&mut q, "frobnicate 1", "err unknown:");
+    let t = expect(&mut q, "timing", "ok tick_period_us=");
+    let words = t.split(" cmd_us=").nth(1).unwrap_or("");
+    assert!(words.contains("version:"), "{t}");
+    if img != Image::M3 {
+        assert!(words.contains("unknown:"), "{t}");
+        assert!(!words.contains("frobnic") && !words.contains("non-printable") && !words.contains("garbage"), "{t}");
+    }
     // CR, LF, CRLF: one reply each; blank lines none
     let r = send(&mut q, b"version\rversion\nversion\r\n\r\n\n", 3);
     assert_eq!(r.len(), 3, "{r:?}");

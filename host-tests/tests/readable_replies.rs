@@ -1,11 +1,14 @@
 //! Replies that say what is wrong, on the simulated board: a negative pose angle is refused as
-//! an extension (the cable only flexes), `contact` with P below P0 is refused as a pull-off,
-//! joints are numbered 1..3 in every message, and a terminal's escape sequences (arrow keys)
-//! get no reply at all.
+//! an extension (the cable only flexes), a posture with the tip behind the base as outside the
+//! model's domain, `contact` with P below P0 is refused as a pull-off, joints are numbered 1..3
+//! in every message, a terminal's escape sequences (arrow keys) and control characters
+//! (Ctrl-L) get no reply at all. And replies that say what they did: `pose`'s `moved`,
+//! `status`' posture at the stacks' thickness now, `limits`' `vmax_ok`, `help`'s every
+//! command, `material`'s units, `factory`'s `store=empty`.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 use host_tests::sim_console::{cmd, feed};
-use host_tests::reply::val;
+use host_tests::reply::{field, nums, val};
 
 fn app() -> App<SimBoard> {
     App::new(SimBoard::default())
@@ -107,4 +110,139 @@ fn escape_sequences_get_no_reply() {
     assert_eq!(feed(&mut a, b"arm\n"), vec!["ok armed=1".to_string()]);
     assert_eq!(feed(&mut a, b"\x1b[Astop\n"), vec!["ok stopped".to_string()]);
     assert!(cmd(&mut a, "status").contains("armed=0"));
+}
+
+#[test]
+fn control_characters_are_ignored_as_arrow_keys_are() {
+    let mut a = app();
+    // Ctrl-L (a terminal's clear screen), NUL, backspace, DEL: alone, no reply; inside a line
+    // the rest of the line stands
+    assert!(feed(&mut a, b"\x0c\n\x00\x08\x7f\n").is_empty());
+    for line in [&b"\x0cversion\n"[..], b"ver\x0csion\n", b"\x01version\x7f\n"] {
+        let r = feed(&mut a, line);
+        assert!(r.len() == 1 && r[0].starts_with("ok version="), "{line:?} -> {r:?}");
+    }
+    // tab still separates words
+    assert!(cmd(&mut a, "param\tl").starts_with("ok l="));
+}
+
+#[test]
+fn pose_says_whether_it_moved_the_board() {
+    let mut a = app();
+    let r = cmd(&mut a, "pose 10 10 10");
+    assert!(r.starts_with("ok force=") && r.ends_with(" moved=0"), "{r}");
+    assert_eq!(a.targets(), [0.0; 3], "disarmed: nothing moves");
+    cmd(&mut a, "arm");
+    let armed = cmd(&mut a, "pose 10 10 10");
+    assert_eq!(armed, r.replace(" moved=0", " moved=1"));
+    let volts = nums(val(&armed, "volts"));
+    for (t, v) in a.targets().iter().zip(&volts) {
+        assert!((*t as f64 - v).abs() < 0.06, "{armed}: targets {:?}", a.targets());
+    }
+}
+
+#[test]
+fn a_posture_with_the_tip_behind_the_base_is_refused_with_its_reason() {
+    let mut a = app();
+    cmd(&mut a, "arm");
+    let before = cmd(&mut a, "status");
+    for line in ["pose 90 90 90", "pose 60 60 60"] {
+        let r = cmd(&mut a, line);
+        assert!(r.starts_with("err unreachable: pose: the tip would be behind the base (x=-"), "{line} -> {r}");
+        assert!(r.contains("outside the model's domain"), "{r}");
+    }
+    assert_eq!(cmd(&mut a, "status"), before, "nothing moved");
+    // a posture inside the domain still passes
+    assert!(cmd(&mut a, "pose 40 40 40").starts_with("ok force="));
+}
+
+#[test]
+fn status_reports_the_posture_at_the_stacks_thickness_now() {
+    let mut a = app();
+    let p = 1.0;
+    let at = |a: &mut App<SimBoard>, v: f64| nums(val(&cmd(a, &format!("solve {p} {v} {v} {v}")), "joints"))[0];
+    let v = nums(val(&cmd(&mut a, "limits"), "vmax_ok"))[0].floor();
+    let (rest, relaxed) = (at(&mut a, 0.0), at(&mut a, v));
+    assert!(relaxed > rest + 0.05, "the voltage bends the joint more once relaxed: {rest} {relaxed}");
+    cmd(&mut a, "arm");
+    cmd(&mut a, &format!("force {p}"));
+    cmd(&mut a, &format!("volt all {v}"));
+    // the voltage is there after the slew; the film has not crept yet
+    cmd(&mut a, "wait 3");
+    let st = cmd(&mut a, "status");
+    let (t, eq, j) = (field(&st, "thick"), field(&st, "thick_eq"), field(&st, "joints")[0]);
+    assert!(field(&st, "volts")[0] == v && t[0] > eq[0] + 0.05, "{st}");
+    assert!(j > rest && j < relaxed - 0.05, "the posture at the film's thickness now: {st} ({rest}..{relaxed})");
+    // as the film relaxes, the posture nears `solve`'s at the voltages
+    cmd(&mut a, "wait 600");
+    let st = cmd(&mut a, "status");
+    let later = field(&st, "joints")[0];
+    assert!(later > j && later <= relaxed + 1e-3 && relaxed - later < 0.25 * (relaxed - j), "{st}: {j} then {later}, relaxed {relaxed}");
+}
+
+#[test]
+fn limits_reports_the_largest_voltage_volt_takes() {
+    let mut a = app();
+    let l = cmd(&mut a, "limits");
+    let (vmax, ok) = (field(&l, "vmax"), field(&l, "vmax_ok"));
+    cmd(&mut a, "arm");
+    for ch in 0..3 {
+        assert!(ok[ch] < vmax[ch] && ok[ch] > vmax[ch] - 0.11, "{l}");
+        let n = ch + 1;
+        assert!(cmd(&mut a, &format!("volt {n} {:.1}", ok[ch])).starts_with("ok volts="), "{l}");
+        assert!(cmd(&mut a, &format!("volt {n} {:.1}", ok[ch] + 0.1)).starts_with("err limit:"), "{l}");
+    }
+}
+
+/// The command words of docs/console.md's command tables (`arm` / `disarm` as two).
+fn documented_commands() -> Vec<String> {
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/console.md")).unwrap();
+    let section = &doc[doc.find("## Commands").unwrap()..doc.find("## What each command does").unwrap()];
+    let mut words = Vec::new();
+    for row in section.lines().filter(|l| l.starts_with("| `")) {
+        let cell = row.split('|').nth(1).unwrap();
+        for part in cell.split(" / ") {
+            let w = part.trim().trim_start_matches('`').split([' ', '`']).next().unwrap();
+            words.push(w.to_string());
+        }
+    }
+    words
+}
+
+#[test]
+fn help_lists_every_command_the_build_has() {
+    let mut a = app();
+    let help = feed(&mut a, b"help\n");
+    let docs = documented_commands();
+    assert!(docs.len() >= 20, "{docs:?}");
+    for w in &docs {
+        let r = cmd(&mut a, w);
+        // (the simulated board has `save` but no store to save to: it says so)
+        let absent = r.starts_with("err unknown:") && !r.contains("no settings store");
+        let listed = help.iter().any(|l| l.starts_with(&format!("{w} ")) || l.contains(&format!("| {w} ")));
+        assert!(absent != listed, "{w}: help {} it, the board answers {r}", if listed { "lists" } else { "omits" });
+        if w != "stop" {
+            cmd(&mut a, "stop");
+        }
+    }
+    // and only those
+    assert_eq!(help.len() - 1, help.iter().filter(|l| docs.iter().any(|w| l.starts_with(&format!("{w} ")))).count());
+}
+
+#[test]
+fn material_names_the_unit_of_every_field() {
+    let mut a = app();
+    let r = cmd(&mut a, "material");
+    let fields: Vec<&str> = r.trim_start_matches("ok ").split(' ').map(|kv| kv.split('=').next().unwrap()).collect();
+    let units = val(&r, "units");
+    let named: Vec<&str> = units.split(',').map(|u| u.split(':').next().unwrap()).collect();
+    // every field but the card's name and the units themselves
+    assert_eq!(named, fields.iter().copied().filter(|f| *f != "card" && *f != "units").collect::<Vec<_>>(), "{r}");
+    assert!(units.contains("breakdown:V/um") && units.contains("branches:MPa:s") && units.contains("g_eq:MPa"), "{r}");
+}
+
+#[test]
+fn factory_says_what_docs_console_md_says() {
+    let mut a = app();
+    assert_eq!(cmd(&mut a, "factory"), "ok factory=1 store=empty");
 }

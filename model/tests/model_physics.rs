@@ -426,3 +426,26 @@ fn tip_stiffness_in_f32_is_not_singular() {
         }
     }
 }
+
+/// The stacks at a given thickness (the board's `status` while the film creeps): at the
+/// relaxed thickness of the voltages the compliances are `compliances`' own; a thicker stack
+/// (not yet thinned) bends the joint less; a thickness outside the stack is refused.
+#[test]
+fn compliances_at_a_thickness_between_rest_and_relaxed() {
+    let f = Finger::new(Params::<f64>::vhb4905()).unwrap();
+    let v = [0.5 * f.voltage_ceiling(); 3];
+    let relaxed = f.compliances(&v).unwrap();
+    let same = f.compliances_at_thickness(&v, &relaxed.thickness[..3]).unwrap();
+    assert_eq!(same.c, relaxed.c);
+    assert_eq!(same.volts, relaxed.volts);
+    let rest = 4.0 * 0.5;
+    let mid = (relaxed.thickness[0] + rest) / 2.0;
+    let creeping = f.compliances_at_thickness(&v, &[mid; 3]).unwrap();
+    let at = |c| f.solve_with(c, 1.0, [0.0; 2], conv()).unwrap().joint_angle[0];
+    let (a_mid, a_relaxed, a_rest) = (at(&creeping), at(&relaxed), at(&f.compliances(&[0.0; 3]).unwrap()));
+    assert!(a_rest < a_mid && a_mid < a_relaxed, "{a_rest} {a_mid} {a_relaxed}");
+    for bad in [rest * 1.01, rest * 0.6, f64::NAN, -1.0] {
+        assert!(f.compliances_at_thickness(&v, &[bad, rest, rest]).is_err(), "{bad}");
+    }
+    assert!(f.compliances_at_thickness(&v, &[rest; 2]).is_err());
+}

@@ -137,7 +137,7 @@ def main() -> None:
     r_scipy = rate(lambda: [ref.solve(P[i], V[i]) for i in range(n_sci)], n_sci)
     r_loop = rate(lambda: [f.solve(P[i], V[i], stiffness=False) for i in range(n_loop)], n_loop)
     r_many = rate(lambda: f.solve_many(P, V, stiffness=False), big)
-    default = sf.Finger()
+    default = sf.Finger(preset="default")
     r_many_default = rate(lambda: default.solve_many(P[: big // 10], np.minimum(V[: big // 10], 0.9 * default.ceiling()), stiffness=True), big // 10)
 
     rows = [

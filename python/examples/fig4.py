@@ -6,8 +6,12 @@ docs/scenes.md) solved with softfinger and its postures drawn with matplotlib in
 
 Per scene: one posture per tension (node 0, the nodes, the tip), in mm, the flexor side up; a
 scene with a [match] section also gets the tension at which its finger reaches the tip angle
-of the [match] finger (bisection; purple) and that finger's own posture (green, dotted).
-The continuum reference overlay of finger-scene is not drawn here.
+of the [match] finger (bisection; purple, wide and pale under the posture it coincides with)
+and that finger's own posture (green, dotted). With two scenes or more, also
+`fig4-compare.png`: every scene's posture at the largest tension they share on one axes, each
+in its own colour, dash and marker, with a zoom on the tips and each tip angle in the legend,
+so that the conditions that nearly coincide (0 V, one joint thinned, all thinned: tenths of a
+degree apart) are told apart. The continuum reference overlay of finger-scene is not drawn here.
 """
 
 from __future__ import annotations
@@ -59,8 +63,8 @@ def tension_for_tip_angle(f: sf.Finger, volts, target_rad: float, solve_kw: dict
     return 0.5 * (lo + hi)
 
 
-def run(path: Path, out: Path) -> Path:
-    scene = tomllib.loads(path.read_text())
+def scene_finger(scene: dict):
+    """A scene's finger, its voltages, tensions and solver options."""
     f, volts, thick = finger_of(scene.get("finger", {}))
     drive = scene.get("drive", {})
     if "volts" in drive or "thickness" in drive:
@@ -75,6 +79,12 @@ def run(path: Path, out: Path) -> Path:
     if "tol" in solver:
         solve_kw["tol"] = float(solver["tol"])
 
+    return f, v, tensions, solve_kw
+
+
+def run(path: Path, out: Path) -> Path:
+    scene = tomllib.loads(path.read_text())
+    f, v, tensions, solve_kw = scene_finger(scene)
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     sols = f.solve_many(tensions, v, **solve_kw)
     colors = plt.cm.viridis(np.linspace(0.0, 0.85, len(tensions)))
@@ -88,7 +98,9 @@ def run(path: Path, out: Path) -> Path:
         target = g.solve(float(m["tension"]), gv, **solve_kw)
         P = tension_for_tip_angle(f, v, target.tip[2], solve_kw)
         xy = f.solve(P, v, **solve_kw).nodes[:, :2]
-        ax.plot(xy[:, 0], xy[:, 1], "-o", color="purple", ms=3, label=f"{P:.3f} N: tip angle of the match")
+        # by construction it lies on a posture of the other finger: wide and pale, under it
+        ax.plot(xy[:, 0], xy[:, 1], "-", color="purple", lw=7, alpha=0.3, zorder=1,
+                label=f"{P:.3f} N: the match's tip angle (wide, under the posture it coincides with)")
         if m.get("show", True):
             t = target.nodes[:, :2]
             ax.plot(t[:, 0], t[:, 1], ":o", color="green", ms=3, label=f"match finger at {float(m['tension']):g} N")
@@ -105,6 +117,52 @@ def run(path: Path, out: Path) -> Path:
     return png
 
 
+STYLES = [("-", "o"), ("--", "s"), ("-.", "^"), (":", "D"), ((0, (5, 1, 1, 1)), "v"), ((0, (1, 1)), "P"), ((0, (8, 2)), "X")]
+
+
+def compare(paths: list[Path], out: Path) -> Path:
+    """Every scene's posture at the largest tension they all have, on one axes, with a zoom on
+    the tips: fig4-compare.png."""
+    scenes = [(p, tomllib.loads(p.read_text())) for p in paths]
+    rows = []
+    for p, sc in scenes:
+        f, v, tensions, solve_kw = scene_finger(sc)
+        rows.append((p, sc, f, v, set(tensions.tolist()), solve_kw))
+    common = set.intersection(*(r[4] for r in rows))
+    P = max(common) if common else min(max(r[4]) for r in rows)
+    fig, ax = plt.subplots(figsize=(7.5, 5.0))
+    zoom = ax.inset_axes([0.03, 0.42, 0.36, 0.55])
+    colors = plt.cm.tab10(np.arange(len(rows)) % 10)
+    tips = []
+    for i, (p, sc, f, v, _, solve_kw) in enumerate(rows):
+        s = f.solve(P, v, **solve_kw)
+        xy = s.nodes[:, :2]
+        dash, mark = STYLES[i % len(STYLES)]
+        label = f"{sc.get('title', p.stem)}: tip {np.degrees(s.tip[2]):.3f} deg"
+        for a in (ax, zoom):
+            a.plot(xy[:, 0], xy[:, 1], linestyle=dash, marker=mark, color=colors[i], ms=4, lw=1.4, label=label if a is ax else None)
+        tips.append(xy[-1])
+    tips = np.array(tips)
+    c, r = tips.mean(axis=0), max(np.ptp(tips[:, 0]), np.ptp(tips[:, 1]), 0.5)
+    zoom.set_xlim(c[0] - r, c[0] + r)
+    zoom.set_ylim(c[1] - r, c[1] + r)
+    zoom.set_aspect("equal")
+    zoom.set_title("the tips, zoomed", fontsize=7)
+    zoom.tick_params(labelsize=6)
+    ax.indicate_inset_zoom(zoom, edgecolor="grey")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x, mm")
+    ax.set_ylabel("y, mm (flexor side)")
+    ax.set_title(f"the compared conditions at {P:g} N", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=1)
+    out.mkdir(parents=True, exist_ok=True)
+    png = out / "fig4-compare.png"
+    fig.savefig(png, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return png
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description="the paper's Fig. 4 scenes as PNG postures")
     ap.add_argument("scenes", nargs="*", type=Path, help="scene files (default: every scenes/*.toml)")
@@ -112,12 +170,16 @@ def main() -> int:
     args = ap.parse_args()
     scenes = args.scenes or sorted((TOP / "scenes").glob("*.toml"))
     status = 0
+    ran = []
     for s in scenes:
         try:
             print(run(s, args.out))
+            ran.append(s)
         except sf.FingerError as e:
             print(f"{s}: refused: {e}", file=sys.stderr)
             status = 1
+    if len(ran) >= 2:
+        print(compare(ran, args.out))
     return status
 
 

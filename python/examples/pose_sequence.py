@@ -2,9 +2,10 @@
 
     target/pyenv/bin/python python/examples/pose_sequence.py [--out out/python/pose-sequence.csv] [--qemu]
 
-For each target posture (joint angles in degrees) the board's own inverse (`pose`) gives the
-cable tension and the three channel voltages; they are commanded (`force`, `volt`), the board
-is given time to slew (`wait`), and its `status` is logged. A posture the board refuses is
+For each target posture (joint angles in degrees) the board's own inverse (`pose`, armed) sets
+the cable tension and the three channel voltage targets (its reply says `moved=1`), the board
+is given time to slew (`wait`), and its `status` is logged (the posture at the stacks'
+thickness then: the film still creeps toward the target, `pose`'s `settle`). A posture the board refuses is
 logged with its error code and skipped. Leaving the `with` block (at the end, on an error or
 on Ctrl-C) sends `stop`; the final row is the board's status after it.
 """
@@ -44,11 +45,9 @@ def main() -> None:
             except sf.BoardError as e:
                 w.writerow([t, "/".join(map(str, target)), f"err {e.code}"])
                 continue
-            volts = ans["volts"]
-            assert all(v < m for v, m in zip(volts, lim.vmax_V)), "the board's inverse stays below its ceilings"
-            b.force(ans["force"])
-            for ch, v in enumerate(volts, start=1):
-                b.volt(ch, v)
+            # armed, the board's `pose` set the tension and the voltage targets itself
+            assert ans.moved, ans
+            assert all(v < m for v, m in zip(ans.volts_V, lim.vmax_V)), "the board's inverse stays below its ceilings"
             b.wait(args.settle)
             t += args.settle
             w.writerow([t, "/".join(map(str, target)), "ok", *b.status().row()])

@@ -14,7 +14,7 @@ a name says so, and at the board's console).
 """
 
 from ._core import BranchLimit, Contact, Finger, PoseSolution, Solution, Solutions, cards, parameter_ranges
-from .board import Board, BoardError, BoardLinkError, BoardTimeout, Limits, Status
+from .board import Board, BoardError, BoardLinkError, BoardSolution, BoardTimeout, Force, Limits, Pose, Status
 from .errors import (
     BranchEndError,
     FingerError,
@@ -40,6 +40,9 @@ __all__ = [
     "BoardLinkError",
     "Status",
     "Limits",
+    "BoardSolution",
+    "Force",
+    "Pose",
     "FingerError",
     "VoltageCeilingError",
     "ThicknessLimitError",

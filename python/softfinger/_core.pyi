@@ -142,21 +142,28 @@ class BranchLimit:
 class Finger:
     """The finger's model, prepared once: parameters validated, hinge compliances computed.
 
-    ``preset``: ``"default"`` (the default finger of docs/model.md, m = 8, plate modulus, flexible links),
-    ``"paper"`` (the paper's model and its Eq. 3 DE modulus) or ``"paper_model"`` (the paper's
-    model with the corrected DE modulus). ``calibration``: None (none), ``"model_md"`` (the FE
-    factors for the default finger), ``"auto"`` (those for the default finger, none for any
-    other: what the board does) or 8 factors. ``**params``: any parameter by its console name
-    (``l``, ``b``, ``w``, ``t_min``, ``a``, ``e_b``, ``e``, ``layers``, ``z0``, ``g``, ``nu``,
-    ``eps_r``, ``margin``, ``v_supply``, ``n_inc``, ``m``, ``plate``, ``nu_b``, ``span_floor``,
-    ``flex_links``; mm, MPa, V). Raises :class:`InputError` for a value out of range.
-    ``card``: the DE film's material card (:func:`cards`, e.g. ``"VHB-4905"``; docs/materials.md)
-    on the preset's finger: its equilibrium modulus (``g``) and permittivity (``eps_r``), its
-    breakdown field in the ceiling; default the preset's."""
+    ``preset``: ``"board"`` (the default: the board's finger, docs/model.md's geometry on the
+    board's film VHB 4905 with the board's FE calibration and hold ceiling: what the board's
+    ``solve`` answers), ``"default"`` (docs/model.md's finger on its default film, m = 8, plate
+    modulus, flexible links), ``"paper"`` (the paper's model and its Eq. 3 DE modulus) or
+    ``"paper_model"`` (the paper's model with the corrected DE modulus). ``calibration``:
+    ``"auto"`` (the default: the board's FE calibration on the board's finger, none on the other
+    presets), ``"model_md"`` (docs/model.md's FE factors), None (none) or 8 factors; a
+    calibration that does not apply to the finger raises :class:`InputError` (never dropped).
+    ``**params``: any parameter by its console name (``l``, ``b``, ``w``, ``t_min``, ``a``,
+    ``e_b``, ``e``, ``layers``, ``z0``, ``g``, ``nu``, ``eps_r``, ``margin``, ``v_supply``,
+    ``n_inc``, ``m``, ``plate``, ``nu_b``, ``span_floor``, ``flex_links``; mm, MPa, V). Raises
+    :class:`InputError` for a value out of range. ``card``: the DE film's material card
+    (:func:`cards`, e.g. ``"VHB-4905"``; docs/materials.md) on the preset's finger: its
+    equilibrium modulus (``g``) and permittivity (``eps_r``), its breakdown field in the
+    ceiling; default the preset's. The repr names preset, card, calibration and ceiling."""
 
-    def __init__(self, preset: Literal["default", "paper", "paper_model"] = "default",
-                 calibration: Union[None, str, Sequence[float]] = None, card: Optional[str] = None,
+    def __init__(self, preset: Literal["board", "default", "paper", "paper_model"] = "board",
+                 calibration: Union[None, str, Sequence[float]] = "auto", card: Optional[str] = None,
                  **params: float) -> None: ...
+    @property
+    def preset(self) -> str:
+        """The preset the finger started from."""
     @property
     def card(self) -> str:
         """The film's material card."""
@@ -169,7 +176,8 @@ class Finger:
     @property
     def n(self) -> int: ...
     def ceiling(self) -> float:
-        """The voltage every channel stays below: min(margin × V_pi, v_supply), V."""
+        """The voltage every channel stays below: min(margin × V_pi, v_supply) and, on the
+        board's finger, the board's hold ceiling, V."""
     def pull_in_voltage(self) -> float:
         """V_pi of one layer (the 33 % limit), V."""
     def stack_thickness(self, volts: float) -> float:

@@ -177,6 +177,94 @@ class Limits:
         )
 
 
+@dataclass(frozen=True)
+class BoardSolution:
+    """The board's ``solve``: its own model (f32) at a tension and voltages; nothing moves."""
+
+    #: joint angles, degrees
+    joints_deg: Tuple[float, ...]
+    #: tip pose: x mm, y mm, angle degrees
+    tip: Tuple[float, ...]
+    #: cable excursion, mm
+    cable_mm: float
+    #: stack thicknesses (relaxed), mm
+    thick_mm: Tuple[float, ...]
+    #: tip stiffness diagonal: k_xx N/mm, k_yy N/mm, k_θθ N·mm/rad
+    stiffness: Tuple[float, ...]
+    #: solver iterations (0: the board's branch table answered)
+    iters: int
+    #: every field of the reply, parsed
+    fields: Dict[str, Value] = field(default_factory=dict, compare=False)
+
+    @classmethod
+    def parse(cls, line: str) -> "BoardSolution":
+        f = parse_fields(line)
+        return cls(
+            joints_deg=_tuple(f["joints"]),
+            tip=_tuple(f["tip"]),
+            cable_mm=_float(f["cable"]),
+            thick_mm=_tuple(f["thick"]),
+            stiffness=_tuple(f["stiffness"]),
+            iters=int(_float(f["iters"])),
+            fields=f,
+        )
+
+
+@dataclass(frozen=True)
+class Force:
+    """The board's ``force``: the tension target and where the servo goes for it."""
+
+    #: cable tension target, N
+    force_N: float
+    #: cable the servo pulls in, mm
+    cable_mm: float
+    #: servo angle, degrees
+    servo_deg: float
+    #: every field of the reply, parsed
+    fields: Dict[str, Value] = field(default_factory=dict, compare=False)
+
+    @classmethod
+    def parse(cls, line: str) -> "Force":
+        f = parse_fields(line)
+        return cls(force_N=_float(f["force"]), cable_mm=_float(f["cable"]), servo_deg=_float(f["servo"]), fields=f)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """The board's ``pose``: the inverse's tension and voltages for joint angles."""
+
+    #: cable tension, N
+    force_N: float
+    #: channel voltages, V
+    volts_V: Tuple[float, ...]
+    #: the joint angles held, degrees
+    joints_deg: Tuple[float, ...]
+    #: the tensions that hold the posture (lo, hi), N; None when the tension was given
+    range_N: Optional[Tuple[float, ...]]
+    #: time from rest until every stack is within 1 % of its target thickness, s (None: past 600 s)
+    settle_s: Optional[float]
+    #: the reply set the board's targets (armed); False: nothing moved (disarmed). None from a
+    #: firmware that does not say
+    moved: Optional[bool]
+    #: every field of the reply, parsed
+    fields: Dict[str, Value] = field(default_factory=dict, compare=False)
+
+    @classmethod
+    def parse(cls, line: str) -> "Pose":
+        f = parse_fields(line)
+        settle = f.get("settle")
+        moved = f.get("moved")
+        return cls(
+            force_N=_float(f["force"]),
+            volts_V=_tuple(f["volts"]),
+            joints_deg=_tuple(f["joints"]),
+            range_N=_tuple(f["range"]) if "range" in f else None,
+            settle_s=settle if isinstance(settle, float) else None,
+            moved=None if moved is None else _float(moved) != 0.0,
+            fields=f,
+        )
+
+
 class _Link:
     """Bytes out; lines in through a reader thread and a queue, so every read has a deadline.
 
@@ -506,11 +594,10 @@ class Board:
         """The ceilings in force (:class:`Limits`)."""
         return Limits.parse(self.command("limits"))
 
-    def solve(self, P: float, volts: Sequence[float]) -> Dict[str, Value]:
+    def solve(self, P: float, volts: Sequence[float]) -> BoardSolution:
         """The board's model at tension ``P`` (N) and channel voltages ``volts`` (V); nothing
-        moves. Fields ``joints`` (deg), ``tip`` (mm, mm, deg), ``cable`` (mm), ``thick`` (mm),
-        ``stiffness`` (k_xx N/mm, k_yy N/mm, k_θθ N·mm/rad), ``iters``."""
-        return self.fields("solve " + " ".join(self._num(x) for x in [P, *volts]))
+        moves (:class:`BoardSolution`)."""
+        return BoardSolution.parse(self.command("solve " + " ".join(self._num(x) for x in [P, *volts])))
 
     def arm(self) -> None:
         """Allow the HV outputs."""
@@ -531,15 +618,15 @@ class Board:
             raise ValueError(f"channel must be 1, 2, 3 or 'all', not {ch!r}")
         return _tuple(self.fields(f"volt {ch} {self._num(V)}")["volts"])
 
-    def force(self, P: float) -> Dict[str, Value]:
-        """Cable tension target ``P`` (N): fields ``force`` (N), ``cable`` (mm), ``servo`` (deg)."""
-        return self.fields(f"force {self._num(P)}")
+    def force(self, P: float) -> Force:
+        """Cable tension target ``P`` (N); needs :meth:`arm` (:class:`Force`)."""
+        return Force.parse(self.command(f"force {self._num(P)}"))
 
-    def pose(self, d1: float, d2: float, d3: float, P: Optional[float] = None) -> Dict[str, Value]:
+    def pose(self, d1: float, d2: float, d3: float, P: Optional[float] = None) -> Pose:
         """The inverse at the board: joint angles in degrees (and optionally the tension, N) to
-        the force and voltages that hold them: fields ``force``, ``volts``, ``joints``."""
+        the force and voltages that hold them (:class:`Pose`; armed, the board moves there)."""
         args = [d1, d2, d3] + ([] if P is None else [P])
-        return self.fields("pose " + " ".join(self._num(x) for x in args))
+        return Pose.parse(self.command("pose " + " ".join(self._num(x) for x in args)))
 
     def param(self, name: Optional[str] = None, value: Optional[float] = None) -> Dict[str, Value]:
         """List every parameter (no name), read one, or set one (only while disarmed)."""

@@ -115,6 +115,38 @@ fn build(py: Python<'_>, e: Error, index: Option<usize>) -> PyErr {
     make().unwrap_or_else(|err| err)
 }
 
+/// The model error as its Python exception, with `msg` for its message.
+pub fn model_err_msg(e: Error, msg: String) -> PyErr {
+    Python::attach(|py| {
+        let make = || -> PyResult<PyErr> {
+            let cls = py.import("softfinger.errors")?.getattr(class_of(&e))?;
+            let (kind, kw) = fields(py, &e)?;
+            kw.set_item("kind", kind)?;
+            kw.set_item("code", e.code())?;
+            Ok(PyErr::from_value(cls.call((msg,), Some(&kw))?))
+        };
+        make().unwrap_or_else(|err| err)
+    })
+}
+
+/// `pose` of a negative joint angle: `UnreachableError` (kind `Extension`, fields `joint`,
+/// `angle_deg`) in the firmware's words (src/app/pose.rs).
+pub fn extension_err(joint: usize, angle_deg: f64) -> PyErr {
+    Python::attach(|py| {
+        let make = || -> PyResult<PyErr> {
+            let cls = py.import("softfinger.errors")?.getattr("UnreachableError")?;
+            let kw = PyDict::new(py);
+            kw.set_item("kind", "Extension")?;
+            kw.set_item("code", "unreachable")?;
+            kw.set_item("joint", joint)?;
+            kw.set_item("angle_deg", angle_deg)?;
+            let msg = format!("joint {joint}: {angle_deg:.3} deg is an extension; the cable only flexes the joints (angles >= 0)");
+            Ok(PyErr::from_value(cls.call((msg,), Some(&kw))?))
+        };
+        make().unwrap_or_else(|err| err)
+    })
+}
+
 /// The model error as its Python exception.
 pub fn model_err(e: Error) -> PyErr {
     Python::attach(|py| build(py, e, None))

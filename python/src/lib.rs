@@ -367,33 +367,85 @@ fn volts_of(obj: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<R>> {
     Ok(a.as_array().to_vec())
 }
 
-/// A calibration given as None, "model_md", "auto" or 8 factors (hinge ×4, stack EA g0 g1,
-/// stack EI g0 g1).
-fn calibration_of(obj: Option<&Bound<'_, PyAny>>, p: &Params<R>) -> PyResult<Calibration<R>> {
-    let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(Calibration::none()) };
-    if let Ok(s) = obj.extract::<String>() {
+/// The FE calibration the board gives a parameter set (src/app/params.rs `calibration_for`):
+/// docs/model.md's finger on the board's film or on the default film has docs/model.md's
+/// factors (`Calibration::for_params` judges the structure; the board's film does not clear
+/// them), any other finger none.
+fn board_calibration(p: &Params<R>) -> Calibration<R> {
+    let d = Params::<R>::default();
+    let b = Params::<R>::with_card(BOARD_CARD);
+    let mut q = *p;
+    if p.card == b.card && p.g == b.g && p.nu == b.nu && p.de_rule == b.de_rule {
+        (q.card, q.g, q.nu, q.de_rule) = (d.card, d.g, d.nu, d.de_rule);
+    }
+    Calibration::for_params(&q)
+}
+
+/// An `InputError` for a calibration that does not apply to the finger asked for.
+fn calibration_refused(what: &str, p: &Params<R>) -> PyErr {
+    errors::model_err_msg(
+        Error::Param { name: "calibration", range: "docs/model.md's finger (m = 8, plate, flexible links, its geometry) on VHB 4905 or the default film" },
+        format!(
+            "calibration {what} does not apply to this finger (card {}, m = {}, layers = {}): the FE factors were computed for docs/model.md's finger on VHB 4905 or the default film; pass calibration=None for the uncalibrated model, or 8 factors",
+            p.card.name, p.m, p.layers
+        ),
+    )
+}
+
+/// `Finger(calibration=...)`: a name or the 8 factors.
+#[derive(FromPyObject)]
+enum CalArg {
+    Name(String),
+    Factors(Vec<R>),
+}
+
+/// A calibration given as "auto", None, "model_md" or 8 factors (hinge ×4, stack EA g0 g1,
+/// stack EI g0 g1), and how the repr names it. "auto": on the board's finger (preset
+/// "board") the board's calibration, an error where none applies; on the other presets none
+/// (their models are uncalibrated). "model_md" where it does not apply is an error.
+fn calibration_of(arg: Option<CalArg>, p: &Params<R>, preset: &str) -> PyResult<(Calibration<R>, &'static str)> {
+    let Some(arg) = arg else { return Ok((Calibration::none(), "none")) };
+    if let CalArg::Name(s) = &arg {
+        let applies = board_calibration(p) == Calibration::model_md();
         return match s.as_str() {
-            "none" => Ok(Calibration::none()),
-            "model_md" => Ok(Calibration::model_md()),
-            "auto" => Ok(Calibration::for_params(p)),
-            _ => Err(PyValueError::new_err(format!("calibration must be None, \"model_md\", \"auto\" or 8 factors, not {s:?}"))),
+            "none" => Ok((Calibration::none(), "none")),
+            "model_md" if applies => Ok((Calibration::model_md(), "model_md")),
+            "model_md" => Err(calibration_refused("\"model_md\"", p)),
+            "auto" if preset != "board" => Ok((Calibration::none(), "none")),
+            "auto" if applies => Ok((Calibration::model_md(), "model_md")),
+            "auto" => Err(calibration_refused("\"auto\" (the board's)", p)),
+            _ => Err(PyValueError::new_err(format!("calibration must be \"auto\", None, \"model_md\" or 8 factors, not {s:?}"))),
         };
     }
-    let v: Vec<R> = obj.extract()?;
+    let CalArg::Factors(v) = arg else { unreachable!("names are handled above") };
     if v.len() != 8 {
         return Err(PyValueError::new_err("calibration: 8 factors (hinge x4, stack EA g0 g1, stack EI g0 g1)"));
     }
-    Ok(Calibration { hinge: [v[0], v[1], v[2], v[3]], stack_axial: [v[4], v[5]], stack_bending: [v[6], v[7]] })
+    Ok((Calibration { hinge: [v[0], v[1], v[2], v[3]], stack_axial: [v[4], v[5]], stack_bending: [v[6], v[7]] }, "factors"))
+}
+
+/// The board's film, compiled into the firmware (src/board.rs `BOARD_CARD`).
+const BOARD_CARD: &Card = &finger_model::material::VHB_4905;
+/// The board's HV modules' limit, V (src/board.rs `HV_MAX_V`).
+const BOARD_HV_MAX_V: R = 10_000.0;
+
+/// The board's hold ceiling on a finger's film (src/board.rs `board_hold_ceiling_of`): the
+/// card's hold ceiling at the finger's z0 and margin, at most the HV modules' limit, V.
+fn hold_ceiling_of(p: &Params<R>) -> PyResult<R> {
+    let law = finger_model::material::StackLaw::<R>::new(p.card, p.z0, p.margin).map_err(model_err)?;
+    let v = finger_model::material::hold_ceiling(&law, p.margin);
+    Ok(if v > 0.0 { v.min(BOARD_HV_MAX_V) } else { 0.0 })
 }
 
 /// The parameter set: a preset, then the keyword overrides by their console names (docs/model.md
 /// "Geometry"). An override that is only consistent with a later one is retried after the others.
 fn params_of(preset: &str, card: Option<&str>, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Params<R>> {
     let mut p = match preset {
+        "board" => Params::with_card(BOARD_CARD),
         "default" => Params::default(),
         "paper" => Params::paper(),
         "paper_model" => Params::paper_model(),
-        _ => return Err(PyValueError::new_err(format!("preset must be \"default\", \"paper\" or \"paper_model\", not {preset:?}"))),
+        _ => return Err(PyValueError::new_err(format!("preset must be \"board\", \"default\", \"paper\" or \"paper_model\", not {preset:?}"))),
     };
     if let Some(name) = card {
         // the film of the card on the preset's finger, as `Params::with_card` does on the default finger
@@ -436,9 +488,11 @@ fn set_all(p: &mut Params<R>, mut pending: Vec<(String, R)>) -> PyResult<()> {
 }
 
 /// A pickled `Finger` rebuilt (`Finger.__reduce__`): the card, the DE modulus rule, every
-/// settable parameter by name and the 8 calibration factors.
+/// settable parameter by name, the 8 calibration factors, the preset and how the calibration
+/// was given (the repr's; the board's hold ceiling follows the preset).
 #[pyfunction]
-fn _finger_from_state(card: &str, de_rule: &str, params: Vec<(String, R)>, calibration: Vec<R>) -> PyResult<Finger> {
+#[pyo3(signature = (card, de_rule, params, calibration, preset = "default", cal_name = "factors"))]
+fn _finger_from_state(card: &str, de_rule: &str, params: Vec<(String, R)>, calibration: Vec<R>, preset: &str, cal_name: &str) -> PyResult<Finger> {
     let de_rule = match de_rule {
         "isotropic" => DeModulusRule::Isotropic,
         "paper_eq3" => DeModulusRule::PaperEq3,
@@ -451,7 +505,19 @@ fn _finger_from_state(card: &str, de_rule: &str, params: Vec<(String, R)>, calib
     }
     let c = &calibration;
     let cal = Calibration { hinge: [c[0], c[1], c[2], c[3]], stack_axial: [c[4], c[5]], stack_bending: [c[6], c[7]] };
-    Ok(Finger { f: Model::with_calibration(p, cal).map_err(model_err)? })
+    let preset = match preset {
+        "board" => "board",
+        "paper" => "paper",
+        "paper_model" => "paper_model",
+        _ => "default",
+    };
+    let cal_name = match cal_name {
+        "model_md" => "model_md",
+        "none" => "none",
+        _ => "factors",
+    };
+    let hold = if preset == "board" && p.layers > 0 { Some(hold_ceiling_of(&p)?) } else { None };
+    Ok(Finger { f: Model::with_calibration(p, cal).map_err(model_err)?, preset, cal_name, hold })
 }
 
 /// A material card by its name or a short key (`cards::CARDS`; docs/materials.md).
@@ -478,16 +544,57 @@ fn cards() -> Vec<&'static str> {
 #[pyclass(module = "softfinger._core", frozen)]
 struct Finger {
     f: Model<R>,
+    preset: &'static str,
+    /// How the calibration was given: "model_md", "none" or "factors".
+    cal_name: &'static str,
+    /// The board's hold ceiling (preset "board"), V: every voltage stays below it too.
+    hold: Option<R>,
+}
+
+impl Finger {
+    /// The ceiling in force, V: the model's (margin × V_pi, supply) and, on the board's finger,
+    /// the board's hold ceiling.
+    fn ceiling_V(&self) -> R {
+        let m = self.f.voltage_ceiling();
+        self.hold.map_or(m, |h| m.min(h))
+    }
+
+    /// Channel voltages checked against the board's hold ceiling (the model checks its own),
+    /// refused as the model refuses a voltage at or past its ceiling.
+    fn check_hold(&self, volts: &[R]) -> Result<(), Error> {
+        let Some(h) = self.hold else { return Ok(()) };
+        let c = self.ceiling_V().min(h);
+        for (k, &v) in volts.iter().enumerate() {
+            if v > 0.0 && v >= c {
+                return Err(Error::VoltageCeiling { joint: k + 1, volts: v, ceiling: c });
+            }
+        }
+        Ok(())
+    }
 }
 
 #[pymethods]
 impl Finger {
     #[new]
-    #[pyo3(signature = (preset = "default", calibration = None, card = None, **params))]
-    fn new(preset: &str, calibration: Option<&Bound<'_, PyAny>>, card: Option<&str>, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+    #[pyo3(signature = (preset = "board", calibration = Some(CalArg::Name("auto".into())), card = None, **params))]
+    fn new(preset: &str, calibration: Option<CalArg>, card: Option<&str>, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let p = params_of(preset, card, params)?;
-        let cal = calibration_of(calibration, &p)?;
-        Ok(Finger { f: Model::with_calibration(p, cal).map_err(model_err)? })
+        let (cal, cal_name) = calibration_of(calibration, &p, preset)?;
+        let preset = match preset {
+            "board" => "board",
+            "default" => "default",
+            "paper" => "paper",
+            _ => "paper_model",
+        };
+        let hold = if preset == "board" && p.layers > 0 { Some(hold_ceiling_of(&p)?) } else { None };
+        Ok(Finger { f: Model::with_calibration(p, cal).map_err(model_err)?, preset, cal_name, hold })
+    }
+
+    /// The preset the finger started from: "board" (the board's finger: docs/model.md's on
+    /// VHB 4905, its FE calibration and hold ceiling), "default", "paper" or "paper_model".
+    #[getter]
+    fn preset(&self) -> &'static str {
+        self.preset
     }
 
     /// Every parameter by its console name (`e_de` derived), units as in docs/model.md.
@@ -522,9 +629,10 @@ impl Finger {
         self.f.params().card.name
     }
 
-    /// The ceiling every channel stays below: min(margin × V_pi, v_supply), V.
+    /// The ceiling every channel stays below, V: min(margin × V_pi, v_supply) and, on the
+    /// board's finger, the board's hold ceiling (docs/materials.md; 5,400 V on VHB 4905).
     fn ceiling(&self) -> R {
-        self.f.voltage_ceiling()
+        self.ceiling_V()
     }
 
     /// The pull-in voltage V_pi of one layer (the 33 % limit), V (0 without stacks).
@@ -534,6 +642,7 @@ impl Finger {
 
     /// Whole-stack thickness at `volts` (V), mm.
     fn stack_thickness(&self, volts: R) -> PyResult<R> {
+        self.check_hold(&[volts]).map_err(model_err)?;
         self.f.stack_thickness(volts).map_err(model_err)
     }
 
@@ -549,6 +658,7 @@ impl Finger {
         for (k, &tk) in t.iter().enumerate() {
             v.push(finger_model::de::voltage_for_thickness(self.f.params(), k + 1, tk).map_err(model_err)?);
         }
+        self.check_hold(&v).map_err(model_err)?;
         Ok(arr1(py, &v))
     }
 
@@ -570,6 +680,7 @@ impl Finger {
         let v = volts_of(volts, self.f.params().n)?;
         let m = self::method(method, n_inc, tol, max_iter, self.f.params())?;
         let f = &self.f;
+        self.check_hold(&v).map_err(model_err)?;
         let row = py.detach(|| solve_row(f, P, &v, m, stiffness)).map_err(model_err)?;
         Ok(Solution { row })
     }
@@ -636,6 +747,7 @@ impl Finger {
                 .map(|i| {
                     let t = tensions[if p_rows.is_some() { i } else { 0 }];
                     let v = if v_rows.is_some() { &volts[i * n..(i + 1) * n] } else { &volts[..n] };
+                    self.check_hold(v)?;
                     solve_row(f, t, v, m, stiffness).map(|r| Compact::of(&r))
                 })
                 .collect()
@@ -676,13 +788,20 @@ impl Finger {
     #[allow(non_snake_case)]
     fn pose(&self, py: Python<'_>, angles: &Bound<'_, PyAny>, P: Option<R>, degrees: bool) -> PyResult<PoseSolution> {
         let mut a = volts_of(angles, self.f.params().n)?;
+        // the firmware's words (src/app/pose.rs): the cable runs on the flexor side
+        if let Some(k) = a.iter().position(|&x| x < 0.0) {
+            let deg = if degrees { a[k] } else { a[k].to_degrees() };
+            return Err(errors::extension_err(k + 1, deg));
+        }
         if degrees {
             a.iter_mut().for_each(|x| *x = x.to_radians());
         }
         let f = &self.f;
+        // the board's inverse: its top voltage under the ceiling in force
+        let opts = inverse::Options { hv_fs: self.hold, ..Default::default() };
         let (pose, forward) = py
             .detach(|| -> Result<_, Error> {
-                let pose = inverse::solve_pose(f, &a, P)?;
+                let pose = inverse::solve_pose_with(f, &a, P, &opts)?;
                 let forward = pose.to_solution(f)?;
                 Ok((pose, forward))
             })
@@ -702,6 +821,7 @@ impl Finger {
             None => v.clone(),
         };
         let f = &self.f;
+        self.check_hold(&v).and_then(|_| self.check_hold(&v0)).map_err(model_err)?;
         let c = py.detach(|| contact_force(f, P0, &v0, P, &v)).map_err(model_err)?;
         Ok(Contact { c })
     }
@@ -711,6 +831,7 @@ impl Finger {
     fn fmax(&self, py: Python<'_>, volts: &Bound<'_, PyAny>) -> PyResult<BranchLimit> {
         let v = volts_of(volts, self.f.params().n)?;
         let f = &self.f;
+        self.check_hold(&v).map_err(model_err)?;
         let b = py.detach(|| f.fmax(&v)).map_err(model_err)?;
         let kind = match b.kind {
             BranchEnd::Contact => "contact",
@@ -722,7 +843,8 @@ impl Finger {
 
     /// Pickling (and so Dask and multiprocessing): the state `_finger_from_state` rebuilds the
     /// same model from, every parameter's f64 value exactly.
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (&'static str, &'static str, Vec<(&'static str, R)>, Vec<R>))> {
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (&'static str, &'static str, Vec<(&'static str, R)>, Vec<R>, &'static str, &'static str))> {
         let p = self.f.params();
         let rule = match p.de_rule {
             DeModulusRule::Isotropic => "isotropic",
@@ -730,12 +852,28 @@ impl Finger {
         };
         let params = PARAMS.iter().filter(|i| !i.read_only).filter_map(|i| p.get(i.name).map(|v| (i.name, v))).collect();
         let make = py.import("softfinger._core")?.getattr("_finger_from_state")?;
-        Ok((make, (p.card.name, rule, params, self.calibration())))
+        Ok((make, (p.card.name, rule, params, self.calibration(), self.preset, self.cal_name)))
     }
 
     fn __repr__(&self) -> String {
         let p = self.f.params();
-        format!("Finger(n={}, m={}, layers={}, card={:?}, e_de={:.4} MPa, ceiling={:.1} V)", p.n, p.m, p.layers, p.card.name, p.e_de(), self.f.voltage_ceiling())
+        let why = match self.hold {
+            _ if p.layers == 0 => "no stacks",
+            Some(h) if h <= self.f.voltage_ceiling() => "the board's hold ceiling",
+            _ if self.f.voltage_ceiling() >= p.v_supply => "the supply",
+            _ => "margin x pull-in",
+        };
+        format!(
+            "Finger(preset={:?}, card={:?}, calibration={:?}, ceiling={:.1} V ({why}), n={}, m={}, layers={}, e_de={:.4} MPa)",
+            self.preset,
+            p.card.name,
+            self.cal_name,
+            self.ceiling_V(),
+            p.n,
+            p.m,
+            p.layers,
+            p.e_de()
+        )
     }
 }
 

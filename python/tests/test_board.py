@@ -24,7 +24,15 @@ def same_session(board: sf.Board) -> None:
     lim = board.limits()
     assert len(lim.vmax_V) == 3 and all(0 < v < lim.vpullin_V for v in lim.vmax_V)
     assert board.command("solve 0.5 0 1000 2000").startswith("ok joints=")
+    # every reply typed: solve, pose (disarmed: nothing moves), force
+    s = board.solve(0.5, [0, 1000, 2000])
+    assert isinstance(s, sf.BoardSolution) and len(s.joints_deg) == 3 and len(s.stiffness) == 3
+    p = board.pose(5, 5, 5)
+    assert isinstance(p, sf.Pose) and p.force_N > 0 and len(p.volts_V) == 3 and p.range_N[0] <= p.force_N <= p.range_N[1]
+    assert p.moved is False and board.status().force_N == 0.0
     board.arm()
+    fr = board.force(0.2)
+    assert isinstance(fr, sf.Force) and fr.force_N == 0.2 and fr.cable_mm > 0
     v = 0.05 * min(lim.vmax_V)  # below every channel's ceiling, whatever the card
     assert board.volt("all", v) == (v, v, v)
     board.wait(0.3)
@@ -81,14 +89,31 @@ def test_late_replies_and_a_flushing_stop_keep_replies_matched(fw_elf):
 
 
 def test_board_solve_equals_the_python_model_to_its_printed_digits(sim_program):
-    """The board's f32 `solve` against the f64 model of the board's finger (its film's card from
-    `material`, its calibration from `cal`): each printed value is the model's rounded to the
-    printed digits, within one unit of the last (f32)."""
+    """The board's f32 `solve` against `Finger()`, the f64 model of the board's finger: its
+    film's card is the board's (`material`), its calibration the board's (`cal`), its ceiling
+    the board's (`limits`); each printed value is the model's rounded to the printed digits,
+    within one unit of the last (f32)."""
     with sf.Board.sim(sim_program) as b:
         card = b.command("material").split("card=")[1].split()[0]
         cal = [float(x) for x in b.command("cal").split("cal=")[1].split(",")]
-        f = sf.Finger(card=card, calibration=cal)
+        f = sf.Finger()
         lim = b.limits()
+        assert f.card == card and f.calibration == pytest.approx(cal, abs=5e-7), (f, cal)
+        assert f.ceiling() == pytest.approx(min(lim.vmax_V), abs=0.05), (f, lim)
+        for word in ("card=", "calibration=", "ceiling="):
+            assert word in repr(f), f
+        # the board's ceiling is the model's too: at it, both refuse
+        with pytest.raises(sf.VoltageCeilingError):
+            f.solve(1.0, [0, 0, min(lim.vmax_V)])
+        with pytest.raises(sf.BoardError) as e:
+            b.solve(1.0, [0, 0, min(lim.vmax_V)])
+        assert e.value.code == "limit"
+        # and a negative pose angle is refused in the same words
+        with pytest.raises(sf.BoardError) as e:
+            b.pose(-10, 0, 0)
+        with pytest.raises(sf.UnreachableError) as m:
+            f.pose([-10, 0, 0], degrees=True)
+        assert str(m.value) == e.value.message and m.value.code == e.value.code
         top = 0.9 * min(lim.vmax_V)
         for P, volts in [(0.2, [0, 0, 0]), (0.5, [0, 0.3 * top, 0.6 * top]), (1.0, [top, top / 2, 0]), (2.0, [top] * 3)]:
             r = b.solve(P, volts)
@@ -106,7 +131,8 @@ def test_board_solve_equals_the_python_model_to_its_printed_digits(sim_program):
                     decimals = len(printed.split(".")[1]) if "." in printed else 0
                     unit = 10.0 ** -decimals
                     assert abs(float(printed) - value) <= unit, (key, printed, value, line)
-            assert r["joints"] == tuple(float(x) for x in text["joints"].split(","))
+            assert r.joints_deg == tuple(float(x) for x in text["joints"].split(","))
+            assert isinstance(r, sf.BoardSolution) and isinstance(r.iters, int)
 
 
 def test_a_mute_board_times_out_and_a_closed_one_says_so(tmp_path):
@@ -180,7 +206,10 @@ def test_ctrl_c_sends_stop(sim_program, tmp_path):
             st = board.final_status
             print("final", st.armed, st.volts_V, flush=True)
     """))
-    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True)
+    # SIGINT as a terminal's Ctrl-C delivers it, even where this runs with SIGINT ignored (a
+    # background job of a script): the child would inherit that and never see the signal
+    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     first = p.stdout.readline()
     assert first.startswith("armed"), first
     p.send_signal(signal.SIGINT)

@@ -20,7 +20,7 @@ def run(*args, env=None):
 
 def test_fig4_scene_to_png(tmp_path):
     run(EXAMPLES / "fig4.py", ROOT / "scenes" / "paper-no-de.toml", ROOT / "scenes" / "paper-de-joint1-thin.toml", "--out", tmp_path)
-    for name in ("paper-no-de", "paper-de-joint1-thin"):
+    for name in ("paper-no-de", "paper-de-joint1-thin", "fig4-compare"):
         png = tmp_path / f"{name}.png"
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
     # the paper's "2 mm to 1 mm" is refused, and the script says so

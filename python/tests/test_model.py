@@ -10,9 +10,9 @@ import softfinger as sf
 
 
 def bench_finger(layers: int, fidelity: bool) -> sf.Finger:
-    """finger-scenes' `params`: the default values with the hinge model pinned."""
+    """finger-scenes' `params`: docs/model.md's default values with the hinge model pinned."""
     m, plate, flex = (8, 1, 1) if fidelity else (1, 0, 0)
-    return sf.Finger(layers=layers, m=m, plate=plate, flex_links=flex)
+    return sf.Finger(preset="default", layers=layers, m=m, plate=plate, flex_links=flex)
 
 
 def parse_reference(line: str):
@@ -85,7 +85,8 @@ def test_solve_many_equals_a_loop_of_solve():
 
 def test_shapes_units_and_no_nan():
     f = sf.Finger()
-    s = f.solve(1.0, [0, 3000, 6000])
+    c = f.ceiling()
+    s = f.solve(1.0, [0, 0.3 * c, 0.6 * c])
     assert s.joints_rad.shape == (3,) and s.nodes.shape == (4, 3) and s.tip.shape == (3,)
     assert s.stiffness.shape == (3, 3) and s.thickness_mm.shape == (3,)
     assert np.allclose(np.degrees(s.joints_rad), s.joints_deg)
@@ -102,7 +103,7 @@ def test_shapes_units_and_no_nan():
     for a in (many.joints_rad, many.nodes, many.tip, many.cable_mm, many.thickness_mm, many.stiffness, many.residual_mm):
         assert np.isfinite(a).all()
     # pose: the inverse lands on the forward model
-    target = f.solve(1.0, [2000, 5000, 8000]).joints_rad
+    target = f.solve(1.0, [0.2 * c, 0.5 * c, 0.8 * c]).joints_rad
     p = f.pose(target)
     lo, hi = p.interval_N
     assert lo <= p.tension_N <= hi and not p.tension_given
@@ -174,14 +175,26 @@ def test_presets_parameters_and_calibration():
     paper = sf.Finger(preset="paper")
     assert paper.params["e_de"] == pytest.approx(0.6 / (2 * 1.49))
     assert paper.params["m"] == 1 and sf.Finger().params["m"] == 8
+    assert paper.calibration == [1, 1, 1, 1, 1, 0, 1, 0] and paper.preset == "paper"
     # an override only consistent with a later one is retried (a = 15 needs l = 40 first)
-    assert sf.Finger(a=15.0, l=40.0).params["a"] == 15.0
-    assert sf.Finger().calibration == [1, 1, 1, 1, 1, 0, 1, 0]
-    auto = sf.Finger(calibration="auto")
-    assert auto.calibration == sf.Finger(calibration="model_md").calibration != sf.Finger().calibration
-    assert sf.Finger(calibration="auto", layers=2).calibration == [1, 1, 1, 1, 1, 0, 1, 0]
+    assert sf.Finger(preset="default", a=15.0, l=40.0).params["a"] == 15.0
+    none = [1, 1, 1, 1, 1, 0, 1, 0]
+    # the board's finger: VHB 4905 with the board's FE calibration; docs/model.md's finger
+    # ("default") is uncalibrated unless asked
+    board = sf.Finger()
+    assert board.preset == "board" and board.card == "VHB-4905" and board.calibration != none
+    assert board.calibration == sf.Finger(preset="default", calibration="model_md").calibration
+    assert sf.Finger(preset="default").calibration == none == sf.Finger(calibration=None).calibration
+    assert 'calibration="model_md"' in repr(board) and 'calibration="none"' in repr(sf.Finger(calibration=None))
+    # a calibration that does not apply is an error, never dropped: another stack count, another
+    # film, another hinge model
+    for kw in ({"layers": 2}, {"card": "Elastosil-2030"}, {"preset": "default", "m": 1, "calibration": "model_md"}):
+        with pytest.raises(sf.InputError) as e:
+            sf.Finger(**kw)
+        assert "calibration" in str(e.value) and "calibration=None" in str(e.value), kw
+    assert sf.Finger(layers=2, calibration=None).params["layers"] == 2
     # the calibration changes the answer
-    assert not np.array_equal(auto.solve(1.0, 0).joints_rad, sf.Finger().solve(1.0, 0).joints_rad)
+    assert not np.array_equal(board.solve(1.0, 0).joints_rad, sf.Finger(calibration=None).solve(1.0, 0).joints_rad)
     names = [n for n, _ in sf.parameter_ranges()]
     assert "margin" in names and set(names) == set(sf.Finger().params)
 
@@ -189,9 +202,11 @@ def test_presets_parameters_and_calibration():
 def test_material_cards():
     names = sf.cards()
     assert "VHB-4905" in names and len(names) >= 3
-    default = sf.Finger()
-    vhb = sf.Finger(card="VHB-4905")
+    default = sf.Finger(preset="default")
+    vhb = sf.Finger(preset="default", card="VHB-4905")
     assert vhb.card == "VHB-4905" and sf.Finger(card="vhb").card == "VHB-4905"
+    # the board's finger holds the board's hold ceiling (docs/materials.md) with the model's
+    assert 0 < sf.Finger().ceiling() <= vhb.ceiling() and "hold ceiling" in repr(sf.Finger())
     # the card's film: its equilibrium modulus by the isotropic rule, a lower ceiling than the
     # default film's, and (softer) more bending at the same fraction of its ceiling
     assert vhb.params["e_de"] == pytest.approx(2 * vhb.params["g"] * (1 + vhb.params["nu"]))

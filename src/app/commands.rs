@@ -369,6 +369,28 @@ impl Commands {
         forward(&self.finger, p, volts).map(|s| use_it(&s))
     }
 
+    /// [`Commands::forward_with`] with the stacks at `thick_mm` now instead of relaxed at
+    /// `volts` (`status`: the film creeps toward its voltages). The M3 image solves at the
+    /// voltages (its fixed-point path takes no thickness).
+    pub(super) fn forward_now<T>(&self, p: f32, volts: &[f32; CHANNELS], thick_mm: &[f32; CHANNELS], use_it: impl FnOnce(&Solved) -> T) -> Result<T, ModelError> {
+        #[cfg(m3)]
+        {
+            let _ = thick_mm;
+            self.forward_with(p, volts, use_it)
+        }
+        #[cfg(not(m3))]
+        {
+            let c = self.finger.compliances_at_thickness(volts, thick_mm)?;
+            #[cfg(feature = "pose")]
+            if let Some(t) = self.branch_table() {
+                let mut sol = Solution::empty();
+                t.solve_into(&c, p, &mut sol)?;
+                return Ok(use_it(&sol));
+            }
+            self.finger.solve_with(&c, p, [0.0; 2], finger_model::Method::converged()).map(|s| use_it(&s))
+        }
+    }
+
     /// How many times `Finger::fmax` ran (the cache's misses), for the tests.
     pub fn fmax_evaluations(&self) -> u32 {
         self.fmax_computed.get()
@@ -462,6 +484,9 @@ impl Commands {
                 let nl = self.nl;
                 for l in HELP {
                     let _ = w!(out; l, nl);
+                }
+                if report.is_some() {
+                    let _ = w!(out; super::help::HELP_TIMING, nl);
                 }
             }
             b"version" => {
@@ -567,7 +592,9 @@ impl Commands {
         let stack_mm = self.stack_mm();
         let mut thick = [0.0f32; CHANNELS];
         for ch in 0..CHANNELS {
-            thick[ch] = stack_mm * self.stack_ratio[ch];
+            // never past the rest thickness (the solve's domain); NaN (the M3's) stays NaN
+            let t = stack_mm * self.stack_ratio[ch];
+            thick[ch] = if t > stack_mm { stack_mm } else { t };
         }
         let _ = w!(r; " thick=");
         list(r, &thick, 4);
@@ -576,7 +603,8 @@ impl Commands {
         {
             fault = fault.or(self.config_fault());
         }
-        let shown = self.forward_with(self.force, &self.volts, |s| {
+        // the posture of the stacks as they are now, not as they will relax
+        let shown = self.forward_now(self.force, &self.volts, &thick, |s| {
             let _ = w!(r; " joints=");
             joints(r, s);
             let tip = s.tip();
@@ -626,9 +654,19 @@ impl Commands {
         let _ = w!(r; " slew=", Short(self.fw.slew), " servo=0,", Short(self.fw.servo_range), " cable_max=", Fixed(self.fw.servo_range / DEG * self.fw.spool_r, 2), " dutymax=");
         let d = self.duty_max;
         let _ = w!(r; d[0], ",", d[1], ",", d[2], " vhold=", Fixed(self.film.hold_ceiling(), 1));
+        // vmax itself is refused (at or past the ceiling): the largest `volt` takes, 0.1 V steps
+        #[cfg(not(m3))]
+        {
+            let mut ok = [0.0f32; CHANNELS];
+            for ch in 0..CHANNELS {
+                ok[ch] = largest_below(self.vmax[ch]);
+            }
+            let _ = w!(r; " vmax_ok=");
+            list(r, &ok, 1);
+        }
     }
 
-    /// Check channel voltages against the ceilings: `limit` at or past.
+    /// Check channel voltages against the ceilings: `limit` at or past ([`largest_below`]).
     pub(super) fn check_volts(&self, v: &[f32; CHANNELS]) -> Result<(), CmdError> {
         self.check_volts_of(v, false)
     }
@@ -872,4 +910,19 @@ impl Commands {
         list(r, &g, 6);
         Ok(())
     }
+}
+
+/// The largest multiple of 0.1 V below `vmax` (V; 0 for a ceiling of 0.1 V or less): what
+/// `limits`' `vmax_ok` reports, the highest voltage of a reply's precision `volt` accepts (not
+/// in the M3 image: its flash).
+#[cfg(not(m3))]
+pub(crate) fn largest_below(vmax: f32) -> f32 {
+    if !(vmax > 0.1) {
+        return 0.0;
+    }
+    let mut tenths = (vmax * 10.0) as u32;
+    if tenths as f32 / 10.0 >= vmax {
+        tenths -= 1;
+    }
+    tenths as f32 / 10.0
 }

@@ -109,7 +109,8 @@ impl Commands {
         self.put_settings(default_finger(), FwParams::default());
         self.cfg.saves = 0;
         self.cfg.rejected = false;
-        let _ = w!(r; "factory=1 store=", if self.cfg.store.is_some() { "empty" } else { "none" });
+        // nothing is stored now, with a store or without one (the simulated board's)
+        let _ = w!(r; "factory=1 store=empty");
         Ok(())
     }
 

@@ -36,6 +36,10 @@ pub const SETTLE_MAX_S: f32 = 600.0;
 #[cfg(not(m3))]
 pub const SETTLE_TOL: f32 = 0.01;
 
+/// `material`'s `units=`: each field's unit (`1`: a ratio), `branches` as its pairs' g:tau.
+#[cfg(not(m3))]
+pub const MATERIAL_UNITS: &str = "g_eq:MPa,branches:MPa:s,eps_r:1,breakdown:V/um,z0:mm,margin:1,s_hold:1,vhold:V";
+
 /// The board's film, built once from the board constants.
 pub(crate) struct BoardFilm {
     law: StackLaw<f32>,
@@ -96,7 +100,7 @@ impl BoardFilm {
     }
 
     #[cfg(not(m3))]
-    /// `material`'s reply: `card= g_eq= branches=g:tau,.. eps_r= breakdown= z0=
+    /// `material`'s reply (its last field, `units=`, the unit of each one before it): `card= g_eq= branches=g:tau,.. eps_r= breakdown= z0=
     /// margin= s_hold= vhold=` (MPa, s, V/um, mm, V; docs/firmware.md).
     pub fn write_material(&self, r: &mut Reply) {
         let c = BOARD_CARD;
@@ -109,5 +113,6 @@ impl BoardFilm {
         }
         let _ = w!(r; " eps_r=", Short(c.eps_r as f32), " breakdown=", Short(c.breakdown.field0_v_per_um as f32));
         let _ = w!(r; " z0=", Short(BOARD_Z0_MM), " margin=", Short(BOARD_MARGIN), " s_hold=", crate::num::Fixed(self.s_hold, 4), " vhold=", crate::num::Fixed(self.vhold, 1));
+        let _ = w!(r; " units=", MATERIAL_UNITS);
     }
 }

@@ -64,6 +64,36 @@ pub(crate) const HELP: &[&str] = &[
     help_line!("factory", "erase the stored settings, back to the compiled defaults; only while disarmed"),
 ];
 
+/// `help`'s line for `timing`, listed where the runtime measures (the chip images).
+pub(crate) const HELP_TIMING: &str = help_line!("timing", "the board's own real-time measurements: tick period, latency, stop, command durations");
+
+/// Whether `word` (lowercase) is a command of this build's `help` (or `timing`): the first
+/// word of each alternative of a line's syntax. `timing`'s durations file the rest under
+/// `unknown`. The Cortex-M3 image calls every word a command (360 bytes its flash lacks).
+pub fn is_command(word: &[u8]) -> bool {
+    if cfg!(m3) {
+        return true;
+    }
+    if word == b"timing" {
+        return true;
+    }
+    // byte by byte (no string search in the M3 image's flash): a line's first word, or the
+    // word after a `|` alone, up to the description's `-`
+    for l in HELP {
+        let mut first = true;
+        for t in l.as_bytes().split(|&c| c == b' ') {
+            if t == b"-" {
+                break;
+            }
+            if first && t == word {
+                return true;
+            }
+            first = t == b"|";
+        }
+    }
+    false
+}
+
 pub(crate) fn list(r: &mut Reply, v: &[f32], prec: usize) {
     let _ = w!(r; List(v, prec));
 }

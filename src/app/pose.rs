@@ -5,7 +5,9 @@
 //! fixed-point one.
 //!
 //! - `pose <d1> <d2> <d3> [<P>]` (degrees, N): the tension and voltages that hold the joint
-//!   angles. Reply `ok force=<N> volts=<v1,v2,v3> joints=<d1,d2,d3> range=<lo,hi>`. Armed, the
+//!   angles. Reply `ok force=<N> volts=<v1,v2,v3> joints=<d1,d2,d3> range=<lo,hi> settle=<s>
+//!   moved=<0|1>`; a posture past the model's domain (tip behind the base, past fmax) is
+//!   `err unreachable`. Armed, the
 //!   answer passes the checks of `volt` and `force` before anything moves; disarmed nothing
 //!   moves. A negative angle is `err unreachable` (the cable only flexes a joint).
 //! - `contact <P0> <P> [<V1> <V2> <V3>]` (N, V): model only. The tip stops at the free tip of
@@ -221,6 +223,7 @@ impl Commands {
         let this = &*self;
         let done = pose_with(&mut line, &this.finger, table, &this.inverse_options(), &deg, p, |t, v| {
             let target = [v[0], v[1], v[2]];
+            this.check_domain(t, &target)?;
             answer = Some(target);
             if !armed {
                 return Ok(());
@@ -242,8 +245,30 @@ impl Commands {
         if let (Ok(true), Some(v)) = (done, answer) {
             let _ = w!(&mut line; " settle=");
             self.write_settle(&mut line, &v);
+            let _ = w!(&mut line; " moved=", armed as u8);
         }
         let _ = w!(out; line, self.nl);
+        Ok(())
+    }
+
+    /// The model's domain (docs/console.md `pose`): a posture whose tension is past fmax at its
+    /// voltages (a hinge's notch closed, links touching) or whose tip lies behind the base
+    /// (x <= 0) is refused as `unreachable`, with the reason.
+    #[cfg(feature = "pose")]
+    #[inline(never)]
+    pub(super) fn check_domain(&self, p: f32, v: &[f32; CHANNELS]) -> Result<(), CmdError> {
+        let end = self.fmax(v).map_err(super::errors::model_err)?;
+        if !(p <= end.tension) {
+            let why = match end.kind {
+                finger_model::BranchEnd::Contact => "its notch closes (links touch)",
+                _ => "its equilibrium branch ends",
+            };
+            return Err(err!("unreachable"; "pose: needs ", Fixed(p, 3), " N, past fmax ", Fixed(end.tension, 3), " N: at joint ", end.joint, " ", why));
+        }
+        let x = self.forward_with(p, v, |s| s.tip().x).map_err(super::errors::model_err)?;
+        if !(x > 0.0) {
+            return Err(err!("unreachable"; "pose: the tip would be behind the base (x=", Fixed(x, 3), " mm), outside the model's domain"));
+        }
         Ok(())
     }
 

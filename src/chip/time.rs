@@ -79,11 +79,15 @@ impl Durations {
     pub const fn new() -> Self {
         Durations([([0; 8], 0); DURATION_SLOTS])
     }
-    /// The first word of a queued line (none for an error record).
+    /// The first word of a queued line (none for an error record); a word that is no command
+    /// of this build's `help` is filed as `unknown`.
     pub fn word_of(rec: &Record) -> [u8; 8] {
         let mut w = [0u8; 8];
         if let Record::Line(l) = rec {
-            for (i, &c) in l.iter().skip_while(|&&c| c == b' ').take_while(|&&c| c != b' ').take(8).enumerate() {
+            let mut word = l.split(|&c| c == b' ' || c == b'\t').filter(|t| !t.is_empty());
+            let Some(first) = word.next() else { return w };
+            let first: &[u8] = if crate::app::is_command(first) { first } else { b"unknown" };
+            for (i, &c) in first.iter().take(8).enumerate() {
                 w[i] = c;
             }
         }

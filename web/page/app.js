@@ -244,11 +244,12 @@ function drawShape(g, s, volts, style) {
   g.dataset.nodes = s.nodes.map((p) => f3(p.x) + ',' + f3(p.y)).join(';');
 }
 
-/** The drawing's view: the straight finger's box, grown to hold a posture that leaves it. */
+/** The drawing's view: the straight finger's box (clamp, body, scale bar), grown to hold the
+ * posture with a small margin, so that the finger fills the pane at every posture. */
 function fitView(s) {
-  const xs = s.nodes.map((p) => p.x), ys = s.nodes.map((p) => p.y), m = 14;
-  const x0 = Math.min(-20, Math.min(...xs) - m), x1 = Math.max(105, Math.max(...xs) + m);
-  const y0 = Math.min(-22, Math.min(...ys) - m), y1 = Math.max(58, Math.max(...ys) + m);
+  const xs = s.nodes.map((p) => p.x), ys = s.nodes.map((p) => p.y), m = 9;
+  const x0 = Math.min(-16, Math.min(...xs) - m), x1 = Math.max(92, Math.max(...xs) + m);
+  const y0 = Math.min(-24, Math.min(...ys) - m), y1 = Math.max(14, Math.max(...ys) + m);
   // the world group is flipped (flexor side up): world y maps to SVG -y
   $('finger').setAttribute('viewBox', `${x0.toFixed(1)} ${(-y1).toFixed(1)} ${(x1 - x0).toFixed(1)} ${(y1 - y0).toFixed(1)}`);
   drawScaleBar(x0, -y0);
@@ -341,6 +342,34 @@ function readable(kv) {
     `iters ${kv.iters}${kv.iters === '0' ? ' (branch table)' : ''}`;
 }
 
+// ------------------------------------------------------------------ axes
+
+/** Tick values for [lo, hi]: about n steps of 1, 2 or 5 times a power of ten. */
+function niceTicks(lo, hi, n = 4) {
+  const span = hi - lo;
+  if (!(span > 0)) return [lo];
+  const raw = span / n, p = 10 ** Math.floor(Math.log10(raw));
+  const step = [1, 2, 5, 10].map((m) => m * p).find((x) => x >= raw);
+  const out = [];
+  for (let t = Math.ceil(lo / step - 1e-9) * step; t <= hi + step * 1e-9; t += step) out.push(+t.toPrecision(12));
+  return out;
+}
+
+/** A tick's label with as many decimals as its step needs. */
+function tickLabel(t, ticks) {
+  const step = ticks.length > 1 ? Math.abs(ticks[1] - ticks[0]) : Math.abs(t) || 1;
+  const dec = Math.max(0, Math.min(6, -Math.floor(Math.log10(step) + 1e-9)));
+  return t.toFixed(dec);
+}
+
+/** A padded axis range for values `vals`; a flat series gets `minSpan` around it. */
+function axisRange(vals, minSpan) {
+  let lo = vals.length ? Math.min(...vals) : 0, hi = vals.length ? Math.max(...vals) : minSpan;
+  if (hi - lo < minSpan) { const c = (hi + lo) / 2; lo = c - minSpan / 2; hi = c + minSpan / 2; }
+  const pad = (hi - lo) * 0.08;
+  return [lo - pad, hi + pad];
+}
+
 // ------------------------------------------------------------------ strip chart
 
 const STRIP_MAX = 4800; // 20 min at 4 samples a second
@@ -366,13 +395,15 @@ function drawStrip() {
   const svg = $('strip');
   if (!svg) return;
   svg.innerHTML = '';
+  // one colour per channel (the tension, one series, in black); a channel's own dash and
+  // width, so that channels at the same value stay visible on top of each other
   const W = 520, L = 64, R = 90, T = 6, H = 300, rows = [
-    { name: 'tension', unit: 'N', get: (r) => [r.force] },
-    { name: 'voltage', unit: 'V', get: (r) => r.volts },
-    { name: 'stack', unit: 'mm', get: (r) => r.thick },
-    { name: 'joints', unit: 'deg', get: (r) => r.joints },
+    { name: 'tension', unit: 'N', get: (r) => [r.force], span: 0.1 },
+    { name: 'voltage', unit: 'V', get: (r) => r.volts, span: 100 },
+    { name: 'stack', unit: 'mm', get: (r) => r.thick, span: 0.01 },
+    { name: 'joints', unit: 'deg', get: (r) => r.joints, span: 0.5 },
   ];
-  const cols = ['#06c', '#c60', '#393'], rowH = (H - T - 18) / rows.length;
+  const cols = ['#06c', '#c60', '#393'], dash = ['', '7 4', '2 3'], widths = [3, 2, 1.3], rowH = (H - T - 18) / rows.length;
   const data = state.strip;
   $('strip-count').textContent = `${data.length} samples`;
   const tEnd = data.length ? data[data.length - 1].t : 0, tStart = Math.max(0, tEnd - STRIP_WINDOW_S);
@@ -382,16 +413,19 @@ function drawStrip() {
     const y0 = T + i * rowH, h = rowH - 10;
     el('rect', { x: L, y: y0, width: W - L - R, height: h, fill: 'none', stroke: '#ccc' }, svg);
     const vals = shown.flatMap((r) => row.get(r)).filter(Number.isFinite);
-    let lo = vals.length ? Math.min(...vals) : 0, hi = vals.length ? Math.max(...vals) : 1;
-    if (hi - lo < 1e-9) { const m = Math.max(Math.abs(hi) * 0.05, row.unit === 'mm' ? 0.01 : 1); lo -= m; hi += m; }
+    const [lo, hi] = axisRange(vals, row.span);
     const Y = (v) => y0 + h - (v - lo) / (hi - lo) * h;
-    el('text', { x: L - 4, y: y0 + 10, 'text-anchor': 'end', 'font-size': 10 }, svg).textContent = +hi.toPrecision(5);
-    el('text', { x: L - 4, y: y0 + h, 'text-anchor': 'end', 'font-size': 10 }, svg).textContent = +lo.toPrecision(5);
+    const ticks = niceTicks(lo, hi, 3);
+    for (const t of ticks) {
+      el('line', { x1: L, x2: W - R, y1: Y(t), y2: Y(t), stroke: '#eee' }, svg);
+      el('text', { x: L - 4, y: Y(t) + 3, 'text-anchor': 'end', 'font-size': 10, class: 'tick' }, svg).textContent = tickLabel(t, ticks);
+    }
     el('text', { x: W - R + 6, y: y0 + 12, 'font-size': 11 }, svg).textContent = `${row.name} (${row.unit})`;
     const n = row.get(shown[0] || { force: 0, volts: [], thick: [], joints: [] }).length;
     for (let c = 0; c < n; c++) {
       const pts = shown.map((r) => `${X(r.t).toFixed(1)},${Y(row.get(r)[c]).toFixed(1)}`).join(' ');
-      el('polyline', { points: pts, fill: 'none', stroke: cols[c % 3], 'stroke-width': 1.4, class: `strip-${row.name}`, 'data-channel': c + 1 }, svg);
+      const col = n > 1 ? cols[c % 3] : '#222';
+      el('polyline', { points: pts, fill: 'none', stroke: col, 'stroke-width': n > 1 ? widths[c % 3] : 1.6, 'stroke-dasharray': n > 1 ? dash[c % 3] : '', class: `strip-${row.name}`, 'data-channel': c + 1 }, svg);
       if (n > 1) el('text', { x: W - R + 6 + 24 * c, y: y0 + 26, 'font-size': 10, fill: cols[c % 3] }, svg).textContent = String(c + 1);
     }
   });
@@ -453,7 +487,8 @@ async function refreshLimits() {
   const vm = nums(r.kv.vmax);
   for (const k of [1, 2, 3]) {
     $('v' + k).max = Math.ceil(state.vmax * 1.1 / 100) * 100;
-    $('v' + k + '-ceil').textContent = `(ceiling ${vm[k - 1]} V; the slider reaches past it)`;
+    const ok = r.kv.vmax_ok ? nums(r.kv.vmax_ok)[k - 1] : vm[k - 1];
+    $('v' + k + '-ceil').textContent = `(the board takes up to ${ok} V, below its ${vm[k - 1]} V ceiling; the last 10 % of the slider shows its refusal)`;
   }
   $('force-ceil').textContent = `(fmax ${r.kv.fmax} N at these setpoints)`;
   $('volt-scale-hi').textContent = `${state.vmax} V (ceiling)`;
@@ -532,7 +567,7 @@ async function doPose() {
   for (let i = 0; i < N; i++) {
     const t = lo + (hi - lo) * i / (N - 1);
     const s = await stiffnessAt(d, t);
-    if (s) samples.push({ t, k: s.k, host: s.host });
+    if (s) samples.push({ t, x: s.volts.reduce((a, b) => a + b, 0) / s.volts.length, k: s.k, host: s.host });
     if (i === 0 || i === N - 1) ends.push(s);
   }
   const fmt = (s) => s ? `kxx=${s.k[0].toPrecision(4)} kyy=${s.k[1].toPrecision(4)} ktt=${s.k[2].toPrecision(4)} (volts ${s.volts.map((x) => x.toFixed(0)).join(',')})` : '-';
@@ -565,7 +600,7 @@ function drawPlot() {
   const svg = $('plot');
   svg.innerHTML = '';
   const P = state.plot;
-  const W = 520, H = 260, L = 60, R = 110, T = 12, B = 36;
+  const W = 520, H = 260, L = 72, R = 110, T = 12, B = 36;
   if (!P || P.samples.length === 0) {
     el('text', { x: W / 2, y: H / 2, 'text-anchor': 'middle', fill: '#888' }, svg).textContent = 'pose a target to see its stiffness range';
     $('plot-src').textContent = '';
@@ -579,50 +614,60 @@ function drawPlot() {
   const rel = (s, c, k) => (k || s.k)[c] / base[c];
   const all = [];
   for (const s of P.samples) for (let c = 0; c < 3; c++) { all.push(rel(s, c)); if (s.host) all.push(rel(s, c, s.host)); }
-  let y0 = Math.min(...all), y1 = Math.max(...all);
-  const pad = Math.max((y1 - y0) * 0.08, 1e-4);
-  y0 -= pad; y1 += pad;
-  const span = P.hi - P.lo || 1;
-  const X = (t) => L + (t - P.lo) / span * (W - L - R), Y = (r) => T + (y1 - r) / (y1 - y0) * (H - T - B);
+  // in percent, on ticks of 1, 2 or 5
+  const pct = all.map((r) => (r - 1) * 100);
+  const [y0, y1] = axisRange(pct, 0.05);
+  // x: the voltage (the pose's mean channel voltage across its interval; the sweep's channels)
+  const xv = (s) => s.x;
+  const xs = P.samples.map(xv), x0 = Math.min(...xs), x1 = Math.max(...xs), span = x1 - x0 || 1;
+  const X = (x) => L + (x - x0) / span * (W - L - R), Y = (q) => T + (y1 - q) / (y1 - y0) * (H - T - B);
   el('rect', { x: L, y: T, width: W - L - R, height: H - T - B, fill: 'none', stroke: '#999' }, svg);
-  for (let i = 0; i <= 4; i++) {
-    const r = y0 + (y1 - y0) * i / 4;
-    el('line', { x1: L, x2: W - R, y1: Y(r), y2: Y(r), stroke: '#eee' }, svg);
-    el('text', { x: L - 4, y: Y(r) + 4, 'text-anchor': 'end', 'font-size': 11 }, svg).textContent = ((r - 1) * 100).toFixed(2) + ' %';
+  const yt = niceTicks(y0, y1, 4);
+  for (const q of yt) {
+    el('line', { x1: L, x2: W - R, y1: Y(q), y2: Y(q), stroke: '#eee' }, svg);
+    el('text', { x: L - 4, y: Y(q) + 4, 'text-anchor': 'end', 'font-size': 11, class: 'tick' }, svg).textContent = tickLabel(q, yt) + ' %';
   }
-  for (const t of [P.lo, (P.lo + P.hi) / 2, P.hi]) {
-    el('text', { x: X(t), y: H - B + 14, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent = t.toFixed(4);
+  const xt = niceTicks(x0, x1, 5);
+  for (const x of xt) {
+    el('text', { x: X(x), y: H - B + 14, 'text-anchor': 'middle', 'font-size': 11, class: 'xtick' }, svg).textContent = tickLabel(x, xt);
   }
   el('text', { x: (L + W - R) / 2, y: H - 6, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent =
-    P.kind === 'pose' ? 'cable tension P (N) across the feasible interval' : 'cable tension P (N), voltages as set';
-  el('text', { x: L + 6, y: T + 14, 'font-size': 10, fill: '#555' }, svg).textContent = 'k / k(low end) - 1';
+    P.kind === 'pose' ? `mean channel voltage (V) across the feasible interval, P ${P.lo}..${P.hi} N` : `channel voltage (V), all three alike, at P = ${P.p} N`;
+  el('text', { x: L + 6, y: T + 14, 'font-size': 10, fill: '#555' }, svg).textContent = P.kind === 'pose' ? 'k / k(softest end) - 1' : 'k / k(0 V) - 1';
   const last = P.samples[P.samples.length - 1].k;
   for (let c = 0; c < 3; c++) {
-    const pts = P.samples.map((s) => `${X(s.t).toFixed(1)},${Y(rel(s, c)).toFixed(1)}`).join(' ');
-    el('polyline', { points: pts, fill: 'none', stroke: cols[c], 'stroke-width': 2, class: 'k' + c }, svg);
-    P.samples.forEach((s) => el('circle', { cx: X(s.t), cy: Y(rel(s, c)), r: 2.5, fill: cols[c] }, svg));
-    const hs = P.samples.filter((s) => s.host);
-    if (hs.length) el('polyline', { points: hs.map((s) => `${X(s.t).toFixed(1)},${Y(rel(s, c, s.host)).toFixed(1)}`).join(' '), fill: 'none', stroke: cols[c], 'stroke-dasharray': '4 3', 'stroke-width': 1, class: 'host-k' + c }, svg);
+    const pts = P.samples.map((s) => `${X(xv(s)).toFixed(1)},${Y((rel(s, c) - 1) * 100).toFixed(1)}`).join(' ');
+    el('polyline', { points: pts, fill: 'none', stroke: cols[c], 'stroke-width': 2.5, class: 'k' + c }, svg);
+    P.samples.forEach((s) => el('circle', { cx: X(xv(s)), cy: Y((rel(s, c) - 1) * 100), r: 2.5, fill: cols[c] }, svg));
     el('text', { x: W - R + 6, y: T + 12 + 30 * c, fill: cols[c], 'font-size': 11 }, svg).textContent = `${names[c]} ${units[c]}`;
     el('text', { x: W - R + 6, y: T + 25 + 30 * c, fill: cols[c], 'font-size': 10 }, svg).textContent = `${base[c].toPrecision(4)} → ${last[c].toPrecision(4)}`;
   }
-  el('text', { x: W - R + 6, y: T + 104, fill: '#555', 'font-size': 10 }, svg).textContent = 'dashed: host f64';
+  // the host's f64 model on top: black dashes and open squares, visible where it coincides
+  for (let c = 0; c < 3; c++) {
+    const hs = P.samples.filter((s) => s.host);
+    if (!hs.length) continue;
+    el('polyline', { points: hs.map((s) => `${X(xv(s)).toFixed(1)},${Y((rel(s, c, s.host) - 1) * 100).toFixed(1)}`).join(' '), fill: 'none', stroke: '#000', 'stroke-dasharray': '3 3', 'stroke-width': 1, class: 'host-k' + c }, svg);
+    hs.forEach((s) => el('rect', { x: X(xv(s)) - 2.5, y: Y((rel(s, c, s.host) - 1) * 100) - 2.5, width: 5, height: 5, fill: 'none', stroke: '#000', 'stroke-width': 0.8, class: 'host-mark' }, svg));
+  }
+  el('text', { x: W - R + 6, y: T + 104, fill: '#000', 'font-size': 10 }, svg).textContent = 'black dashes, □:';
+  el('text', { x: W - R + 6, y: T + 116, fill: '#000', 'font-size': 10 }, svg).textContent = 'host f64 model';
 }
 
-/** Before any pose: the tip stiffness of the present voltages' postures across the tension
- * (0 .. 0.8 fmax), from the board's `solve` (nothing moves). */
+/** Before any pose: the tip stiffness at the present tension (1 N when it is 0) with all three
+ * channels from 0 V to just below the ceiling, from the board's `solve` (nothing moves): how
+ * much the voltage changes the stiffness. */
 async function sweepPlot() {
-  const v = state.armed && state.status ? nums(state.status.target || state.status.volts) : sliders().v;
-  const fmax = Number(state.limits.fmax) || 1;
-  const hi = Number((0.8 * fmax).toPrecision(3)), N = 8, samples = [];
+  const p0 = state.armed && state.status ? Number(state.status.force) : sliders().p;
+  const p = p0 > 0 ? p0 : 1;
+  const top = Math.floor(0.99 * (state.vmax || 0) / 100) * 100, N = 8, samples = [];
   for (let i = 0; i < N; i++) {
-    const t = Number((hi * i / (N - 1)).toPrecision(4));
-    const s = await cmd(`solve ${t} ${v.join(' ')}`);
+    const x = Math.round(top * i / (N - 1)), v = [x, x, x];
+    const s = await cmd(`solve ${p} ${v.join(' ')}`);
     if (!s.ok) continue;
-    const h = hostShape(t, v);
-    samples.push({ t, k: nums(s.kv.stiffness), host: h && !h.err ? nums(h.kv.stiffness) : null });
+    const h = hostShape(p, v);
+    samples.push({ t: p, x, k: nums(s.kv.stiffness), host: h && !h.err ? nums(h.kv.stiffness) : null });
   }
-  state.plot = { kind: 'sweep', lo: 0, hi, samples, src: `solve at V = ${v.join(', ')} V, P from 0 to 0.8 fmax (no pose yet)` };
+  state.plot = { kind: 'sweep', lo: p, hi: p, p, samples, src: `solve at P = ${p} N, every channel from 0 to ${top} V (no pose yet)` };
   drawPlot();
 }
 

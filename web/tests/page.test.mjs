@@ -71,11 +71,35 @@ test('the page loads: simulated board connected, posture, limits and stop shown'
   await shot('loaded');
 });
 
+/** Tick labels that read as an axis: numbers, evenly spaced by 1, 2 or 5 times a power of ten,
+ * with no more decimals than that step needs, 2 to 8 of them. */
+function checkTicks(labels, what) {
+  const v = labels.map((l) => Number(l.replace(/ %$/, '')));
+  assert.ok(v.every(Number.isFinite) && v.length >= 2 && v.length <= 8, `${what}: ${labels}`);
+  const sorted = [...v].sort((a, b) => a - b), step = sorted[1] - sorted[0];
+  for (let i = 1; i < sorted.length; i++) assert.ok(Math.abs(sorted[i] - sorted[i - 1] - step) < 1e-9 * Math.max(1, Math.abs(step)), `${what}: uneven ${labels}`);
+  const mant = step / 10 ** Math.floor(Math.log10(step) + 1e-12);
+  assert.ok([1, 2, 5].some((m) => Math.abs(mant - m) < 1e-6), `${what}: step ${step}`);
+  const dec = Math.max(0, -Math.floor(Math.log10(step) + 1e-9));
+  for (const l of labels) assert.ok((l.replace(/ %$/, '').split('.')[1] || '').length <= dec, `${what}: ${l} has more decimals than its step ${step}`);
+}
+
 test('the drawing has a mm scale bar, the flexor side up, the 33 % limit on every stack; readouts carry units; the stiffness plot is filled from the start', async () => {
   // the stiffness plot before any pose: the present voltages across the tension
   await page.waitForFunction(() => window.finger.plot && window.finger.plot.kind === 'sweep');
   assert.equal(await page.locator('#plot polyline.k1').count(), 1, 'stiffness plot drawn before any pose');
   assert.ok((await page.evaluate(() => window.finger.plot.samples.length)) >= 5);
+  // against the voltage, from 0 V to near the ceiling, on ticks that read as an axis
+  const vm = Number((await board('limits')).kv.vmax.split(',')[0]);
+  const xs = await page.evaluate(() => window.finger.plot.samples.map((s) => s.x));
+  assert.ok(xs[0] === 0 && xs[xs.length - 1] >= 0.9 * vm, `voltages ${xs}`);
+  checkTicks(await page.locator('#plot text.tick').allTextContents(), 'stiffness y');
+  checkTicks(await page.locator('#plot text.xtick').allTextContents(), 'stiffness x');
+  // the host's f64 series is drawn on top of the board's, in black, with its own markers
+  const order = await page.evaluate(() => [...document.querySelectorAll('#plot polyline')].map((p) => p.getAttribute('class')));
+  assert.ok(order.indexOf('host-k1') > order.indexOf('k2'), `host drawn last: ${order}`);
+  assert.equal(await page.getAttribute('#plot polyline.host-k1', 'stroke'), '#000');
+  assert.ok((await page.locator('#plot rect.host-mark').count()) >= 5);
   // a 10 mm scale bar as long on screen as 10 mm of the finger
   await page.evaluate(() => drawAt(0, [0, 0, 0], 'test'));
   const bar = await page.evaluate(() => document.querySelector('#scale-bar .bar').getBoundingClientRect().toJSON());
@@ -237,6 +261,11 @@ test('the strip chart gains points while the board runs, and exports them as CSV
   assert.equal(await page.locator('#strip polyline.strip-voltage').count(), 3);
   assert.equal(await page.locator('#strip polyline.strip-stack').count(), 3);
   assert.equal(await page.locator('#strip polyline.strip-joints').count(), 3);
+  // one colour and one dash per channel, so that equal channels stay visible
+  const styles = await page.evaluate(() => [...document.querySelectorAll('#strip polyline.strip-voltage')].map((p) => `${p.getAttribute('stroke')} ${p.getAttribute('stroke-dasharray')} ${p.getAttribute('stroke-width')}`));
+  assert.equal(new Set(styles).size, 3, `${styles}`);
+  const labels = await page.locator('#strip text.tick').allTextContents();
+  assert.ok(labels.length >= 8, `${labels}`);
   // CSV: units in the header, a row a sample
   const csv = await page.evaluate(() => window.finger.stripCsv());
   const rows = csv.trim().split('\n');

@@ -131,14 +131,51 @@ impl<R: Real> Finger<R> {
                 continue;
             }
             let t = de::stack_thickness(p, k + 1, v)?;
-            out.thickness[k] = t;
-            let k_de = self.stack_stiffness(t);
-            for j in 0..p.m {
-                let k_sum = mat3::add(&self.hinge_k[j], &k_de);
-                out.c[k][j] = mat3::inverse_spd(&k_sum).ok_or(Error::Singular { what: "joint stiffness" })?;
-            }
+            self.stack_into(&mut out, k, t)?;
         }
         Ok(out)
+    }
+
+    /// As [`Finger::compliances`], the stacks at the thicknesses `thickness_mm` (mm, one per
+    /// joint) instead of the ones the voltages relax to: a film still creeping toward its
+    /// voltage (the board's `status`). The voltages are checked and kept in the answer; a
+    /// thickness outside (the 33 % limit, N_L z0] is refused. Without stacks, the hinges alone.
+    pub fn compliances_at_thickness(&self, volts: &[R], thickness_mm: &[R]) -> Result<Compliances<R>, Error> {
+        let p = &self.p;
+        if thickness_mm.len() != p.n {
+            return Err(Error::Input { input: "thickness", reason: "one thickness per joint is required" });
+        }
+        let mut out = self.compliances(&[R::zero(); MAX_JOINTS][..p.n])?;
+        if volts.len() != p.n {
+            return Err(Error::Input { input: "voltages", reason: "one voltage per joint is required" });
+        }
+        out.volts[..p.n].copy_from_slice(volts);
+        let t0 = R::from_u32(p.layers as u32) * p.z0;
+        for (k, (&v, &t)) in volts.iter().zip(thickness_mm).enumerate() {
+            de::check_voltage(p, k + 1, v)?;
+            if p.layers == 0 || cfg!(not(feature = "de")) {
+                continue;
+            }
+            if !t.is_finite() {
+                return Err(Error::NonFinite { input: "thickness" });
+            }
+            if !(t <= t0 && t > t0 * R::from_f64(crate::material::LIMIT_RATIO)) {
+                return Err(Error::Input { input: "thickness", reason: "must lie in (the 33 % limit, N_L z0]" });
+            }
+            self.stack_into(&mut out, k, t)?;
+        }
+        Ok(out)
+    }
+
+    /// Joint `k`'s sub-element compliances with its stack at thickness `t`, mm.
+    fn stack_into(&self, out: &mut Compliances<R>, k: usize, t: R) -> Result<(), Error> {
+        out.thickness[k] = t;
+        let k_de = self.stack_stiffness(t);
+        for j in 0..self.p.m {
+            let k_sum = mat3::add(&self.hinge_k[j], &k_de);
+            out.c[k][j] = mat3::inverse_spd(&k_sum).ok_or(Error::Singular { what: "joint stiffness" })?;
+        }
+        Ok(())
     }
 }
 

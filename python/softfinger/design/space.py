@@ -125,7 +125,7 @@ class Design:
         """The model of this design (uncalibrated: the FE calibration is the default finger's)."""
         from .. import Finger
 
-        return Finger(card=self.card, **self.params())
+        return Finger(preset="default", card=self.card, calibration=None, **self.params())
 
     def stack_mm(self) -> float:
         """The stack's thickness at rest, mm."""

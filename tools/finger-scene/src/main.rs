@@ -271,9 +271,10 @@ fn run_all(a: &Args) -> Result<(), String> {
     Ok(())
 }
 
-/// The front page's drawing: the default finger, straight and at 1 N with half the ceiling.
+/// The front page's drawing: the board's finger (docs/model.md's on VHB 4905), straight and at
+/// 1 N with half its ceiling; the colour bar ends at that ceiling.
 fn write_drawing(file: &Path) -> Result<(), String> {
-    let params = finger_model::Params::<f64>::default();
+    let params = finger_model::Params::<f64>::vhb4905();
     let half = finger_model::Finger::new(params).map_err(|e| e.to_string())?.voltage_ceiling() / 2.0;
     let svg = scene::drawing::dimensioned(params, 1.0, (half / 100.0).round() * 100.0).map_err(|e| e.to_string())?;
     std::fs::write(file, svg).map_err(|e| format!("cannot write {}: {e}", file.display()))?;

@@ -148,6 +148,9 @@ pub struct Scene {
     /// From the file name (or "scene").
     pub name: String,
     pub title: String,
+    /// False (`board = false`): the paper's model past what the board's film holds (voltages
+    /// past its ceiling); `finger run` refuses it before any board is touched.
+    pub board: bool,
     pub finger: FingerSpec,
     pub tensions: Vec<f64>,
     pub tensions_at: Pos,
@@ -165,6 +168,7 @@ pub struct Scene {
 #[serde(deny_unknown_fields)]
 struct SceneFile {
     title: Option<String>,
+    board: Option<bool>,
     finger: Option<Spanned<Keys>>,
     drive: Option<Spanned<Keys>>,
     #[serde(rename = "match")]
@@ -552,6 +556,7 @@ pub fn parse(name: &str, text: &str) -> Result<Scene, SceneError> {
     Ok(Scene {
         name: name.to_string(),
         title: file.title.unwrap_or_else(|| name.to_string()),
+        board: file.board.unwrap_or(true),
         finger,
         tensions,
         tensions_at,

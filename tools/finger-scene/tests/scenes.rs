@@ -631,6 +631,13 @@ fn drawing_shows_the_finger_with_its_dimensions() {
     }
     // the straight finger and the bent one
     assert_eq!(svg.matches("<g class=\"finger").count(), 2);
+    // the front page's drawing is the board's finger: its colour bar ends at the board film's
+    // ceiling, not the default film's
+    let front = std::fs::read_to_string(top().join("docs/finger.svg")).unwrap();
+    let vhb = finger_model::Finger::new(finger_model::Params::<f64>::vhb4905()).unwrap().voltage_ceiling();
+    let default = finger_model::Finger::new(finger_model::Params::<f64>::default()).unwrap().voltage_ceiling();
+    assert!(vhb < default);
+    assert!(front.contains(&format!(">{:.1} kV (ceiling)<", vhb / 1000.0)), "docs/finger.svg's colour bar");
 }
 
 #[test]

@@ -134,9 +134,20 @@ impl Link {
             .arg(elf)
             .stdin(Stdio::null())
             .stdout(log)
-            .stderr(Stdio::inherit())
+            .stderr(Stdio::piped())
             .spawn()
             .map_err(|e| LinkError::Open(format!("qemu-system-arm: {e} (scripts/setup installs it)")))?;
+        // QEMU's own messages pass to stderr, but not its notice that the socket waits for us
+        if let Some(err) = child.stderr.take() {
+            std::thread::spawn(move || {
+                use std::io::BufRead;
+                for l in std::io::BufReader::new(err).lines().map_while(Result::ok) {
+                    if !l.starts_with("QEMU waiting for connection") {
+                        eprintln!("{l}");
+                    }
+                }
+            });
+        }
         let t0 = Instant::now();
         let stream = loop {
             match UnixStream::connect(&sock) {

@@ -275,6 +275,14 @@ fn main() -> ExitCode {
     // a scene is read and run on the host model (and refused) before any board is touched
     let scene = match &cli.what {
         What::Run { scene, .. } => match finger_scene::read_file(scene).map_err(finger::run::RunError::Scene).and_then(|s| finger::run::host(&s)) {
+            Ok(s) if !s.scene.board => {
+                eprintln!(
+                    "finger run: {}: `board = false`: this scene is the paper's model, past what the board's film holds (docs/scenes.md \"The shipped scenes\"); run it on the host: cd tools/finger-scene && cargo run -- {}",
+                    scene.display(),
+                    scene.display()
+                );
+                return ExitCode::from(1);
+            }
             Ok(s) => Some(s),
             Err(e) => {
                 eprintln!("finger run: {}: {e}", scene.display());
@@ -348,8 +356,12 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             let live = std::io::stdout().is_terminal();
+            let demo = cli.to.sim;
+            if demo {
+                eprintln!("{}", finger::monitor::DEMO);
+            }
             let mut out = std::io::stdout().lock();
-            match finger::monitor::run(&mut con, rate, count, live, &mut out) {
+            match finger::monitor::run(&mut con, rate, count, live, demo, &mut out) {
                 Ok(()) => {
                     let _ = out.flush();
                     ExitCode::SUCCESS

@@ -1,5 +1,7 @@
 //! `finger monitor`: the board's `status` at a fixed rate, as a live terminal view (redrawn in
-//! place on a terminal, one line per poll otherwise). Not here: the console itself.
+//! place on a terminal, one line per poll otherwise). On the simulated board, which nothing else
+//! drives and whose time passes only through `wait`, a short demo ([`DEMO`]). Not here: the
+//! console itself.
 use std::io::Write;
 use std::time::{Duration, Instant};
 
@@ -15,12 +17,35 @@ pub fn render(r: &Reply, polls: u64, rate_hz: f64) -> String {
     s
 }
 
+/// What `finger --sim monitor` says on stderr before its demo.
+pub const DEMO: &str = "finger monitor --sim: the simulated board is this client's own child and nothing else drives it, \
+so this is a demo: armed, every channel at half its ceiling, the cable at 0.5 N; each poll runs the board's control \
+loop for one period (`wait`), so the slew and the film's creep play out; Ctrl-C quits (the board stops with the client)";
+
+/// The demo's setpoints on the simulated board: arm, every channel at half its ceiling
+/// (`limits`' vmax), 0.5 N.
+fn start_demo(con: &mut Console) -> Result<(), CommandError> {
+    let vmax = con.command("limits")?.get("vmax").and_then(|v| v.split(',').next()).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    con.command("arm")?;
+    con.command(&format!("volt all {}", (0.5 * vmax).floor()))?;
+    con.command("force 0.5")?;
+    Ok(())
+}
+
 /// Poll `status` every 1/rate_hz s, `count` times (forever when None), and draw each reply.
-pub fn run(con: &mut Console, rate_hz: f64, count: Option<u64>, live: bool, out: &mut impl Write) -> Result<(), CommandError> {
+/// `demo` (the simulated board): set the demo's setpoints first and run the board's loop for a
+/// period before each poll; `stop` after the last.
+pub fn run(con: &mut Console, rate_hz: f64, count: Option<u64>, live: bool, demo: bool, out: &mut impl Write) -> Result<(), CommandError> {
     let period = Duration::from_secs_f64(1.0 / rate_hz);
+    if demo {
+        start_demo(con)?;
+    }
     let mut next = Instant::now();
     let mut polls = 0;
     while count.is_none_or(|n| polls < n) {
+        if demo {
+            con.command(&format!("wait {}", period.as_secs_f64()))?;
+        }
         let r = con.command("status")?;
         polls += 1;
         if live {
@@ -37,6 +62,9 @@ pub fn run(con: &mut Console, rate_hz: f64, count: Option<u64>, live: bool, out:
         } else {
             next = now;
         }
+    }
+    if demo {
+        con.command("stop")?;
     }
     Ok(())
 }

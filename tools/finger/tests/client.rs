@@ -68,10 +68,16 @@ fn script_and_monitor_on_the_sim() {
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stdout).contains("> status\nok armed=1 "));
 
+    // on the simulated board, which nothing else drives, monitor says so and runs its demo:
+    // armed, the voltages slewing up poll after poll
     let out = finger(&["--sim", "--sim-bin", sim, "monitor", "--rate", "50", "--count", "4"]);
     assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("nothing else drives it, so this is a demo"), "{}", text(&out.stderr));
     let so = text(&out.stdout);
-    assert_eq!(so.lines().filter(|l| l.starts_with("ok armed=0 ")).count(), 4, "{so}");
+    let polls: Vec<&str> = so.lines().filter(|l| l.starts_with("ok armed=1 ")).collect();
+    assert_eq!(polls.len(), 4, "{so}");
+    let volts: Vec<f64> = polls.iter().map(|l| l.split(" volts=").nth(1).unwrap().split(',').next().unwrap().parse().unwrap()).collect();
+    assert!(volts.windows(2).all(|w| w[1] > w[0]) && volts[0] > 0.0, "the slew plays out: {volts:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -132,5 +138,50 @@ fn save_and_config_reach_the_store() {
     assert!(text(&out.stdout).starts_with("ok store=empty saves=0 boot=empty"), "{}{}", text(&out.stdout), text(&out.stderr));
     let out = finger(&[&qemu[..], &["save"]].concat());
     assert!(text(&out.stdout).starts_with("ok saved=1 bytes="), "{}{}", text(&out.stdout), text(&out.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A README line's arguments after `cargo run --`, double quotes grouping words.
+fn readme_args(line: &str) -> Vec<String> {
+    let rest = line.split("cargo run -- ").nth(1).unwrap().split(" # ").next().unwrap().trim();
+    let (mut out, mut word, mut quoted) = (Vec::new(), String::new(), false);
+    for c in rest.chars() {
+        match c {
+            '"' => quoted = !quoted,
+            ' ' if !quoted => {
+                if !word.is_empty() {
+                    out.push(std::mem::take(&mut word));
+                }
+            }
+            c => word.push(c),
+        }
+    }
+    if !word.is_empty() {
+        out.push(word);
+    }
+    out
+}
+
+#[test]
+fn the_readme_sim_commands_run_as_shown() {
+    let readme = std::fs::read_to_string(common::root().join("README.md")).unwrap();
+    let section = &readme[readme.find("## The host client: `finger`").unwrap()..];
+    let block = &section[section.find("```sh\n").unwrap()..];
+    let block = &block[..block[6..].find("```").unwrap()];
+    let lines: Vec<&str> = block.lines().filter(|l| l.starts_with("cargo run -- --sim ")).collect();
+    assert!(lines.len() >= 2, "{block}");
+    let dir = scratch("readme");
+    for l in lines {
+        let mut args = readme_args(l);
+        // the finger-sim this test built; a run's files into the scratch directory
+        args.insert(1, "--sim-bin".into());
+        args.insert(2, sim().to_str().unwrap().into());
+        if args.iter().any(|a| a == "run") {
+            args.extend(["--out".into(), dir.to_str().unwrap().into()]);
+        }
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_finger")).args(&args).current_dir(common::root().join("tools/finger")).output().unwrap();
+        assert!(out.status.success(), "{l}: {}", text(&out.stderr));
+        assert!(text(&out.stdout).lines().all(|r| !r.starts_with("err ")), "{l}: {}", text(&out.stdout));
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -54,7 +54,9 @@ fn a_scene_on_the_sim_is_the_host_model_to_print_precision() {
     let shipped = std::fs::read_to_string(root().join("scenes/paper-de-joint1-thin.toml")).unwrap();
     assert!(shipped.contains("thickness = [1.8, 2.0, 2.0]"));
     let scene = dir.join("paper-de-joint1-thin.toml");
-    std::fs::write(&scene, shipped.replace("thickness = [1.8, 2.0, 2.0]", "thickness = [1.96, 2.0, 2.0]")).unwrap();
+    assert!(shipped.contains("board = false"));
+    let reachable = shipped.replace("thickness = [1.8, 2.0, 2.0]", "thickness = [1.96, 2.0, 2.0]").replace("board = false", "board = true");
+    std::fs::write(&scene, reachable).unwrap();
     let out = finger(&["--sim", "--sim-bin", sim().to_str().unwrap(), "run", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     // the paper preset with 4 layers and joint 1 at 1.96 mm: the board computed that finger
@@ -226,4 +228,44 @@ fn a_run_without_out_writes_under_target_not_into_the_current_directory() {
     let st = Command::new("git").arg("-C").arg(root()).args(["check-ignore", "-q"]).arg(&csv).status().unwrap();
     assert!(st.success(), "{} is not git-ignored", csv.display());
     let _ = std::fs::remove_dir_all(&cwd);
+}
+
+/// The ceiling the simulated board holds with the paper preset, V (`limits`' first vmax).
+fn sim_paper_ceiling() -> f64 {
+    use std::io::Write;
+    let mut c = Command::new(sim()).stdin(std::process::Stdio::piped()).stdout(std::process::Stdio::piped()).spawn().unwrap();
+    c.stdin.take().unwrap().write_all(b"preset paper\nlimits\n").unwrap();
+    let out = text(&c.wait_with_output().unwrap().stdout);
+    let l = out.lines().find(|l| l.starts_with("ok vmax=")).unwrap_or_else(|| panic!("{out}"));
+    l["ok vmax=".len()..].split(',').next().unwrap().parse().unwrap()
+}
+
+#[test]
+fn every_shipped_scene_runs_on_the_board_or_says_it_is_the_papers_model() {
+    let dir = scratch("run-shipped");
+    let ceiling = sim_paper_ceiling();
+    let mut scenes: Vec<_> = std::fs::read_dir(root().join("scenes")).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
+    scenes.sort();
+    assert!(scenes.len() >= 7, "{scenes:?}");
+    let (mut ran, mut labelled) = (0, 0);
+    for path in &scenes {
+        let s = finger_scene::read_file(path).unwrap();
+        let top = finger_scene::scene::volts_of(&s.finger).unwrap().into_iter().fold(0.0f64, f64::max);
+        let out = finger(&["--sim", "--sim-bin", sim().to_str().unwrap(), "run", path.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+        let err = text(&out.stderr);
+        if s.board {
+            assert!(out.status.success(), "{}: {err}", path.display());
+            assert!(dir.join(format!("{}-board.csv", s.name)).exists(), "{}", path.display());
+            assert!(top < ceiling, "{}: {top} V", path.display());
+            ran += 1;
+        } else {
+            // the label is true: the board's film cannot hold the scene's voltages
+            assert!(top >= ceiling, "{}: labelled `board = false` but {top} V is under the board's {ceiling} V", path.display());
+            assert_eq!(out.status.code(), Some(1), "{}: {err}", path.display());
+            assert!(err.contains("`board = false`") && err.contains("paper's model") && err.contains("finger-scene"), "{err}");
+            labelled += 1;
+        }
+    }
+    assert!(ran >= 3 && labelled >= 1, "{ran} ran, {labelled} labelled");
+    let _ = std::fs::remove_dir_all(&dir);
 }
