@@ -215,5 +215,5 @@ fn each_fault_has_its_console_text() {
     use finger_fw::control::Fault;
     // the console's words (docs/console.md `status` fault=), one per fault, in the enum's order
     let words: Vec<&str> = Fault::ALL.iter().map(|f| f.text()).collect();
-    assert_eq!(words, ["hv-refused", "pwm", "enable", "hv-model", "board card", "qemu image on a real chip"]);
+    assert_eq!(words, ["hv-refused", "pwm", "enable", "hv-model", "board card", "qemu image on a real chip", "breakdown", "hv-mismatch", "stack-open", "sensor", "leakage"]);
 }
