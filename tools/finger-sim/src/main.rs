@@ -15,7 +15,6 @@
 //! but the board's replies.
 use std::io::{IsTerminal, Read, Write};
 
-use finger_fw::plant::Plant;
 use finger_fw::sim::{default_cost, SimBoard, VirtualSim};
 use finger_fw::App;
 
@@ -87,12 +86,7 @@ fn main() {
         eprintln!("# t={} ticks={ticks}", sim.t_us / 1000);
         return;
     }
-    // the HV plant behind the board's read-back (docs/firmware.md "The plant": `plant ...`)
-    let Some(plant) = Plant::new(1) else {
-        eprintln!("finger-sim: the board's film card gives no plant");
-        std::process::exit(1);
-    };
-    let mut app = App::new(SimBoard::with_plant(plant));
+    let mut app = App::new(SimBoard::default());
     let mut buf = [0u8; 4096];
     loop {
         let n = match stdin.read(&mut buf) {
