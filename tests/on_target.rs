@@ -290,6 +290,7 @@ mod tests {
                 }
                 Record::Overrun(n) => lost += n,
                 Record::TooLong => panic!("no line was too long"),
+                Record::Stopped(_) => panic!("no stop was sent"),
             }
         }
         assert!(whole <= fit && whole + 1 >= fit, "{} whole lines, {} fit", whole, fit);
