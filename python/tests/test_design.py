@@ -89,7 +89,7 @@ def test_a_killed_study_resumes_with_its_trials(tmp_path):
 
 
 def test_the_model_and_a_design_pickle():
-    for f in (sf.Finger(card="Elastosil-2030", t_min=0.8, layers=12, z0=0.1), sf.Finger(preset="paper"), sf.Finger(calibration="auto")):
+    for f in (sf.Finger(preset="default", calibration=None, card="Elastosil-2030", t_min=0.8, layers=12, z0=0.1), sf.Finger(preset="paper"), sf.Finger()):
         g = pickle.loads(pickle.dumps(f))
         assert g.params == f.params and g.calibration == f.calibration and g.card == f.card
         a, b = f.solve(0.5, [0, 1000, 2000]), g.solve(0.5, [0, 1000, 2000])
