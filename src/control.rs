@@ -637,12 +637,6 @@ impl<B: Board> Control<B> {
         }
     }
 
-    /// Channel `ch`'s estimator (reports and tests).
-    #[cfg(not(m3))]
-    pub fn estimator(&self, ch: usize) -> Option<sense::Estimator> {
-        self.sensing.present.then_some(self.sensing.est[ch])
-    }
-
     /// The duty of a guarded value `nv` (target `t`): open loop without a read-back; with
     /// one, the hold ripple below `nv` once it is held, and the voltage loop, clamped to the
     /// channel's duty ceiling (the loop can ask no more than the open loop could).
@@ -657,7 +651,7 @@ impl<B: Board> Control<B> {
         let sn = &mut self.sensing;
         // steady (held, or a shaped or guarded voltage that creeps): the ripple measures it
         let held = nv > sense::RIPPLE_MIN_V && (nv - self.volts[ch]).abs() < 1.0 && self.enable;
-        let limit_v = hv_volts_of_duty(limit, max);
+        let limit_v = self.write_ceiling_v[ch];
         let drive = if held { nv - sense::ripple_v(now) } else { nv }.min(limit_v);
         sn.drive[ch] = drive;
         let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v);

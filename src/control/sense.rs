@@ -121,11 +121,6 @@ impl Estimator {
         }
     }
 
-    /// The running capacitance (pF) and swings, measured or not (reports).
-    pub fn raw(&self) -> (f32, u32) {
-        (self.c_pf, self.swings)
-    }
-
     /// Windows closed so far.
     pub fn windows(&self) -> u32 {
         self.windows
