@@ -45,6 +45,7 @@ pub struct Mailbox {
 ///
 /// | prio | task | binds | does |
 /// | --- | --- | --- | --- |
+/// | 4 | `hv_trip` (board build) | ADC (ADC1/ADC2 analog watchdogs) | the HV enable low and the duties 0 by register stores, the channel left for the next tick (`finger_fw::chip::hv_adc`); no resources, so no lock raises to it |
 /// | 3 | `control` | SysTick, 1 kHz | the control core (`finger_fw::control`): takes the setpoints, slew, the HV duties (single writer), servo, stop requests, watchdog feed |
 /// | 2 | `console` | USART1 (RXNE, TXE) | each received byte into `finger_fw::rx` (a `stop` line stops the control core here, at once), the transmit queue out |
 /// | 0 | `idle` | - | the command side (`finger_fw::Commands`): lines, model solves, `wait`, replies into the transmit queue |
@@ -164,6 +165,13 @@ mod app {
             tm.ticks += 1;
             tm.tick_run_max = tm.tick_run_max.max(time::systick_elapsed().saturating_sub(entry));
         });
+    }
+
+    /// The analog watchdogs (board build): above the control task, sharing nothing.
+    #[cfg(feature = "hw")]
+    #[task(binds = ADC, priority = 4)]
+    fn hv_trip(_cx: hv_trip::Context) {
+        finger_fw::chip::hv_adc::on_watchdog();
     }
 
     /// USART1: received bytes into the line ring (`stop` acts here), the transmit queue out.
