@@ -39,6 +39,9 @@ pub struct Mailbox {
     /// A `plant ...` line's change to the emulator's plant.
     #[cfg(all(feature = "qemu", not(m3)))]
     plant: Option<finger_fw::control::PlantRequest>,
+    /// A `cal vmon|c0` line's calibration for the read-back.
+    #[cfg(not(m3))]
+    sense_cal: Option<finger_fw::app::hv_cal::SenseCal>,
 }
 
 /// The real-time core. Priorities and interrupts, the one place they are set:
@@ -123,6 +126,8 @@ mod app {
             checkin_ms: 0,
             #[cfg(all(feature = "qemu", not(m3)))]
             plant: None,
+            #[cfg(not(m3))]
+            sense_cal: None,
         };
         (Shared { ctl, mailbox, timing: Timing::new(), rx: RxLines::new(), tx }, Local { cmds, usart_rx: chip.rx })
     }
@@ -144,6 +149,10 @@ mod app {
             #[cfg(all(feature = "qemu", not(m3)))]
             if let Some(p) = mb.plant.take() {
                 ctl.plant_request(p);
+            }
+            #[cfg(not(m3))]
+            if let Some(c) = mb.sense_cal.take() {
+                ctl.set_sense_cal(c.monitor, c.c0_pf);
             }
             if let Some(sp) = mb.setpoints.take() {
                 ctl.apply(&sp);
@@ -236,12 +245,18 @@ mod app {
             let sp = cmds.setpoints();
             #[cfg(all(feature = "qemu", not(m3)))]
             let plant = cmds.take_plant();
+            #[cfg(not(m3))]
+            let sense_cal = cmds.take_sense_cal();
             out.mailbox.lock(|m| {
                 m.setpoints = Some(sp);
                 m.stop |= stop;
                 #[cfg(all(feature = "qemu", not(m3)))]
                 {
                     m.plant = plant;
+                }
+                #[cfg(not(m3))]
+                if sense_cal.is_some() {
+                    m.sense_cal = sense_cal;
                 }
             });
             // the next line sees this one's effect: the core takes the setpoints at its next
