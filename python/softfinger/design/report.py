@@ -59,7 +59,46 @@ def _front_rows(card: str, designs: List[Design]) -> List[Dict]:
     return rows
 
 
-def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_per_card: int = 5, storage: str | None = None, scheduler: str | None = None, progress: bool = True, search: Dict | None = None) -> Dict:
+class _Machine:
+    """The machine while a stage runs: the load average (sampled each second) and the CPU time
+    every process used (/proc/stat), so that what other jobs took is on record beside the
+    stage's own CPU time."""
+
+    def __enter__(self):
+        import threading
+
+        self.loads = [os.getloadavg()[0]]
+        self.busy0 = self._busy()
+        self._stop = threading.Event()
+        self._t = threading.Thread(target=self._sample, daemon=True)
+        self._t.start()
+        return self
+
+    def _sample(self):
+        while not self._stop.wait(1.0):
+            self.loads.append(os.getloadavg()[0])
+
+    @staticmethod
+    def _busy() -> float:
+        """CPU seconds all processes have used since boot (every core), 0 where /proc is absent."""
+        try:
+            f = [int(x) for x in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:]]
+        except OSError:
+            return 0.0
+        idle = f[3] + (f[4] if len(f) > 4 else 0)
+        return (sum(f[:8]) - idle) / os.sysconf("SC_CLK_TCK")
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._t.join()
+        self.busy1 = self._busy()
+
+    def summary(self, wall: float, own_cpu: float) -> Dict:
+        busy = self.busy1 - self.busy0
+        return {"load_before": self.loads[0], "load_mean": float(np.mean(self.loads)), "load_max": float(max(self.loads)), "machine_cpu": busy, "others_cpu": max(0.0, busy - own_cpu)}
+
+
+def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_per_card: int = 5, fe_repeats: int = 2, storage: str | None = None, scheduler: str | None = None, progress: bool = True, search: Dict | None = None) -> Dict:
     """Everything the page reports, as plain data (saved to out/design/results.json).
     `search`: a previous run's results whose search (studies, sweep, front) is kept; only the
     FE stage runs again."""
@@ -100,15 +139,18 @@ def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_pe
         c["fe_designs"] = [p["design"] for p in picks]
         chosen += [Design(**p["design"]) for p in picks]
         out["cards"][card] = c
-    # the FE stage on 2 workers (the report's results), then on 1 (the benchmark)
-    load = {}
-    load["2"] = os.getloadavg()[0]
-    checks, wall2, n2 = fe.check(chosen, scheduler=scheduler, workers=2, progress=progress)
-    out["fe"] = {"kind": "3D half width, C3D20R, the coarse mesh with 16 columns per notch (`Density::coarse`, notch_cols of `fine`)", "runs": 2 * len(chosen), "wall": {str(n2): wall2}, "load": load}
-    if scheduler is None:
-        load["1"] = os.getloadavg()[0]
-        _, wall1, n1 = fe.check(chosen, workers=1, progress=progress)
-        out["fe"]["wall"][str(n1)] = wall1
+    # the FE stage, timed on a LocalCluster of as many workers as cores and of 1, alternately
+    # (the benchmark; the first run's results are the report's), or once on `scheduler`
+    cores = os.cpu_count() or 1
+    order = [cores, 1] * fe_repeats if scheduler is None and cores > 1 else [cores]
+    checks, timed = None, []
+    for n in order:
+        with _Machine() as mach:
+            ch, wall, nw = fe.check(chosen, scheduler=scheduler, workers=n, progress=progress)
+        checks = checks or ch
+        cpu = sum(r.cpu_seconds for c in ch for r in c.results)
+        timed.append({"workers": nw, "wall": wall, "cpu": cpu, **mach.summary(wall, cpu)})
+    out["fe"] = {"kind": "3D half width, C3D20R, the coarse mesh with 16 columns per notch (`Density::coarse`, notch_cols of `fine`)", "runs": 2 * len(chosen), "timed": timed, "cores": cores, "scheduler": scheduler or "LocalCluster"}
     out["fe"]["checks"] = [
         {
             "design": asdict(ch.design),
