@@ -76,6 +76,12 @@ struct Sensing {
     cal: [sense::MonitorCal; HV_CHANNELS],
     /// The voltage the loop drove each channel to in the tick just ended, V.
     drive: [f32; HV_CHANNELS],
+    /// The loop's ask was held back by the slew this tick (the module not yet given the
+    /// chance to follow: no mismatch counts).
+    slew_held: [bool; HV_CHANNELS],
+    /// Each channel's time in its hold, ms (0: not held): the ripple's phase, from 0 V below
+    /// the guarded value, so it starts without a step.
+    ripple_ms: [u32; HV_CHANNELS],
     /// Windows the estimator had closed when the guard last looked.
     seen_windows: [u32; HV_CHANNELS],
     view: SenseView,
@@ -104,6 +110,8 @@ impl Sensing {
             vloop: [hv_loop::VoltageLoop::new(); HV_CHANNELS],
             cal: [sense::MonitorCal::NOMINAL; HV_CHANNELS],
             drive: [0.0; HV_CHANNELS],
+            slew_held: [false; HV_CHANNELS],
+            ripple_ms: [0; HV_CHANNELS],
             seen_windows: [0; HV_CHANNELS],
             view: SenseView { volts: [0.0; HV_CHANNELS], current_ua: [0.0; HV_CHANNELS], stack_ratio: [f32::NAN; HV_CHANNELS], ceiling_v: [0.0; HV_CHANNELS], disagreed: [false; HV_CHANNELS] },
             check_until_ms: None,
@@ -412,6 +420,8 @@ impl<B: Board> Control<B> {
             sn.guard = [watch::ThicknessGuard::new(); HV_CHANNELS];
             sn.vloop = [hv_loop::VoltageLoop::new(); HV_CHANNELS];
             sn.drive = [0.0; HV_CHANNELS];
+            sn.slew_held = [false; HV_CHANNELS];
+            sn.ripple_ms = [0; HV_CHANNELS];
             sn.check_until_ms = None;
             sn.recheck = recheck;
         }
@@ -520,7 +530,11 @@ impl<B: Board> Control<B> {
     }
 
     fn finish_ramp_down(&mut self) {
-        if self.ramping_down && self.volts.iter().all(|&v| v == 0.0) {
+        #[cfg(not(m3))]
+        let asked_zero = self.sensing.vloop.iter().all(|l| l.asked_v() == 0.0);
+        #[cfg(m3)]
+        let asked_zero = true;
+        if self.ramping_down && asked_zero && self.volts.iter().all(|&v| v == 0.0) {
             for ch in 0..HV_CHANNELS {
                 let _ = self.write_hv_duty_checked(ch, 0);
             }
@@ -644,7 +658,6 @@ impl<B: Board> Control<B> {
     fn loop_duty(&mut self, ch: usize, nv: f32) -> u16 {
         let max = self.hv_max[ch];
         let limit = self.write_ceiling[ch];
-        let now = self.now_ms;
         if !self.sensing.present {
             return hv_duty_for(nv, max);
         }
@@ -652,10 +665,12 @@ impl<B: Board> Control<B> {
         // steady (held, or a shaped or guarded voltage that creeps): the ripple measures it
         let held = nv > sense::RIPPLE_MIN_V && (nv - self.volts[ch]).abs() < 1.0 && self.enable;
         let limit_v = self.write_ceiling_v[ch];
-        let drive = if held { nv - sense::ripple_v(now) } else { nv }.min(limit_v);
+        sn.ripple_ms[ch] = if held { sn.ripple_ms[ch].wrapping_add(1).max(1) } else { 0 };
+        let drive = if held { nv - sense::ripple_v(sn.ripple_ms[ch]) } else { nv }.min(limit_v);
         sn.drive[ch] = drive;
-        let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v);
-        hv_duty_for(ask, max).min(limit)
+        let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v, self.slew * 0.001);
+        sn.slew_held[ch] = ask.slew_held;
+        hv_duty_for(ask.volts, max).min(limit)
     }
 
     /// The tick's read-back: the analog watchdog's trip, each channel's reading, estimate,
@@ -677,9 +692,9 @@ impl<B: Board> Control<B> {
             let i = sense::microamps_of_code(hs.i_code[ch]);
             sn.view.volts[ch] = v;
             sn.view.current_ua[ch] = i;
-            sn.est[ch].tick(v, i, sense::ripple_turns(self.now_ms));
+            sn.est[ch].tick(v, i, sn.ripple_ms[ch] > 0 && sense::ripple_turns(sn.ripple_ms[ch]));
             let reading = watch::Reading { v, i_ua: i, v_code: hs.v_code[ch] };
-            if let Some(f) = sn.watch[ch].check(&reading, sn.drive[ch], self.write_ceiling_v[ch], self.enable, &sn.est[ch]) {
+            if let Some(f) = sn.watch[ch].check(&reading, sn.drive[ch], sn.slew_held[ch], self.write_ceiling_v[ch], self.enable, &sn.est[ch]) {
                 fault = fault.or(Some(f));
             }
             let s_meas = sn.est[ch].thickness_ratio(crate::board::BOARD_STACK_C0_PF);

@@ -62,9 +62,10 @@ impl Watch {
         Watch { steady_ms: 0, collapse_ms: 0, mismatch_ms: 0, over_ms: 0, stuck_ms: 0, stuck_from_v: 0.0, last_code: -1.0, leak_ms: 0, prev_drive: 0.0, fall_env: 0.0 }
     }
 
-    /// The checks of one tick: `drive_v` the voltage the loop drives to, `ceiling_v` the
-    /// channel's ceiling in force, `enabled` the HV enable.
-    pub fn check(&mut self, r: &Reading, drive_v: f32, ceiling_v: f32, enabled: bool, est: &Estimator) -> Option<Fault> {
+    /// The checks of one tick: `drive_v` the voltage the loop drives to, `slew_held` the
+    /// loop's ask held back by the slew (a module off its command then is not yet one that
+    /// does not follow), `ceiling_v` the channel's ceiling in force, `enabled` the HV enable.
+    pub fn check(&mut self, r: &Reading, drive_v: f32, slew_held: bool, ceiling_v: f32, enabled: bool, est: &Estimator) -> Option<Fault> {
         if !(r.v.is_finite() && r.i_ua.is_finite() && r.v_code >= 0.0) || r.v_code >= ADC_FULL_CODE - 0.5 {
             return Some(Fault::Sensor);
         }
@@ -86,7 +87,7 @@ impl Watch {
         let off = (r.v - drive_v).abs() > MISMATCH_V.max(MISMATCH_FRAC * drive_v);
         let want = if enabled { drive_v } else { 0.0 };
         let off = if enabled { off } else { r.v > 2.0 * MISMATCH_V };
-        self.mismatch_ms = if off { self.mismatch_ms + 1 } else { 0 };
+        self.mismatch_ms = if off && !(enabled && slew_held) { self.mismatch_ms + 1 } else { 0 };
         if enabled && self.steady_ms >= 30 && drive_v > 1000.0 && r.v < COLLAPSE_FRAC * drive_v {
             self.collapse_ms += 1;
             if self.collapse_ms >= 3 {
