@@ -308,6 +308,11 @@ impl<B: Board> Control<B> {
         if c.stacks.is_none() {
             c.lock_out(Fault::BoardCard);
         }
+        // a board with a read-back says so from the start (one sample taken, at 0 V)
+        #[cfg(not(m3))]
+        {
+            c.sensing.present = c.board.hv_sense().is_some();
+        }
         #[cfg(all(not(feature = "hw"), not(m3)))]
         c.read_plant();
         c
