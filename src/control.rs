@@ -261,6 +261,19 @@ pub fn hv_volts_of_duty(duty: u16, max_duty: u16) -> f32 {
     }
 }
 
+/// What one control tick's parts cost, in the caller's clock counts (`Control::tick_timed`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TickCost {
+    /// The longest stack step of a channel (goal, slew, guard, thickness, relaxation).
+    pub stack_step: u32,
+    /// The read-back's own work: the estimate, the checks, the guard and the voltage loop
+    /// (0 on the M3 image, which has none).
+    pub read_back: u32,
+    /// The board's read-back source: the ADC's averages; on the emulator image, its plant's
+    /// step (no part of the firmware's cost on a board).
+    pub sense_source: u32,
+}
+
 impl<B: Board> Control<B> {
     /// Take the board: enable low, every HV duty 0, servo at `servo_released`. The ceilings
     /// start at 0 (nothing above 0 V until the command side sends its ceilings).
@@ -550,7 +563,7 @@ impl<B: Board> Control<B> {
 
     /// One 1 ms control tick, as [`Control::tick_timed`] without the clock.
     pub fn tick(&mut self, last_checkin_ms: u32) {
-        self.tick_timed(last_checkin_ms, || 0);
+        let _ = self.tick_timed(last_checkin_ms, || 0);
     }
 
     /// One 1 ms control tick. Each channel steps ([`Stacks::step`]): its value moves at most
@@ -560,11 +573,16 @@ impl<B: Board> Control<B> {
     /// too, at 0 V: the film recovers in time); the duty of the guarded value is written. Then
     /// the servo follows; a disarm ramp that reached 0 drops the enable; the watchdog is fed if
     /// the command side checked in at `last_checkin_ms` within [`CHECKIN_BOUND_MS`]. Returns
-    /// the longest stack step of a channel in `clock` counts.
-    pub fn tick_timed(&mut self, last_checkin_ms: u32, clock: fn() -> u32) -> u32 {
+    /// what the tick's parts cost, in `clock` counts.
+    pub fn tick_timed(&mut self, last_checkin_ms: u32, clock: fn() -> u32) -> TickCost {
         self.now_ms = self.now_ms.wrapping_add(1);
+        let mut cost = TickCost::default();
         #[cfg(not(m3))]
-        self.read_back();
+        {
+            let t0 = clock();
+            cost.sense_source = self.read_back(clock);
+            cost.read_back = clock().wrapping_sub(t0).saturating_sub(cost.sense_source);
+        }
         let step = self.slew * 0.001;
         let mut worst = 0u32;
         #[cfg(not(m3))]
@@ -601,7 +619,12 @@ impl<B: Board> Control<B> {
                 }
             };
             #[cfg(not(m3))]
-            let d = self.loop_duty(ch, nv);
+            let d = {
+                let t0 = clock();
+                let d = self.loop_duty(ch, nv);
+                cost.read_back = cost.read_back.wrapping_add(clock().wrapping_sub(t0));
+                d
+            };
             #[cfg(m3)]
             let d = hv_duty_for(nv, self.hv_max[ch]);
             if d != self.duty[ch] && self.write_hv_duty_checked(ch, d).is_err() {
@@ -616,7 +639,8 @@ impl<B: Board> Control<B> {
         if self.now_ms.wrapping_sub(last_checkin_ms) <= CHECKIN_BOUND_MS {
             self.board.feed_watchdog();
         }
-        worst
+        cost.stack_step = worst;
+        cost
     }
 
     pub fn now_ms(&self) -> u32 {
@@ -681,10 +705,12 @@ impl<B: Board> Control<B> {
     /// The tick's read-back: the analog watchdog's trip, each channel's reading, estimate,
     /// checks and thickness guard. A fault cuts the HV at once (latched until `stop`).
     #[cfg(not(m3))]
-    fn read_back(&mut self) {
-        let Some(hs) = self.board.hv_sense() else { return };
+    fn read_back(&mut self, clock: fn() -> u32) -> u32 {
+        let t0 = clock();
+        let Some(hs) = self.board.hv_sense() else { return 0 };
         #[cfg(not(feature = "hw"))]
         self.read_plant();
+        let source = clock().wrapping_sub(t0);
         let hold = self.hold_ceiling_v();
         let sn = &mut self.sensing;
         sn.present = true;
@@ -726,5 +752,6 @@ impl<B: Board> Control<B> {
                 self.fault_stop(f);
             }
         }
+        source
     }
 }
