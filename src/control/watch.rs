@@ -27,8 +27,13 @@ pub const MODULE_FALL_MS: f32 = 25.0;
 pub const COLLAPSE_FRAC: f32 = 0.5;
 /// An open stack: the sensed capacitance under this fraction of the stack's.
 pub const OPEN_FRAC: f32 = 0.3;
-/// The leakage bound at a held voltage, µA (a healthy stack leaks nA).
+/// The leakage bound, µA, and as a conductance, µA/V (0.2 nS: 5 GΩ; a healthy stack of the
+/// board's film leaks under 0.01 nS at its ceiling), checked at a command above
+/// [`LEAK_CHECK_MIN_V`]: the lower of the two. A leak that a lowered ceiling holds at a low
+/// voltage is still one.
 pub const LEAK_BOUND_UA: f32 = 1.0;
+pub const LEAK_BOUND_UA_PER_V: f32 = 2e-4;
+pub const LEAK_CHECK_MIN_V: f32 = 50.0;
 /// The thickness guard lowers the ceiling once the sensed film is within this of its floor.
 pub const FLOOR_MARGIN_S: f32 = 0.03;
 /// The sensed and the model's thickness disagree past this (absolute, in s).
@@ -118,7 +123,8 @@ impl Watch {
                     return Some(Fault::StackOpen);
                 }
             }
-            let leaking = drive_v > 1000.0 && est.leakage_ua().is_some_and(|l| !(l <= LEAK_BOUND_UA));
+            let bound = LEAK_BOUND_UA.min(LEAK_BOUND_UA_PER_V * drive_v);
+            let leaking = drive_v > LEAK_CHECK_MIN_V && est.leakage_ua().is_some_and(|l| !(l <= bound));
             self.leak_ms = if leaking { self.leak_ms + 1 } else { 0 };
             if self.leak_ms >= 200 {
                 return Some(Fault::Leakage);
