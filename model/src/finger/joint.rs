@@ -125,12 +125,12 @@ impl<R: Real> Finger<R> {
         }
     }
 
-    /// A joint's march under tension alone from the stiffnesses K_hinge,j + K_de (`kd` the
-    /// stack's upper triangle): `march_stiffness`, with `link` the link's deflection at that
-    /// tension (`tension_link_q`); None where it refuses (the caller takes the compliance path).
+    /// A joint's march under tension alone from its stiffnesses `k` (`march_stiffness`), with
+    /// `link` the link's deflection at that tension (`tension_link_q`); None where it refuses
+    /// (the caller takes the compliance path).
     #[inline(always)]
-    pub(crate) fn joint_march_stiffness(&self, kd: &[R; 6], tension: R, link: [R; 3], b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
-        let (end, hole, _, _) = self.march_stiffness(kd, tension, b, q).ok()?;
+    pub(crate) fn joint_march_stiffness(&self, k: &JointStiffness<'_, R>, tension: R, link: [R; 3], b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+        let (end, hole, _, _) = self.march_stiffness(k, tension, b, q).ok()?;
         Some(JointMarch::arrived(end, hole, link))
     }
 
@@ -138,10 +138,5 @@ impl<R: Real> Finger<R> {
     /// tip load).
     pub(crate) fn tension_link_q(&self, tension: R) -> [R; 3] {
         self.link_q(tension, &Pose::origin(), None)
-    }
-
-    /// Hinge sub-element j's stiffness (the inverse of its compliance, computed in `new`).
-    pub(crate) fn hinge_stiffness(&self, j: usize) -> &Mat3<R> {
-        &self.hinge_k[j]
     }
 }

@@ -16,7 +16,7 @@ use super::table::{BranchTable, TableEnd, TABLE_BAND};
 use super::{choose_tension, feasible_interval, one_tension, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
-use crate::finger::{uniform_beam_compliance, Finger, JointEquilibrium, JointMarch, Method, Pose};
+use crate::finger::{uniform_beam_compliance, Finger, JointEquilibrium, JointMarch, JointStiffness, Method, Pose};
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;

@@ -13,7 +13,7 @@
 
 use super::general::Gen;
 use super::Options;
-use crate::de::{self, ThicknessVoltage};
+use crate::de::{self, Stack};
 use crate::error::Error;
 use crate::finger::{BranchLimit, Compliances, Finger, Method, Solution};
 use crate::mat3::Mat3;
@@ -69,7 +69,7 @@ pub struct BranchTable<R> {
     /// The top voltage (`top` x the ceiling), V.
     pub(super) v_top: R,
     /// The finger's thickness-to-voltage constants (`solve_pose_tabled`'s voltages).
-    pub(super) volts: ThicknessVoltage<R>,
+    pub(super) volts: Stack<R>,
     /// Sub-element compliances at each end (the middle branch's are not kept).
     pub(super) comp: [[Mat3<R>; MAX_SUB]; 2],
     /// dθ/dP of the straight joint at each end, rad/N.
@@ -540,7 +540,7 @@ impl<R: Real> BranchTable<R> {
             opts: *opts,
             thickness: [t_top, t0, t_mid],
             v_top,
-            volts: de::ThicknessVoltage::new(p),
+            volts: de::Stack::new(p),
             comp,
             slope0,
             step,

@@ -17,11 +17,11 @@ impl<'a, R: Real> Gen<'a, R> {
         self.converged(st, b, theta)
     }
 
-    /// `march_converged` from the stiffnesses at the stack's upper triangle `kd`
-    /// (`Finger::joint_march_stiffness`: no compliance formed).
+    /// `march_converged` from the joint's stiffnesses `k` (`Finger::joint_march_stiffness`: no
+    /// compliance formed).
     #[inline(never)]
-    pub(super) fn march_converged_stiff(&self, kd: &[R; 6], p: R, link: [R; 3], b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
-        let st = self.f.joint_march_stiffness(kd, p, link, b, q)?;
+    pub(super) fn march_converged_stiff(&self, k: &JointStiffness<'a, R>, p: R, link: [R; 3], b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+        let st = self.f.joint_march_stiffness(k, p, link, b, q)?;
         self.converged(st, b, theta)
     }
 
@@ -257,7 +257,7 @@ pub(in crate::inverse) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R
         // inside the stack's range one march from the stiffnesses (no compliance formed); the
         // compliance march at either end, and inside it only where that one is not converged
         let inside = t_guess < t0 && t_guess > t_top;
-        let quick = if inside { g.march_converged_stiff(&g.stack.upper(t_guess), pt, link, b, angles[k], &mut out.sub_q[k]) } else { None };
+        let quick = if inside { g.march_converged_stiff(&g.stiffness(t_guess), pt, link, b, angles[k], &mut out.sub_q[k]) } else { None };
         g.iters += 1;
         let marched = match quick {
             Some(st) => Some(st),
