@@ -39,7 +39,7 @@ mod types;
 
 pub use prepare::uniform_beam_compliance;
 pub use stiffness::JointStiffness;
-pub(crate) use types::JointMarch;
+pub(crate) use types::{By, JointMarch};
 use types::cast_mat;
 pub use types::{BranchEnd, BranchLimit, Compliances, JointEquilibrium, Method, Pose, Solution};
 

@@ -292,7 +292,7 @@ impl<R: Real> newton::Linearized<R, 3> for HoldThickness<'_, '_, R> {
     fn linearize(&mut self, x: &[R; 3]) -> Result<([R; 3], Mat3<R>), Error> {
         let (ctx, p) = (self.ctx, self.p);
         let kj = ctx.stiffness(x[2]);
-        let (k, kd) = (kj.matrix(0), kj.dt());
+        let (k, kd) = (kj.matrix(0), kj.dt(&ctx.stack));
         self.w = ctx.wrench(self.ang, [x[0], x[1]], self.joint, p)?;
         let w = &self.w;
         let q = [x[0], x[1], self.ang.theta];

@@ -1,10 +1,10 @@
 //! The stiffness form of a sub-element's equilibrium (`ByStiffness`): K_j q = (f, M) with
 //! K_j = K_hinge,j + K_de(t) (`JointStiffness`), solved by Gaussian elimination in place of multiplying by a
 //! compliance computed beforehand. For the tabled inverse, whose thickness is new at every
-//! solve: no compliance array is formed. The march around it is `Finger::march_joint`.
+//! solve: no compliance array is formed. The march around it is `Finger::march_cable`.
 
-use super::march::{CableFrame, MarchEnd, SubElement};
-use super::{Finger, JointStiffness, MarchError};
+use super::march::SubElement;
+use super::{JointStiffness, MarchError};
 use crate::mat3::Mat3;
 use crate::params::MAX_SUB;
 use crate::real::Real;
@@ -49,21 +49,12 @@ impl<R: Real> SubElement<R, R> for ByStiffness<'_, R> {
     }
 }
 
-impl<R: Real> Finger<R> {
-    /// The march under tension alone from stiffnesses (`ByStiffness` in `CableFrame`). Refuses
-    /// what `march_tension` refuses and a non-positive last pivot; the caller then takes the
-    /// compliance path.
-    #[inline(always)]
-    pub(super) fn march_stiffness(&self, k: &JointStiffness<'_, R>, tension: R, b: [R; 2], q_out: &mut [[R; 3]; MAX_SUB]) -> Result<MarchEnd<R>, MarchError> {
-        let (start, frame) = CableFrame::new(self, tension, b)?;
-        self.march_joint(&ByStiffness(*k), frame, q_out, |x| x)?.end(start, self.p.e)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::calibration::Calibration;
+    use crate::finger::march::ByCompliance;
+    use crate::finger::Finger;
     use crate::mat3;
     use crate::params::Params;
 
@@ -122,9 +113,9 @@ mod tests {
                 for tension in [0.05, 1.0, 7.0, 15.0] {
                     for b in [[10.0, 5.0], [9.3, 6.1], [8.0, 7.5], [3.0, 9.0]] {
                         let mut qa = [[0.0; 3]; MAX_SUB];
-                        let Ok(a) = f.march_tension(&c, tension, b, &mut qa) else { continue };
+                        let Ok(a) = f.march_cable(&ByCompliance(&c), tension, b, &mut qa) else { continue };
                         let mut qb = [[0.0; 3]; MAX_SUB];
-                        let s = f.march_stiffness(&kd, tension, b, &mut qb).ok().unwrap();
+                        let s = f.march_cable(&ByStiffness(kd), tension, b, &mut qb).ok().unwrap();
                         let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * (1.0 + y.abs());
                         assert!(close(s.0.x, a.0.x) && close(s.0.y, a.0.y) && close(s.0.theta, a.0.theta), "{:?} {:?}", s.0, a.0);
                         assert!(close(s.1[0], a.1[0]) && close(s.1[1], a.1[1]));
@@ -147,8 +138,8 @@ mod tests {
             for tension in [0.2f32, 1.0, 7.0, 15.0] {
                 let b = [9.0, 6.5];
                 let mut q = [[0.0; 3]; MAX_SUB];
-                let a = f.march_tension(&c, tension, b, &mut q).ok().unwrap();
-                let s = f.march_stiffness(&kd, tension, b, &mut q).ok().unwrap();
+                let a = f.march_cable(&ByCompliance(&c), tension, b, &mut q).ok().unwrap();
+                let s = f.march_cable(&ByStiffness(kd), tension, b, &mut q).ok().unwrap();
                 assert!((s.0.x - a.0.x).abs() < 2e-5 && (s.0.y - a.0.y).abs() < 2e-5 && (s.0.theta - a.0.theta).abs() < 2e-6);
                 assert!((s.1[0] - a.1[0]).abs() < 2e-5 && (s.1[1] - a.1[1]).abs() < 2e-5);
             }
@@ -157,14 +148,14 @@ mod tests {
         let f = &fingers[0];
         let (kd, _) = at(f, f.stack_thickness(0.0).unwrap());
         let mut q = [[0.0; 3]; MAX_SUB];
-        assert!(f.march_stiffness(&kd, 1.0, [0.0, f.params().e], &mut q).is_err(), "span below its floor");
-        assert!(f.march_stiffness(&kd, 0.0, [10.0, 5.0], &mut q).is_err(), "no tension");
+        assert!(f.march_cable(&ByStiffness(kd), 1.0, [0.0, f.params().e], &mut q).is_err(), "span below its floor");
+        assert!(f.march_cable(&ByStiffness(kd), 0.0, [10.0, 5.0], &mut q).is_err(), "no tension");
         // a stiffness that is not positive definite: refused, not a NaN state
         let bad = JointStiffness::with_upper(f, [0.0, 0.0, 0.0, 0.0, 0.0, -1e9]);
-        assert!(f.march_stiffness(&bad, 1.0, [10.0, 5.0], &mut q).is_err(), "negative pivot");
+        assert!(f.march_cable(&ByStiffness(bad), 1.0, [10.0, 5.0], &mut q).is_err(), "negative pivot");
         assert!(bad.compliance(0).is_err(), "and no compliance");
         let nan = JointStiffness::with_upper(f, [f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]);
-        assert!(f.march_stiffness(&nan, 1.0, [10.0, 5.0], &mut q).is_err(), "not finite");
+        assert!(f.march_cable(&ByStiffness(nan), 1.0, [10.0, 5.0], &mut q).is_err(), "not finite");
         assert!(nan.compliance(0).is_err(), "and no compliance");
     }
 }

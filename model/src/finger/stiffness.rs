@@ -16,7 +16,6 @@ use crate::real::Real;
 #[derive(Clone, Copy, Debug)]
 pub struct JointStiffness<'a, R> {
     f: &'a Finger<R>,
-    stack: StackStiffness<R>,
     /// K_de(t)'s upper triangle (k01 = 0); None: the hinge alone (no stacks in the set or build).
     upper: Option<[R; 6]>,
     t: R,
@@ -30,13 +29,13 @@ impl<'a, R: Real> JointStiffness<'a, R> {
         // a build without the `de` feature refuses stacks in `Finger::new` and leaves the
         // stack's code out of the image
         let upper = if f.p.layers == 0 || cfg!(not(feature = "de")) { None } else { Some(stack.upper(t)) };
-        JointStiffness { f, stack: *stack, upper, t }
+        JointStiffness { f, upper, t }
     }
 
     /// Only the tests' stiffness from a given stack triangle (a bad one, say).
     #[cfg(test)]
     pub(crate) fn with_upper(f: &'a Finger<R>, upper: [R; 6]) -> Self {
-        JointStiffness { f, stack: f.stack(), upper: Some(upper), t: R::zero() }
+        JointStiffness { f, upper: Some(upper), t: R::zero() }
     }
 
     /// The stack thickness it was built at, mm.
@@ -72,10 +71,11 @@ impl<'a, R: Real> JointStiffness<'a, R> {
         mat3::from_upper(self.upper(j))
     }
 
-    /// dK_j/dt, the same for every sub-element (zero without stacks).
-    pub fn dt(&self) -> Mat3<R> {
+    /// dK_j/dt, the same for every sub-element (zero without stacks); `stack` the stack's
+    /// constants it was built with.
+    pub fn dt(&self, stack: &StackStiffness<R>) -> Mat3<R> {
         match self.upper {
-            Some(_) => mat3::from_upper(self.stack.upper_dt(self.t)),
+            Some(_) => mat3::from_upper(stack.upper_dt(self.t)),
             None => mat3::zero(),
         }
     }
@@ -91,10 +91,14 @@ impl<'a, R: Real> JointStiffness<'a, R> {
         (mat3::from_upper(o), check)
     }
 
-    /// C_j; refuses a sum that is not positive definite (`Singular`, "joint stiffness").
+    /// C_j; refuses a sum that is not positive definite (`Singular`, "joint stiffness"). By
+    /// `mat3::inverse_spd` out of line: the set-up's one copy (flash; `compliances_into` is
+    /// the solves' inline one, the same arithmetic).
     pub fn compliance(&self, j: usize) -> Result<Mat3<R>, Error> {
-        let (c, check) = self.compliance_checked(j);
-        checked(check).map(|_| c)
+        if self.upper.is_none() {
+            return Ok(self.f.hinge_c[j.min(MAX_SUB - 1)]);
+        }
+        mat3::inverse_spd(&self.matrix(j)).ok_or(Error::Singular { what: "joint stiffness" })
     }
 
     /// Every sub-element's C_j into `c` (its first m entries), one test for all of them.
@@ -120,8 +124,10 @@ fn checked<R: Real>(check: R) -> Result<(), Error> {
 }
 
 impl<R: Real> Finger<R> {
-    /// The joint's stiffness with its stack at thickness `t`, mm (`JointStiffness`).
-    #[inline(always)]
+    /// The joint's stiffness with its stack at thickness `t`, mm (`JointStiffness`). Out of
+    /// line (flash): the set-ups call it; the inverses' loops keep the stack's constants
+    /// (`JointStiffness::new`).
+    #[inline(never)]
     pub fn joint_stiffness(&self, t: R) -> JointStiffness<'_, R> {
         JointStiffness::new(self, &self.stack(), t)
     }
