@@ -22,6 +22,7 @@ use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 use crate::solve::{bracket, broyden};
 
+mod build_table;
 mod hold;
 mod prepare;
 mod qn;
