@@ -78,6 +78,12 @@ struct Sensing {
     c0_pf: [f32; HV_CHANNELS],
     /// The voltage the loop drove each channel to in the tick just ended, V.
     drive: [f32; HV_CHANNELS],
+    /// The loop's ask was held back by the slew this tick (the module not yet given the
+    /// chance to follow: no mismatch counts).
+    slew_held: [bool; HV_CHANNELS],
+    /// Each channel's time in its hold, ms (0: not held): the ripple's phase, from 0 V below
+    /// the guarded value, so it starts without a step.
+    ripple_ms: [u32; HV_CHANNELS],
     /// Windows the estimator had closed when the guard last looked.
     seen_windows: [u32; HV_CHANNELS],
     view: SenseView,
@@ -107,6 +113,8 @@ impl Sensing {
             cal: [sense::MonitorCal::NOMINAL; HV_CHANNELS],
             c0_pf: [crate::board::BOARD_STACK_C0_PF; HV_CHANNELS],
             drive: [0.0; HV_CHANNELS],
+            slew_held: [false; HV_CHANNELS],
+            ripple_ms: [0; HV_CHANNELS],
             seen_windows: [0; HV_CHANNELS],
             view: SenseView { volts: [0.0; HV_CHANNELS], current_ua: [0.0; HV_CHANNELS], stack_ratio: [f32::NAN; HV_CHANNELS], ceiling_v: [0.0; HV_CHANNELS], disagreed: [false; HV_CHANNELS] },
             check_until_ms: None,
@@ -256,6 +264,19 @@ pub fn hv_volts_of_duty(duty: u16, max_duty: u16) -> f32 {
     }
 }
 
+/// What one control tick's parts cost, in the caller's clock counts (`Control::tick_timed`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TickCost {
+    /// The longest stack step of a channel (goal, slew, guard, thickness, relaxation).
+    pub stack_step: u32,
+    /// The read-back's own work: the estimate, the checks, the guard and the voltage loop
+    /// (0 on the M3 image, which has none).
+    pub read_back: u32,
+    /// The board's read-back source: the ADC's averages; on the emulator image, its plant's
+    /// step (no part of the firmware's cost on a board).
+    pub sense_source: u32,
+}
+
 impl<B: Board> Control<B> {
     /// Take the board: enable low, every HV duty 0, servo at `servo_released`. The ceilings
     /// start at 0 (nothing above 0 V until the command side sends its ceilings).
@@ -302,6 +323,11 @@ impl<B: Board> Control<B> {
         c.write_servo(servo_released);
         if c.stacks.is_none() {
             c.lock_out(Fault::BoardCard);
+        }
+        // a board with a read-back says so from the start (one sample taken, at 0 V)
+        #[cfg(not(m3))]
+        {
+            c.sensing.present = c.board.hv_sense().is_some();
         }
         #[cfg(all(not(feature = "hw"), not(m3)))]
         c.read_plant();
@@ -415,6 +441,8 @@ impl<B: Board> Control<B> {
             sn.guard = [watch::ThicknessGuard::new(); HV_CHANNELS];
             sn.vloop = [hv_loop::VoltageLoop::new(); HV_CHANNELS];
             sn.drive = [0.0; HV_CHANNELS];
+            sn.slew_held = [false; HV_CHANNELS];
+            sn.ripple_ms = [0; HV_CHANNELS];
             sn.check_until_ms = None;
             sn.recheck = recheck;
         }
@@ -523,7 +551,11 @@ impl<B: Board> Control<B> {
     }
 
     fn finish_ramp_down(&mut self) {
-        if self.ramping_down && self.volts.iter().all(|&v| v == 0.0) {
+        #[cfg(not(m3))]
+        let asked_zero = self.sensing.vloop.iter().all(|l| l.asked_v() == 0.0);
+        #[cfg(m3)]
+        let asked_zero = true;
+        if self.ramping_down && asked_zero && self.volts.iter().all(|&v| v == 0.0) {
             for ch in 0..HV_CHANNELS {
                 let _ = self.write_hv_duty_checked(ch, 0);
             }
@@ -534,7 +566,7 @@ impl<B: Board> Control<B> {
 
     /// One 1 ms control tick, as [`Control::tick_timed`] without the clock.
     pub fn tick(&mut self, last_checkin_ms: u32) {
-        self.tick_timed(last_checkin_ms, || 0);
+        let _ = self.tick_timed(last_checkin_ms, || 0);
     }
 
     /// One 1 ms control tick. Each channel steps ([`Stacks::step`]): its value moves at most
@@ -544,11 +576,16 @@ impl<B: Board> Control<B> {
     /// too, at 0 V: the film recovers in time); the duty of the guarded value is written. Then
     /// the servo follows; a disarm ramp that reached 0 drops the enable; the watchdog is fed if
     /// the command side checked in at `last_checkin_ms` within [`CHECKIN_BOUND_MS`]. Returns
-    /// the longest stack step of a channel in `clock` counts.
-    pub fn tick_timed(&mut self, last_checkin_ms: u32, clock: fn() -> u32) -> u32 {
+    /// what the tick's parts cost, in `clock` counts.
+    pub fn tick_timed(&mut self, last_checkin_ms: u32, clock: fn() -> u32) -> TickCost {
         self.now_ms = self.now_ms.wrapping_add(1);
+        let mut cost = TickCost::default();
         #[cfg(not(m3))]
-        self.read_back();
+        {
+            let t0 = clock();
+            cost.sense_source = self.read_back(clock);
+            cost.read_back = clock().wrapping_sub(t0).saturating_sub(cost.sense_source);
+        }
         let step = self.slew * 0.001;
         let mut worst = 0u32;
         #[cfg(not(m3))]
@@ -585,7 +622,12 @@ impl<B: Board> Control<B> {
                 }
             };
             #[cfg(not(m3))]
-            let d = self.loop_duty(ch, nv);
+            let d = {
+                let t0 = clock();
+                let d = self.loop_duty(ch, nv);
+                cost.read_back = cost.read_back.wrapping_add(clock().wrapping_sub(t0));
+                d
+            };
             #[cfg(m3)]
             let d = hv_duty_for(nv, self.hv_max[ch]);
             if d != self.duty[ch] && self.write_hv_duty_checked(ch, d).is_err() {
@@ -600,7 +642,8 @@ impl<B: Board> Control<B> {
         if self.now_ms.wrapping_sub(last_checkin_ms) <= CHECKIN_BOUND_MS {
             self.board.feed_watchdog();
         }
-        worst
+        cost.stack_step = worst;
+        cost
     }
 
     pub fn now_ms(&self) -> u32 {
@@ -663,7 +706,6 @@ impl<B: Board> Control<B> {
     fn loop_duty(&mut self, ch: usize, nv: f32) -> u16 {
         let max = self.hv_max[ch];
         let limit = self.write_ceiling[ch];
-        let now = self.now_ms;
         if !self.sensing.present {
             return hv_duty_for(nv, max);
         }
@@ -671,19 +713,23 @@ impl<B: Board> Control<B> {
         // steady (held, or a shaped or guarded voltage that creeps): the ripple measures it
         let held = nv > sense::RIPPLE_MIN_V && (nv - self.volts[ch]).abs() < 1.0 && self.enable;
         let limit_v = self.write_ceiling_v[ch];
-        let drive = if held { nv - sense::ripple_v(now) } else { nv }.min(limit_v);
+        sn.ripple_ms[ch] = if held { sn.ripple_ms[ch].wrapping_add(1).max(1) } else { 0 };
+        let drive = if held { nv - sense::ripple_v(sn.ripple_ms[ch]) } else { nv }.min(limit_v);
         sn.drive[ch] = drive;
-        let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v);
-        hv_duty_for(ask, max).min(limit)
+        let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v, self.slew * 0.001);
+        sn.slew_held[ch] = ask.slew_held;
+        hv_duty_for(ask.volts, max).min(limit)
     }
 
     /// The tick's read-back: the analog watchdog's trip, each channel's reading, estimate,
     /// checks and thickness guard. A fault cuts the HV at once (latched until `stop`).
     #[cfg(not(m3))]
-    fn read_back(&mut self) {
-        let Some(hs) = self.board.hv_sense() else { return };
+    fn read_back(&mut self, clock: fn() -> u32) -> u32 {
+        let t0 = clock();
+        let Some(hs) = self.board.hv_sense() else { return 0 };
         #[cfg(not(feature = "hw"))]
         self.read_plant();
+        let source = clock().wrapping_sub(t0);
         let hold = self.hold_ceiling_v();
         let sn = &mut self.sensing;
         sn.present = true;
@@ -696,9 +742,9 @@ impl<B: Board> Control<B> {
             let i = sense::microamps_of_code(hs.i_code[ch]);
             sn.view.volts[ch] = v;
             sn.view.current_ua[ch] = i;
-            sn.est[ch].tick(v, i, sense::ripple_turns(self.now_ms));
+            sn.est[ch].tick(v, i, sn.ripple_ms[ch] > 0 && sense::ripple_turns(sn.ripple_ms[ch]));
             let reading = watch::Reading { v, i_ua: i, v_code: hs.v_code[ch] };
-            if let Some(f) = sn.watch[ch].check(&reading, sn.drive[ch], self.write_ceiling_v[ch], self.enable, &sn.est[ch]) {
+            if let Some(f) = sn.watch[ch].check(&reading, sn.drive[ch], sn.slew_held[ch], self.write_ceiling_v[ch], self.enable, &sn.est[ch]) {
                 fault = fault.or(Some(f));
             }
             let s_meas = sn.est[ch].thickness_ratio(sn.c0_pf[ch]);
@@ -725,5 +771,6 @@ impl<B: Board> Control<B> {
                 self.fault_stop(f);
             }
         }
+        source
     }
 }

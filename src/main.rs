@@ -157,8 +157,13 @@ mod app {
             if let Some(sp) = mb.setpoints.take() {
                 ctl.apply(&sp);
             }
-            let stack = ctl.tick_timed(mb.checkin_ms, time::systick_elapsed);
-            tm.tick_stack_max = tm.tick_stack_max.max(stack);
+            let cost = ctl.tick_timed(mb.checkin_ms, time::systick_elapsed);
+            tm.tick_stack_max = tm.tick_stack_max.max(cost.stack_step);
+            #[cfg(not(m3))]
+            {
+                tm.tick_sense_max = tm.tick_sense_max.max(cost.read_back);
+                tm.tick_source_max = tm.tick_source_max.max(cost.sense_source);
+            }
             mb.view = ctl.view();
             #[cfg(not(m3))]
             {

@@ -59,11 +59,10 @@ fn main() {
     }
 
     let mut t = String::new();
-    let _ = writeln!(t, "| scene | model | f32 instr | f32 same-algorithm instr | fixed instr | f32 / fixed | same / fixed | tip err f32 (mm) | tip err fixed (mm) | joint err fixed (deg) | excursion err fixed (mm) | fixed set-up instr |");
-    let _ = writeln!(t, "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let _ = writeln!(t, "| scene | model | f32 instr | fixed instr | f32 / fixed | tip err f32 (mm) | tip err fixed (mm) | joint err fixed (deg) | excursion err fixed (mm) | fixed set-up instr |");
+    let _ = writeln!(t, "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
     let (mut worst_tip, mut worst_joint, mut worst_exc, mut worst_tip_default) = (0f64, 0f64, 0f64, 0f64);
     let mut ratios = Vec::new();
-    let mut same_ratios = Vec::new();
     let mut refusals = Vec::new();
     for (k, s) in scenes::SCENES.iter().enumerate() {
         for model in ["pinned", "default"] {
@@ -95,14 +94,6 @@ fn main() {
                 }
             }
             let ratio = if a.ok.is_some() && b.ok.is_some() { a.instr / b.instr } else { f64::NAN };
-            let same = lines.get(&(k, model.into(), "f32-same".into()));
-            let same_ratio = match same {
-                Some(c) if c.ok.is_some() && b.ok.is_some() => c.instr / b.instr,
-                _ => f64::NAN,
-            };
-            if same_ratio.is_finite() {
-                same_ratios.push(same_ratio);
-            }
             if ratio.is_finite() {
                 ratios.push(ratio);
             } else {
@@ -110,17 +101,11 @@ fn main() {
             }
             let _ = writeln!(
                 t,
-                "| {} | {model} | {:.0} | {} | {:.0} | {} | {} | {} | {} | {} | {} | {:.0} |",
+                "| {} | {model} | {:.0} | {:.0} | {} | {} | {} | {} | {} | {:.0} |",
                 s.name,
                 a.instr,
-                match same {
-                    Some(c) if c.ok.is_some() => format!("{:.0}", c.instr),
-                    Some(c) => format!("err {}", c.code),
-                    None => "-".into(),
-                },
                 b.instr,
                 if ratio.is_finite() { format!("{ratio:.2}") } else { "-".into() },
-                if same_ratio.is_finite() { format!("{same_ratio:.2}") } else { "-".into() },
                 show(a, ea, 0),
                 show(b, eb, 0),
                 show(b, eb, 1),
@@ -131,18 +116,15 @@ fn main() {
     }
     ratios.sort_by(|a, b| a.partial_cmp(b).unwrap());
     let (rmin, rmed) = (ratios[0], ratios[ratios.len() / 2]);
-    same_ratios.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    let (smin, smed) = (same_ratios[0], same_ratios[same_ratios.len() / 2]);
-    let default_same: Vec<f64> = scenes::SCENES
+    let dmin = scenes::SCENES
         .iter()
         .enumerate()
         .filter_map(|(k, _)| {
-            let c = lines.get(&(k, "default".into(), "f32-same".into()))?;
+            let a = lines.get(&(k, "default".into(), "f32".into()))?;
             let b = lines.get(&(k, "default".into(), "fixed".into()))?;
-            (c.ok.is_some() && b.ok.is_some()).then(|| c.instr / b.instr)
+            (a.ok.is_some() && b.ok.is_some()).then(|| a.instr / b.instr)
         })
-        .collect();
-    let dmin = default_same.iter().copied().fold(f64::INFINITY, f64::min);
+        .fold(f64::INFINITY, f64::min);
 
     // round trip: the f64 inverse (posture -> tension, voltages), then the fixed-point forward
     let f = Finger::new(Params { layers: 4, ..Params::default() }).unwrap();
@@ -275,15 +257,14 @@ fn main() {
     let mut m = String::new();
     let _ = writeln!(m, "QEMU mps2-an385 (Cortex-M3, no FPU), `-icount shift=4`, instructions from SysTick calibrated on a");
     let _ = writeln!(m, "loop of known length (bench/src/cycles.rs). f32: the model's converged forward solve in soft float");
-    let _ = writeln!(m, "(`Finger::solve_with`, dual-number Newton, `fast-trig`); same algorithm: the fixed-point solve's steps in f32");
-    let _ = writeln!(m, "(bench/src/twin.rs; its stop at the f32 model's resolution); fixed: `finger_model::fixed`.");
+    let _ = writeln!(m, "(`Finger::solve_with`, dual-number Newton, `fast-trig`); fixed: `finger_model::fixed`, the same sub-element");
+    let _ = writeln!(m, "march in Q formats (docs/model.md \"Which march to call\").");
     let _ = writeln!(m, "Errors against the host's f64 reference (converged to 1e-12 mm). Set-up: `FixedFinger::new` (the");
     let _ = writeln!(m, "compliances in f32, then scaled), once per parameter or voltage change.\n");
     let _ = writeln!(m, "| target | measured |");
     let _ = writeln!(m, "| --- | --- |");
     let _ = writeln!(m, "| forward tip within 1e-3 mm of f64, every bench scene, default model | worst {worst_tip_default:.1e} mm (all models: {worst_tip:.1e} mm) |");
-    let _ = writeln!(m, "| >= 3x fewer M3 instructions than soft-float f32 running the same algorithm | same algorithm in f32 (bench/src/twin.rs) / fixed: min {smin:.2}, median {smed:.2}; default model min {dmin:.2} |");
-    let _ = writeln!(m, "| (against the model's own f32 solve, the firmware's) | f32 `Finger::solve_with` / fixed: min {rmin:.2}, median {rmed:.2} |");
+    let _ = writeln!(m, "| >= 3x fewer M3 instructions than soft-float f32 | the model's own f32 solve (the firmware's, `Finger::solve_with`) / fixed: min {rmin:.2}, median {rmed:.2}; default model min {dmin:.2} |");
     let _ = writeln!(m, "| inverse round trip within 0.05 deg | the fixed-point inverse at a given tension (`FixedInverse`, on the M3) through the f64 forward: worst {inv_worst:.1e} deg over {inv_n} postures (table below); without the table (`FixedInverseDirect`, the M3 image's `pose`): worst {dir_worst:.1e} deg, at most {dir_max_instr:.0} instructions with its set-up; the f64 inverse through the fixed-point forward (host): worst {rt_worst:.1e} deg over {rt_n} postures ({rt_refused} refused); `pose` without P (the F405's tension rule in fixed point, `FixedInverseDirect::solve_free`): its tension within {free_worst_p:.1e} (relative) of the f64 rule's, round trip worst {free_worst_deg:.1e} deg over {free_n} postures, at most {free_max_instr:.0} instructions |");
     let _ = writeln!(m, "| image with console and `pose` in 64 KiB flash / 20 KiB RAM | M3 image (console, DE, defmt, `pose`; the fixed-point model): flash {flash} bytes ({:.1} KiB); static RAM {ram} bytes + the 16 KiB stack = {:.1} KiB (memory-m3.x: 20 KiB; docs/firmware.md \"Cortex-M3 image\"); stack high-water {stack} bytes ({:.1} KiB) |", flash as f64 / 1024.0, (ram + 16 * 1024) as f64 / 1024.0, stack as f64 / 1024.0);
     let _ = writeln!(m, "\nWorst fixed-point errors, all scenes both models: joint angle {worst_joint:.1e} deg, cable excursion {worst_exc:.1e} mm.\n");

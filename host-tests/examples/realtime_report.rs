@@ -74,6 +74,14 @@ fn main() {
         "| the stacks in time, one channel's step in a tick (goal, slew, guard, thickness, relaxation), max | {stack_us:.3} us = {:.0} M4F instructions |\n",
         stack_us * 1000.0
     ));
+    let (sense_us, source_us): (f64, f64) = (kv(&t, "tick_sense_us").parse().unwrap_or(f64::NAN), kv(&t, "tick_source_us").parse().unwrap_or(f64::NAN));
+    s.push_str(&format!(
+        "| the HV read-back's work in a tick (three channels' estimate, checks, thickness guard, voltage loop), max | {sense_us:.3} us = {:.0} M4F instructions |\n",
+        sense_us * 1000.0
+    ));
+    s.push_str(&format!(
+        "| the emulator's plant stepped in a tick (no part of the board's cost; its ADC averages replace it), max | {source_us:.3} us |\n"
+    ));
     s.push_str(&format!("| control ticks counted | {} |\n", kv(&t, "ticks")));
     s.push_str(&format!("| stop: console interrupt entry to HV off, max ({} stops) | {} us |\n", kv(&t, "stops"), kv(&t, "stop_us")));
     s.push_str(&format!("| stop: control ticks between the stop line's last byte and all duties 0 (trace), worst | {worst_ticks} |\n"));

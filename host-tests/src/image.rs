@@ -121,6 +121,10 @@ impl Image {
             Image::M3 => "qemu-netduino2",
         }
     }
+    /// The image reads its HV back (its plant) and closes the voltage loop on it.
+    pub fn reads_hv_back(self) -> bool {
+        self == Image::M4f
+    }
     /// The image has `pose` and `contact` (feature `full`).
     pub fn has_inverse(self) -> bool {
         self == Image::M4f

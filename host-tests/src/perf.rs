@@ -432,7 +432,7 @@ pub fn table_cost_section() -> String {
          thickness, read where the grid agrees with the inversion below to 1/8 of the solver's tolerance; else \
          the cubic P(theta) inverted at P on each thickness, then the quadratic across the thicknesses), then \
          Newton on the full model from that hole; a march whose hole residual is within the converged solver's \
-         own tolerance is the answer (Newton's first evaluation; that march is `march_tension`, the plain \
+         own tolerance is the answer (Newton's first evaluation; that march is `march_cable` by `ByCompliance`, the plain \
          march's equations carried in each sub-element's own frame, the same answer to rounding), else Newton \
          iterates, else the full solve's continuation; the posture is composed as the joints are marched, from \
          each march's own sin/cos. **Inverse** (`solve_pose_tabled`): the \
@@ -545,7 +545,7 @@ pub fn table_cost_section() -> String {
     writeln!(
         w,
         "\n**What bounds it.** The full model's march: m sub-elements per distinct joint. The forward marches \
-         each distinct joint once (`march_tension`, in each sub-element's own frame: per sub-element the \
+         each distinct joint once (`march_cable` by `ByCompliance`, in each sub-element's own frame: per sub-element the \
          closed-form 3x3 equilibrium with its one division, from the six entries of the symmetric compliance, \
          the cable force turned by the sub-element's rotation from the sine and cosine series, one term longer \
          where the stiffest scenes' middle sub-elements pass the short series' bound, and the moment and the \
@@ -562,7 +562,7 @@ pub fn table_cost_section() -> String {
          which would no longer be the full model's converged solve. The inverse (`solve_pose_tabled_into`, written in \
          place) spends per distinct joint the table's reading (three branches' cubics at one set of weights), \
          one march of the full model at the thickness the table gives along the level curve, from the \
-         stiffnesses (`march_stiffness`: per sub-element the parallel sum of the hinge's and the stack's \
+         stiffnesses (`march_cable` by `ByStiffness`: per sub-element the parallel sum of the hinge's and the stack's \
          stiffness and its 3x3 equilibrium by Gaussian elimination, no compliance formed; at either end of the \
          stack's range the compliance march with the table's compliances), which is the answer where it is \
          within the converged solver's tolerance (the quasi-Newton solve only if not), and the voltage; with \

@@ -105,15 +105,25 @@ fn paths(text: &str, module: &[String]) -> Vec<Vec<String>> {
 
 /// The library's modules and, per parent, the edges between its child modules.
 fn graph() -> (BTreeSet<Vec<String>>, BTreeMap<Vec<String>, BTreeSet<(String, String)>>) {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../src");
+    graph_of("../src", false)
+}
+
+/// `graph` of the crate whose sources are at `dir` (relative to host-tests).
+/// `skip_tests`: leave out each file's `#[cfg(test)] mod tests` (a test imports what it checks).
+fn graph_of(dir: &str, skip_tests: bool) -> (BTreeSet<Vec<String>>, BTreeMap<Vec<String>, BTreeSet<(String, String)>>) {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
     let mut files = Vec::new();
     rust_files(&src, &mut files);
-    // the binary's modules: src/main.rs and the `mod x;` it declares
-    let main = std::fs::read_to_string(src.join("main.rs")).unwrap();
+    // the binary's modules: src/main.rs and the `mod x;` it declares (none in a library crate)
+    let main = std::fs::read_to_string(src.join("main.rs")).unwrap_or_default();
     let bin: BTreeSet<String> = main.lines().filter_map(|l| l.trim().strip_prefix("mod ")?.strip_suffix(';').map(str::to_string)).collect();
     let files: Vec<(Vec<String>, String)> = files
         .iter()
-        .map(|f| (module_of(&src, f), std::fs::read_to_string(f).unwrap()))
+        .map(|f| {
+            let text = std::fs::read_to_string(f).unwrap();
+            let text = if skip_tests { text.split("\n#[cfg(test)]\nmod tests").next().unwrap_or_default().to_string() } else { text };
+            (module_of(&src, f), text)
+        })
         .filter(|(m, _)| !(m.first().is_some_and(|x| x == "main" || bin.contains(x))))
         .collect();
     let modules: BTreeSet<Vec<String>> = files.iter().map(|(m, _)| m.clone()).collect();
@@ -177,6 +187,22 @@ fn sibling_modules_import_without_a_cycle() {
     for (parent, e) in &edges {
         if let Some(c) = cycle(e) {
             panic!("an import cycle between the modules of crate::{}: {}", parent.join("::"), c.join(" -> "));
+        }
+    }
+}
+
+/// The model's modules (model/src) import in one direction too, between the modules of each
+/// parent (the crate's: params, material, de, finger, inverse, ...; finger's and inverse's
+/// own), their unit tests left out.
+#[test]
+fn model_modules_import_without_a_cycle() {
+    let (modules, edges) = graph_of("../model/src", true);
+    // the reading sees the model: its modules and a known import
+    assert!(modules.contains(&vec!["finger".to_string(), "stiffness".to_string()]), "{modules:?}");
+    assert!(edges[&vec![]].contains(&("finger".into(), "de".into())), "{:?}", edges[&vec![]]);
+    for (parent, e) in &edges {
+        if let Some(c) = cycle(e) {
+            panic!("an import cycle between the modules of finger_model::{}: {}", parent.join("::"), c.join(" -> "));
         }
     }
 }

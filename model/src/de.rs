@@ -37,13 +37,7 @@ pub fn pull_in_voltage<R: Real>(p: &Params<R>) -> R {
 /// `margin min(V_eq(2/3), E_B(2/3) 2/3 z0)` of the set's film (`material::hold_ceiling`).
 /// Zero without stacks or with an invalid film.
 pub fn voltage_ceiling<R: Real>(p: &Params<R>) -> R {
-    if p.layers == 0 {
-        return R::zero();
-    }
-    match law(p) {
-        Ok(l) => material::hold_ceiling(&l, l.margin).min(p.v_supply),
-        Err(_) => R::zero(),
-    }
+    Stack::new(p).ceiling()
 }
 
 /// The ceiling in force on a channel, V: `min(hold ceiling, v_supply, hv_fs)` (`hv_fs` the HV
@@ -80,8 +74,11 @@ fn check_below<R: Real>(joint: usize, volts: R, ceiling: R) -> Result<(), Error>
 /// Thickness ratio s = z/z0 of one layer held at `volts` until relaxed
 /// (`material::equilibrium_ratio`, the stable branch). Errors past pull-in.
 pub fn layer_thickness_ratio<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<R, Error> {
-    let l = law(p)?;
-    material::equilibrium_ratio(&l, volts).map_err(|e| match e {
+    ratio(&law(p)?, joint, volts)
+}
+
+fn ratio<R: Real>(l: &StackLaw<R>, joint: usize, volts: R) -> Result<R, Error> {
+    material::equilibrium_ratio(l, volts).map_err(|e| match e {
         Error::PullIn { volts, pull_in } => Error::VoltageCeiling { joint, volts, ceiling: pull_in },
         e => e,
     })
@@ -89,36 +86,52 @@ pub fn layer_thickness_ratio<R: Real>(p: &Params<R>, joint: usize, volts: R) -> 
 
 /// Whole-stack thickness t_k = N_L z(V_k), mm, after checking the voltage against the ceiling.
 pub fn stack_thickness<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<R, Error> {
-    check_voltage(p, joint, volts)?;
-    let s = layer_thickness_ratio(p, joint, volts)?;
-    Ok(R::from_u32(p.layers as u32) * p.z0 * s)
+    Stack::new(p).thickness(joint, volts)
 }
 
 /// The voltage that thins the stack to `thickness_mm` once relaxed, V. Refuses a thickness at or
 /// past the 33 % limit (the paper's "2 mm to 1 mm" is a 50 % reduction) and a voltage at or past
 /// the ceiling.
 pub fn voltage_for_thickness<R: Real>(p: &Params<R>, joint: usize, thickness_mm: R) -> Result<R, Error> {
-    ThicknessVoltage::new(p).voltage(joint, thickness_mm)
+    Stack::new(p).voltage(joint, thickness_mm)
 }
 
-/// `voltage_for_thickness` with its parameter-set constants (stack thickness at 0 V, the film's
-/// law, ceiling) computed once: the branch table keeps one for its finger.
+/// A parameter set's stack, its constants computed once (the stack at 0 V, the film's law, the
+/// ceiling): a solve builds one and checks, thins and inverts every joint's voltage with it.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ThicknessVoltage<R> {
+pub struct Stack<R> {
     t0: R,
-    /// None without stacks or with an invalid film.
-    law: Option<StackLaw<R>>,
+    /// The film's law, or why the set has none (also without stacks: `layers`).
+    law: Result<StackLaw<R>, Error>,
     ceiling: R,
 }
 
-impl<R: Real> ThicknessVoltage<R> {
+impl<R: Real> Stack<R> {
     /// The constants of parameter set `p`.
     pub fn new(p: &Params<R>) -> Self {
-        ThicknessVoltage {
-            t0: R::from_u32(p.layers as u32) * p.z0,
-            law: if p.layers != 0 { law(p).ok() } else { None },
-            ceiling: voltage_ceiling(p),
-        }
+        let law = law(p);
+        let ceiling = match (&law, p.layers) {
+            (_, 0) | (Err(_), _) => R::zero(),
+            (Ok(l), _) => material::hold_ceiling(l, l.margin).min(p.v_supply),
+        };
+        Stack { t0: R::from_u32(p.layers as u32) * p.z0, law, ceiling }
+    }
+
+    /// The ceiling (`voltage_ceiling`), V.
+    pub fn ceiling(&self) -> R {
+        self.ceiling
+    }
+
+    /// `check_voltage`.
+    pub fn check(&self, joint: usize, volts: R) -> Result<(), Error> {
+        check_below(joint, volts, self.ceiling)
+    }
+
+    /// `stack_thickness`: the voltage checked, then N_L z(V), mm.
+    pub fn thickness(&self, joint: usize, volts: R) -> Result<R, Error> {
+        self.check(joint, volts)?;
+        let l = self.law.as_ref().map_err(|e| *e)?;
+        Ok(self.t0 * ratio(l, joint, volts)?)
     }
 
     /// The voltage that thins joint `joint`'s stack to `thickness_mm`, V (`voltage_for_thickness`).
@@ -128,7 +141,7 @@ impl<R: Real> ThicknessVoltage<R> {
         }
         let t0 = self.t0;
         let law = match &self.law {
-            Some(l) if thickness_mm <= t0 && thickness_mm > R::zero() => l,
+            Ok(l) if thickness_mm <= t0 && thickness_mm > R::zero() => l,
             _ => return Err(Error::Input { input: "thickness", reason: "must lie in (0, N_L z0]" }),
         };
         let s = thickness_mm / t0;

@@ -6,6 +6,7 @@
 //! (`inverse`) or anything that drives hardware. One idea per submodule:
 //! - `types`: the value types (pose, method, compliances, solution, branch end);
 //! - `prepare`: validation, hinge compliances, the compliances for a set of voltages;
+//! - `stiffness`: a joint's K_hinge + K_de at a thickness, its inverse and derivative;
 //! - `joint`: one joint's march entry points; `march`, `march_stiffness`: the marches;
 //! - `tension`: the converged solve under tension alone; `tabled`: it from a table's guesses;
 //! - `loaded`: the tip-loaded coupled solve; `stepping`: the paper's Eq. 29 load stepping;
@@ -30,13 +31,15 @@ mod pinned;
 mod posture;
 mod prepare;
 mod stepping;
+mod stiffness;
 mod tabled;
 mod tension;
 mod tip_stiffness;
 mod types;
 
 pub use prepare::uniform_beam_compliance;
-pub(crate) use types::JointMarch;
+pub use stiffness::JointStiffness;
+pub(crate) use types::{By, JointMarch};
 use types::cast_mat;
 pub use types::{BranchEnd, BranchLimit, Compliances, JointEquilibrium, Method, Pose, Solution};
 

@@ -13,7 +13,7 @@
 use crate::calibration::Calibration;
 use crate::de;
 use crate::error::Error;
-use crate::finger::{Finger, Pose, Solution};
+use crate::finger::{Finger, JointStiffness, Pose, Solution};
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -123,8 +123,8 @@ struct Hold<R> {
 
 /// What the solver needs of the finger, prepared once per solve.
 struct Ctx<'a, R> {
+    f: &'a Finger<R>,
     p: &'a Params<R>,
-    k_hinge: Mat3<R>,
     stack: de::StackStiffness<R>,
     lh: R,
     max_iter: u32,
@@ -148,23 +148,14 @@ struct Wrench<R> {
 impl<'a, R: Real> Ctx<'a, R> {
     fn new(f: &'a Finger<R>, opts: &Options<R>) -> Result<Self, Error> {
         let p = f.params();
-        let k_hinge = *f.hinge_stiffness(0);
         let rel = R::from_f64(1e-11_f64.max(64.0 * R::EPS));
-        Ok(Ctx { p, k_hinge, stack: f.stack(), lh: p.hinge_len(), max_iter: opts.max_iter.max(1), rel })
+        Ok(Ctx { f, p, stack: f.stack(), lh: p.hinge_len(), max_iter: opts.max_iter.max(1), rel })
     }
 
-    /// Joint stiffness K(t) = K_hinge + K_de(t) (`de::StackStiffness`; K_hinge alone without
-    /// stacks).
-    fn stiffness(&self, t: R) -> Mat3<R> {
-        if self.p.layers == 0 {
-            return self.k_hinge;
-        }
-        mat3::add(&self.k_hinge, &self.stack.matrix(t))
-    }
-
-    /// dK/dt (`de::StackStiffness::upper_dt`).
-    fn stiffness_dt(&self, t: R) -> Mat3<R> {
-        mat3::from_upper(self.stack.upper_dt(t))
+    /// The joint's stiffness K(t) = K_hinge + K_de(t) and dK/dt (`Finger::joint_stiffness`; m = 1:
+    /// its one sub-element; K_hinge alone without stacks).
+    fn stiffness(&self, t: R) -> JointStiffness<'a, R> {
+        JointStiffness::new(self.f, &self.stack, t)
     }
 
     /// ŵ at (δax, δtr, θ) and its derivatives. v = B - A (A = (0, e) the hole at node k-1,
@@ -199,7 +190,7 @@ impl<'a, R: Real> Ctx<'a, R> {
     /// Joint `joint` (1-based) held at `ang` with stack thickness t: Newton on (δax, δtr, P) of
     /// `K q - P ŵ(q) = 0` (`solve::newton::full_steps`). Also the implicit dP/dθ at fixed t.
     fn hold_tension(&self, joint: usize, ang: &Angle<R>, t: R, guess: [R; 2]) -> Result<Hold<R>, Error> {
-        let k = self.stiffness(t);
+        let k = self.stiffness(t).matrix(0);
         // first tension from the moment row with the guessed δ
         let w0 = self.wrench(ang, guess, joint, R::zero())?;
         let p0 = (k[2][0] * guess[0] + k[2][1] * guess[1] + k[2][2] * ang.theta) / w0.w[2];
@@ -244,7 +235,7 @@ impl<'a, R: Real> Ctx<'a, R> {
         if m.abs() > R::from_f64(1e-30_f64.max(R::EPS * 1e-20)) {
             return (ang.theta / m).to_f64();
         }
-        let Some(c) = mat3::inverse_spd(&self.stiffness(t)) else { return 0.0 };
+        let Ok(c) = self.stiffness(t).compliance(0) else { return 0.0 };
         let Ok(w) = self.wrench(ang, [R::zero(); 2], 0, R::zero()) else { return 0.0 };
         let cw = mat3::mul_vec(&c, &w.w);
         (cw[2] / w.w[2]).to_f64()
@@ -300,8 +291,8 @@ impl<R: Real> newton::Linearized<R, 3> for HoldThickness<'_, '_, R> {
     #[inline]
     fn linearize(&mut self, x: &[R; 3]) -> Result<([R; 3], Mat3<R>), Error> {
         let (ctx, p) = (self.ctx, self.p);
-        let k = ctx.stiffness(x[2]);
-        let kd = ctx.stiffness_dt(x[2]);
+        let kj = ctx.stiffness(x[2]);
+        let (k, kd) = (kj.matrix(0), kj.dt(&ctx.stack));
         self.w = ctx.wrench(self.ang, [x[0], x[1]], self.joint, p)?;
         let w = &self.w;
         let q = [x[0], x[1], self.ang.theta];

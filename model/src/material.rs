@@ -20,8 +20,11 @@ pub mod drive;
 pub use cards::{CARDS, ELASTOSIL_2030, PAPER_ELASTIC, VHB_4905};
 
 use crate::error::Error;
-use crate::params::EPS0;
 use crate::real::Real;
+
+/// Vacuum permittivity, F/m. With lengths in mm and pressures in MPa the Maxwell pressure is
+/// `p[MPa] = EPS0 * eps_r * V^2 / z[mm]^2` (the 1e-6 of m^2->mm^2 and Pa->MPa cancel).
+pub const EPS0: f64 = 8.854e-12;
 
 /// Most Maxwell branches a card may have.
 pub const MAX_BRANCHES: usize = 3;

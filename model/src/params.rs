@@ -14,9 +14,7 @@ pub const MAX_SUB: usize = 8;
 /// Most DE layers per stack.
 pub const MAX_LAYERS: u32 = 64;
 
-/// Vacuum permittivity, F/m. With lengths in mm and pressures in MPa the Maxwell pressure is
-/// `p[MPa] = EPS0 * eps_r * V^2 / z[mm]^2` (the 1e-6 of m^2->mm^2 and Pa->MPa cancel).
-pub const EPS0: f64 = 8.854e-12;
+pub use crate::material::EPS0;
 
 /// How the stack's Young's modulus follows from G and nu.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

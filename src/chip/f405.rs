@@ -88,6 +88,9 @@ pub struct F405Board {
     servo: PwmChannel<pac::TIM3, 0>,
     hv: [HvPwm; 3],
     enable: EnablePin,
+    /// The emulator image's HV plant behind the read-back (QEMU's ADC is a sawtooth).
+    #[cfg(all(feature = "qemu", not(m3)))]
+    plant: crate::plant::Plant,
     #[cfg(feature = "hw")]
     iwdg: stm32f4xx_hal::watchdog::IndependentWatchdog,
     #[cfg(feature = "hw")]
@@ -111,9 +114,25 @@ impl Board for F405Board {
         #[cfg(feature = "hw")]
         self.iwdg.feed();
     }
+    /// The board build: the ADCs' read-back (`super::hv_adc`).
     #[cfg(feature = "hw")]
     fn hv_sense(&mut self) -> Option<crate::board::HvSense> {
         Some(self.adc.sense())
+    }
+    /// The emulator image: the plant stepped over the tick with the duties in TIM4's compare
+    /// registers and the enable as last written.
+    #[cfg(all(feature = "qemu", not(m3)))]
+    fn hv_sense(&mut self) -> Option<crate::board::HvSense> {
+        use embedded_hal::pwm::SetDutyCycle;
+        // SAFETY: reads of TIM4's compare registers, which only the HV writer sets.
+        let tim4 = unsafe { &*pac::TIM4::ptr() };
+        let duty = [tim4.ccr(0).read().bits() as u16, tim4.ccr(1).read().bits() as u16, tim4.ccr(2).read().bits() as u16];
+        let max = self.hv[0].max_duty_cycle();
+        Some(self.plant.tick(duty, max, self.enable.high))
+    }
+    #[cfg(all(feature = "qemu", not(m3)))]
+    fn plant(&mut self) -> Option<&mut crate::plant::Plant> {
+        Some(&mut self.plant)
     }
     fn name(&self) -> &'static str {
         if cfg!(m3) {
@@ -185,6 +204,11 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
         servo,
         hv,
         enable,
+        #[cfg(all(feature = "qemu", not(m3)))]
+        plant: match crate::plant::Plant::new(1) {
+            Some(p) => p,
+            None => panic!(),
+        },
         #[cfg(feature = "hw")]
         iwdg,
         #[cfg(feature = "hw")]

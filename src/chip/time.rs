@@ -42,6 +42,12 @@ pub struct Timing {
     pub tick_run_max: u32,
     /// One channel's stack step in a control tick (goal, slew, guard, thickness, relaxation), max.
     pub tick_stack_max: u32,
+    /// The read-back's work in a tick (estimate, checks, guard, loop), max; and its source's
+    /// (the ADC's averages, or the emulator's plant), max.
+    #[cfg(not(m3))]
+    pub tick_sense_max: u32,
+    #[cfg(not(m3))]
+    pub tick_source_max: u32,
     /// Entry to entry of the control task, min and max.
     pub period: (u32, u32),
     /// Stop: from the console interrupt's entry to HV off, max; and how many.
@@ -56,7 +62,7 @@ pub struct Timing {
 
 impl Timing {
     pub const fn new() -> Self {
-        Timing { tick_latency: (u32::MAX, 0), tick_run_max: 0, tick_stack_max: 0, period: (u32::MAX, 0), stop_max: 0, stops: 0, ticks: 0, trip_max_us: None }
+        Timing { tick_latency: (u32::MAX, 0), tick_run_max: 0, tick_stack_max: 0, #[cfg(not(m3))] tick_sense_max: 0, #[cfg(not(m3))] tick_source_max: 0, period: (u32::MAX, 0), stop_max: 0, stops: 0, ticks: 0, trip_max_us: None }
     }
 }
 
@@ -120,7 +126,8 @@ impl Default for Durations {
 /// `tick_latency_us=<min>,<max>` (control-task entry after the SysTick reload: the tick's
 /// jitter), `tick_run_us=<max>`, `tick_stack_us=<max>`, `ticks=<n>`, `stop_us=<max>` (console
 /// interrupt entry to HV off), `stops=<n>`, `trip_us=<max>` (a plant's fault, injection to the
-/// enable low: the emulator image), `cmd_us=<word>:<max>,...` (the command side, line run,
+/// enable low: the emulator image), `tick_sense_us=<max> tick_source_us=<max>` (a board with a
+/// read-back: its work in a tick, and its source's: the ADC averages or the plant), `cmd_us=<word>:<max>,...` (the command side, line run,
 /// replies queued).
 pub fn write_timing(o: &mut dyn Write, t: &Timing, d: &Durations) {
     let us = |c: u32| Fixed(c as f32 / CORE_MHZ as f32, 2);
@@ -129,6 +136,10 @@ pub fn write_timing(o: &mut dyn Write, t: &Timing, d: &Durations) {
     let _ = w!(o; " stop_us=", us(t.stop_max), " stops=", t.stops);
     if let Some(trip) = t.trip_max_us {
         let _ = w!(o; " trip_us=", trip);
+    }
+    #[cfg(not(m3))]
+    if t.tick_sense_max > 0 {
+        let _ = w!(o; " tick_sense_us=", Fixed(t.tick_sense_max as f32 / CORE_MHZ as f32, 3), " tick_source_us=", Fixed(t.tick_source_max as f32 / CORE_MHZ as f32, 3));
     }
     let _ = w!(o; " cmd_us=");
     let mut first = true;

@@ -65,6 +65,11 @@ pub struct Estimator {
     /// averaged with weights [`C_WEIGHT`] and [`LEAK_WEIGHT`].
     c_pf: f32,
     leak_ua: f32,
+    /// The leakage's conductance at its last measure, µA/V (a slew's windows take the
+    /// leakage at their voltage from it).
+    leak_us_per_v: f32,
+    /// The last window that swung: (ΔV, T, Q), or zeros.
+    prev: (f32, f32, f32),
     swings: u32,
     windows: u32,
 }
@@ -75,7 +80,7 @@ pub const LEAK_WEIGHT: f32 = 0.2;
 
 impl Estimator {
     pub const fn new() -> Self {
-        Estimator { v0: 0.0, q_nc: 0.0, t_ms: 0, started: false, c_pf: BOARD_STACK_C0_PF + SENSE_STRAY_PF, leak_ua: 0.0, swings: 0, windows: 0 }
+        Estimator { v0: 0.0, q_nc: 0.0, t_ms: 0, started: false, c_pf: BOARD_STACK_C0_PF + SENSE_STRAY_PF, leak_ua: 0.0, leak_us_per_v: 0.0, prev: (0.0, 0.0, 0.0), swings: 0, windows: 0 }
     }
 
     /// One tick's mean voltage (V) and return current (µA); `turn`: the hold ripple turns
@@ -92,7 +97,7 @@ impl Estimator {
         self.t_ms += 1;
         let dv = v - self.v0;
         if dv.abs() >= WINDOW_DV_V || (turn && self.t_ms >= 20) || self.t_ms >= WINDOW_MAX_MS {
-            self.close(dv, self.t_ms as f32, self.q_nc);
+            self.close(dv, self.t_ms as f32, self.q_nc, self.v0 + 0.5 * dv);
             self.windows = self.windows.wrapping_add(1);
             self.v0 = v;
             self.q_nc = 0.0;
@@ -100,23 +105,36 @@ impl Estimator {
         }
     }
 
-    /// A window of swing `dv` (V), length `t` (ms), charge `q` (nC): Q = C ΔV + I_leak T.
-    fn close(&mut self, dv: f32, t: f32, q: f32) {
-        // a swing's capacitance, an outlier (a window cut by a stop, a step) left out
-        if dv.abs() >= 0.5 * WINDOW_DV_V && t >= 5.0 {
-            let c = (q - self.leak_ua * t) / dv * 1e3;
-            let c0 = BOARD_STACK_C0_PF + SENSE_STRAY_PF;
-            if c > 0.05 * c0 && c < 4.0 * c0 {
-                self.c_pf += C_WEIGHT * (c - self.c_pf);
-                self.swings = self.swings.saturating_add(1);
-            }
+    /// A window of swing `dv` (V), length `t` (ms), charge `q` (nC), mean voltage `v_mid`:
+    /// Q = C ΔV + I_leak T. Two windows that swing opposite ways (the ripple's up and down)
+    /// give both unknowns at once; a lone swing (a slew) its capacitance with the leakage
+    /// taken as ohmic from the last measured conductance; a slow window its leakage.
+    fn close(&mut self, dv: f32, t: f32, q: f32, v_mid: f32) {
+        let c0 = BOARD_STACK_C0_PF + SENSE_STRAY_PF;
+        let swing = dv.abs() >= 0.5 * WINDOW_DV_V && t >= 5.0;
+        let (pdv, pt, pq) = self.prev;
+        let det = dv * pt - pdv * t;
+        let paired = swing && dv * pdv < 0.0 && pdv.abs() >= 0.5 * WINDOW_DV_V && det.abs() >= 0.5 * WINDOW_DV_V * (t + pt);
+        self.prev = if swing { (dv, t, q) } else { (0.0, 0.0, 0.0) };
+        let leak_now = self.leak_us_per_v * v_mid;
+        let (c, leak) = if paired {
+            ((q * pt - pq * t) / det * 1e3, Some((dv * pq - pdv * q) / det))
+        } else if swing {
+            ((q - leak_now * t) / dv * 1e3, None)
+        } else if t >= 50.0 {
+            (f32::NAN, Some((q - self.c_pf * 1e-3 * dv) / t))
+        } else {
+            (f32::NAN, None)
+        };
+        // an outlier (a window cut by a stop, a step) left out
+        if c > 0.05 * c0 && c < 4.0 * c0 {
+            self.c_pf += C_WEIGHT * (c - self.c_pf);
+            self.swings = self.swings.saturating_add(1);
         }
-        // the leakage from the slow windows (a hold, its ripple), where it is not lost in
-        // the charging current
-        if t >= 50.0 {
-            let leak = (q - self.c_pf * 1e-3 * dv) / t;
-            if leak.is_finite() {
-                self.leak_ua += LEAK_WEIGHT * (leak - self.leak_ua);
+        if let Some(leak) = leak.filter(|l| l.is_finite()) {
+            self.leak_ua += LEAK_WEIGHT * (leak - self.leak_ua);
+            if v_mid > RIPPLE_MIN_V {
+                self.leak_us_per_v = self.leak_ua / v_mid;
             }
         }
     }
@@ -153,14 +171,15 @@ impl Default for Estimator {
     }
 }
 
-/// The hold ripple turns at `now_ms` (a half period ends).
-pub fn ripple_turns(now_ms: u32) -> bool {
-    now_ms % (RIPPLE_PERIOD_MS / 2) == 0
+/// The hold ripple turns `held_ms` into a hold (a half period ends).
+pub fn ripple_turns(held_ms: u32) -> bool {
+    held_ms % (RIPPLE_PERIOD_MS / 2) == 0
 }
 
-/// The hold ripple's offset below the guarded voltage at `now_ms`, V (a triangle 0..pp).
-pub fn ripple_v(now_ms: u32) -> f32 {
-    let ph = (now_ms % RIPPLE_PERIOD_MS) as f32 / RIPPLE_PERIOD_MS as f32;
+/// The hold ripple's offset below the guarded voltage `held_ms` into a hold, V (a triangle
+/// 0..pp, from 0).
+pub fn ripple_v(held_ms: u32) -> f32 {
+    let ph = (held_ms % RIPPLE_PERIOD_MS) as f32 / RIPPLE_PERIOD_MS as f32;
     let tri = if ph < 0.5 { 2.0 * ph } else { 2.0 - 2.0 * ph };
     RIPPLE_PP_V * tri
 }

@@ -27,12 +27,19 @@ pub const MODULE_FALL_MS: f32 = 25.0;
 pub const COLLAPSE_FRAC: f32 = 0.5;
 /// An open stack: the sensed capacitance under this fraction of the stack's.
 pub const OPEN_FRAC: f32 = 0.3;
-/// The leakage bound at a held voltage, µA (a healthy stack leaks nA).
+/// The leakage bound, µA, and as a conductance, µA/V (0.2 nS: 5 GΩ; a healthy stack of the
+/// board's film leaks under 0.01 nS at its ceiling), checked at a command above
+/// [`LEAK_CHECK_MIN_V`]: the lower of the two. A leak that a lowered ceiling holds at a low
+/// voltage is still one.
 pub const LEAK_BOUND_UA: f32 = 1.0;
+pub const LEAK_BOUND_UA_PER_V: f32 = 2e-4;
+pub const LEAK_CHECK_MIN_V: f32 = 50.0;
 /// The thickness guard lowers the ceiling once the sensed film is within this of its floor.
 pub const FLOOR_MARGIN_S: f32 = 0.03;
-/// The sensed and the model's thickness disagree past this (absolute, in s).
+/// The sensed and the model's thickness disagree past this (absolute, in s), over this many
+/// windows in a row (one window's outlier lowers nothing; near the floor the guard acts at once).
 pub const DISAGREE_S: f32 = 0.02;
+pub const DISAGREE_WINDOWS: u32 = 3;
 
 /// One tick's reading of a channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,9 +69,10 @@ impl Watch {
         Watch { steady_ms: 0, collapse_ms: 0, mismatch_ms: 0, over_ms: 0, stuck_ms: 0, stuck_from_v: 0.0, last_code: -1.0, leak_ms: 0, prev_drive: 0.0, fall_env: 0.0 }
     }
 
-    /// The checks of one tick: `drive_v` the voltage the loop drives to, `ceiling_v` the
-    /// channel's ceiling in force, `enabled` the HV enable.
-    pub fn check(&mut self, r: &Reading, drive_v: f32, ceiling_v: f32, enabled: bool, est: &Estimator) -> Option<Fault> {
+    /// The checks of one tick: `drive_v` the voltage the loop drives to, `slew_held` the
+    /// loop's ask held back by the slew (a module off its command then is not yet one that
+    /// does not follow), `ceiling_v` the channel's ceiling in force, `enabled` the HV enable.
+    pub fn check(&mut self, r: &Reading, drive_v: f32, slew_held: bool, ceiling_v: f32, enabled: bool, est: &Estimator) -> Option<Fault> {
         if !(r.v.is_finite() && r.i_ua.is_finite() && r.v_code >= 0.0) || r.v_code >= ADC_FULL_CODE - 0.5 {
             return Some(Fault::Sensor);
         }
@@ -86,7 +94,7 @@ impl Watch {
         let off = (r.v - drive_v).abs() > MISMATCH_V.max(MISMATCH_FRAC * drive_v);
         let want = if enabled { drive_v } else { 0.0 };
         let off = if enabled { off } else { r.v > 2.0 * MISMATCH_V };
-        self.mismatch_ms = if off { self.mismatch_ms + 1 } else { 0 };
+        self.mismatch_ms = if off && !(enabled && slew_held) { self.mismatch_ms + 1 } else { 0 };
         if enabled && self.steady_ms >= 30 && drive_v > 1000.0 && r.v < COLLAPSE_FRAC * drive_v {
             self.collapse_ms += 1;
             if self.collapse_ms >= 3 {
@@ -117,7 +125,8 @@ impl Watch {
                     return Some(Fault::StackOpen);
                 }
             }
-            let leaking = drive_v > 1000.0 && est.leakage_ua().is_some_and(|l| !(l <= LEAK_BOUND_UA));
+            let bound = LEAK_BOUND_UA.min(LEAK_BOUND_UA_PER_V * drive_v);
+            let leaking = drive_v > LEAK_CHECK_MIN_V && est.leakage_ua().is_some_and(|l| !(l <= bound));
             self.leak_ms = if leaking { self.leak_ms + 1 } else { 0 };
             if self.leak_ms >= 200 {
                 return Some(Fault::Leakage);
@@ -135,11 +144,12 @@ pub struct ThicknessGuard {
     pub derate: f32,
     /// The sensed thickness disagreed with the model's past [`DISAGREE_S`].
     pub disagreed: bool,
+    disagree_windows: u32,
 }
 
 impl ThicknessGuard {
     pub const fn new() -> Self {
-        ThicknessGuard { derate: 1.0, disagreed: false }
+        ThicknessGuard { derate: 1.0, disagreed: false, disagree_windows: 0 }
     }
 
     /// After a window: `s_meas` sensed, `s_model` the model's, `s_floor` the floor, and the
@@ -148,7 +158,8 @@ impl ThicknessGuard {
         if !(s_meas > 0.0 && s_meas <= 1.5) {
             return;
         }
-        if s_meas < s_model - DISAGREE_S {
+        self.disagree_windows = if s_meas < s_model - DISAGREE_S { self.disagree_windows.saturating_add(1) } else { 0 };
+        if self.disagree_windows >= DISAGREE_WINDOWS {
             self.disagreed = true;
             // the film's voltage scale: at equilibrium a film g times the card's modulus needs
             // sqrt(g) times the card's voltage for the same thickness

@@ -23,8 +23,6 @@ use finger_model::fixed::{FixedFinger, FixedInverse, FixedInverseDirect};
 use finger_model::{Finger, Method, Params};
 
 use bench::cycles;
-#[path = "../twin.rs"]
-mod twin;
 use finger_scenes as scenes;
 
 fn run(s: &scenes::Scene, model: &str, p: Params<f64>) {
@@ -57,24 +55,6 @@ fn run(s: &scenes::Scene, model: &str, p: Params<f64>) {
             }
         }
         Err(e) => hprintln!("F {} {} f32 err 0 {} {}", s.name, model, setup, e.code()),
-    }
-    // the fixed-point algorithm in f32 (soft float): the "same algorithm" comparison
-    let t0 = cycles::now();
-    let tw = twin::Twin::new(&f, &v);
-    let t1 = cycles::now();
-    let setup = t1 - t0;
-    if let Some(tw) = tw {
-        let t0 = cycles::now();
-        let r = tw.solve(tension);
-        core::hint::black_box(&r);
-        let t1 = cycles::now();
-        match r {
-            Some(sol) => {
-                let a = sol.joint_angle;
-                hprintln!("F {} {} f32-same ok {} {} {:e} {:e} {:e} {:e} {:e} {:e} {}", s.name, model, t1 - t0, setup, sol.tip.x, sol.tip.y, a[0], a[1], a[2], sol.cable_excursion, sol.iterations);
-            }
-            None => hprintln!("F {} {} f32-same err {} {} fault", s.name, model, t1 - t0, setup),
-        }
     }
     // fixed point (its set-up: the same compliances in f32, then scaled to Q formats)
     let t0 = cycles::now();

@@ -1,6 +1,7 @@
 //! One joint's march entry points under a guessed guide hole: the cable's loads on the distal
 //! chain, the plain march, its hole residual and tangent, and the crate-visible marches the
-//! inverse calls. The marches themselves are in `march` and `march_stiffness`.
+//! inverse calls (`joint_march`). The march's loop and forms are in `march` and
+//! `march_stiffness`.
 
 use super::*;
 
@@ -25,27 +26,15 @@ impl<R: Real> Finger<R> {
         Ok(SpanLoads { fc, ft, tp, ftot: [fc[0] + ft[0], fc[1] + ft[1]] })
     }
 
-    /// March through joint k's sub-elements for a guessed guide-hole position `b_hole` (the
-    /// joint's proximal frame): cable force P along the span from `b_hole` to the hole at the
-    /// proximal node, plus an optional tip load. Each sub-element's deflection is the closed
-    /// solution of `q = C (f, M0 + s)` with `s = -f_y δax + f_x δtr` (the moment arm's own
-    /// change, linear in δ).
-    pub(super) fn march(
-        &self,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        b_hole: [R; 2],
-        tip: Option<TipLoad<R>>,
-    ) -> Result<JointState<R>, MarchError> {
-        let mut q = [[R::zero(); 3]; MAX_SUB];
-        let (end, hole, _) = self.march_into(c, tension, b_hole, tip, &mut q)?;
-        Ok(JointState { q, end, hole, tangent: None })
-    }
-
-    /// The plain march in R (`ByComplianceLoaded` in `PoseFrame`, any load): the one copy in the
-    /// image (`march` and `joint_march` share it; flash).
+    /// The plain march of joint k's sub-elements for a guessed guide-hole position `b_hole` (the
+    /// joint's proximal frame), any load: cable force P along the span from `b_hole` to the
+    /// hole at the proximal node, plus an optional tip load (`ByComplianceLoaded` in
+    /// `PoseFrame`: each sub-element's `q = C (f, M0 + s)` in closed form, `s = -f_y δax + f_x
+    /// δtr` the moment arm's own change). Returns the hinge's end, the hole it arrives at and
+    /// the end's (sin, cos); the displacements go to `q`. Out of line: the one copy in the
+    /// image (flash).
     #[inline(never)]
-    pub(super) fn march_into(
+    pub(super) fn march(
         &self,
         c: &[Mat3<R>; MAX_SUB],
         tension: R,
@@ -57,6 +46,13 @@ impl<R: Real> Finger<R> {
         self.march_joint(&march::ByComplianceLoaded(c), frame, q, |x| x)?.end(self.p.e)
     }
 
+    /// `march`'s state (a fresh displacement array).
+    pub(super) fn marched(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b_hole: [R; 2], tip: Option<TipLoad<R>>) -> Result<JointState<R>, MarchError> {
+        let mut q = [[R::zero(); 3]; MAX_SUB];
+        let (end, hole, _) = self.march(c, tension, b_hole, tip, &mut q)?;
+        Ok(JointState { q, end, hole, tangent: None })
+    }
+
     /// Residual of the hole guess: guess - arrived.
     pub(super) fn hole_residual(
         &self,
@@ -65,7 +61,7 @@ impl<R: Real> Finger<R> {
         b: [R; 2],
         tip: Option<TipLoad<R>>,
     ) -> Result<([R; 2], JointState<R>), MarchError> {
-        let st = self.march(c, tension, b, tip)?;
+        let st = self.marched(c, tension, b, tip)?;
         Ok(([b[0] - st.hole[0], b[1] - st.hole[1]], st))
     }
 
@@ -82,66 +78,39 @@ impl<R: Real> Finger<R> {
     }
 
     /// One march of joint `joint` (1-based) under tension alone from the hole guess `b` (no
-    /// Newton): the state it arrives at, with `hole` the hole it arrives at (the residual is
-    /// `b - hole`) and `angle` the joint angle (hinge and flexible link). For the inverse
-    /// model's quasi-Newton solves (inverse/general.rs); `iterations` is 0.
-    /// The sub-element displacements go to `q`.
-    pub(crate) fn joint_march(
-        &self,
-        joint: usize,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        b: [R; 2],
-        q: &mut [[R; 3]; MAX_SUB],
-    ) -> Result<JointMarch<R>, Error> {
-        let (end, hole, _) = self.march_into(c, tension, b, None, q).map_err(|e| match e {
+    /// Newton), `by` one of the three ways (`By`): the state it arrives at, with `hole` the hole
+    /// it arrives at (the residual is `b - hole`) and `angle` the joint angle (hinge and
+    /// flexible link). For the inverse's quasi-Newton solves and the tabled inverse's
+    /// confirming marches; `iterations` is 0. The sub-element displacements go to `q`.
+    #[inline(always)]
+    pub(crate) fn joint_march(&self, joint: usize, by: By<'_, '_, R>, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<JointMarch<R>, Error> {
+        let refused = |e| match e {
             MarchError::Contact => Error::Contact { joint, tension: tension.to_f64() },
             MarchError::Singular => Error::Singular { what: "joint march" },
-        })?;
-        let link = self.link_q(tension, &end, None);
-        Ok(JointMarch::arrived(end, hole, link))
-    }
-
-    /// `joint_march` by `march_tension` (the same equations carried in each sub-element's own
-    /// frame, the same answer to rounding: test `tension_march_matches_march`) where that march
-    /// applies (P > 0 and its `den` positive), else `joint_march`'s plain march, as the branch
-    /// table's forward does (`fill_from_holes`). For the tabled inverse's confirming marches.
-    // same parameters as `joint_march`: the same question, answered by the running-frame march
-    #[inline(always)]
-    pub(crate) fn joint_march_tension(
-        &self,
-        joint: usize,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        b: [R; 2],
-        q: &mut [[R; 3]; MAX_SUB],
-    ) -> Result<JointMarch<R>, Error> {
-        match self.march_tension(c, tension, b, q) {
-            Ok((end, hole, _, _)) => {
-                let link = self.link_q(tension, &end, None);
-                Ok(JointMarch::arrived(end, hole, link))
+        };
+        let (end, hole, link) = match by {
+            By::Cable(c) => match self.march_cable(&march::ByCompliance(c), tension, b, q) {
+                Ok((end, hole, _, _)) => (end, hole, self.link_q(tension, &end, None)),
+                Err(_) => {
+                    let (end, hole, _) = self.march(c, tension, b, None, q).map_err(refused)?;
+                    (end, hole, self.link_q(tension, &end, None))
+                }
+            },
+            By::Stiffness(k, link) => {
+                let (end, hole, _, _) = self.march_cable(&march_stiffness::ByStiffness(*k), tension, b, q).map_err(refused)?;
+                (end, hole, link)
             }
-            Err(_) => self.joint_march(joint, c, tension, b, q),
-        }
-    }
-
-    /// A joint's march under tension alone from the stiffnesses K_hinge,j + K_de (`kd` the
-    /// stack's upper triangle): `march_stiffness`, with `link` the link's deflection at that
-    /// tension (`tension_link_q`); None where it refuses (the caller takes the compliance path).
-    #[inline(always)]
-    pub(crate) fn joint_march_stiffness(&self, kd: &[R; 6], tension: R, link: [R; 3], b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
-        let (end, hole, _, _) = self.march_stiffness(kd, tension, b, q).ok()?;
-        Some(JointMarch::arrived(end, hole, link))
+            By::Compliance(c) => {
+                let (end, hole, _) = self.march(c, tension, b, None, q).map_err(refused)?;
+                (end, hole, self.link_q(tension, &end, None))
+            }
+        };
+        Ok(JointMarch::arrived(end, hole, link))
     }
 
     /// A link's deflection under tension alone, the same for every joint (`link_q` without a
     /// tip load).
     pub(crate) fn tension_link_q(&self, tension: R) -> [R; 3] {
         self.link_q(tension, &Pose::origin(), None)
-    }
-
-    /// Hinge sub-element j's stiffness (the inverse of its compliance, computed in `new`).
-    pub(crate) fn hinge_stiffness(&self, j: usize) -> &Mat3<R> {
-        &self.hinge_k[j]
     }
 }

@@ -50,7 +50,7 @@ impl<R: Real> Finger<R> {
         for k in 0..n {
             let tl = Self::tip_in_frame(&frame, force, tip);
             let b = [x[2 * k], x[2 * k + 1]];
-            let st = self.march(&c.c[k], tension, b, Some(tl))?;
+            let st = self.marched(&c.c[k], tension, b, Some(tl))?;
             r[2 * k] = b[0] - st.hole[0];
             r[2 * k + 1] = b[1] - st.hole[1];
             let hinge_end = frame.then(st.end.x, st.end.y, st.end.theta);

@@ -4,15 +4,24 @@
 //! - a sub-element's equilibrium (`SubElement`) in one of three forms: `ByCompliance` (q from
 //!   C in closed form, the moment about the proximal end), `ByComplianceLoaded` (the same
 //!   equation from the moment about the undeflected distal end: the dual/tip-load form) and
-//!   `ByStiffness` (K q = w eliminated in place, march_stiffness.rs);
+//!   `ByStiffness` (K q = w eliminated in place, K from `JointStiffness`, march_stiffness.rs);
 //! - how the loads travel to the next sub-element (`Frame`): `CableFrame` (tension alone, in
 //!   each sub-element's own frame, the end's pose recovered once; with `ByCompliance` or
 //!   `ByStiffness`) or `PoseFrame` (the pose carried, any scalar including dual numbers, an
 //!   optional tip load; with `ByComplianceLoaded`).
 //!
-//! Both frames turn by one rule (`Real::turn`). Which entry point serves which caller: the table in
-//! docs/model.md "Which march to call"; the fixed-point march (`fixed::forward`) follows the
-//! same recurrence in Q formats.
+//! Both frames turn by one rule (`Real::turn`). Which to call (docs/model.md "Which march to
+//! call"):
+//!
+//! | to get | call |
+//! | --- | --- |
+//! | one plain march, any load | `Finger::march` (joint.rs) |
+//! | a converged joint under tension alone | `newton_dual` on `march_dual` (here) |
+//! | one march under tension alone, by compliance or stiffness | `march_cable` (here) |
+//! | the inverse's march of a joint | `Finger::joint_march` with a `By` (joint.rs) |
+//!
+//! The fixed-point march (`fixed::forward`) follows `ByComplianceLoaded` in `PoseFrame` in Q
+//! formats.
 
 use super::{norm2, Finger, JointState, MarchError, Pose, TipLoad};
 use crate::dual::D;
@@ -276,13 +285,14 @@ impl<R: Real> Finger<R> {
         Ok(frame)
     }
 
-    /// The march under tension alone by compliances in the running frame (`CableFrame`): the
-    /// tabled forward's. Refuses what `CableFrame` and a non-positive den refuse; the full
-    /// model's Newton then takes the joint.
+    /// The march under tension alone in the running frame (`CableFrame`), by either form that
+    /// takes the moment about the proximal end: `ByCompliance` (the tabled forward's) or
+    /// `ByStiffness` (the tabled inverse's, no compliance formed). Refuses what `CableFrame`
+    /// refuses and a non-positive den or last pivot; the full model's Newton then takes the joint.
     #[inline(always)]
-    pub(super) fn march_tension(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], q_out: &mut [[R; 3]; MAX_SUB]) -> Result<MarchEnd<R>, MarchError> {
+    pub(super) fn march_cable<K: SubElement<R, R>>(&self, kernel: &K, tension: R, b: [R; 2], q_out: &mut [[R; 3]; MAX_SUB]) -> Result<MarchEnd<R>, MarchError> {
         let (start, frame) = CableFrame::new(self, tension, b)?;
-        self.march_joint(&ByCompliance(c), frame, q_out, |x| x)?.end(start, self.p.e)
+        self.march_joint(kernel, frame, q_out, |x| x)?.end(start, self.p.e)
     }
 
     /// The march on dual numbers in `PoseFrame` (tension alone), out of line: one copy in the
@@ -402,14 +412,14 @@ mod tests {
             for tension in [0.0, 0.2, 1.0, 7.0] {
                 for b in [[10.0, 5.0], [9.3, 6.1], [8.0, 7.5]] {
                     for tip in tips {
-                        let a = f.march(&c.c[0], tension, b, tip).ok().unwrap();
+                        let a = f.marched(&c.c[0], tension, b, tip).ok().unwrap();
                         let mut q = [[0.0; 3]; MAX_SUB];
                         let t = f.march_joint::<f64, _, _>(&ByComplianceLoaded(&c.c[0]), PoseFrame::new(&f, tension, b, tip).ok().unwrap(), &mut q, |x| x).ok().unwrap().end(f.params().e).ok().unwrap();
                         assert_eq!(a.hole, t.1);
                         assert_eq!(a.end, t.0);
                         assert_eq!(a.q, q);
                         let d = f.eval_dual(&c.c[0], tension, b).ok().unwrap();
-                        let plain = f.march(&c.c[0], tension, b, None).ok().unwrap();
+                        let plain = f.marched(&c.c[0], tension, b, None).ok().unwrap();
                         assert_eq!(d.0.hole, plain.hole, "dual value part equals the plain march");
                     }
                 }
@@ -418,7 +428,7 @@ mod tests {
         // and in f32
         let f = Finger::new(Params::<f32>::default()).unwrap();
         let c = f.compliances(&[0.0; 3]).unwrap();
-        let a = f.march(&c.c[0], 1.0, [9.5, 5.5], None).ok().unwrap();
+        let a = f.marched(&c.c[0], 1.0, [9.5, 5.5], None).ok().unwrap();
         let mut q = [[0.0; 3]; MAX_SUB];
         let t = f.march_joint::<f32, _, _>(&ByComplianceLoaded(&c.c[0]), PoseFrame::new(&f, 1.0, [9.5, 5.5], None).ok().unwrap(), &mut q, |x| x).ok().unwrap().end(f.params().e).ok().unwrap();
         assert_eq!(a.hole, t.1);
@@ -445,9 +455,9 @@ mod tests {
                 }
                 for tension in [0.05, 1.0, 7.0, 15.0] {
                     for b in [[10.0, 5.0], [9.3, 6.1], [8.0, 7.5], [3.0, 9.0]] {
-                        let Ok(a) = f.march(&c.c[0], tension, b, None) else { continue };
+                        let Ok(a) = f.marched(&c.c[0], tension, b, None) else { continue };
                         let mut q = [[0.0; 3]; MAX_SUB];
-                        let (end, hole, sc, r2) = f.march_tension(&c.c[0], tension, b, &mut q).ok().unwrap();
+                        let (end, hole, sc, r2) = f.march_cable(&ByCompliance(&c.c[0]), tension, b, &mut q).ok().unwrap();
                         let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * (1.0 + y.abs());
                         assert!(close(end.x, a.end.x) && close(end.y, a.end.y) && close(end.theta, a.end.theta), "{end:?} {:?}", a.end);
                         assert!(close(hole[0], a.hole[0]) && close(hole[1], a.hole[1]));
@@ -469,9 +479,9 @@ mod tests {
             let c = f.compliances(&[volts; 3]).unwrap();
             for tension in [0.2, 1.0, 7.0, 15.0] {
                 let b = [9.0, 6.5];
-                let a = f.march(&c.c[0], tension, b, None).ok().unwrap();
+                let a = f.marched(&c.c[0], tension, b, None).ok().unwrap();
                 let mut q = [[0.0; 3]; MAX_SUB];
-                let (end, hole, _, _) = f.march_tension(&c.c[0], tension, b, &mut q).ok().unwrap();
+                let (end, hole, _, _) = f.march_cable(&ByCompliance(&c.c[0]), tension, b, &mut q).ok().unwrap();
                 assert!((end.x - a.end.x).abs() < 2e-5 && (end.y - a.end.y).abs() < 2e-5 && (end.theta - a.end.theta).abs() < 2e-6);
                 assert!((hole[0] - a.hole[0]).abs() < 2e-5 && (hole[1] - a.hole[1]).abs() < 2e-5);
             }
@@ -480,8 +490,8 @@ mod tests {
         let f = &fingers[0];
         let c = f.compliances(&[0.0; 3]).unwrap();
         let mut q = [[0.0; 3]; MAX_SUB];
-        assert!(f.march_tension(&c.c[0], 1.0, [0.0, f.params().e], &mut q).is_err(), "span below its floor");
-        assert!(f.march_tension(&c.c[0], 0.0, [10.0, 5.0], &mut q).is_err(), "no tension: not this march's case");
+        assert!(f.march_cable(&ByCompliance(&c.c[0]), 1.0, [0.0, f.params().e], &mut q).is_err(), "span below its floor");
+        assert!(f.march_cable(&ByCompliance(&c.c[0]), 0.0, [10.0, 5.0], &mut q).is_err(), "no tension: not this march's case");
     }
 
     /// The turn rule (series, longer series, sin/cos) is the sine and cosine to the

@@ -1,35 +1,29 @@
 //! The stiffness form of a sub-element's equilibrium (`ByStiffness`): K_j q = (f, M) with
-//! K_j = K_hinge,j + K_de(t), solved by Gaussian elimination in place of multiplying by a
+//! K_j = K_hinge,j + K_de(t) (`JointStiffness`), solved by Gaussian elimination in place of multiplying by a
 //! compliance computed beforehand. For the tabled inverse, whose thickness is new at every
-//! solve: no compliance array is formed. The march around it is `Finger::march_joint`.
+//! solve: no compliance array is formed. The march around it is `Finger::march_cable`.
 
-use super::march::{CableFrame, MarchEnd, SubElement};
-use super::{Finger, MarchError};
+use super::march::SubElement;
+use super::{JointStiffness, MarchError};
 use crate::mat3::Mat3;
 use crate::params::MAX_SUB;
 use crate::real::Real;
 
 /// Sub-element j's q from K_j q = (f0, f1, M), M = mm - f1 (L + q0) + f0 q1 the moment about its
-/// deformed distal end (linear in q: the third row carries it); `stack` is the stack
-/// stiffness's upper triangle (k00, k01 = 0, k02, k11, k12, k22). Refuses (`Singular`) a
-/// non-positive last pivot (the compliance form's non-positive den).
-pub(super) struct ByStiffness<'a, R> {
-    pub hinge: &'a [Mat3<R>; MAX_SUB],
-    pub stack: [R; 6],
-}
+/// deformed distal end (linear in q: the third row carries it), K_j from the joint's
+/// `JointStiffness`. Refuses (`Singular`) a non-positive last pivot (the compliance form's
+/// non-positive den).
+pub(super) struct ByStiffness<'a, R>(pub JointStiffness<'a, R>);
 
 impl<R: Real> SubElement<R, R> for ByStiffness<'_, R> {
     #[inline(always)]
     fn subs(&self) -> &[Mat3<R>; MAX_SUB] {
-        self.hinge
+        self.0.hinges()
     }
     #[inline(always)]
     fn equilibrium(&self, kh: &Mat3<R>, f: [R; 2], mm: R, l: R) -> Result<([R; 3], R), MarchError> {
         let zr = R::zero();
-        // (the stack couples no shear to the axial force: its k01 is zero, `de::StackStiffness::upper`)
-        let [d00, _, d02, d11, d12, d22] = self.stack;
-        let (k00, k01, k02) = (kh[0][0] + d00, kh[0][1], kh[0][2] + d02);
-        let (k11, k12, k22) = (kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22);
+        let [k00, k01, k02, k11, k12, k22] = self.0.add_to(kh);
         // rows: K q = (f0, f1, g + f0 q1 - f1 q0), g = mm - f1 L; eliminate below k00, then
         // below u11 (not `mat3::inverse_spd`: the moment's load terms make the rows unsymmetric)
         let g = mm - f[1] * l;
@@ -55,36 +49,25 @@ impl<R: Real> SubElement<R, R> for ByStiffness<'_, R> {
     }
 }
 
-impl<R: Real> Finger<R> {
-    /// The march under tension alone from stiffnesses (`ByStiffness` in `CableFrame`), `kd` the
-    /// stack's upper triangle. Refuses what `march_tension` refuses and a non-positive last
-    /// pivot; the caller then takes the compliance path.
-    #[inline(always)]
-    pub(super) fn march_stiffness(&self, kd: &[R; 6], tension: R, b: [R; 2], q_out: &mut [[R; 3]; MAX_SUB]) -> Result<MarchEnd<R>, MarchError> {
-        debug_assert!(kd[1] == R::zero());
-        let kernel = ByStiffness { hinge: &self.hinge_k, stack: *kd };
-        let (start, frame) = CableFrame::new(self, tension, b)?;
-        self.march_joint(&kernel, frame, q_out, |x| x)?.end(start, self.p.e)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::calibration::Calibration;
+    use crate::finger::march::ByCompliance;
+    use crate::finger::Finger;
     use crate::mat3;
     use crate::params::Params;
 
-    /// The stack's upper triangle and every sub-element's compliance (K_hinge,j + K_de)⁻¹ at
-    /// thickness t.
-    fn at<R: Real>(f: &Finger<R>, t: R) -> ([R; 6], [mat3::Mat3<R>; MAX_SUB]) {
-        let k = f.stack_stiffness(t);
-        let kd = [k[0][0], k[0][1], k[0][2], k[1][1], k[1][2], k[2][2]];
+    /// The joint's stiffness and every sub-element's compliance (K_hinge,j + K_de)⁻¹ at
+    /// thickness t, the inverse taken here by `mat3::inverse_spd` of the matrices.
+    fn at<R: Real>(f: &Finger<R>, t: R) -> (JointStiffness<'_, R>, [mat3::Mat3<R>; MAX_SUB]) {
+        let k = f.joint_stiffness(t);
         let mut c = [mat3::zero(); MAX_SUB];
         for j in 0..f.params().m {
-            c[j] = mat3::inverse_spd(&mat3::add(f.hinge_stiffness(j), &k)).unwrap();
+            c[j] = mat3::inverse_spd(&mat3::add(&mat3::inverse_spd(&f.hinge_compliance(j)).unwrap(), &f.stack_stiffness(t))).unwrap();
+            assert_eq!(c[j], k.compliance(j).unwrap(), "the joint stiffness's compliance");
         }
-        (kd, c)
+        (k, c)
     }
 
     /// The stack's upper triangle (`Finger::stack`) is the matrix `Finger::stack_stiffness`
@@ -130,9 +113,9 @@ mod tests {
                 for tension in [0.05, 1.0, 7.0, 15.0] {
                     for b in [[10.0, 5.0], [9.3, 6.1], [8.0, 7.5], [3.0, 9.0]] {
                         let mut qa = [[0.0; 3]; MAX_SUB];
-                        let Ok(a) = f.march_tension(&c, tension, b, &mut qa) else { continue };
+                        let Ok(a) = f.march_cable(&ByCompliance(&c), tension, b, &mut qa) else { continue };
                         let mut qb = [[0.0; 3]; MAX_SUB];
-                        let s = f.march_stiffness(&kd, tension, b, &mut qb).ok().unwrap();
+                        let s = f.march_cable(&ByStiffness(kd), tension, b, &mut qb).ok().unwrap();
                         let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * (1.0 + y.abs());
                         assert!(close(s.0.x, a.0.x) && close(s.0.y, a.0.y) && close(s.0.theta, a.0.theta), "{:?} {:?}", s.0, a.0);
                         assert!(close(s.1[0], a.1[0]) && close(s.1[1], a.1[1]));
@@ -155,8 +138,8 @@ mod tests {
             for tension in [0.2f32, 1.0, 7.0, 15.0] {
                 let b = [9.0, 6.5];
                 let mut q = [[0.0; 3]; MAX_SUB];
-                let a = f.march_tension(&c, tension, b, &mut q).ok().unwrap();
-                let s = f.march_stiffness(&kd, tension, b, &mut q).ok().unwrap();
+                let a = f.march_cable(&ByCompliance(&c), tension, b, &mut q).ok().unwrap();
+                let s = f.march_cable(&ByStiffness(kd), tension, b, &mut q).ok().unwrap();
                 assert!((s.0.x - a.0.x).abs() < 2e-5 && (s.0.y - a.0.y).abs() < 2e-5 && (s.0.theta - a.0.theta).abs() < 2e-6);
                 assert!((s.1[0] - a.1[0]).abs() < 2e-5 && (s.1[1] - a.1[1]).abs() < 2e-5);
             }
@@ -165,12 +148,14 @@ mod tests {
         let f = &fingers[0];
         let (kd, _) = at(f, f.stack_thickness(0.0).unwrap());
         let mut q = [[0.0; 3]; MAX_SUB];
-        assert!(f.march_stiffness(&kd, 1.0, [0.0, f.params().e], &mut q).is_err(), "span below its floor");
-        assert!(f.march_stiffness(&kd, 0.0, [10.0, 5.0], &mut q).is_err(), "no tension");
+        assert!(f.march_cable(&ByStiffness(kd), 1.0, [0.0, f.params().e], &mut q).is_err(), "span below its floor");
+        assert!(f.march_cable(&ByStiffness(kd), 0.0, [10.0, 5.0], &mut q).is_err(), "no tension");
         // a stiffness that is not positive definite: refused, not a NaN state
-        let bad = [0.0, 0.0, 0.0, 0.0, 0.0, -1e9];
-        assert!(f.march_stiffness(&bad, 1.0, [10.0, 5.0], &mut q).is_err(), "negative pivot");
-        let nan = [f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0];
-        assert!(f.march_stiffness(&nan, 1.0, [10.0, 5.0], &mut q).is_err(), "not finite");
+        let bad = JointStiffness::with_upper(f, [0.0, 0.0, 0.0, 0.0, 0.0, -1e9]);
+        assert!(f.march_cable(&ByStiffness(bad), 1.0, [10.0, 5.0], &mut q).is_err(), "negative pivot");
+        assert!(bad.compliance(0).is_err(), "and no compliance");
+        let nan = JointStiffness::with_upper(f, [f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        assert!(f.march_cable(&ByStiffness(nan), 1.0, [10.0, 5.0], &mut q).is_err(), "not finite");
+        assert!(nan.compliance(0).is_err(), "and no compliance");
     }
 }

@@ -122,15 +122,17 @@ impl<R: Real> Finger<R> {
             volts: [R::zero(); MAX_JOINTS],
         };
         out.volts[..p.n].copy_from_slice(volts);
+        // the ceiling and the film's law once for every joint
+        let stack = de::Stack::new(p);
         for (k, &v) in volts.iter().enumerate() {
-            de::check_voltage(p, k + 1, v)?;
+            stack.check(k + 1, v)?;
             // a build without the `de` feature refuses stacks in `new`, and leaves the stack's
             // code (thinning, stack stiffness) out of the image
             if p.layers == 0 || cfg!(not(feature = "de")) {
                 out.c[k][..p.m].copy_from_slice(&self.hinge_c[..p.m]);
                 continue;
             }
-            let t = de::stack_thickness(p, k + 1, v)?;
+            let t = stack.thickness(k + 1, v)?;
             self.stack_into(&mut out, k, t)?;
         }
         Ok(out)
@@ -151,8 +153,9 @@ impl<R: Real> Finger<R> {
         }
         out.volts[..p.n].copy_from_slice(volts);
         let t0 = R::from_u32(p.layers as u32) * p.z0;
+        let stack = de::Stack::new(p);
         for (k, (&v, &t)) in volts.iter().zip(thickness_mm).enumerate() {
-            de::check_voltage(p, k + 1, v)?;
+            stack.check(k + 1, v)?;
             if p.layers == 0 || cfg!(not(feature = "de")) {
                 continue;
             }
@@ -170,12 +173,7 @@ impl<R: Real> Finger<R> {
     /// Joint `k`'s sub-element compliances with its stack at thickness `t`, mm.
     fn stack_into(&self, out: &mut Compliances<R>, k: usize, t: R) -> Result<(), Error> {
         out.thickness[k] = t;
-        let k_de = self.stack_stiffness(t);
-        for j in 0..self.p.m {
-            let k_sum = mat3::add(&self.hinge_k[j], &k_de);
-            out.c[k][j] = mat3::inverse_spd(&k_sum).ok_or(Error::Singular { what: "joint stiffness" })?;
-        }
-        Ok(())
+        self.joint_stiffness(t).compliances_into(&mut out.c[k])
     }
 }
 

@@ -92,7 +92,7 @@ impl<R: Real> Finger<R> {
                 sol.q[k] = sol.q[k - 1];
                 prev
             } else {
-                match self.march_tension(&c.c[k], tension, b, &mut sol.q[k]) {
+                match self.march_cable(&march::ByCompliance(&c.c[k]), tension, b, &mut sol.q[k]) {
                     Ok((end, hole, sc, r2)) if r2 <= tol * tol => (end, sc, hole, r2, R::one()),
                     _ => {
                         let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;

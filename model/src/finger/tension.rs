@@ -118,7 +118,7 @@ impl<R: Real> Finger<R> {
         min_step: R,
     ) -> Result<(JointState<R>, u32), Error> {
         if tension == R::zero() {
-            let st = self.march(c, tension, [self.p.hinge_len(), self.p.e], None).map_err(|_| Error::Singular { what: "joint" })?;
+            let st = self.marched(c, tension, [self.p.hinge_len(), self.p.e], None).map_err(|_| Error::Singular { what: "joint" })?;
             return Ok((st, 0));
         }
         // the unloaded joint is straight (the march at zero tension gives exactly this)

@@ -5,6 +5,7 @@
 use crate::mat3::{self, Mat3};
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
+use super::JointStiffness;
 
 /// A planar pose: position (mm) and angle (rad, positive toward +y).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -196,6 +197,18 @@ pub struct JointEquilibrium<R> {
     pub angle: R,
     /// Newton iterations.
     pub iterations: u32,
+}
+
+/// How `Finger::joint_march` marches a joint under tension alone: by compliances in
+/// `PoseFrame` (`Compliance`), by compliances in the running frame where that march applies,
+/// else as `Compliance` (`Cable`), or by the joint's stiffness, no compliance formed, with the
+/// link's deflection at that tension given (`Stiffness`; refused where its last pivot is not
+/// positive: the caller takes the compliance path).
+#[derive(Clone, Copy)]
+pub(crate) enum By<'a, 'k, R> {
+    Compliance(&'a [Mat3<R>; MAX_SUB]),
+    Cable(&'a [Mat3<R>; MAX_SUB]),
+    Stiffness(&'a JointStiffness<'k, R>, [R; 3]),
 }
 
 /// One march of a joint without Newton (`Finger::joint_march`): where it arrives.

@@ -224,18 +224,16 @@ impl FixedFinger {
         if volts.len() != n {
             return Err(Error::Input { input: "voltages", reason: "one voltage per joint is required" });
         }
-        // `Finger::compliances`, one joint at a time: C = (K_hinge + K_stack(t))^-1, or
-        // C_hinge without stacks
+        // `Finger::compliances`, one joint at a time (`Finger::joint_stiffness`: C_hinge
+        // without stacks)
         let stacks = p.layers > 0 && cfg!(feature = "de");
+        let stack = de::Stack::new(p);
         for (k, &v) in volts.iter().enumerate() {
-            de::check_voltage(p, k + 1, v)?;
-            let k_de = if stacks { Some(f.stack_stiffness(de::stack_thickness(p, k + 1, v)?)) } else { None };
+            stack.check(k + 1, v)?;
+            let t = if stacks { stack.thickness(k + 1, v)? } else { R::zero() };
+            let kj = f.joint_stiffness(t);
             for j in 0..m {
-                let c = match &k_de {
-                    Some(kd) => mat3::inverse_spd(&mat3::add(f.hinge_stiffness(j), kd)).ok_or(Error::Singular { what: "joint stiffness" })?,
-                    None => f.hinge_compliance(j),
-                };
-                self.c[k][j] = cmat(&c);
+                self.c[k][j] = cmat(&kj.compliance(j)?);
             }
             self.same_as_prev[k] = k > 0 && (!stacks || v == volts[k - 1]);
         }

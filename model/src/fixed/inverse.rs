@@ -179,11 +179,10 @@ impl<'a, R: Real> FixedInverseDirect<'a, R> {
         let u = u.clamp(0, last);
         let frac = R::from_u32(u as u32) / R::from_u32(last as u32);
         let t = (self.t_rest_r - (self.t_rest_r - self.t_ceiling_r) * frac).max(self.t_ceiling_r);
-        let k_de = self.f.stack_stiffness(t);
+        let kj = self.f.joint_stiffness(t);
         let mut o = [CMat::default(); MAX_SUB];
         for (j, c) in o.iter_mut().enumerate().take(self.fwd.m) {
-            let k = crate::mat3::add(self.f.hinge_stiffness(j), &k_de);
-            *c = cmat(&crate::mat3::inverse_spd(&k).ok_or(Error::Singular { what: "joint stiffness" })?);
+            *c = cmat(&kj.compliance(j)?);
         }
         Ok(o)
     }

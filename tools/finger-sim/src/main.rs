@@ -15,6 +15,7 @@
 //! but the board's replies.
 use std::io::{IsTerminal, Read, Write};
 
+use finger_fw::plant::Plant;
 use finger_fw::sim::{default_cost, SimBoard, VirtualSim};
 use finger_fw::App;
 
@@ -86,7 +87,12 @@ fn main() {
         eprintln!("# t={} ticks={ticks}", sim.t_us / 1000);
         return;
     }
-    let mut app = App::new(SimBoard::default());
+    // the HV plant behind the board's read-back (docs/firmware.md "The plant": `plant ...`)
+    let Some(plant) = Plant::new(1) else {
+        eprintln!("finger-sim: the board's film card gives no plant");
+        std::process::exit(1);
+    };
+    let mut app = App::new(SimBoard::with_plant(plant));
     let mut buf = [0u8; 4096];
     loop {
         let n = match stdin.read(&mut buf) {

@@ -47,52 +47,21 @@ impl<'a, R: Real> Gen<'a, R> {
         Ok(c)
     }
 
-    /// `comp` into `c` (its first m entries; no array returned by value in the hot loop).
+    /// `comp` into `c` (its first m entries; no array returned by value in the hot loop):
+    /// `Finger::joint_stiffness`'s compliances; refuses a thickness that is not positive and
+    /// finite (K_de ∝ t axially, t³ in bending: positive semi-definite for t > 0).
     #[inline(never)]
     pub(super) fn comp_into(&self, t: R, c: &mut [Mat3<R>; MAX_SUB]) -> Result<(), Error> {
-        if self.p.layers == 0 {
-            for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
-                *cj = self.f.hinge_compliance(j);
-            }
-            return Ok(());
-        }
-        let kd = self.stack_at(t)?;
-        let mut check = R::zero();
-        for (j, cj) in c.iter_mut().enumerate().take(self.p.m) {
-            let (m, ck) = self.sub_compliance(j, &kd);
-            *cj = m;
-            check += ck;
-        }
-        Self::checked(check)
-    }
-
-    /// The upper triangle of the stack's stiffness at thickness t (`de::StackStiffness`:
-    /// K_de ∝ t axially, t³ in bending, positive semi-definite for t > 0, so each sum with the
-    /// positive definite hinge has a positive diagonal). Once per compliance evaluation.
-    #[inline(always)]
-    pub(super) fn stack_at(&self, t: R) -> Result<[R; 6], Error> {
-        if !(t > R::zero() && t.is_finite()) {
+        if self.p.layers != 0 && !(t > R::zero() && t.is_finite()) {
             return Err(Error::Singular { what: "joint stiffness" });
         }
-        Ok(self.stack.upper(t))
+        self.stiffness(t).compliances_into(c)
     }
 
-    /// Sub-element j's compliance C_j = (K_hinge,j + K_de)⁻¹ (`kd` the stack's upper triangle),
-    /// with `mat3::inverse_spd_upper`'s check value (a finite sum of checks: every sum positive
-    /// definite).
+    /// The joint's stiffness at thickness t (the stack's constants taken once, in `new`).
     #[inline(always)]
-    pub(super) fn sub_compliance(&self, j: usize, kd: &[R; 6]) -> (Mat3<R>, R) {
-        let kh = self.f.hinge_stiffness(j);
-        let (o, check) = mat3::inverse_spd_upper([kh[0][0] + kd[0], kh[0][1] + kd[1], kh[0][2] + kd[2], kh[1][1] + kd[3], kh[1][2] + kd[4], kh[2][2] + kd[5]]);
-        (mat3::from_upper(o), check)
-    }
-
-    pub(super) fn checked(check: R) -> Result<(), Error> {
-        if check.is_finite() {
-            Ok(())
-        } else {
-            Err(Error::Singular { what: "joint stiffness" })
-        }
+    pub(super) fn stiffness(&self, t: R) -> JointStiffness<'a, R> {
+        JointStiffness::new(self.f, &self.stack, t)
     }
 
     /// Scale the angle tolerance of the solves (the branch table's samples).
@@ -117,7 +86,7 @@ impl<'a, R: Real> Gen<'a, R> {
             return Ok(h.st);
         }
         let mut q = [[R::zero(); 3]; MAX_SUB];
-        self.f.joint_march(joint, c, h.tension, h.st.hole, &mut q)
+        self.f.joint_march(joint, By::Compliance(c), h.tension, h.st.hole, &mut q)
     }
 
     /// The unloaded joint's state.

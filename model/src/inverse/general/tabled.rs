@@ -6,22 +6,14 @@
 use super::*;
 
 impl<'a, R: Real> Gen<'a, R> {
-    /// One march of joint `joint` at tension `p` from hole `b` with compliances `c`: its state
-    /// when that is already an equilibrium of the full model to the quasi-Newton solves' own
-    /// tolerance (`broyden_steps`: hole residual and joint angle), else None (also when the
-    /// march fails). The march is `march_tension` where it applies (`Finger::joint_march_tension`).
-    /// The sub-element displacements go to `q`.
+    /// One march of joint `joint` at tension `p` from hole `b` (`Finger::joint_march`, `by`
+    /// `By::Cable` or `By::Stiffness`): its state when that is already an equilibrium of the
+    /// full model to the quasi-Newton solves' own tolerance (`broyden_steps`: hole residual and
+    /// joint angle), else None (also when the march fails). The sub-element displacements go to
+    /// `q`.
     #[inline(never)]
-    pub(super) fn march_converged(&self, joint: usize, c: &[Mat3<R>; MAX_SUB], p: R, b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
-        let st = self.f.joint_march_tension(joint, c, p, b, q).ok()?;
-        self.converged(st, b, theta)
-    }
-
-    /// `march_converged` from the stiffnesses at the stack's upper triangle `kd`
-    /// (`Finger::joint_march_stiffness`: no compliance formed).
-    #[inline(never)]
-    pub(super) fn march_converged_stiff(&self, kd: &[R; 6], p: R, link: [R; 3], b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
-        let st = self.f.joint_march_stiffness(kd, p, link, b, q)?;
+    pub(super) fn converged_march(&self, joint: usize, by: By<'_, '_, R>, p: R, b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+        let st = self.f.joint_march(joint, by, p, b, q).ok()?;
         self.converged(st, b, theta)
     }
 
@@ -44,7 +36,7 @@ impl<'a, R: Real> Gen<'a, R> {
 #[allow(clippy::too_many_arguments)]
 pub(super) fn confirm_end<R: Real>(g: &mut Gen<'_, R>, tb: &BranchTable<R>, k: usize, e: usize, r: &mut TableEnd<R>, theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Result<bool, Error> {
     let c = &tb.comp[e];
-    if g.march_converged(k + 1, c, r.tension, r.hole, theta, q).is_some() {
+    if g.converged_march(k + 1, By::Cable(c), r.tension, r.hole, theta, q).is_some() {
         return Ok(false);
     }
     let h = g.hold_tension(k + 1, theta, c, tb.thickness[e], tb.slope0[e], Some((r.tension, r.hole)), None, Some(theta / r.tension), q)?;
@@ -111,33 +103,20 @@ pub(super) fn confirm_bounds<R: Real>(
     }
 }
 
-/// Step 4's march of joint `k` (0-based) from compliances at thickness `t`: the table's at either
-/// end of the stack's range, else evaluated (after a stiffness march that was not converged: a
-/// march more). `Gen::march_converged`'s answer.
+/// Step 4's compliances at thickness `t`: the table's at either end of the stack's range, else
+/// evaluated into `c` (after a stiffness march that was not converged: a march more).
 #[inline(never)]
-#[allow(clippy::too_many_arguments)]
-pub(super) fn compliance_march<R: Real>(
-    g: &mut Gen<'_, R>,
-    tb: &BranchTable<R>,
-    k: usize,
-    t: R,
-    p: R,
-    b: [R; 2],
-    theta: R,
-    q: &mut [[R; 3]; MAX_SUB],
-) -> Result<Option<JointMarch<R>>, Error> {
+pub(super) fn step_compliances<'c, R: Real>(g: &mut Gen<'_, R>, tb: &'c BranchTable<R>, t: R, c: &'c mut [Mat3<R>; MAX_SUB]) -> Result<&'c [Mat3<R>; MAX_SUB], Error> {
     let [t_top, t0, _] = tb.thickness;
-    let mut c = [tb.comp[1][0]; MAX_SUB];
-    let ck = if t >= t0 {
+    Ok(if t >= t0 {
         &tb.comp[1]
     } else if t <= t_top {
         &tb.comp[0]
     } else {
         g.iters += 1;
-        g.comp_into(t, &mut c)?;
-        &c
-    };
-    Ok(g.march_converged(k + 1, ck, p, b, theta, q))
+        g.comp_into(t, c)?;
+        c
+    })
 }
 
 /// `solve_pose_tabled`'s path (docs/inverse.md, "The tabled inverse"): every joint's range
@@ -257,11 +236,15 @@ pub(in crate::inverse) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R
         // inside the stack's range one march from the stiffnesses (no compliance formed); the
         // compliance march at either end, and inside it only where that one is not converged
         let inside = t_guess < t0 && t_guess > t_top;
-        let quick = if inside { g.march_converged_stiff(&g.stack.upper(t_guess), pt, link, b, angles[k], &mut out.sub_q[k]) } else { None };
+        let quick = if inside { g.converged_march(k + 1, By::Stiffness(&g.stiffness(t_guess), link), pt, b, angles[k], &mut out.sub_q[k]) } else { None };
         g.iters += 1;
         let marched = match quick {
             Some(st) => Some(st),
-            None => compliance_march(&mut g, tb, k, t_guess, pt, b, angles[k], &mut out.sub_q[k])?,
+            None => {
+                let mut c = [tb.comp[1][0]; MAX_SUB];
+                let ck = step_compliances(&mut g, tb, t_guess, &mut c)?;
+                g.converged_march(k + 1, By::Cable(ck), pt, b, angles[k], &mut out.sub_q[k])
+            }
         };
         let (t, st) = match marched {
             Some(st) => (t_guess, st),
