@@ -86,6 +86,27 @@ pub struct Driven {
     pub joints_deg: Vec<f64>,
     pub tip: [f64; 3],
     pub cable_mm: f64,
+    /// The HV read-back, on a board with one (`status`' `vmeas=`, `imeas=`, `thick_meas=`):
+    /// each channel's measured voltage (V), return current (µA) and sensed thickness (mm; NaN
+    /// until measured).
+    pub readback: Option<Readback>,
+}
+
+/// The HV read-back of one `status`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Readback {
+    pub vmeas_v: Vec<f64>,
+    pub imeas_ua: Vec<f64>,
+    pub thick_meas_mm: Vec<f64>,
+}
+
+impl Readback {
+    /// From a `status` reply: None without `vmeas=` (a board without a read-back).
+    pub fn of(r: &Reply) -> Option<Readback> {
+        // `-`: not measured yet
+        let list = |key: &str| -> Option<Vec<f64>> { r.get(key)?.split(',').map(|v| if v == "-" { Some(f64::NAN) } else { v.parse().ok() }).collect() };
+        Some(Readback { vmeas_v: list("vmeas")?, imeas_ua: list("imeas")?, thick_meas_mm: list("thick_meas")? })
+    }
 }
 
 /// A scene run on a board, with the host model's run of the same scene.
@@ -240,6 +261,7 @@ fn drive_to(con: &mut Console, tension: f64, volts: &[f64], slew: f64) -> Result
                 joints_deg: numbers(&r, "joints", "status")?,
                 tip: three(numbers(&r, "tip", "status")?, "tip")?,
                 cable_mm: numbers(&r, "cable", "status")?.first().copied().unwrap_or(f64::NAN),
+                readback: Readback::of(&r),
             });
         }
         if Instant::now() > deadline {
@@ -310,11 +332,18 @@ pub fn csv(r: &BoardRun) -> String {
     }
     head.extend((1..=n).map(|k| format!("diff_joint{k}_deg")));
     head.extend(["diff_tip_mm".into(), "diff_tip_deg".into(), "board_iters".into()]);
+    // the read-back's columns when every driven posture has one
+    let readback = r.drove && r.board.iter().all(|b| b.driven.as_ref().is_some_and(|d| d.readback.is_some()));
     if r.drove {
         head.push("driven_force_N".into());
         head.extend((1..=n).map(|k| format!("driven_volts{k}_V")));
         head.extend((1..=n).map(|k| format!("driven_joint{k}_deg")));
         head.extend(["driven_tip_x_mm", "driven_tip_y_mm", "driven_tip_deg", "driven_cable_mm"].map(String::from));
+    }
+    if readback {
+        head.extend((1..=n).map(|k| format!("driven_vmeas{k}_V")));
+        head.extend((1..=n).map(|k| format!("driven_imeas{k}_uA")));
+        head.extend((1..=n).map(|k| format!("driven_thick_meas{k}_mm")));
     }
     let mut out = head.join(",") + "\n";
     let hosts = r.host.postures.iter().filter(|p| p.kind != Kind::MatchTarget);
@@ -337,6 +366,11 @@ pub fn csv(r: &BoardRun) -> String {
             row.extend(joined(&d.volts));
             row.extend(joined(&d.joints_deg));
             row.extend(joined(&[d.tip[0], d.tip[1], d.tip[2], d.cable_mm]));
+            if let (true, Some(rb)) = (readback, &d.readback) {
+                row.extend(joined(&rb.vmeas_v));
+                row.extend(joined(&rb.imeas_ua));
+                row.extend(joined(&rb.thick_meas_mm));
+            }
         }
         out += &(row.join(",") + "\n");
     }

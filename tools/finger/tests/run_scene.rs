@@ -113,6 +113,35 @@ fn check_driven(dir: &Path) {
     }
 }
 
+/// finger-sim runs against the plant: each driven posture carries the read-back, the measured
+/// voltage near the command (the hold ripple is up to 100 V below it), a current inside the
+/// watchdog's bound, the sensed thickness of a stack near its rest (NaN until measured).
+fn check_readback(dir: &Path) {
+    let (head, rows) = csv(&dir.join("drive-board.csv"));
+    for row in &rows {
+        for (k, v) in [600.0, 300.0, 0.0].iter().enumerate() {
+            let vm = get(&head, row, &format!("driven_vmeas{}_V", k + 1));
+            assert!(vm > v - 160.0 && vm < v + 40.0, "channel {}: vmeas {vm} V for {v} V", k + 1);
+            let im = get(&head, row, &format!("driven_imeas{}_uA", k + 1));
+            assert!(im.abs() < 30.0, "channel {}: imeas {im} µA", k + 1);
+            let t = get(&head, row, &format!("driven_thick_meas{}_mm", k + 1));
+            assert!(t.is_nan() || (t > 0.5 && t < 3.0), "channel {}: thick_meas {t} mm", k + 1);
+        }
+    }
+}
+
+#[test]
+fn the_status_readback_is_parsed_with_unmeasured_thickness_as_nan() {
+    let r = finger::Reply { before: vec![], line: "ok volts=1,2,3 thick=2.0000,2.0000,2.0000 vmeas=598.2,301.0,0.0 imeas=0.120,-0.050,0.000 thick_meas=1.9950,-,- vceil=5400.0,5400.0,5400.0".into() };
+    let rb = finger::run::Readback::of(&r).expect("a read-back");
+    assert_eq!(rb.vmeas_v, vec![598.2, 301.0, 0.0]);
+    assert_eq!(rb.imeas_ua, vec![0.12, -0.05, 0.0]);
+    assert_eq!(rb.thick_meas_mm[0], 1.995);
+    assert!(rb.thick_meas_mm[1].is_nan() && rb.thick_meas_mm[2].is_nan());
+    let plain = finger::Reply { before: vec![], line: "ok volts=1,2,3 thick=2.0000,2.0000,2.0000".into() };
+    assert_eq!(finger::run::Readback::of(&plain), None);
+}
+
 #[test]
 fn drive_arms_drives_reads_back_and_stops_on_the_sim() {
     let (dir, scene) = drive_scene("run-drive");
@@ -123,6 +152,7 @@ fn drive_arms_drives_reads_back_and_stops_on_the_sim() {
     let p = Params::<f64>::default();
     check_against_host(&dir.join("drive-board.csv"), p, &[600.0, 300.0, 0.0], &[0.3, 0.8]);
     check_driven(&dir);
+    check_readback(&dir);
     let sent = std::fs::read_to_string(&log).unwrap();
     let lines: Vec<&str> = sent.lines().map(str::trim).collect();
     let arm = lines.iter().position(|l| *l == "arm").expect("armed");
