@@ -4,9 +4,10 @@
 //!
 //! - `errors`: [`CmdError`] and the shared argument checks; `params`: the parameter registry;
 //!   `m3` (Cortex-M3 image) and `solves`: the forward solves; `help`: `help` and the replies'
-//!   formatting; `film`: the board's film; `stored`: the stored record's checks.
-//! - `commands`: [`Commands`], its state, the dispatch and the core commands; `pose`, `shape`:
-//!   the commands that are theirs.
+//!   formatting; `film`: the board's film; `hv_cal`: the read-back's calibration (`cal
+//!   show|vmon|c0`); `stored`: the stored record's checks.
+//! - `commands`: [`Commands`], its state, the dispatch and the core commands; `hv_cal_cmd`,
+//!   `pose`, `shape`: the commands that are theirs.
 //! - `wire`: [`wire`], the parts built for a board (the chip, [`App`], the on-target tests);
 //!   `host`: [`App`]; `config`: `save`, `config`, `factory` and the boot hook.
 
@@ -27,9 +28,13 @@ mod m3;
 mod solves;
 mod help;
 mod film;
+#[cfg(not(m3))]
+pub mod hv_cal;
 #[cfg(feature = "settings")]
 mod stored;
 mod commands;
+#[cfg(not(m3))]
+mod hv_cal_cmd;
 #[cfg(any(feature = "pose", feature = "contact", m3))]
 pub mod pose;
 #[cfg(feature = "shape")]

@@ -7,6 +7,7 @@
 //! - [`time`]: SysTick as the control tick and the clock within it; the `timing` figures.
 //! - [`mpu`]: the stack guard.
 //! - [`flash`]: the settings store's flash (feature `settings`).
+//! - [`hv_adc`]: the board build's HV read-back: ADCs, DMA, the analog watchdog (feature `hw`).
 //!
 //! Builds (Cargo features): `qemu` (QEMU netduinoplus2: HSI clock, no watchdog, defmt over
 //! semihosting) or `hw` (the board: PLL from the crystal, IWDG, defmt over RTT); `cfg(m3)`,
@@ -16,6 +17,8 @@
 #[cfg(feature = "settings")]
 pub mod flash;
 pub mod f405;
+#[cfg(feature = "hw")]
+pub mod hv_adc;
 pub mod mpu;
 pub mod time;
 pub mod usart;

@@ -74,6 +74,8 @@ struct Sensing {
     guard: [watch::ThicknessGuard; HV_CHANNELS],
     vloop: [hv_loop::VoltageLoop; HV_CHANNELS],
     cal: [sense::MonitorCal; HV_CHANNELS],
+    /// Each stack's capacitance at 0 V, pF (stored; the board's constant until calibrated).
+    c0_pf: [f32; HV_CHANNELS],
     /// The voltage the loop drove each channel to in the tick just ended, V.
     drive: [f32; HV_CHANNELS],
     /// The loop's ask was held back by the slew this tick (the module not yet given the
@@ -109,6 +111,7 @@ impl Sensing {
             guard: [watch::ThicknessGuard::new(); HV_CHANNELS],
             vloop: [hv_loop::VoltageLoop::new(); HV_CHANNELS],
             cal: [sense::MonitorCal::NOMINAL; HV_CHANNELS],
+            c0_pf: [crate::board::BOARD_STACK_C0_PF; HV_CHANNELS],
             drive: [0.0; HV_CHANNELS],
             slew_held: [false; HV_CHANNELS],
             ripple_ms: [0; HV_CHANNELS],
@@ -654,6 +657,22 @@ impl<B: Board> Control<B> {
         self.sensing.guard_on = on;
     }
 
+    /// The read-back's stored calibration (the command side's `cal vmon|c0`, the boot's
+    /// record): a monitor that would read low (`MonitorCal::checked`) or a C0 out of range
+    /// (half to twice the board's) is not taken, that channel keeps what it had.
+    #[cfg(not(m3))]
+    pub fn set_sense_cal(&mut self, monitor: [sense::MonitorCal; HV_CHANNELS], c0_pf: [f32; HV_CHANNELS]) {
+        let c0 = crate::board::BOARD_STACK_C0_PF;
+        for ch in 0..HV_CHANNELS {
+            if let Some(m) = sense::MonitorCal::checked(monitor[ch].gain, monitor[ch].offset_v) {
+                self.sensing.cal[ch] = m;
+            }
+            if c0_pf[ch] >= 0.5 * c0 && c0_pf[ch] <= 2.0 * c0 {
+                self.sensing.c0_pf[ch] = c0_pf[ch];
+            }
+        }
+    }
+
     /// The plant's truth into the view (boards with a plant).
     #[cfg(all(not(feature = "hw"), not(m3)))]
     fn read_plant(&mut self) {
@@ -728,7 +747,7 @@ impl<B: Board> Control<B> {
             if let Some(f) = sn.watch[ch].check(&reading, sn.drive[ch], sn.slew_held[ch], self.write_ceiling_v[ch], self.enable, &sn.est[ch]) {
                 fault = fault.or(Some(f));
             }
-            let s_meas = sn.est[ch].thickness_ratio(crate::board::BOARD_STACK_C0_PF);
+            let s_meas = sn.est[ch].thickness_ratio(sn.c0_pf[ch]);
             sn.view.stack_ratio[ch] = s_meas;
             let windows = sn.est[ch].windows();
             if windows != sn.seen_windows[ch] {

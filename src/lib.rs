@@ -16,6 +16,8 @@
 //! - [`sim`]: a simulated board (records every output; with [`plant`] behind its read-back).
 //! - [`plant`]: the simulated HV plant (modules, divider, stacks, faults, ADC), never in the
 //!   board build.
+//! - [`sampling`]: the board's HV read-back sampling arithmetic (DMA halves, means, the
+//!   analog watchdog's codes); host and board build only.
 //! - [`out`], [`num`]: console text and numbers without core's formatting machinery.
 //! - [`settings`], [`flash_ram`]: the stored settings' record and store, and the emulator's
 //!   RAM flash (feature `settings`).
@@ -33,6 +35,8 @@ pub mod num;
 #[cfg(all(not(feature = "hw"), not(m3)))]
 pub mod plant;
 pub mod rx;
+#[cfg(any(feature = "hw", not(target_os = "none")))]
+pub mod sampling;
 #[cfg(feature = "settings")]
 pub mod settings;
 #[cfg(feature = "settings")]

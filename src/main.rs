@@ -39,12 +39,16 @@ pub struct Mailbox {
     /// A `plant ...` line's change to the emulator's plant.
     #[cfg(all(feature = "qemu", not(m3)))]
     plant: Option<finger_fw::control::PlantRequest>,
+    /// A `cal vmon|c0` line's calibration for the read-back.
+    #[cfg(not(m3))]
+    sense_cal: Option<finger_fw::app::hv_cal::SenseCal>,
 }
 
 /// The real-time core. Priorities and interrupts, the one place they are set:
 ///
 /// | prio | task | binds | does |
 /// | --- | --- | --- | --- |
+/// | 4 | `hv_trip` (board build) | ADC (ADC1/ADC2 analog watchdogs) | the HV enable low and the duties 0 by register stores, the channel left for the next tick (`finger_fw::chip::hv_adc`); no resources, so no lock raises to it |
 /// | 3 | `control` | SysTick, 1 kHz | the control core (`finger_fw::control`): takes the setpoints, slew, the HV duties (single writer), servo, stop requests, watchdog feed |
 /// | 2 | `console` | USART1 (RXNE, TXE) | each received byte into `finger_fw::rx` (a `stop` line stops the control core here, at once), the transmit queue out |
 /// | 0 | `idle` | - | the command side (`finger_fw::Commands`): lines, model solves, `wait`, replies into the transmit queue |
@@ -122,6 +126,8 @@ mod app {
             checkin_ms: 0,
             #[cfg(all(feature = "qemu", not(m3)))]
             plant: None,
+            #[cfg(not(m3))]
+            sense_cal: None,
         };
         (Shared { ctl, mailbox, timing: Timing::new(), rx: RxLines::new(), tx }, Local { cmds, usart_rx: chip.rx })
     }
@@ -143,6 +149,10 @@ mod app {
             #[cfg(all(feature = "qemu", not(m3)))]
             if let Some(p) = mb.plant.take() {
                 ctl.plant_request(p);
+            }
+            #[cfg(not(m3))]
+            if let Some(c) = mb.sense_cal.take() {
+                ctl.set_sense_cal(c.monitor, c.c0_pf);
             }
             if let Some(sp) = mb.setpoints.take() {
                 ctl.apply(&sp);
@@ -169,6 +179,13 @@ mod app {
             tm.ticks += 1;
             tm.tick_run_max = tm.tick_run_max.max(time::systick_elapsed().saturating_sub(entry));
         });
+    }
+
+    /// The analog watchdogs (board build): above the control task, sharing nothing.
+    #[cfg(feature = "hw")]
+    #[task(binds = ADC, priority = 4)]
+    fn hv_trip(_cx: hv_trip::Context) {
+        finger_fw::chip::hv_adc::on_watchdog();
     }
 
     /// USART1: received bytes into the line ring (`stop` acts here), the transmit queue out.
@@ -233,12 +250,18 @@ mod app {
             let sp = cmds.setpoints();
             #[cfg(all(feature = "qemu", not(m3)))]
             let plant = cmds.take_plant();
+            #[cfg(not(m3))]
+            let sense_cal = cmds.take_sense_cal();
             out.mailbox.lock(|m| {
                 m.setpoints = Some(sp);
                 m.stop |= stop;
                 #[cfg(all(feature = "qemu", not(m3)))]
                 {
                     m.plant = plant;
+                }
+                #[cfg(not(m3))]
+                if sense_cal.is_some() {
+                    m.sense_cal = sense_cal;
                 }
             });
             // the next line sees this one's effect: the core takes the setpoints at its next

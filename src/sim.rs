@@ -291,6 +291,10 @@ impl VirtualSim {
         if let Some(p) = app.cmds.take_plant() {
             app.ctl.plant_request(p);
         }
+        #[cfg(not(m3))]
+        if let Some(c) = app.cmds.take_sense_cal() {
+            app.ctl.set_sense_cal(c.monitor, c.c0_pf);
+        }
         if app.cmds.take_stop() {
             app.ctl.stop();
             app.cmds.sync(&app.ctl.view());

@@ -5,6 +5,7 @@ ceiling is the design's."""
 
 import os
 import pickle
+import shutil
 import signal
 import subprocess
 import sys
@@ -112,6 +113,22 @@ def fields(line):
     return dict(kv.split("=", 1) for kv in line.split()[1:])
 
 
+def check_board_is_the_designs(d, send):
+    """`send(lines)` -> the replies, on a board built for design `d`: `limits` is the design's
+    ceiling, `material` its card, and the console's parameters cannot raise the ceiling."""
+    t_min, layers, lim, mat, *_, lim2 = send(["param t_min", "param layers", "limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"])
+    # the board's default finger is the design's
+    assert float(t_min.split("=")[1]) == pytest.approx(d.t_min) and float(layers.split("=")[1]) == d.layers, (t_min, layers)
+    ceiling = d.finger().ceiling()
+    vmax = [float(v) for v in fields(lim)["vmax"].split(",")]
+    assert vmax == [pytest.approx(ceiling, abs=0.15)] * 3, (lim, ceiling)
+    assert float(fields(lim)["vhold"]) == pytest.approx(min(ceiling, d.v_supply), abs=0.15)
+    m = fields(mat)
+    assert m["card"] == d.card and float(m["z0"]) == pytest.approx(d.z0) and float(m["margin"]) == pytest.approx(d.margin)
+    # the design's ceiling is a board constant: the console's parameters cannot raise it
+    assert [float(v) for v in fields(lim2)["vmax"].split(",")] == vmax, lim2
+
+
 def test_the_design_file_builds_a_board_whose_ceiling_is_the_designs():
     path = ROOT / "designs" / "Elastosil-2030.toml"
     d = Design.load(path)
@@ -121,12 +138,46 @@ def test_the_design_file_builds_a_board_whose_ceiling_is_the_designs():
     out = subprocess.run(["cargo", "build", "--quiet", "-p", "finger-sim", "--target", "host-tuple", "--target-dir", "target/design"], cwd=ROOT, env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     program = host_target_dir(ROOT / "target" / "design", "debug") / "finger-sim"
-    lim, mat, *_, lim2 = sim_lines(program, ["limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"])
-    ceiling = d.finger().ceiling()
-    vmax = [float(v) for v in fields(lim)["vmax"].split(",")]
-    assert vmax == [pytest.approx(ceiling, abs=0.15)] * 3, (lim, ceiling)
-    assert float(fields(lim)["vhold"]) == pytest.approx(min(ceiling, d.v_supply), abs=0.15)
-    m = fields(mat)
-    assert m["card"] == d.card and float(m["z0"]) == pytest.approx(d.z0) and float(m["margin"]) == pytest.approx(d.margin)
-    # the design's ceiling is a board constant: the console's parameters cannot raise it
-    assert [float(v) for v in fields(lim2)["vmax"].split(",")] == vmax, lim2
+    check_board_is_the_designs(d, lambda lines: sim_lines(program, lines))
+
+
+def test_the_design_file_builds_a_firmware_image_whose_limits_are_the_designs(tmp_path):
+    """The command docs/design.md gives (`FINGER_DESIGN=designs/<card>.toml cargo build
+    --release`): the image booted in QEMU answers with the design's card and ceiling. Built in
+    the top's target dir (its dependencies are the default image's; only the firmware crate and
+    its link build again), copied out, and the default image built back."""
+    path = ROOT / "designs" / "VHB-4905.toml"
+    d = Design.load(path)
+    elf = ROOT / "target" / "thumbv7em-none-eabihf" / "release" / "finger-fw"
+    try:
+        out = subprocess.run(["cargo", "build", "--release", "--quiet", "--bin", "finger-fw"], cwd=ROOT, env={**os.environ, "FINGER_DESIGN": "designs/VHB-4905.toml"}, capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr
+        image = tmp_path / "finger-fw-VHB-4905"
+        shutil.copy(elf, image)
+    finally:
+        env = {k: v for k, v in os.environ.items() if k != "FINGER_DESIGN"}
+        back = subprocess.run(["cargo", "build", "--release", "--quiet", "--bin", "finger-fw"], cwd=ROOT, env=env, capture_output=True, text=True)
+        assert back.returncode == 0, back.stderr
+    with sf.Board.qemu(image) as b:
+        check_board_is_the_designs(d, lambda lines: [b.command(l) for l in lines])
+    # built back: the default image is the paper's finger again (t_min 1.5 mm, 4 layers)
+    with sf.Board.qemu(elf) as b:
+        assert b.param("t_min")["t_min"] == pytest.approx(1.5) and b.param("layers")["layers"] == 4
+
+
+def test_the_page_is_what_its_command_writes(tmp_path):
+    """docs/design.md, its figure and designs/*.toml are what `report --from
+    docs/design-results.json` writes (the run's numbers committed beside the page)."""
+    import json
+
+    from softfinger.design import report
+
+    res = json.loads((ROOT / "docs" / "design-results.json").read_text())
+    report.write(res, tmp_path)
+    assert (tmp_path / "docs" / "design.md").read_text() == (ROOT / "docs" / "design.md").read_text()
+    for card in res["cards"]:
+        assert (tmp_path / "designs" / f"{card}.toml").read_text() == (ROOT / "designs" / f"{card}.toml").read_text()
+    assert (tmp_path / "docs" / "design-pareto.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "<svg" in (tmp_path / "docs" / "design-pareto.svg").read_text()[:2000]
+    page = (ROOT / "docs" / "design.md").read_text()
+    assert "](design-pareto.png)" in page and "design-pareto.svg" in page

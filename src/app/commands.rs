@@ -84,6 +84,11 @@ pub struct Commands {
     pub(super) plant_view: Option<crate::control::PlantView>,
     #[cfg(all(not(feature = "hw"), not(m3)))]
     pub(super) plant_req: Option<crate::control::PlantRequest>,
+    /// The read-back's calibration in force, and a change not yet handed to the core.
+    #[cfg(not(m3))]
+    pub(super) sense_cal: super::hv_cal::SenseCal,
+    #[cfg(not(m3))]
+    pub(super) sense_cal_req: Option<super::hv_cal::SenseCal>,
     /// The core's latched fault, as the console names it.
     pub(super) fault: Option<&'static str>,
     pub(super) locked_out: bool,
@@ -143,6 +148,10 @@ impl Commands {
             plant_view: None,
             #[cfg(all(not(feature = "hw"), not(m3)))]
             plant_req: None,
+            #[cfg(not(m3))]
+            sense_cal: super::hv_cal::SenseCal::NOMINAL,
+            #[cfg(not(m3))]
+            sense_cal_req: None,
             fault: None,
             locked_out: false,
             now_ms: 0,
@@ -941,6 +950,10 @@ impl Commands {
     /// change rebuilds the finger, as `param` does; refused, nothing changes.
     #[inline(never)]
     pub(super) fn cmd_cal(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
+        #[cfg(not(m3))]
+        if matches!(args.first(), Some(&(b"show" | b"vmon" | b"c0"))) {
+            return self.cmd_cal_hv(args, r);
+        }
         let cal = match args {
             [] => None,
             [w] if *w == b"none" => Some(Calibration::none()),

@@ -16,7 +16,7 @@ use super::help::Reply;
 use super::host::App;
 use super::params::FwParams;
 pub use super::params::default_finger;
-pub use super::stored::{board_ceiling, record_of, settings_of, Boot, Reject};
+pub use super::stored::{board_ceiling, record_of, record_with, settings_of, Boot, Reject};
 use super::stored::name_of;
 use crate::board::Board;
 use crate::control::Control;
@@ -43,6 +43,10 @@ impl Commands {
             Ok(Some(n)) => match Record::decode(&buf[..n]).map_err(Reject::Format).and_then(|r| settings_of(&r).map(|s| (r.counter, s))) {
                 Ok((counter, (f, fw))) => {
                     self.put_settings(f, fw);
+                    if let Ok(c) = Record::decode(&buf[..n]).map_err(|_| ()).and_then(|r| super::hv_cal::sense_cal_of(&r).map_err(|_| ())) {
+                        self.sense_cal = c;
+                        self.sense_cal_req = Some(c);
+                    }
                     self.cfg.saves = counter;
                     Boot::Loaded
                 }
@@ -78,7 +82,7 @@ impl Commands {
         if self.cfg.store.is_none() {
             return Err(err!("unknown"; "save: this board has no settings store"));
         }
-        let rec = record_of(&self.finger, &self.fw, self.cfg.saves.wrapping_add(1));
+        let rec = record_with(&self.finger, &self.fw, &self.sense_cal, self.cfg.saves.wrapping_add(1));
         match settings_of(&rec) {
             Ok((f, fw)) if f.params() == self.finger.params() && f.calibration() == self.finger.calibration() && fw == self.fw => {}
             Ok(_) => return Err(err!("usage"; "save: the settings in force do not read back as themselves; not saved")),
@@ -107,6 +111,8 @@ impl Commands {
             store.erase().map_err(|e| err!("store"; "factory: erase failed (", e.name(), "); settings unchanged"))?;
         }
         self.put_settings(default_finger(), FwParams::default());
+        self.sense_cal = super::hv_cal::SenseCal::NOMINAL;
+        self.sense_cal_req = Some(self.sense_cal);
         self.cfg.saves = 0;
         self.cfg.rejected = false;
         // nothing is stored now, with a store or without one (the simulated board's)
@@ -174,6 +180,9 @@ impl Commands {
 /// setpoints to the core. What the boot found.
 pub fn boot<B: Board>(cmds: &mut Commands, ctl: &mut Control<B>, store: &'static mut dyn ConfigStore) -> Boot {
     let boot = cmds.boot_settings(store);
+    if let Some(c) = cmds.take_sense_cal() {
+        ctl.set_sense_cal(c.monitor, c.c0_pf);
+    }
     let sp = cmds.setpoints();
     ctl.apply(&sp);
     cmds.sync(&ctl.view());

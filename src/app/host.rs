@@ -177,6 +177,10 @@ impl<B: Board> App<B> {
         if let Some(p) = self.cmds.take_plant() {
             self.ctl.plant_request(p);
         }
+        #[cfg(not(m3))]
+        if let Some(c) = self.cmds.take_sense_cal() {
+            self.ctl.set_sense_cal(c.monitor, c.c0_pf);
+        }
         if self.cmds.take_stop() {
             self.ctl.stop();
             self.cmds.sync(&self.ctl.view());

@@ -70,6 +70,8 @@ pub enum Reject {
     Ceiling,
     /// A board constant (never stored: a read-only parameter).
     BoardConstant(&'static str),
+    /// The read-back's calibration would loosen a ceiling or is out of its range (`hv_cal`).
+    SenseCal,
 }
 
 impl Emit for Reject {
@@ -87,6 +89,7 @@ impl Emit for Reject {
             Reject::Calibration => w!(f; "cal"),
             Reject::Ceiling => w!(f; "ceiling"),
             Reject::BoardConstant(n) => w!(f; "board-constant-", n),
+            Reject::SenseCal => w!(f; "sense-cal"),
         };
     }
 }
@@ -140,6 +143,8 @@ pub fn settings_of(rec: &Record) -> Result<(Finger<f32>, FwParams), Reject> {
             cal[k] = Some(v);
         } else if let Some(name) = fw_names().find(|n| tag(b'f', n) == t) {
             fw.set(name, v).map_err(|_| Reject::Param(name))?;
+        } else if cfg!(not(m3)) && super::hv_cal::slot_of(t).is_some() {
+            // the read-back's calibration: checked whole below
         } else if let Some(i) = PARAMS.iter().map(|i| i.name).chain(FW_PARAMS.iter().map(|i| i.name)).find(|n| tag(b'p', n) == t || tag(b'f', n) == t) {
             return Err(Reject::BoardConstant(i));
         } else {
@@ -161,6 +166,8 @@ pub fn settings_of(rec: &Record) -> Result<(Finger<f32>, FwParams), Reject> {
     if !cfg!(feature = "de") && p.layers != 0 {
         return Err(Reject::Param("layers"));
     }
+    #[cfg(not(m3))]
+    super::hv_cal::sense_cal_of(rec).map_err(|_| Reject::SenseCal)?;
     let cal = match cal {
         [None, None, None, None, None, None, None, None] => calibration_for(&p),
         [Some(h1), Some(h2), Some(h3), Some(h4), Some(a0), Some(a1), Some(b0), Some(b1)] => {
@@ -184,6 +191,15 @@ pub fn settings_of(rec: &Record) -> Result<(Finger<f32>, FwParams), Reject> {
 /// constants allow a stored setting (`save` and the boot refuse more).
 pub fn board_ceiling() -> f32 {
     default_finger().ceiling_in_force(None)
+}
+
+/// The settings `finger` and `fw` and the read-back's calibration `sense` (its values only
+/// when not nominal) as a record numbered `counter`.
+#[cfg(not(m3))]
+pub fn record_with(finger: &Finger<f32>, fw: &FwParams, sense: &super::hv_cal::SenseCal, counter: u32) -> Record {
+    let mut rec = record_of(finger, fw, counter);
+    super::hv_cal::push_values(sense, &mut rec.values);
+    rec
 }
 
 /// The settings `finger` and `fw` as a record numbered `counter`.
@@ -214,6 +230,10 @@ pub(crate) fn name_of(t: u16) -> &'static str {
     }
     if let Some(n) = CAL_NAMES.iter().find(|n| tag(b'c', n) == t) {
         return n;
+    }
+    #[cfg(not(m3))]
+    if let Some((k, j)) = super::hv_cal::slot_of(t) {
+        return super::hv_cal::NAMES[k][j];
     }
     fw_names().find(|n| tag(b'f', n) == t).unwrap_or("?")
 }

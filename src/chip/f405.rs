@@ -6,6 +6,7 @@
 //! - TIM3 CH1 PA6: servo PWM, 50 Hz, 1.0..2.0 ms
 //! - TIM4 CH1..CH3 PB6, PB7, PB8: HV modules' control inputs (PWM 20 kHz, RC-filtered to 0..5 V)
 //! - PB12: HV enable (interlock), push-pull, low unless armed (external pull-down on the board)
+//! - board build: PC0..PC3, PA1, PA2 analog, the HV read-back (`super::hv_adc`)
 //!
 //! Not here: the HV-off stores of the reset and fault paths (src/image/fault.rs), which run
 //! before and without this.
@@ -13,6 +14,8 @@
 use crate::Board;
 use core::convert::Infallible;
 use embedded_hal::digital::{ErrorType, OutputPin};
+#[cfg(feature = "hw")]
+use embedded_hal::pwm::SetDutyCycle;
 use stm32f4xx_hal::{
     gpio::{Output, PinState, PB12},
     pac,
@@ -23,7 +26,29 @@ use stm32f4xx_hal::{
 };
 
 /// One HV control PWM: the three TIM4 channels, erased to one type.
+#[cfg(not(feature = "hw"))]
 pub type HvPwm = ErasedChannel<pac::TIM4>;
+
+/// The board build's HV control PWM: a TIM4 channel held at duty 0 while the analog
+/// watchdog's cut stands (`hv_adc::cut`), whatever the core writes before it has seen the trip.
+#[cfg(feature = "hw")]
+pub struct HvPwm(ErasedChannel<pac::TIM4>);
+
+#[cfg(feature = "hw")]
+impl embedded_hal::pwm::ErrorType for HvPwm {
+    type Error = Infallible;
+}
+
+#[cfg(feature = "hw")]
+impl SetDutyCycle for HvPwm {
+    fn max_duty_cycle(&self) -> u16 {
+        self.0.max_duty_cycle()
+    }
+    fn set_duty_cycle(&mut self, duty: u16) -> Result<(), Infallible> {
+        let d = if super::hv_adc::cut() { 0 } else { duty };
+        self.0.set_duty_cycle(d)
+    }
+}
 /// The console USART's halves.
 pub type ConsoleRx = Rx<pac::USART1>;
 pub type ConsoleTx = Tx<pac::USART1>;
@@ -42,9 +67,17 @@ impl OutputPin for EnablePin {
     fn set_low(&mut self) -> Result<(), Infallible> {
         self.pin.set_low();
         self.high = false;
+        // the core dropped the enable itself: a watchdog's cut is acknowledged
+        #[cfg(feature = "hw")]
+        super::hv_adc::acknowledge_cut();
         Ok(())
     }
     fn set_high(&mut self) -> Result<(), Infallible> {
+        // the board build: never over a watchdog's cut the core has not acknowledged
+        #[cfg(feature = "hw")]
+        if super::hv_adc::cut() {
+            return Ok(());
+        }
         self.pin.set_high();
         self.high = true;
         Ok(())
@@ -60,6 +93,8 @@ pub struct F405Board {
     plant: crate::plant::Plant,
     #[cfg(feature = "hw")]
     iwdg: stm32f4xx_hal::watchdog::IndependentWatchdog,
+    #[cfg(feature = "hw")]
+    adc: super::hv_adc::HvAdc,
 }
 
 impl Board for F405Board {
@@ -79,9 +114,13 @@ impl Board for F405Board {
         #[cfg(feature = "hw")]
         self.iwdg.feed();
     }
+    /// The board build: the ADCs' read-back (`super::hv_adc`).
+    #[cfg(feature = "hw")]
+    fn hv_sense(&mut self) -> Option<crate::board::HvSense> {
+        Some(self.adc.sense())
+    }
     /// The emulator image: the plant stepped over the tick with the duties in TIM4's compare
-    /// registers and the enable as last written. (The board build's ADC read-back is not
-    /// written yet: it has none, and runs open loop as before.)
+    /// registers and the enable as last written.
     #[cfg(all(feature = "qemu", not(m3)))]
     fn hv_sense(&mut self) -> Option<crate::board::HvSense> {
         use embedded_hal::pwm::SetDutyCycle;
@@ -141,6 +180,8 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
         ch.set_duty(0);
         ch.enable();
     }
+    #[cfg(feature = "hw")]
+    let hv = hv.map(HvPwm);
 
     let serial: stm32f4xx_hal::serial::Serial<pac::USART1, u8> = dp.USART1.serial((gpioa.pa9, gpioa.pa10), 115_200.bps(), &mut rcc).unwrap();
     let (tx, mut rx) = serial.split();
@@ -151,6 +192,13 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
         let mut w = stm32f4xx_hal::watchdog::IndependentWatchdog::new(dp.IWDG);
         w.start(1000.millis());
         w
+    };
+    // the HV read-back: its pins analog, then the chain started (board build)
+    #[cfg(feature = "hw")]
+    let adc = {
+        let gpioc = dp.GPIOC.split(&mut rcc);
+        let _analog = (gpioc.pc0.into_analog(), gpioc.pc1.into_analog(), gpioc.pc2.into_analog(), gpioc.pc3.into_analog(), gpioa.pa1.into_analog(), gpioa.pa2.into_analog());
+        super::hv_adc::start(&mut rcc, dp.ADC1, dp.ADC2, dp.ADC_COMMON, dp.DMA2, dp.TIM2)
     };
     let board = F405Board {
         servo,
@@ -163,6 +211,8 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
         },
         #[cfg(feature = "hw")]
         iwdg,
+        #[cfg(feature = "hw")]
+        adc,
     };
     Chip { board, rx, tx, real_chip, flash: dp.FLASH }
 }

@@ -36,8 +36,10 @@ pub const LEAK_BOUND_UA_PER_V: f32 = 2e-4;
 pub const LEAK_CHECK_MIN_V: f32 = 50.0;
 /// The thickness guard lowers the ceiling once the sensed film is within this of its floor.
 pub const FLOOR_MARGIN_S: f32 = 0.03;
-/// The sensed and the model's thickness disagree past this (absolute, in s).
+/// The sensed and the model's thickness disagree past this (absolute, in s), over this many
+/// windows in a row (one window's outlier lowers nothing; near the floor the guard acts at once).
 pub const DISAGREE_S: f32 = 0.02;
+pub const DISAGREE_WINDOWS: u32 = 3;
 
 /// One tick's reading of a channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -142,11 +144,12 @@ pub struct ThicknessGuard {
     pub derate: f32,
     /// The sensed thickness disagreed with the model's past [`DISAGREE_S`].
     pub disagreed: bool,
+    disagree_windows: u32,
 }
 
 impl ThicknessGuard {
     pub const fn new() -> Self {
-        ThicknessGuard { derate: 1.0, disagreed: false }
+        ThicknessGuard { derate: 1.0, disagreed: false, disagree_windows: 0 }
     }
 
     /// After a window: `s_meas` sensed, `s_model` the model's, `s_floor` the floor, and the
@@ -155,7 +158,8 @@ impl ThicknessGuard {
         if !(s_meas > 0.0 && s_meas <= 1.5) {
             return;
         }
-        if s_meas < s_model - DISAGREE_S {
+        self.disagree_windows = if s_meas < s_model - DISAGREE_S { self.disagree_windows.saturating_add(1) } else { 0 };
+        if self.disagree_windows >= DISAGREE_WINDOWS {
             self.disagreed = true;
             // the film's voltage scale: at equilibrium a film g times the card's modulus needs
             // sqrt(g) times the card's voltage for the same thickness

@@ -4,7 +4,7 @@
   resume a card's Optuna study (journal file out/design/studies.journal by default);
 - ``sweep --card C [--grid 7]``: the exhaustive grid, its rate and best design;
 - ``fe DESIGN.toml ... [--scheduler tcp://...] [--workers 2]``: FE-check designs on Dask;
-- ``report [--trials N] [--grid 7] [--scheduler ...] [--from results.json]``: everything, then
+- ``report [--trials N] [--grid 7] [--fe-repeats 2] [--scheduler ...] [--from results.json | --fe-only results.json]``: everything, then
   docs/design.md, its figure and designs/<card>.toml.
 """
 
@@ -40,6 +40,7 @@ def main(argv=None) -> int:
     r.add_argument("--trials", type=int, default=2048)
     r.add_argument("--grid", type=int, default=7)
     r.add_argument("--fe-per-card", type=int, default=5)
+    r.add_argument("--fe-repeats", type=int, default=2, help="FE stage timings per worker count (alternating cores and 1)")
     r.add_argument("--storage", default=None)
     r.add_argument("--scheduler", default=None)
     r.add_argument("--from", dest="from_json", default=None, help="rewrite the page from a results.json, running nothing")
@@ -77,7 +78,7 @@ def main(argv=None) -> int:
             res = json.loads(Path(a.from_json).read_text())
         else:
             search = json.loads(Path(a.fe_only).read_text()) if a.fe_only else None
-            res = report.run(root, trials=a.trials, grid=a.grid, fe_per_card=a.fe_per_card, storage=a.storage, scheduler=a.scheduler, search=search)
+            res = report.run(root, trials=a.trials, grid=a.grid, fe_per_card=a.fe_per_card, fe_repeats=a.fe_repeats, storage=a.storage, scheduler=a.scheduler, search=search)
             out = root / "out" / "design" / "results.json"
             out.parent.mkdir(parents=True, exist_ok=True)
             out.write_text(json.dumps(res, indent=1, default=float))

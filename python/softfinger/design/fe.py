@@ -19,6 +19,7 @@ Not here: which designs (``report`` picks the Pareto front), the cluster's set-u
 from __future__ import annotations
 
 import os
+import resource
 import shutil
 import subprocess
 import time
@@ -76,6 +77,7 @@ class CaseResult:
     joints_rad: tuple = ()
     direct: tuple = ()  # (1/C_yy, 1/C_θθ), FE
     seconds: float = 0.0
+    cpu_seconds: float = 0.0  # the run's processes' CPU time (user + system)
     nodes: int = 0
     error: str = ""
 
@@ -86,15 +88,16 @@ def run_case(case: Case, program: Optional[str] = None) -> CaseResult:
     d = case.design
     args = [prog, f"card={d.card}"] + [f"{k}={v}" for k, v in d.params().items()]
     args += [f"tension={case.tension_N!r}", "stack=" + ",".join(repr(float(x)) for x in case.stack_mm), f"kind={case.kind}", f"density={case.density}"]
-    t0 = time.perf_counter()
+    t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
     out = subprocess.run(args, capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"})
-    secs = time.perf_counter() - t0
+    secs, r1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
     if out.returncode != 0:
-        return CaseResult(case, False, seconds=secs, error=(out.stderr.strip().splitlines() or ["?"])[-1])
+        return CaseResult(case, False, seconds=secs, cpu_seconds=cpu, error=(out.stderr.strip().splitlines() or ["?"])[-1])
     kv = dict(line.split("=", 1) for line in out.stdout.split() if "=" in line)
     num = lambda k: [float(x) for x in kv[k].split(",")]
     c = np.array(num("compliance")).reshape(3, 3)
-    return CaseResult(case, True, joints_rad=tuple(num("joints")), direct=(1.0 / c[1, 1], 1.0 / c[2, 2]), seconds=secs, nodes=int(kv["nodes"]))
+    return CaseResult(case, True, joints_rad=tuple(num("joints")), direct=(1.0 / c[1, 1], 1.0 / c[2, 2]), seconds=secs, cpu_seconds=cpu, nodes=int(kv["nodes"]))
 
 
 def cases_of(design: Design, *, kind: str = "3d", density: str = "notch", reference_deg: float = REFERENCE_DEG) -> List[Case]:

@@ -125,11 +125,14 @@ fn columns(p: &Params<f64>, seg: &Segment, d: &Density) -> Vec<f64> {
                     let near = xs.iter().map(|&x| (x - e).abs()).fold(f64::MAX, f64::min);
                     let h = 0.25 * 2.0 * p.a / d.notch_cols as f64;
                     if near > 1e-9 {
-                        // move the nearest boundary onto the end if it is close, else add one
+                        // move the nearest boundary onto the end if it is close, else add one;
+                        // an end close to the notch's own end is taken at it (a column of a few
+                        // um beside a 10 mm link diverges in ccx)
                         let i = xs.iter().enumerate().min_by(|a, b| (a.1 - e).abs().total_cmp(&(b.1 - e).abs())).unwrap().0;
-                        if near < h && i != 0 && i != xs.len() - 1 {
+                        let at_notch_end = i == 0 || i == xs.len() - 1;
+                        if near < h && !at_notch_end {
                             xs[i] = e;
-                        } else {
+                        } else if !(at_notch_end && near < h) {
                             xs.push(e);
                         }
                     }

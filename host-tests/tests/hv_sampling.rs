@@ -1,0 +1,192 @@
+//! The board build's read-back sampling arithmetic (src/sampling.rs; its registers are
+//! src/chip/hv_adc.rs, which no test here runs: QEMU does not model the F405's ADC): the DMA
+//! buffer's means at any phase of the halves against the tick, the halves' bookkeeping and the
+//! stale cut-off, the analog watchdog's threshold codes against the plant's and the tick's
+//! bounds, and the trip's channel.
+use finger_fw::board::{ADC_FULL_CODE, HV_CHANNELS, HV_LIMIT_V, IMON_SPAN_UA, IMON_ZERO_CODE, SENSE_SAMPLES_PER_TICK, TRIP_CURRENT_UA};
+use finger_fw::control::sense::{microamps_of_code, volts_of_code, MonitorCal};
+use finger_fw::control::watch::{OVER_FRAC, OVER_V};
+use finger_fw::sampling::{awd_codes, split, trip_channel, window_means, writing_at, HalfFlags, Halves, BUF_WORDS, HALF_WORDS, STALE_LIMIT};
+
+/// One DMA word: ADC1's current code low, ADC2's voltage code high.
+fn pair(i_code: u16, v_code: u16) -> u32 {
+    i_code as u32 | (v_code as u32) << 16
+}
+
+/// A simulated chain: the DMA writes one word per conversion pair into the circular buffer,
+/// HTIF at the half, TCIF at the end, as DMA2 stream 0 does.
+struct Dma {
+    buf: [u32; BUF_WORDS],
+    at: usize,
+    flags: HalfFlags,
+}
+
+impl Dma {
+    fn new() -> Self {
+        Dma { buf: [0; BUF_WORDS], at: 0, flags: HalfFlags::default() }
+    }
+    fn push(&mut self, w: u32) {
+        self.buf[self.at] = w;
+        self.at = (self.at + 1) % BUF_WORDS;
+        if self.at == HALF_WORDS {
+            self.flags.half = true;
+        }
+        if self.at == 0 {
+            self.flags.full = true;
+        }
+    }
+    /// NDTR as the stream reports it (transfers left before the reload).
+    fn ndtr(&self) -> u32 {
+        (BUF_WORDS - self.at) as u32
+    }
+    fn take_flags(&mut self) -> HalfFlags {
+        core::mem::take(&mut self.flags)
+    }
+}
+
+#[test]
+fn the_layout_is_adc1_low_adc2_high_and_ndtr_counts_down() {
+    assert_eq!(split(pair(0x0ABC, 0x0123)), (0x0ABC, 0x0123));
+    // the 12 data bits only (DATA1, DATA2 right aligned)
+    assert_eq!(split(0xF123_F456), (0x0456, 0x0123));
+    assert_eq!(writing_at(BUF_WORDS as u32), 0);
+    assert_eq!(writing_at(1), BUF_WORDS - 1);
+    assert_eq!(writing_at(BUF_WORDS as u32 - 7), 7);
+    assert_eq!(HALF_WORDS, SENSE_SAMPLES_PER_TICK as usize * HV_CHANNELS);
+}
+
+/// The DMA runs at 10 kHz, the tick at 1 kHz, at every phase between them (the trigger's
+/// sample k of the tick, and the word of a group the DMA is in): each tick's means are
+/// exactly the last 10 samples of each channel.
+#[test]
+fn each_tick_averages_the_last_tick_of_samples_at_every_phase() {
+    for phase in 0..HALF_WORDS {
+        let mut dma = Dma::new();
+        let mut halves = Halves::new();
+        let mut n = 0u32;
+        // sample g of channel k: a ramp distinct per channel
+        let code = |g: u32, k: usize| -> (u16, u16) { ((1000 + 7 * g + 300 * k as u32) as u16 % 4096, (200 + 13 * g + 500 * k as u32) as u16 % 4096) };
+        for _ in 0..phase {
+            let (i, v) = code(n / 3, (n % 3) as usize);
+            dma.push(pair(i, v));
+            n += 1;
+        }
+        for tick in 0..50 {
+            for _ in 0..HALF_WORDS {
+                let (i, v) = code(n / 3, (n % 3) as usize);
+                dma.push(pair(i, v));
+                n += 1;
+            }
+            if tick < 2 {
+                continue;
+            }
+            let flags = dma.take_flags();
+            let at = writing_at(dma.ndtr());
+            let s = halves.sense(flags, at, |w| dma.buf[w], None);
+            let last_group = n / 3; // groups complete so far
+            for k in 0..HV_CHANNELS {
+                let (mut si, mut sv) = (0.0, 0.0);
+                for g in last_group - 10..last_group {
+                    let (i, v) = code(g, k);
+                    si += i as f32;
+                    sv += v as f32;
+                }
+                assert!((s.i_code[k] - si / 10.0).abs() < 1e-3, "phase {phase} tick {tick} ch {k}: {} against {}", s.i_code[k], si / 10.0);
+                assert!((s.v_code[k] - sv / 10.0).abs() < 1e-3, "phase {phase} tick {tick} ch {k}: {} against {}", s.v_code[k], sv / 10.0);
+            }
+        }
+        assert_eq!(halves.stale_ticks, 0, "phase {phase}");
+    }
+}
+
+/// A chain that stops (the timer, the ADC's overrun, the DMA): the readings go NaN after
+/// STALE_LIMIT ticks with no half completed, which the tick's checks latch as `sensor`; a
+/// tick seeing both halves counts a half no tick read.
+#[test]
+fn a_stopped_chain_reads_nan_after_the_stale_limit() {
+    let buf = [pair(2048, 1000); BUF_WORDS];
+    let mut h = Halves::new();
+    let fresh = HalfFlags { half: true, full: false };
+    assert!(h.sense(fresh, 0, |w| buf[w], None).v_code[0] == 1000.0);
+    for k in 1..STALE_LIMIT {
+        let s = h.sense(HalfFlags::default(), 0, |w| buf[w], None);
+        assert!(s.v_code[0].is_finite(), "stale tick {k}: one late half is not a fault");
+    }
+    let s = h.sense(HalfFlags::default(), 0, |w| buf[w], None);
+    assert!(s.v_code.iter().chain(s.i_code.iter()).all(|c| c.is_nan()));
+    assert_eq!(h.stale_ticks, STALE_LIMIT);
+    // the chain back: readings again
+    let s = h.sense(HalfFlags { half: true, full: true }, 0, |w| buf[w], Some(1));
+    assert_eq!((s.v_code[2], s.i_code[1], s.trip), (1000.0, 2048.0, Some(1)));
+    assert_eq!(h.missed_halves, 1);
+    // a NaN reading is a sensor fault at the tick's checks
+    let mut w = finger_fw::control::watch::Watch::new();
+    let r = finger_fw::control::watch::Reading { v: f32::NAN, i_ua: f32::NAN, v_code: f32::NAN };
+    assert_eq!(w.check(&r, 1000.0, false, 5000.0, true, &finger_fw::control::sense::Estimator::new()), Some(finger_fw::control::Fault::Sensor));
+}
+
+/// The watchdog flags a code above HTR or below LTR (RM0090): exactly the codes the plant's
+/// watchdog and the tick's check trip on, for every code.
+#[test]
+fn the_watchdog_codes_trip_where_the_plant_and_the_tick_do() {
+    let c = awd_codes();
+    let plant_trip = IMON_ZERO_CODE + TRIP_CURRENT_UA / IMON_SPAN_UA * ADC_FULL_CODE;
+    for code in 0..=4095u16 {
+        let hw_high = code > c.current_high;
+        assert_eq!(hw_high, code as f32 >= plant_trip, "code {code}: the plant's watchdog");
+        // the tick's check: a current past TRIP_CURRENT_UA (a code past the high threshold is one)
+        if hw_high {
+            assert!(microamps_of_code(code as f32) >= TRIP_CURRENT_UA - 1e-3);
+        } else {
+            assert!(microamps_of_code(code as f32) < TRIP_CURRENT_UA);
+        }
+        let hw_low = code < c.current_low;
+        assert_eq!(hw_low, microamps_of_code(code as f32) <= -TRIP_CURRENT_UA + 1e-3, "code {code}: the mirror");
+        let v = volts_of_code(code as f32, &MonitorCal::NOMINAL);
+        let over = HV_LIMIT_V * (1.0 + OVER_FRAC) + OVER_V;
+        assert_eq!(code > c.volts_high, v >= over - 0.01, "code {code} ({v} V): over the hard limit's bound");
+    }
+    // a healthy charge at the module's own slew (24 µA at the 2/3 limit) never trips
+    let at_slew = (IMON_ZERO_CODE + 24.0 / IMON_SPAN_UA * ADC_FULL_CODE) as u16;
+    assert!(at_slew <= c.current_high && (4096 - at_slew) >= c.current_low);
+}
+
+/// The trip's channel: the newest sample out of the window in the last two groups, at any
+/// position of the DMA (wrapping too); else the largest current of the last group.
+#[test]
+fn the_trip_names_the_channel_out_of_its_window() {
+    let c = awd_codes();
+    for at in 0..BUF_WORDS {
+        for ch in 0..HV_CHANNELS {
+            for (bad_i, bad_v) in [(c.current_high + 1, 100), (c.current_low - 1, 100), (2048, c.volts_high + 1)] {
+                let mut buf = [pair(2048, 1000); BUF_WORDS];
+                // the newest group before `at` holding channel ch's word
+                let mut w = (at + BUF_WORDS - 1) % BUF_WORDS;
+                while w % HV_CHANNELS != ch {
+                    w = (w + BUF_WORDS - 1) % BUF_WORDS;
+                }
+                buf[w] = pair(bad_i, bad_v);
+                assert_eq!(trip_channel(at, |i| buf[i], &c) as usize, ch, "at {at} ch {ch}");
+            }
+        }
+    }
+    // nothing out of the window yet (the sample still in ADC_CDR): the largest current
+    let mut buf = [pair(2048, 1000); BUF_WORDS];
+    buf[BUF_WORDS - 2] = pair(3000, 1000);
+    assert_eq!(trip_channel(0, |i| buf[i], &c), ((BUF_WORDS - 2) % 3) as u8);
+}
+
+/// A window's mean of a constant buffer is its code (no off-by-one in the wrap).
+#[test]
+fn a_constant_buffer_averages_to_its_codes_everywhere() {
+    let mut buf = [0u32; BUF_WORDS];
+    for (w, b) in buf.iter_mut().enumerate() {
+        let k = w % 3;
+        *b = pair(2000 + k as u16, 3000 + k as u16);
+    }
+    for at in 0..BUF_WORDS {
+        let (v, i) = window_means(at, |w| buf[w]);
+        assert_eq!(v, [3000.0, 3001.0, 3002.0], "at {at}");
+        assert_eq!(i, [2000.0, 2001.0, 2002.0], "at {at}");
+    }
+}
