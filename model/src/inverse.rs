@@ -189,6 +189,8 @@ impl<'a, R: Real> Ctx<'a, R> {
 
     /// Joint `joint` (1-based) held at `ang` with stack thickness t: Newton on (δax, δtr, P) of
     /// `K q - P ŵ(q) = 0` (`solve::newton::full_steps`). Also the implicit dP/dθ at fixed t.
+    /// Not the march's `SubElement`: with θ given and P (or t) unknown the residual is solved for
+    /// the load, where the march solves q for a given load; K is the same `JointStiffness`.
     fn hold_tension(&self, joint: usize, ang: &Angle<R>, t: R, guess: [R; 2]) -> Result<Hold<R>, Error> {
         let k = self.stiffness(t).matrix(0);
         // first tension from the moment row with the guessed δ

@@ -177,6 +177,8 @@ fn main() {
         Some(i) => md.insert_str(i, &section),
         None => md.push_str(&section),
     }
+    let previous = std::fs::read_to_string(root.join("docs/performance.md")).unwrap_or_default();
+    md.push_str(&moved(&previous, &md));
     std::fs::write(root.join("docs/performance.md"), md).unwrap();
     std::fs::write(root.join("docs/perf-error-vs-instructions.svg"), plot(&rows)).unwrap();
     eprintln!("perf-report: wrote docs/performance.md and docs/perf-error-vs-instructions.svg");
@@ -590,5 +592,50 @@ fn plot(rows: &[Row]) -> String {
     writeln!(s, r##"<circle cx="{}" cy="{ly}" r="6" fill="none" stroke="#333" stroke-width="2"/><text x="{}" y="{}">converged</text>"##, w - mr + 20.0, w - mr + 35.0, ly + 4.0).unwrap();
     writeln!(s, r##"<circle cx="{}" cy="{}" r="2.5" fill="#333"/><text x="{}" y="{}">stepping, n_inc 1..200</text>"##, w - mr + 20.0, ly + 18.0, w - mr + 35.0, ly + 22.0).unwrap();
     writeln!(s, "</svg>").unwrap();
+    s
+}
+
+/// Why the counts of the last structural change moved (the section `moved` writes).
+const MOVED_WHY: &str = "The last structural change (issue 35: one joint-stiffness value, `JointStiffness`, \
+for every K_hinge + K_de; the ceiling and the film's law once per compliance set, `de::Stack`; four march \
+entry points, `march_cable` taking the compliance or the stiffness form; the bench twin deleted) keeps every \
+solve's arithmetic: the answers are bit for bit the same, so no error digit moves. Instruction counts move \
+where the inlining and the code layout around the marches changed.";
+
+/// The rows of the tables under `heading` in `md`: the first `key` cells joined, then the next `cols` cells.
+fn table_rows(md: &str, heading: &str, key: usize, cols: usize) -> BTreeMap<String, Vec<String>> {
+    let mut out = BTreeMap::new();
+    let Some(start) = md.find(heading) else { return out };
+    let body = &md[start + heading.len()..];
+    let body = &body[..body.find("\n## ").unwrap_or(body.len())];
+    for line in body.lines().filter(|l| l.starts_with("| ") && !l.starts_with("| ---")) {
+        let cells: Vec<String> = line.trim_matches('|').split('|').map(|c| c.trim().to_string()).collect();
+        if cells.len() >= key + cols {
+            out.insert(cells[..key].join(" / "), cells[key..key + cols].to_vec());
+        }
+    }
+    out
+}
+
+/// The section listing what moved against the report this run replaces: per summary row and per
+/// scene row, the instruction counts and errors whose text changed (host ns left out: they
+/// vary with the machine).
+fn moved(previous: &str, new: &str) -> String {
+    let mut s = String::from("\n## Counts moved since the previous report\n\n");
+    s.push_str(MOVED_WHY);
+    s.push_str("\n\n| table | row | before | after |\n| --- | --- | --- | --- |\n");
+    let mut n = 0;
+    for (heading, key, cols) in [("## Summary over the paper's scenes", 3, 4), ("## Every scene and variant", 4, 3)] {
+        let (a, b) = (table_rows(previous, heading, key, cols), table_rows(new, heading, key, cols));
+        for (k, v) in &b {
+            if let Some(old) = a.get(k).filter(|old| *old != v) {
+                n += 1;
+                s.push_str(&format!("| {} | {k} | {} | {} |\n", &heading[3..], old.join(", "), v.join(", ")));
+            }
+        }
+    }
+    if n == 0 {
+        s.push_str("| - | nothing moved | | |\n");
+    }
     s
 }
