@@ -742,7 +742,8 @@ impl<B: Board> Control<B> {
             let i = sense::microamps_of_code(hs.i_code[ch]);
             sn.view.volts[ch] = v;
             sn.view.current_ua[ch] = i;
-            sn.est[ch].tick(v, i, sn.ripple_ms[ch] > 0 && sense::ripple_turns(sn.ripple_ms[ch]));
+            let c_ratio = self.stacks.as_ref().map_or(1.0, |st| st.incremental_capacitance_ratio(ch));
+            sn.est[ch].tick(v, i, sn.ripple_ms[ch], c_ratio);
             let reading = watch::Reading { v, i_ua: i, v_code: hs.v_code[ch] };
             if let Some(f) = sn.watch[ch].check(&reading, sn.drive[ch], sn.slew_held[ch], self.write_ceiling_v[ch], self.enable, &sn.est[ch]) {
                 fault = fault.or(Some(f));
@@ -755,7 +756,7 @@ impl<B: Board> Control<B> {
                 if let (Some(st), true) = (self.stacks.as_ref(), sn.guard_on) {
                     let s_model = st.ratios()[ch];
                     let (at_model, at_meas) = (st.equilibrium_voltage_at(s_model), st.equilibrium_voltage_at(s_meas));
-                    sn.guard[ch].update(s_meas, s_model, self.s_floor[ch], at_model, at_meas);
+                    sn.guard[ch].update(s_meas, s_model, self.s_floor[ch], at_model, at_meas, sn.ripple_ms[ch]);
                 }
             }
             sn.view.ceiling_v[ch] = sn.guard[ch].derate * hold;

@@ -86,6 +86,9 @@ struct Channel {
     short_ms: Option<Option<u32>>,
     mon_stuck: Option<f32>,
     i_last: f32,
+    /// The film's charge current, A: its capacitance's change over the last tick at its
+    /// voltage (V dC/dt), drawn from the node over the next tick.
+    i_film: f32,
     /// The analog watchdog cut this channel's module (until the core drops the enable).
     awd_cut: bool,
 }
@@ -106,6 +109,7 @@ impl Channel {
             short_ms: None,
             mon_stuck: None,
             i_last: 0.0,
+            i_film: 0.0,
             awd_cut: false,
         }
     }
@@ -295,18 +299,18 @@ impl Plant {
                 // the node by backward Euler (stable whatever the short), the module's
                 // current limited
                 let g_load = 1.0 / DIVIDER_OHM + g_stack;
-                let mut v_new = (c_node * c.v + DT_S * c.v_src / MODULE_R_OUT_OHM) / (c_node + DT_S * (1.0 / MODULE_R_OUT_OHM + g_load));
+                let mut v_new = (c_node * c.v + DT_S * (c.v_src / MODULE_R_OUT_OHM - c.i_film)) / (c_node + DT_S * (1.0 / MODULE_R_OUT_OHM + g_load));
                 let i_src = (c.v_src - v_new) / MODULE_R_OUT_OHM;
                 if !(i_src.abs() <= MODULE_I_MAX_A) {
                     let i_lim = MODULE_I_MAX_A.copysign(i_src);
-                    v_new = (c_node * c.v + DT_S * i_lim) / (c_node + DT_S * g_load);
+                    v_new = (c_node * c.v + DT_S * (i_lim - c.i_film)) / (c_node + DT_S * g_load);
                 }
                 let v_new = v_new.max(0.0);
                 let dv = v_new - c.v;
                 let i_stack_dc = v_new * g_stack;
                 c.v = v_new;
                 // the return sees the stack's charge and conduction and the stray beside it
-                let i_sense = (c_stack + stray_f) * dv / DT_S + i_stack_dc;
+                let i_sense = (c_stack + stray_f) * dv / DT_S + c.i_film + i_stack_dc;
                 c.i_last = i_sense;
                 let v_code = match c.mon_stuck {
                     Some(code) => code,
@@ -331,6 +335,7 @@ impl Plant {
         for k in 0..HV_CHANNELS {
             let mut c = self.ch[k];
             let v = c.v;
+            let c_before = self.stack_f(&c);
             if !c.collapsed {
                 if c.state.advance(&self.law, &self.relax, v).is_err() {
                     // past its pull-in the film collapses: it breaks down
@@ -338,6 +343,8 @@ impl Plant {
                     c.short_ms = Some(None);
                 }
             }
+            // Q = C V: the film's thinning at its voltage draws V dC over the next tick
+            c.i_film = v * (self.stack_f(&c) - c_before) * 1e3;
             c.s_min = c.s_min.min(c.state.s);
             let thick_um = c.state.s * BOARD_Z0_MM * 1e3;
             c.field_max = c.field_max.max(v / thick_um);

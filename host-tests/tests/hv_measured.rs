@@ -99,19 +99,58 @@ fn the_loop_holds_a_module_ten_percent_weak() {
     assert_eq!(c.view().fault.get(), None);
 }
 
-/// The sensed thickness follows the plant's film within 1.5 % over a ramp and a hold.
+/// The sensed thickness follows the plant's film: on the ramp within 3 % and never more than
+/// 0.5 % thicker (a slew's windows carry the film's creep, which reads thinner), once held
+/// within 1 %.
 #[test]
 fn the_sensed_thickness_follows_the_film() {
     let mut c = armed(Plant::new(11).unwrap(), [5399.0; 3]);
     run(&mut c, 1000);
-    let mut worst: f32 = 0.0;
-    for _ in 0..60 {
+    let (mut ramp_lo, mut ramp_hi, mut held): (f32, f32, f32) = (0.0, 0.0, 0.0);
+    for k in 0..60 {
         run(&mut c, 100);
         let s_true = c.board().plant.as_ref().unwrap().truth()[0].s;
-        let s_meas = c.view().sense.unwrap().stack_ratio[0];
-        worst = worst.max((s_meas - s_true).abs() / s_true);
+        let err = (c.view().sense.unwrap().stack_ratio[0] - s_true) / s_true;
+        if k < 20 {
+            (ramp_lo, ramp_hi) = (ramp_lo.min(err), ramp_hi.max(err));
+        } else if k >= 40 {
+            held = held.max(err.abs());
+        }
     }
-    assert!(worst < 0.015, "worst {worst}");
+    assert!(ramp_lo > -0.03 && ramp_hi < 0.005 && held < 0.01, "ramp {ramp_lo}..{ramp_hi}, held {held}");
+}
+
+/// The card's own film held at 0.9 of the hold ceiling for two minutes (the emulator's creep
+/// test): once held, the sensed thickness stays within 0.015 of the model's and the guard
+/// lowers no ceiling. Before each held window spanned a whole half period of the ripple (it
+/// closed at 60 V, so 60 V and 40 V windows were paired), the scatter was 0.02 and 2 of these 6
+/// holds lowered their ceiling.
+#[test]
+fn the_cards_own_film_held_for_two_minutes_lowers_no_ceiling() {
+    use finger_fw::control::Control;
+    use finger_fw::sim::SimBoard;
+    use host_tests::hv::setpoints;
+    for seed in 0..6u32 {
+        let mut c = Control::new(SimBoard::with_plant(Plant::new(seed).unwrap()), 2000, 2000.0);
+        run(&mut c, 1 + seed * 37 % 500);
+        let v = (0.9 * c.hold_ceiling_v()).floor();
+        assert!(c.apply(&setpoints(&c, [v; 3], false, 2000.0)));
+        let mut worst: f32 = 0.0;
+        for t in 0..120_000 {
+            run(&mut c, 1);
+            let view = c.view();
+            let sense = view.sense.unwrap();
+            for ch in 0..3 {
+                // once held (the ramp's own windows lag the film)
+                if t >= 5_000 {
+                    worst = worst.max((sense.stack_ratio[ch] - view.stack_ratio[ch]).abs());
+                }
+                assert!(!sense.disagreed[ch] && sense.ceiling_v[ch] == c.hold_ceiling_v(), "seed {seed} ch {ch} at {} ms: {sense:?}", view.now_ms);
+            }
+        }
+        assert!(worst < 0.015, "seed {seed}: the sensed thickness {worst} off the model's");
+        assert_eq!(c.view().fault.get(), None);
+    }
 }
 
 /// `n` soft-film histories from `seed0`, on two threads: the worst of them.

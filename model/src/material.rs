@@ -321,6 +321,23 @@ pub fn pull_in_ratio<R: Real>(law: &StackLaw<R>, a: &[R; MAX_BRANCHES]) -> R {
     Balance::of(law, a).pull_in()
 }
 
+/// The film's incremental capacitance over its capacitance, `(dQ/dV) / (Q/V)`, at stretch `s`
+/// with branches `a` frozen (a swing faster than the branches, such as the hold ripple): with
+/// C = C0 / s², `d ln C / d ln V = -2 d ln s / d ln V = -4 f / (s f')`, so the ratio is
+/// `1 - 4 f / (s f')` (above 1 on the stable branch). Refuses s outside (0, 1] and a stretch
+/// past the branch's pull-in.
+pub fn incremental_capacitance_ratio<R: Real>(law: &StackLaw<R>, a: &[R; MAX_BRANCHES], s: R) -> Result<R, Error> {
+    if !(s > R::zero() && s <= R::one()) {
+        return Err(Error::Input { input: "thickness ratio", reason: "must lie in (0, 1]" });
+    }
+    let b = Balance::of(law, a);
+    let slope = b.slope(s);
+    if !(slope < R::zero()) {
+        return Err(Error::Input { input: "thickness ratio", reason: "past the film's pull-in" });
+    }
+    Ok(R::one() - R::from_f64(4.0) * b.stress(s) / (s * slope))
+}
+
 /// The voltage that holds the film at stretch `s` with branches `a` now, V (film balance in
 /// closed form, `V = z0 sqrt(f / eps)`). Refuses s outside (0, 1] and a negative film stress
 /// (the film is thinner than s at 0 V).

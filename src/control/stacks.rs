@@ -129,6 +129,15 @@ impl Stacks {
         }
     }
 
+    /// Channel `ch`'s film: its incremental capacitance over its capacitance now (the hold
+    /// ripple's and a slew's charge measure dQ/dV, the thickness wants Q/V), or 1 where the
+    /// model has none (a film past its reach: the read-back then reads thinner, never thicker).
+    #[cfg(not(m3))]
+    pub fn incremental_capacitance_ratio(&self, ch: usize) -> f32 {
+        let st = &self.chan[ch].state;
+        finger_model::material::incremental_capacitance_ratio(&self.law, &st.a, st.s).unwrap_or(1.0)
+    }
+
     /// The card's equilibrium voltage of stretch `s`, V (infinite past the film's reach).
     #[cfg(not(m3))]
     pub fn equilibrium_voltage_at(&self, s: f32) -> f32 {

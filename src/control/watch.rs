@@ -40,6 +40,10 @@ pub const FLOOR_MARGIN_S: f32 = 0.03;
 /// windows in a row (one window's outlier lowers nothing; near the floor the guard acts at once).
 pub const DISAGREE_S: f32 = 0.02;
 pub const DISAGREE_WINDOWS: u32 = 3;
+/// The disagreement counts only on a channel held this long, ms (ten ripple windows: a slew's
+/// charge carries the film's creep, which reads thinner, and the running mean keeps the
+/// slew's windows for a while).
+pub const GUARD_HELD_MS: u32 = 1000;
 
 /// One tick's reading of a channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -152,13 +156,15 @@ impl ThicknessGuard {
         ThicknessGuard { derate: 1.0, disagreed: false, disagree_windows: 0 }
     }
 
-    /// After a window: `s_meas` sensed, `s_model` the model's, `s_floor` the floor, and the
-    /// card's equilibrium voltages of the two thicknesses.
-    pub fn update(&mut self, s_meas: f32, s_model: f32, s_floor: f32, volts_model_at_model: f32, volts_model_at_meas: f32) {
+    /// After a window: `s_meas` sensed, `s_model` the model's, `s_floor` the floor, the
+    /// card's equilibrium voltages of the two thicknesses, and `held_ms` how long the channel
+    /// has been held.
+    pub fn update(&mut self, s_meas: f32, s_model: f32, s_floor: f32, volts_model_at_model: f32, volts_model_at_meas: f32, held_ms: u32) {
         if !(s_meas > 0.0 && s_meas <= 1.5) {
             return;
         }
-        self.disagree_windows = if s_meas < s_model - DISAGREE_S { self.disagree_windows.saturating_add(1) } else { 0 };
+        let thinner = held_ms >= GUARD_HELD_MS && s_meas < s_model - DISAGREE_S;
+        self.disagree_windows = if thinner { self.disagree_windows.saturating_add(1) } else { 0 };
         if self.disagree_windows >= DISAGREE_WINDOWS {
             self.disagreed = true;
             // the film's voltage scale: at equilibrium a film g times the card's modulus needs
