@@ -11,13 +11,13 @@
 //! - `wire`: [`wire`], the parts built for a board (the chip, [`App`], the on-target tests);
 //!   `host`: [`App`]; `config`: `save`, `config`, `factory` and the boot hook.
 
-/// `err!(code; pieces...)`: a console error with a message written from pieces
-/// ([`crate::out::Emit`]).
+/// `err!(Code; pieces...)`: a console error, its code a [`finger_protocol::ErrorCode`]
+/// variant, with a message written from pieces ([`crate::out::Emit`]).
 macro_rules! err {
-    ($code:expr; $($x:expr),+ $(,)?) => {{
+    ($code:ident; $($x:expr),+ $(,)?) => {{
         let mut msg: heapless::String<160> = heapless::String::new();
         let _ = w!(&mut msg; $($x),+);
-        $crate::app::errors::CmdError { code: $code, msg }
+        $crate::app::errors::CmdError { code: finger_protocol::ErrorCode::$code, msg }
     }};
 }
 
@@ -47,7 +47,7 @@ mod host;
 pub mod config;
 
 pub use commands::{Commands, TimingReport};
-pub use errors::CmdError;
+pub use errors::{CmdError, ErrorCode};
 pub use help::is_command;
 pub use host::App;
 pub use wire::wire;

@@ -347,42 +347,34 @@ impl List<'_> {
     }
 }
 
-/// A joint in a message: `joint k` (1..=n, from the base), or for the model's joint 0 (a
-/// loaded finger's coupled equilibrium, no single joint to blame) `the tip-loaded finger`.
-struct Joint(usize);
+/// The console side of a message's pieces ([`finger_protocol::Pieces`]): text as it is,
+/// numbers with the formats above (in f32: no f64 formatting is linked). The model's errors'
+/// messages are written once, in the model (model/src/error.rs), and rendered here.
+pub struct Console<'a>(pub &'a mut dyn Write);
 
-impl Emit for Joint {
-    fn emit(&self, f: &mut dyn Write) {
-        let _ = if self.0 == 0 { f.write_str("the tip-loaded finger") } else { w!(f; "joint ", self.0) };
+impl finger_protocol::Pieces for Console<'_> {
+    #[inline(always)]
+    fn text(&mut self, s: &str) {
+        let _ = self.0.write_str(s);
+    }
+    #[inline(always)]
+    fn fixed(&mut self, x: f64, decimals: u8) {
+        let _ = Fixed(x as f32, decimals as usize).write(self.0);
+    }
+    #[inline(always)]
+    fn exp(&mut self, x: f64, decimals: u8) {
+        let _ = Exp(x as f32, decimals as usize).write(self.0);
+    }
+    #[inline(always)]
+    fn count(&mut self, n: u32) {
+        crate::out::emit_u32(self.0, n);
     }
 }
 
-/// The model's error as a console message, from its public fields, with the formatters above
-/// (the model's own `Display` formats f64 with core and would link core's float formatting).
+/// The model's error as a console message ([`Console`] over the model's one table).
 pub fn write_model_error(w: &mut dyn Write, e: &finger_model::Error) -> fmt::Result {
-    use finger_model::Error as E;
-    match *e {
-        E::Param { name, range } => w!(w; "parameter ", name, " out of range: ", range),
-        E::NonFinite { input } => w!(w; input, " is not a finite number"),
-        E::Input { input, reason } => w!(w; input, ": ", reason),
-        E::VoltageCeiling { joint, volts, ceiling } => w!(w; Joint(joint), ": ", Fixed(volts as f32, 0), " V is at or past the ceiling ", Fixed(ceiling as f32, 0), " V (33 % pull-in limit with margin, or supply)"),
-        E::PullIn { volts, pull_in } => w!(w; Fixed(volts as f32, 0), " V is at or past the film's pull-in ", Fixed(pull_in as f32, 0), " V in its present state"),
-        E::ThicknessLimit { joint, requested_mm, limit_mm } => w!(w; Joint(joint), ": stack thickness ", Fixed(requested_mm as f32, 3), " mm is past the 33 % pull-in limit (", Fixed(limit_mm as f32, 3), " mm)"),
-        E::Contact { joint, tension } => {
-            w!(w; Joint(joint), ": links in contact (cable span at its floor) at ", Fixed(tension as f32, 3), " N")
-        }
-        E::LimitPoint { joint, tension } => {
-            w!(w; Joint(joint), ": equilibrium limit point (singular tangent) at ", Fixed(tension as f32, 3), " N")
-        }
-        E::ForceLimit { tension, fmax } => w!(w; "tension ", Fixed(tension as f32, 3), " N is past the end of the equilibrium branch fmax=", Fixed(fmax as f32, 3), " N"),
-        E::NotConverged { iterations, residual } => {
-            w!(w; "solver did not converge: ", iterations, " iterations, residual ", Exp(residual as f32, 3))
-        }
-        E::Singular { what } => w!(w; "singular ", what),
-        E::Unreachable { joint, needed, min, max } => w!(w; Joint(joint), ": needs compliance ", Exp(needed as f32, 4), " rad/Nmm, the ceiling allows ", Exp(min as f32, 4), "..", Exp(max as f32, 4)),
-        #[allow(unreachable_patterns)]
-        _ => w!(w; "model error"),
-    }
+    finger_protocol::message::Message::message(e, &mut Console(w));
+    Ok(())
 }
 
 /// `Emit` (the console) and `Display` (host tests, against core's formatting) for a number

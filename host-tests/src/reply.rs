@@ -1,10 +1,11 @@
-//! Reading the console's replies (docs/console.md): `key=value` words and comma-separated
-//! numbers. The one parser every test and report uses, whatever console it talks to (the
-//! simulated board, QEMU). Not a client: tools/finger is what a user runs.
+//! Reading the console's replies (docs/console.md) in the tests: thin wrappers over the
+//! protocol crate's one parser (`finger_protocol::reply`), whatever console the test talks to
+//! (the simulated board, QEMU). Not a client: tools/finger is what a user runs.
+use finger_protocol::reply::Fields;
 
 /// The value of `key=` in a reply, if it has one.
 pub fn find<'a>(reply: &'a str, key: &str) -> Option<&'a str> {
-    reply.split_whitespace().find_map(|kv| kv.strip_prefix(key).and_then(|r| r.strip_prefix('=')))
+    Fields::new(reply).text(key)
 }
 
 /// The value of `key=` in a reply (panics if the reply has none).
@@ -12,9 +13,9 @@ pub fn val<'a>(reply: &'a str, key: &str) -> &'a str {
     find(reply, key).unwrap_or_else(|| panic!("no {key} in {reply}"))
 }
 
-/// A reply's comma-separated list of numbers.
+/// A reply's comma-separated list of numbers (panics on a component that is not one).
 pub fn nums(s: &str) -> Vec<f64> {
-    s.split(',').map(|x| x.parse().unwrap()).collect()
+    finger_protocol::Value::of_syntax(s).numbers().map(|x| x.unwrap_or_else(|| panic!("not numbers: {s}"))).collect()
 }
 
 /// The value of `key=` in a reply, as numbers (panics if the reply has none).

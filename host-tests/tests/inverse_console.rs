@@ -60,7 +60,7 @@ fn pose_unreachable_or_refused_moves_nothing() {
     assert!(out.starts_with("err usage:"), "{out}");
     // the dispatcher's apply refuses (e.g. a force limit): its error is the reply
     out.clear();
-    let ok = inverse_cmds::pose(&mut out, &f, None, &[5.0, 5.0, 5.0], None, |_, _| Err(CmdError::new("limit", "force past fmax"))).unwrap();
+    let ok = inverse_cmds::pose(&mut out, &f, None, &[5.0, 5.0, 5.0], None, |_, _| Err(CmdError::new(finger_fw::app::ErrorCode::Limit, "force past fmax"))).unwrap();
     assert!(!ok);
     assert_eq!(out, "err limit: force past fmax");
     // a negative tension

@@ -1,7 +1,12 @@
 //! Typed errors of the model: every failure says what is wrong and names the parameter,
 //! input or joint. The model never panics and never returns NaN or infinity as a result.
+//! Each error's console code and message are written here once ([`Message`], from the
+//! console protocol crate): the model's `Display` and the firmware's replies both render it.
 
 use core::fmt;
+
+use finger_protocol::message::{Message, Pieces};
+use finger_protocol::ErrorCode;
 
 /// What went wrong, with the name of the offending parameter or input.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,55 +40,115 @@ pub enum Error {
     Unreachable { joint: usize, needed: f64, min: f64, max: f64 },
 }
 
-impl Error {
-    /// A short code, as the console uses.
-    pub fn code(&self) -> &'static str {
+impl Message for Error {
+    /// Its console code.
+    fn code(&self) -> ErrorCode {
         match self {
-            Error::Param { .. } => "usage",
-            Error::NonFinite { .. } => "bad-number",
-            Error::Input { .. } => "usage",
-            Error::VoltageCeiling { .. } | Error::ThicknessLimit { .. } | Error::PullIn { .. } => "limit",
-            Error::Contact { .. } | Error::LimitPoint { .. } | Error::ForceLimit { .. } => "limit",
-            Error::NotConverged { .. } | Error::Singular { .. } => "fault",
-            Error::Unreachable { .. } => "unreachable",
+            Error::Param { .. } => ErrorCode::Usage,
+            Error::NonFinite { .. } => ErrorCode::BadNumber,
+            Error::Input { .. } => ErrorCode::Usage,
+            Error::VoltageCeiling { .. } | Error::ThicknessLimit { .. } | Error::PullIn { .. } => ErrorCode::Limit,
+            Error::Contact { .. } | Error::LimitPoint { .. } | Error::ForceLimit { .. } => ErrorCode::Limit,
+            Error::NotConverged { .. } | Error::Singular { .. } => ErrorCode::Fault,
+            Error::Unreachable { .. } => ErrorCode::Unreachable,
+        }
+    }
+
+    /// The one table of the model's messages (exhaustive: a new variant does not compile
+    /// without one). `Display` renders it with core's formatting, the firmware with its own
+    /// number formats (src/num.rs).
+    fn message<P: Pieces + ?Sized>(&self, o: &mut P) {
+        match *self {
+            Error::Param { name, range } => {
+                o.text("parameter ");
+                o.text(name);
+                o.text(" out of range: ");
+                o.text(range);
+            }
+            Error::NonFinite { input } => {
+                o.text(input);
+                o.text(" is not a finite number");
+            }
+            Error::Input { input, reason } => {
+                o.text(input);
+                o.text(": ");
+                o.text(reason);
+            }
+            Error::VoltageCeiling { joint, volts, ceiling } => {
+                o.joint(joint);
+                o.text(": ");
+                o.fixed(volts, 0);
+                o.text(" V is at or past the ceiling ");
+                o.fixed(ceiling, 0);
+                o.text(" V (33 % pull-in limit with margin, or supply)");
+            }
+            Error::ThicknessLimit { joint, requested_mm, limit_mm } => {
+                o.joint(joint);
+                o.text(": stack thickness ");
+                o.fixed(requested_mm, 3);
+                o.text(" mm is past the 33 % pull-in limit (");
+                o.fixed(limit_mm, 3);
+                o.text(" mm)");
+            }
+            Error::PullIn { volts, pull_in } => {
+                o.fixed(volts, 0);
+                o.text(" V is at or past the film's pull-in ");
+                o.fixed(pull_in, 0);
+                o.text(" V in its present state");
+            }
+            Error::Contact { joint, tension } => {
+                o.joint(joint);
+                o.text(": links in contact (cable span at its floor) at ");
+                o.fixed(tension, 3);
+                o.text(" N");
+            }
+            Error::LimitPoint { joint, tension } => {
+                o.joint(joint);
+                o.text(": equilibrium limit point (singular tangent) at ");
+                o.fixed(tension, 3);
+                o.text(" N");
+            }
+            Error::ForceLimit { tension, fmax } => {
+                o.text("tension ");
+                o.fixed(tension, 3);
+                o.text(" N is past the end of the equilibrium branch fmax=");
+                o.fixed(fmax, 3);
+                o.text(" N");
+            }
+            Error::NotConverged { iterations, residual } => {
+                o.text("solver did not converge: ");
+                o.count(iterations);
+                o.text(" iterations, residual ");
+                o.exp(residual, 3);
+            }
+            Error::Singular { what } => {
+                o.text("singular ");
+                o.text(what);
+            }
+            Error::Unreachable { joint, needed, min, max } => {
+                o.joint(joint);
+                o.text(": needs compliance ");
+                o.exp(needed, 4);
+                o.text(" rad/Nmm, the ceiling allows ");
+                o.exp(min, 4);
+                o.text("..");
+                o.exp(max, 4);
+            }
         }
     }
 }
 
+impl Error {
+    /// Its console code ([`Message::code`], here without importing the trait).
+    pub fn code(&self) -> ErrorCode {
+        Message::code(self)
+    }
+}
+
+/// The message with core's formatting (the firmware never calls this: it links core's float
+/// formatting; it renders [`Message::message`] with its own numbers).
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match *self {
-            Error::Param { name, range } => write!(f, "parameter {name} out of range: {range}"),
-            Error::NonFinite { input } => write!(f, "{input} is not a finite number"),
-            Error::Input { input, reason } => write!(f, "{input}: {reason}"),
-            Error::VoltageCeiling { joint, volts, ceiling } => write!(
-                f,
-                "joint {joint}: {volts:.0} V is at or past the ceiling {ceiling:.0} V (33 % pull-in limit with margin, or supply)"
-            ),
-            Error::ThicknessLimit { joint, requested_mm, limit_mm } => write!(
-                f,
-                "joint {joint}: stack thickness {requested_mm:.3} mm is past the 33 % pull-in limit ({limit_mm:.3} mm)"
-            ),
-            Error::PullIn { volts, pull_in } => {
-                write!(f, "{volts:.0} V is at or past the film's pull-in {pull_in:.0} V in its present state")
-            }
-            Error::Contact { joint, tension } => {
-                write!(f, "joint {joint}: links in contact (cable span at its floor) at {tension:.3} N")
-            }
-            Error::LimitPoint { joint, tension } => {
-                write!(f, "joint {joint}: equilibrium limit point (singular tangent) at {tension:.3} N")
-            }
-            Error::ForceLimit { tension, fmax } => {
-                write!(f, "tension {tension:.3} N is past the end of the equilibrium branch fmax={fmax:.3} N")
-            }
-            Error::NotConverged { iterations, residual } => {
-                write!(f, "solver did not converge: {iterations} iterations, residual {residual:.3e}")
-            }
-            Error::Singular { what } => write!(f, "singular {what}"),
-            Error::Unreachable { joint, needed, min, max } => write!(
-                f,
-                "joint {joint}: needs compliance {needed:.4e} rad/Nmm, the ceiling allows {min:.4e}..{max:.4e}"
-            ),
-        }
+        finger_protocol::message::display(self, f)
     }
 }

@@ -23,10 +23,16 @@ impl AsRef<str> for Never {
 /// An error code. `S` holds the text of a code this crate does not know (a newer firmware's):
 /// `&str` borrowed from a line, `String` in a client that keeps it, or [`Never`] (the
 /// default: the firmware, where every code is one of these).
+///
+/// Its layout is the firmware's flash: a word whose values (`u32::MAX - 12..=u32::MAX`) leave
+/// 0 free, so a `Result<T, E>` of an error `E` holding a code (the firmware's `CmdError`) is
+/// `Ok` when that word is 0, read with its payload in one load and tested by one
+/// compare-with-zero, as a `&'static str` code was (the Cortex-M3 image's budget).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
 pub enum ErrorCode<S = Never> {
     /// A command this build does not have.
-    Unknown,
+    Unknown = u32::MAX - 11,
     /// Wrong arguments, a value outside its range.
     Usage,
     /// A number that does not parse (NaN, infinity, hex, trailing characters).
@@ -50,7 +56,7 @@ pub enum ErrorCode<S = Never> {
     /// The settings store's flash failed.
     Store,
     /// A code not listed here (a newer firmware's), as it came.
-    Other(S),
+    Other(S) = u32::MAX - 12,
 }
 
 /// Each known code's text, in the order of docs/console.md's table: the row of a code is its

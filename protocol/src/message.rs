@@ -36,8 +36,9 @@ pub trait Pieces {
 pub trait Message {
     /// Its code in an `err <code>: <message>` reply.
     fn code(&self) -> ErrorCode;
-    /// Its message, piece by piece.
-    fn message(&self, out: &mut dyn Pieces);
+    /// Its message, piece by piece (generic, not `dyn`: the firmware's renderer inlines, no
+    /// vtable of its writer is built; the Cortex-M3 image's flash).
+    fn message<P: Pieces + ?Sized>(&self, out: &mut P);
 }
 
 /// [`Pieces`] written to a `fmt::Write` with core's formatting; the first error is kept.
@@ -86,7 +87,7 @@ impl<W: fmt::Write> Pieces for Formatted<W> {
 }
 
 /// A [`Message`]'s text with core's formatting (a `Display` impl's body).
-pub fn display(m: &dyn Message, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+pub fn display<M: Message + ?Sized>(m: &M, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     let mut p = Formatted::new(f);
     m.message(&mut p);
     p.finish()

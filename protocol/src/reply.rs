@@ -167,7 +167,8 @@ impl<'a> Iterator for Raw<'a> {
             let after = &s[end..];
             let next = after.trim_start();
             let w = &next[..word_end(next)];
-            if w.is_empty() || w.contains('=') {
+            // (never past the line's end: one line's fields)
+            if w.is_empty() || w.contains('=') || after[..after.len() - next.len()].contains(['\n', '\r']) {
                 break;
             }
             end = s.len() - next.len() + w.len();

@@ -91,6 +91,7 @@ fn lines_round_trip() {
     let Reply::Ok(f) = Reply::parse("ok fault=board card enable=0").unwrap() else { panic!() };
     assert_eq!(f.get("fault"), Some(Value::Word("board card")));
     assert_eq!(f.get("enable"), Some(Value::Number(0.0)));
+    assert_eq!(Fields::new("fault=none\nnext line").text("fault"), Some("none"));
     let Reply::Ok(f) = Reply::parse("ok stopped").unwrap() else { panic!() };
     assert_eq!(f.raw().collect::<Vec<_>>(), [("stopped", "")]);
 }

@@ -24,7 +24,7 @@ use finger_model::params::PARAMS;
 use finger_model::Solution;
 use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Params};
 
-use super::errors::{model_err, no_args, number, tension, CmdError};
+use super::errors::{head, model_err, no_args, number, tension, CmdError, ErrorCode};
 use super::film;
 use super::help::{joints, list, solve_reply, Reply, Tip, DEG, HELP};
 use super::params::{board_params, calibration_for, default_finger, preset, FwParams, CAL_NAMES, CHANNELS, FW_PARAMS};
@@ -266,16 +266,19 @@ impl Commands {
         match rec {
             Record::Line(l) => self.execute_reporting(&l, out, report),
             Record::TooLong => {
-                let _ = w!(out; "err too-long: line longer than ", console::LINE_MAX, " bytes discarded", nl);
+                head(out, ErrorCode::TooLong);
+                let _ = w!(out; "line longer than ", console::LINE_MAX, " bytes discarded", nl);
             }
             Record::Overrun(n) => {
                 for _ in 0..n {
-                    let _ = w!(out; "err overrun: bytes lost while receiving (line discarded); send it again", nl);
+                    head(out, ErrorCode::Overrun);
+                    let _ = w!(out; "bytes lost while receiving (line discarded); send it again", nl);
                 }
             }
             Record::Stopped(n) => {
                 for _ in 0..n {
-                    let _ = w!(out; "err stopped: not run, a stop came after it", nl);
+                    head(out, ErrorCode::Stopped);
+                    let _ = w!(out; "not run, a stop came after it", nl);
                 }
             }
         }
@@ -349,7 +352,7 @@ impl Commands {
         let cable = cable.map_err(model_err)?.max(0.0);
         let deg = cable / fw.spool_r * DEG;
         if !(deg <= fw.servo_range) {
-            return Err(err!("limit"; "cable excursion ", Fixed(cable, 2), " mm needs ", Fixed(deg, 1), " deg, past the servo travel ", Fixed(fw.servo_range, 0), " deg"));
+            return Err(err!(Limit; "cable excursion ", Fixed(cable, 2), " mm needs ", Fixed(deg, 1), " deg, past the servo travel ", Fixed(fw.servo_range, 0), " deg"));
         }
         Ok((cable, deg))
     }
@@ -491,7 +494,8 @@ impl Commands {
         let toks = match console::tokens(line) {
             Some(t) => t,
             None => {
-                let _ = w!(out; "err usage: too many arguments", nl);
+                head(out, ErrorCode::Usage);
+                let _ = w!(out; "too many arguments", nl);
                 return;
             }
         };
@@ -506,7 +510,8 @@ impl Commands {
                 let _ = if reply.is_empty() { w!(out; "ok", nl) } else { w!(out; "ok ", reply, nl) };
             }
             Err(e) => {
-                let _ = w!(out; "err ", e.code, ": ", e.msg, nl);
+                e.emit(out);
+                let _ = w!(out; nl);
             }
         }
     }
@@ -548,10 +553,10 @@ impl Commands {
             b"arm" => {
                 no_args(args, "arm")?;
                 if let (true, Some(f)) = (self.locked_out, self.fault) {
-                    return Err(err!("fault"; f, ": this image never arms here"));
+                    return Err(err!(Fault; f, ": this image never arms here"));
                 }
                 if let Some(f) = self.fault {
-                    return Err(err!("fault"; "fault ", f, " latched; send stop to clear it"));
+                    return Err(err!(Fault; "fault ", f, " latched; send stop to clear it"));
                 }
                 self.armed = true;
                 let _ = w!(r; "armed=1");
@@ -569,7 +574,7 @@ impl Commands {
             }
             b"timing" => {
                 no_args(args, "timing")?;
-                let Some(f) = report else { return Err(err!("unknown"; "timing is not in this build")) };
+                let Some(f) = report else { return Err(err!(Unknown; "timing is not in this build")) };
                 f.write_timing(r);
             }
             b"volt" => self.cmd_volt(args, r)?,
@@ -587,13 +592,13 @@ impl Commands {
             #[cfg(m3)]
             b"pose" => self.cmd_pose(args, r)?,
             #[cfg(not(any(feature = "pose", m3)))]
-            b"pose" => return Err(err!("unknown"; "pose is not in this build (feature pose)")),
+            b"pose" => return Err(err!(Unknown; "pose is not in this build (feature pose)")),
             #[cfg(not(feature = "contact"))]
-            b"contact" => return Err(err!("unknown"; "contact is not in this build (feature contact)")),
+            b"contact" => return Err(err!(Unknown; "contact is not in this build (feature contact)")),
             #[cfg(all(not(feature = "hw"), not(m3)))]
             b"plant" => self.cmd_plant(args, r)?,
             #[cfg(feature = "hw")]
-            b"plant" => return Err(err!("unknown"; "plant is not in this build (the simulated plant: finger-sim and the emulator image)")),
+            b"plant" => return Err(err!(Unknown; "plant is not in this build (the simulated plant: finger-sim and the emulator image)")),
             b"param" => self.cmd_param(args, r, out)?,
             b"preset" => self.cmd_preset(args, r)?,
             b"cal" => self.cmd_cal(args, r)?,
@@ -604,10 +609,10 @@ impl Commands {
             #[cfg(feature = "settings")]
             b"config" => self.cmd_config(args, r, out)?,
             b"wait" => {
-                let [s] = args else { return Err(err!("usage"; "wait <seconds>")) };
+                let [s] = args else { return Err(err!(Usage; "wait <seconds>")) };
                 let s = number(s, "seconds")?;
                 if !(s >= 0.0 && s <= WAIT_MAX_S) {
-                    return Err(err!("usage"; "wait: 0..", Short(WAIT_MAX_S), " s"));
+                    return Err(err!(Usage; "wait: 0..", Short(WAIT_MAX_S), " s"));
                 }
                 let ms = (s * 1000.0 + 0.5) as u32;
                 if ms == 0 {
@@ -618,7 +623,7 @@ impl Commands {
                 return Ok(true);
             }
             w => {
-                return Err(err!("unknown"; "unknown command ", (console::printable(w)), "; try help"));
+                return Err(err!(Unknown; "unknown command ", (console::printable(w)), "; try help"));
             }
         }
         Ok(false)
@@ -743,13 +748,13 @@ impl Commands {
             }
             // NaN-proof: every comparison is written so that NaN fails it
             if !v[ch].is_finite() {
-                return Err(err!("limit"; "channel ", (ch + 1), ": voltage is not a finite number"));
+                return Err(err!(Limit; "channel ", (ch + 1), ": voltage is not a finite number"));
             }
             if !(v[ch] >= 0.0) {
-                return Err(err!("usage"; "channel ", (ch + 1), ": voltage must be >= 0"));
+                return Err(err!(Usage; "channel ", (ch + 1), ": voltage must be >= 0"));
             }
             if !(v[ch] < self.vmax[ch]) {
-                return Err(err!("limit"; "channel ", (ch + 1), ": ", Fixed(v[ch], 1), " V is at or past the ceiling ", Fixed(self.vmax[ch], 1), " V (see limits)"));
+                return Err(err!(Limit; "channel ", (ch + 1), ": ", Fixed(v[ch], 1), " V is at or past the ceiling ", Fixed(self.vmax[ch], 1), " V (see limits)"));
             }
         }
         Ok(())
@@ -763,7 +768,7 @@ impl Commands {
         let v = match args {
             [_, v1, v2, v3] => [number(v1, "V1")?, number(v2, "V2")?, number(v3, "V3")?],
             [_] if self.finger.params().layers == 0 => [0.0; CHANNELS],
-            _ => return Err(err!("usage"; usage, " (", usage.split(' ').next().unwrap_or(""), " <P> without stacks)")),
+            _ => return Err(err!(Usage; usage, " (", usage.split(' ').next().unwrap_or(""), " <P> without stacks)")),
         };
         let p = tension(number(args[0], "P")?)?;
         self.check_volts_of(&v, true)?;
@@ -816,17 +821,17 @@ impl Commands {
 
     #[inline(never)]
     pub(super) fn cmd_volt(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        let [ch, v] = args else { return Err(err!("usage"; "volt <1|2|3|all> <V>")) };
+        let [ch, v] = args else { return Err(err!(Usage; "volt <1|2|3|all> <V>")) };
         let chans: &[usize] = match *ch {
             b"1" => &[0],
             b"2" => &[1],
             b"3" => &[2],
             b"all" => &[0, 1, 2],
-            c => return Err(err!("usage"; "volt: channel ", (console::printable(c)), " is not 1, 2, 3 or all")),
+            c => return Err(err!(Usage; "volt: channel ", (console::printable(c)), " is not 1, 2, 3 or all")),
         };
         let v = number(v, "V")?;
         if !(v >= 0.0) {
-            return Err(err!("usage"; "volt: voltage must be >= 0"));
+            return Err(err!(Usage; "volt: voltage must be >= 0"));
         }
         self.require_armed("volt")?;
         let mut req = self.target_v;
@@ -846,17 +851,17 @@ impl Commands {
 
     pub(super) fn require_armed(&self, what: &str) -> Result<(), CmdError> {
         if let Some(f) = self.fault {
-            return Err(err!("fault"; "fault ", f, " latched; send stop to clear it"));
+            return Err(err!(Fault; "fault ", f, " latched; send stop to clear it"));
         }
         if !self.armed {
-            return Err(err!("not-armed"; what, " needs arm"));
+            return Err(err!(NotArmed; what, " needs arm"));
         }
         Ok(())
     }
 
     #[inline(never)]
     pub(super) fn cmd_force(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        let [p] = args else { return Err(err!("usage"; "force <P>")) };
+        let [p] = args else { return Err(err!(Usage; "force <P>")) };
         let p = tension(number(p, "P")?)?;
         self.require_armed("force")?;
         let (cable, deg) = self.plan_setpoints(p, &self.target_v)?;
@@ -869,10 +874,10 @@ impl Commands {
 
     pub(super) fn require_disarmed(&self, what: &str) -> Result<(), CmdError> {
         if self.armed {
-            return Err(err!("armed"; what, " only while disarmed"));
+            return Err(err!(Armed; what, " only while disarmed"));
         }
         if self.volts.iter().any(|&v| v != 0.0) || self.enable {
-            return Err(err!("armed"; what, ": HV still ramping down, wait"));
+            return Err(err!(Armed; what, ": HV still ramping down, wait"));
         }
         Ok(())
     }
@@ -895,18 +900,18 @@ impl Commands {
             Some(n) => *n,
         };
         if args.len() > 2 {
-            return Err(err!("usage"; "param [<name> [<value>]]"));
+            return Err(err!(Usage; "param [<name> [<value>]]"));
         }
         // the parameter's own name (a &'static str), found by its bytes
         let name = PARAMS.iter().map(|i| i.name).chain(FW_PARAMS.iter().map(|i| i.name)).find(|n| n.as_bytes() == name);
         let Some(name) = name else {
-            return Err(err!("usage"; "no parameter ", (console::printable(args[0])), "; param lists them"));
+            return Err(err!(Usage; "no parameter ", (console::printable(args[0])), "; param lists them"));
         };
         if let Some(v) = args.get(1) {
             let v = number(v, name)?;
             if PARAMS.iter().any(|i| i.name == name) {
                 if name == "n" && v != CHANNELS as f32 {
-                    return Err(err!("usage"; "parameter n: the board drives ", CHANNELS, " joints"));
+                    return Err(err!(Usage; "parameter n: the board drives ", CHANNELS, " joints"));
                 }
                 let mut p = *self.finger.params();
                 p.set(name, v.into()).map_err(model_err)?;
@@ -933,11 +938,11 @@ impl Commands {
 
     #[inline(never)]
     pub(super) fn cmd_preset(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
-        let [which] = args else { return Err(err!("usage"; "preset <default|paper>")) };
+        let [which] = args else { return Err(err!(Usage; "preset <default|paper>")) };
         let (p, name) = match *which {
             b"default" => (preset(board_params()), "default"),
             b"paper" => (preset(Params::<f32>::paper()), "paper"),
-            w => return Err(err!("usage"; "preset ", (console::printable(w)), " is not default or paper")),
+            w => return Err(err!(Usage; "preset ", (console::printable(w)), " is not default or paper")),
         };
         self.require_disarmed("preset")?;
         self.adopt_model(p, calibration_for(&p))?;
@@ -964,7 +969,7 @@ impl Commands {
                 }
                 Some(Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] })
             }
-            _ => return Err(err!("usage"; "cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]")),
+            _ => return Err(err!(Usage; "cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]")),
         };
         if let Some(cal) = cal {
             self.require_disarmed("cal")?;

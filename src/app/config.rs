@@ -80,22 +80,22 @@ impl Commands {
         no_args(args, "save")?;
         self.require_disarmed("save")?;
         if self.cfg.store.is_none() {
-            return Err(err!("unknown"; "save: this board has no settings store"));
+            return Err(err!(Unknown; "save: this board has no settings store"));
         }
         let rec = record_with(&self.finger, &self.fw, &self.sense_cal, self.cfg.saves.wrapping_add(1));
         match settings_of(&rec) {
             Ok((f, fw)) if f.params() == self.finger.params() && f.calibration() == self.finger.calibration() && fw == self.fw => {}
-            Ok(_) => return Err(err!("usage"; "save: the settings in force do not read back as themselves; not saved")),
+            Ok(_) => return Err(err!(Usage; "save: the settings in force do not read back as themselves; not saved")),
             Err(Reject::Ceiling) => {
                 let v = self.finger.ceiling_in_force(None);
-                return Err(err!("limit"; "save: these settings raise the model's ceiling to ", Fixed(v, 1), " V, past the compiled ", Fixed(board_ceiling(), 1), " V; not saved"));
+                return Err(err!(Limit; "save: these settings raise the model's ceiling to ", Fixed(v, 1), " V, past the compiled ", Fixed(board_ceiling(), 1), " V; not saved"));
             }
-            Err(e) => return Err(err!("usage"; "save: a boot would refuse these settings (", e, "); not saved")),
+            Err(e) => return Err(err!(Usage; "save: a boot would refuse these settings (", e, "); not saved")),
         }
         let mut buf = [0u8; RECORD_MAX];
         let n = rec.encode(&mut buf);
-        let Some(store) = self.cfg.store.as_mut() else { return Err(err!("unknown"; "save: no store")) };
-        store.write(&buf[..n]).map_err(|e| err!("store"; "save failed (", e.name(), "): the store holds the previous record or none; see config"))?;
+        let Some(store) = self.cfg.store.as_mut() else { return Err(err!(Unknown; "save: no store")) };
+        store.write(&buf[..n]).map_err(|e| err!(Store; "save failed (", e.name(), "): the store holds the previous record or none; see config"))?;
         self.cfg.saves = rec.counter;
         self.cfg.rejected = false;
         let _ = w!(r; "saved=", rec.counter, " bytes=", n);
@@ -108,7 +108,7 @@ impl Commands {
         no_args(args, "factory")?;
         self.require_disarmed("factory")?;
         if let Some(store) = self.cfg.store.as_mut() {
-            store.erase().map_err(|e| err!("store"; "factory: erase failed (", e.name(), "); settings unchanged"))?;
+            store.erase().map_err(|e| err!(Store; "factory: erase failed (", e.name(), "); settings unchanged"))?;
         }
         self.put_settings(default_finger(), FwParams::default());
         self.sense_cal = super::hv_cal::SenseCal::NOMINAL;

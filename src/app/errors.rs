@@ -1,10 +1,14 @@
-//! Console errors: [`CmdError`] (a code of docs/console.md and a message), the model's errors
-//! as console errors, and the argument checks every command shares (no arguments, a strict
-//! number, a cable tension).
+//! Console errors: [`CmdError`] (a code of docs/console.md, [`ErrorCode`], and a message), the
+//! model's errors as console errors, [`head`] (every error line's start, through the protocol
+//! crate), and the argument checks every command shares (no arguments, a strict number, a
+//! cable tension).
 //!
 //! What it is not: the commands that raise them (`super::commands` and its handlers).
 
+use core::fmt::Write;
+
 use finger_model::Error as ModelError;
+pub use finger_protocol::ErrorCode;
 use heapless::String;
 
 use crate::console::{self, NumError};
@@ -13,13 +17,13 @@ use crate::num::{self, Exp};
 /// A refused command: its code (docs/console.md) and a human message.
 #[derive(Debug)]
 pub struct CmdError {
-    pub code: &'static str,
+    pub code: ErrorCode,
     pub msg: String<160>,
 }
 
 impl CmdError {
     /// A console error with a fixed message.
-    pub fn new(code: &'static str, msg: &str) -> Self {
+    pub fn new(code: ErrorCode, msg: &str) -> Self {
         let mut m = String::new();
         for c in msg.chars() {
             if m.push(c).is_err() {
@@ -38,11 +42,25 @@ pub(crate) fn model_err(e: ModelError) -> CmdError {
     CmdError { code: e.code(), msg }
 }
 
+impl CmdError {
+    /// Write its reply line's text: `err <code>: <message>` (without the line ending).
+    pub fn emit(&self, out: &mut dyn Write) {
+        head(out, self.code);
+        let _ = out.write_str(&self.msg);
+    }
+}
+
+/// Write `err <code>: `, the start of every error line (the protocol's); the message follows.
+#[inline(never)]
+pub fn head(out: &mut dyn Write, code: ErrorCode) {
+    let _ = finger_protocol::reply::emit_err_head(out, &code);
+}
+
 pub(crate) fn no_args(args: &[&[u8]], cmd: &str) -> Result<(), CmdError> {
     if args.is_empty() {
         Ok(())
     } else {
-        Err(err!("usage"; cmd, " takes no arguments"))
+        Err(err!(Usage; cmd, " takes no arguments"))
     }
 }
 
@@ -52,17 +70,17 @@ pub(crate) fn number(tok: &[u8], what: &str) -> Result<f32, CmdError> {
             NumError::Syntax => " is not a decimal number",
             NumError::Overflow => " is out of range",
         };
-        err!("bad-number"; what, ": ", (console::printable(tok)), why)
+        err!(BadNumber; what, ": ", (console::printable(tok)), why)
     })
 }
 
 /// A cable tension: >= 0 (usage), representable (limit: far past any fmax).
 pub(crate) fn tension(p: f32) -> Result<f32, CmdError> {
     if !(p >= 0.0) {
-        return Err(err!("usage"; "tension must be >= 0 (a cable cannot push)"));
+        return Err(err!(Usage; "tension must be >= 0 (a cable cannot push)"));
     }
     if !(p <= 1e6) {
-        return Err(err!("limit"; "tension ", Exp(p, 3), " N is past fmax"));
+        return Err(err!(Limit; "tension ", Exp(p, 3), " N is past fmax"));
     }
     Ok(p)
 }

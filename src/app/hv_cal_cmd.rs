@@ -16,7 +16,7 @@ fn channel(w: &[u8]) -> Result<usize, CmdError> {
         b"1" => Ok(0),
         b"2" => Ok(1),
         b"3" => Ok(2),
-        _ => Err(err!("usage"; "cal: channel 1..3")),
+        _ => Err(err!(Usage; "cal: channel 1..3")),
     }
 }
 
@@ -37,16 +37,16 @@ impl Commands {
                 let (g, o) = (value(g, "gain")?, value(o, "offset")?);
                 self.require_disarmed("cal")?;
                 c.monitor[k] = MonitorCal::checked(g, o).ok_or_else(|| {
-                    err!("limit"; "cal vmon: gain ", Fixed(g, 4), " offset ", Fixed(o, 1), " V reads below the nominal chain or past its range (gain 1..1.2, offset 0..200 V): the loop would drive past what it reads; refused")
+                    err!(Limit; "cal vmon: gain ", Fixed(g, 4), " offset ", Fixed(o, 1), " V reads below the nominal chain or past its range (gain 1..1.2, offset 0..200 V): the loop would drive past what it reads; refused")
                 })?;
             }
             [w, ch, pf] if *w == b"c0" => {
                 let k = channel(ch)?;
                 let pf = value(pf, "c0")?;
                 self.require_disarmed("cal")?;
-                c.c0_pf[k] = SenseCal::c0_checked(pf).map_err(|_| err!("usage"; "cal c0: ", Fixed(pf, 1), " pF outside ", Fixed(BOARD_STACK_C0_PF / C0_RANGE, 1), "..", Fixed(BOARD_STACK_C0_PF * C0_RANGE, 1), " pF; refused"))?;
+                c.c0_pf[k] = SenseCal::c0_checked(pf).map_err(|_| err!(Usage; "cal c0: ", Fixed(pf, 1), " pF outside ", Fixed(BOARD_STACK_C0_PF / C0_RANGE, 1), "..", Fixed(BOARD_STACK_C0_PF * C0_RANGE, 1), " pF; refused"))?;
             }
-            _ => return Err(err!("usage"; "cal show | cal vmon <ch> <gain> <offset V> | cal c0 <ch> <pF>")),
+            _ => return Err(err!(Usage; "cal show | cal vmon <ch> <gain> <offset V> | cal c0 <ch> <pF>")),
         }
         if c != self.sense_cal {
             self.sense_cal = c;

@@ -72,8 +72,8 @@ impl FwParams {
 
     /// Set by name; on error nothing changes.
     pub(crate) fn set(&mut self, name: &str, v: f32) -> Result<(), CmdError> {
-        let info = FW_PARAMS.iter().find(|i| i.name == name).ok_or_else(|| err!("unknown"; "no parameter ", name))?;
-        let bad = || err!("usage"; "parameter ", info.name, " out of range: ", info.range);
+        let info = FW_PARAMS.iter().find(|i| i.name == name).ok_or_else(|| err!(Unknown; "no parameter ", name))?;
+        let bad = || err!(Usage; "parameter ", info.name, " out of range: ", info.range);
         if !(v >= info.min && v <= info.max) {
             return Err(bad());
         }

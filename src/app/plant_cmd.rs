@@ -18,7 +18,7 @@ fn channel(c: &[u8]) -> Result<usize, CmdError> {
         b"1" => Ok(0),
         b"2" => Ok(1),
         b"3" => Ok(2),
-        c => Err(err!("usage"; "plant: channel ", (console::printable(c)), " is not 1, 2 or 3")),
+        c => Err(err!(Usage; "plant: channel ", (console::printable(c)), " is not 1, 2 or 3")),
     }
 }
 
@@ -28,12 +28,12 @@ impl Commands {
     #[inline(never)]
     pub(super) fn cmd_plant(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         if self.plant_view.is_none() {
-            return Err(err!("unknown"; "plant: this board has no plant"));
+            return Err(err!(Unknown; "plant: this board has no plant"));
         }
-        let Some((&what, rest)) = args.split_first() else { return Err(err!("usage"; USAGE)) };
+        let Some((&what, rest)) = args.split_first() else { return Err(err!(Usage; USAGE)) };
         let req = match (what, rest) {
             (b"status", []) => {
-                let Some(pv) = self.plant_view else { return Err(err!("unknown"; "plant: this board has no plant")) };
+                let Some(pv) = self.plant_view else { return Err(err!(Unknown; "plant: this board has no plant")) };
                 let stack_mm = self.stack_mm();
                 let mut t = [0.0f32; 3];
                 for ch in 0..3 {
@@ -55,7 +55,7 @@ impl Commands {
                     None => 1.0,
                 };
                 if !(g >= 1.0 && g <= 100.0) || !(ts >= 1.0 && ts <= 1000.0) {
-                    return Err(err!("usage"; "plant film: G_eq 1..100 kPa, time scale 1..1000"));
+                    return Err(err!(Usage; "plant film: G_eq 1..100 kPa, time scale 1..1000"));
                 }
                 PlantRequest::Film { g_eq_kpa: g, time_scale: ts }
             }
@@ -63,14 +63,14 @@ impl Commands {
             (b"breakdown", [c, ms]) => {
                 let ms = number(ms, "ms")?;
                 if !(ms >= 1.0 && ms <= 60_000.0) {
-                    return Err(err!("usage"; "plant breakdown: clears after 1..60000 ms"));
+                    return Err(err!(Usage; "plant breakdown: clears after 1..60000 ms"));
                 }
                 PlantRequest::Inject(channel(c)?, Inject::Breakdown { clears_after_ms: Some(ms as u32) })
             }
             (b"stuck", [c, v]) => {
                 let v = number(v, "V")?;
                 if !(v >= 0.0 && v <= 12_000.0) {
-                    return Err(err!("usage"; "plant stuck: 0..12000 V"));
+                    return Err(err!(Usage; "plant stuck: 0..12000 V"));
                 }
                 PlantRequest::Inject(channel(c)?, Inject::Stuck(v))
             }
@@ -78,18 +78,18 @@ impl Commands {
             (b"leak", [c, mohm]) => {
                 let m = number(mohm, "MOhm")?;
                 if !(m > 0.0 && m <= 1e9) {
-                    return Err(err!("usage"; "plant leak: > 0 MOhm"));
+                    return Err(err!(Usage; "plant leak: > 0 MOhm"));
                 }
                 PlantRequest::Inject(channel(c)?, Inject::Leak(m * 1e6))
             }
             (b"gain", [c, x]) => {
                 let x = number(x, "gain")?;
                 if !(x > 0.0 && x <= 2.0) {
-                    return Err(err!("usage"; "plant gain: 0..2"));
+                    return Err(err!(Usage; "plant gain: 0..2"));
                 }
                 PlantRequest::Inject(channel(c)?, Inject::Gain(x))
             }
-            _ => return Err(err!("usage"; USAGE)),
+            _ => return Err(err!(Usage; USAGE)),
         };
         self.plant_req = Some(req);
         let _ = w!(r; "plant ", (console::printable(what)));

@@ -35,6 +35,8 @@ use heapless::String;
 
 use super::commands::Commands;
 use super::errors::{number, tension, CmdError};
+#[cfg(any(feature = "pose", feature = "contact"))]
+use super::errors::{head, ErrorCode};
 #[cfg(m3)]
 use super::errors::model_err;
 #[cfg(m3)]
@@ -51,13 +53,13 @@ use crate::num::write_model_error;
 #[inline(always)]
 fn pose_args<T: Copy>(args: &[&[u8]], zero: T, angle: impl Fn(f32) -> T) -> Result<([T; CHANNELS], Option<f32>), CmdError> {
     if args.len() != 3 && args.len() != 4 {
-        return Err(err!("usage"; "pose <d1> <d2> <d3> [<P>]"));
+        return Err(err!(Usage; "pose <d1> <d2> <d3> [<P>]"));
     }
     let mut angles = [zero; CHANNELS];
     for ch in 0..CHANNELS {
         let d = number(args[ch], "angle")?;
         if !(d.abs() <= 360.0) {
-            return Err(err!("usage"; "pose: joint angles are degrees, |d| <= 360"));
+            return Err(err!(Usage; "pose: joint angles are degrees, |d| <= 360"));
         }
         angles[ch] = angle(d);
     }
@@ -78,7 +80,7 @@ fn f32_of<R: Real>(x: R) -> f32 {
 /// Write `err <code>: <message>` for a model error.
 #[cfg(any(feature = "pose", feature = "contact"))]
 fn write_err(out: &mut dyn Write, e: &Error) -> fmt::Result {
-    w!(out; "err ", e.code(), ": ")?;
+    head(out, e.code());
     write_model_error(out, e)
 }
 
@@ -125,20 +127,23 @@ where
 {
     let n = finger.params().n;
     if degrees.len() != n {
-        w!(out; "err usage: pose <d1> .. <d", n, "> [<P>] (degrees, N)")?;
+        head(out, ErrorCode::Usage);
+        w!(out; "pose <d1> .. <d", n, "> [<P>] (degrees, N)")?;
         return Ok(false);
     }
     let mut angles = [R::zero(); MAX_JOINTS];
     for (a, &d) in angles.iter_mut().zip(degrees) {
         if !d.is_finite() {
-            w!(out; "err bad-number: angle is not a finite number")?;
+            head(out, ErrorCode::BadNumber);
+            w!(out; "angle is not a finite number")?;
             return Ok(false);
         }
         *a = R::from_f64(f64::from(d)) * R::from_f64(core::f64::consts::PI / 180.0);
     }
     // the cable runs on the flexor side: it flexes a joint, it can never extend one
     if let Some(k) = degrees.iter().position(|&d| d < 0.0) {
-        w!(out; "err unreachable: joint ", k + 1, ": ", Fixed(degrees[k], 3), " deg is an extension; the cable only flexes the joints (angles >= 0)")?;
+        head(out, ErrorCode::Unreachable);
+        w!(out; "joint ", k + 1, ": ", Fixed(degrees[k], 3), " deg is an extension; the cable only flexes the joints (angles >= 0)")?;
         return Ok(false);
     }
     let tension = tension.map(|t| R::from_f64(f64::from(t)));
@@ -153,7 +158,7 @@ where
         return Ok(false);
     }
     if let Err(e) = apply(sol.tension, &sol.volts[..n]) {
-        w!(out; "err ", e.code, ": ", e.msg)?;
+        e.emit(out);
         return Ok(false);
     }
     w!(out; "ok force=", Fixed(f32_of(sol.tension), 4), " volts=")?;
@@ -174,17 +179,20 @@ where
 {
     let n = finger.params().n;
     if !(volts.is_empty() || volts.len() == n) {
-        w!(out; "err usage: contact <P0> <P> [<V1> .. <V", n, ">] (N, V)")?;
+        head(out, ErrorCode::Usage);
+        w!(out; "contact <P0> <P> [<V1> .. <V", n, ">] (N, V)")?;
         return Ok(false);
     }
     if !(p0.is_finite() && p.is_finite() && volts.iter().all(|v| v.is_finite())) {
-        w!(out; "err bad-number: not a finite number")?;
+        head(out, ErrorCode::BadNumber);
+        w!(out; "not a finite number")?;
         return Ok(false);
     }
     // the stop holds the free tip of P0; a lower tension pulls the tip away from it (a
     // pull-off: the stop cannot pull), so there is no contact force to report
     if p < p0 {
-        w!(out; "err usage: contact: P ", Fixed(p, 3), " N is below P0 ", Fixed(p0, 3), " N: the tip pulls away from the stop (pull-off); a contact force needs P >= P0")?;
+        head(out, ErrorCode::Usage);
+        w!(out; "contact: P ", Fixed(p, 3), " N is below P0 ", Fixed(p0, 3), " N: the tip pulls away from the stop (pull-off); a contact force needs P >= P0")?;
         return Ok(false);
     }
     let zero = [R::zero(); MAX_JOINTS];
@@ -263,11 +271,11 @@ impl Commands {
                 finger_model::BranchEnd::Contact => "its notch closes (links touch)",
                 _ => "its equilibrium branch ends",
             };
-            return Err(err!("unreachable"; "pose: needs ", Fixed(p, 3), " N, past fmax ", Fixed(end.tension, 3), " N: at joint ", end.joint, " ", why));
+            return Err(err!(Unreachable; "pose: needs ", Fixed(p, 3), " N, past fmax ", Fixed(end.tension, 3), " N: at joint ", end.joint, " ", why));
         }
         let x = self.forward_with(p, v, |s| s.tip().x).map_err(super::errors::model_err)?;
         if !(x > 0.0) {
-            return Err(err!("unreachable"; "pose: the tip would be behind the base (x=", Fixed(x, 3), " mm), outside the model's domain"));
+            return Err(err!(Unreachable; "pose: the tip would be behind the base (x=", Fixed(x, 3), " mm), outside the model's domain"));
         }
         Ok(())
     }
@@ -310,7 +318,7 @@ impl Commands {
     #[inline(never)]
     pub(super) fn cmd_contact<W: Write>(&self, args: &[&[u8]], out: &mut W) -> Result<(), CmdError> {
         if args.len() != 2 && args.len() != 2 + CHANNELS {
-            return Err(err!("usage"; "contact <P0> <P> [<V1> <V2> <V3>]"));
+            return Err(err!(Usage; "contact <P0> <P> [<V1> <V2> <V3>]"));
         }
         let p0 = tension(number(args[0], "P0")?)?;
         let p = tension(number(args[1], "P")?)?;
@@ -355,7 +363,7 @@ impl Commands {
             // the fixed-point inverse's range is in joint angles (the f32 one's in compliance)
             ModelError::Unreachable { joint, needed, min, max } => {
                 let d = |x: f64| Fixed(x as f32 * DEG, 3);
-                err!("unreachable"; "joint ", joint, ": needs ", d(needed), " deg, its stack spans ", d(min), "..", d(max), " deg at ", Fixed(at.to_f32(), 3), " N")
+                err!(Unreachable; "joint ", joint, ": needs ", d(needed), " deg, its stack spans ", d(min), "..", d(max), " deg at ", Fixed(at.to_f32(), 3), " N")
             }
             e => model_err(e),
         })?;

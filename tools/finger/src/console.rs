@@ -3,62 +3,14 @@
 //! Not here: how bytes travel (`link.rs`).
 use std::time::Duration;
 
+use finger_protocol::reply::{Fields, Item};
+use finger_protocol::Value;
+
 use crate::link::{Link, LinkError};
 
-/// The error codes of docs/console.md, and any other code a newer firmware may add.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum ErrorCode {
-    Unknown,
-    Usage,
-    BadNumber,
-    TooLong,
-    Limit,
-    NotArmed,
-    Armed,
-    Unreachable,
-    Fault,
-    /// A line lost while receiving.
-    Overrun,
-    /// A line a later `stop` dropped before it ran.
-    Stopped,
-    Other(String),
-}
-
-impl ErrorCode {
-    pub fn parse(code: &str) -> ErrorCode {
-        match code {
-            "unknown" => ErrorCode::Unknown,
-            "usage" => ErrorCode::Usage,
-            "bad-number" => ErrorCode::BadNumber,
-            "too-long" => ErrorCode::TooLong,
-            "limit" => ErrorCode::Limit,
-            "not-armed" => ErrorCode::NotArmed,
-            "armed" => ErrorCode::Armed,
-            "unreachable" => ErrorCode::Unreachable,
-            "fault" => ErrorCode::Fault,
-            "overrun" => ErrorCode::Overrun,
-            "stopped" => ErrorCode::Stopped,
-            other => ErrorCode::Other(other.to_owned()),
-        }
-    }
-
-    pub fn as_str(&self) -> &str {
-        match self {
-            ErrorCode::Unknown => "unknown",
-            ErrorCode::Usage => "usage",
-            ErrorCode::BadNumber => "bad-number",
-            ErrorCode::TooLong => "too-long",
-            ErrorCode::Limit => "limit",
-            ErrorCode::NotArmed => "not-armed",
-            ErrorCode::Armed => "armed",
-            ErrorCode::Unreachable => "unreachable",
-            ErrorCode::Fault => "fault",
-            ErrorCode::Overrun => "overrun",
-            ErrorCode::Stopped => "stopped",
-            ErrorCode::Other(s) => s,
-        }
-    }
-}
+/// The error codes of docs/console.md (the protocol crate's [`finger_protocol::ErrorCode`]),
+/// and any other code a newer firmware may add, kept as it came.
+pub type ErrorCode = finger_protocol::ErrorCode<String>;
 
 /// A successful reply: the `key=value` fields of the final `ok` line, and the lines before it.
 #[derive(Clone, Debug, PartialEq)]
@@ -68,19 +20,37 @@ pub struct Reply {
 }
 
 impl Reply {
-    /// The value of `key` in the `ok` line.
-    pub fn get(&self, key: &str) -> Option<&str> {
-        self.line.split_whitespace().skip(1).find_map(|kv| kv.strip_prefix(key)?.strip_prefix('='))
+    /// The `ok` line's fields, read by the protocol crate (none for a line that is not one).
+    fn parsed(&self) -> Fields<'_> {
+        match finger_protocol::Reply::parse(&self.line) {
+            Ok(finger_protocol::Reply::Ok(f)) => f,
+            _ => Fields::new(""),
+        }
     }
 
-    /// The comma-separated numbers of `key` (`volts=1.0,2.0,3.0`).
+    /// The value of `key` in the `ok` line.
+    pub fn get(&self, key: &str) -> Option<&str> {
+        self.parsed().text(key)
+    }
+
+    /// The comma-separated numbers of `key` (`volts=1.0,2.0,3.0`); `None` when a component is
+    /// not a number.
     pub fn numbers(&self, key: &str) -> Option<Vec<f64>> {
-        self.get(key)?.split(',').map(|v| v.parse().ok()).collect()
+        Value::of_syntax(self.get(key)?).numbers().collect()
+    }
+
+    /// As [`Reply::numbers`], a component not measured yet (`-`) as NaN.
+    pub fn measured(&self, key: &str) -> Option<Vec<f64>> {
+        let list = match Value::of_syntax(self.get(key)?) {
+            Value::List(l) => l,
+            v => return v.number().map(|x| vec![x]).or_else(|| (v == Value::Missing).then(|| vec![f64::NAN])),
+        };
+        list.items().map(|i| if i == Item::Missing { Some(f64::NAN) } else { i.number() }).collect()
     }
 
     /// Every `key=value` field, in order.
     pub fn fields(&self) -> impl Iterator<Item = (&str, &str)> {
-        self.line.split_whitespace().skip(1).filter_map(|kv| kv.split_once('='))
+        self.parsed().raw()
     }
 }
 
@@ -138,14 +108,20 @@ impl Console {
         let mut before = Vec::new();
         loop {
             let l = self.link.line(timeout)?;
-            if l == "ok" || l.starts_with("ok ") {
-                return Ok(Reply { before, line: l });
+            match finger_protocol::Reply::parse(&l) {
+                Ok(finger_protocol::Reply::Ok(_)) => return Ok(Reply { before, line: l }),
+                Ok(finger_protocol::Reply::Err { code, message }) => {
+                    return Err(CommandError::Board { code: ErrorCode::parse(code.as_str()), message: message.to_owned() });
+                }
+                // an `err` line without `<code>:`: its words as the code, no message
+                Err(finger_protocol::reply::Error::NoCode) => {
+                    let code = l.strip_prefix("err ").unwrap_or(&l).trim();
+                    return Err(CommandError::Board { code: ErrorCode::parse(code), message: String::new() });
+                }
+                // an ok line whose field does not read as its kind: still the final line
+                Err(finger_protocol::reply::Error::BadValue | finger_protocol::reply::Error::NotAField) => return Ok(Reply { before, line: l }),
+                Err(finger_protocol::reply::Error::NotFinal) => before.push(l),
             }
-            if let Some(rest) = l.strip_prefix("err ") {
-                let (code, message) = rest.split_once(':').unwrap_or((rest, ""));
-                return Err(CommandError::Board { code: ErrorCode::parse(code.trim()), message: message.trim().to_owned() });
-            }
-            before.push(l);
         }
     }
 }

@@ -25,7 +25,7 @@ loop for one period (`wait`), so the slew and the film's creep play out; Ctrl-C 
 /// The demo's setpoints on the simulated board: arm, every channel at half its ceiling
 /// (`limits`' vmax), 0.5 N.
 fn start_demo(con: &mut Console) -> Result<(), CommandError> {
-    let vmax = con.command("limits")?.get("vmax").and_then(|v| v.split(',').next()).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    let vmax = con.command("limits")?.numbers("vmax").and_then(|v| v.first().copied()).unwrap_or(0.0);
     con.command("arm")?;
     con.command(&format!("volt all {}", (0.5 * vmax).floor()))?;
     con.command("force 0.5")?;

@@ -103,9 +103,8 @@ pub struct Readback {
 impl Readback {
     /// From a `status` reply: None without `vmeas=` (a board without a read-back).
     pub fn of(r: &Reply) -> Option<Readback> {
-        // `-`: not measured yet
-        let list = |key: &str| -> Option<Vec<f64>> { r.get(key)?.split(',').map(|v| if v == "-" { Some(f64::NAN) } else { v.parse().ok() }).collect() };
-        Some(Readback { vmeas_v: list("vmeas")?, imeas_ua: list("imeas")?, thick_meas_mm: list("thick_meas")? })
+        // `-`: not measured yet (NaN)
+        Some(Readback { vmeas_v: r.measured("vmeas")?, imeas_ua: r.measured("imeas")?, thick_meas_mm: r.measured("thick_meas")? })
     }
 }
 
