@@ -1,0 +1,126 @@
+//! Every error code the firmware can emit is the protocol crate's and parses back through it:
+//! the firmware's source names codes only as `finger_protocol::ErrorCode` variants (no
+//! `"err <code>` text of its own), and the simulated board's refusals, one per code it can give
+//! here, parse to their code. Every reply of a session parses as a final line, its declared
+//! fields as their kinds.
+use std::path::Path;
+
+use finger_fw::sim::SimBoard;
+use finger_fw::App;
+use finger_protocol::{ErrorCode, Reply};
+use host_tests::sim_console::{cmd, feed, Out};
+
+fn sources(dir: &Path, out: &mut Vec<(String, String)>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            sources(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push((p.display().to_string(), std::fs::read_to_string(&p).unwrap()));
+        }
+    }
+}
+
+/// The identifier after each `pat` in `text`.
+fn names_after<'a>(text: &'a str, pat: &str) -> Vec<&'a str> {
+    text.match_indices(pat).map(|(i, _)| {
+        let rest = &text[i + pat.len()..];
+        &rest[..rest.find(|c: char| !c.is_ascii_alphanumeric()).unwrap_or(rest.len())]
+    }).collect()
+}
+
+#[test]
+fn every_code_the_firmware_names_is_the_protocols_and_parses() {
+    let mut files = Vec::new();
+    sources(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../src"), &mut files);
+    let known: Vec<String> = ErrorCode::ALL.iter().map(|c| format!("{c:?}")).collect();
+    let mut used = std::collections::BTreeSet::new();
+    for (path, text) in &files {
+        // the code, not its comments
+        let text: String = text.lines().filter(|l| !l.trim_start().starts_with("//")).collect::<Vec<_>>().join("\n");
+        // an error line's head is the protocol's (src/app/errors.rs `head`), never text
+        assert!(!text.contains("\"err "), "{path}: an `err <code>` line written as text");
+        // (`ErrorCode::$code`: the macro's own)
+        for n in names_after(&text, "err!(").into_iter().chain(names_after(&text, "ErrorCode::")).filter(|n| !n.is_empty()) {
+            assert!(known.iter().any(|k| k == n), "{path}: `{n}` is not a code of finger_protocol::ErrorCode");
+            used.insert(n.to_string());
+        }
+    }
+    assert!(used.len() >= 10, "{used:?}");
+    for c in ErrorCode::ALL {
+        let line = format!("err {c}: message");
+        assert_eq!(Reply::parse(&line).map(|r| match r { Reply::Err { code, .. } => code.to_known(), _ => None }), Ok(Some(c)), "{line}");
+    }
+    // the model's errors' codes are among them (their table is exhaustive by construction)
+    let e = finger_model::Error::Singular { what: "tangent" };
+    assert_eq!(e.code(), ErrorCode::Fault);
+    assert_eq!(e.to_string(), "singular tangent");
+}
+
+fn app() -> App<SimBoard> {
+    App::new(SimBoard::default())
+}
+
+/// `line`'s reply, parsed: its code.
+fn code_of(a: &mut App<SimBoard>, line: &str) -> ErrorCode {
+    let r = cmd(a, line);
+    match Reply::parse(&r) {
+        Ok(Reply::Err { code, message }) => {
+            assert!(!message.is_empty(), "{r}");
+            code.to_known().unwrap_or_else(|| panic!("{r}: not a known code"))
+        }
+        other => panic!("{line:?} -> {r:?}: {other:?}"),
+    }
+}
+
+#[test]
+fn the_simulated_boards_refusals_parse_to_their_codes() {
+    let mut a = app();
+    assert_eq!(code_of(&mut a, "frobnicate"), ErrorCode::Unknown);
+    assert_eq!(code_of(&mut a, "solve 1"), ErrorCode::Usage);
+    assert_eq!(code_of(&mut a, "solve nan 0 0 0"), ErrorCode::BadNumber);
+    assert_eq!(code_of(&mut a, &format!("solve {}", "1 ".repeat(100))), ErrorCode::TooLong);
+    assert_eq!(code_of(&mut a, "a b c d e f g h i j"), ErrorCode::Usage);
+    assert_eq!(code_of(&mut a, "volt 1 100"), ErrorCode::NotArmed);
+    assert_eq!(code_of(&mut a, "pose -5 1 1"), ErrorCode::Unreachable);
+    assert!(cmd(&mut a, "arm").starts_with("ok"));
+    assert_eq!(code_of(&mut a, "volt 1 1e6"), ErrorCode::Limit);
+    assert_eq!(code_of(&mut a, "param l 30"), ErrorCode::Armed);
+    // a model error, through the one table of messages
+    assert_eq!(code_of(&mut a, "force 1e7"), ErrorCode::Limit);
+    // a lost line, and lines a stop drops
+    a.input_overrun();
+    let lines = feed(&mut a, b"status\n");
+    assert!(matches!(Reply::parse(&lines[0]), Ok(Reply::Err { code: ErrorCode::Overrun, .. })), "{lines:?}");
+    let mut out = Out(String::new());
+    for &b in b"status\nstatus\nstop\n" {
+        a.receive(b, &mut out);
+    }
+    a.run_commands(&mut out);
+    let stopped = out.0.lines().filter(|l| matches!(Reply::parse(l), Ok(Reply::Err { code: ErrorCode::Stopped, .. }))).count();
+    assert_eq!(stopped, 2, "{}", out.0);
+    // a latched fault
+    assert!(a.write_hv_duty(3, 0).is_err());
+    assert_eq!(code_of(&mut a, "arm"), ErrorCode::Fault);
+}
+
+/// Each reply of a session is a final line that parses, every declared field reading as its
+/// kind ([`finger_protocol::field::FIELDS`]), and emits back to itself.
+#[test]
+fn every_reply_of_a_session_parses() {
+    let mut a = app();
+    for line in ["help", "version", "status", "limits", "material", "solve 0.5 100 0 0", "shape 0.5 0 0 0", "pose 5 5 5", "contact 0.2 0.5", "param", "param l", "cal", "cal show", "arm", "volt all 100", "force 0.3", "wait 0.1", "status", "disarm", "stop"] {
+        let r = cmd(&mut a, line);
+        let p = Reply::parse(&r).unwrap_or_else(|e| panic!("{line:?} -> {r:?}: {e}"));
+        let mut back = String::new();
+        p.emit(&mut back).unwrap();
+        assert_eq!(back, r.trim_end());
+        if let Reply::Ok(f) = p {
+            for (k, v) in f.raw() {
+                if finger_protocol::field::field(k).is_some() {
+                    assert!(f.get(k).is_some(), "{line:?}: {k}={v} does not read as its kind");
+                }
+            }
+        }
+    }
+}
