@@ -47,7 +47,8 @@ pub const FIELDS: &[Field] = &[
     f("imeas", Numbers, "µA"),
     f("thick_meas", Numbers, "mm"),
     f("vceil", Numbers, "V"),
-    f("film_check", Word, "-"),
+    // per channel: `ok` or `thinner`
+    f("film_check", Words, "-"),
     f("trip_us", Number, "µs"),
     f("tick_sense_us", Number, "µs"),
     f("tick_source_us", Number, "µs"),

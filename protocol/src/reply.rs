@@ -30,7 +30,7 @@ pub enum Error {
     NoCode,
     /// A word of an `ok` line that is not `key=value` (its text).
     NotAField,
-    /// A declared field whose value does not read as its kind.
+    /// A declared field whose value does not read as its kind ([`Fields::check`]).
     BadValue,
 }
 
@@ -53,7 +53,9 @@ pub fn emit_err_head<S: AsRef<str>>(w: &mut dyn fmt::Write, code: &ErrorCode<S>)
 }
 
 impl<'a> Reply<'a> {
-    /// A final line (without its line ending; surrounding spaces are ignored).
+    /// A final line (without its line ending; surrounding spaces are ignored). Its grammar
+    /// only: a field's value is read when asked for ([`Fields::get`]; [`Fields::check`] reads
+    /// them all), so a client reads what it knows of a newer firmware's line.
     pub fn parse(line: &'a str) -> Result<Reply<'a>, Error> {
         let line = line.trim();
         if let Some(rest) = line.strip_prefix("err ") {
@@ -69,11 +71,8 @@ impl<'a> Reply<'a> {
             _ => return Err(Error::NotFinal),
         };
         let fields = Fields(rest);
-        for (k, v) in fields.raw() {
-            if k.is_empty() {
-                return Err(Error::NotAField);
-            }
-            Value::read(k, v).ok_or(Error::BadValue)?;
+        if fields.raw().any(|(k, _)| k.is_empty()) {
+            return Err(Error::NotAField);
         }
         Ok(Reply::Ok(fields))
     }
@@ -121,6 +120,24 @@ impl<'a> Fields<'a> {
     /// Every field, in order, as text: key and value.
     pub fn raw(&self) -> Raw<'a> {
         Raw { rest: self.0 }
+    }
+
+    /// The `key=value` fields as text, without the words before any field (`ok stopped`'s).
+    pub fn pairs(self) -> impl Iterator<Item = (&'a str, &'a str)> + 'a {
+        let text = self.0;
+        self.raw().filter(move |(k, _)| {
+            let end = k.as_ptr() as usize - text.as_ptr() as usize + k.len();
+            text.as_bytes().get(end) == Some(&b'=')
+        })
+    }
+
+    /// Every declared field reads as its kind ([`crate::field::FIELDS`]): what the firmware's
+    /// tests hold each reply to.
+    pub fn check(&self) -> Result<(), Error> {
+        for (k, v) in self.raw() {
+            Value::read(k, v).ok_or(Error::BadValue)?;
+        }
+        Ok(())
     }
 
     /// Every field, in order, its value read (a declared field whose value does not read as

@@ -1,7 +1,7 @@
 """Type stubs of the native module (Rust, PyO3): the model. Units in the names or the docs:
 lengths mm, forces N, moments N·mm, voltages V, angles rad (``_deg``: degrees)."""
 
-from typing import List, Literal, Optional, Sequence, Tuple, Union
+from typing import Dict, List, Literal, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -209,3 +209,13 @@ def cards() -> List[str]:
 
 def parameter_ranges() -> List[Tuple[str, str]]:
     """Every parameter name with its valid range, as the console states them."""
+
+# A board's reply lines, read by the console protocol crate (softfinger/board.py's parser).
+def _reply_final(line: str) -> Optional[Tuple[str, ...]]:
+    """``("ok",)``, ``("err", code, message)``, or None for a line before a final one."""
+
+def _reply_fields(line: str) -> Dict[str, Union[float, str, Tuple[float, ...]]]:
+    """The ``key=value`` fields of a line: floats, tuples of floats, else the text."""
+
+def _reply_measured(line: str, key: str) -> Optional[List[float]]:
+    """``key``'s numbers, ``-`` as NaN; None without ``key`` or with a word in it."""

@@ -8,7 +8,9 @@ that closes raises :class:`BoardLinkError`; nothing waits forever. A :class:`Boa
 context manager: leaving the block (normally, by an exception or by Ctrl-C) sends ``stop``.
 
 What it is not: the model (``softfinger.Finger``), nor a second console grammar: the board's
-replies are parsed as the contract states them (``key=value``, comma-separated components).
+replies are read by the console protocol crate (``finger-protocol``, through the extension:
+``key=value``, comma-separated components), the parser the firmware's tests and the ``finger``
+client use.
 Units as at the console: forces N, voltages V, lengths mm, angles degrees.
 """
 
@@ -27,6 +29,8 @@ from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import serial
+
+from ._core import _reply_fields, _reply_final, _reply_measured
 
 Value = Union[float, str, Tuple[float, ...]]
 
@@ -61,24 +65,11 @@ class BoardLinkError(ConnectionError):
     """The link itself failed: it could not be opened, or the board's side closed."""
 
 
-def _value(v: str) -> Value:
-    """A reply value: a number, a tuple of numbers (comma-separated), else the text."""
-    parts = v.split(",")
-    try:
-        nums = tuple(float(p) for p in parts)
-    except ValueError:
-        return v
-    return nums[0] if len(nums) == 1 else nums
-
-
 def parse_fields(line: str) -> Dict[str, Value]:
-    """The ``key=value`` fields of an ``ok`` line, values parsed by :func:`_value`."""
-    out: Dict[str, Value] = {}
-    for kv in line.split()[1:]:
-        if "=" in kv:
-            k, v = kv.split("=", 1)
-            out[k] = _value(v)
-    return out
+    """The ``key=value`` fields of an ``ok`` line: a number as a float, comma-separated numbers
+    as a tuple, anything else as its text (read by the console protocol crate, through the
+    extension: the project's one parser of the grammar)."""
+    return _reply_fields(line)
 
 
 def _tuple(v: Value) -> Tuple[float, ...]:
@@ -127,10 +118,8 @@ class Status:
 
     @staticmethod
     def _measured(line: str, key: str) -> Optional[Tuple[float, ...]]:
-        for kv in line.split()[1:]:
-            if kv.startswith(key + "="):
-                return tuple(float("nan") if x == "-" else float(x) for x in kv.split("=", 1)[1].split(","))
-        return None
+        v = _reply_measured(line, key)
+        return None if v is None else tuple(v)
 
     @classmethod
     def parse(cls, line: str) -> "Status":
@@ -569,8 +558,8 @@ class Board:
         before: List[str] = []
         while True:
             reply = self._link.line(t, line)
-            final = reply == "ok" or reply.startswith("ok ") or reply.startswith("err ")
-            if not final:
+            final = _reply_final(reply)
+            if final is None:
                 before.append(reply)
                 continue
             self._late -= 1
@@ -581,9 +570,8 @@ class Board:
                 earlier -= 1
                 before = []
                 continue
-            if reply.startswith("err "):
-                code, _, msg = reply[4:].partition(":")
-                raise BoardError(code.strip(), msg.strip(), line)
+            if final[0] == "err":
+                raise BoardError(final[1], final[2], line)
             self.before = before
             return reply
 

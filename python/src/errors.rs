@@ -102,7 +102,7 @@ fn build(py: Python<'_>, e: Error, index: Option<usize>) -> PyErr {
         let cls = py.import("softfinger.errors")?.getattr(class_of(&e))?;
         let (kind, kw) = fields(py, &e)?;
         kw.set_item("kind", kind)?;
-        kw.set_item("code", e.code())?;
+        kw.set_item("code", e.code().as_str())?;
         if let Some(i) = index {
             kw.set_item("index", i)?;
         }
@@ -122,7 +122,7 @@ pub fn model_err_msg(e: Error, msg: String) -> PyErr {
             let cls = py.import("softfinger.errors")?.getattr(class_of(&e))?;
             let (kind, kw) = fields(py, &e)?;
             kw.set_item("kind", kind)?;
-            kw.set_item("code", e.code())?;
+            kw.set_item("code", e.code().as_str())?;
             Ok(PyErr::from_value(cls.call((msg,), Some(&kw))?))
         };
         make().unwrap_or_else(|err| err)

@@ -4,7 +4,8 @@
 //! typed errors become the exception classes of `errors.rs`.
 //!
 //! What it is not: a second implementation of any equation (every number comes from
-//! `finger-model`), nor the board (pure Python, `softfinger/board.py`). Units are the model's:
+//! `finger-model`), nor the board (Python, `softfinger/board.py`; its replies are read by the
+//! console protocol crate through `reply.rs`). Units are the model's:
 //! mm, N, N·mm, MPa, V, angles in rad (degrees only where a name says `_deg`).
 use finger_model::inverse::{self, contact_force};
 use finger_model::mat3::{self, Mat3};
@@ -21,6 +22,7 @@ use rayon::prelude::*;
 
 mod design;
 mod errors;
+mod reply;
 use errors::{model_err, row_err};
 
 type R = f64;
@@ -895,6 +897,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cards, m)?)?;
     m.add_function(wrap_pyfunction!(_finger_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(design::evaluate_designs, m)?)?;
+    m.add_function(wrap_pyfunction!(reply::_reply_final, m)?)?;
+    m.add_function(wrap_pyfunction!(reply::_reply_fields, m)?)?;
+    m.add_function(wrap_pyfunction!(reply::_reply_measured, m)?)?;
     errors::register(m)?;
     Ok(())
 }

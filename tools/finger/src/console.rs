@@ -50,7 +50,7 @@ impl Reply {
 
     /// Every `key=value` field, in order.
     pub fn fields(&self) -> impl Iterator<Item = (&str, &str)> {
-        self.parsed().raw()
+        self.parsed().pairs()
     }
 }
 
@@ -118,7 +118,7 @@ impl Console {
                     let code = l.strip_prefix("err ").unwrap_or(&l).trim();
                     return Err(CommandError::Board { code: ErrorCode::parse(code), message: String::new() });
                 }
-                // an ok line whose field does not read as its kind: still the final line
+                // an ok line with a field without its key: still the final line
                 Err(finger_protocol::reply::Error::BadValue | finger_protocol::reply::Error::NotAField) => return Ok(Reply { before, line: l }),
                 Err(finger_protocol::reply::Error::NotFinal) => before.push(l),
             }
