@@ -130,8 +130,19 @@ fn the_plant_corpus_latches_every_kind_of_fault() {
 /// at 6 kV against a 4.2 kV shaped target (the drive at the 5.4 kV hold ceiling) never.
 #[test]
 fn a_stuck_module_on_a_shaped_channel_is_cut_within_320_ms() {
-    for f in ["stuck-module-shaped-drive", "stuck-6kv-shaped-never-cut"] {
+    for f in ["stuck-module-shaped-drive", "stuck-6kv-shaped-never-cut", "stuck-shaped-found-by-the-fuzzer"] {
         let data = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("regressions/plant").join(f)).unwrap();
         finger_fuzz::plant::check(&data);
     }
+}
+
+/// The plant target's second find (open): armed setpoints taken by the core while a fault is
+/// latched (no stop since: a breakdown, then a disarm and an arm) set its targets, and the
+/// values and the loop's ask climb: nonzero duties written with the enable low (which the
+/// fault holds low until a stop, so no HV reaches a stack). Against "a fault cuts the HV:
+/// enable low, every duty 0, until stop".
+#[test]
+fn a_latched_fault_keeps_every_duty_at_0() {
+    let data = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("regressions/plant/duty-with-the-enable-low-after-a-fault")).unwrap();
+    finger_fuzz::plant::check(&data);
 }
