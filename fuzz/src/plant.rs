@@ -290,7 +290,13 @@ impl Run {
         plant.inject(ch, what).expect("the plant takes the fault");
         match kind {
             Kind::Stuck => self.stuck[ch] = true,
-            Kind::Open => self.open[ch] = true,
+            Kind::Open => {
+                self.open[ch] = true;
+                // a short or a leak injected in this same tick, before any current flowed, is
+                // behind the disconnection now: it draws nothing either
+                let now = self.ticks;
+                self.due.retain(|d| !(d.ch == ch && d.at == now && matches!(d.kind, Kind::Breakdown | Kind::Leak)));
+            }
             _ => {}
         }
         if counted {
