@@ -78,9 +78,9 @@ struct Sensing {
     c0_pf: [f32; HV_CHANNELS],
     /// The voltage the loop drove each channel to in the tick just ended, V.
     drive: [f32; HV_CHANNELS],
-    /// The loop's ask was held back by the slew this tick (the module not yet given the
-    /// chance to follow: no mismatch counts).
-    slew_held: [bool; HV_CHANNELS],
+    /// What the loop asked of each module this tick, and whether the slew held it back (the
+    /// module not yet given the chance to follow its command: `watch::Watch::check`).
+    ask: [hv_loop::Ask; HV_CHANNELS],
     /// Each channel's time in its hold, ms (0: not held): the ripple's phase, from 0 V below
     /// the guarded value, so it starts without a step.
     ripple_ms: [u32; HV_CHANNELS],
@@ -113,7 +113,7 @@ impl Sensing {
             cal: [sense::MonitorCal::NOMINAL; HV_CHANNELS],
             c0_pf: [crate::board::BOARD_STACK_C0_PF; HV_CHANNELS],
             drive: [0.0; HV_CHANNELS],
-            slew_held: [false; HV_CHANNELS],
+            ask: [hv_loop::Ask::ZERO; HV_CHANNELS],
             ripple_ms: [0; HV_CHANNELS],
             seen_windows: [0; HV_CHANNELS],
             view: SenseView { volts: [0.0; HV_CHANNELS], current_ua: [0.0; HV_CHANNELS], stack_ratio: [f32::NAN; HV_CHANNELS], ceiling_v: [0.0; HV_CHANNELS], disagreed: [false; HV_CHANNELS] },
@@ -441,7 +441,7 @@ impl<B: Board> Control<B> {
             sn.guard = [watch::ThicknessGuard::new(); HV_CHANNELS];
             sn.vloop = [hv_loop::VoltageLoop::new(); HV_CHANNELS];
             sn.drive = [0.0; HV_CHANNELS];
-            sn.slew_held = [false; HV_CHANNELS];
+            sn.ask = [hv_loop::Ask::ZERO; HV_CHANNELS];
             sn.ripple_ms = [0; HV_CHANNELS];
             sn.check_until_ms = None;
             sn.recheck = recheck;
@@ -488,7 +488,9 @@ impl<B: Board> Control<B> {
             self.slew = sp.slew;
         }
         self.servo_released = sp.servo_released;
-        if sp.armed && self.lockout.is_none() {
+        // a latched fault takes no armed targets until `stop` (the enable stays low, and so
+        // does every duty)
+        if sp.armed && self.lockout.is_none() && self.fault.is_none() {
             let mut floor = [1.0f32; HV_CHANNELS];
             for ch in 0..HV_CHANNELS {
                 let t = sp.target_v[ch];
@@ -717,7 +719,7 @@ impl<B: Board> Control<B> {
         let drive = if held { nv - sense::ripple_v(sn.ripple_ms[ch]) } else { nv }.min(limit_v);
         sn.drive[ch] = drive;
         let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v, self.slew * 0.001);
-        sn.slew_held[ch] = ask.slew_held;
+        sn.ask[ch] = ask;
         hv_duty_for(ask.volts, max).min(limit)
     }
 
@@ -745,7 +747,11 @@ impl<B: Board> Control<B> {
             let c_ratio = self.stacks.as_ref().map_or(1.0, |st| st.incremental_capacitance_ratio(ch));
             sn.est[ch].tick(v, i, sn.ripple_ms[ch], c_ratio);
             let reading = watch::Reading { v, i_ua: i, v_code: hs.v_code[ch] };
-            if let Some(f) = sn.watch[ch].check(&reading, sn.drive[ch], sn.slew_held[ch], self.write_ceiling_v[ch], self.enable, &sn.est[ch]) {
+            // the measured voltage's ceiling: the writer's, and with a read-back never above
+            // the hold ceiling (a shaped drive stays under it: `tick_timed`); a guard's cut
+            // is followed at the slew, so the hold ceiling, not the lowered one
+            let over_ceiling_v = self.write_ceiling_v[ch].min(hold);
+            if let Some(f) = sn.watch[ch].check(&reading, sn.drive[ch], &sn.ask[ch], over_ceiling_v, self.enable, &sn.est[ch]) {
                 fault = fault.or(Some(f));
             }
             let s_meas = sn.est[ch].thickness_ratio(sn.c0_pf[ch]);

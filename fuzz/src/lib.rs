@@ -10,6 +10,7 @@ pub mod config;
 pub mod console;
 pub mod material;
 pub mod model;
+pub mod plant;
 pub mod rx;
 pub mod scene;
 

@@ -56,6 +56,30 @@ fn a_stuck_module_is_cut_within_the_settling_time() {
     }
 }
 
+/// A module stuck under the hold ceiling, 800-2,300 V above a held 3 kV command, plain at
+/// 100, 2,000 and 100,000 V/s and shaped at the two faster slews: `hv-mismatch` within the
+/// settling time. The slew holds the loop's ask back all the while the ask descends; a
+/// mismatch count that restarted on every such tick never cut the plain channel at 2,000 V/s or
+/// slower (60 s), and one that only paused took 8-16 s at 100 V/s: the module must follow its ask.
+#[test]
+fn a_module_stuck_under_the_ceiling_is_cut_within_the_settling_time_at_any_slew() {
+    use finger_fw::control::Control;
+    use finger_fw::sim::SimBoard;
+    use host_tests::hv::setpoints;
+    for (shaped, slew) in [(false, 100.0), (false, 2000.0), (false, 100_000.0), (true, 2000.0), (true, 100_000.0)] {
+        for stuck in [3800.0, 4500.0, 5300.0] {
+            let mut c = Control::new(SimBoard::with_plant(Plant::new(3).unwrap()), 2000, slew);
+            assert!(c.apply(&setpoints(&c, [3000.0; 3], shaped, slew)));
+            run(&mut c, 40_000);
+            assert_eq!(c.view().fault.get(), None);
+            c.board_mut().plant.as_mut().unwrap().inject(0, Inject::Stuck(stuck)).unwrap();
+            run(&mut c, HV_SETTLE_MS + 20);
+            assert_eq!(c.view().fault.get(), Some(Fault::HvMismatch), "shaped {shaped} at {slew} V/s, stuck at {stuck} V");
+            assert!(!c.view().enable && c.view().duty == [0; 3]);
+        }
+    }
+}
+
 /// A disconnected stack (`stack-open`) and a film that leaks 10 µA (`leakage`), each
 /// latched, HV off.
 #[test]

@@ -27,6 +27,11 @@ pub struct Ask {
     pub slew_held: bool,
 }
 
+impl Ask {
+    /// Nothing asked.
+    pub const ZERO: Ask = Ask { volts: 0.0, slew_held: false };
+}
+
 impl VoltageLoop {
     pub const fn new() -> Self {
         VoltageLoop { integral_v: 0.0, asked_v: 0.0 }
@@ -73,6 +78,9 @@ impl VoltageLoop {
         let u = if want > hi { hi } else if want > lo { want } else { lo };
         let u = if u > limit_v { limit_v } else if u > 0.0 { u } else { 0.0 };
         self.asked_v = u;
-        Ask { volts: u, slew_held: (want > hi && hi < limit_v) || (want < lo && lo > 0.0) }
+        // held back: what the PI term would ask without the anti-windup (which puts the output
+        // exactly on the slew's bound, so the output alone flickers between held and not)
+        let free = p_v + trial;
+        Ask { volts: u, slew_held: (free > hi && hi < limit_v) || (free < lo && lo > 0.0) }
     }
 }

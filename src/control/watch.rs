@@ -7,6 +7,7 @@
 //! (`super::sense`). Every comparison is written so that NaN fails safe.
 
 use super::fault::Fault;
+use super::hv_loop::Ask;
 use super::sense::Estimator;
 use crate::board::{ADC_FULL_CODE, BOARD_STACK_C0_PF, SENSE_STRAY_PF, TRIP_CURRENT_UA};
 
@@ -16,6 +17,10 @@ pub const HV_SETTLE_MS: u32 = 300;
 /// Off its command: by more than this many volts or this fraction of the command.
 pub const MISMATCH_V: f32 = 300.0;
 pub const MISMATCH_FRAC: f32 = 0.1;
+/// While the slew holds the loop's ask back, a healthy module still follows the ask: within
+/// this fraction of it (a gain off its datasheet) or [`MISMATCH_V`], plus its lag (the ask's
+/// rate over [`MODULE_FALL_MS`]). Off that, the mismatch counts.
+pub const FOLLOW_FRAC: f32 = 0.15;
 /// Past the ceiling in force by this fraction plus [`OVER_V`], for [`OVER_MS`]: at once.
 pub const OVER_FRAC: f32 = 0.02;
 pub const OVER_V: f32 = 60.0;
@@ -65,18 +70,20 @@ pub struct Watch {
     last_code: f32,
     leak_ms: u32,
     prev_drive: f32,
+    prev_ask: f32,
     fall_env: f32,
 }
 
 impl Watch {
     pub const fn new() -> Self {
-        Watch { steady_ms: 0, collapse_ms: 0, mismatch_ms: 0, over_ms: 0, stuck_ms: 0, stuck_from_v: 0.0, last_code: -1.0, leak_ms: 0, prev_drive: 0.0, fall_env: 0.0 }
+        Watch { steady_ms: 0, collapse_ms: 0, mismatch_ms: 0, over_ms: 0, stuck_ms: 0, stuck_from_v: 0.0, last_code: -1.0, leak_ms: 0, prev_drive: 0.0, prev_ask: 0.0, fall_env: 0.0 }
     }
 
-    /// The checks of one tick: `drive_v` the voltage the loop drives to, `slew_held` the
-    /// loop's ask held back by the slew (a module off its command then is not yet one that
-    /// does not follow), `ceiling_v` the channel's ceiling in force, `enabled` the HV enable.
-    pub fn check(&mut self, r: &Reading, drive_v: f32, slew_held: bool, ceiling_v: f32, enabled: bool, est: &Estimator) -> Option<Fault> {
+    /// The checks of one tick: `drive_v` the voltage the loop drives to, `ask` what the loop
+    /// asked of the module (held back by the slew, a module off its command is not yet one that
+    /// does not follow, as long as it follows the ask), `ceiling_v` the channel's ceiling in
+    /// force, `enabled` the HV enable.
+    pub fn check(&mut self, r: &Reading, drive_v: f32, ask: &Ask, ceiling_v: f32, enabled: bool, est: &Estimator) -> Option<Fault> {
         if !(r.v.is_finite() && r.i_ua.is_finite() && r.v_code >= 0.0) || r.v_code >= ADC_FULL_CODE - 0.5 {
             return Some(Fault::Sensor);
         }
@@ -98,7 +105,12 @@ impl Watch {
         let off = (r.v - drive_v).abs() > MISMATCH_V.max(MISMATCH_FRAC * drive_v);
         let want = if enabled { drive_v } else { 0.0 };
         let off = if enabled { off } else { r.v > 2.0 * MISMATCH_V };
-        self.mismatch_ms = if off && !(enabled && slew_held) { self.mismatch_ms + 1 } else { 0 };
+        // the slew holding the loop's ask back: a module that follows the ask had no chance
+        // yet to follow the command (no mismatch); one off its ask counts
+        let lag_v = (ask.volts - self.prev_ask).abs() * MODULE_FALL_MS;
+        self.prev_ask = ask.volts;
+        let follows_ask = !((r.v - ask.volts).abs() > MISMATCH_V.max(FOLLOW_FRAC * ask.volts) + lag_v);
+        self.mismatch_ms = if !off || (enabled && ask.slew_held && follows_ask) { 0 } else { self.mismatch_ms + 1 };
         if enabled && self.steady_ms >= 30 && drive_v > 1000.0 && r.v < COLLAPSE_FRAC * drive_v {
             self.collapse_ms += 1;
             if self.collapse_ms >= 3 {

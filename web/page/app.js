@@ -379,15 +379,21 @@ const STRIP_WINDOW_S = 60;
 function stripAdd(kv) {
   const now = performance.now();
   if (state.stripT0 == null) state.stripT0 = now;
-  state.strip.push({ t: (now - state.stripT0) / 1000, force: Number(kv.force), volts: nums(kv.volts), thick: nums(kv.thick), joints: nums(kv.joints) });
+  state.strip.push({
+    t: (now - state.stripT0) / 1000, force: Number(kv.force), volts: nums(kv.volts), thick: nums(kv.thick), joints: nums(kv.joints),
+    // the read-back (a board without one: none), NaN until measured
+    vmeas: nums(kv.vmeas), imeas: nums(kv.imeas), thickMeas: nums(kv.thick_meas),
+  });
   if (state.strip.length > STRIP_MAX) state.strip.shift();
   drawStrip();
 }
 
 /** The samples as CSV, one row a `status`, units in the header. */
 function stripCsv() {
-  const head = 't_s,tension_N,v1_V,v2_V,v3_V,thick1_mm,thick2_mm,thick3_mm,joint1_deg,joint2_deg,joint3_deg';
-  return [head, ...state.strip.map((r) => [r.t.toFixed(3), r.force, ...r.volts, ...r.thick, ...r.joints].join(','))].join('\n') + '\n';
+  const head = 't_s,tension_N,v1_V,v2_V,v3_V,thick1_mm,thick2_mm,thick3_mm,joint1_deg,joint2_deg,joint3_deg'
+    + ',vmeas1_V,vmeas2_V,vmeas3_V,imeas1_uA,imeas2_uA,imeas3_uA,thick_meas1_mm,thick_meas2_mm,thick_meas3_mm';
+  const three = (a) => [0, 1, 2].map((k) => (Number.isFinite(a[k]) ? a[k] : ''));
+  return [head, ...state.strip.map((r) => [r.t.toFixed(3), r.force, ...r.volts, ...r.thick, ...r.joints, ...three(r.vmeas), ...three(r.imeas), ...three(r.thickMeas)].join(','))].join('\n') + '\n';
 }
 state.stripCsv = stripCsv;
 
@@ -396,11 +402,13 @@ function drawStrip() {
   if (!svg) return;
   svg.innerHTML = '';
   // one colour per channel (the tension, one series, in black); a channel's own dash and
-  // width, so that channels at the same value stay visible on top of each other
-  const W = 520, L = 64, R = 90, T = 6, H = 300, rows = [
+  // width, so that channels at the same value stay visible on top of each other. A row's
+  // `meas`: the read-back beside the command or the model (thin, faded; class `-meas`)
+  const W = 520, L = 64, R = 90, T = 6, H = 380, rows = [
     { name: 'tension', unit: 'N', get: (r) => [r.force], span: 0.1 },
-    { name: 'voltage', unit: 'V', get: (r) => r.volts, span: 100 },
-    { name: 'stack', unit: 'mm', get: (r) => r.thick, span: 0.01 },
+    { name: 'voltage', unit: 'V', get: (r) => r.volts, meas: (r) => r.vmeas || [], span: 100 },
+    { name: 'current', unit: 'µA', get: (r) => r.imeas || [], span: 0.2 },
+    { name: 'stack', unit: 'mm', get: (r) => r.thick, meas: (r) => r.thickMeas || [], span: 0.01 },
     { name: 'joints', unit: 'deg', get: (r) => r.joints, span: 0.5 },
   ];
   const cols = ['#06c', '#c60', '#393'], dash = ['', '7 4', '2 3'], widths = [3, 2, 1.3], rowH = (H - T - 18) / rows.length;
@@ -412,7 +420,7 @@ function drawStrip() {
   rows.forEach((row, i) => {
     const y0 = T + i * rowH, h = rowH - 10;
     el('rect', { x: L, y: y0, width: W - L - R, height: h, fill: 'none', stroke: '#ccc' }, svg);
-    const vals = shown.flatMap((r) => row.get(r)).filter(Number.isFinite);
+    const vals = shown.flatMap((r) => [...row.get(r), ...(row.meas ? row.meas(r) : [])]).filter(Number.isFinite);
     const [lo, hi] = axisRange(vals, row.span);
     const Y = (v) => y0 + h - (v - lo) / (hi - lo) * h;
     const ticks = niceTicks(lo, hi, 3);
@@ -421,13 +429,20 @@ function drawStrip() {
       el('text', { x: L - 4, y: Y(t) + 3, 'text-anchor': 'end', 'font-size': 10, class: 'tick' }, svg).textContent = tickLabel(t, ticks);
     }
     el('text', { x: W - R + 6, y: y0 + 12, 'font-size': 11 }, svg).textContent = `${row.name} (${row.unit})`;
-    const n = row.get(shown[0] || { force: 0, volts: [], thick: [], joints: [] }).length;
+    const first = shown[0] || { force: 0, volts: [], thick: [], joints: [], vmeas: [], imeas: [], thickMeas: [] };
+    // a series' points where it is measured (NaN before the read-back has a value)
+    const points = (get, c) => shown.filter((r) => Number.isFinite(get(r)[c])).map((r) => `${X(r.t).toFixed(1)},${Y(get(r)[c]).toFixed(1)}`).join(' ');
+    const n = row.get(first).length;
     for (let c = 0; c < n; c++) {
-      const pts = shown.map((r) => `${X(r.t).toFixed(1)},${Y(row.get(r)[c]).toFixed(1)}`).join(' ');
       const col = n > 1 ? cols[c % 3] : '#222';
-      el('polyline', { points: pts, fill: 'none', stroke: col, 'stroke-width': n > 1 ? widths[c % 3] : 1.6, 'stroke-dasharray': n > 1 ? dash[c % 3] : '', class: `strip-${row.name}`, 'data-channel': c + 1 }, svg);
+      el('polyline', { points: points(row.get, c), fill: 'none', stroke: col, 'stroke-width': n > 1 ? widths[c % 3] : 1.6, 'stroke-dasharray': n > 1 ? dash[c % 3] : '', class: `strip-${row.name}`, 'data-channel': c + 1 }, svg);
       if (n > 1) el('text', { x: W - R + 6 + 24 * c, y: y0 + 26, 'font-size': 10, fill: cols[c % 3] }, svg).textContent = String(c + 1);
     }
+    const m = row.meas ? row.meas(first).length : 0;
+    for (let c = 0; c < m; c++) {
+      el('polyline', { points: points(row.meas, c), fill: 'none', stroke: cols[c % 3], 'stroke-width': 1, 'stroke-opacity': 0.6, 'stroke-dasharray': '1 2', class: `strip-${row.name}-meas`, 'data-channel': c + 1 }, svg);
+    }
+    if (m > 0) el('text', { x: W - R + 6, y: y0 + 40, 'font-size': 9, fill: '#666' }, svg).textContent = row.name === 'voltage' ? 'dotted: measured' : 'dotted: sensed';
   });
   el('text', { x: (L + W - R) / 2, y: H - 4, 'text-anchor': 'middle', 'font-size': 11 }, svg).textContent =
     `time (s), the last ${STRIP_WINDOW_S} s: ${tStart.toFixed(1)} .. ${tEnd.toFixed(1)}`;

@@ -261,6 +261,17 @@ test('the strip chart gains points while the board runs, and exports them as CSV
   assert.equal(await page.locator('#strip polyline.strip-voltage').count(), 3);
   assert.equal(await page.locator('#strip polyline.strip-stack').count(), 3);
   assert.equal(await page.locator('#strip polyline.strip-joints').count(), 3);
+  // the read-back beside the command and the model: measured voltage, current, sensed thickness
+  assert.equal(await page.locator('#strip polyline.strip-voltage-meas').count(), 3);
+  assert.equal(await page.locator('#strip polyline.strip-current').count(), 3);
+  assert.equal(await page.locator('#strip polyline.strip-stack-meas').count(), 3);
+  const last = s[s.length - 1];
+  for (let k = 0; k < 3; k++) {
+    assert.ok(last.vmeas[k] > 0.5 * last.volts[k] && last.vmeas[k] <= last.volts[k] + 60, `measured ${last.vmeas} for ${last.volts}`);
+    assert.ok(Math.abs(last.imeas[k]) < 30, `current ${last.imeas}`);
+  }
+  const vpts = await page.evaluate(() => document.querySelector('#strip polyline.strip-voltage-meas').getAttribute('points'));
+  assert.ok(vpts.split(' ').length >= 8 && !vpts.includes('NaN'), vpts);
   // one colour and one dash per channel, so that equal channels stay visible
   const styles = await page.evaluate(() => [...document.querySelectorAll('#strip polyline.strip-voltage')].map((p) => `${p.getAttribute('stroke')} ${p.getAttribute('stroke-dasharray')} ${p.getAttribute('stroke-width')}`));
   assert.equal(new Set(styles).size, 3, `${styles}`);
@@ -269,7 +280,9 @@ test('the strip chart gains points while the board runs, and exports them as CSV
   // CSV: units in the header, a row a sample
   const csv = await page.evaluate(() => window.finger.stripCsv());
   const rows = csv.trim().split('\n');
-  assert.equal(rows[0], 't_s,tension_N,v1_V,v2_V,v3_V,thick1_mm,thick2_mm,thick3_mm,joint1_deg,joint2_deg,joint3_deg');
+  assert.equal(rows[0], 't_s,tension_N,v1_V,v2_V,v3_V,thick1_mm,thick2_mm,thick3_mm,joint1_deg,joint2_deg,joint3_deg'
+    + ',vmeas1_V,vmeas2_V,vmeas3_V,imeas1_uA,imeas2_uA,imeas3_uA,thick_meas1_mm,thick_meas2_mm,thick_meas3_mm');
+  assert.ok(Number(rows[rows.length - 1].split(',')[11]) > 0, rows[rows.length - 1]);
   assert.ok(rows.length - 1 >= n0 + 8);
   assert.equal(Number(rows[rows.length - 1].split(',')[1]), 0.5);
   // the button downloads it

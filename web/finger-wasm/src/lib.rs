@@ -16,6 +16,7 @@
 use std::cell::RefCell;
 use std::fmt::Write as _;
 
+use finger_fw::plant::Plant;
 use finger_fw::sim::SimBoard;
 use finger_fw::app::{board_params, calibration_for};
 use finger_fw::App;
@@ -33,9 +34,15 @@ struct State {
     host: Params<f64>,
 }
 
+/// The simulated board with the HV plant behind its read-back, as finger-sim runs it (without
+/// a plant, a board of the card that gives none).
+fn plant_board() -> SimBoard {
+    Plant::new(1).map_or_else(SimBoard::default, SimBoard::with_plant)
+}
+
 impl State {
     fn new() -> Self {
-        State { app: App::new(SimBoard::default()), pending: Vec::new(), out: String::new(), io: vec![0; IO_CAP], host: board_params() }
+        State { app: App::new(plant_board()), pending: Vec::new(), out: String::new(), io: vec![0; IO_CAP], host: board_params() }
     }
 
     /// Feed held bytes until the App is busy (glue: `busy`, `input_byte`).
@@ -87,7 +94,7 @@ pub extern "C" fn out_clear() {
 #[no_mangle]
 pub extern "C" fn fw_reset() {
     with(|s| {
-        s.app = App::new(SimBoard::default());
+        s.app = App::new(plant_board());
         s.pending.clear();
     })
 }
