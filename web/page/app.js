@@ -10,14 +10,27 @@
 
 // ------------------------------------------------------------------ console replies
 
-/** `ok a=1 b=2,3` -> {a: '1', b: '2,3'}; the first word (ok/err) is dropped. */
-function parseKv(line) {
-  const kv = {};
-  for (const tok of line.trim().split(/\s+/).slice(1)) {
-    const i = tok.indexOf('=');
-    if (i > 0) kv[tok.slice(0, i)] = tok.slice(i + 1);
+/** A reply line read by the console protocol crate (finger-wasm's `reply_parse`, whichever
+ * board answers): {final: 'ok' | 'err' | null, kv: {a: '1', b: '2,3'} of an `ok` line, code,
+ * message of an `err` line}. */
+function parseReply(line) {
+  const e = state.wasm;
+  const bytes = new TextEncoder().encode(line).subarray(0, e.io_cap());
+  new Uint8Array(e.memory.buffer, e.io_buf(), bytes.length).set(bytes);
+  const kind = e.reply_parse(bytes.length);
+  const text = new TextDecoder().decode(new Uint8Array(e.memory.buffer, e.parsed_ptr(), e.parsed_len()).slice());
+  const r = { final: [null, 'ok', 'err'][kind], kv: {}, code: '', message: '' };
+  if (kind === 1) {
+    for (const l of text.split('\n')) {
+      const i = l.indexOf('=');
+      if (i > 0) r.kv[l.slice(0, i)] = l.slice(i + 1);
+    }
+  } else if (kind === 2) {
+    const i = text.indexOf('\n');
+    r.code = text.slice(0, i);
+    r.message = text.slice(i + 1);
   }
-  return kv;
+  return r;
 }
 const nums = (s) => (s || '').split(',').map(Number);
 /** `x,y,deg,x,y,deg,...` -> [{x, y, th (rad)}] */
@@ -133,7 +146,8 @@ class Console {
   line(l) {
     const c0 = this.sent[0];
     if (l.startsWith('#') || !c0) { log('note', l); return; }
-    if (/^(ok|err)\b/.test(l)) {
+    const r = parseReply(l);
+    if (r.final) {
       // `ok stopped` answers the stop wherever it comes, ahead of the lines sent before the
       // stop; every other final line answers the oldest other line (docs/console.md "Lines")
       const isStop = (x) => /^\s*stop\b/i.test(x.line);
@@ -141,9 +155,10 @@ class Console {
       if (i < 0) { log('note', l); return; }
       const c = this.sent.splice(i, 1)[0];
       clearTimeout(c.timer);
-      if (c.quiet && l.startsWith('err')) log('tx', '> ' + c.line); // a refusal is always logged
-      if (!c.quiet || l.startsWith('err')) log(l.startsWith('err') ? 'err' : 'rx', l);
-      c.resolve({ ok: l.startsWith('ok'), line: l, kv: parseKv(l), lines: c.lines });
+      const err = r.final === 'err';
+      if (c.quiet && err) log('tx', '> ' + c.line); // a refusal is always logged
+      if (!c.quiet || err) log(err ? 'err' : 'rx', l);
+      c.resolve({ ok: !err, line: l, kv: r.kv, lines: c.lines });
       this.pump();
     } else {
       c0.lines.push(l);
@@ -278,9 +293,9 @@ function hostShape(p, v) {
   e.host_shape(p, v[0], v[1], v[2]);
   const t = new TextDecoder().decode(new Uint8Array(e.memory.buffer, e.out_ptr(), e.out_len()).slice()).trim();
   e.out_clear();
-  if (!t.startsWith('ok')) return { err: t };
-  const kv = parseKv(t);
-  return { ...shapeOf(kv), kv };
+  const r = parseReply(t);
+  if (r.final !== 'ok') return { err: t };
+  return { ...shapeOf(r.kv), kv: r.kv };
 }
 
 function hostPose(d, p) {
@@ -289,7 +304,8 @@ function hostPose(d, p) {
   e.host_pose(d[0], d[1], d[2], p == null ? NaN : p);
   const t = new TextDecoder().decode(new Uint8Array(e.memory.buffer, e.out_ptr(), e.out_len()).slice()).trim();
   e.out_clear();
-  return { ok: t.startsWith('ok'), line: t, kv: parseKv(t) };
+  const r = parseReply(t);
+  return { ok: r.final === 'ok', line: t, kv: r.kv };
 }
 
 /** Draw the board's posture at (P, V): `shape` (the same solve as `solve`), with `solve`'s
@@ -723,6 +739,8 @@ async function useSerial() {
   if (!('serial' in navigator)) { showReply('serial', { ok: false, line: 'Web Serial is not available in this browser (Chromium has it)' }); return; }
   const port = await navigator.serial.requestPort();
   const b = new SerialBoard(port);
+  // the replies are read by the wasm module's parser (the console protocol crate)
+  if (!state.wasm) state.wasm = await loadWasm();
   await b.open();
   state.ready = false;
   await connect(b);

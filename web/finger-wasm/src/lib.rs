@@ -12,6 +12,8 @@
 //!
 //! Protocol: write bytes at `io_buf()` (capacity `io_cap()`), call `fw_input(len)`; read
 //! `out_len()` bytes at `out_ptr()`, then `out_clear()`. `host_*` write their reply there too.
+//! `reply_parse(len)` reads a reply line written at `io_buf()` (the page parses every board's
+//! replies here: the console protocol crate's parser).
 
 use std::cell::RefCell;
 use std::fmt::Write as _;
@@ -30,6 +32,8 @@ struct State {
     /// Bytes received while the App was busy (a `wait`).
     pending: Vec<u8>,
     out: String,
+    /// A reply line's parts, as `reply_parse` read them.
+    parsed: String,
     io: Vec<u8>,
     host: Params<f64>,
 }
@@ -42,7 +46,7 @@ fn plant_board() -> SimBoard {
 
 impl State {
     fn new() -> Self {
-        State { app: App::new(plant_board()), pending: Vec::new(), out: String::new(), io: vec![0; IO_CAP], host: board_params() }
+        State { app: App::new(plant_board()), pending: Vec::new(), out: String::new(), parsed: String::new(), io: vec![0; IO_CAP], host: board_params() }
     }
 
     /// Feed held bytes until the App is busy (glue: `busy`, `input_byte`).
@@ -88,6 +92,49 @@ pub extern "C" fn out_len() -> u32 {
 #[no_mangle]
 pub extern "C" fn out_clear() {
     with(|s| s.out.clear())
+}
+
+// ------------------------------------------------------------------ reply lines
+
+/// The page's parser of reply lines (web/page/app.js, whichever board answers): the line at
+/// `io_buf()[..len]` read by the console protocol crate. 0: not a final line; 1: `ok`, its
+/// fields at `parsed_ptr()` (`parsed_len()` bytes), one `key=value` a line; 2: `err`, its code,
+/// a newline, its message.
+#[no_mangle]
+pub extern "C" fn reply_parse(len: u32) -> u32 {
+    use finger_protocol::reply::{Error, Reply};
+    with(|s| {
+        let n = (len as usize).min(IO_CAP);
+        let line = String::from_utf8_lossy(&s.io[..n]).into_owned();
+        s.parsed.clear();
+        match Reply::parse(&line) {
+            Ok(Reply::Ok(f)) => {
+                for (k, v) in f.pairs() {
+                    let _ = writeln!(s.parsed, "{k}={v}");
+                }
+                1
+            }
+            Ok(Reply::Err { code, message }) => {
+                let _ = write!(s.parsed, "{code}\n{message}");
+                2
+            }
+            Err(Error::NoCode) => {
+                let _ = write!(s.parsed, "{}\n", line.trim().strip_prefix("err ").unwrap_or(&line).trim());
+                2
+            }
+            Err(_) => 0,
+        }
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn parsed_ptr() -> *const u8 {
+    with(|s| s.parsed.as_ptr())
+}
+
+#[no_mangle]
+pub extern "C" fn parsed_len() -> u32 {
+    with(|s| s.parsed.len() as u32)
 }
 
 /// A fresh board (power cycle): the App as `App::new` makes it.
@@ -199,7 +246,8 @@ fn write_shape(o: &mut String, f: &Finger<f64>, sol: &Solution<f64>) {
 }
 
 fn write_err(o: &mut String, e: &finger_model::Error) {
-    let _ = write!(o, "err {}: {}", e.code(), e);
+    let _ = finger_protocol::reply::emit_err_head(o, &e.code());
+    let _ = write!(o, "{e}");
 }
 
 /// `solve` and `shape` in one, in f64: `ok nodes=.. hinges=.. thick=.. joints=.. stiffness=kxx,kyy,ktt`
