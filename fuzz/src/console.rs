@@ -76,13 +76,18 @@ fn first_word(line: &[u8]) -> Vec<u8> {
     line.split(|&c| c == b' ' || c == b'\t').find(|w| !w.is_empty()).unwrap_or(b"").to_ascii_lowercase()
 }
 
+/// A final reply line, as the console protocol crate reads it (`ok ...` / `err <code>: ...`).
 fn is_final(l: &str) -> bool {
-    l == "ok" || l.starts_with("ok ") || l.starts_with("err ")
+    finger_protocol::Reply::parse(l).is_ok()
 }
 
 /// An `ok` reply carries no NaN or infinity in any value.
 fn check_reply_values(text: &str) {
     for l in text.lines().filter(|l| l.starts_with("ok")) {
+        // every declared field reads as its kind (protocol/src/field.rs)
+        if let Ok(finger_protocol::Reply::Ok(f)) = finger_protocol::Reply::parse(l) {
+            assert_eq!(f.check(), Ok(()), "a field of {l:?} does not read as its kind");
+        }
         for v in l.split([' ', '=', ',']) {
             let v = v.to_ascii_lowercase();
             let v = v.trim_start_matches(['+', '-']);
