@@ -244,7 +244,7 @@ impl Qemu {
         let mut k = 0;
         while k < n {
             let l = self.line();
-            if l.starts_with("ok") || l.starts_with("err ") {
+            if crate::reply::is_final(&l) {
                 k += 1;
             }
             lines.push(l);

@@ -3,6 +3,11 @@
 //! (the simulated board, QEMU). Not a client: tools/finger is what a user runs.
 use finger_protocol::reply::Fields;
 
+/// Whether `line` is a final reply (`ok ...` / `err <code>: ...`), as the protocol crate reads it.
+pub fn is_final(line: &str) -> bool {
+    finger_protocol::Reply::parse(line).is_ok()
+}
+
 /// The value of `key=` in a reply, if it has one.
 pub fn find<'a>(reply: &'a str, key: &str) -> Option<&'a str> {
     Fields::new(reply).text(key)

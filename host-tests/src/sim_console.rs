@@ -4,6 +4,8 @@
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 
+use crate::reply::is_final;
+
 /// A reply sink for `App::input` and `App::tick`.
 pub struct Out(pub String);
 
@@ -34,10 +36,10 @@ pub fn feed(a: &mut App<SimBoard>, bytes: &[u8]) -> Vec<String> {
 /// One command line: its final reply line (asserting there is exactly one ok/err line, last).
 pub fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
     let lines = feed(a, format!("{line}\n").as_bytes());
-    let finals: Vec<_> = lines.iter().filter(|l| l.starts_with("ok") || l.starts_with("err ")).collect();
+    let finals: Vec<_> = lines.iter().filter(|l| is_final(l)).collect();
     assert_eq!(finals.len(), 1, "{line:?} -> {lines:?}");
     let last = lines.last().unwrap();
-    assert!(last.starts_with("ok") || last.starts_with("err "), "{line:?} -> {lines:?}");
+    assert!(is_final(last), "{line:?} -> {lines:?}");
     last.clone()
 }
 
