@@ -104,6 +104,23 @@ fn the_simulated_boards_refusals_parse_to_their_codes() {
     assert_eq!(code_of(&mut a, "arm"), ErrorCode::Fault);
 }
 
+/// Every command word the firmware's `help` lists is a [`finger_protocol::Command`], and every
+/// command this build lacks answers `err unknown`.
+#[test]
+fn every_command_of_help_is_the_protocols() {
+    let mut a = app();
+    let help = host_tests::sim_console::feed(&mut a, b"help\n");
+    for l in help.iter().filter(|l| !l.starts_with("ok")) {
+        let w = l.split_whitespace().next().unwrap();
+        assert!(finger_protocol::Command::parse(w.as_bytes()).is_some(), "help's {w}");
+    }
+    for c in finger_protocol::Command::ALL {
+        if !finger_fw::app::is_command(c.as_str().as_bytes()) {
+            assert!(cmd(&mut a, c.as_str()).starts_with("err unknown: "), "{c:?}");
+        }
+    }
+}
+
 /// Each reply of a session is a final line that parses, every declared field reading as its
 /// kind ([`finger_protocol::field::FIELDS`]), and emits back to itself.
 #[test]

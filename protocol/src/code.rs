@@ -66,23 +66,27 @@ const NAMES: [&str; 12] = ["unknown", "usage", "bad-number", "too-long", "limit"
 /// `NAMES` end to end, and where each ends: what the image holds (one string and 13 bytes, not
 /// 12 string slices: the Cortex-M3 image's flash). The build checks it is `NAMES`.
 const TEXT: &str = "unknownusagebad-numbertoo-longlimitnot-armedarmedunreachableoverrunstoppedfaultstore";
-const ENDS: [u8; NAMES.len() + 1] = {
-    let mut ends = [0u8; NAMES.len() + 1];
-    let (t, mut at, mut i) = (TEXT.as_bytes(), 0, 0);
-    while i < NAMES.len() {
-        let n = NAMES[i].as_bytes();
+const ENDS: [u8; NAMES.len() + 1] = ends(TEXT, &NAMES);
+
+/// Where each of `names` ends in `text` (their concatenation; the build fails otherwise).
+pub(crate) const fn ends<const N: usize, const M: usize>(text: &str, names: &[&str; N]) -> [u8; M] {
+    assert!(M == N + 1);
+    let mut ends = [0u8; M];
+    let (t, mut at, mut i) = (text.as_bytes(), 0, 0);
+    while i < N {
+        let n = names[i].as_bytes();
         let mut j = 0;
         while j < n.len() {
-            assert!(at + j < t.len() && t[at + j] == n[j], "TEXT is not NAMES end to end");
+            assert!(at + j < t.len() && t[at + j] == n[j], "the text is not the names end to end");
             j += 1;
         }
         at += n.len();
         ends[i + 1] = at as u8;
         i += 1;
     }
-    assert!(at == t.len(), "TEXT is not NAMES end to end");
+    assert!(at == t.len(), "the text is not the names end to end");
     ends
-};
+}
 
 impl<S> ErrorCode<S> {
     /// The known codes by row (the row of each is its [`ErrorCode::index`]).

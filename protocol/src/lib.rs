@@ -5,6 +5,7 @@
 //!
 //! One idea per module:
 //! - [`code`]: [`ErrorCode`], the codes of `err <code>: <message>`.
+//! - [`command`]: [`Command`], a line's first word.
 //! - [`message`]: [`message::Pieces`], a message as text and numbers in a row, so one table
 //!   of messages (the model's errors, model/src/error.rs) renders through core's formatting
 //!   on the host and through the firmware's own number formats on the board.
@@ -17,11 +18,13 @@
 #![no_std]
 
 pub mod code;
+pub mod command;
 pub mod field;
 pub mod message;
 pub mod reply;
 
 pub use code::{ErrorCode, Never};
+pub use command::Command;
 pub use field::{Field, Kind};
 pub use message::Pieces;
 pub use reply::{Reply, Value};

@@ -167,3 +167,20 @@ fn the_field_table_is_the_docs_table() {
     assert_eq!(FIELDS.len(), table_keys.len(), "a key declared twice");
     assert!(FIELDS.iter().filter(|f| f.kind == Kind::Numbers).count() > 10);
 }
+
+#[test]
+fn every_command_round_trips() {
+    use finger_protocol::Command;
+    let mut seen = BTreeSet::new();
+    for c in Command::ALL {
+        let w = c.as_str();
+        assert!(!w.is_empty() && w.bytes().all(|b| b.is_ascii_lowercase()), "{c:?}: {w}");
+        assert!(seen.insert(w), "{w} twice");
+        assert_eq!(Command::parse(w.as_bytes()), Some(c));
+        assert_eq!(format!("{c:?}").to_ascii_lowercase(), w);
+    }
+    assert_eq!(Command::parse(b"frobnicate"), None);
+    assert_eq!(Command::parse(b"Help"), None, "the board's line buffer is lowercase");
+    assert_eq!(Command::parse(b""), None);
+    assert_eq!(Command::parse(b"helpversion"), None);
+}

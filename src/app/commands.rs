@@ -25,6 +25,7 @@ use finger_model::Solution;
 use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Params};
 
 use super::errors::{head, model_err, no_args, number, tension, CmdError, ErrorCode};
+use finger_protocol::Command;
 use super::film;
 use super::help::{joints, list, solve_reply, Reply, Tip, DEG, HELP};
 use super::params::{board_params, calibration_for, default_finger, preset, FwParams, CAL_NAMES, CHANNELS, FW_PARAMS};
@@ -519,8 +520,8 @@ impl Commands {
     /// Ok(true): the reply is written already (pose, contact) or comes later (wait).
     pub(super) fn dispatch<W: Write>(&mut self, t: &[&[u8]], r: &mut Reply, out: &mut W, report: Option<&mut dyn TimingReport>) -> Result<bool, CmdError> {
         let args = &t[1..];
-        match t[0] {
-            b"help" => {
+        match Command::parse(t[0]) {
+            Some(Command::Help) => {
                 no_args(args, "help")?;
                 let nl = self.nl;
                 for l in HELP {
@@ -530,27 +531,27 @@ impl Commands {
                     let _ = w!(out; super::help::HELP_TIMING, nl);
                 }
             }
-            b"version" => {
+            Some(Command::Version) => {
                 no_args(args, "version")?;
                 let _ = w!(r; "version=", crate::VERSION, " name=", crate::NAME, " board=", self.board_name);
             }
-            b"status" => {
+            Some(Command::Status) => {
                 no_args(args, "status")?;
                 self.cmd_status(r);
             }
-            b"limits" => {
+            Some(Command::Limits) => {
                 no_args(args, "limits")?;
                 self.cmd_limits(r);
             }
             #[cfg(not(m3))]
-            b"material" => {
+            Some(Command::Material) => {
                 no_args(args, "material")?;
                 self.film.write_material(r);
             }
-            b"solve" => self.cmd_solve(args, r)?,
+            Some(Command::Solve) => self.cmd_solve(args, r)?,
             #[cfg(feature = "shape")]
-            b"shape" => self.cmd_shape(args, r)?,
-            b"arm" => {
+            Some(Command::Shape) => self.cmd_shape(args, r)?,
+            Some(Command::Arm) => {
                 no_args(args, "arm")?;
                 if let (true, Some(f)) = (self.locked_out, self.fault) {
                     return Err(err!(Fault; f, ": this image never arms here"));
@@ -561,54 +562,54 @@ impl Commands {
                 self.armed = true;
                 let _ = w!(r; "armed=1");
             }
-            b"disarm" => {
+            Some(Command::Disarm) => {
                 no_args(args, "disarm")?;
                 self.cmd_disarm()?;
                 let _ = w!(r; "armed=0");
             }
-            b"stop" => {
+            Some(Command::Stop) => {
                 // reached only when a line is executed directly (App::execute): the RX part
                 // acts on `stop` lines before they are queued
                 self.stop_asked = true;
                 let _ = w!(r; "stopped");
             }
-            b"timing" => {
+            Some(Command::Timing) => {
                 no_args(args, "timing")?;
                 let Some(f) = report else { return Err(err!(Unknown; "timing is not in this build")) };
                 f.write_timing(r);
             }
-            b"volt" => self.cmd_volt(args, r)?,
-            b"force" => self.cmd_force(args, r)?,
+            Some(Command::Volt) => self.cmd_volt(args, r)?,
+            Some(Command::Force) => self.cmd_force(args, r)?,
             #[cfg(feature = "pose")]
-            b"pose" => {
+            Some(Command::Pose) => {
                 self.cmd_pose(args, out)?;
                 return Ok(true);
             }
             #[cfg(feature = "contact")]
-            b"contact" => {
+            Some(Command::Contact) => {
                 self.cmd_contact(args, out)?;
                 return Ok(true);
             }
             #[cfg(m3)]
-            b"pose" => self.cmd_pose(args, r)?,
+            Some(Command::Pose) => self.cmd_pose(args, r)?,
             #[cfg(not(any(feature = "pose", m3)))]
-            b"pose" => return Err(err!(Unknown; "pose is not in this build (feature pose)")),
+            Some(Command::Pose) => return Err(err!(Unknown; "pose is not in this build (feature pose)")),
             #[cfg(not(feature = "contact"))]
-            b"contact" => return Err(err!(Unknown; "contact is not in this build (feature contact)")),
+            Some(Command::Contact) => return Err(err!(Unknown; "contact is not in this build (feature contact)")),
             #[cfg(all(not(feature = "hw"), not(m3)))]
-            b"plant" => self.cmd_plant(args, r)?,
+            Some(Command::Plant) => self.cmd_plant(args, r)?,
             #[cfg(feature = "hw")]
-            b"plant" => return Err(err!(Unknown; "plant is not in this build (the simulated plant: finger-sim and the emulator image)")),
-            b"param" => self.cmd_param(args, r, out)?,
-            b"preset" => self.cmd_preset(args, r)?,
-            b"cal" => self.cmd_cal(args, r)?,
+            Some(Command::Plant) => return Err(err!(Unknown; "plant is not in this build (the simulated plant: finger-sim and the emulator image)")),
+            Some(Command::Param) => self.cmd_param(args, r, out)?,
+            Some(Command::Preset) => self.cmd_preset(args, r)?,
+            Some(Command::Cal) => self.cmd_cal(args, r)?,
             #[cfg(feature = "settings")]
-            b"save" => self.cmd_save(args, r)?,
+            Some(Command::Save) => self.cmd_save(args, r)?,
             #[cfg(feature = "settings")]
-            b"factory" => self.cmd_factory(args, r)?,
+            Some(Command::Factory) => self.cmd_factory(args, r)?,
             #[cfg(feature = "settings")]
-            b"config" => self.cmd_config(args, r, out)?,
-            b"wait" => {
+            Some(Command::Config) => self.cmd_config(args, r, out)?,
+            Some(Command::Wait) => {
                 let [s] = args else { return Err(err!(Usage; "wait <seconds>")) };
                 let s = number(s, "seconds")?;
                 if !(s >= 0.0 && s <= WAIT_MAX_S) {
@@ -622,8 +623,9 @@ impl Commands {
                 self.wait = Some(Wait { start_ms: self.now_ms, ms, s });
                 return Ok(true);
             }
-            w => {
-                return Err(err!(Unknown; "unknown command ", (console::printable(w)), "; try help"));
+            // a word no command has, or a command this build does not have
+            _ => {
+                return Err(err!(Unknown; "unknown command ", (console::printable(t[0])), "; try help"));
             }
         }
         Ok(false)

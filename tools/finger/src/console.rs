@@ -129,7 +129,7 @@ impl Console {
 /// The duration of a `wait <s>` command, which the board answers only when it ends.
 fn wait_duration(line: &str) -> Option<Duration> {
     let mut w = line.split_whitespace();
-    if !w.next()?.eq_ignore_ascii_case("wait") {
+    if finger_protocol::Command::parse(w.next()?.to_ascii_lowercase().as_bytes()) != Some(finger_protocol::Command::Wait) {
         return None;
     }
     let s: f64 = w.next()?.parse().ok()?;
