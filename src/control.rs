@@ -711,6 +711,7 @@ impl<B: Board> Control<B> {
         if !self.sensing.present {
             return hv_duty_for(nv, max);
         }
+        let hold = self.hold_ceiling_v();
         let sn = &mut self.sensing;
         // steady (held, or a shaped or guarded voltage that creeps): the ripple measures it
         let held = nv > sense::RIPPLE_MIN_V && (nv - self.volts[ch]).abs() < 1.0 && self.enable;
@@ -720,7 +721,11 @@ impl<B: Board> Control<B> {
         sn.drive[ch] = drive;
         let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v, self.slew * 0.001);
         sn.ask[ch] = ask;
-        hv_duty_for(ask.volts, max).min(limit)
+        // the loop asks no more than the open loop could: the duty of `nv`, or of the hold
+        // ceiling a few ulps under it (the f32 ceiling, 5,400.0, rounds up from the card's
+        // 5,399.9999 V, and its duty would be a count past that), within the channel's ceiling
+        let open_loop_top = hv_duty_for(nv, max).max(hv_duty_for(hold * (1.0 - 8.0 * f32::EPSILON), max));
+        hv_duty_for(ask.volts, max).min(open_loop_top).min(limit)
     }
 
     /// The tick's read-back: the analog watchdog's trip, each channel's reading, estimate,

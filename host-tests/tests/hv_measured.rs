@@ -177,6 +177,32 @@ fn the_cards_own_film_held_for_two_minutes_lowers_no_ceiling() {
     }
 }
 
+/// A module 10 % weak held just under the hold ceiling: the loop asks up to the ceiling's
+/// duty, and every duty it writes is under the card's hold ceiling computed in f64 (the f32
+/// ceiling, 5,400.0, is above the card's 5,399.9999 V: its own duty was one count past it, which
+/// the emulator's `largest_held_voltage_below_the_hold_ceiling_at_boot` caught now and then).
+#[test]
+fn the_loop_never_writes_a_duty_past_the_cards_hold_ceiling() {
+    use finger_fw::board::{BOARD_CARD, BOARD_MARGIN, BOARD_Z0_MM, HV_FULL_SCALE_V};
+    use finger_model::material::{hold_ceiling, StackLaw};
+    let law = StackLaw::<f64>::new(BOARD_CARD, BOARD_Z0_MM as f64, BOARD_MARGIN as f64).unwrap();
+    let hold = hold_ceiling(&law, BOARD_MARGIN as f64);
+    let mut p = Plant::new(4).unwrap();
+    for ch in 0..3 {
+        p.inject(ch, Inject::Gain(0.9)).unwrap();
+    }
+    let mut c = armed(p, [(hold as f32 - 1.0).floor(); 3]);
+    let max = c.hv_max();
+    let mut top: f64 = 0.0;
+    for _ in 0..6000 {
+        run(&mut c, 1);
+        for (ch, &d) in c.view().duty.iter().enumerate() {
+            top = top.max(d as f64 / max[ch] as f64 * HV_FULL_SCALE_V as f64);
+        }
+    }
+    assert!(top <= hold && top > hold - 5.0, "the loop's highest duty {top} V against the hold ceiling {hold} V");
+}
+
 /// `n` soft-film histories from `seed0`, on two threads: the worst of them.
 fn soft_films(seed0: u64, n: u64, guard: bool, stop_at_first_failure: bool) -> (Vec<host_tests::plant_runs::FilmRun>, u64) {
     use host_tests::plant_runs::soft_film_history;
