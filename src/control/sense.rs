@@ -67,6 +67,8 @@ pub struct Estimator {
     v0: f32,
     q_nc: f32,
     t_ms: u32,
+    /// The window's voltage integral, V ms (the ohmic leakage's charge is G times it).
+    s_vms: f32,
     started: bool,
     /// The capacitance the sense sees (pF) and the leakage (µA), each window's estimate
     /// averaged with weights [`C_WEIGHT`] and [`LEAK_WEIGHT`].
@@ -75,8 +77,8 @@ pub struct Estimator {
     /// The leakage's conductance at its last measure, µA/V (a slew's windows take the
     /// leakage at their voltage from it).
     leak_us_per_v: f32,
-    /// The last window that swung: (ΔV, T, Q), or zeros.
-    prev: (f32, f32, f32),
+    /// The last window that swung: (ΔV, T, Q, its voltage integral), or zeros.
+    prev: (f32, f32, f32, f32),
     swings: u32,
     windows: u32,
 }
@@ -87,7 +89,7 @@ pub const LEAK_WEIGHT: f32 = 0.2;
 
 impl Estimator {
     pub const fn new() -> Self {
-        Estimator { v0: 0.0, q_nc: 0.0, t_ms: 0, started: false, c_pf: BOARD_STACK_C0_PF + SENSE_STRAY_PF, leak_ua: 0.0, leak_us_per_v: 0.0, prev: (0.0, 0.0, 0.0), swings: 0, windows: 0 }
+        Estimator { v0: 0.0, q_nc: 0.0, t_ms: 0, s_vms: 0.0, started: false, c_pf: BOARD_STACK_C0_PF + SENSE_STRAY_PF, leak_ua: 0.0, leak_us_per_v: 0.0, prev: (0.0, 0.0, 0.0, 0.0), swings: 0, windows: 0 }
     }
 
     /// One tick's mean voltage (V) and return current (µA); `held_ms` how long the channel has
@@ -105,14 +107,16 @@ impl Estimator {
             return;
         }
         self.q_nc += i_ua; // µA x 1 ms = nC
+        self.s_vms += v;
         self.t_ms += 1;
         let dv = v - self.v0;
         let turn = held_ms > 0 && ripple_turns(held_ms);
         if (held_ms == 0 && dv.abs() >= WINDOW_DV_V) || (turn && self.t_ms >= 20) || self.t_ms >= WINDOW_MAX_MS {
-            self.close(dv, self.t_ms as f32, self.q_nc, self.v0 + 0.5 * dv, c_ratio);
+            self.close(dv, self.t_ms as f32, self.q_nc, self.s_vms, self.v0 + 0.5 * dv, c_ratio);
             self.windows = self.windows.wrapping_add(1);
             self.v0 = v;
             self.q_nc = 0.0;
+            self.s_vms = 0.0;
             self.t_ms = 0;
         }
     }
@@ -122,16 +126,22 @@ impl Estimator {
     /// give both unknowns at once; a lone swing (a slew) its capacitance with the leakage
     /// taken as ohmic from the last measured conductance; a slow window its leakage. A
     /// swing's capacitance is the stack's dQ/dV: over `c_ratio`, its Q/V.
-    fn close(&mut self, dv: f32, t: f32, q: f32, v_mid: f32, c_ratio: f32) {
+    fn close(&mut self, dv: f32, t: f32, q: f32, s: f32, v_mid: f32, c_ratio: f32) {
         let c0 = BOARD_STACK_C0_PF + SENSE_STRAY_PF;
         let swing = dv.abs() >= 0.5 * WINDOW_DV_V && t >= 5.0;
-        let (pdv, pt, pq) = self.prev;
+        let (pdv, pt, pq, ps) = self.prev;
         let det = dv * pt - pdv * t;
         let paired = swing && dv * pdv < 0.0 && pdv.abs() >= 0.5 * WINDOW_DV_V && det.abs() >= 0.5 * WINDOW_DV_V * (t + pt);
-        self.prev = if swing { (dv, t, q) } else { (0.0, 0.0, 0.0) };
+        self.prev = if swing { (dv, t, q, s) } else { (0.0, 0.0, 0.0, 0.0) };
         let leak_now = self.leak_us_per_v * v_mid;
         let secant = |c_inc: f32| SENSE_STRAY_PF + (c_inc - SENSE_STRAY_PF) / c_ratio;
-        let (c, leak) = if paired {
+        // the pair's leakage ohmic (Q = C dV + G S) where both windows are held high enough
+        // for their voltage integrals to differ by the ripple alone; else one current
+        let det_g = dv * ps - pdv * s;
+        let ohmic = paired && s > RIPPLE_MIN_V * t && ps > RIPPLE_MIN_V * pt && det_g.abs() >= 0.5 * WINDOW_DV_V * (s + ps);
+        let (c, leak) = if ohmic {
+            (secant((q * ps - pq * s) / det_g * 1e3), Some((dv * pq - pdv * q) / det_g * (s / t)))
+        } else if paired {
             (secant((q * pt - pq * t) / det * 1e3), Some((dv * pq - pdv * q) / det))
         } else if swing {
             (secant((q - leak_now * t) / dv * 1e3), None)
