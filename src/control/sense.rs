@@ -5,7 +5,7 @@
 //! The estimator (docs/firmware.md "Thickness sensed"): the return current is integrated
 //! over windows that close once the voltage has moved [`WINDOW_DV_V`] on a slew, or at each
 //! turn of the hold ripple ([`RIPPLE_PP_V`] at [`RIPPLE_PERIOD_MS`]); each window gives
-//! Q = C ΔV + I_leak T: two opposite swings both unknowns, a lone swing its capacitance (the
+//! Q = C ΔV + I_leak T (ohmic, G ∫V dt, for a held pair): two opposite swings both unknowns, a lone swing its capacitance (the
 //! leakage known), a slow window its leakage, each kept as a running mean over the windows.
 //! A swing's charge measures the film's dQ/dV; the capacitance kept is its Q/V (the model's
 //! incremental ratio taken off).
@@ -121,11 +121,12 @@ impl Estimator {
         }
     }
 
-    /// A window of swing `dv` (V), length `t` (ms), charge `q` (nC), mean voltage `v_mid`:
-    /// Q = C ΔV + I_leak T. Two windows that swing opposite ways (the ripple's up and down)
-    /// give both unknowns at once; a lone swing (a slew) its capacitance with the leakage
-    /// taken as ohmic from the last measured conductance; a slow window its leakage. A
-    /// swing's capacitance is the stack's dQ/dV: over `c_ratio`, its Q/V.
+    /// A window of swing `dv` (V), length `t` (ms), charge `q` (nC), voltage integral `s`
+    /// (V ms), mean voltage `v_mid`: Q = C ΔV + I_leak T. Two windows that swing opposite ways
+    /// (the ripple's up and down) give both unknowns at once, the leakage ohmic (Q = C ΔV + G S)
+    /// when both are held above [`RIPPLE_MIN_V`]; a lone swing (a slew) its capacitance with
+    /// the leakage taken as ohmic from the last measured conductance; a slow window its
+    /// leakage. A swing's capacitance is the stack's dQ/dV: over `c_ratio`, its Q/V.
     fn close(&mut self, dv: f32, t: f32, q: f32, s: f32, v_mid: f32, c_ratio: f32) {
         let c0 = BOARD_STACK_C0_PF + SENSE_STRAY_PF;
         let swing = dv.abs() >= 0.5 * WINDOW_DV_V && t >= 5.0;
