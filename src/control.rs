@@ -626,7 +626,11 @@ impl<B: Board> Control<B> {
             #[cfg(not(m3))]
             let d = {
                 let t0 = clock();
-                let d = self.loop_duty(ch, nv);
+                // the ceiling in force, for the duty as for the measured voltage: a shaped
+                // drive's guarded value is its bound itself; a plain one's, the lower of the hold
+                // and the sensed ceilings (a monitor reading low never lifts the true voltage past it)
+                let in_force = if self.shaped { nv } else { v_cap.min(hold) };
+                let d = self.loop_duty(ch, nv, in_force);
                 cost.read_back = cost.read_back.wrapping_add(clock().wrapping_sub(t0));
                 d
             };
@@ -701,31 +705,34 @@ impl<B: Board> Control<B> {
         }
     }
 
-    /// The duty of a guarded value `nv` (target `t`): open loop without a read-back; with
-    /// one, the hold ripple below `nv` once it is held, and the voltage loop, clamped to the
-    /// channel's duty ceiling (the loop can ask no more than the open loop could).
+    /// The duty of a guarded value `nv`: open loop without a read-back; with one, the hold
+    /// ripple below `nv` once it is held, and the voltage loop, clamped to the open-loop duty of
+    /// the ceiling in force `in_force_v` and to the channel's duty ceiling (the loop can ask no
+    /// more than the open loop could: a module at its datasheet gain stays under the ceiling
+    /// whatever the monitor reads).
     #[cfg(not(m3))]
-    fn loop_duty(&mut self, ch: usize, nv: f32) -> u16 {
+    fn loop_duty(&mut self, ch: usize, nv: f32, in_force_v: f32) -> u16 {
         let max = self.hv_max[ch];
         let limit = self.write_ceiling[ch];
         if !self.sensing.present {
             return hv_duty_for(nv, max);
         }
-        let hold = self.hold_ceiling_v();
         let sn = &mut self.sensing;
         // steady (held, or a shaped or guarded voltage that creeps): the ripple measures it
         let held = nv > sense::RIPPLE_MIN_V && (nv - self.volts[ch]).abs() < 1.0 && self.enable;
-        let limit_v = self.write_ceiling_v[ch];
         sn.ripple_ms[ch] = if held { sn.ripple_ms[ch].wrapping_add(1).max(1) } else { 0 };
-        let drive = if held { nv - sense::ripple_v(sn.ripple_ms[ch]) } else { nv }.min(limit_v);
+        let ripple = if held { sense::ripple_v(sn.ripple_ms[ch]) } else { 0.0 };
+        // the loop asks no more than the open loop could: the ceiling in force a few ulps
+        // under it (the f32 hold ceiling, 5,400.0, rounds up from the card's 5,399.9999 V, and
+        // its duty would be a count past that), within the channel's ceiling; its top is the
+        // ripple below that (a loop pinned at its top still swings the ripple, so the film is
+        // still measured), followed at the slew
+        let limit_v = self.write_ceiling_v[ch].min(in_force_v * (1.0 - 8.0 * f32::EPSILON));
+        let drive = (nv - ripple).min(limit_v);
         sn.drive[ch] = drive;
-        let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v, self.slew * 0.001);
+        let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v - ripple, limit_v, self.slew * 0.001);
         sn.ask[ch] = ask;
-        // the loop asks no more than the open loop could: the duty of `nv`, or of the hold
-        // ceiling a few ulps under it (the f32 ceiling, 5,400.0, rounds up from the card's
-        // 5,399.9999 V, and its duty would be a count past that), within the channel's ceiling
-        let open_loop_top = hv_duty_for(nv, max).max(hv_duty_for(hold * (1.0 - 8.0 * f32::EPSILON), max));
-        hv_duty_for(ask.volts, max).min(open_loop_top).min(limit)
+        hv_duty_for(ask.volts, max).min(limit)
     }
 
     /// The tick's read-back: the analog watchdog's trip, each channel's reading, estimate,

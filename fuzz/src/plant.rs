@@ -15,9 +15,9 @@
 //! - [`FILM`] `g ts`: `Plant::set_film`, a film softer than the card: G_eq 6.7..13.4 kPa
 //!   creeping 1..100 times faster (the stated range: docs/reliability.md, `hv_measured`);
 //! - [`PARTS`] `stray div`: `Plant::set_parts`, the sense's stray 4..6 pF (the board assumes 5,
-//!   docs/firmware.md: 1 pF of uncertainty) and the divider's ratio 1.00..1.03 (a monitor that
-//!   reads high or true; one reading low, with a soft film creeping fast, is an open find:
-//!   `fuzz/open/plant/`, docs/reliability.md).
+//!   docs/firmware.md: 1 pF of uncertainty) and the divider's ratio 0.99..1.03 (1 % parts; a
+//!   monitor reading low once hid the hold ripple under the loop's duty top:
+//!   `regressions/plant/soft-film-fast-creep-low-divider`, docs/reliability.md).
 //!
 //! Invariants, after every tick and every command:
 //! - no duty past its cap (`hv_duty_cap`), nor past the writer's ceiling in force after a tick; the core's duties
@@ -359,7 +359,7 @@ pub fn run(data: &[u8]) -> Summary {
             }
             _ => {
                 let (Some(s), Some(d)) = (b.u8(), b.u8()) else { break };
-                let (stray, div) = (4.0 + 2.0 * s as f32 / 255.0, 1.0 + 0.03 * d as f32 / 255.0);
+                let (stray, div) = (4.0 + 2.0 * s as f32 / 255.0, 0.99 + 0.04 * d as f32 / 255.0);
                 r.command(format!("parts stray {stray} pF divider {div}"));
                 r.c.board_mut().plant.as_mut().expect("plant").set_parts(stray, div);
             }

@@ -42,11 +42,11 @@ impl VoltageLoop {
         self.asked_v
     }
 
-    /// The voltage to ask of the module for `drive_v` with `measured_v` read back: within
-    /// `max_step_v` of the last tick's ask, then in [0, limit_v] (a ceiling that drops is
-    /// obeyed at once). A drive of 0 ramps the ask down to 0 (a stop or a fault zeroes the
-    /// duties past the loop, at once).
-    pub fn step(&mut self, drive_v: f32, measured_v: f32, limit_v: f32, max_step_v: f32) -> Ask {
+    /// The voltage to ask of the module for `drive_v` with `measured_v` read back: at most
+    /// `top_v` (followed at the slew, as the drive is), within `max_step_v` of the last tick's
+    /// ask, then in [0, limit_v] (a ceiling that drops is obeyed at once). A drive of 0 ramps
+    /// the ask down to 0 (a stop or a fault zeroes the duties past the loop, at once).
+    pub fn step(&mut self, drive_v: f32, measured_v: f32, top_v: f32, limit_v: f32, max_step_v: f32) -> Ask {
         if !(drive_v > 0.0 && limit_v > 0.0) {
             // down to 0 one step a tick (a disarm's ramp ends there); a ceiling of 0 at once
             let u = self.asked_v - max_step_v;
@@ -61,7 +61,7 @@ impl VoltageLoop {
         let trial = (self.integral_v + KI_PER_S * 1e-3 * e).clamp(-bound, bound);
         // anti-windup by back-calculation: at a bound, the integral grows only as far as
         // puts the output on it
-        let (top, bottom) = (hi.min(limit_v), lo.max(0.0));
+        let (top, bottom) = (hi.min(limit_v).min(top_v), lo.max(0.0));
         let p_v = drive_v + KP * e;
         let integral = if p_v + trial > top && e > 0.0 {
             trial.min(self.integral_v.max(top - p_v))
@@ -73,14 +73,14 @@ impl VoltageLoop {
         if integral.is_finite() {
             self.integral_v = integral;
         }
-        let want = p_v + self.integral_v;
+        let want = (p_v + self.integral_v).min(top_v);
         // NaN-safe: a want that is not a number asks the slewed bound below
         let u = if want > hi { hi } else if want > lo { want } else { lo };
         let u = if u > limit_v { limit_v } else if u > 0.0 { u } else { 0.0 };
         self.asked_v = u;
         // held back: what the PI term would ask without the anti-windup (which puts the output
         // exactly on the slew's bound, so the output alone flickers between held and not)
-        let free = p_v + trial;
+        let free = (p_v + trial).min(top_v);
         Ask { volts: u, slew_held: (free > hi && hi < limit_v) || (free < lo && lo > 0.0) }
     }
 }
