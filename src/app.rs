@@ -21,35 +21,35 @@ macro_rules! err {
     }};
 }
 
+mod commands;
+#[cfg(feature = "settings")]
+pub mod config;
 pub mod errors;
-pub mod params;
-#[cfg(m3)]
-mod m3;
-mod solves;
-mod help;
 mod film;
+mod help;
+mod host;
 #[cfg(not(m3))]
 pub mod hv_cal;
-#[cfg(feature = "settings")]
-mod stored;
-mod commands;
 #[cfg(not(m3))]
 mod hv_cal_cmd;
+#[cfg(m3)]
+mod m3;
+pub mod params;
+#[cfg(all(not(feature = "hw"), not(m3)))]
+mod plant_cmd;
 #[cfg(any(feature = "pose", feature = "contact", m3))]
 pub mod pose;
 #[cfg(feature = "shape")]
 mod shape;
-#[cfg(all(not(feature = "hw"), not(m3)))]
-mod plant_cmd;
-mod wire;
-mod host;
+mod solves;
 #[cfg(feature = "settings")]
-pub mod config;
+mod stored;
+mod wire;
 
+pub use crate::control::HvRefused;
 pub use commands::{Commands, TimingReport};
 pub use errors::{CmdError, ErrorCode};
 pub use help::is_command;
 pub use host::App;
-pub use wire::wire;
 pub use params::{board_params, calibration_for, FwParamInfo, FwParams, CHANNELS, FW_PARAMS};
-pub use crate::control::HvRefused;
+pub use wire::wire;

@@ -14,9 +14,9 @@
 //! set by build.rs for thumbv7m, is the Cortex-M3 emulator image (QEMU netduino2).
 //! Not here: the application (the rest of this library), the tasks (src/main.rs).
 
+pub mod f405;
 #[cfg(feature = "settings")]
 pub mod flash;
-pub mod f405;
 #[cfg(feature = "hw")]
 pub mod hv_adc;
 pub mod mpu;

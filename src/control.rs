@@ -116,7 +116,13 @@ impl Sensing {
             ask: [hv_loop::Ask::ZERO; HV_CHANNELS],
             ripple_ms: [0; HV_CHANNELS],
             seen_windows: [0; HV_CHANNELS],
-            view: SenseView { volts: [0.0; HV_CHANNELS], current_ua: [0.0; HV_CHANNELS], stack_ratio: [f32::NAN; HV_CHANNELS], ceiling_v: [0.0; HV_CHANNELS], disagreed: [false; HV_CHANNELS] },
+            view: SenseView {
+                volts: [0.0; HV_CHANNELS],
+                current_ua: [0.0; HV_CHANNELS],
+                stack_ratio: [f32::NAN; HV_CHANNELS],
+                ceiling_v: [0.0; HV_CHANNELS],
+                disagreed: [false; HV_CHANNELS],
+            },
             check_until_ms: None,
             recheck: false,
         }
@@ -494,7 +500,7 @@ impl<B: Board> Control<B> {
             let mut floor = [1.0f32; HV_CHANNELS];
             for ch in 0..HV_CHANNELS {
                 let t = sp.target_v[ch];
-                if !(t >= 0.0 && t <= HV_LIMIT_V && t <= hold) || hv_duty_for(t, self.hv_max[ch]) > self.ceiling[ch] {
+                if !((0.0..=HV_LIMIT_V).contains(&t) && t <= hold) || hv_duty_for(t, self.hv_max[ch]) > self.ceiling[ch] {
                     self.fault_stop(Fault::HvRefused);
                     return true;
                 }

@@ -77,7 +77,7 @@ impl<const PAGE: usize> NorFlash for RamFlash<PAGE> {
     const WRITE_SIZE: usize = 1;
     const ERASE_SIZE: usize = PAGE;
     async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-        if from as usize % PAGE != 0 || to as usize % PAGE != 0 || to < from {
+        if !(from as usize).is_multiple_of(PAGE) || !(to as usize).is_multiple_of(PAGE) || to < from {
             return Err(RamFlashError(NorFlashErrorKind::NotAligned));
         }
         let r = self.range(from, (to - from) as usize)?;

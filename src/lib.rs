@@ -31,6 +31,8 @@ pub mod board;
 pub mod chip;
 pub mod console;
 pub mod control;
+#[cfg(feature = "settings")]
+pub mod flash_ram;
 pub mod num;
 #[cfg(all(not(feature = "hw"), not(m3)))]
 pub mod plant;
@@ -39,8 +41,6 @@ pub mod rx;
 pub mod sampling;
 #[cfg(feature = "settings")]
 pub mod settings;
-#[cfg(feature = "settings")]
-pub mod flash_ram;
 pub mod sim;
 
 pub use app::{wire, App, Commands, FwParams, CHANNELS};

@@ -61,10 +61,10 @@ pub struct Mailbox {
 #[cfg(target_os = "none")]
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
+    use finger_fw::app::TimingReport;
     use finger_fw::chip::{f405, f405::F405Board, mpu, time, time::Durations, time::Timing, usart, usart::TxQueue};
     use finger_fw::control::Control;
     use finger_fw::rx::{RxEvent, RxLines};
-    use finger_fw::app::TimingReport;
     use finger_fw::Commands;
     use rtic::Mutex;
 

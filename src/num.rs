@@ -60,7 +60,8 @@ pub fn decimal_to_f32(mant: u32, exp10: i32) -> Option<f32> {
             // the midpoints to the neighbours: (2m+1) 2^(e-1) above, (2m-1) 2^(e-1) below
             // ((4m-1) 2^(e-2) at a power of two)
             let up = cmp_decimal(mant, exp10, 2 * m as u64 + 1, e - 1);
-            let down = if m == 0x80_0000 && be > 1 { cmp_decimal(mant, exp10, 4 * m as u64 - 1, e - 2) } else { cmp_decimal(mant, exp10, 2 * m as u64 - 1, e - 1) };
+            let down =
+                if m == 0x80_0000 && be > 1 { cmp_decimal(mant, exp10, 4 * m as u64 - 1, e - 2) } else { cmp_decimal(mant, exp10, 2 * m as u64 - 1, e - 1) };
             if up == Greater || (up == Equal && odd) {
                 v = f32::from_bits(b + 1);
             } else if m > 0 && (down == Less || (down == Equal && odd)) {

@@ -14,8 +14,8 @@
 use finger_model::material::{Relaxation, StackLaw, StackState};
 
 use crate::board::{
-    HvSense, ADC_FULL_CODE, BOARD_CARD, BOARD_MARGIN, BOARD_STACK_C0_PF, BOARD_Z0_MM, HV_CHANNELS, HV_FULL_SCALE_V, HV_ZERO_DUTY_PCT, IMON_SPAN_UA, IMON_ZERO_CODE, SENSE_SAMPLES_PER_TICK,
-    SENSE_STRAY_PF, TRIP_CURRENT_UA, VMON_FULL_SCALE_V,
+    HvSense, ADC_FULL_CODE, BOARD_CARD, BOARD_MARGIN, BOARD_STACK_C0_PF, BOARD_Z0_MM, HV_CHANNELS, HV_FULL_SCALE_V, HV_ZERO_DUTY_PCT, IMON_SPAN_UA,
+    IMON_ZERO_CODE, SENSE_SAMPLES_PER_TICK, SENSE_STRAY_PF, TRIP_CURRENT_UA, VMON_FULL_SCALE_V,
 };
 
 /// Electrical sub-steps (ADC samples) per 1 ms tick.
@@ -172,7 +172,7 @@ impl Plant {
     /// The film's equilibrium modulus, kPa (the branches stay the card's), and how much
     /// faster than real time its branches relax (1: as the card). Keeps each film's state.
     pub fn set_film(&mut self, g_eq_kpa: f32, time_scale: f32) -> Result<(), PlantError> {
-        if !(g_eq_kpa >= 1.0 && g_eq_kpa <= 100.0) || !(time_scale >= 1.0 && time_scale <= 1000.0) {
+        if !(1.0..=100.0).contains(&g_eq_kpa) || !(1.0..=1000.0).contains(&time_scale) {
             return Err(PlantError::Film);
         }
         let eps_r = BOARD_CARD.eps_r as f32;
@@ -201,14 +201,16 @@ impl Plant {
         let c = self.ch.get_mut(ch).ok_or(PlantError::Channel)?;
         match what {
             Inject::Breakdown { clears_after_ms } => c.short_ms = Some(clears_after_ms),
-            Inject::Stuck(v) if v.is_finite() && v >= 0.0 && v <= 12_000.0 => c.stuck = Some(v),
+            Inject::Stuck(v) if v.is_finite() && (0.0..=12_000.0).contains(&v) => c.stuck = Some(v),
             Inject::Open => c.open = true,
             Inject::Leak(r) if r > 0.0 => c.leak_ohm = r,
             Inject::Gain(g) if g.is_finite() && g > 0.0 && g <= 2.0 => c.gain = g,
-            Inject::MonitorStuck(code) if code.is_finite() && code >= 0.0 && code <= ADC_FULL_CODE => c.mon_stuck = Some(code),
+            Inject::MonitorStuck(code) if code.is_finite() && (0.0..=ADC_FULL_CODE).contains(&code) => c.mon_stuck = Some(code),
             _ => return Err(PlantError::Value),
         }
-        if matches!(what, Inject::Breakdown { .. } | Inject::Stuck(_) | Inject::Open | Inject::Leak(_) | Inject::MonitorStuck(_)) && self.pending_since_us.is_none() {
+        if matches!(what, Inject::Breakdown { .. } | Inject::Stuck(_) | Inject::Open | Inject::Leak(_) | Inject::MonitorStuck(_))
+            && self.pending_since_us.is_none()
+        {
             self.pending_since_us = Some(self.now_us);
         }
         Ok(())
@@ -336,12 +338,10 @@ impl Plant {
             let mut c = self.ch[k];
             let v = c.v;
             let c_before = self.stack_f(&c);
-            if !c.collapsed {
-                if c.state.advance(&self.law, &self.relax, v).is_err() {
-                    // past its pull-in the film collapses: it breaks down
-                    c.collapsed = true;
-                    c.short_ms = Some(None);
-                }
+            if !c.collapsed && c.state.advance(&self.law, &self.relax, v).is_err() {
+                // past its pull-in the film collapses: it breaks down
+                c.collapsed = true;
+                c.short_ms = Some(None);
             }
             // Q = C V: the film's thinning at its voltage draws V dC over the next tick
             c.i_film = v * (self.stack_f(&c) - c_before) * 1e3;

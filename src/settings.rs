@@ -154,7 +154,7 @@ pub trait ConfigStore {
 /// The map's key of the settings record (the only item).
 const KEY: u8 = 1;
 /// The map's work buffer: key and the longest record, word-aligned.
-const BUF: usize = (1 + RECORD_MAX + 31) / 32 * 32;
+const BUF: usize = (1 + RECORD_MAX).div_ceil(32) * 32;
 
 /// A flash that counts its erases and writes: a read that wrote is the map repairing what it
 /// found ([`FlashStore::read`]); the counts are the wear figures (docs/firmware.md).

@@ -187,16 +187,24 @@ macro_rules! fixed_real {
                 let (ax, ay) = (x.abs(), y.abs());
                 let swap = ay > ax;
                 let t = if swap { ax / ay } else { ay / ax }; // [0, 1]
-                // atan(t) for t in [0, 1]: past tan(pi/8) use pi/4 + atan((t-1)/(t+1))
+                                                              // atan(t) for t in [0, 1]: past tan(pi/8) use pi/4 + atan((t-1)/(t+1))
                 let one = Self::c(1.0);
-                let (base, v) = if t > Self::c(0.41421356237309503) {
-                    (Self::c(core::f64::consts::FRAC_PI_4), (t - one) / (t + one))
-                } else {
-                    (zero, t)
-                };
+                let (base, v) = if t > Self::c(0.41421356237309503) { (Self::c(core::f64::consts::FRAC_PI_4), (t - one) / (t + one)) } else { (zero, t) };
                 const ATAN: [f64; 14] = [
-                    1.0, -1.0 / 3.0, 1.0 / 5.0, -1.0 / 7.0, 1.0 / 9.0, -1.0 / 11.0, 1.0 / 13.0,
-                    -1.0 / 15.0, 1.0 / 17.0, -1.0 / 19.0, 1.0 / 21.0, -1.0 / 23.0, 1.0 / 25.0, -1.0 / 27.0,
+                    1.0,
+                    -1.0 / 3.0,
+                    1.0 / 5.0,
+                    -1.0 / 7.0,
+                    1.0 / 9.0,
+                    -1.0 / 11.0,
+                    1.0 / 13.0,
+                    -1.0 / 15.0,
+                    1.0 / 17.0,
+                    -1.0 / 19.0,
+                    1.0 / 21.0,
+                    -1.0 / 23.0,
+                    1.0 / 25.0,
+                    -1.0 / 27.0,
                 ];
                 let mut a = base + v * Self::horner(v * v, &ATAN);
                 if swap {
@@ -222,8 +230,7 @@ macro_rules! fixed_real {
 const SIN7: &[f64] = &[1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0];
 const COS8: &[f64] = &[1.0, -0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0];
 const SIN11: &[f64] = &[1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0];
-const COS12: &[f64] =
-    &[1.0, -0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0];
+const COS12: &[f64] = &[1.0, -0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0];
 
 fixed_real!(Q16, fixed::types::I16F16, i32, u64, 16, "i16f16", SIN7, COS8);
 fixed_real!(Q32, fixed::types::I32F32, i64, u128, 32, "i32f32", SIN11, COS12);

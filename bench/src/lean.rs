@@ -34,7 +34,11 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
 }
 
 fn layers() -> u32 {
-    if cfg!(feature = "de") { 4 } else { 0 }
+    if cfg!(feature = "de") {
+        4
+    } else {
+        0
+    }
 }
 
 fn report(ok: bool, y: f64) {
@@ -64,8 +68,7 @@ fn main() -> ! {
         fix::prep::<fix::Q16>(&s).and_then(|(f, c, _)| {
             // the tolerance at the scalar's resolution (the default 1e-9 mm is 0 in I16F16)
             let m = Method::Converged { tol: fix::Q16::from_f64(<fix::Q16 as Real>::EPS), max_iter: 200 };
-            f.solve_with(&c, fix::Q16::from_f64(tension), [fix::Q16::from_f64(0.0); 2], m)
-                .map(|s| s.tip().y.to_f64())
+            f.solve_with(&c, fix::Q16::from_f64(tension), [fix::Q16::from_f64(0.0); 2], m).map(|s| s.tip().y.to_f64())
         })
     };
     match y {
@@ -73,5 +76,7 @@ fn main() -> ! {
         Err(_) => report(false, f64::NAN),
     }
     debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }

@@ -44,5 +44,7 @@ macro_rules! start {
 pub fn end() -> ! {
     hprintln!("END");
     debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }

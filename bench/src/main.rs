@@ -71,11 +71,7 @@ pub(crate) fn params(s: &Scene) -> Params<f64> {
 
 /// Run one scene with scalar `S`. `prep` builds the finger and its compliances (in `S`, or in
 /// f32 and cast for fixed point).
-fn run_scene<S: Real>(
-    name: &str,
-    s: &Scene,
-    prep: impl Fn(&Scene) -> Result<(Finger<S>, finger_model::Compliances<S>, u64), finger_model::Error>,
-) {
+fn run_scene<S: Real>(name: &str, s: &Scene, prep: impl Fn(&Scene) -> Result<(Finger<S>, finger_model::Compliances<S>, u64), finger_model::Error>) {
     let (finger, comp, setup) = match prep(s) {
         Ok(v) => v,
         Err(e) => {

@@ -48,7 +48,12 @@ pub fn check(data: &[u8]) {
     let Ok((f, fw)) = settings_of(&rec) else { return };
     let d = default_finger();
     for cap in [Some(HV_MAX_V), None] {
-        assert!(f.ceiling_in_force(cap) <= d.ceiling_in_force(cap), "stored settings raise the ceiling ({cap:?}): {} V past {} V", f.ceiling_in_force(cap), d.ceiling_in_force(cap));
+        assert!(
+            f.ceiling_in_force(cap) <= d.ceiling_in_force(cap),
+            "stored settings raise the ceiling ({cap:?}): {} V past {} V",
+            f.ceiling_in_force(cap),
+            d.ceiling_in_force(cap)
+        );
     }
     for i in FW_PARAMS.iter().filter(|i| i.min <= i.max) {
         let v = fw.get(i.name).unwrap_or(f32::NAN);

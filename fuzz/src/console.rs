@@ -108,7 +108,12 @@ fn check_outputs(app: &App<SimBoard>) {
         let cap = hv_duty_cap(hv[ch].max);
         assert!(targets[ch] == 0.0 || (targets[ch] > 0.0 && targets[ch] < vmax[ch]), "channel {ch}: target {} V, ceiling {} V", targets[ch], vmax[ch]);
         assert!(volts[ch] == 0.0 || (volts[ch] > 0.0 && volts[ch] < vmax[ch]), "channel {ch}: value {} V, ceiling {} V", volts[ch], vmax[ch]);
-        assert!(hv[ch].duty <= duty_ceiling[ch] && hv[ch].duty <= cap, "channel {ch}: duty {} past the ceiling's {} (cap {cap})", hv[ch].duty, duty_ceiling[ch]);
+        assert!(
+            hv[ch].duty <= duty_ceiling[ch] && hv[ch].duty <= cap,
+            "channel {ch}: duty {} past the ceiling's {} (cap {cap})",
+            hv[ch].duty,
+            duty_ceiling[ch]
+        );
         assert_eq!(duties[ch], hv[ch].duty, "channel {ch}: the core's duty is not the PWM's");
     }
 }

@@ -81,7 +81,13 @@ pub fn check(data: &[u8]) {
             assert!(v.is_finite() && v >= 0.0, "{}: applied {v} V for {requested} V", card.name);
             assert!(!(requested >= 0.0) || v <= requested, "{}: applied {v} V past the request {requested} V", card.name);
             assert!(st.s >= s_hold, "{}: s {} below the hold ratio {s_hold} at {v} V (z0 {z0}, margin {margin}, dt {dt}, tick {ticks})", card.name, st.s);
-            assert!(v / (st.s * law.z0) <= law.margin * law.breakdown_field(st.s), "{}: field {} V/mm past margin x breakdown at s {}", card.name, v / (st.s * law.z0), st.s);
+            assert!(
+                v / (st.s * law.z0) <= law.margin * law.breakdown_field(st.s),
+                "{}: field {} V/mm past margin x breakdown at s {}",
+                card.name,
+                v / (st.s * law.z0),
+                st.s
+            );
         }
     }
 }

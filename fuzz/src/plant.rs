@@ -7,7 +7,7 @@
 //! - [`SETPOINTS`] `flags t1 t1 t2 t2 t3 t3 slew`: setpoints into `Control::apply`; targets
 //!   0..5399 V (u16 % 5400), armed unless `flags & 7 == 0` (a disarm), shaped when `flags & 8`,
 //!   slew 100..1e5 V/s (log scale);
-//! - [`STOP`]: `Control::stop`;
+//! - [`STOP`] (no argument): `Control::stop`;
 //! - [`TICKS`] `n`: n + 1 ticks (n < 200) or (n - 199) x 64 (at most [`MAX_TICKS`] per input);
 //! - [`INJECT`] `ch kind p`: into channel `ch % 3`: a breakdown (permanent, or clearing itself
 //!   after 1..5 ms), a module stuck at 6..9 kV, an open stack, a leak of 2..20 µA at the
@@ -146,7 +146,13 @@ impl Run {
             assert!(!ticked || d <= ceiling[ch], "{when}: channel {ch}: duty {d} past the writer's ceiling {} {}", ceiling[ch], self.history());
             assert_eq!(v.duty[ch], d, "{when}: channel {ch}: the core's duty is not the PWM's {}", self.history());
         }
-        assert!(b.enable.high || b.hv.iter().all(|h| h.duty == 0), "{when}: the enable low with duties {:?} (fault {:?}) {}", b.hv.map(|h| h.duty), v.fault.get(), self.history());
+        assert!(
+            b.enable.high || b.hv.iter().all(|h| h.duty == 0),
+            "{when}: the enable low with duties {:?} (fault {:?}) {}",
+            b.hv.map(|h| h.duty),
+            v.fault.get(),
+            self.history()
+        );
     }
 
     /// The plant's true film on every channel whose module was never stuck.
@@ -178,7 +184,14 @@ impl Run {
                         return true;
                     }
                     if !cut {
-                        missed = Some(format!("{:?} on channel {} at {} V: not cut 2 ms after (fault {:?}, enable {})", d.what, d.ch, d.volts, v.fault.get(), v.enable));
+                        missed = Some(format!(
+                            "{:?} on channel {} at {} V: not cut 2 ms after (fault {:?}, enable {})",
+                            d.what,
+                            d.ch,
+                            d.volts,
+                            v.fault.get(),
+                            v.enable
+                        ));
                     } else if d.own_latency && (pending || trip_last > 1000) {
                         missed = Some(format!("{:?} on channel {} at {} V: cut after {} µs of board time (bound 1000)", d.what, d.ch, d.volts, trip_last));
                     } else {
@@ -192,7 +205,15 @@ impl Run {
                         return false;
                     }
                     if since >= STUCK_BOUND_MS {
-                        missed = Some(format!("{:?} on channel {} at {} V: not latched within {} ms (fault {:?}, enable {})", d.what, d.ch, d.volts, STUCK_BOUND_MS, v.fault.get(), v.enable));
+                        missed = Some(format!(
+                            "{:?} on channel {} at {} V: not latched within {} ms (fault {:?}, enable {})",
+                            d.what,
+                            d.ch,
+                            d.volts,
+                            STUCK_BOUND_MS,
+                            v.fault.get(),
+                            v.enable
+                        ));
                         return false;
                     }
                     true
@@ -207,7 +228,13 @@ impl Run {
                     if d.held >= HELD_BOUND_MS {
                         missed = Some(format!(
                             "{:?} on channel {} at {} V: not latched within {} ms held at {} V ({} ms since; fault {:?})",
-                            d.what, d.ch, d.volts, HELD_BOUND_MS, v.volts[d.ch], since, v.fault.get()
+                            d.what,
+                            d.ch,
+                            d.volts,
+                            HELD_BOUND_MS,
+                            v.volts[d.ch],
+                            since,
+                            v.fault.get()
                         ));
                         return false;
                     }
@@ -327,7 +354,17 @@ pub fn run(data: &[u8]) -> Summary {
     let Some(seed) = b.u16() else { return Summary::default() };
     let plant = Plant::new(seed as u32).expect("the board's card gives a plant");
     let c = Control::new(SimBoard::with_plant(plant), 2000, 2000.0);
-    let mut r = Run { c, ticks: 0, armed: false, stuck: [false; 3], open: [false; 3], due: Vec::new(), prev_volts: [0.0; 3], log: Vec::new(), summary: Summary::default() };
+    let mut r = Run {
+        c,
+        ticks: 0,
+        armed: false,
+        stuck: [false; 3],
+        open: [false; 3],
+        due: Vec::new(),
+        prev_volts: [0.0; 3],
+        log: Vec::new(),
+        summary: Summary::default(),
+    };
     r.check_outputs("at start", false);
     while let Some(op) = b.u8() {
         match op % OPS {

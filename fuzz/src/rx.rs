@@ -174,4 +174,3 @@ pub fn check(data: &[u8]) {
     }
     take(&mut rx, &mut queued, &mut popped);
 }
-

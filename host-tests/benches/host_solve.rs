@@ -29,9 +29,7 @@ fn solves<S: Real>(c: &mut Criterion, scalar: &str) {
         let p = S::from_f64(s.tension);
         for m in perf::host_methods() {
             let method = method_of::<S>(&m);
-            g.bench_function(perf::bench_id(s.name, &m), |b| {
-                b.iter(|| f.solve_with(black_box(&comp), black_box(p), [S::zero(); 2], method))
-            });
+            g.bench_function(perf::bench_id(s.name, &m), |b| b.iter(|| f.solve_with(black_box(&comp), black_box(p), [S::zero(); 2], method)));
         }
     }
     g.finish();

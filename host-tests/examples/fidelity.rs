@@ -132,11 +132,8 @@ struct RefSet {
 fn reference(s: &SceneDef, plate: bool) -> RefSet {
     let p = params(s, Config { plate, flex: true, m: 1 });
     let finger = Finger::new(p).expect("scene parameters are valid");
-    let stacks: Vec<f64> = if s.layers == 0 {
-        Vec::new()
-    } else {
-        finger.compliances(&s.volts).expect("voltages within the ceiling").thickness[..p.n].to_vec()
-    };
+    let stacks: Vec<f64> =
+        if s.layers == 0 { Vec::new() } else { finger.compliances(&s.volts).expect("voltages within the ceiling").thickness[..p.n].to_vec() };
     let cp = continuum_params(&p);
     let disc = Discretisation::default();
     let close = continuum::closing_tension(&cp, &stacks, [0.0, 0.0], disc, 60.0).expect("continuum closing tension");
@@ -144,14 +141,11 @@ fn reference(s: &SceneDef, plate: bool) -> RefSet {
         Some(r) => (Some(r.tension), r.joint),
         None => (None, 0),
     };
-    let mut tensions: Vec<f64> = TENSIONS.iter().copied().filter(|&t| closing.map_or(true, |c| t < 0.95 * c)).collect();
+    let mut tensions: Vec<f64> = TENSIONS.iter().copied().filter(|&t| closing.is_none_or(|c| t < 0.95 * c)).collect();
     if let Some(c) = closing {
         tensions.push(0.95 * c);
     }
-    let sols = tensions
-        .iter()
-        .map(|&t| continuum::solve(&cp, t, &stacks, [0.0, 0.0], disc).map_err(|e| e.to_string()))
-        .collect();
+    let sols = tensions.iter().map(|&t| continuum::solve(&cp, t, &stacks, [0.0, 0.0], disc).map_err(|e| e.to_string())).collect();
     RefSet { closing, closing_joint, tensions, sols }
 }
 
@@ -173,8 +167,7 @@ fn kind_name(k: BranchEnd) -> &'static str {
 /// Bench results: (image, config name, case) -> record.
 type Bench = BTreeMap<(String, String, String), perf::Rec>;
 
-const IMAGES: &[(&str, &str)] =
-    &[("m4f-libm", "de,f32"), ("m4f-fast-trig", "de,f32,fast-trig"), ("m4f-micromath", "de,f32,micromath")];
+const IMAGES: &[(&str, &str)] = &[("m4f-libm", "de,f32"), ("m4f-fast-trig", "de,f32,fast-trig"), ("m4f-micromath", "de,f32,micromath")];
 
 fn run_bench() -> Result<Bench, String> {
     let mut out = Bench::new();
@@ -242,9 +235,7 @@ fn main() {
     // 3. instructions on the M4F (and the target's own answers against the reference)
     eprintln!("bench image in QEMU ...");
     let bench = run_bench().unwrap_or_else(|e| panic!("bench image: {e}"));
-    let instr = |image: &str, c: Config, case: &str| -> Option<&perf::Rec> {
-        bench.get(&(image.to_string(), c.bench_name(), case.to_string()))
-    };
+    let instr = |image: &str, c: Config, case: &str| -> Option<&perf::Rec> { bench.get(&(image.to_string(), c.bench_name(), case.to_string())) };
     // worst solve (and setup) instructions of a bench configuration (its name) over the bench cases
     let worst_named = |image: &str, name: &str| -> Option<(f64, f64)> {
         let v: Vec<_> = CASES.iter().filter_map(|(case, _, _)| bench.get(&(image.to_string(), name.to_string(), case.to_string()))).collect();
@@ -297,7 +288,7 @@ fn main() {
     };
 
     // the choice: smallest m with plate + flexible links within TOL up to LIMIT on every scene
-    let passes = |c: Config| worst(c, LIMIT_TENSION).map_or(false, |w| w.0.abs() <= TOL_PCT);
+    let passes = |c: Config| worst(c, LIMIT_TENSION).is_some_and(|w| w.0.abs() <= TOL_PCT);
     let chosen_m = MS.iter().copied().find(|&m| passes(Config { plate: true, flex: true, m }));
     let chosen = chosen_m.map(|m| Config { plate: true, flex: true, m });
 
@@ -308,22 +299,12 @@ fn main() {
     let paper_cfg = Config { plate: false, flex: false, m: 1 };
     for (file, s, c, title) in [
         ("no-stacks-paper-m1.svg", &SCENES[0], paper_cfg, "No stacks: the paper's model (m = 1, rigid links, E_b) vs continuum (E_b)".to_string()),
-        (
-            "no-stacks-chosen.svg",
-            &SCENES[0],
-            fig_cfg,
-            format!("No stacks: m = {}, plate modulus, flexible links vs continuum (plate)", fig_cfg.m),
-        ),
-        (
-            "per-joint-chosen.svg",
-            &SCENES[3],
-            fig_cfg,
-            format!("9 / 5 / 0 kV: m = {}, plate modulus, flexible links vs continuum (plate)", fig_cfg.m),
-        ),
+        ("no-stacks-chosen.svg", &SCENES[0], fig_cfg, format!("No stacks: m = {}, plate modulus, flexible links vs continuum (plate)", fig_cfg.m)),
+        ("per-joint-chosen.svg", &SCENES[3], fig_cfg, format!("9 / 5 / 0 kV: m = {}, plate modulus, flexible links vs continuum (plate)", fig_cfg.m)),
     ] {
         let i = SCENES.iter().position(|x| x.name == s.name).unwrap();
         let rs = &refs[&(i, c.plate)];
-        let mut ts: Vec<f64> = [0.5, 1.0, 2.0, 3.0].into_iter().filter(|&t| rs.closing.map_or(true, |cl| t < 0.95 * cl)).collect();
+        let mut ts: Vec<f64> = [0.5, 1.0, 2.0, 3.0].into_iter().filter(|&t| rs.closing.is_none_or(|cl| t < 0.95 * cl)).collect();
         if let Some(cl) = rs.closing {
             // the last tension both models reach
             let mf = fmax[&(i, c)].as_ref().map(|f| f.0).unwrap_or(cl);
@@ -344,11 +325,7 @@ fn main() {
             Ok(e) => (e.pct.to_string(), e.deg.to_string(), e.tip.to_string(), String::new()),
             Err(e) => (String::new(), String::new(), String::new(), e.replace(',', ";")),
         };
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{a},{b},{c},{note}",
-            SCENES[r.scene].name, r.cfg.plate as u32, r.cfg.flex as u32, r.cfg.m, r.tension
-        );
+        let _ = writeln!(csv, "{},{},{},{},{},{a},{b},{c},{note}", SCENES[r.scene].name, r.cfg.plate as u32, r.cfg.flex as u32, r.cfg.m, r.tension);
     }
     std::fs::write(fig_dir.join("fidelity.csv"), csv).expect("write csv");
 
@@ -438,28 +415,16 @@ cases (below); only the paper's and the real-structure configurations are in the
             _ => ("—".into(), "—".into()),
         };
         let mark = if wp.abs() <= TOL_PCT { " ✓" } else { "" };
-        let _ = writeln!(
-            w,
-            "| {} | {}{mark} | {wh} | {wd:.2} | {wt:.2} | {} | {at:.2} | {refused} | {fm} | {ins} | {setup} |",
-            c.label(),
-            pct(wp),
-            pct(ap)
-        );
+        let _ = writeln!(w, "| {} | {}{mark} | {wh} | {wd:.2} | {wt:.2} | {} | {at:.2} | {refused} | {fm} | {ins} | {setup} |", c.label(), pct(wp), pct(ap));
     }
     let _ = writeln!(w, "\n✓: within {TOL_PCT} % up to {} N on every scene.\n", fmt_t(LIMIT_TENSION));
 
     // the recommendation
     let _ = writeln!(w, "## The default m, plate modulus and flexible links\n");
-    let budget_ok: Vec<usize> = MS
-        .iter()
-        .copied()
-        .filter(|&m| worst_instr("m4f-libm", Config { plate: true, flex: true, m }).map_or(false, |x| x.0 <= BUDGET))
-        .collect();
-    let budget_ok_mm: Vec<usize> = MS
-        .iter()
-        .copied()
-        .filter(|&m| worst_instr("m4f-micromath", Config { plate: true, flex: true, m }).map_or(false, |x| x.0 <= BUDGET))
-        .collect();
+    let budget_ok: Vec<usize> =
+        MS.iter().copied().filter(|&m| worst_instr("m4f-libm", Config { plate: true, flex: true, m }).is_some_and(|x| x.0 <= BUDGET)).collect();
+    let budget_ok_mm: Vec<usize> =
+        MS.iter().copied().filter(|&m| worst_instr("m4f-micromath", Config { plate: true, flex: true, m }).is_some_and(|x| x.0 <= BUDGET)).collect();
     match chosen {
         Some(c) => {
             let (wp, _, wt, wh) = worst(c, LIMIT_TENSION).unwrap();
@@ -663,9 +628,7 @@ what a user of the board sees.\n"
                         _ => "—".into(),
                     }
                 };
-                let n = |img: &str, setup: bool| {
-                    instr(img, c, case).map_or("—".into(), |x| format!("{:.0}", if setup { x.setup_instr } else { x.instr }))
-                };
+                let n = |img: &str, setup: bool| instr(img, c, case).map_or("—".into(), |x| format!("{:.0}", if setup { x.setup_instr } else { x.instr }));
                 let _ = writeln!(
                     w,
                     "| {case} | {}, {} | {m} | {} | {} | {} | {} | {} | {} |",
@@ -700,11 +663,7 @@ what a user of the board sees.\n"
                     .iter()
                     .zip(&rs.sols)
                     .map(|(t, r)| match r {
-                        Ok(r) => format!(
-                            "{} N: {}",
-                            fmt_t(*t),
-                            r.joint_angles.iter().map(|a| format!("{:.2}", a.to_degrees())).collect::<Vec<_>>().join(", ")
-                        ),
+                        Ok(r) => format!("{} N: {}", fmt_t(*t), r.joint_angles.iter().map(|a| format!("{:.2}", a.to_degrees())).collect::<Vec<_>>().join(", ")),
                         Err(e) => format!("{} N: {e}", fmt_t(*t)),
                     })
                     .collect::<Vec<_>>()

@@ -6,7 +6,7 @@
 //! flash and RAM. `cd host-tests && cargo run --release --example fixed_report`
 use finger_model::{Finger, Method, Params};
 use host_tests::image::Image;
-use host_tests::perf::{build, read_bench, elf_sizes, run_qemu, scenes, M3};
+use host_tests::perf::{build, elf_sizes, read_bench, run_qemu, scenes, M3};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -97,7 +97,16 @@ fn main() {
             if ratio.is_finite() {
                 ratios.push(ratio);
             } else {
-                refusals.push(format!("`{}` ({model}): f32 {}, fixed {}, f64 {}", s.name, if a.ok.is_some() { "ok".into() } else { format!("err {}", a.code) }, if b.ok.is_some() { "ok".into() } else { format!("err {}", b.code) }, match &r { Ok(_) => "ok".to_string(), Err(e) => format!("err {}", e.code()) }));
+                refusals.push(format!(
+                    "`{}` ({model}): f32 {}, fixed {}, f64 {}",
+                    s.name,
+                    if a.ok.is_some() { "ok".into() } else { format!("err {}", a.code) },
+                    if b.ok.is_some() { "ok".into() } else { format!("err {}", b.code) },
+                    match &r {
+                        Ok(_) => "ok".to_string(),
+                        Err(e) => format!("err {}", e.code()),
+                    }
+                ));
             }
             let _ = writeln!(
                 t,
@@ -130,8 +139,10 @@ fn main() {
     let f = Finger::new(Params { layers: 4, ..Params::default() }).unwrap();
     let (mut rt_worst, mut rt_n, mut rt_refused) = (0f64, 0, 0);
     // postures the finger reaches: forward solves at these (tension, voltages)
-    for (p, v) in [(0.5, [0.0; 3]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 0.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3]), (2.0, [0.0, 4000.0, 8000.0])] {
-        let Ok(fw) = f.solve(p as f64, &v, Method::converged()) else {
+    for (p, v) in
+        [(0.5, [0.0; 3]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 0.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3]), (2.0, [0.0, 4000.0, 8000.0])]
+    {
+        let Ok(fw) = f.solve(p, &v, Method::converged()) else {
             rt_refused += 1;
             continue;
         };
@@ -150,7 +161,8 @@ fn main() {
     }
 
     // the inverse on the M3: each answer's round trip through the f64 forward
-    const POSES: &[(f64, [f64; 3])] = &[(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])];
+    const POSES: &[(f64, [f64; 3])] =
+        &[(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])];
     let mut it = String::new();
     let _ = writeln!(it, "| posture of (P, V) | fixed instr | fixed, no table (firmware) instr | f32 `solve_pose` instr | f32 / fixed | round trip fixed (deg) | round trip no table (deg) | round trip f32 (deg) | no P (tension rule, firmware) instr | its tension vs the f64 rule's (relative) | round trip no P (deg) |");
     let _ = writeln!(it, "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
@@ -202,7 +214,17 @@ fn main() {
         };
         let dn = d.map_or("-".to_string(), |d| format!("{:.0}", d.0));
         let dt = td.map_or("-".to_string(), |t| show(&t));
-        let _ = writeln!(it, "| {p} N, {:?} V | {:.0} | {dn} | {:.0} | {:.2} | {} | {dt} | {} | {free_instr} | {free_rel} | {} |", v, a.0, b.0, b.0 / a.0, show(&ta), show(&tb), show(&free_trip));
+        let _ = writeln!(
+            it,
+            "| {p} N, {:?} V | {:.0} | {dn} | {:.0} | {:.2} | {} | {dt} | {} | {free_instr} | {free_rel} | {} |",
+            v,
+            a.0,
+            b.0,
+            b.0 / a.0,
+            show(&ta),
+            show(&tb),
+            show(&free_trip)
+        );
     }
 
     // the Cortex-M3 firmware image
@@ -221,7 +243,36 @@ fn main() {
     let pose_free = format!("pose {:.6} {:.6} {:.6}", ps.joint_angle[0].to_degrees(), ps.joint_angle[1].to_degrees(), ps.joint_angle[2].to_degrees());
     let mut worst_stack: Vec<(String, u64)> = Vec::new();
     let mut prev = 0;
-    for c in ["version", "status", "limits", "help", "param", "solve 0.5 0 1000 2000", "solve 1 0 5000 5000", "solve 4 0 0 0", "arm", "volt all 1000", "wait 0.6", "force 0.5", "force 2", "volt 1 5000", "wait 5", "status", pose_cmd.as_str(), "wait 5", "status", pose_free.as_str(), "wait 5", "status", "stop", "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332", "solve 1 0 5000 0", "preset paper", "solve 1 0 1000 1000", "limits"] {
+    for c in [
+        "version",
+        "status",
+        "limits",
+        "help",
+        "param",
+        "solve 0.5 0 1000 2000",
+        "solve 1 0 5000 5000",
+        "solve 4 0 0 0",
+        "arm",
+        "volt all 1000",
+        "wait 0.6",
+        "force 0.5",
+        "force 2",
+        "volt 1 5000",
+        "wait 5",
+        "status",
+        pose_cmd.as_str(),
+        "wait 5",
+        "status",
+        pose_free.as_str(),
+        "wait 5",
+        "status",
+        "stop",
+        "cal 1.540745 6.245597 1.066900 1.154625 0.718260 0.054631 5.254023 -1.756332",
+        "solve 1 0 5000 0",
+        "preset paper",
+        "solve 1 0 1000 1000",
+        "limits",
+    ] {
         let r = q.cmd(c);
         assert!(r.starts_with("ok"), "{c}: {r}");
         let hw = q.stack_high_water(0x2000_0000, 0x2000_4000);
@@ -250,7 +301,14 @@ fn main() {
             let (Ok(want), Ok(got)) = (f.fmax(&v), finger_model::fixed::FixedFinger::new(f, &v).and_then(|ff| ff.branch_end())) else { continue };
             let t = got.tension.to_f64();
             let holds = if f.solve(t, &v, Method::converged()).is_ok() { "yes" } else { "no" };
-            let _ = writeln!(fm, "| {name} | {v:?} | {:.4} ({:?}) | {t:.4} ({:?}) | {:+.1e} | {holds} |", want.tension, want.kind, got.kind, t / want.tension - 1.0);
+            let _ = writeln!(
+                fm,
+                "| {name} | {v:?} | {:.4} ({:?}) | {t:.4} ({:?}) | {:+.1e} | {holds} |",
+                want.tension,
+                want.kind,
+                got.kind,
+                t / want.tension - 1.0
+            );
         }
     }
 
@@ -263,7 +321,10 @@ fn main() {
     let _ = writeln!(m, "compliances in f32, then scaled), once per parameter or voltage change.\n");
     let _ = writeln!(m, "| target | measured |");
     let _ = writeln!(m, "| --- | --- |");
-    let _ = writeln!(m, "| forward tip within 1e-3 mm of f64, every bench scene, default model | worst {worst_tip_default:.1e} mm (all models: {worst_tip:.1e} mm) |");
+    let _ = writeln!(
+        m,
+        "| forward tip within 1e-3 mm of f64, every bench scene, default model | worst {worst_tip_default:.1e} mm (all models: {worst_tip:.1e} mm) |"
+    );
     let _ = writeln!(m, "| >= 3x fewer M3 instructions than soft-float f32 | the model's own f32 solve (the firmware's, `Finger::solve_with`) / fixed: min {rmin:.2}, median {rmed:.2}; default model min {dmin:.2} |");
     let _ = writeln!(m, "| inverse round trip within 0.05 deg | the fixed-point inverse at a given tension (`FixedInverse`, on the M3) through the f64 forward: worst {inv_worst:.1e} deg over {inv_n} postures (table below); without the table (`FixedInverseDirect`, the M3 image's `pose`): worst {dir_worst:.1e} deg, at most {dir_max_instr:.0} instructions with its set-up; the f64 inverse through the fixed-point forward (host): worst {rt_worst:.1e} deg over {rt_n} postures ({rt_refused} refused); `pose` without P (the F405's tension rule in fixed point, `FixedInverseDirect::solve_free`): its tension within {free_worst_p:.1e} (relative) of the f64 rule's, round trip worst {free_worst_deg:.1e} deg over {free_n} postures, at most {free_max_instr:.0} instructions |");
     let _ = writeln!(m, "| image with console and `pose` in 64 KiB flash / 20 KiB RAM | M3 image (console, DE, defmt, `pose`; the fixed-point model): flash {flash} bytes ({:.1} KiB); static RAM {ram} bytes + the 16 KiB stack = {:.1} KiB (memory-m3.x: 20 KiB; docs/firmware.md \"Cortex-M3 image\"); stack high-water {stack} bytes ({:.1} KiB) |", flash as f64 / 1024.0, (ram + 16 * 1024) as f64 / 1024.0, stack as f64 / 1024.0);

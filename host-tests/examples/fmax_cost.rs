@@ -25,7 +25,8 @@ fn main() {
          The target: at most 500,000 instructions.\n"
     )
     .unwrap();
-    writeln!(doc, "| case | full: instructions | full: fmax | table: instructions | table: fmax | ends at (table) |\n| --- | --- | --- | --- | --- | --- |").unwrap();
+    writeln!(doc, "| case | full: instructions | full: fmax | table: instructions | table: fmax | ends at (table) |\n| --- | --- | --- | --- | --- | --- |")
+        .unwrap();
     let bench = read_bench(&out).unwrap_or_else(|e| panic!("{e}"));
     let instr = |t: &str| bench.instructions(t.parse().unwrap()).round();
     let (mut worst_full, mut worst_table) = (0.0f64, 0.0f64);

@@ -48,7 +48,12 @@ fn main() {
     }
     let t1 = Instant::now();
     let false_trips: Vec<(u64, Fault)> = (0..n_clean).filter_map(|s| clean_history(1_000_000_000 + s, 3000).map(|f| (s, f))).collect();
-    println!("fault-free histories: {n_clean} of 3 s, false trips: {} ({:.0} s) {:?}", false_trips.len(), t1.elapsed().as_secs_f64(), &false_trips[..false_trips.len().min(5)]);
+    println!(
+        "fault-free histories: {n_clean} of 3 s, false trips: {} ({:.0} s) {:?}",
+        false_trips.len(),
+        t1.elapsed().as_secs_f64(),
+        &false_trips[..false_trips.len().min(5)]
+    );
     for guard in [true, false] {
         let t2 = Instant::now();
         let runs: Vec<_> = (0..n_soft).map(|s| soft_film_history(2_000_000_000 + s, 3000, 30.0, guard)).collect();

@@ -149,7 +149,8 @@ fn part(name: &str) -> &'static str {
 }
 
 fn main() {
-    let mut doc = host_tests::report::generated_header("cargo run --release --example inverse_profile", "# Where the tabled inverse's instructions go (Cortex-M4F)");
+    let mut doc =
+        host_tests::report::generated_header("cargo run --release --example inverse_profile", "# Where the tabled inverse's instructions go (Cortex-M4F)");
     writeln!(
         doc,
         "One `solve_pose_tabled_into` in f32 with the firmware's model features (fast-trig), the \

@@ -8,9 +8,8 @@
 
 use finger_model::material::drive::{Channel, DriveLimits, Mode};
 use finger_model::material::{
-    equilibrium_pull_in_voltage, equilibrium_ratio, equilibrium_voltage, guarded_tick, hold_ceiling, hold_ratio,
-    ratio_at_voltage, reference::advance_reference, voltage_at_ratio, Card, Integrator, Relaxation, StackLaw, StackState,
-    CARDS, LIMIT_RATIO, VHB_4905,
+    equilibrium_pull_in_voltage, equilibrium_ratio, equilibrium_voltage, guarded_tick, hold_ceiling, hold_ratio, ratio_at_voltage,
+    reference::advance_reference, voltage_at_ratio, Card, Integrator, Relaxation, StackLaw, StackState, CARDS, LIMIT_RATIO, VHB_4905,
 };
 use finger_model::params::EPS0;
 use host_tests::perf::{build, read_bench, run_qemu, M3, M4F};
@@ -77,10 +76,7 @@ struct History {
 
 fn histories() -> Vec<History> {
     let hold = hold_ceiling(&law::<f64>(&VHB_4905), MARGIN);
-    let mut v = vec![
-        History { volts: Box::new(|_| 5000.0) },
-        History { volts: Box::new(|t| 6000.0 * (t / 5.0).min(1.0)) },
-    ];
+    let mut v = vec![History { volts: Box::new(|_| 5000.0) }, History { volts: Box::new(|t| 6000.0 * (t / 5.0).min(1.0)) }];
     // random: piecewise constant, 4-20 s segments, 0..hold ceiling (fixed seed)
     let mut rng = finger_model_testkit::material::Rng(0x2545_F491_4F6C_DD1D);
     let mut rnd = move || rng.next();
@@ -91,9 +87,7 @@ fn histories() -> Vec<History> {
             segs.push((t, hold * rnd()));
             t += 4.0 + 16.0 * rnd();
         }
-        v.push(History {
-            volts: Box::new(move |t| segs.iter().rev().find(|s| s.0 <= t).map_or(0.0, |s| s.1)),
-        });
+        v.push(History { volts: Box::new(move |t| segs.iter().rev().find(|s| s.0 <= t).map_or(0.0, |s| s.1)) });
     }
     v
 }

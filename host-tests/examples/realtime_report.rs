@@ -48,14 +48,11 @@ fn main() {
     let fs = hv_full_scale(&trace);
     // slew steps: a stop (all duties to 0 at once) is not one
     let ticks: Vec<[u64; 3]> = duties_per_tick(&trace);
-    let step = ticks.windows(2).filter(|w| w[1] != [0; 3]).map(|w| max_step(w)).max().unwrap_or(0);
+    let step = ticks.windows(2).filter(|w| w[1] != [0; 3]).map(max_step).max().unwrap_or(0);
     let period: Vec<&str> = kv(&t, "tick_period_us").split(',').collect();
     let lat: Vec<&str> = kv(&t, "tick_latency_us").split(',').collect();
-    let mut cmds: Vec<(String, f64)> = kv(&t, "cmd_us")
-        .split(',')
-        .filter_map(|e| e.split_once(':'))
-        .map(|(w, us)| (w.to_string(), us.parse().unwrap_or(0.0)))
-        .collect();
+    let mut cmds: Vec<(String, f64)> =
+        kv(&t, "cmd_us").split(',').filter_map(|e| e.split_once(':')).map(|(w, us)| (w.to_string(), us.parse().unwrap_or(0.0))).collect();
     cmds.sort_by(|a, b| b.1.partial_cmp(&a.1).unwrap());
     let mut s = String::new();
     s.push_str("<!-- realtime-report:begin (cd host-tests && cargo run --release --example realtime_report) -->\n");
@@ -79,9 +76,7 @@ fn main() {
         "| the HV read-back's work in a tick (three channels' estimate, checks, thickness guard, voltage loop), max | {sense_us:.3} us = {:.0} M4F instructions |\n",
         sense_us * 1000.0
     ));
-    s.push_str(&format!(
-        "| the emulator's plant stepped in a tick (no part of the board's cost; its ADC averages replace it), max | {source_us:.3} us |\n"
-    ));
+    s.push_str(&format!("| the emulator's plant stepped in a tick (no part of the board's cost; its ADC averages replace it), max | {source_us:.3} us |\n"));
     s.push_str(&format!("| control ticks counted | {} |\n", kv(&t, "ticks")));
     s.push_str(&format!("| stop: console interrupt entry to HV off, max ({} stops) | {} us |\n", kv(&t, "stops"), kv(&t, "stop_us")));
     s.push_str(&format!("| stop: control ticks between the stop line's last byte and all duties 0 (trace), worst | {worst_ticks} |\n"));

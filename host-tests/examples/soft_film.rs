@@ -37,5 +37,9 @@ fn main() {
         }
     }
     let view = c.view();
-    println!("fault {:?}, thinnest true film {:.4}", view.fault.get(), c.board().plant.as_ref().expect("plant").truth().iter().map(|t| t.s_min).fold(1.0, f32::min));
+    println!(
+        "fault {:?}, thinnest true film {:.4}",
+        view.fault.get(),
+        c.board().plant.as_ref().expect("plant").truth().iter().map(|t| t.s_min).fold(1.0, f32::min)
+    );
 }

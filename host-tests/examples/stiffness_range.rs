@@ -17,7 +17,10 @@ fn main() {
     let path = std::env::args().nth(1).unwrap_or_else(|| "../docs/inverse-tables.md".to_string());
     let deg = 10.0f64;
     let angles = [deg.to_radians(); 3];
-    let mut o = host_tests::report::generated_header("cargo run --release --example stiffness_range", &format!("## Stiffness range of one posture (all three joints at {deg}°)"));
+    let mut o = host_tests::report::generated_header(
+        "cargo run --release --example stiffness_range",
+        &format!("## Stiffness range of one posture (all three joints at {deg}°)"),
+    );
     writeln!(
         o,
         "Tip stiffness K_tip (`Finger::tip_stiffness`) at the two ends of the tension interval: low end = \
@@ -89,7 +92,11 @@ fn main() {
     let mut rows: Vec<(String, Params<f64>, Calibration<f64>)> = cases.iter().map(|(n, p)| (n.to_string(), *p, Calibration::none())).collect();
     rows.insert(
         1,
-        ("card VHB 4905 with the board's FE calibration (`cal`): the board's finger, what `solve`, `pose` and the web view show".to_string(), Params::vhb4905(), Calibration::model_md()),
+        (
+            "card VHB 4905 with the board's FE calibration (`cal`): the board's finger, what `solve`, `pose` and the web view show".to_string(),
+            Params::vhb4905(),
+            Calibration::model_md(),
+        ),
     );
     // (kθθ low..high, the kyy ratio) of each row, for the note on the calibration below
     let mut seen: Vec<Option<(f64, f64, f64)>> = Vec::new();
@@ -165,16 +172,7 @@ fn main() {
                 Ok(c) => {
                     let m = c.magnitude();
                     let b = *base.get_or_insert(m);
-                    writeln!(
-                        o,
-                        "| {name} | {:.0} | {:.4} | {:.4} | {:.4} | {:+.2} |",
-                        v[0],
-                        c.force[0],
-                        c.force[1],
-                        m,
-                        100.0 * (m - b) / b
-                    )
-                    .unwrap();
+                    writeln!(o, "| {name} | {:.0} | {:.4} | {:.4} | {:.4} | {:+.2} |", v[0], c.force[0], c.force[1], m, 100.0 * (m - b) / b).unwrap();
                 }
                 Err(e) => writeln!(o, "| {name} | {:.0} | err: {e} | | | |", v[0]).unwrap(),
             }
@@ -232,7 +230,8 @@ fn main() {
          parameters, for scale. Host µs, release build, mean of the count shown.\n"
     )
     .unwrap();
-    writeln!(o, "| m | plate | flexible links | path | Newton iterations f64 / f32 | inverse µs f64 | inverse µs f32 | forward µs f64 | inverse / forward |").unwrap();
+    writeln!(o, "| m | plate | flexible links | path | Newton iterations f64 / f32 | inverse µs f64 | inverse µs f32 | forward µs f64 | inverse / forward |")
+        .unwrap();
     writeln!(o, "| --- | --- | --- | --- | --- | --- | --- | --- | --- |").unwrap();
     for m in [1usize, 4, 8] {
         for (plate, flex_links) in [(false, false), (true, false), (true, true)] {

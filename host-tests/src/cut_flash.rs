@@ -46,15 +46,7 @@ pub struct CutFlash<const PAGE: usize> {
 impl<const PAGE: usize> CutFlash<PAGE> {
     /// `pages` erased pages, no cut.
     pub fn new(pages: usize) -> Self {
-        let s = State {
-            mem: vec![0xFF; pages * PAGE],
-            budget: None,
-            off: false,
-            noise: 0x5A,
-            page_erases: vec![0; pages],
-            bytes_written: 0,
-            bytes_erased: 0,
-        };
+        let s = State { mem: vec![0xFF; pages * PAGE], budget: None, off: false, noise: 0x5A, page_erases: vec![0; pages], bytes_written: 0, bytes_erased: 0 };
         CutFlash { state: Rc::new(RefCell::new(s)) }
     }
     /// A flash with a copy of this one's state (not shared).

@@ -7,17 +7,7 @@ use finger_fw::sim::SimBoard;
 /// Armed setpoints for `target` (V), plain or `shaped`, at `slew` V/s.
 pub fn setpoints(c: &Control<SimBoard>, target: [f32; 3], shaped: bool, slew: f32) -> Setpoints {
     let v = c.view();
-    Setpoints {
-        seq: v.seq + 1,
-        epoch: v.epoch,
-        armed: true,
-        target_v: target,
-        servo_duty: 2000,
-        servo_released: 2000,
-        duty_ceiling: [8400; 3],
-        slew,
-        shaped,
-    }
+    Setpoints { seq: v.seq + 1, epoch: v.epoch, armed: true, target_v: target, servo_duty: 2000, servo_released: 2000, duty_ceiling: [8400; 3], slew, shaped }
 }
 
 /// A step to `volts` on channel 1 from rest at `slew` V/s, `secs` long: the predicted

@@ -45,8 +45,7 @@ pub const IMAGES: &[Image] = &[
 
 /// The quick image for the CI smoke test: one scene, converged solver, f32 with the model's
 /// `fast-trig` sin/cos, M4F.
-pub const QUICK: Image =
-    Image { name: "m4f-quick", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,fast-trig,quick" };
+pub const QUICK: Image = Image { name: "m4f-quick", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,fast-trig,quick" };
 
 pub fn bench_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("bench")
@@ -80,10 +79,7 @@ pub fn build_with_env(bin: &str, triple: &str, features: &str, name: &str, env: 
 /// Run an image in QEMU (semihosting, -icount) and return what it printed. Fails on a
 /// non-zero exit (the image exits 1 on a panic) or a timeout.
 pub fn run_qemu(elf: &Path, machine: &str, shift: u32) -> Result<String, String> {
-    let out = qemu_command(machine, &format!("shift={shift}"), elf, Some(900))
-        .arg("-nographic")
-        .output()
-        .map_err(|e| format!("qemu-system-arm: {e}"))?;
+    let out = qemu_command(machine, &format!("shift={shift}"), elf, Some(900)).arg("-nographic").output().map_err(|e| format!("qemu-system-arm: {e}"))?;
     // semihosting output comes on QEMU's stdout or stderr depending on its version
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     if !out.status.success() {
@@ -516,22 +512,23 @@ pub fn table_cost_section() -> String {
     }
     // what bounds the forward: a distinct joint's march (the three-voltage scene minus the
     // uniform one at the same tension, per extra joint)
-    for (m, _) in &worst {
+    for m in worst.keys() {
         let get = |s: &str| rows.iter().find(|r| &r.0 == m && r.1 == s).and_then(|r| r.2.table.map(|t| t.0));
         if let (Some(a), Some(b)) = (get("de-1.0N"), get("de-1.0N-per9/5/0kV")) {
-            writeln!(w, "\n- {m}: a forward solve with one distinct joint costs {a:.0}, each further distinct joint {:.0} (its march on the full model).", (b - a) / 2.0).unwrap();
+            writeln!(
+                w,
+                "\n- {m}: a forward solve with one distinct joint costs {a:.0}, each further distinct joint {:.0} (its march on the full model).",
+                (b - a) / 2.0
+            )
+            .unwrap();
         }
         // the inverse's: identical joints inside the stack's range (8 kV), three different
         // ones inside it (2/6/9 kV), identical joints at 0 V (no compliance evaluation), each
         // with the tension given and free
         let inv = |s: &str, i: usize| rows.iter().find(|r| &r.0 == m && r.1 == s).and_then(|r| r.2.inv.get(i).map(|x| x.0));
-        if let (Some(a), Some(b), Some(fa), Some(fb), Some(z)) = (
-            inv("de-1.0N-uni8kV", 0),
-            inv("de-15N-per2/6/9kV", 0),
-            inv("de-1.0N-uni8kV", 1),
-            inv("de-15N-per2/6/9kV", 1),
-            inv("de-0.2N", 0),
-        ) {
+        if let (Some(a), Some(b), Some(fa), Some(fb), Some(z)) =
+            (inv("de-1.0N-uni8kV", 0), inv("de-15N-per2/6/9kV", 0), inv("de-1.0N-uni8kV", 1), inv("de-15N-per2/6/9kV", 1), inv("de-0.2N", 0))
+        {
             writeln!(
                 w,
                 "- {m}: an inverse with the tension given and one distinct joint (de-1.0N-uni8kV) costs {a:.0}, each further distinct joint {:.0} (de-15N-per2/6/9kV: its reading, march from the stiffnesses and voltage); with the joints at the scene's 0 V (de-0.2N) {z:.0} (the solved thickness is t0 itself: the compliance march with the table's compliances); the tension free adds {:.0} with one distinct joint, {:.0} with three (the two confirming marches of the interval's bounds).",

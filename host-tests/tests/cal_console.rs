@@ -4,10 +4,10 @@
 //! refusals change nothing.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{cmd, frac_of, Out};
+use finger_model::{Calibration, Finger, Method};
 use host_tests::console::{ceiling, err};
 use host_tests::reply::{nums, val};
-use finger_model::{Calibration, Finger, Method};
+use host_tests::sim_console::{cmd, frac_of, Out};
 
 /// docs/model.md's finger, as `fe-calibrate` (tools/calculix) prints it (docs/firmware.md).
 /// Another calibration, for the tests that set one.
@@ -196,7 +196,9 @@ fn preset_and_mechanical_param_give_their_parameters_calibration() {
     // electrical, solver and firmware parameters keep the one in force; so do a read and a refused set
     cmd(&mut a, "preset default");
     cmd(&mut a, &other);
-    for keep in ["param margin 0.5", "param v_supply 9000", "param eps_r 4", "param n_inc 20", "param slew 5000", "param l", "param", "param l 1e9", "param nope 1"] {
+    for keep in
+        ["param margin 0.5", "param v_supply 9000", "param eps_r 4", "param n_inc 20", "param slew 5000", "param l", "param", "param l 1e9", "param nope 1"]
+    {
         cmd(&mut a, keep);
         assert_eq!(cmd(&mut a, "cal"), OTHER_REPLY, "{keep} changed the calibration");
     }

@@ -5,8 +5,8 @@
 //! with the same parameters.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{at_ceiling, feed_text};
 use host_tests::console::ceiling;
+use host_tests::sim_console::{at_ceiling, feed_text};
 use proptest::prelude::*;
 
 thread_local!(static VMAX: f64 = ceiling(&mut App::new(SimBoard::default())));
@@ -113,4 +113,3 @@ proptest! {
         }
     }
 }
-

@@ -2,14 +2,13 @@
 //! command and error code, and the board's safety rules, each shown here.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{cmd, feed, frac_of, Out};
 use host_tests::console::{ceiling, check_ceiling_only_lowers, check_refusals, err, ok, REFUSED_DISARMED};
 use host_tests::reply::{nums, val};
+use host_tests::sim_console::{cmd, feed, frac_of, Out};
 
 fn app() -> App<SimBoard> {
     App::new(SimBoard::default())
 }
-
 
 /// Everything observable: the status reply and the outputs of the board.
 fn snapshot(a: &mut App<SimBoard>) -> String {
@@ -96,7 +95,7 @@ fn error_codes() {
             ("volt 4 100", "usage"),
             ("preset other", "usage"),
             ("param nonsense", "usage"),
-            ("param l 0.5", "usage"), // 2a < l
+            ("param l 0.5", "usage"),  // 2a < l
             ("param e_de 2", "usage"), // read-only
             ("param n 4", "usage"),
             ("volt all 100", "not-armed"),
@@ -105,7 +104,15 @@ fn error_codes() {
         ],
     );
     ok(&mut a, "arm");
-    let armed = [("param l 30", "armed"), ("param", "armed"), ("preset paper", "armed"), ("volt 1 10000", "limit"), ("volt 1 1e30", "limit"), ("force 1e30", "limit"), ("force 2000", "limit")];
+    let armed = [
+        ("param l 30", "armed"),
+        ("param", "armed"),
+        ("preset paper", "armed"),
+        ("volt 1 10000", "limit"),
+        ("volt 1 1e30", "limit"),
+        ("force 1e30", "limit"),
+        ("force 2000", "limit"),
+    ];
     check_refusals(&mut a, &armed);
     err(&mut a, &format!("{}\n", "x".repeat(300)), "too-long");
     // fault: a refused HV write latches it; arm refuses until stop
@@ -406,7 +413,21 @@ fn enable_low_from_reset_until_arm() {
     let mut a = app();
     assert!(!a.board().enable.high && !a.hv_enabled());
     assert_eq!(a.board().hv.map(|h| h.duty), [0; 3]);
-    for c in ["help", "status", "limits", "solve 0.5 100 100 100", "volt 1 100", "force 0.2", "param l 28", "preset paper", "disarm", "stop", "wait 0.1", "pose 3 3 3", "bogus"] {
+    for c in [
+        "help",
+        "status",
+        "limits",
+        "solve 0.5 100 100 100",
+        "volt 1 100",
+        "force 0.2",
+        "param l 28",
+        "preset paper",
+        "disarm",
+        "stop",
+        "wait 0.1",
+        "pose 3 3 3",
+        "bogus",
+    ] {
         cmd(&mut a, c);
         assert!(!a.board().enable.high_ever, "enable went high after {c}");
     }
@@ -564,7 +585,7 @@ fn fidelity_parameters() {
         assert_eq!(a.finger().params().get(n), Some(v.parse::<f32>().unwrap() as f64));
     }
     for bad in ["param m 9", "param m 0", "param m 2.5", "param plate 2", "param plate 0.5", "param flex_links -1", "param nu_b 0.6", "param nu_b nan"] {
-        let before = a.finger().params().clone();
+        let before = *a.finger().params();
         let r = cmd(&mut a, bad);
         assert!(r.starts_with("err usage:") || r.starts_with("err bad-number:"), "{bad} -> {r}");
         assert_eq!(a.finger().params(), &before);

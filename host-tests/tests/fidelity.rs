@@ -32,11 +32,7 @@ fn reference(plate: bool, tension: f64) -> ContinuumSolution {
 fn rel_err(m: usize, plate: bool, flex: bool, tension: f64, r: &ContinuumSolution) -> f64 {
     let f = Finger::new(params(m, plate, flex)).unwrap();
     let s = f.solve(tension, &[0.0; 3], Method::converged()).unwrap();
-    s.joint_angles()
-        .iter()
-        .zip(&r.joint_angles)
-        .map(|(a, b)| (a - b) / b)
-        .fold(0.0, |w: f64, e| if e.abs() > w.abs() { e } else { w })
+    s.joint_angles().iter().zip(&r.joint_angles).map(|(a, b)| (a - b) / b).fold(0.0, |w: f64, e| if e.abs() > w.abs() { e } else { w })
 }
 
 #[test]

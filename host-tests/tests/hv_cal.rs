@@ -30,12 +30,12 @@ fn each_refusal_changes_nothing() {
     let before = cmd(&mut a, "cal show");
     assert!(before.starts_with("ok vgain=1.0000,1.0000,1.0000 voff=0.0,0.0,0.0 c0_pf="), "{before}");
     for (line, code) in [
-        ("cal vmon 1 0.95 0", "err limit"),  // reads 5 % low
-        ("cal vmon 2 1.0 -5", "err limit"),  // an offset below 0
-        ("cal vmon 3 1.5 0", "err limit"),   // past its range
-        ("cal c0 1 10", "err usage"),        // far below the stack's
-        ("cal c0 2 500", "err usage"),       // far above
-        ("cal c0 4 68", "err usage"),        // no channel 4
+        ("cal vmon 1 0.95 0", "err limit"), // reads 5 % low
+        ("cal vmon 2 1.0 -5", "err limit"), // an offset below 0
+        ("cal vmon 3 1.5 0", "err limit"),  // past its range
+        ("cal c0 1 10", "err usage"),       // far below the stack's
+        ("cal c0 2 500", "err usage"),      // far above
+        ("cal c0 4 68", "err usage"),       // no channel 4
         ("cal vmon 1 x 0", "err bad-number"),
         ("cal vmon 1", "err usage"),
     ] {

@@ -14,7 +14,7 @@ use finger_fw::control::{hv_duty_cap, hv_duty_for, Control};
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 use finger_model::material::{equilibrium_ratio, hold_ceiling, Relaxation, StackLaw, StackState, LIMIT_RATIO};
-use host_tests::hv::{settling_s, setpoints, step_response};
+use host_tests::hv::{setpoints, settling_s, step_response};
 use host_tests::sim_console::Out;
 
 /// The testkit's xorshift64*: the histories are reproducible from their seed.
@@ -230,4 +230,3 @@ fn the_film_creeps_under_a_held_voltage_and_recovers_after_stop() {
     let s_later = at(&mut c, 60_000);
     assert!(s_later > s_off + 0.005 && s_later <= 1.0, "recovers in time: {s_off} -> {s_later}");
 }
-

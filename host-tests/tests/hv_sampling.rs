@@ -122,7 +122,10 @@ fn a_stopped_chain_reads_nan_after_the_stale_limit() {
     // a NaN reading is a sensor fault at the tick's checks
     let mut w = finger_fw::control::watch::Watch::new();
     let r = finger_fw::control::watch::Reading { v: f32::NAN, i_ua: f32::NAN, v_code: f32::NAN };
-    assert_eq!(w.check(&r, 1000.0, &finger_fw::control::hv_loop::Ask::ZERO, 5000.0, true, &finger_fw::control::sense::Estimator::new()), Some(finger_fw::control::Fault::Sensor));
+    assert_eq!(
+        w.check(&r, 1000.0, &finger_fw::control::hv_loop::Ask::ZERO, 5000.0, true, &finger_fw::control::sense::Estimator::new()),
+        Some(finger_fw::control::Fault::Sensor)
+    );
 }
 
 /// The watchdog flags a code above HTR or below LTR (RM0090): exactly the codes the plant's

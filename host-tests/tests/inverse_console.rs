@@ -3,8 +3,8 @@
 //! the firmware's console on the simulated board (finger-sim's application): `pose` moves
 //! the outputs only when armed, through the checks of `volt` and `force`.
 
-use finger_fw::app::CmdError;
 use finger_fw::app::pose as inverse_cmds;
+use finger_fw::app::CmdError;
 
 use finger_model::{Finger, Method, Params};
 
@@ -60,7 +60,8 @@ fn pose_unreachable_or_refused_moves_nothing() {
     assert!(out.starts_with("err usage:"), "{out}");
     // the dispatcher's apply refuses (e.g. a force limit): its error is the reply
     out.clear();
-    let ok = inverse_cmds::pose(&mut out, &f, None, &[5.0, 5.0, 5.0], None, |_, _| Err(CmdError::new(finger_fw::app::ErrorCode::Limit, "force past fmax"))).unwrap();
+    let ok =
+        inverse_cmds::pose(&mut out, &f, None, &[5.0, 5.0, 5.0], None, |_, _| Err(CmdError::new(finger_fw::app::ErrorCode::Limit, "force past fmax"))).unwrap();
     assert!(!ok);
     assert_eq!(out, "err limit: force past fmax");
     // a negative tension
@@ -93,8 +94,8 @@ mod console {
     use finger_fw::sim::SimBoard;
     use finger_fw::App;
     use finger_model::Method;
-    use host_tests::sim_console::{cmd, frac_of, Out};
     use host_tests::console::ceiling;
+    use host_tests::sim_console::{cmd, frac_of, Out};
 
     fn outputs(a: &mut App<SimBoard>) -> String {
         let st = cmd(a, "status");
@@ -218,7 +219,13 @@ mod console {
         let v = frac_of(ceiling(&mut a), 0.3);
         let r = cmd(&mut a, &format!("contact 1 1.5 {v} {v} {v}"));
         assert!(r.starts_with("ok fx="), "{r}");
-        for (bad, code) in [("contact 1", "usage"), ("contact 1 2 3", "usage"), ("contact nan 1", "bad-number"), ("contact 1 1.5 20000 0 0", "limit"), ("contact -1 1", "usage")] {
+        for (bad, code) in [
+            ("contact 1", "usage"),
+            ("contact 1 2 3", "usage"),
+            ("contact nan 1", "bad-number"),
+            ("contact 1 1.5 20000 0 0", "limit"),
+            ("contact -1 1", "usage"),
+        ] {
             let r = cmd(&mut a, bad);
             assert!(r.starts_with(&format!("err {code}:")), "{bad} -> {r}");
         }

@@ -57,7 +57,7 @@ fn paths(text: &str, module: &[String]) -> Vec<Vec<String>> {
         for (start, base) in [("crate::", 0u8), ("super::", 1u8)] {
             let mut rest = line;
             while let Some(i) = rest.find(start) {
-                let boundary = rest[..i].chars().last().map_or(true, |c| !(c.is_ascii_alphanumeric() || c == '_' || c == '$'));
+                let boundary = rest[..i].chars().last().is_none_or(|c| !(c.is_ascii_alphanumeric() || c == '_' || c == '$'));
                 let after = &rest[i + start.len()..];
                 rest = after;
                 if !boundary {
@@ -131,7 +131,7 @@ fn graph_of(dir: &str, skip_tests: bool) -> (BTreeSet<Vec<String>>, BTreeMap<Vec
     for (m, text) in &files {
         for p in paths(text, m) {
             let common = m.iter().zip(&p).take_while(|(a, b)| a == b).count();
-            if common < m.len() && common < p.len() && modules.contains(&p[..=common].to_vec()) {
+            if common < m.len() && common < p.len() && modules.contains(&p[..=common]) {
                 edges.entry(m[..common].to_vec()).or_default().insert((m[common].clone(), p[common].clone()));
             }
         }
@@ -211,10 +211,8 @@ fn model_modules_import_without_a_cycle() {
 fn app_modules_import_only_those_declared_before_them() {
     // src/app.rs' header says so: its `mod` lines are in import order
     let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../src/app.rs")).unwrap();
-    let order: Vec<String> = text
-        .lines()
-        .filter_map(|l| l.trim().trim_start_matches("pub ").strip_prefix("mod ")?.strip_suffix(';').map(str::to_string))
-        .collect();
+    let order: Vec<String> =
+        text.lines().filter_map(|l| l.trim().trim_start_matches("pub ").strip_prefix("mod ")?.strip_suffix(';').map(str::to_string)).collect();
     assert!(order.len() >= 10, "{order:?}");
     let (_, edges) = graph();
     for (from, to) in &edges[&vec!["app".to_string()]] {
@@ -241,5 +239,8 @@ fn each_fault_has_its_console_text() {
     use finger_fw::control::Fault;
     // the console's words (docs/console.md `status` fault=), one per fault, in the enum's order
     let words: Vec<&str> = Fault::ALL.iter().map(|f| f.text()).collect();
-    assert_eq!(words, ["hv-refused", "pwm", "enable", "hv-model", "board card", "qemu image on a real chip", "breakdown", "hv-mismatch", "stack-open", "sensor", "leakage"]);
+    assert_eq!(
+        words,
+        ["hv-refused", "pwm", "enable", "hv-model", "board card", "qemu image on a real chip", "breakdown", "hv-mismatch", "stack-open", "sensor", "leakage"]
+    );
 }

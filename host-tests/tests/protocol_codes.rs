@@ -23,10 +23,12 @@ fn sources(dir: &Path, out: &mut Vec<(String, String)>) {
 
 /// The identifier after each `pat` in `text`.
 fn names_after<'a>(text: &'a str, pat: &str) -> Vec<&'a str> {
-    text.match_indices(pat).map(|(i, _)| {
-        let rest = &text[i + pat.len()..];
-        &rest[..rest.find(|c: char| !c.is_ascii_alphanumeric()).unwrap_or(rest.len())]
-    }).collect()
+    text.match_indices(pat)
+        .map(|(i, _)| {
+            let rest = &text[i + pat.len()..];
+            &rest[..rest.find(|c: char| !c.is_ascii_alphanumeric()).unwrap_or(rest.len())]
+        })
+        .collect()
 }
 
 #[test]
@@ -49,7 +51,14 @@ fn every_code_the_firmware_names_is_the_protocols_and_parses() {
     assert!(used.len() >= 10, "{used:?}");
     for c in ErrorCode::ALL {
         let line = format!("err {c}: message");
-        assert_eq!(Reply::parse(&line).map(|r| match r { Reply::Err { code, .. } => code.to_known(), _ => None }), Ok(Some(c)), "{line}");
+        assert_eq!(
+            Reply::parse(&line).map(|r| match r {
+                Reply::Err { code, .. } => code.to_known(),
+                _ => None,
+            }),
+            Ok(Some(c)),
+            "{line}"
+        );
     }
     // the model's errors' codes are among them (their table is exhaustive by construction)
     let e = finger_model::Error::Singular { what: "tangent" };
@@ -126,7 +135,28 @@ fn every_command_of_help_is_the_protocols() {
 #[test]
 fn every_reply_of_a_session_parses() {
     let mut a = app();
-    for line in ["help", "version", "status", "limits", "material", "solve 0.5 100 0 0", "shape 0.5 0 0 0", "pose 5 5 5", "contact 0.2 0.5", "param", "param l", "cal", "cal show", "arm", "volt all 100", "force 0.3", "wait 0.1", "status", "disarm", "stop"] {
+    for line in [
+        "help",
+        "version",
+        "status",
+        "limits",
+        "material",
+        "solve 0.5 100 0 0",
+        "shape 0.5 0 0 0",
+        "pose 5 5 5",
+        "contact 0.2 0.5",
+        "param",
+        "param l",
+        "cal",
+        "cal show",
+        "arm",
+        "volt all 100",
+        "force 0.3",
+        "wait 0.1",
+        "status",
+        "disarm",
+        "stop",
+    ] {
         let r = cmd(&mut a, line);
         let p = Reply::parse(&r).unwrap_or_else(|e| panic!("{line:?} -> {r:?}: {e}"));
         let mut back = String::new();

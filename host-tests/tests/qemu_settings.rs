@@ -6,10 +6,10 @@
 use finger_fw::app::config::record_of;
 use finger_fw::flash_ram::{F405_BASE, FORMATTED, PAGE, PAGES};
 use finger_fw::settings::{tag, ConfigStore, FlashStore, RECORD_MAX};
+use host_tests::console::ok;
 use host_tests::cut_flash::CutFlash;
 use host_tests::image::image;
 use host_tests::qemu::Qemu;
-use host_tests::console::ok;
 use host_tests::reply::val;
 
 const CAL: &str = "1.5 2 1 1.25 0.5 0 2 -0.25";

@@ -7,8 +7,8 @@
 //! command, `material`'s units, `factory`'s `store=empty`.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{cmd, feed};
 use host_tests::reply::{field, nums, val};
+use host_tests::sim_console::{cmd, feed};
 
 fn app() -> App<SimBoard> {
     App::new(SimBoard::default())
@@ -49,10 +49,7 @@ fn contact_below_p0_is_refused_as_a_pull_off() {
 fn joints_named(r: &str) -> Vec<i64> {
     ["joint ", "channel "]
         .iter()
-        .flat_map(|w| {
-            r.match_indices(w)
-                .filter_map(|(i, _)| r[i + w.len()..].split(|c: char| !c.is_ascii_digit()).next().and_then(|d| d.parse().ok()))
-        })
+        .flat_map(|w| r.match_indices(w).filter_map(|(i, _)| r[i + w.len()..].split(|c: char| !c.is_ascii_digit()).next().and_then(|d| d.parse().ok())))
         .collect()
 }
 

@@ -3,9 +3,9 @@
 //! (the single duty writer's ceiling and cap, the slew step, stale setpoints, the watchdog's
 //! check-in bound, stop) and the RX ring (overrun counts, a full ring, the `wait` input flag).
 use finger_fw::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V};
+use finger_fw::console::LINE_MAX;
 use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Setpoints, CHECKIN_BOUND_MS};
 use finger_fw::rx::{Record, RxEvent, RxLines, OVERRUN_RECORD, RX_RING};
-use finger_fw::console::LINE_MAX;
 use finger_fw::sim::SimBoard;
 
 const MAX: u16 = 8_400;

@@ -12,8 +12,8 @@ use finger_fw::settings::{tag, ConfigStore, FlashStore, FormatError, Record, Sto
 use finger_fw::sim::SimBoard;
 use finger_fw::{App, FwParams};
 use host_tests::cut_flash::CutFlash;
-use host_tests::sim_console::{cmd, feed_text};
 use host_tests::reply::val;
+use host_tests::sim_console::{cmd, feed_text};
 
 /// Small pages, so a few saves fill one and the map closes, migrates and erases pages.
 const PAGE: usize = 1024;
@@ -125,7 +125,7 @@ fn saved_settings_survive_a_reset_and_factory_erases() {
     let c = cmd(&mut b, "config");
     assert!(c.starts_with("ok store=saved saves=1 boot=loaded fault=none format=1"), "{c}");
     assert_eq!(val(&c, "differ"), "10", "{c}"); // slew, servo_range, the 8 factors
-    // each stored value under its own name
+                                                // each stored value under its own name
     let full = feed_text(&mut b, b"config\n");
     let mut names: Vec<&str> = full.lines().filter_map(|l| l.strip_prefix("stored ")?.split('=').next()).collect();
     names.sort_unstable();
@@ -144,7 +144,7 @@ fn saved_settings_survive_a_reset_and_factory_erases() {
 /// bytes (None: no cut). The save's reply.
 fn save_with_cut(flash: &Flash, script: &[&str], cut: Option<(u64, u8)>) -> String {
     let mut a = boot(flash);
-    assert_eq!(a.config_boot() == Boot::Loaded || a.config_boot() == Boot::Empty, true, "{:?}", a.config_boot());
+    assert!(a.config_boot() == Boot::Loaded || a.config_boot() == Boot::Empty, "{:?}", a.config_boot());
     // from the compiled defaults (the preset brings their calibration) to the script's
     let _ = cmd(&mut a, "preset default");
     for (k, v) in [("slew", 2000.0), ("spool_r", 10.0), ("servo_range", 180.0), ("servo_dir", 1.0)] {
@@ -162,10 +162,13 @@ fn save_with_cut(flash: &Flash, script: &[&str], cut: Option<(u64, u8)>) -> Stri
 #[test]
 fn a_cut_at_every_byte_of_a_save_leaves_the_old_or_the_new_settings() {
     let flash = Flash::new(PAGES);
-    let want: Vec<(Vec<(u16, u32)>, String)> = SCRIPTS.iter().map(|s| {
-        let mut a = typed(s);
-        (settings(&a), transcript(&mut a))
-    }).collect();
+    let want: Vec<(Vec<(u16, u32)>, String)> = SCRIPTS
+        .iter()
+        .map(|s| {
+            let mut a = typed(s);
+            (settings(&a), transcript(&mut a))
+        })
+        .collect();
     let mut old = 0; // the settings stored now (0: none, the defaults)
     let mut offsets = 0;
     let mut outcomes = [0usize; 2];
@@ -188,7 +191,13 @@ fn a_cut_at_every_byte_of_a_save_leaves_the_old_or_the_new_settings() {
             let first = old == 0 && matches!(b.config_boot(), Boot::Empty | Boot::Rejected(Reject::Store(StoreError::Corrupted)));
             assert!(b.config_boot() == Boot::Loaded || first, "step {step} cut at {k}: {:?}", b.config_boot());
             let got = settings(&b);
-            let which = if got == want[old].0 { 0 } else if got == want[new].0 { 1 } else { panic!("step {step} cut at {k}/{total}: a mix") };
+            let which = if got == want[old].0 {
+                0
+            } else if got == want[new].0 {
+                1
+            } else {
+                panic!("step {step} cut at {k}/{total}: a mix")
+            };
             if !seen[which] {
                 // the board answers as one given those settings at the console
                 assert_eq!(transcript_but_fault(&mut b), want[[old, new][which]].1, "step {step} cut at {k}");
@@ -211,10 +220,14 @@ fn a_cut_at_every_byte_of_a_save_leaves_the_old_or_the_new_settings() {
 
 /// The records of the scripts' settings, numbered.
 fn records() -> Vec<Record> {
-    SCRIPTS.iter().enumerate().map(|(i, s)| {
-        let a = typed(s);
-        record_of(a.finger(), a.fw_params(), 100 + i as u32)
-    }).collect()
+    SCRIPTS
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let a = typed(s);
+            record_of(a.finger(), a.fw_params(), 100 + i as u32)
+        })
+        .collect()
 }
 
 fn encode(r: &Record) -> Vec<u8> {
@@ -282,7 +295,10 @@ fn random_sequences_of_saves_with_random_cuts_leave_old_or_new() {
             r => r.unwrap_or_else(|e| panic!("sequence {seq}: unreadable after a cut: {e}")),
         };
         let which = got.as_ref().map(|r| recs.iter().position(|x| x == r).unwrap_or_else(|| panic!("sequence {seq}: a record never saved: {r:?}")));
-        assert!(which == committed || (in_flight.is_some() && which == in_flight), "sequence {seq}: read {which:?}, committed {committed:?}, in flight {in_flight:?}");
+        assert!(
+            which == committed || (in_flight.is_some() && which == in_flight),
+            "sequence {seq}: read {which:?}, committed {committed:?}, in flight {in_flight:?}"
+        );
         // stable: the next boot reads the same
         assert_eq!(read_back(&flash).ok().flatten(), got, "sequence {seq}");
         committed = which;
@@ -343,12 +359,31 @@ fn records_with_a_valid_checksum_and_bad_values_are_refused_whole() {
         ("2a >= l", forged(&[], |r| set(r, b'p', "a", 20.0)), Reject::Param("a")),
         ("a calibration factor of 100", forged(&[], |r| set(r, b'c', "h1", 100.0)), Reject::Calibration),
         ("preset 7", forged(&[], |r| r.preset = 7), Reject::Preset(7)),
-        ("an unknown value", forged(&[], |r| { r.values.push((0xBEEF, 1.0)).unwrap(); }), Reject::Unknown(0xBEEF)),
-        ("a repeated value", forged(&[], |r| { let v = r.values[0]; r.values.push(v).unwrap(); }), Reject::Duplicate(tag(b'p', "n"))),
+        (
+            "an unknown value",
+            forged(&[], |r| {
+                r.values.push((0xBEEF, 1.0)).unwrap();
+            }),
+            Reject::Unknown(0xBEEF),
+        ),
+        (
+            "a repeated value",
+            forged(&[], |r| {
+                let v = r.values[0];
+                r.values.push(v).unwrap();
+            }),
+            Reject::Duplicate(tag(b'p', "n")),
+        ),
         ("half a calibration", forged(&[], |r| r.values.retain(|v| v.0 != tag(b'c', "ei1"))), Reject::Calibration),
         // (the board's film's hold ceiling binds, not the supply: a higher margin raises it)
         ("a raised ceiling (margin 0.99)", forged(&[], |r| set(r, b'p', "margin", 0.99)), Reject::Ceiling),
-        ("a board constant (hv_fs)", forged(&[], |r| { r.values.push((tag(b'f', "hv_fs"), 20_000.0)).unwrap(); }), Reject::BoardConstant("hv_fs")),
+        (
+            "a board constant (hv_fs)",
+            forged(&[], |r| {
+                r.values.push((tag(b'f', "hv_fs"), 20_000.0)).unwrap();
+            }),
+            Reject::BoardConstant("hv_fs"),
+        ),
     ];
     for (why, bytes, reject) in cases {
         let a = boot_on_record(&bytes);

@@ -3,10 +3,10 @@
 //! sub-elements (the model's posture, docs/model.md "Equilibrium"), the tip as `solve`'s.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use host_tests::sim_console::{feed, frac_of};
+use finger_model::{Calibration, Finger, Method, Params, Pose};
 use host_tests::console::ceiling;
 use host_tests::reply::{nums, val};
-use finger_model::{Calibration, Finger, Method, Params, Pose};
+use host_tests::sim_console::{feed, frac_of};
 
 /// One command line: its reply, which must be the only line.
 fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
@@ -14,7 +14,6 @@ fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
     assert_eq!(lines.len(), 1, "{line:?} -> {lines:?}");
     lines[0].clone()
 }
-
 
 #[test]
 fn shape_reports_the_poses_of_the_solve() {

@@ -6,9 +6,9 @@
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
 use finger_model::Method;
-use host_tests::sim_console::{cmd, frac_of};
 use host_tests::console::ceiling;
 use host_tests::reply::{nums, val};
+use host_tests::sim_console::{cmd, frac_of};
 
 /// `solve P V1 V2 V3` against the app's finger's full solve: joints (3 decimals, degrees) and
 /// tip (3 decimals, mm) within a unit of the last digit; returns `iters`.

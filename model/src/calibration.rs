@@ -58,11 +58,7 @@ impl<R: Real> Calibration<R> {
     /// line).
     pub fn elastosil_2030() -> Self {
         let f = R::from_f64;
-        Calibration {
-            stack_axial: [f(0.744127), f(0.043434)],
-            stack_bending: [f(5.298853), f(-1.838570)],
-            ..Self::model_md()
-        }
+        Calibration { stack_axial: [f(0.744127), f(0.043434)], stack_bending: [f(5.298853), f(-1.838570)], ..Self::model_md() }
     }
 
     /// The calibration that belongs to a parameter set: [`Calibration::model_md`] for the default

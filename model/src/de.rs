@@ -12,8 +12,8 @@
 //! What it is not: the law in time (`material`: the firmware's per-tick state), the joint
 //! assembly (`finger`).
 
-use crate::error::Error;
 use crate::calibration::Calibration;
+use crate::error::Error;
 use crate::mat3::{self, Mat3};
 use crate::material::{self, StackLaw, LIMIT_RATIO};
 use crate::params::Params;
@@ -114,7 +114,7 @@ impl<R: Real> Stack<R> {
             (_, 0) | (Err(_), _) => R::zero(),
             (Ok(l), _) => material::hold_ceiling(l, l.margin).min(p.v_supply),
         };
-        Stack { t0: R::from_u32(p.layers as u32) * p.z0, law, ceiling }
+        Stack { t0: R::from_u32(p.layers) * p.z0, law, ceiling }
     }
 
     /// The ceiling (`voltage_ceiling`), V.
@@ -147,11 +147,7 @@ impl<R: Real> Stack<R> {
         let s = thickness_mm / t0;
         let limit = R::from_f64(LIMIT_RATIO);
         if s <= limit {
-            return Err(Error::ThicknessLimit {
-                joint,
-                requested_mm: thickness_mm.to_f64(),
-                limit_mm: (t0 * limit).to_f64(),
-            });
+            return Err(Error::ThicknessLimit { joint, requested_mm: thickness_mm.to_f64(), limit_mm: (t0 * limit).to_f64() });
         }
         let v = material::equilibrium_voltage(law, s)?;
         check_below(joint, v, self.ceiling)?;
@@ -294,5 +290,4 @@ mod tests {
         }
         assert!(matches!(voltage_for_thickness(&p, 1, 0.5 * t0), Err(Error::ThicknessLimit { .. })));
     }
-
 }

@@ -48,10 +48,7 @@ impl<R: Real> Mul for D<R> {
     type Output = Self;
     #[inline(always)]
     fn mul(self, o: Self) -> Self {
-        D {
-            v: self.v * o.v,
-            d: [self.v * o.d[0] + self.d[0] * o.v, self.v * o.d[1] + self.d[1] * o.v],
-        }
+        D { v: self.v * o.v, d: [self.v * o.d[0] + self.d[0] * o.v, self.v * o.d[1] + self.d[1] * o.v] }
     }
 }
 impl<R: Real> Div for D<R> {
@@ -171,4 +168,3 @@ impl<R: Real> Real for D<R> {
         D { v: c, d: [self.d[0] * k, self.d[1] * k] }
     }
 }
-

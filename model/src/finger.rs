@@ -15,11 +15,11 @@
 //!
 //! The sub-element state and the solver's unknowns: docs/model.md "Finger solver layout".
 
+use crate::calibration::Calibration;
 use crate::error::Error;
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
-use crate::calibration::Calibration;
 use crate::{de, hinge};
 
 mod branch_end;
@@ -39,9 +39,9 @@ mod types;
 
 pub use prepare::uniform_beam_compliance;
 pub use stiffness::JointStiffness;
-pub(crate) use types::{By, JointMarch};
 use types::cast_mat;
 pub use types::{BranchEnd, BranchLimit, Compliances, JointEquilibrium, Method, Pose, Solution};
+pub(crate) use types::{By, JointMarch};
 
 use crate::solve::continuation::{self, Step};
 use crate::solve::newton::{self as newton_solve, Equations};
@@ -106,7 +106,6 @@ fn norm2<R: Real>(v: [R; 2]) -> R {
     (v[0] * v[0] + v[1] * v[1]).sqrt()
 }
 
-
 impl<R: Real> Finger<R> {
     /// Solve under cable tension alone (N) with one voltage per joint (V).
     ///
@@ -121,26 +120,14 @@ impl<R: Real> Finger<R> {
 
     /// Solve with an external tip force too (N, base frame): the joints couple.
     #[inline(always)]
-    pub fn solve_loaded(
-        &self,
-        tension: R,
-        volts: &[R],
-        tip_force: [R; 2],
-        method: Method<R>,
-    ) -> Result<Solution<R>, Error> {
+    pub fn solve_loaded(&self, tension: R, volts: &[R], tip_force: [R; 2], method: Method<R>) -> Result<Solution<R>, Error> {
         let c = self.compliances(volts)?;
         self.solve_with(&c, tension, tip_force, method)
     }
 
     /// Solve with precomputed compliances (see `compliances`).
     #[inline(always)]
-    pub fn solve_with(
-        &self,
-        c: &Compliances<R>,
-        tension: R,
-        tip_force: [R; 2],
-        method: Method<R>,
-    ) -> Result<Solution<R>, Error> {
+    pub fn solve_with(&self, c: &Compliances<R>, tension: R, tip_force: [R; 2], method: Method<R>) -> Result<Solution<R>, Error> {
         match method {
             Method::Stepping { n_inc } => self.solve_stepping(c, tension, tip_force, n_inc),
             Method::Converged { tol, max_iter } => self.solve_converged(c, tension, tip_force, tol, max_iter),
@@ -186,12 +173,7 @@ impl<R: Real> Finger<R> {
 
     fn straight(&self) -> JointState<R> {
         let lh = self.p.hinge_len();
-        JointState {
-            q: [[R::zero(); 3]; MAX_SUB],
-            end: Pose { x: lh, y: R::zero(), theta: R::zero() },
-            hole: [lh, self.p.e],
-            tangent: None,
-        }
+        JointState { q: [[R::zero(); 3]; MAX_SUB], end: Pose { x: lh, y: R::zero(), theta: R::zero() }, hole: [lh, self.p.e], tangent: None }
     }
 
     /// The finest hole-position residual the scalar type can resolve, mm (crate-visible).

@@ -17,8 +17,8 @@ use crate::real::Real;
 
 /// Gauss-Legendre, 8 nodes on [-1, 1]: (node, weight), the positive half.
 const GL8: [(f64, f64); 4] = [
-    (0.183_434_642_495_649_8, 0.362_683_783_378_362_0),
-    (0.525_532_409_916_329_0, 0.313_706_645_877_887_3),
+    (0.183_434_642_495_649_8, 0.362_683_783_378_362),
+    (0.525_532_409_916_329, 0.313_706_645_877_887_3),
     (0.796_666_477_413_626_7, 0.222_381_034_453_374_5),
     (0.960_289_856_497_536_3, 0.101_228_536_290_376_3),
 ];
@@ -51,14 +51,14 @@ pub fn stretch_compliance<R: Real>(b: R, t_min: R, a: R, e: R, w: R, x0: R, x1: 
     let span = p1 - p0;
     // panels of at most 0.2 rad, at least 2
     let mut panels = 2u32;
-    while R::from_u32(panels as u32) * R::from_f64(0.2) < span && panels < 64 {
+    while R::from_u32(panels) * R::from_f64(0.2) < span && panels < 64 {
         panels += 1;
     }
-    let h = span / R::from_u32(panels as u32);
+    let h = span / R::from_u32(panels);
     let twelve = R::from_f64(12.0);
     let (mut cx, mut cyy, mut cym, mut cmm) = (R::zero(), R::zero(), R::zero(), R::zero());
     for p in 0..panels {
-        let mid = p0 + h * (R::from_u32(p as u32) + R::from_f64(0.5));
+        let mid = p0 + h * (R::from_u32(p) + R::from_f64(0.5));
         for &(node, weight) in GL8.iter() {
             // half the node and weight (exact in binary); the pair ±node, in R (no f64
             // arithmetic at run time)

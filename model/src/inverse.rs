@@ -339,12 +339,7 @@ pub fn solve_pose<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>) -> R
 }
 
 /// Inverse model with explicit options (see the module documentation for the algorithm).
-pub fn solve_pose_with<R: Real>(
-    f: &Finger<R>,
-    angles: &[R],
-    tension: Option<R>,
-    opts: &Options<R>,
-) -> Result<PoseSolution<R>, Error> {
+pub fn solve_pose_with<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>, opts: &Options<R>) -> Result<PoseSolution<R>, Error> {
     solve(f, Table::None, angles, tension, opts)
 }
 
@@ -445,13 +440,7 @@ impl<'t, R> Table<'t, R> {
 /// `solve_pose_with` and `solve_pose_tabled` (`table`: see `Table`). One copy in the image
 /// for both entry points.
 #[inline(never)]
-fn solve<R: Real>(
-    f: &Finger<R>,
-    table: Table<'_, R>,
-    angles: &[R],
-    tension: Option<R>,
-    opts: &Options<R>,
-) -> Result<PoseSolution<R>, Error> {
+fn solve<R: Real>(f: &Finger<R>, table: Table<'_, R>, angles: &[R], tension: Option<R>, opts: &Options<R>) -> Result<PoseSolution<R>, Error> {
     check_inputs(f, angles, tension, Some(opts))?;
     let p = f.params();
     let n = p.n;
@@ -518,7 +507,7 @@ fn fast<R: Real>(
     let n = out.n;
 
     // 1. every joint's tension range: stiffest stack (0 V) and softest (top voltage)
-    let t0 = R::from_u32(p.layers as u32) * p.z0;
+    let t0 = R::from_u32(p.layers) * p.z0;
     let v_top = f.ceiling_in_force(opts.hv_fs) * opts.top;
     let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
     let mut hi = [ctx.hold_tension(1, &ang[0], t0, [R::zero(); 2])?; MAX_JOINTS];
@@ -554,12 +543,7 @@ fn fast<R: Real>(
     if let Some(k) = worst {
         // the range the ceiling allows, whichever end is the more compliant
         let (c_hi, c_lo) = (ctx.compliance(&ang[k], hi[k].tension, hi[k].wm, t0), ctx.compliance(&ang[k], lo[k].tension, lo[k].wm, t_top));
-        return Err(Error::Unreachable {
-            joint: k + 1,
-            needed: ctx.compliance(&ang[k], pt, hi[k].wm, t0),
-            min: c_hi.min(c_lo),
-            max: c_hi.max(c_lo),
-        });
+        return Err(Error::Unreachable { joint: k + 1, needed: ctx.compliance(&ang[k], pt, hi[k].wm, t0), min: c_hi.min(c_lo), max: c_hi.max(c_lo) });
     }
     out.tension = pt;
     // 4. every joint's thickness at that tension, then its voltage. At zero tension (every
@@ -579,11 +563,7 @@ fn fast<R: Real>(
         let span = hi[k].tension - lo[k].tension;
         let frac = if span != R::zero() { ((pt - lo[k].tension) / span).max(R::zero()).min(R::one()) } else { R::one() };
         let lerp = |a: R, b: R| a + (b - a) * frac;
-        let guess = Hold {
-            delta: [lerp(lo[k].delta[0], hi[k].delta[0]), lerp(lo[k].delta[1], hi[k].delta[1])],
-            thickness: lerp(t_top, t0),
-            ..hi[k]
-        };
+        let guess = Hold { delta: [lerp(lo[k].delta[0], hi[k].delta[0]), lerp(lo[k].delta[1], hi[k].delta[1])], thickness: lerp(t_top, t0), ..hi[k] };
         let h = ctx.hold_thickness(k + 1, &ang[k], pt, guess)?;
         out.iterations += h.iters;
         let t = h.thickness.max(t_top).min(t0);
@@ -665,7 +645,7 @@ fn one_tension<R: Real>(p: &[R], w: &[R], given: Option<R>, tol: R) -> ([R; 2], 
     let mut worst: Option<(usize, R)> = None;
     for k in 0..n {
         let err = (pt - p[k]).abs() * w[k];
-        if err > tol * R::from_f64(1.001) && worst.map_or(true, |(_, e)| err > e) {
+        if err > tol * R::from_f64(1.001) && worst.is_none_or(|(_, e)| err > e) {
             worst = Some((k, err));
         }
     }
@@ -703,7 +683,7 @@ fn choose_tension<R: Real>(ends: &[[R; 2]], given: Option<R>, refuse: Option<usi
     let mut worst: Option<(usize, R)> = None;
     for (k, e) in ends.iter().enumerate() {
         let v = (range(e).0 - pt).max(pt - range(e).1);
-        if v > slack && worst.map_or(true, |(_, w)| v > w) {
+        if v > slack && worst.is_none_or(|(_, w)| v > w) {
             worst = Some((k, v));
         }
     }

@@ -49,8 +49,7 @@ pub fn transpose<R: Real>(a: &Mat3<R>) -> Mat3<R> {
 }
 
 pub fn det<R: Real>(m: &Mat3<R>) -> R {
-    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
 /// The symmetric matrix with upper triangle (m00, m01, m02, m11, m12, m22).
@@ -157,10 +156,8 @@ mod tests {
     #[test]
     fn inverse_spd_matches_the_scaled_inverse() {
         // a stiffness-like matrix (axial decades above bending, coupled) and a compliance
-        let ms: [Mat3<f64>; 2] = [
-            [[2.0e4, 0.0, 150.0], [0.0, 30.0, -40.0], [150.0, -40.0, 300.0]],
-            [[1.0e-4, 2.0e-6, 3.0e-5], [2.0e-6, 0.5, 0.02], [3.0e-5, 0.02, 0.004]],
-        ];
+        let ms: [Mat3<f64>; 2] =
+            [[[2.0e4, 0.0, 150.0], [0.0, 30.0, -40.0], [150.0, -40.0, 300.0]], [[1.0e-4, 2.0e-6, 3.0e-5], [2.0e-6, 0.5, 0.02], [3.0e-5, 0.02, 0.004]]];
         for m in ms {
             let a = inverse_spd(&m).unwrap();
             let b = inverse(&m).unwrap();

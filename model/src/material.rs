@@ -14,8 +14,8 @@
 //! (`cards`), the fine-step reference (`reference`), the stack as a beam (`de`).
 
 pub mod cards;
-pub mod reference;
 pub mod drive;
+pub mod reference;
 
 pub use cards::{CARDS, ELASTOSIL_2030, PAPER_ELASTIC, VHB_4905};
 
@@ -602,11 +602,7 @@ mod tests {
 
     fn round_trip<R: Real>(tol: f64) {
         let law = vhb::<R>();
-        let states = [
-            [R::one(); MAX_BRANCHES],
-            [R::from_f64(1.05), R::from_f64(1.1), R::from_f64(1.02)],
-            [R::from_f64(1.2); MAX_BRANCHES],
-        ];
+        let states = [[R::one(); MAX_BRANCHES], [R::from_f64(1.05), R::from_f64(1.1), R::from_f64(1.02)], [R::from_f64(1.2); MAX_BRANCHES]];
         for a in &states {
             let s_pi = pull_in_ratio(&law, a).to_f64();
             let mut s = 0.999;

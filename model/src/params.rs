@@ -300,10 +300,7 @@ impl<R: Real> Params<R> {
     /// Set a parameter by its console name. The whole set is validated; on error nothing
     /// changes.
     pub fn set(&mut self, name: &str, value: f64) -> Result<(), Error> {
-        let info = PARAMS
-            .iter()
-            .find(|p| p.name == name)
-            .ok_or(Error::Input { input: "parameter", reason: "unknown parameter name" })?;
+        let info = PARAMS.iter().find(|p| p.name == name).ok_or(Error::Input { input: "parameter", reason: "unknown parameter name" })?;
         if !value.is_finite() {
             return Err(Error::NonFinite { input: info.name });
         }

@@ -349,7 +349,10 @@ mod fast_trig {
         let kf = k as f32;
         // pi/2 = P1 + P2 + P3, P1 and P2 with few significant bits so k·P1, k·P2 are exact
         const P1: f32 = 1.5703125;
+        // the exact binary values, digit for digit
+        #[allow(clippy::excessive_precision)]
         const P2: f32 = 4.837512969970703125e-4;
+        #[allow(clippy::excessive_precision)]
         const P3: f32 = 7.549_789_954_891_882e-8;
         let r = ((x - kf * P1) - kf * P2) - kf * P3;
         let z = r * r;
@@ -378,7 +381,7 @@ mod fast_trig {
     fn matches_f64_sine_and_cosine() {
         let mut x = -12000.0f32;
         while x < 12000.0 {
-            for d in [0.0f32, 0.123, 0.785, 1.5707964, 3.1415927] {
+            for d in [0.0f32, 0.123, 0.785, core::f32::consts::FRAC_PI_2, core::f32::consts::PI] {
                 let v = x + d;
                 let (s, c) = sin_cos(v);
                 let (s64, c64) = libm::sincos(v as f64);

@@ -37,7 +37,11 @@ fn contact_grid_on_the_default_finger_answers_or_refuses_and_every_answer_holds_
                         let sol = &c.solution;
                         let on = ((sol.tip().x - c.point[0]).powi(2) + (sol.tip().y - c.point[1]).powi(2)).sqrt();
                         let fwd = f.equilibrium_residual(sol).unwrap();
-                        assert!(sol.residual < 1e-7 && fwd < 1e-7 * 81.0 && on < 1e-6, "P0={p0} P={p} V={v:?}: residual {:.2e} (afresh {fwd:.2e}), tip {on:.2e} mm off", sol.residual);
+                        assert!(
+                            sol.residual < 1e-7 && fwd < 1e-7 * 81.0 && on < 1e-6,
+                            "P0={p0} P={p} V={v:?}: residual {:.2e} (afresh {fwd:.2e}), tip {on:.2e} mm off",
+                            sol.residual
+                        );
                         worst_fwd = worst_fwd.max(fwd);
                         // a forward solve with that tip load by load continuation from the straight
                         // finger: the same equilibrium where the loaded branch is unique (a large

@@ -50,11 +50,7 @@ fn round_trip_over<R: Real>(f: &Finger<R>, postures: Vec<(f64, [f64; 3], Vec<R>)
             // the tension the grid posture was made with lies in the interval
             // (to the forward solve's precision: f32 postures carry ~1e-6 relative error)
             let rt = 1e-6_f64.max(1000.0 * R::EPS);
-            assert!(
-                s.interval[0].to_f64() <= p * (1.0 + rt) && p <= s.interval[1].to_f64() * (1.0 + rt),
-                "P={p} outside {:?}",
-                s.interval
-            );
+            assert!(s.interval[0].to_f64() <= p * (1.0 + rt) && p <= s.interval[1].to_f64() * (1.0 + rt), "P={p} outside {:?}", s.interval);
             let ceil = f.voltage_ceiling();
             for k in 0..3 {
                 assert!(s.volts[k] >= R::zero() && s.volts[k] < ceil, "voltage {:?} vs ceiling {ceil:?}", s.volts[k]);
@@ -622,7 +618,9 @@ fn tabled_is_a_converged_solve<R: Real>(f: &Finger<R>, tensions: &[f64], tol_v: 
 #[test]
 fn tabled_inverse_is_a_converged_solve_f64() {
     let (hi, lo) = (&[0.2, 1.0, 4.0, 12.0][..], &[0.2, 1.0, 4.0][..]);
-    for (params, tensions) in [(Params::<f64>::default(), hi), (Params { m: 4, ..Params::<f64>::paper() }, lo), (Params { flex_links: true, ..Params::<f64>::paper() }, lo)] {
+    for (params, tensions) in
+        [(Params::<f64>::default(), hi), (Params { m: 4, ..Params::<f64>::paper() }, lo), (Params { flex_links: true, ..Params::<f64>::paper() }, lo)]
+    {
         let f = Finger::new(params).unwrap();
         let n = tabled_is_a_converged_solve(&f, tensions, 1e-8, 1e-9, 1e-9);
         assert!(n > 80 * tensions.len(), "{}: {n} answers", label(&params));

@@ -1,9 +1,7 @@
 //! The film's law in time (model/src/material.rs) against its f64 reference, and the guard of
 //! the control tick under random voltage histories (docs/materials.md).
 
-use finger_model::material::{
-    equilibrium_ratio, hold_ratio, reference::advance_reference, Relaxation, StackLaw, StackState, LIMIT_RATIO, VHB_4905,
-};
+use finger_model::material::{equilibrium_ratio, hold_ratio, reference::advance_reference, Relaxation, StackLaw, StackState, LIMIT_RATIO, VHB_4905};
 use finger_model_testkit::material::{guarded_history, Rng};
 
 /// Run the f32 per-tick law (1 ms ticks, exponential relaxation) and the f64 reference on the

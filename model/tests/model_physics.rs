@@ -286,8 +286,7 @@ fn load_stepping_converges_at_first_order() {
     let xs: Vec<f64> = ns.iter().map(|&n| (n as f64).ln()).collect();
     let ys: Vec<f64> = errs.iter().map(|e| e.ln()).collect();
     let (mx, my) = (xs.iter().sum::<f64>() / xs.len() as f64, ys.iter().sum::<f64>() / ys.len() as f64);
-    let slope = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
-        / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
+    let slope = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>() / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
     println!("stepping tip error vs n_inc: {errs:?}, slope {slope:.3}");
     assert!((slope + 1.0).abs() < 0.05, "expected first order, slope {slope}");
 }

@@ -19,23 +19,7 @@ fn params() -> impl Strategy<Value = Params<f64>> {
             // E_b log-uniform in [1, 3500] MPa
             let e_b = 10f64.powf(e_b_u * 3500f64.log10());
             let base = if paper { Params::paper() } else { Params::default() };
-            Params {
-                n,
-                m,
-                b,
-                t_min: tmin_frac * b,
-                a,
-                l: 2.0 * a + gap,
-                e: e_frac * b / 2.0,
-                w,
-                e_b,
-                plate,
-                layers,
-                z0,
-                nu,
-                span_floor: 0.01 * a,
-                ..base
-            }
+            Params { n, m, b, t_min: tmin_frac * b, a, l: 2.0 * a + gap, e: e_frac * b / 2.0, w, e_b, plate, layers, z0, nu, span_floor: 0.01 * a, ..base }
         })
 }
 

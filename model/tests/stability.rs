@@ -198,17 +198,7 @@ fn extreme_params() -> Vec<Params<f64>> {
         span_floor: 2e-6,
         ..Params::default()
     };
-    let huge = Params::<f64> {
-        l: 1e4,
-        b: 1e4,
-        w: 1e4,
-        t_min: 100.0,
-        a: 4000.0,
-        e: 5000.0,
-        z0: 100.0,
-        span_floor: 1.0,
-        ..Params::default()
-    };
+    let huge = Params::<f64> { l: 1e4, b: 1e4, w: 1e4, t_min: 100.0, a: 4000.0, e: 5000.0, z0: 100.0, span_floor: 1.0, ..Params::default() };
     let mut v = vec![tiny, huge, tiny.without_stacks(), huge.without_stacks()];
     v.push(Params { e_b: 1e-3, ..Params::default() });
     v.push(Params { e_b: 1e6, ..Params::default() });

@@ -14,11 +14,7 @@ fn calibration<R: Real>() -> Calibration<R> {
 fn fingers<R: Real>() -> Vec<(&'static str, Finger<R>)> {
     let d = Params::<R>::default();
     let paper = Params::<R> { m: 1, plate: false, flex_links: false, ..Params::default() };
-    vec![
-        ("default", Finger::new(d).unwrap()),
-        ("calibrated", Finger::with_calibration(d, calibration()).unwrap()),
-        ("paper-m1", Finger::new(paper).unwrap()),
-    ]
+    vec![("default", Finger::new(d).unwrap()), ("calibrated", Finger::with_calibration(d, calibration()).unwrap()), ("paper-m1", Finger::new(paper).unwrap())]
 }
 
 fn tip_err<A: Real, B: Real>(a: &Solution<A>, b: &Solution<B>) -> f64 {
@@ -112,7 +108,6 @@ fn tabled_fmax_is_fmax() {
     }
 }
 
-
 /// In f32 (the firmware), fmax from the table is the f64 fmax (1e-3 relative) for every model,
 /// a tiny span floor and uniform and mixed voltages.
 #[test]
@@ -186,7 +181,14 @@ fn solve_into_reused_storage_is_a_fresh_solve() {
     big_table.solve_into(&big.compliances(&[4000.0; 5]).unwrap(), 2.0, &mut sol).unwrap();
     assert_eq!(sol.n, 5);
     let top = f.voltage_ceiling() * 0.99;
-    let cases = [(1.0, [0.9 * top, 0.5 * top, 0.0]), (7.0, [0.0; 3]), (1.0, [top; 3]), (15.0, [0.2 * top, 0.6 * top, 0.9 * top]), (1e9, [0.0; 3]), (0.5, [0.3 * top, 0.3 * top, 0.8 * top])];
+    let cases = [
+        (1.0, [0.9 * top, 0.5 * top, 0.0]),
+        (7.0, [0.0; 3]),
+        (1.0, [top; 3]),
+        (15.0, [0.2 * top, 0.6 * top, 0.9 * top]),
+        (1e9, [0.0; 3]),
+        (0.5, [0.3 * top, 0.3 * top, 0.8 * top]),
+    ];
     for (p, v) in cases {
         let c = f.compliances(&v).unwrap();
         let fresh = table.solve(p, &v);

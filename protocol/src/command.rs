@@ -35,7 +35,10 @@ pub enum Command {
 }
 
 /// Each command's word, in the order of the enum.
-const NAMES: [&str; 23] = ["help", "version", "status", "limits", "material", "solve", "shape", "arm", "disarm", "stop", "timing", "volt", "force", "pose", "contact", "plant", "param", "preset", "cal", "save", "factory", "config", "wait"];
+const NAMES: [&str; 23] = [
+    "help", "version", "status", "limits", "material", "solve", "shape", "arm", "disarm", "stop", "timing", "volt", "force", "pose", "contact", "plant",
+    "param", "preset", "cal", "save", "factory", "config", "wait",
+];
 
 /// `NAMES` end to end and where each ends: what the image holds (one string and a byte per
 /// command: the Cortex-M3 image's flash). The build checks it is `NAMES`.

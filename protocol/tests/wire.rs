@@ -51,7 +51,8 @@ fn an_unknown_code_is_kept() {
 
 #[test]
 fn an_ok_line_reads_typed_and_emits_back() {
-    let line = "ok armed=1 force=0.5000 volts=1.0,2.0,3.0 thick_meas=1.9950,-,- settle=- fault=none fmax_end=contact,2 units=force:N,volts:V version=0.1.0 l=30";
+    let line =
+        "ok armed=1 force=0.5000 volts=1.0,2.0,3.0 thick_meas=1.9950,-,- settle=- fault=none fmax_end=contact,2 units=force:N,volts:V version=0.1.0 l=30";
     let Reply::Ok(f) = Reply::parse(line).unwrap() else { panic!() };
     assert_eq!(f.check(), Ok(()));
     assert_eq!(f.get("armed"), Some(Value::Number(1.0)));
@@ -115,7 +116,14 @@ fn what_is_not_a_reply() {
     assert_eq!(f.check(), Ok(()));
     // fields of a line that is not a final one
     assert_eq!(Fields::new("params=22 slew=1000").text("slew"), Some("1000"));
-    assert_eq!(List::items(&match Value::of_syntax("1,-,x") { Value::List(l) => l, _ => panic!() }).collect::<Vec<_>>(), [Item::Number(1.0), Item::Missing, Item::Word("x")]);
+    assert_eq!(
+        List::items(&match Value::of_syntax("1,-,x") {
+            Value::List(l) => l,
+            _ => panic!(),
+        })
+        .collect::<Vec<_>>(),
+        [Item::Number(1.0), Item::Missing, Item::Word("x")]
+    );
 }
 
 #[test]

@@ -20,8 +20,21 @@ use rayon::prelude::*;
 type R = f64;
 
 /// The model's refusals by kind, as `evaluate_designs` codes them (0: solved).
-pub const ERROR_KINDS: [&str; 13] =
-    ["", "Param", "NonFinite", "Input", "VoltageCeiling", "ThicknessLimit", "PullIn", "Contact", "LimitPoint", "ForceLimit", "NotConverged", "Singular", "Unreachable"];
+pub const ERROR_KINDS: [&str; 13] = [
+    "",
+    "Param",
+    "NonFinite",
+    "Input",
+    "VoltageCeiling",
+    "ThicknessLimit",
+    "PullIn",
+    "Contact",
+    "LimitPoint",
+    "ForceLimit",
+    "NotConverged",
+    "Singular",
+    "Unreachable",
+];
 
 /// Which step refused (0: none).
 pub const STAGES: [&str; 6] = ["", "params", "pose", "range", "fmax", "grip"];
@@ -87,7 +100,7 @@ fn evaluate(base: &Params<R>, c: &Candidate, angles: &[R], grip: bool) -> Eval {
             "v_supply" => &mut p.v_supply,
             "margin" => &mut p.margin,
             _ => {
-                if !(v >= 0.0 && v <= 64.0 && v.fract() == 0.0) {
+                if !((0.0..=64.0).contains(&v) && v.fract() == 0.0) {
                     return fail(out, 1, Error::Param { name: "layers", range: "integer 0..64" });
                 }
                 p.layers = v as u32;

@@ -14,7 +14,7 @@ use finger_model::material::Card;
 use finger_model::params::PARAMS;
 use finger_model::{BranchEnd, Calibration, DeModulusRule, Error, Finger as Model, Method, Params, Solution as ModelSolution, MAX_JOINTS};
 use numpy::ndarray::{Array1, Array2, Array3};
-use numpy::{AllowTypeChange, IntoPyArray, PyArrayMethods, PyUntypedArrayMethods, PyArray1, PyArray2, PyArray3, PyArrayLike1, PyArrayLike2};
+use numpy::{AllowTypeChange, IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayLike1, PyArrayLike2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -47,11 +47,7 @@ struct Row {
 fn solve_row(f: &Model<R>, tension: R, volts: &[R], m: Method<R>, stiffness: bool) -> Result<Row, Error> {
     let c = f.compliances(volts)?;
     let sol = f.solve_with(&c, tension, [0.0; 2], m)?;
-    let stiffness = if stiffness {
-        Some(mat3::inverse_spd(&f.tip_compliance(&c, &sol)).ok_or(Error::Singular { what: "tip compliance" })?)
-    } else {
-        None
-    };
+    let stiffness = if stiffness { Some(mat3::inverse_spd(&f.tip_compliance(&c, &sol)).ok_or(Error::Singular { what: "tip compliance" })?) } else { None };
     Ok(Row { sol, stiffness })
 }
 
@@ -355,7 +351,11 @@ impl Contact {
     fn __repr__(&self) -> String {
         format!(
             "Contact(point_mm=({:.3}, {:.3}), force_N=({:.4}, {:.4}), magnitude_N={:.4})",
-            self.c.point[0], self.c.point[1], self.c.force[0], self.c.force[1], self.c.magnitude()
+            self.c.point[0],
+            self.c.point[1],
+            self.c.force[0],
+            self.c.force[1],
+            self.c.magnitude()
         )
     }
 }
@@ -526,14 +526,10 @@ fn _finger_from_state(card: &str, de_rule: &str, params: Vec<(String, R)>, calib
 fn card_of(name: &str) -> PyResult<&'static Card> {
     let key = |s: &str| s.chars().filter(|c| c.is_ascii_alphanumeric()).collect::<String>().to_ascii_lowercase();
     let want = key(name);
-    CARDS
-        .iter()
-        .copied()
-        .find(|c| key(c.name) == want || key(c.name).starts_with(&want) && want.len() >= 3)
-        .ok_or_else(|| {
-            let names: Vec<&str> = CARDS.iter().map(|c| c.name).collect();
-            PyValueError::new_err(format!("unknown card {name:?}; cards: {}", names.join(", ")))
-        })
+    CARDS.iter().copied().find(|c| key(c.name) == want || key(c.name).starts_with(&want) && want.len() >= 3).ok_or_else(|| {
+        let names: Vec<&str> = CARDS.iter().map(|c| c.name).collect();
+        PyValueError::new_err(format!("unknown card {name:?}; cards: {}", names.join(", ")))
+    })
 }
 
 /// Every material card's name (`Finger(card=...)`).
@@ -846,7 +842,10 @@ impl Finger {
     /// Pickling (and so Dask and multiprocessing): the state `_finger_from_state` rebuilds the
     /// same model from, every parameter's f64 value exactly.
     #[allow(clippy::type_complexity)]
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (&'static str, &'static str, Vec<(&'static str, R)>, Vec<R>, &'static str, &'static str))> {
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (&'static str, &'static str, Vec<(&'static str, R)>, Vec<R>, &'static str, &'static str))> {
         let p = self.f.params();
         let rule = match p.de_rule {
             DeModulusRule::Isotropic => "isotropic",

@@ -25,13 +25,12 @@ use finger_model::Solution;
 use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Params};
 
 use super::errors::{head, model_err, no_args, number, tension, CmdError, ErrorCode};
-use finger_protocol::Command;
 use super::film;
 use super::help::{joints, list, solve_reply, Reply, Tip, DEG, HELP};
 use super::params::{board_params, calibration_for, default_finger, preset, FwParams, CAL_NAMES, CHANNELS, FW_PARAMS};
-use super::solves::{fmax_of, forward, Solved};
 #[cfg(m3)]
 use super::solves::forward_stiffness;
+use super::solves::{fmax_of, forward, Solved};
 #[cfg(feature = "settings")]
 use super::stored::ConfigState;
 use crate::board::HV_MAX_V;
@@ -39,6 +38,7 @@ use crate::console;
 use crate::control::{hv_duty_for, Setpoints, View};
 use crate::num::{Fixed, Short};
 use crate::rx::Record;
+use finger_protocol::Command;
 
 /// Longest `wait`, s.
 const WAIT_MAX_S: f32 = 600.0;
@@ -349,11 +349,14 @@ impl Commands {
             return Ok((0.0, 0.0));
         }
         let excursion = |s: &Solved| s.cable_excursion;
-        let cable = if core::ptr::eq(finger, &self.finger) { self.forward_with(force, volts, excursion) } else { forward(finger, force, volts).map(|s| excursion(&s)) };
+        let cable =
+            if core::ptr::eq(finger, &self.finger) { self.forward_with(force, volts, excursion) } else { forward(finger, force, volts).map(|s| excursion(&s)) };
         let cable = cable.map_err(model_err)?.max(0.0);
         let deg = cable / fw.spool_r * DEG;
         if !(deg <= fw.servo_range) {
-            return Err(err!(Limit; "cable excursion ", Fixed(cable, 2), " mm needs ", Fixed(deg, 1), " deg, past the servo travel ", Fixed(fw.servo_range, 0), " deg"));
+            return Err(
+                err!(Limit; "cable excursion ", Fixed(cable, 2), " mm needs ", Fixed(deg, 1), " deg, past the servo travel ", Fixed(fw.servo_range, 0), " deg"),
+            );
         }
         Ok((cable, deg))
     }
@@ -412,7 +415,13 @@ impl Commands {
     /// [`Commands::forward_with`] with the stacks at `thick_mm` now instead of relaxed at
     /// `volts` (`status`: the film creeps toward its voltages). The M3 image solves at the
     /// voltages (its fixed-point path takes no thickness).
-    pub(super) fn forward_now<T>(&self, p: f32, volts: &[f32; CHANNELS], thick_mm: &[f32; CHANNELS], use_it: impl FnOnce(&Solved) -> T) -> Result<T, ModelError> {
+    pub(super) fn forward_now<T>(
+        &self,
+        p: f32,
+        volts: &[f32; CHANNELS],
+        thick_mm: &[f32; CHANNELS],
+        use_it: impl FnOnce(&Solved) -> T,
+    ) -> Result<T, ModelError> {
         #[cfg(m3)]
         {
             let _ = thick_mm;
@@ -481,7 +490,6 @@ impl Commands {
         }
         self.plan_servo(&self.finger, &self.fw, force, volts)
     }
-
 
     // ---------------------------------------------------------------- console
     /// Run one line (without terminator); writes exactly one final reply line (none for a
@@ -612,7 +620,7 @@ impl Commands {
             Some(Command::Wait) => {
                 let [s] = args else { return Err(err!(Usage; "wait <seconds>")) };
                 let s = number(s, "seconds")?;
-                if !(s >= 0.0 && s <= WAIT_MAX_S) {
+                if !(0.0..=WAIT_MAX_S).contains(&s) {
                     return Err(err!(Usage; "wait: 0..", Short(WAIT_MAX_S), " s"));
                 }
                 let ms = (s * 1000.0 + 0.5) as u32;
@@ -756,7 +764,9 @@ impl Commands {
                 return Err(err!(Usage; "channel ", (ch + 1), ": voltage must be >= 0"));
             }
             if !(v[ch] < self.vmax[ch]) {
-                return Err(err!(Limit; "channel ", (ch + 1), ": ", Fixed(v[ch], 1), " V is at or past the ceiling ", Fixed(self.vmax[ch], 1), " V (see limits)"));
+                return Err(
+                    err!(Limit; "channel ", (ch + 1), ": ", Fixed(v[ch], 1), " V is at or past the ceiling ", Fixed(self.vmax[ch], 1), " V (see limits)"),
+                );
             }
         }
         Ok(())

@@ -14,10 +14,10 @@ use super::commands::Commands;
 use super::errors::{no_args, CmdError};
 use super::help::Reply;
 use super::host::App;
-use super::params::FwParams;
 pub use super::params::default_finger;
-pub use super::stored::{board_ceiling, record_of, record_with, settings_of, Boot, Reject};
+use super::params::FwParams;
 use super::stored::name_of;
+pub use super::stored::{board_ceiling, record_of, record_with, settings_of, Boot, Reject};
 use crate::board::Board;
 use crate::control::Control;
 use crate::num::{Fixed, Short};
@@ -88,7 +88,9 @@ impl Commands {
             Ok(_) => return Err(err!(Usage; "save: the settings in force do not read back as themselves; not saved")),
             Err(Reject::Ceiling) => {
                 let v = self.finger.ceiling_in_force(None);
-                return Err(err!(Limit; "save: these settings raise the model's ceiling to ", Fixed(v, 1), " V, past the compiled ", Fixed(board_ceiling(), 1), " V; not saved"));
+                return Err(
+                    err!(Limit; "save: these settings raise the model's ceiling to ", Fixed(v, 1), " V, past the compiled ", Fixed(board_ceiling(), 1), " V; not saved"),
+                );
             }
             Err(e) => return Err(err!(Usage; "save: a boot would refuse these settings (", e, "); not saved")),
         }
@@ -129,10 +131,7 @@ impl Commands {
         no_args(args, "config")?;
         let nl = self.nl;
         let mut buf = [0u8; RECORD_MAX];
-        let read = match self.cfg.store.as_mut() {
-            None => None,
-            Some(s) => Some(s.read(&mut buf)),
-        };
+        let read = self.cfg.store.as_mut().map(|s| s.read(&mut buf));
         let (state, rec) = match read {
             None => ("none", None),
             Some(Ok(None)) => ("empty", None),

@@ -9,9 +9,9 @@
 #[cfg(not(m3))]
 use finger_model::material::drive::{settling_time, DriveLimits, Mode};
 #[cfg(not(m3))]
-use finger_model::material::Relaxation;
-#[cfg(not(m3))]
 use finger_model::material::hold_ratio;
+#[cfg(not(m3))]
+use finger_model::material::Relaxation;
 use finger_model::material::{equilibrium_ratio, StackLaw};
 use finger_model::Error as ModelError;
 

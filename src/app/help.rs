@@ -60,7 +60,10 @@ pub(crate) const HELP: &[&str] = &[
     help_line!("preset <default|paper>", "model parameters back to a preset; only while disarmed"),
     help_line!("cal [<h1> <h2> <h3> <h4> <ea0> <ea1> <ei0> <ei1> | none]", "FE calibration factors: read, set or clear (set and clear only while disarmed)"),
     #[cfg(not(m3))]
-    help_line!("cal show | vmon <ch> <gain> <offset V> | c0 <ch> <pF>", "HV read-back calibration: monitors, stacks' C0 (only tightens; set only while disarmed; save stores it)"),
+    help_line!(
+        "cal show | vmon <ch> <gain> <offset V> | c0 <ch> <pF>",
+        "HV read-back calibration: monitors, stacks' C0 (only tightens; set only while disarmed; save stores it)"
+    ),
     help_line!("wait <s>", "run the control loop for s seconds, then reply"),
     #[cfg(feature = "settings")]
     help_line!("save", "keep the settings in force across resets; only while disarmed"),

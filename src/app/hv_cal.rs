@@ -37,7 +37,7 @@ impl SenseCal {
 
     /// A C0 in its range, pF.
     pub fn c0_checked(c0_pf: f32) -> Result<f32, CalRefused> {
-        (c0_pf >= BOARD_STACK_C0_PF / C0_RANGE && c0_pf <= BOARD_STACK_C0_PF * C0_RANGE).then_some(c0_pf).ok_or(CalRefused::C0Range)
+        (BOARD_STACK_C0_PF / C0_RANGE..=BOARD_STACK_C0_PF * C0_RANGE).contains(&c0_pf).then_some(c0_pf).ok_or(CalRefused::C0Range)
     }
 
     /// Every channel's values through their checks.
@@ -51,6 +51,7 @@ impl SenseCal {
 }
 
 /// The stored values' names, per channel k (1-based in the name).
+#[cfg(feature = "settings")]
 pub(crate) const NAMES: [[&str; 3]; HV_CHANNELS] = [["vgain1", "voff1", "c0_1"], ["vgain2", "voff2", "c0_2"], ["vgain3", "voff3", "c0_3"]];
 
 /// Of a stored value's tag: its channel and which value (0 gain, 1 offset, 2 C0).

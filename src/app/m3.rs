@@ -51,7 +51,13 @@ fn stiffness(f: &Finger<f32>, ff: &FixedFinger, s: &FixedSolution) -> Result<Mat
 }
 
 fn solved(f: &Finger<f32>, s: &FixedSolution, volts: &[f32; CHANNELS]) -> Result<Solved, ModelError> {
-    let mut out = Solved { joint_angle: [0.0; CHANNELS], cable_excursion: s.cable_excursion.to_f32(), thickness: [0.0; CHANNELS], iterations: s.iterations, tip: Pose::origin() };
+    let mut out = Solved {
+        joint_angle: [0.0; CHANNELS],
+        cable_excursion: s.cable_excursion.to_f32(),
+        thickness: [0.0; CHANNELS],
+        iterations: s.iterations,
+        tip: Pose::origin(),
+    };
     for k in 0..CHANNELS {
         out.joint_angle[k] = s.joint_angle[k].to_f32();
         if f.params().layers > 0 {

@@ -51,8 +51,18 @@ pub const FW_PARAMS: &[FwParamInfo] = &[
     #[cfg(not(m3))]
     FwParamInfo { name: "shaped", min: 0.0, max: 1.0, range: "0 (plain step) or 1 (shaped actuation)" },
     // read-only: the HV module's calibration is compiled in (crate::board); a set is refused
-    FwParamInfo { name: "hv_fs", min: 1.0, max: 0.0, range: if cfg!(m3) { "read-only" } else { "read-only: V at 100 % duty, a board constant (a different HV module is a different build)" } },
-    FwParamInfo { name: "hv_zero", min: 1.0, max: 0.0, range: if cfg!(m3) { "read-only" } else { "read-only: % duty at 0 V, a board constant (a different HV module is a different build)" } },
+    FwParamInfo {
+        name: "hv_fs",
+        min: 1.0,
+        max: 0.0,
+        range: if cfg!(m3) { "read-only" } else { "read-only: V at 100 % duty, a board constant (a different HV module is a different build)" },
+    },
+    FwParamInfo {
+        name: "hv_zero",
+        min: 1.0,
+        max: 0.0,
+        range: if cfg!(m3) { "read-only" } else { "read-only: % duty at 0 V, a board constant (a different HV module is a different build)" },
+    },
 ];
 
 impl FwParams {

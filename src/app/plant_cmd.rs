@@ -22,7 +22,8 @@ fn channel(c: &[u8]) -> Result<usize, CmdError> {
     }
 }
 
-const USAGE: &str = "plant film <G_eq kPa> [time scale] | breakdown <ch> [clears after ms] | stuck <ch> <V> | open <ch> | leak <ch> <MOhm> | gain <ch> <x> | status";
+const USAGE: &str =
+    "plant film <G_eq kPa> [time scale] | breakdown <ch> [clears after ms] | stuck <ch> <V> | open <ch> | leak <ch> <MOhm> | gain <ch> <x> | status";
 
 impl Commands {
     #[inline(never)]
@@ -54,7 +55,7 @@ impl Commands {
                     Some(x) => number(x, "time scale")?,
                     None => 1.0,
                 };
-                if !(g >= 1.0 && g <= 100.0) || !(ts >= 1.0 && ts <= 1000.0) {
+                if !(1.0..=100.0).contains(&g) || !(1.0..=1000.0).contains(&ts) {
                     return Err(err!(Usage; "plant film: G_eq 1..100 kPa, time scale 1..1000"));
                 }
                 PlantRequest::Film { g_eq_kpa: g, time_scale: ts }
@@ -62,14 +63,14 @@ impl Commands {
             (b"breakdown", [c]) => PlantRequest::Inject(channel(c)?, Inject::Breakdown { clears_after_ms: None }),
             (b"breakdown", [c, ms]) => {
                 let ms = number(ms, "ms")?;
-                if !(ms >= 1.0 && ms <= 60_000.0) {
+                if !(1.0..=60_000.0).contains(&ms) {
                     return Err(err!(Usage; "plant breakdown: clears after 1..60000 ms"));
                 }
                 PlantRequest::Inject(channel(c)?, Inject::Breakdown { clears_after_ms: Some(ms as u32) })
             }
             (b"stuck", [c, v]) => {
                 let v = number(v, "V")?;
-                if !(v >= 0.0 && v <= 12_000.0) {
+                if !(0.0..=12_000.0).contains(&v) {
                     return Err(err!(Usage; "plant stuck: 0..12000 V"));
                 }
                 PlantRequest::Inject(channel(c)?, Inject::Stuck(v))

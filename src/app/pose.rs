@@ -18,14 +18,14 @@
 
 #[cfg(any(feature = "pose", feature = "contact"))]
 use core::fmt::{self, Write};
-#[cfg(feature = "contact")]
-use finger_model::inverse::contact_force;
-#[cfg(feature = "pose")]
-use finger_model::inverse::{solve_pose_tabled_into, solve_pose_with, BranchTable, Options, PoseSolution};
 #[cfg(m3)]
 use finger_model::fixed::q::{Nt, Rad};
 #[cfg(m3)]
 use finger_model::fixed::{FixedFinger, FixedInverseDirect};
+#[cfg(feature = "contact")]
+use finger_model::inverse::contact_force;
+#[cfg(feature = "pose")]
+use finger_model::inverse::{solve_pose_tabled_into, solve_pose_with, BranchTable, Options, PoseSolution};
 #[cfg(m3)]
 use finger_model::Error as ModelError;
 #[cfg(any(feature = "pose", feature = "contact"))]
@@ -34,19 +34,19 @@ use finger_model::{Error, Finger, Real, MAX_JOINTS};
 use heapless::String;
 
 use super::commands::Commands;
-use super::errors::{number, tension, CmdError};
-#[cfg(any(feature = "pose", feature = "contact"))]
-use super::errors::{head, ErrorCode};
 #[cfg(m3)]
 use super::errors::model_err;
+#[cfg(any(feature = "pose", feature = "contact"))]
+use super::errors::{head, ErrorCode};
+use super::errors::{number, tension, CmdError};
 #[cfg(m3)]
 use super::help::{joints, list, Reply, DEG};
 use super::params::CHANNELS;
 #[cfg(m3)]
 use super::solves::forward;
-use crate::num::Fixed;
 #[cfg(any(feature = "pose", feature = "contact"))]
 use crate::num::write_model_error;
+use crate::num::Fixed;
 
 /// `pose`'s arguments: the joint angles (degrees, each |d| <= 360) as `angle` takes them, and
 /// the optional tension.
@@ -103,7 +103,14 @@ fn write_list<W: Write>(out: &mut W, v: impl Iterator<Item = f32>, prec: usize) 
 /// disarmed, nothing) or refuses with a console error. Arguments are the console's f32
 /// numbers (`R::from_f64(f64::from(x))` folds to x for R = f32: no f64 conversion is linked).
 /// Returns whether the command succeeded (and `apply` was called and accepted).
-pub fn pose<R: Real, W: Write, F: FnOnce(R, &[R]) -> Result<(), CmdError>>(out: &mut W, finger: &Finger<R>, table: Option<&BranchTable<R>>, degrees: &[f32], tension: Option<f32>, apply: F) -> Result<bool, fmt::Error> {
+pub fn pose<R: Real, W: Write, F: FnOnce(R, &[R]) -> Result<(), CmdError>>(
+    out: &mut W,
+    finger: &Finger<R>,
+    table: Option<&BranchTable<R>>,
+    degrees: &[f32],
+    tension: Option<f32>,
+    apply: F,
+) -> Result<bool, fmt::Error> {
     pose_with(out, finger, table, &Options::default(), degrees, tension, apply)
 }
 

@@ -204,23 +204,23 @@ pub fn record_with(finger: &Finger<f32>, fw: &FwParams, sense: &super::hv_cal::S
 
 /// The settings `finger` and `fw` as a record numbered `counter`.
 pub fn record_of(finger: &Finger<f32>, fw: &FwParams, counter: u32) -> Record {
-        let p = finger.params();
-        let mut values = heapless::Vec::new();
-        for name in model_names() {
-            let _ = values.push((tag(b'p', name), p.get(name).unwrap_or(f64::NAN) as f32));
-        }
-        let c = finger.calibration();
-        let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];
-        for (name, v) in CAL_NAMES.iter().zip(g) {
-            let _ = values.push((tag(b'c', name), v));
-        }
-        for name in fw_names() {
-            let _ = values.push((tag(b'f', name), fw.get(name).unwrap_or(f32::NAN)));
-        }
-        // the paper's preset is the one on the paper's card (the DE modulus rule and the
-        // film, which no parameter sets); any other started from the board's
-        let preset = if p.card == Params::<f32>::paper().card { 1 } else { 0 };
-        Record { counter, preset, values }
+    let p = finger.params();
+    let mut values = heapless::Vec::new();
+    for name in model_names() {
+        let _ = values.push((tag(b'p', name), p.get(name).unwrap_or(f64::NAN) as f32));
+    }
+    let c = finger.calibration();
+    let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];
+    for (name, v) in CAL_NAMES.iter().zip(g) {
+        let _ = values.push((tag(b'c', name), v));
+    }
+    for name in fw_names() {
+        let _ = values.push((tag(b'f', name), fw.get(name).unwrap_or(f32::NAN)));
+    }
+    // the paper's preset is the one on the paper's card (the DE modulus rule and the
+    // film, which no parameter sets); any other started from the board's
+    let preset = if p.card == Params::<f32>::paper().card { 1 } else { 0 };
+    Record { counter, preset, values }
 }
 
 /// A stored value's console name, from its tag (`?` for a tag this build does not know).
@@ -237,4 +237,3 @@ pub(crate) fn name_of(t: u16) -> &'static str {
     }
     fw_names().find(|n| tag(b'f', n) == t).unwrap_or("?")
 }
-

@@ -197,7 +197,14 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
     #[cfg(feature = "hw")]
     let adc = {
         let gpioc = dp.GPIOC.split(&mut rcc);
-        let _analog = (gpioc.pc0.into_analog(), gpioc.pc1.into_analog(), gpioc.pc2.into_analog(), gpioc.pc3.into_analog(), gpioa.pa1.into_analog(), gpioa.pa2.into_analog());
+        let _analog = (
+            gpioc.pc0.into_analog(),
+            gpioc.pc1.into_analog(),
+            gpioc.pc2.into_analog(),
+            gpioc.pc3.into_analog(),
+            gpioa.pa1.into_analog(),
+            gpioa.pa2.into_analog(),
+        );
         super::hv_adc::start(&mut rcc, dp.ADC1, dp.ADC2, dp.ADC_COMMON, dp.DMA2, dp.TIM2)
     };
     let board = F405Board {

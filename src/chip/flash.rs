@@ -33,12 +33,7 @@ pub const SETTINGS_RAM: usize = crate::flash_ram::F405_BASE;
 pub fn store(_flash: stm32f4xx_hal::pac::FLASH) -> Option<&'static mut FlashStore<StoreFlash>> {
     // SAFETY: [SETTINGS_RAM, + PAGES x PAGE + 4) is RAM on the emulated chip that nothing else
     // in the image addresses (past memory.x's RAM region), taken once (the singleton).
-    let (mem, mark) = unsafe {
-        (
-            core::slice::from_raw_parts_mut(SETTINGS_RAM as *mut u8, PAGES * PAGE),
-            &mut *((SETTINGS_RAM + PAGES * PAGE) as *mut u32),
-        )
-    };
+    let (mem, mark) = unsafe { (core::slice::from_raw_parts_mut(SETTINGS_RAM as *mut u8, PAGES * PAGE), &mut *((SETTINGS_RAM + PAGES * PAGE) as *mut u32)) };
     let flash = crate::flash_ram::RamFlash::<PAGE>::new(mem, mark);
     cortex_m::singleton!(: FlashStore<StoreFlash> = FlashStore::new(flash, 0..(PAGES * PAGE) as u32))
 }

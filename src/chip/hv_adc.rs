@@ -108,10 +108,7 @@ pub fn start(rcc: &mut Rcc, adc1: pac::ADC1, adc2: pac::ADC2, common: pac::ADC_C
         // the sequences: three conversions each (SQR1.L = 2), channel k of the board at rank k + 1
         let smp_lo = (SMP_144 << 3) | (SMP_144 << 6); // SMPR2: IN1, IN2
         let smp_hi = SMP_144 | (SMP_144 << 3) | (SMP_144 << 6) | (SMP_144 << 9); // SMPR1: IN10..IN13
-        for (adc, seq, awd) in [
-            (&*adc1, [13u32, 1, 2], (codes.current_high, codes.current_low)),
-            (&*adc2, [10u32, 11, 12], (codes.volts_high, 0)),
-        ] {
+        for (adc, seq, awd) in [(&*adc1, [13u32, 1, 2], (codes.current_high, codes.current_low)), (&*adc2, [10u32, 11, 12], (codes.volts_high, 0))] {
             adc.smpr1().write(|w| w.bits(smp_hi));
             adc.smpr2().write(|w| w.bits(smp_lo));
             adc.sqr1().write(|w| w.bits(2 << 20));

@@ -62,7 +62,20 @@ pub struct Timing {
 
 impl Timing {
     pub const fn new() -> Self {
-        Timing { tick_latency: (u32::MAX, 0), tick_run_max: 0, tick_stack_max: 0, #[cfg(not(m3))] tick_sense_max: 0, #[cfg(not(m3))] tick_source_max: 0, period: (u32::MAX, 0), stop_max: 0, stops: 0, ticks: 0, trip_max_us: None }
+        Timing {
+            tick_latency: (u32::MAX, 0),
+            tick_run_max: 0,
+            tick_stack_max: 0,
+            #[cfg(not(m3))]
+            tick_sense_max: 0,
+            #[cfg(not(m3))]
+            tick_source_max: 0,
+            period: (u32::MAX, 0),
+            stop_max: 0,
+            stops: 0,
+            ticks: 0,
+            trip_max_us: None,
+        }
     }
 }
 

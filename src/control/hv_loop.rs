@@ -75,8 +75,20 @@ impl VoltageLoop {
         }
         let want = (p_v + self.integral_v).min(top_v);
         // NaN-safe: a want that is not a number asks the slewed bound below
-        let u = if want > hi { hi } else if want > lo { want } else { lo };
-        let u = if u > limit_v { limit_v } else if u > 0.0 { u } else { 0.0 };
+        let u = if want > hi {
+            hi
+        } else if want > lo {
+            want
+        } else {
+            lo
+        };
+        let u = if u > limit_v {
+            limit_v
+        } else if u > 0.0 {
+            u
+        } else {
+            0.0
+        };
         self.asked_v = u;
         // held back: what the PI term would ask without the anti-windup (which puts the output
         // exactly on the slew's bound, so the output alone flickers between held and not)

@@ -46,7 +46,7 @@ impl MonitorCal {
 
     /// Accepted only when it reads at or above the nominal chain: gain 1..1.2, offset 0..200 V.
     pub fn checked(gain: f32, offset_v: f32) -> Option<Self> {
-        (gain >= 1.0 && gain <= 1.2 && offset_v >= 0.0 && offset_v <= 200.0).then_some(MonitorCal { gain, offset_v })
+        ((1.0..=1.2).contains(&gain) && (0.0..=200.0).contains(&offset_v)).then_some(MonitorCal { gain, offset_v })
     }
 }
 
@@ -89,7 +89,19 @@ pub const LEAK_WEIGHT: f32 = 0.2;
 
 impl Estimator {
     pub const fn new() -> Self {
-        Estimator { v0: 0.0, q_nc: 0.0, t_ms: 0, s_vms: 0.0, started: false, c_pf: BOARD_STACK_C0_PF + SENSE_STRAY_PF, leak_ua: 0.0, leak_us_per_v: 0.0, prev: (0.0, 0.0, 0.0, 0.0), swings: 0, windows: 0 }
+        Estimator {
+            v0: 0.0,
+            q_nc: 0.0,
+            t_ms: 0,
+            s_vms: 0.0,
+            started: false,
+            c_pf: BOARD_STACK_C0_PF + SENSE_STRAY_PF,
+            leak_ua: 0.0,
+            leak_us_per_v: 0.0,
+            prev: (0.0, 0.0, 0.0, 0.0),
+            swings: 0,
+            windows: 0,
+        }
     }
 
     /// One tick's mean voltage (V) and return current (µA); `held_ms` how long the channel has
@@ -198,7 +210,7 @@ impl Default for Estimator {
 
 /// The hold ripple turns `held_ms` into a hold (a half period ends).
 pub fn ripple_turns(held_ms: u32) -> bool {
-    held_ms % (RIPPLE_PERIOD_MS / 2) == 0
+    held_ms.is_multiple_of(RIPPLE_PERIOD_MS / 2)
 }
 
 /// The hold ripple's offset below the guarded voltage `held_ms` into a hold, V (a triangle

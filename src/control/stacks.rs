@@ -19,9 +19,9 @@
 
 #[cfg(not(m3))]
 use finger_model::material::drive::{Channel, DriveLimits, Mode};
+use finger_model::material::equilibrium_ratio;
 #[cfg(not(m3))]
 use finger_model::material::Relaxation;
-use finger_model::material::equilibrium_ratio;
 #[cfg(not(m3))]
 use finger_model::material::StackLaw;
 

@@ -76,7 +76,19 @@ pub struct Watch {
 
 impl Watch {
     pub const fn new() -> Self {
-        Watch { steady_ms: 0, collapse_ms: 0, mismatch_ms: 0, over_ms: 0, stuck_ms: 0, stuck_from_v: 0.0, last_code: -1.0, leak_ms: 0, prev_drive: 0.0, prev_ask: 0.0, fall_env: 0.0 }
+        Watch {
+            steady_ms: 0,
+            collapse_ms: 0,
+            mismatch_ms: 0,
+            over_ms: 0,
+            stuck_ms: 0,
+            stuck_from_v: 0.0,
+            last_code: -1.0,
+            leak_ms: 0,
+            prev_drive: 0.0,
+            prev_ask: 0.0,
+            fall_env: 0.0,
+        }
     }
 
     /// The checks of one tick: `drive_v` the voltage the loop drives to, `ask` what the loop
@@ -161,6 +173,12 @@ pub struct ThicknessGuard {
     /// The sensed thickness disagreed with the model's past [`DISAGREE_S`].
     pub disagreed: bool,
     disagree_windows: u32,
+}
+
+impl Default for ThicknessGuard {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl ThicknessGuard {

@@ -49,7 +49,20 @@ fn run(s: &scenes::Scene, model: &str, p: Params<f64>) {
             match r {
                 Ok(sol) => {
                     let (tip, a) = (sol.tip(), sol.joint_angles());
-                    hprintln!("F {} {} f32 ok {} {} {:e} {:e} {:e} {:e} {:e} {:e} {}", s.name, model, t1 - t0, setup, tip.x, tip.y, a[0], a[1], a[2], sol.cable_excursion, sol.iterations);
+                    hprintln!(
+                        "F {} {} f32 ok {} {} {:e} {:e} {:e} {:e} {:e} {:e} {}",
+                        s.name,
+                        model,
+                        t1 - t0,
+                        setup,
+                        tip.x,
+                        tip.y,
+                        a[0],
+                        a[1],
+                        a[2],
+                        sol.cable_excursion,
+                        sol.iterations
+                    );
                 }
                 Err(e) => hprintln!("F {} {} f32 err {} {} {}", s.name, model, t1 - t0, setup, e.code()),
             }
@@ -97,7 +110,8 @@ fn run(s: &scenes::Scene, model: &str, p: Params<f64>) {
 }
 
 /// Postures for the inverse: the forward solve's joint angles at (tension N, voltages V).
-const POSES: &[(f32, [f32; 3])] = &[(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])];
+const POSES: &[(f32, [f32; 3])] =
+    &[(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3])];
 
 fn run_inverse() {
     let f = match Finger::new(Params::<f32> { layers: 4, ..Params::default() }) {

@@ -76,7 +76,17 @@ fn run_model(m: &scenes::TableModel) {
                     let a = sol.joint_angles();
                     hprintln!(
                         "S {} {} {} ok {} {} {:e} {:e} {:e} {:e} {:e} {}",
-                        m.name, name, method, t1 - t0, s1 - s0, sol.tip().x, sol.tip().y, a[0], a[1], a[2], sol.iterations
+                        m.name,
+                        name,
+                        method,
+                        t1 - t0,
+                        s1 - s0,
+                        sol.tip().x,
+                        sol.tip().y,
+                        a[0],
+                        a[1],
+                        a[2],
+                        sol.iterations
                     );
                     angles = Some([a[0], a[1], a[2]]);
                 }
@@ -95,7 +105,17 @@ fn run_model(m: &scenes::TableModel) {
                 match core::hint::black_box(r).map(|()| s) {
                     Ok(s) => hprintln!(
                         "I {} {} {} ok {} {:e} {:e} {:e} {:e} {:e} {:e} {:e}",
-                        m.name, name, case, t1 - t0, s.tension, s.volts[0], s.volts[1], s.volts[2], a[0], a[1], a[2]
+                        m.name,
+                        name,
+                        case,
+                        t1 - t0,
+                        s.tension,
+                        s.volts[0],
+                        s.volts[1],
+                        s.volts[2],
+                        a[0],
+                        a[1],
+                        a[2]
                     ),
                     Err(e) => hprintln!("I {} {} {} err {} {}", m.name, name, case, t1 - t0, e.code()),
                 }
@@ -177,5 +197,7 @@ fn main() -> ! {
     }
     hprintln!("END");
     debug::exit(debug::EXIT_SUCCESS);
-    loop {}
+    loop {
+        cortex_m::asm::wfi();
+    }
 }

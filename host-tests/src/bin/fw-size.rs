@@ -56,7 +56,8 @@ const SETS: &[(&str, &str, &str)] = &[
 ];
 /// The Cortex-M3 image (thumbv7m-none-eabi, QEMU netduino2): its RAM includes its 16 KiB stack
 /// section (memory-m3.x).
-const M3_SET: (&str, &str, &str) = ("Cortex-M3 (thumbv7m, netduino2)", "m3", "console, defmt, DE, `pose`; fixed-point model; RAM with its 16 KiB stack (budget 64 KiB / 20 KiB)");
+const M3_SET: (&str, &str, &str) =
+    ("Cortex-M3 (thumbv7m, netduino2)", "m3", "console, defmt, DE, `pose`; fixed-point model; RAM with its 16 KiB stack (budget 64 KiB / 20 KiB)");
 
 /// The F405's firmware with `features`.
 fn build(features: &str) -> PathBuf {

@@ -72,7 +72,7 @@ impl<R: Real> Finger<R> {
             }
             let start = starts.and_then(|s| s[k]);
             let Some(end) = self.joint_branch_end(k, &c.c[k], best.map(|b| b.tension), start)? else { continue };
-            if best.map_or(true, |b| end.tension < b.tension || (end.tension == b.tension && end.joint < b.joint)) {
+            if best.is_none_or(|b| end.tension < b.tension || (end.tension == b.tension && end.joint < b.joint)) {
                 best = Some(end);
             }
         }
@@ -131,13 +131,7 @@ impl<R: Real> Finger<R> {
 
     /// Joint `k`'s branch end (see the module header); None if it has an equilibrium at
     /// `bound` (it does not end below the end found so far).
-    fn joint_branch_end(
-        &self,
-        k: usize,
-        c: &[Mat3<R>; MAX_SUB],
-        bound: Option<R>,
-        start: Option<[(R, [R; 2]); 2]>,
-    ) -> Result<Option<BranchLimit<R>>, Error> {
+    fn joint_branch_end(&self, k: usize, c: &[Mat3<R>; MAX_SUB], bound: Option<R>, start: Option<[(R, [R; 2]); 2]>) -> Result<Option<BranchLimit<R>>, Error> {
         let c33 = c[..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
         let p_lin = R::one() / (self.p.e * c33);
         let p_search = R::from_f64(1000.0) * p_lin;
@@ -209,12 +203,12 @@ impl<R: Real> Finger<R> {
                 }
             };
             let ([_, hi_end], _trials) = bracket::boundary(lo_p, hi, R::from_f64(REL), 60, est, &mut probe);
-            let near_contact = matches!(why, Some(MarchError::Contact))
-                || lo.span - self.p.span_floor <= R::from_f64(0.05) * (lh - self.p.span_floor).max(self.p.span_floor);
+            let near_contact =
+                matches!(why, Some(MarchError::Contact)) || lo.span - self.p.span_floor <= R::from_f64(0.05) * (lh - self.p.span_floor).max(self.p.span_floor);
             let near_fold = lo.det.abs() < R::from_f64(NEAR_FOLD);
             if near_contact || near_fold {
                 // the last tension with an equilibrium: a forward solve at fmax answers
-                let contact = near_contact && !(near_fold && !matches!(why, Some(MarchError::Contact)));
+                let contact = near_contact && (!near_fold || matches!(why, Some(MarchError::Contact)));
                 let kind = if contact { BranchEnd::Contact } else { BranchEnd::LimitPoint };
                 return Ok(Some(BranchLimit { tension: lo.p, joint: k + 1, kind }));
             }

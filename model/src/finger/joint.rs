@@ -54,26 +54,14 @@ impl<R: Real> Finger<R> {
     }
 
     /// Residual of the hole guess: guess - arrived.
-    pub(super) fn hole_residual(
-        &self,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        b: [R; 2],
-        tip: Option<TipLoad<R>>,
-    ) -> Result<([R; 2], JointState<R>), MarchError> {
+    pub(super) fn hole_residual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], tip: Option<TipLoad<R>>) -> Result<([R; 2], JointState<R>), MarchError> {
         let st = self.marched(c, tension, b, tip)?;
         Ok(([b[0] - st.hole[0], b[1] - st.hole[1]], st))
     }
 
     /// The exact 2x2 tangent of a joint's hole residual (tension alone), from one march on
     /// dual numbers (see `dual`).
-    pub(super) fn joint_tangent(
-        &self,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        b: [R; 2],
-        _r: [R; 2],
-    ) -> Result<[[R; 2]; 2], MarchError> {
+    pub(super) fn joint_tangent(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], _r: [R; 2]) -> Result<[[R; 2]; 2], MarchError> {
         self.eval_dual(c, tension, b).map(|(_, _, jac)| jac)
     }
 

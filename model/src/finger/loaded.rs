@@ -100,7 +100,11 @@ impl<R: Real> Finger<R> {
                 Err(fail) => {
                     iters += fail.iterations();
                     let why = fail.refusal().copied();
-                    if iters >= max_iter { Err(Step::Stop(why)) } else { Err(Step::Retry(why)) }
+                    if iters >= max_iter {
+                        Err(Step::Stop(why))
+                    } else {
+                        Err(Step::Retry(why))
+                    }
                 }
             }
         };

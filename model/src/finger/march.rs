@@ -191,7 +191,7 @@ impl<R: Real> Frame<R, R> for CableFrame<R> {
     fn advance(&mut self, q: [R; 3], m_end: R, l: R, small: R) {
         let f = self.f;
         self.mm = m_end;
-        self.theta = self.theta + q[2];
+        self.theta += q[2];
         // w - (L + q0, q1) is B - the next proximal end: its dot with f; then f into the next
         // frame (dot and cross products keep)
         self.dot = self.dot - (q[0] + l) * f[0] - q[1] * f[1];
@@ -242,7 +242,7 @@ impl<R: Real, T: Scalar<R>> Frame<R, T> for PoseFrame<R, T> {
         let d0 = [self.pose.x + co * l, self.pose.y + s * l];
         let mut m0 = (self.b[0] - d0[0]) * self.fc[1] - (self.b[1] - d0[1]) * self.fc[0];
         if let Some(t) = self.tip {
-            m0 = m0 + ((d0[1] - t.point[1]) * t.force[0] - (d0[0] - t.point[0]) * t.force[1]);
+            m0 += (d0[1] - t.point[1]) * t.force[0] - (d0[0] - t.point[0]) * t.force[1];
         }
         ([co * ft[0] + s * ft[1], -s * ft[0] + co * ft[1]], m0)
     }
@@ -298,7 +298,13 @@ impl<R: Real> Finger<R> {
     /// The march on dual numbers in `PoseFrame` (tension alone), out of line: one copy in the
     /// image for its callers (the Newton residual and `eval_dual`).
     #[inline(never)]
-    fn march_dual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [D<R>; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<D<R>>, [D<R>; 2], [D<R>; 2]), MarchError> {
+    fn march_dual(
+        &self,
+        c: &[Mat3<R>; MAX_SUB],
+        tension: R,
+        b: [D<R>; 2],
+        q: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<(Pose<D<R>>, [D<R>; 2], [D<R>; 2]), MarchError> {
         let frame = PoseFrame::new(self, tension, b, None)?;
         self.march_joint(&ByComplianceLoaded(c), frame, q, |x| x.v)?.end(self.p.e)
     }
@@ -414,7 +420,13 @@ mod tests {
                     for tip in tips {
                         let a = f.marched(&c.c[0], tension, b, tip).ok().unwrap();
                         let mut q = [[0.0; 3]; MAX_SUB];
-                        let t = f.march_joint::<f64, _, _>(&ByComplianceLoaded(&c.c[0]), PoseFrame::new(&f, tension, b, tip).ok().unwrap(), &mut q, |x| x).ok().unwrap().end(f.params().e).ok().unwrap();
+                        let t = f
+                            .march_joint::<f64, _, _>(&ByComplianceLoaded(&c.c[0]), PoseFrame::new(&f, tension, b, tip).ok().unwrap(), &mut q, |x| x)
+                            .ok()
+                            .unwrap()
+                            .end(f.params().e)
+                            .ok()
+                            .unwrap();
                         assert_eq!(a.hole, t.1);
                         assert_eq!(a.end, t.0);
                         assert_eq!(a.q, q);
@@ -430,7 +442,13 @@ mod tests {
         let c = f.compliances(&[0.0; 3]).unwrap();
         let a = f.marched(&c.c[0], 1.0, [9.5, 5.5], None).ok().unwrap();
         let mut q = [[0.0; 3]; MAX_SUB];
-        let t = f.march_joint::<f32, _, _>(&ByComplianceLoaded(&c.c[0]), PoseFrame::new(&f, 1.0, [9.5, 5.5], None).ok().unwrap(), &mut q, |x| x).ok().unwrap().end(f.params().e).ok().unwrap();
+        let t = f
+            .march_joint::<f32, _, _>(&ByComplianceLoaded(&c.c[0]), PoseFrame::new(&f, 1.0, [9.5, 5.5], None).ok().unwrap(), &mut q, |x| x)
+            .ok()
+            .unwrap()
+            .end(f.params().e)
+            .ok()
+            .unwrap();
         assert_eq!(a.hole, t.1);
     }
 

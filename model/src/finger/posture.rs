@@ -89,10 +89,7 @@ impl<R: Real> Finger<R> {
         let (s, c) = frame.theta.sin_cos();
         let dx = point[0] - frame.x;
         let dy = point[1] - frame.y;
-        TipLoad {
-            force: [c * force[0] + s * force[1], -s * force[0] + c * force[1]],
-            point: [c * dx + s * dy, -s * dx + c * dy],
-        }
+        TipLoad { force: [c * force[0] + s * force[1], -s * force[0] + c * force[1]], point: [c * dx + s * dy, -s * dx + c * dy] }
     }
 
     /// Collect the solution: nodes, joint angles, spans, excursion, residual, tangents.
@@ -135,10 +132,7 @@ impl<R: Real> Finger<R> {
             let dual = match (loaded, same, prev) {
                 (true, _, _) => None,
                 (false, true, Some(p)) => Some(p),
-                (false, _, _) => self
-                    .eval_dual(&c.c[k], tension, st.hole)
-                    .ok()
-                    .map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
+                (false, _, _) => self.eval_dual(&c.c[k], tension, st.hole).ok().map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
             };
             prev = dual;
             if let Some((r, det)) = dual {

@@ -114,13 +114,8 @@ impl<R: Real> Finger<R> {
         if volts.len() != p.n {
             return Err(Error::Input { input: "voltages", reason: "one voltage per joint is required" });
         }
-        let mut out = Compliances {
-            n: p.n,
-            m: p.m,
-            c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS],
-            thickness: [R::zero(); MAX_JOINTS],
-            volts: [R::zero(); MAX_JOINTS],
-        };
+        let mut out =
+            Compliances { n: p.n, m: p.m, c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS], thickness: [R::zero(); MAX_JOINTS], volts: [R::zero(); MAX_JOINTS] };
         out.volts[..p.n].copy_from_slice(volts);
         // the ceiling and the film's law once for every joint
         let stack = de::Stack::new(p);
@@ -152,7 +147,7 @@ impl<R: Real> Finger<R> {
             return Err(Error::Input { input: "voltages", reason: "one voltage per joint is required" });
         }
         out.volts[..p.n].copy_from_slice(volts);
-        let t0 = R::from_u32(p.layers as u32) * p.z0;
+        let t0 = R::from_u32(p.layers) * p.z0;
         let stack = de::Stack::new(p);
         for (k, (&v, &t)) in volts.iter().zip(thickness_mm).enumerate() {
             stack.check(k + 1, v)?;
@@ -183,9 +178,5 @@ pub fn uniform_beam_compliance<R: Real>(e: R, w: R, t: R, len: R) -> Mat3<R> {
     let ea = e * w * t;
     let ei = e * w * t * t * t / R::from_f64(12.0);
     let z = R::zero();
-    [
-        [len / ea, z, z],
-        [z, len * len * len / (R::from_f64(3.0) * ei), len * len / (R::from_f64(2.0) * ei)],
-        [z, len * len / (R::from_f64(2.0) * ei), len / ei],
-    ]
+    [[len / ea, z, z], [z, len * len * len / (R::from_f64(3.0) * ei), len * len / (R::from_f64(2.0) * ei)], [z, len * len / (R::from_f64(2.0) * ei), len / ei]]
 }

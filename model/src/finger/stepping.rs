@@ -18,18 +18,12 @@ impl<R: Real> Finger<R> {
     /// span, moment arms, tip-load point) come from the geometry of the step before, and each
     /// sub-element takes `q = C w` at once.
     // same parameters as `newton_coupled` (the finger's loads): the paper's stepping, another solver
-    pub(super) fn stepping(
-        &self,
-        c: &Compliances<R>,
-        tension: R,
-        force: [R; 2],
-        n_inc: u32,
-    ) -> Result<[JointState<R>; MAX_JOINTS], Error> {
+    pub(super) fn stepping(&self, c: &Compliances<R>, tension: R, force: [R; 2], n_inc: u32) -> Result<[JointState<R>; MAX_JOINTS], Error> {
         let n = self.p.n;
         let mut states = [self.straight(); MAX_JOINTS];
         let loaded = force[0] != R::zero() || force[1] != R::zero();
         for step in 1..=n_inc {
-            let lam = R::from_u32(step as u32) / R::from_u32(n_inc as u32);
+            let lam = R::from_u32(step) / R::from_u32(n_inc);
             let p = tension * lam;
             let f = [force[0] * lam, force[1] * lam];
             let (nodes, _) = self.chain(&states, p, f, None);
@@ -47,13 +41,7 @@ impl<R: Real> Finger<R> {
     }
 
     /// One explicit step for a joint: loads from the previous geometry `prev`.
-    pub(super) fn explicit_step(
-        &self,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        prev: &JointState<R>,
-        tip: Option<TipLoad<R>>,
-    ) -> Result<JointState<R>, MarchError> {
+    pub(super) fn explicit_step(&self, c: &[Mat3<R>; MAX_SUB], tension: R, prev: &JointState<R>, tip: Option<TipLoad<R>>) -> Result<JointState<R>, MarchError> {
         let e = self.p.e;
         let b = prev.hole;
         let SpanLoads { fc, ft, tp, ftot } = self.span_loads(tension, b, tip)?;
@@ -63,10 +51,7 @@ impl<R: Real> Finger<R> {
             let (s, co) = pose.theta.sin_cos();
             let qp = prev.q[j];
             // previous distal end of this sub-element
-            let d = [
-                pose.x + co * (self.sub_len + qp[0]) - s * qp[1],
-                pose.y + s * (self.sub_len + qp[0]) + co * qp[1],
-            ];
+            let d = [pose.x + co * (self.sub_len + qp[0]) - s * qp[1], pose.y + s * (self.sub_len + qp[0]) + co * qp[1]];
             let mut mo = (b[0] - d[0]) * fc[1] - (b[1] - d[1]) * fc[0];
             if tip.is_some() {
                 mo += (tp[0] - d[0]) * ft[1] - (tp[1] - d[1]) * ft[0];

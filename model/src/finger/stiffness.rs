@@ -53,9 +53,7 @@ impl<'a, R: Real> JointStiffness<'a, R> {
     #[inline(always)]
     pub(crate) fn add_to(&self, kh: &Mat3<R>) -> [R; 6] {
         match self.upper {
-            Some([d00, _, d02, d11, d12, d22]) => {
-                [kh[0][0] + d00, kh[0][1], kh[0][2] + d02, kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22]
-            }
+            Some([d00, _, d02, d11, d12, d22]) => [kh[0][0] + d00, kh[0][1], kh[0][2] + d02, kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22],
             None => [kh[0][0], kh[0][1], kh[0][2], kh[1][1], kh[1][2], kh[2][2]],
         }
     }

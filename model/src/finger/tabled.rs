@@ -82,28 +82,24 @@ impl<R: Real> Finger<R> {
             // a joint with the same voltage, thickness and guess as the one before has its
             // state (`compliances` makes a joint's compliances a function of its voltage; the
             // first sub-element's are compared too)
-            let (end, turn, hole, r2, det) = if k > 0
-                && b == holes[k - 1]
-                && c.volts[k] == c.volts[k - 1]
-                && c.thickness[k] == c.thickness[k - 1]
-                && c.c[k][0] == c.c[k - 1][0]
-            {
-                // the whole row: its sub-elements past m are zero in both
-                sol.q[k] = sol.q[k - 1];
-                prev
-            } else {
-                match self.march_cable(&march::ByCompliance(&c.c[k]), tension, b, &mut sol.q[k]) {
-                    Ok((end, hole, sc, r2)) if r2 <= tol * tol => (end, sc, hole, r2, R::one()),
-                    _ => {
-                        let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
-                        iters += it;
-                        sol.q[k][..m].copy_from_slice(&st.q[..m]);
-                        let (se, ce) = st.end.theta.sin_cos();
-                        let (r, det) = st.tangent.unwrap_or(([R::zero(); 2], R::one()));
-                        (st.end, [se, ce], st.hole, r[0] * r[0] + r[1] * r[1], det)
+            let (end, turn, hole, r2, det) =
+                if k > 0 && b == holes[k - 1] && c.volts[k] == c.volts[k - 1] && c.thickness[k] == c.thickness[k - 1] && c.c[k][0] == c.c[k - 1][0] {
+                    // the whole row: its sub-elements past m are zero in both
+                    sol.q[k] = sol.q[k - 1];
+                    prev
+                } else {
+                    match self.march_cable(&march::ByCompliance(&c.c[k]), tension, b, &mut sol.q[k]) {
+                        Ok((end, hole, sc, r2)) if r2 <= tol * tol => (end, sc, hole, r2, R::one()),
+                        _ => {
+                            let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
+                            iters += it;
+                            sol.q[k][..m].copy_from_slice(&st.q[..m]);
+                            let (se, ce) = st.end.theta.sin_cos();
+                            let (r, det) = st.tangent.unwrap_or(([R::zero(); 2], R::one()));
+                            (st.end, [se, ce], st.hole, r[0] * r[0] + r[1] * r[1], det)
+                        }
                     }
-                }
-            };
+                };
             prev = (end, turn, hole, r2, det);
             res2 += r2;
             dets += det;

@@ -18,14 +18,7 @@ impl<R: Real> Finger<R> {
         out
     }
 
-    pub(super) fn fill_tension_alone(
-        &self,
-        c: &Compliances<R>,
-        tension: R,
-        tol: R,
-        max_iter: u32,
-        sol: &mut Solution<R>,
-    ) -> Result<(), Error> {
+    pub(super) fn fill_tension_alone(&self, c: &Compliances<R>, tension: R, tol: R, max_iter: u32, sol: &mut Solution<R>) -> Result<(), Error> {
         let (n, m) = (self.p.n, self.p.m);
         let mut ends = [Pose::origin(); MAX_JOINTS];
         let mut holes = [[R::zero(); 2]; MAX_JOINTS];
@@ -51,10 +44,7 @@ impl<R: Real> Finger<R> {
             holes[k] = st.hole;
             let tangent = match st.tangent {
                 Some(t) => Some(t),
-                None => self
-                    .eval_dual(&c.c[k], tension, st.hole)
-                    .ok()
-                    .map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
+                None => self.eval_dual(&c.c[k], tension, st.hole).ok().map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
             };
             let r2 = match tangent {
                 Some((r, det)) => {
@@ -108,15 +98,7 @@ impl<R: Real> Finger<R> {
     /// (`newton_dual`, on `solve::newton`) under load continuation (`solve::continuation`: the
     /// increment doubles on success, halves on failure, down to `min_step`), from a secant
     /// predictor; each accepted step stays on the physical branch (`same_branch`).
-    pub(super) fn newton_joint(
-        &self,
-        k: usize,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        tol: R,
-        max_iter: u32,
-        min_step: R,
-    ) -> Result<(JointState<R>, u32), Error> {
+    pub(super) fn newton_joint(&self, k: usize, c: &[Mat3<R>; MAX_SUB], tension: R, tol: R, max_iter: u32, min_step: R) -> Result<(JointState<R>, u32), Error> {
         if tension == R::zero() {
             let st = self.marched(c, tension, [self.p.hinge_len(), self.p.e], None).map_err(|_| Error::Singular { what: "joint" })?;
             return Ok((st, 0));
@@ -166,12 +148,11 @@ impl<R: Real> Finger<R> {
         };
         let mut why_failed = None;
         let mut track = |from: R, to: R| -> Result<(), Step<Option<MarchError>>> {
-            step(from, to).map_err(|e| {
+            step(from, to).inspect_err(|&e| {
                 let (Step::Retry(w) | Step::Stop(w)) = e;
                 if w.is_some() {
                     why_failed = w;
                 }
-                e
             })
         };
         match continuation::run(R::one(), min_step / tension, None, &mut track) {
@@ -180,9 +161,7 @@ impl<R: Real> Finger<R> {
                 let done = tension * lam;
                 Err(match why_failed {
                     Some(MarchError::Contact) => Error::Contact { joint: k + 1, tension: failed_at.to_f64() },
-                    _ if done > R::zero() && self.near_limit_point(c, done, &last) => {
-                        Error::LimitPoint { joint: k + 1, tension: done.to_f64() }
-                    }
+                    _ if done > R::zero() && self.near_limit_point(c, done, &last) => Error::LimitPoint { joint: k + 1, tension: done.to_f64() },
                     _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
                 })
             }
@@ -213,23 +192,14 @@ impl<R: Real> Finger<R> {
     /// from `guess` (link k's proximal hole, the joint's proximal frame) when given, accepted
     /// if the hole moved less than half a hinge length; else, or if it fails, load continuation
     /// from the straight joint. Additive, for the inverse model's per-joint root finding.
-    pub fn joint_equilibrium(
-        &self,
-        joint: usize,
-        c: &[Mat3<R>; MAX_SUB],
-        tension: R,
-        guess: Option<[R; 2]>,
-        tol: R,
-    ) -> Result<JointEquilibrium<R>, Error> {
+    pub fn joint_equilibrium(&self, joint: usize, c: &[Mat3<R>; MAX_SUB], tension: R, guess: Option<[R; 2]>, tol: R) -> Result<JointEquilibrium<R>, Error> {
         if !tension.is_finite() || tension < R::zero() {
             return Err(Error::Input { input: "tension", reason: "a cable cannot push: tension must be >= 0" });
         }
         let tol = tol.max(self.resolution());
         let k = joint.max(1) - 1;
         let warm = guess.and_then(|b| match self.newton_dual(c, tension, b, tol, 40) {
-            Ok((st, it)) if norm2([st.hole[0] - b[0], st.hole[1] - b[1]]) <= self.p.hinge_len() / R::from_f64(2.0) => {
-                Some((st, it))
-            }
+            Ok((st, it)) if norm2([st.hole[0] - b[0], st.hole[1] - b[1]]) <= self.p.hinge_len() / R::from_f64(2.0) => Some((st, it)),
             _ => None,
         });
         let (st, iterations) = match warm {

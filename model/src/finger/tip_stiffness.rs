@@ -58,9 +58,7 @@ impl<R: Real> Finger<R> {
         }
         x[2 * n] = sol.tip().x;
         x[2 * n + 1] = sol.tip().y;
-        let (r, _) = self
-            .coupled_residual(&c, sol.tension, sol.tip_force, &x)
-            .map_err(|_| Error::Contact { joint: 0, tension: sol.tension.to_f64() })?;
+        let (r, _) = self.coupled_residual(&c, sol.tension, sol.tip_force, &x).map_err(|_| Error::Contact { joint: 0, tension: sol.tension.to_f64() })?;
         Ok(r[..2 * n + 2].iter().fold(R::zero(), |a, &v| a + v * v).sqrt())
     }
 

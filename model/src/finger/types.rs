@@ -2,10 +2,10 @@
 //! a solved posture, how the equilibrium branch ends, one joint's equilibrium and march.
 //! No solving here (see the solvers in `finger`'s other modules).
 
+use super::JointStiffness;
 use crate::mat3::{self, Mat3};
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
-use super::JointStiffness;
 
 /// A planar pose: position (mm) and angle (rad, positive toward +y).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -82,13 +82,7 @@ impl<R: Real> Compliances<R> {
                 c[k][j] = cast_mat(&self.c[k][j]);
             }
         }
-        Compliances {
-            n: self.n,
-            m: self.m,
-            c,
-            thickness: self.thickness.map(|x| S::from_f64(x.to_f64())),
-            volts: self.volts.map(|x| S::from_f64(x.to_f64())),
-        }
+        Compliances { n: self.n, m: self.m, c, thickness: self.thickness.map(|x| S::from_f64(x.to_f64())), volts: self.volts.map(|x| S::from_f64(x.to_f64())) }
     }
 }
 

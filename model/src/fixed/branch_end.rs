@@ -5,9 +5,9 @@
 //! secants): the tension returned is one the fixed-point branch was seen to hold.
 use super::forward::{FixedFinger, MarchError};
 use super::q::{Mm, Nt, Q};
-use crate::params::MAX_JOINTS;
 use crate::error::Error;
 use crate::finger::BranchEnd;
+use crate::params::MAX_JOINTS;
 
 /// Search bound, N: 7/8 of the Q22 range.
 pub const SEARCH_BOUND_N: i32 = 448;

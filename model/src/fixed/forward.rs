@@ -2,12 +2,12 @@
 //! position with the float march's recurrence (`Finger::march_joint` in `PoseFrame` with
 //! `ByComplianceLoaded`, its turn rule without an FPU; docs/model.md "Which march to call"), then the chain of
 //! links and the cable excursion. Same equations as the float model, Q formats of [`q`].
-use super::q::{narrow, shr_round, Mm, Nmm, Nt, Q, Rad, Scaled, Unit};
+use super::q::{narrow, shr_round, Mm, Nmm, Nt, Rad, Scaled, Unit, Q};
 use super::trig::{hypot, hypot_inv, sin_cos};
 use crate::de;
 use crate::error::Error;
-use crate::mat3;
 use crate::finger::{uniform_beam_compliance, Compliances, Finger, Pose, Solution};
+use crate::mat3;
 use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -120,11 +120,7 @@ impl FixedPose {
     /// This pose moved by (dx, dy, dθ) given in its own frame.
     fn then(&self, dx: Mm, dy: Mm, dtheta: Rad) -> Self {
         let (s, c) = sin_cos(self.theta);
-        FixedPose {
-            x: self.x + narrow(c.wide(dx) - s.wide(dy), 52),
-            y: self.y + narrow(s.wide(dx) + c.wide(dy), 52),
-            theta: self.theta + dtheta,
-        }
+        FixedPose { x: self.x + narrow(c.wide(dx) - s.wide(dy), 52), y: self.y + narrow(s.wide(dx) + c.wide(dy), 52), theta: self.theta + dtheta }
     }
 }
 
@@ -287,11 +283,7 @@ impl FixedFinger {
             let qy: Mm = narrow(q0[1].saturating_add(cj.m[1][2] as i64 * sm.0 as i64), cj.t[1]);
             let qt: Rad = narrow(q0[2].saturating_add(cj.m[2][2] as i64 * sm.0 as i64), cj.t[2]);
             let ax = qx + self.sub_len;
-            pose = FixedPose {
-                x: pose.x + narrow(co.wide(ax) - s.wide(qy), 52),
-                y: pose.y + narrow(s.wide(ax) + co.wide(qy), 52),
-                theta: pose.theta + qt,
-            };
+            pose = FixedPose { x: pose.x + narrow(co.wide(ax) - s.wide(qy), 52), y: pose.y + narrow(s.wide(ax) + co.wide(qy), 52), theta: pose.theta + qt };
             // the turn rule of the float march on a core without an FPU: the sub-element's own
             // (sin, cos), composed
             let (sd, cd) = sin_cos(qt);
@@ -421,7 +413,11 @@ impl FixedFinger {
             let s1 = s1.and_then(|(_, h)| {
                 let d = span_v(&h);
                 let moved = (d[0] - s0[0]).abs().max((d[1] - s0[1]).abs());
-                if 4 * moved <= s0[0].abs().max(s0[1].abs()) { Ok(h) } else { Err(MarchError::Contact) }
+                if 4 * moved <= s0[0].abs().max(s0[1].abs()) {
+                    Ok(h)
+                } else {
+                    Err(MarchError::Contact)
+                }
             });
             match s1 {
                 Ok(h) => {

@@ -8,7 +8,7 @@
 //! ends by following its branch from 0 N, the midpoint of the feasible interval. Not here: fmax.
 use super::branch_end::SEARCH_BOUND_N;
 use super::forward::{cmat, CMat, FixedFinger, MarchError};
-use super::q::{Mm, Nt, Q, Rad};
+use super::q::{Mm, Nt, Rad, Q};
 use crate::de;
 use crate::error::Error;
 use crate::finger::Finger;
@@ -189,7 +189,7 @@ impl<'a, R: Real> FixedInverseDirect<'a, R> {
 
     /// As [`FixedInverse::solve`].
     pub fn solve(&self, angles: &[Rad], tension: Nt) -> Result<FixedPoseSolution, Error> {
-        solve_by(&self.fwd, self.t_rest, self.t_ceiling, |u| self.at(u), angles, tension)
+        solve_by(self.fwd, self.t_rest, self.t_ceiling, |u| self.at(u), angles, tension)
     }
 
     /// Without a tension: the tension by the float inverse's rule ([`tension_rule`]), then
@@ -266,7 +266,11 @@ fn tension_rule(fwd: &FixedFinger, at: impl Fn(i64) -> Result<[CMat; MAX_SUB], E
     } else {
         let m = &mut mids[..n];
         m.sort_unstable();
-        if n % 2 == 1 { m[n / 2] } else { Q(m[n / 2 - 1].0 + (m[n / 2].0 - m[n / 2 - 1].0) / 2) }
+        if n % 2 == 1 {
+            m[n / 2]
+        } else {
+            Q(m[n / 2 - 1].0 + (m[n / 2].0 - m[n / 2 - 1].0) / 2)
+        }
     };
     Ok(TensionRule { tension, interval, feasible, evaluations: evals })
 }
@@ -377,7 +381,14 @@ fn hold_tension(fwd: &FixedFinger, c: &[CMat; MAX_SUB], angle: Rad, joint: usize
 
 /// Each joint's stack thickness that holds `angles` at `tension`, the compliances at table
 /// position `u` from `at`.
-fn solve_by(fwd: &FixedFinger, t_rest: Mm, t_ceiling: Mm, at: impl Fn(i64) -> Result<[CMat; MAX_SUB], Error>, angles: &[Rad], tension: Nt) -> Result<FixedPoseSolution, Error> {
+fn solve_by(
+    fwd: &FixedFinger,
+    t_rest: Mm,
+    t_ceiling: Mm,
+    at: impl Fn(i64) -> Result<[CMat; MAX_SUB], Error>,
+    angles: &[Rad],
+    tension: Nt,
+) -> Result<FixedPoseSolution, Error> {
     {
         let n = fwd.n;
         if angles.len() != n {
@@ -401,7 +412,8 @@ fn solve_by(fwd: &FixedFinger, t_rest: Mm, t_ceiling: Mm, at: impl Fn(i64) -> Re
             let mut hole = None;
             let mut g = |u: i64, hole: &mut Option<[Mm; 2]>, evals: &mut u32| -> Result<i64, Error> {
                 *evals += 1;
-                let (end, h) = fwd.joint(&at(u)?, tension, *hole, &mut iters).map_err(|_| Error::NotConverged { iterations: *evals, residual: f64::INFINITY })?;
+                let (end, h) =
+                    fwd.joint(&at(u)?, tension, *hole, &mut iters).map_err(|_| Error::NotConverged { iterations: *evals, residual: f64::INFINITY })?;
                 *hole = Some(h);
                 Ok(end.theta.0 as i64 - target.0 as i64)
             };
@@ -498,14 +510,28 @@ mod tests {
         let top = crate::inverse::Options::<f64>::default().top;
         let inv = FixedInverseDirect::new(&f, &fwd, f.ceiling_in_force(None) * top).unwrap();
         let (mut worst_p, mut worst_deg) = (0f64, 0f64);
-        for (p, v) in [(0.5, [0.0, 2000.0, 4000.0]), (0.8, [1000.0, 3000.0, 5000.0]), (1.0, [9000.0, 5000.0, 100.0]), (1.5, [2000.0; 3]), (0.3, [8000.0; 3]), (4.0, [0.0, 6000.0, 9000.0])] {
+        for (p, v) in [
+            (0.5, [0.0, 2000.0, 4000.0]),
+            (0.8, [1000.0, 3000.0, 5000.0]),
+            (1.0, [9000.0, 5000.0, 100.0]),
+            (1.5, [2000.0; 3]),
+            (0.3, [8000.0; 3]),
+            (4.0, [0.0, 6000.0, 9000.0]),
+        ] {
             let want = f.solve(p, &v, Method::converged()).unwrap();
             let ang = [want.joint_angle[0], want.joint_angle[1], want.joint_angle[2]];
             let fl = crate::inverse::solve_pose(&f, &ang, None).unwrap();
             let (sol, interval) = inv.solve_free(&ang.map(Rad::from_f64), &mut Q(0)).unwrap();
             let rel = |a: Nt, b: f64| (a.to_f64() - b).abs() / b;
             worst_p = worst_p.max(rel(sol.tension, fl.tension)).max(rel(interval[0], fl.interval[0])).max(rel(interval[1], fl.interval[1]));
-            assert!(fl.interval[0] <= p * (1.0 + 1e-9) && p <= fl.interval[1] * (1.0 + 1e-9), "{p} {v:?}: f64 {} {:?} fixed {} {:?}", fl.tension, fl.interval, sol.tension.to_f64(), [interval[0].to_f64(), interval[1].to_f64()]);
+            assert!(
+                fl.interval[0] <= p * (1.0 + 1e-9) && p <= fl.interval[1] * (1.0 + 1e-9),
+                "{p} {v:?}: f64 {} {:?} fixed {} {:?}",
+                fl.tension,
+                fl.interval,
+                sol.tension.to_f64(),
+                [interval[0].to_f64(), interval[1].to_f64()]
+            );
             let volts = inv.volts(&sol).unwrap();
             let back = f.solve(sol.tension.to_f64(), &volts[..3], Method::converged()).unwrap();
             for k in 0..3 {

@@ -26,7 +26,13 @@ pub type Unit = Q<30>;
 #[inline(always)]
 pub fn shr_round(v: i64, s: i32) -> i64 {
     if s <= -63 {
-        if v == 0 { 0 } else if v > 0 { i64::MAX } else { i64::MIN }
+        if v == 0 {
+            0
+        } else if v > 0 {
+            i64::MAX
+        } else {
+            i64::MIN
+        }
     } else if s <= 0 {
         v.saturating_mul(1i64 << (-s))
     } else if s >= 64 {
@@ -58,14 +64,26 @@ impl<const F: i32> Q<F> {
         if v.is_nan() {
             return Self::MAX;
         }
-        Q(if v >= i32::MAX as f64 { i32::MAX } else if v <= i32::MIN as f64 { i32::MIN } else { libm::round(v) as i32 })
+        Q(if v >= i32::MAX as f64 {
+            i32::MAX
+        } else if v <= i32::MIN as f64 {
+            i32::MIN
+        } else {
+            libm::round(v) as i32
+        })
     }
     pub fn from_f32(x: f32) -> Self {
         let v = x * (1u64 << F) as f32;
         if v.is_nan() {
             return Self::MAX;
         }
-        Q(if v >= 2147483520.0 { i32::MAX } else if v <= -2147483648.0 { i32::MIN } else { libm::roundf(v) as i32 })
+        Q(if v >= 2147483520.0 {
+            i32::MAX
+        } else if v <= -2147483648.0 {
+            i32::MIN
+        } else {
+            libm::roundf(v) as i32
+        })
     }
     /// From the model's float type: through f32 when that is the type (no soft-float f64
     /// arithmetic in an f32 image), else through f64.

@@ -1,7 +1,7 @@
 //! sin and cos of a [`Rad`] (Q28) angle in [`Unit`] (Q30): reduction by the nearest multiple
 //! of pi/2, then Taylor polynomials on [-pi/4, pi/4] (degree 9 / 10, Horner, 64-bit products;
 //! truncation below 2e-9); the square root of a 64-bit value.
-use super::q::{Q, Rad, Unit};
+use super::q::{Rad, Unit, Q};
 
 const FRAC_2_PI_Q30: i64 = 683565276; // 2/pi 2^30
 const PI_2_Q30: i64 = 1686629713; // pi/2 2^30, truncated
@@ -13,7 +13,7 @@ pub fn sin_cos(x: Rad) -> (Unit, Unit) {
     let xq = x.0 as i64; // Q28
     let k = ((xq * FRAC_2_PI_Q30) + (1i64 << 57)) >> 58;
     let r = (xq << 2) - k * PI_2_Q30 - ((k * PI_2_LO_Q60) >> 30); // Q30, |r| <= pi/4
-    // |r| <= pi/4: every value below fits an i32 at Q30, so each product is one SMULL
+                                                                  // |r| <= pi/4: every value below fits an i32 at Q30, so each product is one SMULL
     let r = r as i32;
     let mul = |a: i32, b: i32| ((a as i64 * b as i64 + (1 << 29)) >> 30) as i32;
     let u = mul(r, r); // r^2, Q30
@@ -88,7 +88,7 @@ pub fn hypot_inv(x: Q<22>, y: Q<22>) -> Option<(Q<22>, Q<26>)> {
         r = mul(r, three.saturating_sub(mul(z, mul(r, r)))) >> 1;
     }
     let sqrt_v = mul(z, r); // Q30, in [1, 2)
-    // |(x, y)|^2 = s 2^-44 = v 2^(18 - l): |.| = sqrt(v) 2^((18 - l) / 2), 1/|.| = r 2^((l - 18) / 2)
+                            // |(x, y)|^2 = s 2^-44 = v 2^(18 - l): |.| = sqrt(v) 2^((18 - l) / 2), 1/|.| = r 2^((l - 18) / 2)
     let h = (18 - l) / 2;
     let span = if 8 - h >= 0 { sqrt_v >> (8 - h) } else { sqrt_v.checked_shl((h - 8) as u32)? };
     let inv = if h + 4 >= 0 { r >> (h + 4) } else { r.checked_shl((-h - 4) as u32)? };

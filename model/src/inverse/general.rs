@@ -10,6 +10,7 @@
 //! - `hold`: a joint held at its target angle (tension or thickness);
 //! - `qn`: the quasi-Newton joint solve;
 //! - `tabled`: the path from the branch table (`solve_pose_tabled`).
+//!
 //! Here: the general solve (`solve`) and the finger without stacks.
 
 use super::table::{BranchTable, TableEnd, TABLE_BAND};
@@ -75,7 +76,6 @@ pub(super) struct Gen<'a, R> {
     /// Newton iterations spent in all.
     iters: u32,
 }
-
 
 /// Each joint's two tension ends (softest, stiffest stack), as `choose_tension` takes them.
 fn tension_ends<R: Real>(lo: &[Held<R>; MAX_JOINTS], hi: &[Held<R>; MAX_JOINTS], n: usize) -> [[R; 2]; MAX_JOINTS] {
@@ -197,9 +197,7 @@ pub(super) fn solve<R: Real>(
     }
     // 2-3. the feasible interval and the tension (`choose_tension`); a negative angle is
     //      outside every tension's reach
-    let negative = (0..n).filter(|&k| angles[k] < R::zero()).min_by(|&a, &b| {
-        angles[a].partial_cmp(&angles[b]).unwrap_or(core::cmp::Ordering::Equal)
-    });
+    let negative = (0..n).filter(|&k| angles[k] < R::zero()).min_by(|&a, &b| angles[a].partial_cmp(&angles[b]).unwrap_or(core::cmp::Ordering::Equal));
     let (interval, pt, worst) = choose_tension(&tension_ends(&lo, &hi, n)[..n], tension, negative, g.rel);
     out.interval = interval;
     if let Some(k) = worst {
@@ -248,13 +246,7 @@ pub(super) fn solve<R: Real>(
 
 /// The finger without stacks: only the tension is free (the parent's rule).
 #[inline(never)]
-fn no_stacks<R: Real>(
-    g: &mut Gen<'_, R>,
-    angles: &[R],
-    tension: Option<R>,
-    opts: &Options<R>,
-    out: &mut PoseSolution<R>,
-) -> Result<(), Error> {
+fn no_stacks<R: Real>(g: &mut Gen<'_, R>, angles: &[R], tension: Option<R>, opts: &Options<R>, out: &mut PoseSolution<R>) -> Result<(), Error> {
     let n = out.n;
     let z = R::zero();
     let lh = g.p.hinge_len();
@@ -270,10 +262,7 @@ fn no_stacks<R: Real>(
             h[k] = h[k - 1];
             out.sub_q[k] = out.sub_q[k - 1];
         } else {
-            let hint = (0..k)
-                .rev()
-                .find(|&j| h[j].tension > z)
-                .map(|j| (angles[k] * h[j].tension / angles[j], h[j].st.hole));
+            let hint = (0..k).rev().find(|&j| h[j].tension > z).map(|j| (angles[k] * h[j].tension / angles[j], h[j].st.hole));
             let jac = (0..k).rev().find_map(|j| h[j].jac);
             h[k] = g.hold_tension(k + 1, angles[k], &c, z, s_lin, hint, jac, None, &mut out.sub_q[k])?;
         }
@@ -291,12 +280,7 @@ fn no_stacks<R: Real>(
     if let Some(k) = worst {
         let cl = s_lin / g.p.e;
         let have = g.compliance(angles[k], h[k].tension, &h[k].st, cl).to_f64();
-        return Err(Error::Unreachable {
-            joint: k + 1,
-            needed: g.compliance(angles[k], pt, &h[k].st, cl).to_f64(),
-            min: have,
-            max: have,
-        });
+        return Err(Error::Unreachable { joint: k + 1, needed: g.compliance(angles[k], pt, &h[k].st, cl).to_f64(), min: have, max: have });
     }
     out.tension = pt;
     // the states at the chosen tension: the forward model's posture there (0 V: the hinges

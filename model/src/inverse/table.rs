@@ -300,12 +300,8 @@ impl<R: Real> BranchTable<R> {
                     // `cubic` in s from node i, shifted to s from node a (Taylor shift by a - i)
                     let [c0, c1, c2, c3] = cubic4([0, 1, 2, 3].map(|n| nodes[i - 1 + n][e][c]));
                     let (two, three) = (R::from_f64(2.0), R::from_f64(3.0));
-                    self.grid[a][e][c] = [
-                        c0 + shift * (c1 + shift * (c2 + shift * c3)),
-                        c1 + shift * (two * c2 + shift * three * c3),
-                        c2 + shift * three * c3,
-                        c3,
-                    ];
+                    self.grid[a][e][c] =
+                        [c0 + shift * (c1 + shift * (c2 + shift * c3)), c1 + shift * (two * c2 + shift * three * c3), c2 + shift * three * c3, c3];
                 }
             }
         }
@@ -458,11 +454,8 @@ impl<R: Real> BranchTable<R> {
         if !(tension.is_finite() && c.n == n) {
             return None;
         }
-        let h = if tension > R::zero() && tension < self.grid_top {
-            self.grid_holes(tension)?
-        } else {
-            self.thickness_quadratic(&self.branch_holes(tension)?)?
-        };
+        let h =
+            if tension > R::zero() && tension < self.grid_top { self.grid_holes(tension)? } else { self.thickness_quadratic(&self.branch_holes(tension)?)? };
         let [t_top, t0, tm] = self.thickness;
         let slack = (t0 - t_top) * R::from_f64(1e-3);
         let (lo, hi) = (t_top - slack, t0 + slack);

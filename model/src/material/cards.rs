@@ -17,11 +17,7 @@ const NO_BRANCH: Branch = Branch::NONE;
 pub const VHB_4905: Card = Card {
     name: "VHB-4905",
     g_eq_mpa: 0.013_4,
-    branches: [
-        Branch { g_mpa: 0.026_06, tau_s: 0.607_4 },
-        Branch { g_mpa: 0.026_53, tau_s: 6.56 },
-        Branch { g_mpa: 0.010_83, tau_s: 61.25 },
-    ],
+    branches: [Branch { g_mpa: 0.026_06, tau_s: 0.607_4 }, Branch { g_mpa: 0.026_53, tau_s: 6.56 }, Branch { g_mpa: 0.010_83, tau_s: 61.25 }],
     branch_count: 3,
     eps_r: 4.8,
     breakdown: Breakdown { field0_v_per_um: 18.0 },

@@ -79,7 +79,15 @@ impl<R: Real> Channel<R> {
 /// The settling time of a channel from rest to within `tol` (relative) of the thickness of
 /// `target_v` held forever, s, running [`Channel::step`] at the relaxation's step; None when it
 /// has not settled after `max_steps` steps. 0 s for 0 V.
-pub fn settling_time<R: Real>(law: &StackLaw<R>, relax: &Relaxation<R>, lim: &DriveLimits<R>, mode: Mode, target_v: R, tol: R, max_steps: u32) -> Result<Option<R>, Error> {
+pub fn settling_time<R: Real>(
+    law: &StackLaw<R>,
+    relax: &Relaxation<R>,
+    lim: &DriveLimits<R>,
+    mode: Mode,
+    target_v: R,
+    tol: R,
+    max_steps: u32,
+) -> Result<Option<R>, Error> {
     if !(target_v > R::zero()) {
         return Ok(Some(R::zero()));
     }

@@ -52,7 +52,7 @@ pub fn illinois<R: Real, E>(
             b = c;
             fb = fc;
             if side == 1 {
-                fa = fa / R::from_f64(2.0);
+                fa /= R::from_f64(2.0);
             }
             side = 1;
         }
@@ -67,14 +67,7 @@ pub fn illinois<R: Real, E>(
 /// of the target width past it, when that lies inside the bracket and the last two trials
 /// shrank it by half or more; else the midpoint. Stops when hi - lo <= rel * hi. Returns
 /// [lo, hi] and the trials.
-pub fn boundary<R: Real>(
-    mut lo: R,
-    mut hi: R,
-    rel: R,
-    max_iter: u32,
-    mut estimate: Option<R>,
-    probe: &mut dyn FnMut(R) -> Option<Option<R>>,
-) -> ([R; 2], u32) {
+pub fn boundary<R: Real>(mut lo: R, mut hi: R, rel: R, max_iter: u32, mut estimate: Option<R>, probe: &mut dyn FnMut(R) -> Option<Option<R>>) -> ([R; 2], u32) {
     let two = R::from_f64(2.0);
     let mut widths = [hi - lo; 2];
     for it in 0..max_iter {
@@ -261,7 +254,7 @@ pub fn increasing_root<R: Real, S: Copy, E: Copy>(
             (_, Some(b)) => b.x - b.h / slope,
             _ => (l_x + x) / two,
         };
-        let inside = xn.is_finite() && xn > l_x && r_x.map_or(true, |rx| xn < rx);
+        let inside = xn.is_finite() && xn > l_x && r_x.is_none_or(|rx| xn < rx);
         match r_x {
             None => {
                 // unbounded: grow at most fourfold per step

@@ -16,12 +16,7 @@ pub enum Step<E> {
 /// Run `step(from, to)` from λ = 0 to 1, starting with `first` and never below `min_step`.
 /// Returns the accepted steps, or the λ reached and the last refusal (`stalled` when λ
 /// cannot advance in the scalar type).
-pub fn run<R: Real, E: Copy>(
-    first: R,
-    min_step: R,
-    stalled: E,
-    step: &mut dyn FnMut(R, R) -> Result<(), Step<E>>,
-) -> Result<u32, (R, E)> {
+pub fn run<R: Real, E: Copy>(first: R, min_step: R, stalled: E, step: &mut dyn FnMut(R, R) -> Result<(), Step<E>>) -> Result<u32, (R, E)> {
     let one = R::one();
     let mut done = R::zero();
     let mut h = first.min(one);
@@ -42,7 +37,7 @@ pub fn run<R: Real, E: Copy>(
             }
             Err(Step::Stop(e)) => return Err((done, e)),
             Err(Step::Retry(e)) => {
-                h = h / R::from_f64(2.0);
+                h /= R::from_f64(2.0);
                 if h < min_step {
                     return Err((done, e));
                 }

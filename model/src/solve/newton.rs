@@ -119,7 +119,7 @@ pub fn solve<R: Real, const N: usize, S: Equations<R, N> + ?Sized>(
                 }
                 Err(e) => last = Some(e),
             }
-            lambda = lambda / two;
+            lambda /= two;
         }
         if !accepted {
             // at the scalar's resolution the residual stops falling: that is convergence

@@ -49,9 +49,7 @@ impl<E> Failure<E> {
     pub fn iterations(&self) -> u32 {
         match *self {
             Failure::Domain(_) => 0,
-            Failure::Singular { iterations } | Failure::Stalled { iterations, .. } | Failure::MaxIter { iterations, .. } => {
-                iterations
-            }
+            Failure::Singular { iterations } | Failure::Stalled { iterations, .. } | Failure::MaxIter { iterations, .. } => iterations,
         }
     }
     /// The caller's refusal behind this failure, if one was met.

@@ -55,7 +55,11 @@ pub fn forward(f: &Finger<f64>, frac: f64, vfrac: [f64; 3]) -> Result<&'static s
             let finite = s.nodes[..=n].iter().all(|q| q.x.is_finite() && q.y.is_finite() && q.theta.is_finite())
                 && s.residual.is_finite()
                 && s.cable_excursion.is_finite();
-            if finite { Ok("answer") } else { Err(format!("forward P={p} V={v:?}: non-finite {s:?}")) }
+            if finite {
+                Ok("answer")
+            } else {
+                Err(format!("forward P={p} V={v:?}: non-finite {s:?}"))
+            }
         }
         Err(e) => refusal(&e).ok_or_else(|| format!("forward P={p} V={v:?}: {e:?}")),
     }

@@ -6,14 +6,12 @@
 //! 33 % limit nor the breakdown field.
 
 use finger_model::material::drive::{Channel, DriveLimits, Mode};
-use finger_model::material::{
-    equilibrium_ratio, hold_ceiling, hold_ratio, reference::advance_reference, Relaxation, StackLaw, StackState, CARDS,
-    LIMIT_RATIO,
-};
+use finger_model::material::{equilibrium_ratio, hold_ceiling, hold_ratio, reference::advance_reference, Relaxation, StackLaw, StackState, CARDS, LIMIT_RATIO};
 
 /// xorshift64*: a uniform number in [0, 1).
 pub struct Rng(pub u64);
 impl Rng {
+    #[allow(clippy::should_implement_trait)] // a generator, never exhausted: not an iterator
     pub fn next(&mut self) -> f64 {
         self.0 ^= self.0 >> 12;
         self.0 ^= self.0 << 25;
@@ -53,7 +51,13 @@ pub fn guarded_history(rng: &mut Rng, reference: bool) -> Result<Outcome, String
     for _ in 0..1 + (rng.next() * 6.0) as usize {
         let ticks = 1 + (rng.next() * 300.0) as usize;
         let r = rng.next();
-        let command = if r < 0.1 { 0.0 } else if r < 0.2 { 20_000.0 } else { (1.5 * rng.next()) as f32 * hold };
+        let command = if r < 0.1 {
+            0.0
+        } else if r < 0.2 {
+            20_000.0
+        } else {
+            (1.5 * rng.next()) as f32 * hold
+        };
         let target = command.min(hold);
         let mode = if rng.next() < 0.4 { Mode::Shaped } else { Mode::Plain };
         // 1..1e5 V/s, or no slew limit

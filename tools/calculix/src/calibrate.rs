@@ -122,10 +122,7 @@ pub fn stack_factors(p: &Params<f64>, hinge: [f64; 4], t: f64, fe: &Mat3<f64>) -
         let h = 1e-6;
         let ra = at([g[0] * (1.0 + h), g[1]])?;
         let rb = at([g[0], g[1] * (1.0 + h)])?;
-        let j = [
-            [(ra[0] - r[0]) / (g[0] * h), (rb[0] - r[0]) / (g[1] * h)],
-            [(ra[1] - r[1]) / (g[0] * h), (rb[1] - r[1]) / (g[1] * h)],
-        ];
+        let j = [[(ra[0] - r[0]) / (g[0] * h), (rb[0] - r[0]) / (g[1] * h)], [(ra[1] - r[1]) / (g[0] * h), (rb[1] - r[1]) / (g[1] * h)]];
         let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
         if det.abs() < 1e-300 {
             return Err("singular stack calibration".into());

@@ -313,10 +313,8 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
             let _ = writeln!(s, "*INITIAL CONDITIONS, TYPE=TEMPERATURE\nNALL, 0.");
             write_bcs(&mut s, mesh);
             for (i, t) in tensions.iter().enumerate() {
-                let _ = writeln!(
-                    s,
-                    "*STEP, NLGEOM, INC=2000\n*STATIC\n0.25, 1., 1.e-6, 0.5\n*TEMPERATURE\nNALL, {t:.9e}\n*NODE PRINT, NSET=NOUT\nU\n*END STEP"
-                );
+                let _ =
+                    writeln!(s, "*STEP, NLGEOM, INC=2000\n*STATIC\n0.25, 1., 1.e-6, 0.5\n*TEMPERATURE\nNALL, {t:.9e}\n*NODE PRINT, NSET=NOUT\nU\n*END STEP");
                 times.push((i + 1) as f64);
             }
         }
@@ -346,8 +344,7 @@ fn cable_springs(mesh: &AnyMesh, holes: &[usize]) -> Vec<(String, Vec<(usize, us
         AnyMesh::Three(m) => {
             let line = |h: usize| -> Vec<usize> {
                 let n = m.nodes[h];
-                let mut l: Vec<usize> =
-                    (0..m.nodes.len()).filter(|&i| (m.nodes[i][0] - n[0]).abs() < 1e-6 && (m.nodes[i][1] - n[1]).abs() < 1e-6).collect();
+                let mut l: Vec<usize> = (0..m.nodes.len()).filter(|&i| (m.nodes[i][0] - n[0]).abs() < 1e-6 && (m.nodes[i][1] - n[1]).abs() < 1e-6).collect();
                 l.sort_by(|&a, &b| m.nodes[a][2].total_cmp(&m.nodes[b][2]));
                 l
             };
@@ -361,7 +358,13 @@ fn cable_springs(mesh: &AnyMesh, holes: &[usize]) -> Vec<(String, Vec<(usize, us
             ];
             for w in lines.windows(2) {
                 for iz in 0..=nz {
-                    let set = if iz % 2 == 1 { 2 } else if iz == 0 || iz == nz { 0 } else { 1 };
+                    let set = if iz % 2 == 1 {
+                        2
+                    } else if iz == 0 || iz == nz {
+                        0
+                    } else {
+                        1
+                    };
                     sets[set].1.push((w[0][iz], w[1][iz]));
                 }
             }

@@ -58,9 +58,10 @@ pub fn section_pose(mesh: &AnyMesh, nodes: &[usize], u: &BTreeMap<usize, [f64; 2
         cs += ax * bx + ay * by;
     }
     let theta = sn.atan2(cs);
-    // the centre (x0, 0): the mean moved by R(theta) (0 - mean offset)
+    // the centre (rx, 0) on the section's line: the mean moved by R(theta) of its offset
+    // from the mean, (0, -ry)
     let (s, c) = theta.sin_cos();
-    let (ox, oy) = (-(rx - rx), -ry);
+    let (ox, oy) = (0.0, -ry);
     SectionPose { x: px + c * ox - s * oy, y: py + s * ox + c * oy, theta }
 }
 
@@ -93,14 +94,7 @@ pub fn finger_mesh(p: &Params<f64>, stack_mm: &[f64], kind: Kind, d: &Density) -
 
 /// The finger clamped at x = 0, pulled by the cable (constant tension through every guide hole,
 /// anchored at the tip), NLGEOM: one ccx run, one state per tension (increasing).
-pub fn finger_under_cable(
-    p: &Params<f64>,
-    stack_mm: &[f64],
-    kind: Kind,
-    d: &Density,
-    law: Law,
-    tensions: &[f64],
-) -> Result<Vec<FeState>, FeError> {
+pub fn finger_under_cable(p: &Params<f64>, stack_mm: &[f64], kind: Kind, d: &Density, law: Law, tensions: &[f64]) -> Result<Vec<FeState>, FeError> {
     match finger_under_cable_partial(p, stack_mm, kind, d, law, tensions)? {
         (s, None) => Ok(s),
         (_, Some(e)) => Err(e),
@@ -249,7 +243,7 @@ pub fn face_loads(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, xf: f64, w: [f64;
     let mut ys: Vec<f64> = mesh.at_x(xf).iter().map(|&i| mesh.xy(i)[1]).collect();
     ys.sort_by(f64::total_cmp);
     ys.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-    if ys.len() < 3 || ys.len() % 2 == 0 {
+    if ys.len() < 3 || ys.len().is_multiple_of(2) {
         return Err(FeError::Mesh(format!("face x = {xf}: {} node rows", ys.len())));
     }
     let g = [(-(0.6f64).sqrt(), 5.0 / 9.0), (0.0, 8.0 / 9.0), ((0.6f64).sqrt(), 5.0 / 9.0)];

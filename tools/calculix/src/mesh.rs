@@ -161,7 +161,13 @@ pub fn mesh2(p: &Params<f64>, segs: &[Segment], d: &Density) -> Mesh2 {
                     // thickness there (a square root at zero) would move the end's nodes off the
                     // link's, leaving the mesh in two pieces
                     let (u, l) = (x - x0, 2.0 * p.a);
-                    let u = if u < 1e-9 * l { 0.0 } else if u > l * (1.0 - 1e-9) { l } else { u };
+                    let u = if u < 1e-9 * l {
+                        0.0
+                    } else if u > l * (1.0 - 1e-9) {
+                        l
+                    } else {
+                        u
+                    };
                     (notch_thickness(p.b, p.t_min, p.a, u), stack_depth(p, stack_mm, u))
                 }
             }
@@ -173,12 +179,8 @@ pub fn mesh2(p: &Params<f64>, segs: &[Segment], d: &Density) -> Mesh2 {
             // stack rows -2nd..=0 below the body's extensor face
             let mut grid = |m: &mut Mesh2, i: usize, r: i64| -> usize {
                 let (t, h) = shape(xc[i]);
-                let y = if r >= 0 {
-                    -t / 2.0 + t * r as f64 / (2 * ny) as f64
-                } else {
-                    -t / 2.0 + h * r as f64 / (2 * nd) as f64
-                };
-                let corner = i % 2 == 0 && r.rem_euclid(2) == 0;
+                let y = if r >= 0 { -t / 2.0 + t * r as f64 / (2 * ny) as f64 } else { -t / 2.0 + h * r as f64 / (2 * nd) as f64 };
+                let corner = i.is_multiple_of(2) && r.rem_euclid(2) == 0;
                 m.node(&mut map, xc[i], y, corner)
             };
             let mut quad = |m: &mut Mesh2, r0: i64, mat: Material| {

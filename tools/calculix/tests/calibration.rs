@@ -1,10 +1,10 @@
 //! The FE calibration: the calibrated model's small-load element compliance equals the
 //! FE's; the cable's small-load joint angle (NLGEOM springs) agrees with the linear unit loads.
-use finger_model::material::ELASTOSIL_2030;
 use finger_calculix::calibrate::{self, model_element_compliance};
 use finger_calculix::ccx::{Kind, Law};
 use finger_calculix::mesh::Density;
 use finger_calculix::{element_compliance, finger_under_cable};
+use finger_model::material::ELASTOSIL_2030;
 use finger_model::{Calibration, Params};
 
 #[test]
@@ -54,11 +54,8 @@ fn calibrated_finger_reproduces_the_fe_small_load_joint_angle() {
     let t = 0.05;
     let fe = finger_under_cable(&p, &[0.0; 3], Kind::Half3d, &d, Law::NeoHooke, &[t]).unwrap()[0].joint_angle[1];
     let c = run.cal;
-    let cal32 = Calibration::<f32> {
-        hinge: c.hinge.map(|x| x as f32),
-        stack_axial: c.stack_axial.map(|x| x as f32),
-        stack_bending: c.stack_bending.map(|x| x as f32),
-    };
+    let cal32 =
+        Calibration::<f32> { hinge: c.hinge.map(|x| x as f32), stack_axial: c.stack_axial.map(|x| x as f32), stack_bending: c.stack_bending.map(|x| x as f32) };
     let angle = |cal: Calibration<f32>| {
         let f = Finger::<f32>::with_calibration(p.cast(), cal).unwrap();
         f.solve(t as f32, &[0.0; 3], Method::converged()).unwrap().joint_angle[1] as f64

@@ -3,8 +3,8 @@
 //! plate modulus), the tension at which a span closes, and the three-element
 //! model's (finger-model) joint-angle error against this reference for m = 1, 2, 4, 8.
 //! Run: cargo run --release --example continuum_report
-use finger_model::{Finger, Method, Params};
 use continuum::*;
+use finger_model::{Finger, Method, Params};
 
 fn deg(v: &[f64]) -> String {
     v.iter().map(|a| format!("{:8.4}", a.to_degrees())).collect::<Vec<_>>().join(" ")
@@ -23,10 +23,7 @@ fn main() {
                 if let Some(q) = &prev {
                     let da = s.joint_angles.iter().zip(&q.joint_angles).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
                     let dt = ((s.tip.x - q.tip.x).powi(2) + (s.tip.y - q.tip.y).powi(2)).sqrt();
-                    println!(
-                        "| {t} | {stacks:?} | {}/{} | {da:.3e} | {dt:.3e} | {:.2} |",
-                        d.hinge_steps, d.link_steps, prev_d / da
-                    );
+                    println!("| {t} | {stacks:?} | {}/{} | {da:.3e} | {dt:.3e} | {:.2} |", d.hinge_steps, d.link_steps, prev_d / da);
                     prev_d = da;
                 }
                 prev = Some(s);

@@ -95,16 +95,7 @@ impl ContinuumParams {
 
     fn validate(&self) -> Result<(), ContinuumError> {
         let bad = |m: &str| Err(ContinuumError::InvalidInput(m.to_string()));
-        let pos = [
-            ("l", self.l),
-            ("b", self.b),
-            ("w", self.w),
-            ("t_min", self.t_min),
-            ("a", self.a),
-            ("e_b", self.e_b),
-            ("e", self.e),
-            ("e_de", self.e_de),
-        ];
+        let pos = [("l", self.l), ("b", self.b), ("w", self.w), ("t_min", self.t_min), ("a", self.a), ("e_b", self.e_b), ("e", self.e), ("e_de", self.e_de)];
         for (name, v) in pos {
             if !(v.is_finite() && v > 0.0) {
                 return bad(&format!("{name} must be finite and > 0 (got {v})"));
@@ -202,24 +193,32 @@ pub enum ContinuumError {
     InvalidInput(String),
     /// Span `joint` (1-based) fell to `span` <= the floor at tension `tension`
     /// (the first converged continuation step where it happened).
-    Contact { joint: usize, span: f64, tension: f64 },
+    Contact {
+        joint: usize,
+        span: f64,
+        tension: f64,
+    },
     /// Newton failed even with the smallest continuation step, last converged tension given.
-    NoConvergence { tension: f64 },
+    NoConvergence {
+        tension: f64,
+    },
     /// A limit point (fold) of the load path between `from` and `to` (the ramped load:
     /// the tension, or the tip force's largest component when the tension is zero):
     /// the tangent det(∂g/∂z) changed sign, or fell below 1 % of its unloaded value
     /// where continuation could not go on.
-    LimitPoint { from: f64, to: f64 },
+    LimitPoint {
+        from: f64,
+        to: f64,
+    },
 }
 
 impl fmt::Display for ContinuumError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             ContinuumError::InvalidInput(m) => write!(f, "invalid input: {m}"),
-            ContinuumError::Contact { joint, span, tension } => write!(
-                f,
-                "contact: span {joint} is {span:.4} mm (at or below the floor) at P = {tension:.4} N"
-            ),
+            ContinuumError::Contact { joint, span, tension } => {
+                write!(f, "contact: span {joint} is {span:.4} mm (at or below the floor) at P = {tension:.4} N")
+            }
             ContinuumError::NoConvergence { tension } => {
                 write!(f, "no convergence past P = {tension:.4} N")
             }
@@ -336,11 +335,7 @@ impl Segment {
                         dd += e_de * (w * tk * tk * tk / 12.0 + a_de * d * d);
                     }
                 }
-                (
-                    a * (1.0 - cs),
-                    a * sn,
-                    Section { ea, bc, dd, rigid: false, inextensible: false },
-                )
+                (a * (1.0 - cs), a * sn, Section { ea, bc, dd, rigid: false, inextensible: false })
             }
         }
     }
@@ -355,14 +350,7 @@ impl Segment {
 
 /// Integrates one segment with `steps` RK4 steps from `st`; if `rec` is given,
 /// pushes (s0 + s, x, y, theta) after every step.
-fn integrate(
-    seg: &Segment,
-    mut st: State,
-    res: &Resultant,
-    steps: usize,
-    s0: f64,
-    mut rec: Option<&mut Vec<[f64; 4]>>,
-) -> State {
+fn integrate(seg: &Segment, mut st: State, res: &Resultant, steps: usize, s0: f64, mut rec: Option<&mut Vec<[f64; 4]>>) -> State {
     let steps = steps.max(1);
     let h = seg.span() / steps as f64;
     let f = |u: f64, y: &State, c: f64| -> State {
@@ -371,9 +359,7 @@ fn integrate(
         let g = dsdu * c;
         [d[0] * g, d[1] * g, d[2] * g]
     };
-    let add = |y: &State, k: &State, c: f64| -> State {
-        [y[0] + c * k[0], y[1] + c * k[1], y[2] + c * k[2]]
-    };
+    let add = |y: &State, k: &State, c: f64| -> State { [y[0] + c * k[0], y[1] + c * k[1], y[2] + c * k[2]] };
     for i in 0..steps {
         let u = i as f64 * h;
         // In the notch, RK4's quadrature of ds/dφ = a sin φ over the step is
@@ -548,11 +534,7 @@ impl<'a> Finger<'a> {
         } else if stack_mm.len() == p.n {
             stack_mm.to_vec()
         } else {
-            return Err(ContinuumError::InvalidInput(format!(
-                "stack_mm has {} entries, expected 0 or n = {}",
-                stack_mm.len(),
-                p.n
-            )));
+            return Err(ContinuumError::InvalidInput(format!("stack_mm has {} entries, expected 0 or n = {}", stack_mm.len(), p.n)));
         };
         if let Some((k, t)) = stacks.iter().enumerate().find(|(_, t)| !(t.is_finite() && **t >= 0.0)) {
             return Err(ContinuumError::InvalidInput(format!("stack {} thickness {t} mm", k + 1)));
@@ -560,24 +542,11 @@ impl<'a> Finger<'a> {
         let eb = p.body_modulus();
         let hinge = stacks
             .iter()
-            .map(|&tk| Segment::Notch {
-                a: p.a,
-                t_min: p.t_min,
-                b: p.b,
-                w: p.w,
-                e_body: eb,
-                stack: if tk > 0.0 { Some((p.e_de, tk)) } else { None },
-            })
+            .map(|&tk| Segment::Notch { a: p.a, t_min: p.t_min, b: p.b, w: p.w, e_body: eb, stack: if tk > 0.0 { Some((p.e_de, tk)) } else { None } })
             .collect();
         let link = Segment::Uniform {
             len: p.l - 2.0 * p.a,
-            sec: Section {
-                ea: eb * p.w * p.b,
-                bc: 0.0,
-                dd: eb * p.w * p.b.powi(3) / 12.0,
-                rigid: p.rigid_links,
-                inextensible: false,
-            },
+            sec: Section { ea: eb * p.w * p.b, bc: 0.0, dd: eb * p.w * p.b.powi(3) / 12.0, rigid: p.rigid_links, inextensible: false },
         };
         Ok(Finger { p, disc, hinge, link })
     }
@@ -716,10 +685,7 @@ impl<'f, 'a> Tracker<'f, 'a> {
     }
 
     fn loads(&self, lam: f64) -> (f64, [f64; 2]) {
-        (
-            lam * self.tension,
-            [self.tip_fixed[0] + lam * self.tip[0], self.tip_fixed[1] + lam * self.tip[1]],
-        )
+        (lam * self.tension, [self.tip_fixed[0] + lam * self.tip[0], self.tip_fixed[1] + lam * self.tip[1]])
     }
 
     fn predict(&self, lam: f64) -> Vec<f64> {
@@ -748,10 +714,7 @@ impl<'f, 'a> Tracker<'f, 'a> {
     fn accept(&mut self, lam: f64, out: NewtonOut) -> Result<(), ContinuumError> {
         if let Some(s) = self.det_sign {
             if s.signum() != out.det_sign.signum() {
-                return Err(ContinuumError::LimitPoint {
-                    from: self.lam * self.tension,
-                    to: lam * self.tension,
-                });
+                return Err(ContinuumError::LimitPoint { from: self.lam * self.tension, to: lam * self.tension });
             }
         }
         self.det_sign = Some(out.det_sign);
@@ -813,25 +776,13 @@ impl<'f, 'a> Tracker<'f, 'a> {
 
     fn solution(&self) -> Result<ContinuumSolution, ContinuumError> {
         let (t, tip) = self.loads(self.lam);
-        let shot = self
-            .f
-            .shoot(&self.z, t, tip, true)
-            .ok_or(ContinuumError::NoConvergence { tension: t })?;
+        let shot = self.f.shoot(&self.z, t, tip, true).ok_or(ContinuumError::NoConvergence { tension: t })?;
         Ok(build_solution(self.f, &self.z, shot, t, tip, self.steps, self.iters, self.residual))
     }
 }
 
 #[allow(clippy::too_many_arguments)]
-fn build_solution(
-    f: &Finger,
-    z: &[f64],
-    shot: Shot,
-    tension: f64,
-    tip_force: [f64; 2],
-    steps: usize,
-    iters: usize,
-    residual: f64,
-) -> ContinuumSolution {
+fn build_solution(f: &Finger, z: &[f64], shot: Shot, tension: f64, tip_force: [f64; 2], steps: usize, iters: usize, residual: f64) -> ContinuumSolution {
     let p = f.p;
     let n = p.n;
     let spans = f.spans(z);
@@ -870,9 +821,7 @@ fn build_solution(
 
 fn check_loads(tension: f64, tip_force: [f64; 2]) -> Result<(), ContinuumError> {
     if !(tension.is_finite() && tension >= 0.0) {
-        return Err(ContinuumError::InvalidInput(format!(
-            "tension must be finite and >= 0 (a slack cable pushes nothing), got {tension}"
-        )));
+        return Err(ContinuumError::InvalidInput(format!("tension must be finite and >= 0 (a slack cable pushes nothing), got {tension}")));
     }
     if !tip_force.iter().all(|v| v.is_finite()) {
         return Err(ContinuumError::InvalidInput("tip force must be finite".into()));
@@ -884,13 +833,7 @@ fn check_loads(tension: f64, tip_force: [f64; 2]) -> Result<(), ContinuumError> 
 /// force (N, base frame, applied at node n on the centreline), with DE stacks of
 /// thickness `stack_mm[k]` (mm; empty slice or 0 = no stack) over hinge k.
 /// Loads are ramped together by continuation from the straight finger.
-pub fn solve(
-    p: &ContinuumParams,
-    tension: f64,
-    stack_mm: &[f64],
-    tip_force: [f64; 2],
-    disc: Discretisation,
-) -> Result<ContinuumSolution, ContinuumError> {
+pub fn solve(p: &ContinuumParams, tension: f64, stack_mm: &[f64], tip_force: [f64; 2], disc: Discretisation) -> Result<ContinuumSolution, ContinuumError> {
     check_loads(tension, tip_force)?;
     let f = Finger::new(p, stack_mm, disc)?;
     let mut tr = Tracker::new(&f, tension, tip_force);
@@ -899,9 +842,7 @@ pub fn solve(
     }
     match tr.advance_to(1.0)? {
         StepEnd::Reached => tr.solution(),
-        StepEnd::Contact { joint, span, lam, .. } => {
-            Err(ContinuumError::Contact { joint, span, tension: lam * tension })
-        }
+        StepEnd::Contact { joint, span, lam, .. } => Err(ContinuumError::Contact { joint, span, tension: lam * tension }),
     }
 }
 
@@ -999,25 +940,14 @@ pub struct BeamShape {
 /// Large-deflection shape of a uniform cantilever under a dead tip force
 /// (base frame, N) and a tip moment (N·mm, counter-clockwise), with `steps` RK4
 /// steps. The tip position is found by Newton with load continuation.
-pub fn uniform_cantilever(
-    beam: &UniformBeam,
-    tip_force: [f64; 2],
-    tip_moment: f64,
-    steps: usize,
-) -> Result<BeamShape, ContinuumError> {
+pub fn uniform_cantilever(beam: &UniformBeam, tip_force: [f64; 2], tip_moment: f64, steps: usize) -> Result<BeamShape, ContinuumError> {
     if !(beam.length > 0.0 && beam.ei > 0.0 && beam.ea.is_none_or(|v| v > 0.0)) || steps == 0 {
         return Err(ContinuumError::InvalidInput("beam length, EI, EA and steps must be > 0".into()));
     }
     if !(tip_force.iter().all(|v| v.is_finite()) && tip_moment.is_finite()) {
         return Err(ContinuumError::InvalidInput("loads must be finite".into()));
     }
-    let sec = Section {
-        ea: beam.ea.unwrap_or(1.0),
-        bc: 0.0,
-        dd: beam.ei,
-        rigid: false,
-        inextensible: beam.ea.is_none(),
-    };
+    let sec = Section { ea: beam.ea.unwrap_or(1.0), bc: 0.0, dd: beam.ei, rigid: false, inextensible: beam.ea.is_none() };
     let seg = Segment::Uniform { len: beam.length, sec };
     let shoot = |z: &[f64], lam: f64, rec: Option<&mut Vec<[f64; 4]>>| -> Vec<f64> {
         let f = [lam * tip_force[0], lam * tip_force[1]];

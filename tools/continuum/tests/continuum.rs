@@ -20,7 +20,13 @@ fn notch_integral(p: &ContinuumParams, m: usize, f: impl Fn(f64, f64) -> f64) ->
         let phi = i as f64 * h;
         let x = p.a * (1.0 - phi.cos());
         let t = p.t_min + (p.b - p.t_min) * (1.0 - phi.sin());
-        let wgt = if i == 0 || i == m { 1.0 } else if i % 2 == 1 { 4.0 } else { 2.0 };
+        let wgt = if i == 0 || i == m {
+            1.0
+        } else if i % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
         sum += wgt * f(x, t) * p.a * phi.sin();
     }
     sum * h / 3.0
@@ -53,11 +59,7 @@ fn tip_moment_bends_a_uniform_cantilever_into_an_exact_circle() {
     assert!((sh.tip.x - r * phi.sin()).abs() < 1e-9, "tip x {} vs {}", sh.tip.x, r * phi.sin());
     assert!((sh.tip.y - r * (1.0 - phi.cos())).abs() < 1e-9);
     // Every sample lies on the circle of radius EI/M centred at (0, R).
-    let worst = sh
-        .points
-        .iter()
-        .map(|q| ((q[1] * q[1] + (q[2] - r).powi(2)).sqrt() - r).abs())
-        .fold(0.0f64, f64::max);
+    let worst = sh.points.iter().map(|q| ((q[1] * q[1] + (q[2] - r).powi(2)).sqrt() - r).abs()).fold(0.0f64, f64::max);
     assert!(worst < 1e-9, "distance from the circle {worst}");
     // A negative moment curls the other way, symmetric.
     let neg = uniform_cantilever(&beam, [0.0, 0.0], -m, 400).unwrap();
@@ -127,14 +129,9 @@ fn large_tip_force_matches_the_elliptic_integral_elastica() {
 fn finger_converges_at_fourth_order_under_refinement() {
     let p = ContinuumParams::default();
     for stacks in [vec![], vec![2.0, 1.5, 1.0]] {
-        let sols: Vec<ContinuumSolution> = (0..4)
-            .map(|k| solve(&p, 1.0, &stacks, [0.0, 0.0], Discretisation::new(32, 8).refined(1 << k)).unwrap())
-            .collect();
+        let sols: Vec<ContinuumSolution> = (0..4).map(|k| solve(&p, 1.0, &stacks, [0.0, 0.0], Discretisation::new(32, 8).refined(1 << k)).unwrap()).collect();
         let d: Vec<f64> = sols.windows(2).map(|w| max_diff(&w[0].joint_angles, &w[1].joint_angles)).collect();
-        let dt: Vec<f64> = sols
-            .windows(2)
-            .map(|w| ((w[0].tip.x - w[1].tip.x).powi(2) + (w[0].tip.y - w[1].tip.y).powi(2)).sqrt())
-            .collect();
+        let dt: Vec<f64> = sols.windows(2).map(|w| ((w[0].tip.x - w[1].tip.x).powi(2) + (w[0].tip.y - w[1].tip.y).powi(2)).sqrt()).collect();
         println!("stacks {stacks:?}: joint-angle differences {d:?} rad, tip {dt:?} mm");
         for i in 1..d.len() {
             let ratio = d[i - 1] / d[i];
@@ -163,10 +160,7 @@ fn small_load_limit_matches_the_compliance_integrals() {
         let s = solve(&p, pt, &[], [0.0, 0.0], Discretisation::default()).unwrap();
         let hinge_lin = p.e * ctm;
         let joint_lin = p.e * (ctm + cl);
-        println!(
-            "plate {plate}: C_theta-M = {ctm:.6e} rad/(N mm), link {cl:.6e}; link share {:.3} %",
-            100.0 * cl / (ctm + cl)
-        );
+        println!("plate {plate}: C_theta-M = {ctm:.6e} rad/(N mm), link {cl:.6e}; link share {:.3} %", 100.0 * cl / (ctm + cl));
         for k in 0..p.n {
             let hinge = s.hinge_angles[k] / pt;
             let joint = s.joint_angles[k] / pt;
@@ -293,10 +287,7 @@ fn span_closure_is_reported_not_returned() {
     assert_eq!(held.solution.tip_force, [0.0, -0.05]);
     let below = solve(&p, held.tension * 0.99, &[], [0.0, -0.05], disc).unwrap();
     assert!(below.spans.iter().all(|v| *v > p.contact_floor));
-    assert!(matches!(
-        solve(&p, held.tension * 1.01, &[], [0.0, -0.05], disc),
-        Err(ContinuumError::Contact { .. })
-    ));
+    assert!(matches!(solve(&p, held.tension * 1.01, &[], [0.0, -0.05], disc), Err(ContinuumError::Contact { .. })));
     // A larger dead force toward -y makes the curling finger snap through: the load
     // path folds near 3.40 N, reported as a limit point, never as an answer past it.
     let coarse = Discretisation::new(32, 8);

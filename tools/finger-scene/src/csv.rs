@@ -51,11 +51,9 @@ pub fn summary_csv(r: &SceneResult) -> String {
                     row.extend(rf.joint_angles.iter().map(|a| a.to_degrees().to_string()));
                     let e = ((tip.x - rf.tip.x).powi(2) + (tip.y - rf.tip.y).powi(2)).sqrt();
                     row.extend([rf.tip.x, rf.tip.y, rf.tip.theta.to_degrees(), e, (tip.theta - rf.tip.theta).to_degrees()].map(|v| v.to_string()));
-                    row.extend(
-                        p.joint_angles().iter().zip(&rf.joint_angles).map(|(a, b)| (a - b).to_degrees().to_string()),
-                    );
+                    row.extend(p.joint_angles().iter().zip(&rf.joint_angles).map(|(a, b)| (a - b).to_degrees().to_string()));
                 }
-                None => row.extend(std::iter::repeat(String::new()).take(2 * n + 5)),
+                None => row.extend(std::iter::repeat_n(String::new(), 2 * n + 5)),
             }
         }
         row.push(s.iterations.to_string());
@@ -74,18 +72,7 @@ pub fn postures_csv(r: &SceneResult) -> String {
         let m = p.solution.m;
         // one row: what is empty for the reference's points
         let mut row = |source: &str, j: usize, what: &str, pt: &[f64; 2]| {
-            out.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{}\n",
-                r.scene.name,
-                i + 1,
-                csv_text(&p.label),
-                p.tension,
-                source,
-                j,
-                what,
-                pt[0],
-                pt[1]
-            ))
+            out.push_str(&format!("{},{},{},{},{},{},{},{},{}\n", r.scene.name, i + 1, csv_text(&p.label), p.tension, source, j, what, pt[0], pt[1]))
         };
         for (j, pt) in p.points.iter().enumerate() {
             let what = if j == 0 {
@@ -93,7 +80,13 @@ pub fn postures_csv(r: &SceneResult) -> String {
             } else {
                 let k = (j - 1) / (m + 1) + 1;
                 let r = (j - 1) % (m + 1);
-                if r == m { format!("node {k}") } else if r + 1 == m { format!("hinge {k} end") } else { format!("hinge {k} sub {}", r + 1) }
+                if r == m {
+                    format!("node {k}")
+                } else if r + 1 == m {
+                    format!("hinge {k} end")
+                } else {
+                    format!("hinge {k} sub {}", r + 1)
+                }
             };
             row("model", j, &what, pt);
         }
@@ -113,4 +106,3 @@ fn csv_text(s: &str) -> String {
         s.to_string()
     }
 }
-

@@ -80,14 +80,7 @@ fn outline(p: &Params<f64>, sol: &Solution<f64>) -> Vec<[f64; 2]> {
 /// The finger of one posture as an SVG group: clamp, body, stacks (coloured by `volts` on
 /// 0..`v_max`), cable and the arrows. `map` takes mm (base frame) to pixels; `px_per_mm` sizes
 /// the arrow heads and strokes.
-pub fn finger_group(
-    p: &Params<f64>,
-    sol: &Solution<f64>,
-    volts: &[f64],
-    v_max: f64,
-    map: &dyn Fn([f64; 2]) -> [f64; 2],
-    px_per_mm: f64,
-) -> String {
+pub fn finger_group(p: &Params<f64>, sol: &Solution<f64>, volts: &[f64], v_max: f64, map: &dyn Fn([f64; 2]) -> [f64; 2], px_per_mm: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(s, r#"<g class="finger">"#);
     // clamp: a hatched block behind the base
@@ -153,11 +146,7 @@ pub fn finger_group(
         cable.push(hinge_pose(p, sol, k, 1.0).point(0.0, p.e));
         cable.push(sol.nodes[k + 1].point(0.0, p.e));
     }
-    let _ = writeln!(
-        s,
-        r##"<polyline class="cable" points="{}" fill="none" stroke="#1a1a1a" stroke-width="1.2"/>"##,
-        points(&cable, map)
-    );
+    let _ = writeln!(s, r##"<polyline class="cable" points="{}" fill="none" stroke="#1a1a1a" stroke-width="1.2"/>"##, points(&cable, map));
     let anchor = map(sol.nodes[sol.n].point(0.0, p.e));
     let _ = writeln!(s, r##"<circle class="cable-anchor" cx="{:.2}" cy="{:.2}" r="2.5" fill="#1a1a1a"/>"##, anchor[0], anchor[1]);
     // the pull on the cable, at its free end behind the clamp

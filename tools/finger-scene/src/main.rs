@@ -48,7 +48,7 @@ fn parse_args() -> Result<Args, String> {
     if a.drawing.is_some() {
         return if a.all || !a.scenes.is_empty() || a.out.is_some() { Err("--drawing goes alone".into()) } else { Ok(a) };
     }
-    if a.all == !a.scenes.is_empty() {
+    if a.all != a.scenes.is_empty() {
         return Err("give scene files, or --all".into());
     }
     if a.scenes_dir.is_some() && !a.all {
@@ -83,10 +83,8 @@ fn run_one(path: &Path, out: &Path) -> Result<SceneResult, String> {
 
 /// The scenes (`*.toml`) of a directory; a `.scene` file there (the old format) is an error.
 fn scene_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(|e| format!("cannot read {}: {e}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .collect();
+    let mut v: Vec<PathBuf> =
+        std::fs::read_dir(dir).map_err(|e| format!("cannot read {}: {e}", dir.display()))?.filter_map(|e| e.ok().map(|e| e.path())).collect();
     if let Some(old) = v.iter().find(|p| p.extension().is_some_and(|x| x == "scene")) {
         return Err(located(old, &scene::read_file(old).unwrap_err()));
     }
@@ -154,14 +152,7 @@ fn index(results: &[SceneResult], refused: &[(PathBuf, String)], table: &str) ->
                         row.push(format!("{:.2}, {:.2}", rf.tip.x, rf.tip.y));
                         row.push(format!("{e:.3}"));
                         row.push(deg(tip.theta - rf.tip.theta));
-                        row.push(
-                            p.joint_angles()
-                                .iter()
-                                .zip(&rf.joint_angles)
-                                .map(|(a, b)| deg(a - b))
-                                .collect::<Vec<_>>()
-                                .join(", "),
-                        );
+                        row.push(p.joint_angles().iter().zip(&rf.joint_angles).map(|(a, b)| deg(a - b)).collect::<Vec<_>>().join(", "));
                     }
                     None => row.extend(["".to_string(), "".into(), "".into(), "".into()]),
                 }
@@ -251,9 +242,7 @@ fn run_all(a: &Args) -> Result<(), String> {
         for p in scene_files(&rdir)? {
             match scene::run_file(&p, reference.as_deref()) {
                 Ok(_) => return Err(format!("{}: expected a refusal, but the scene ran", p.display())),
-                Err(e) if e.model.is_none() => {
-                    return Err(format!("refused for the wrong reason (not the model): {}", located(&p, &e)))
-                }
+                Err(e) if e.model.is_none() => return Err(format!("refused for the wrong reason (not the model): {}", located(&p, &e))),
                 Err(e) => {
                     println!("refused as expected: {}", located(&p, &e));
                     refused.push((p, e.to_string()));

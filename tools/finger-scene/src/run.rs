@@ -83,7 +83,6 @@ pub trait ReferenceSolver {
     fn solve(&self, params: &Params<f64>, tension: f64, volts: &[f64], thickness: &[f64]) -> Result<RefPosture, String>;
 }
 
-
 /// A prepared finger: the model, its channel voltages and stack thicknesses.
 struct Prepared {
     finger: Finger<f64>,
@@ -124,10 +123,7 @@ fn solve_one(
     kind: Kind,
     reference: Option<&dyn ReferenceSolver>,
 ) -> Result<Posture, SceneError> {
-    let sol = prep
-        .finger
-        .solve(tension, &prep.volts, scene.solver.method())
-        .map_err(|e| SceneError::model(at, &format!("tension {tension} N"), e))?;
+    let sol = prep.finger.solve(tension, &prep.volts, scene.solver.method()).map_err(|e| SceneError::model(at, &format!("tension {tension} N"), e))?;
     let p = prep.finger.params();
     let stiffness = if scene.output.tip_stiffness {
         Some(prep.finger.tip_stiffness(&sol).map_err(|e| SceneError::model(scene.output_at, "tip_stiffness", e))?)
@@ -137,12 +133,9 @@ fn solve_one(
     let reference = match (scene.output.reference, reference) {
         (Reference::None, _) => None,
         (Reference::Continuum, Some(r)) => Some(
-            r.solve(p, tension, &prep.volts, &sol.thickness[..sol.n])
-                .map_err(|e| SceneError::at(scene.output_at, format!("reference at {tension} N: {e}")))?,
+            r.solve(p, tension, &prep.volts, &sol.thickness[..sol.n]).map_err(|e| SceneError::at(scene.output_at, format!("reference at {tension} N: {e}")))?,
         ),
-        (Reference::Continuum, None) => {
-            return Err(SceneError::at(scene.output_at, "reference = continuum: no continuum reference in this build"))
-        }
+        (Reference::Continuum, None) => return Err(SceneError::at(scene.output_at, "reference = continuum: no continuum reference in this build")),
     };
     Ok(Posture {
         label,
@@ -161,10 +154,7 @@ fn solve_one(
 /// growing monotonically with the tension under tension alone.
 fn tension_for_tip_angle(prep: &Prepared, scene: &Scene, target: f64, at: Pos) -> Result<f64, SceneError> {
     let angle = |p: f64| -> Result<f64, SceneError> {
-        prep.finger
-            .solve(p, &prep.volts, scene.solver.method())
-            .map(|s| s.tip().theta)
-            .map_err(|e| SceneError::model(at, "match", e))
+        prep.finger.solve(p, &prep.volts, scene.solver.method()).map(|s| s.tip().theta).map_err(|e| SceneError::model(at, "match", e))
     };
     let (mut lo, mut hi) = (0.0, 1.0);
     let mut grow = 0;
@@ -193,7 +183,11 @@ fn tension_for_tip_angle(prep: &Prepared, scene: &Scene, target: f64, at: Pos) -
 fn fmt_g(x: f64) -> String {
     let s = format!("{x:.4}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".into() } else { s.to_string() }
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.to_string()
+    }
 }
 
 /// A finger in words, for a legend: "finger with 4 DE layers" or "finger without DE layers".
@@ -216,10 +210,7 @@ pub fn run(scene: &Scene, reference: Option<&dyn ReferenceSolver>) -> Result<Sce
     let mut matched_tension = None;
     if let Some(m) = &scene.matching {
         let mprep = prepare(&m.finger)?;
-        let target = mprep
-            .finger
-            .solve(m.tension, &mprep.volts, scene.solver.method())
-            .map_err(|e| SceneError::model(m.at, "match", e))?;
+        let target = mprep.finger.solve(m.tension, &mprep.volts, scene.solver.method()).map_err(|e| SceneError::model(m.at, "match", e))?;
         let tm = tension_for_tip_angle(&prep, scene, target.tip().theta, m.at)?;
         matched_tension = Some(tm);
         postures.push(solve_one(
@@ -246,4 +237,3 @@ pub fn run(scene: &Scene, reference: Option<&dyn ReferenceSolver>) -> Result<Sce
     }
     Ok(SceneResult { scene: scene.clone(), n, postures, matched_tension })
 }
-

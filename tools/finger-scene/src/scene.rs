@@ -277,10 +277,7 @@ impl FingerDraft {
             },
             "volts" | "thickness" => {
                 if let Some((first, _)) = &self.drive {
-                    return Err(SceneError::at(
-                        at,
-                        format!("{key}: the drive is already given on line {} (volts or thickness, not both)", first.line),
-                    ));
+                    return Err(SceneError::at(at, format!("{key}: the drive is already given on line {} (volts or thickness, not both)", first.line)));
                 }
                 let list = numbers(text, key, v)?;
                 let d = if key == "volts" { Drive::Volts(list) } else { Drive::Thickness(list) };
@@ -331,10 +328,7 @@ impl FingerDraft {
             }
         } else if len != p.n {
             let what = if matches!(drive, Drive::Volts(_)) { "volts" } else { "thickness" };
-            return Err(SceneError::at(
-                drive_at,
-                format!("{what}: {len} values for {} joints (give one per joint, or one for all)", p.n),
-            ));
+            return Err(SceneError::at(drive_at, format!("{what}: {len} values for {} joints (give one per joint, or one for all)", p.n)));
         } else {
             drive
         };
@@ -360,8 +354,7 @@ fn old_format_line(text: &str) -> Option<usize> {
         let l = l.split('#').next().unwrap_or("").trim();
         let Some((k, v)) = l.split_once('=') else { return false };
         let v = v.trim();
-        let word = v.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
-            && !["true", "false", "inf", "nan"].contains(&v);
+        let word = v.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) && !["true", "false", "inf", "nan"].contains(&v);
         !k.trim().is_empty() && !v.is_empty() && (word || (v.contains(',') && !v.starts_with('[')))
     })
 }
@@ -418,9 +411,7 @@ fn first_definition(text: &str, name: &str, line: usize) -> Option<usize> {
         return None;
     }
     let section_start = lines.iter().rposition(|l| l.trim_start().starts_with('[')).map_or(0, |i| i + 1);
-    (section_start..lines.len())
-        .find(|&i| lines[i].trim_start().strip_prefix(name).is_some_and(|r| r.trim_start().starts_with('=')))
-        .map(|i| i + 1)
+    (section_start..lines.len()).find(|&i| lines[i].trim_start().strip_prefix(name).is_some_and(|r| r.trim_start().starts_with('='))).map(|i| i + 1)
 }
 
 /// Parse a scene's TOML text. `name` labels the outputs (usually the file stem).
@@ -511,9 +502,7 @@ pub fn parse(name: &str, text: &str) -> Result<Scene, SceneError> {
                         return Err(SceneError::at(key_at(text, &t.span()), "tol: only for method = \"converged\""));
                     }
                     let n_inc = match &f.n_inc {
-                        Some(n) if !(1..=100_000).contains(n.get_ref()) => {
-                            return Err(SceneError::at(key_at(text, &n.span()), "n_inc: an integer 1..100000"))
-                        }
+                        Some(n) if !(1..=100_000).contains(n.get_ref()) => return Err(SceneError::at(key_at(text, &n.span()), "n_inc: an integer 1..100000")),
                         Some(n) => *n.get_ref(),
                         None => finger.params.n_inc,
                     };
@@ -572,10 +561,12 @@ pub fn parse(name: &str, text: &str) -> Result<Scene, SceneError> {
 /// format) is refused with a pointer to the new one.
 pub fn read_file(path: &std::path::Path) -> Result<Scene, SceneError> {
     if path.extension().is_some_and(|x| x == "scene") {
-        return Err(SceneError::at(Pos::WHOLE, format!("{}: a .scene file is the old INI scene format; scenes are TOML now, named .toml: see docs/scenes.md", path.display())));
+        return Err(SceneError::at(
+            Pos::WHOLE,
+            format!("{}: a .scene file is the old INI scene format; scenes are TOML now, named .toml: see docs/scenes.md", path.display()),
+        ));
     }
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| SceneError::at(Pos::WHOLE, format!("cannot read {}: {e}", path.display())))?;
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError::at(Pos::WHOLE, format!("cannot read {}: {e}", path.display())))?;
     let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
     parse(name, &text)
 }
@@ -593,9 +584,7 @@ pub fn volts_of(spec: &FingerSpec) -> Result<Vec<f64>, SceneError> {
         Drive::Thickness(t) => t
             .iter()
             .enumerate()
-            .map(|(k, &x)| {
-                de::voltage_for_thickness(&spec.params, k + 1, x).map_err(|e| SceneError::model(spec.drive_at, "thickness", e))
-            })
+            .map(|(k, &x)| de::voltage_for_thickness(&spec.params, k + 1, x).map_err(|e| SceneError::model(spec.drive_at, "thickness", e)))
             .collect(),
     }
 }

@@ -21,10 +21,46 @@ fn marker(shape: &str, x: f64, y: f64, c: &str) -> String {
     let r = 3.5;
     match shape {
         "square" => format!(r#"<rect class="node" x="{:.3}" y="{:.3}" width="{:.1}" height="{:.1}" fill="{c}"/>"#, x - r, y - r, 2.0 * r, 2.0 * r),
-        "triangle" => format!(r#"<polygon class="node" points="{:.3},{:.3} {:.3},{:.3} {:.3},{:.3}" fill="{c}"/>"#, x, y - r * 1.2, x - r * 1.1, y + r * 0.8, x + r * 1.1, y + r * 0.8),
-        "down" => format!(r#"<polygon class="node" points="{:.3},{:.3} {:.3},{:.3} {:.3},{:.3}" fill="{c}"/>"#, x, y + r * 1.2, x - r * 1.1, y - r * 0.8, x + r * 1.1, y - r * 0.8),
-        "diamond" => format!(r#"<polygon class="node" points="{:.3},{:.3} {:.3},{:.3} {:.3},{:.3} {:.3},{:.3}" fill="{c}"/>"#, x, y - r * 1.3, x + r * 1.3, y, x, y + r * 1.3, x - r * 1.3, y),
-        "cross" => format!(r#"<path class="node" d="M{:.3},{:.3}L{:.3},{:.3}M{:.3},{:.3}L{:.3},{:.3}" stroke="{c}" stroke-width="2"/>"#, x - r, y - r, x + r, y + r, x - r, y + r, x + r, y - r),
+        "triangle" => format!(
+            r#"<polygon class="node" points="{:.3},{:.3} {:.3},{:.3} {:.3},{:.3}" fill="{c}"/>"#,
+            x,
+            y - r * 1.2,
+            x - r * 1.1,
+            y + r * 0.8,
+            x + r * 1.1,
+            y + r * 0.8
+        ),
+        "down" => format!(
+            r#"<polygon class="node" points="{:.3},{:.3} {:.3},{:.3} {:.3},{:.3}" fill="{c}"/>"#,
+            x,
+            y + r * 1.2,
+            x - r * 1.1,
+            y - r * 0.8,
+            x + r * 1.1,
+            y - r * 0.8
+        ),
+        "diamond" => format!(
+            r#"<polygon class="node" points="{:.3},{:.3} {:.3},{:.3} {:.3},{:.3} {:.3},{:.3}" fill="{c}"/>"#,
+            x,
+            y - r * 1.3,
+            x + r * 1.3,
+            y,
+            x,
+            y + r * 1.3,
+            x - r * 1.3,
+            y
+        ),
+        "cross" => format!(
+            r#"<path class="node" d="M{:.3},{:.3}L{:.3},{:.3}M{:.3},{:.3}L{:.3},{:.3}" stroke="{c}" stroke-width="2"/>"#,
+            x - r,
+            y - r,
+            x + r,
+            y + r,
+            x - r,
+            y + r,
+            x + r,
+            y - r
+        ),
         _ => format!(r#"<circle class="node" cx="{x:.3}" cy="{y:.3}" r="{:.1}" fill="{c}"/>"#, r * 0.85),
     }
 }
@@ -153,11 +189,7 @@ pub fn plot_overlay(r: &SceneResult, overlay: &str) -> String {
     );
     let _ = writeln!(s, "{}", drawing::defs());
     let _ = writeln!(s, r#"<rect x="0" y="0" width="{width:.0}" height="{height:.0}" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<text x="{ml:.1}" y="24" font-size="15">{}</text>"#,
-        escape(&r.scene.title)
-    );
+    let _ = writeln!(s, r#"<text x="{ml:.1}" y="24" font-size="15">{}</text>"#, escape(&r.scene.title));
     // grid and ticks
     let _ = writeln!(s, r##"<g class="axes" stroke="#dddddd" stroke-width="1">"##);
     let mut x = x0;
@@ -175,12 +207,7 @@ pub fn plot_overlay(r: &SceneResult, overlay: &str) -> String {
         let map = |q: [f64; 2]| [px(q[0]), py(q[1])];
         let _ = write!(s, "{}", drawing::finger_group(&params, &p.solution, &p.volts, v_max, &map, scale));
     }
-    let _ = writeln!(
-        s,
-        r#"<rect x="{:.2}" y="{:.2}" width="{pw:.2}" height="{ph:.2}" fill="none" stroke="black" stroke-width="1"/>"#,
-        px(x0),
-        py(y1)
-    );
+    let _ = writeln!(s, r#"<rect x="{:.2}" y="{:.2}" width="{pw:.2}" height="{ph:.2}" fill="none" stroke="black" stroke-width="1"/>"#, px(x0), py(y1));
     let _ = writeln!(s, r#"<g class="ticks" fill="black">"#);
     let mut x = x0;
     while x <= x1 + 1e-9 {
@@ -192,12 +219,7 @@ pub fn plot_overlay(r: &SceneResult, overlay: &str) -> String {
         let _ = writeln!(s, r#"<text x="{:.2}" y="{:.2}" text-anchor="end">{}</text>"#, px(x0) - 6.0, py(y) + 4.0, y);
         y += step;
     }
-    let _ = writeln!(
-        s,
-        r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">x (mm)</text>"#,
-        ml + pw / 2.0,
-        py(y0) + 36.0
-    );
+    let _ = writeln!(s, r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">x (mm)</text>"#, ml + pw / 2.0, py(y0) + 36.0);
     let _ = writeln!(
         s,
         r#"<text x="16" y="{:.2}" text-anchor="middle" transform="rotate(-90 16 {:.2})">y (mm), flexor side up</text>"#,
@@ -314,7 +336,13 @@ fn stiffness_panel(r: &SceneResult, cols: &[&str], x: f64, y: f64, w: f64, h: f6
                 cols[i]
             );
             let _ = writeln!(s, r#"<text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="10">{}</text>"#, bx + bw * 0.4, cb - bh - 3.0, sig3(v));
-            let _ = writeln!(s, r#"<text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="10">{} N</text>"#, bx + bw * 0.4, cb + 13.0, trimmed(r.postures[i].tension));
+            let _ = writeln!(
+                s,
+                r#"<text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="10">{} N</text>"#,
+                bx + bw * 0.4,
+                cb + 13.0,
+                trimmed(r.postures[i].tension)
+            );
         }
     }
     let _ = writeln!(s, "</g>");

@@ -16,11 +16,7 @@ fn run_cli(scene: &Path, out: &Path) -> std::process::Output {
 }
 
 fn shipped(dir: &Path) -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-        .collect();
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
     v.sort();
     v
 }
@@ -252,10 +248,8 @@ fn csv_is_the_models_own_solution() {
     let (head, rows) = csv(&scene::postures_csv(&r));
     for (i, &t) in r.scene.tensions.iter().enumerate() {
         let s = f.solve(t, &volts, Method::converged()).unwrap();
-        let nodes: Vec<&Vec<String>> = rows
-            .iter()
-            .filter(|row| row[col(&head, "posture")] == (i + 1).to_string() && row[col(&head, "what")].starts_with("node"))
-            .collect();
+        let nodes: Vec<&Vec<String>> =
+            rows.iter().filter(|row| row[col(&head, "posture")] == (i + 1).to_string() && row[col(&head, "what")].starts_with("node")).collect();
         assert_eq!(nodes.len(), 4);
         for (k, row) in nodes.iter().enumerate() {
             assert_eq!(row[col(&head, "x_mm")].parse::<f64>().unwrap(), s.nodes[k].x);
@@ -645,11 +639,7 @@ fn a_scene_without_out_writes_under_target_not_into_the_current_directory() {
     let cwd = std::env::temp_dir().join(format!("finger-scene-cwd-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&cwd);
     std::fs::create_dir_all(&cwd).unwrap();
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene"))
-        .current_dir(&cwd)
-        .arg(top().join("scenes/paper-de-0v.toml"))
-        .output()
-        .unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_finger-scene")).current_dir(&cwd).arg(top().join("scenes/paper-de-0v.toml")).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(std::fs::read_dir(&cwd).unwrap().count(), 0, "wrote into the current directory");
     let svg = top().join("target/scenes/paper-de-0v.svg");

@@ -5,11 +5,7 @@
 fn script_on_stdin_replies_on_stdout() {
     use std::io::Write;
     use std::process::{Command, Stdio};
-    let mut c = Command::new(env!("CARGO_BIN_EXE_finger-sim"))
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut c = Command::new(env!("CARGO_BIN_EXE_finger-sim")).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap();
     let script = b"version\r\nbogus\nsolve nan 0 0 0\nvolt 1 100\narm\nvolt 1 500\nwait 0.1\nstatus\nparam l 30\nstop\n\xff\n";
     c.stdin.take().unwrap().write_all(script).unwrap();
     let out = c.wait_with_output().unwrap(); // exits at end of input
@@ -55,12 +51,7 @@ fn a_banner_at_a_terminal_and_none_in_a_pipe() {
     let out = c.wait_with_output().unwrap();
     assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
     // at a terminal (util-linux `script` gives it a pseudo-terminal): the banner
-    let mut c = Command::new("script")
-        .args(["-q", "-e", "-c", bin, "/dev/null"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let mut c = Command::new("script").args(["-q", "-e", "-c", bin, "/dev/null"]).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap();
     c.stdin.take().unwrap().write_all(b"version\n").unwrap();
     let out = c.wait_with_output().unwrap();
     let t = String::from_utf8_lossy(&out.stdout);

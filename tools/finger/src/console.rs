@@ -58,7 +58,10 @@ impl Reply {
 #[derive(Debug)]
 pub enum CommandError {
     /// The board refused: `err <code>: <message>`.
-    Board { code: ErrorCode, message: String },
+    Board {
+        code: ErrorCode,
+        message: String,
+    },
     Link(LinkError),
 }
 

@@ -81,10 +81,7 @@ impl Link {
 
     /// A serial port (the real board), 8N1.
     pub fn serial(path: &str, baud: u32) -> Result<Link, LinkError> {
-        let port = serialport::new(path, baud)
-            .timeout(Duration::from_millis(100))
-            .open()
-            .map_err(|e| LinkError::Open(format!("{path}: {e}")))?;
+        let port = serialport::new(path, baud).timeout(Duration::from_millis(100)).open().map_err(|e| LinkError::Open(format!("{path}: {e}")))?;
         let rx = port.try_clone().map_err(|e| LinkError::Open(format!("{path}: {e}")))?;
         Ok(Link::new(Box::new(port), Box::new(rx), None, None))
     }
@@ -115,10 +112,7 @@ impl Link {
     /// Waits for the boot banner.
     pub fn qemu(elf: &Path, defmt_log: &Path, timeout: Duration) -> Result<Link, LinkError> {
         if !elf.exists() {
-            return Err(LinkError::Open(format!(
-                "{}: no firmware image (build it with `cargo build --release` at the top)",
-                elf.display()
-            )));
+            return Err(LinkError::Open(format!("{}: no firmware image (build it with `cargo build --release` at the top)", elf.display())));
         }
         let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.subsec_nanos());
         let dir = std::env::temp_dir().join(format!("finger-client-{}-{nanos}", std::process::id()));

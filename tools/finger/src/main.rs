@@ -210,10 +210,7 @@ fn run_scene(con: &mut Console, path: &Path, host: finger_scene::SceneResult, dr
         eprintln!("finger run: {}: {e}", out.display());
         return ExitCode::from(2);
     }
-    for (name, text) in [
-        (format!("{name}-board.csv"), finger::run::csv(&r)),
-        (format!("{name}-board.svg"), finger::run::svg(&r)),
-    ] {
+    for (name, text) in [(format!("{name}-board.csv"), finger::run::csv(&r)), (format!("{name}-board.svg"), finger::run::svg(&r))] {
         let p = out.join(name);
         if let Err(e) = std::fs::write(&p, text) {
             eprintln!("finger run: {}: {e}", p.display());

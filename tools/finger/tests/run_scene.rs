@@ -132,7 +132,11 @@ fn check_readback(dir: &Path) {
 
 #[test]
 fn the_status_readback_is_parsed_with_unmeasured_thickness_as_nan() {
-    let r = finger::Reply { before: vec![], line: "ok volts=1,2,3 thick=2.0000,2.0000,2.0000 vmeas=598.2,301.0,0.0 imeas=0.120,-0.050,0.000 thick_meas=1.9950,-,- vceil=5400.0,5400.0,5400.0".into() };
+    let r = finger::Reply {
+        before: vec![],
+        line: "ok volts=1,2,3 thick=2.0000,2.0000,2.0000 vmeas=598.2,301.0,0.0 imeas=0.120,-0.050,0.000 thick_meas=1.9950,-,- vceil=5400.0,5400.0,5400.0"
+            .into(),
+    };
     let rb = finger::run::Readback::of(&r).expect("a read-back");
     assert_eq!(rb.vmeas_v, vec![598.2, 301.0, 0.0]);
     assert_eq!(rb.imeas_ua, vec![0.12, -0.05, 0.0]);
@@ -158,8 +162,8 @@ fn drive_arms_drives_reads_back_and_stops_on_the_sim() {
     let arm = lines.iter().position(|l| *l == "arm").expect("armed");
     assert!(lines[..arm].iter().any(|l| l.starts_with("preset default")), "{sent}");
     // the scene's finger is the uncalibrated model: the board's FE calibration is cleared
-    assert!(lines[..arm].iter().any(|l| *l == "cal none"), "{sent}");
-    assert!(lines[arm..].iter().any(|l| *l == "force 0.8") && lines[arm..].iter().any(|l| *l == "volt 1 600"), "{sent}");
+    assert!(lines[..arm].contains(&"cal none"), "{sent}");
+    assert!(lines[arm..].contains(&"force 0.8") && lines[arm..].contains(&"volt 1 600"), "{sent}");
     assert_eq!(lines.last(), Some(&"stop"), "{sent}");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -236,7 +240,7 @@ fn ctrl_c_during_a_driven_run_still_stops_the_board() {
     let sent = std::fs::read_to_string(&log).unwrap();
     let lines: Vec<&str> = sent.lines().map(str::trim).collect();
     assert_eq!(lines.last(), Some(&"stop"), "{sent}");
-    assert!(!lines.iter().any(|l| *l == "force 0.8"), "the run went on after Ctrl-C: {sent}");
+    assert!(!lines.contains(&"force 0.8"), "the run went on after Ctrl-C: {sent}");
     assert!(!out_dir.exists(), "an interrupted run wrote its files");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -274,7 +278,8 @@ fn sim_paper_ceiling() -> f64 {
 fn every_shipped_scene_runs_on_the_board_or_says_it_is_the_papers_model() {
     let dir = scratch("run-shipped");
     let ceiling = sim_paper_ceiling();
-    let mut scenes: Vec<_> = std::fs::read_dir(root().join("scenes")).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
+    let mut scenes: Vec<_> =
+        std::fs::read_dir(root().join("scenes")).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
     scenes.sort();
     assert!(scenes.len() >= 7, "{scenes:?}");
     let (mut ran, mut labelled) = (0, 0);

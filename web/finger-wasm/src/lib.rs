@@ -18,9 +18,9 @@
 use std::cell::RefCell;
 use std::fmt::Write as _;
 
+use finger_fw::app::{board_params, calibration_for};
 use finger_fw::plant::Plant;
 use finger_fw::sim::SimBoard;
-use finger_fw::app::{board_params, calibration_for};
 use finger_fw::App;
 use finger_model::inverse::stiffness_range;
 use finger_model::{solve_pose, Finger, Method, Params, Pose, Solution};
@@ -119,7 +119,7 @@ pub extern "C" fn reply_parse(len: u32) -> u32 {
                 2
             }
             Err(Error::NoCode) => {
-                let _ = write!(s.parsed, "{}\n", line.trim().strip_prefix("err ").unwrap_or(&line).trim());
+                let _ = writeln!(s.parsed, "{}", line.trim().strip_prefix("err ").unwrap_or(&line).trim());
                 2
             }
             Err(_) => 0,

@@ -76,4 +76,3 @@ impl<R: Real> BranchTable<R> {
         Ok(t)
     }
 }
-

@@ -10,9 +10,9 @@ impl<'a, R: Real> Gen<'a, R> {
     /// on the solve layer's bracket (`solve::bracket::increasing_root`). `left`: a known point
     /// at lo; `x0`, `guess`: the first trial and its hole guess; `slope`: an estimate of dh/dx
     /// > 0. With `beyond_ok`, a forward failure (contact, limit point, no convergence) marks the
-    /// trial as past the branch end, and a target past it is refused with that error. Each
-    /// trial's hole guess is interpolated between the bracket's states, else the last state's.
-    /// Returns the point and dh/dx there (secant estimate).
+    /// >    trial as past the branch end, and a target past it is refused with that error. Each
+    /// >    trial's hole guess is interpolated between the bracket's states, else the last state's.
+    /// >    Returns the point and dh/dx there (secant estimate).
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     pub(super) fn root(
@@ -42,10 +42,7 @@ impl<'a, R: Real> Gen<'a, R> {
                 hole = match (at.left, at.right) {
                     (Some(a), Some(b)) if b.x != a.x => {
                         let fr = (x - a.x) / (b.x - a.x);
-                        Some([
-                            a.state.hole[0] + (b.state.hole[0] - a.state.hole[0]) * fr,
-                            a.state.hole[1] + (b.state.hole[1] - a.state.hole[1]) * fr,
-                        ])
+                        Some([a.state.hole[0] + (b.state.hole[0] - a.state.hole[0]) * fr, a.state.hole[1] + (b.state.hole[1] - a.state.hole[1]) * fr])
                     }
                     _ => at.last.or(at.left).map(|z| z.state.hole).or(hole),
                 };
@@ -56,9 +53,7 @@ impl<'a, R: Real> Gen<'a, R> {
                     *iters += eq.iterations;
                     Ok(bracket::Trial::Value(sign * (eq.angle - theta), eq))
                 }
-                Err(e @ (Error::Contact { .. } | Error::LimitPoint { .. } | Error::NotConverged { .. })) if beyond_ok => {
-                    Ok(bracket::Trial::Beyond(e))
-                }
+                Err(e @ (Error::Contact { .. } | Error::LimitPoint { .. } | Error::NotConverged { .. })) if beyond_ok => Ok(bracket::Trial::Beyond(e)),
                 Err(e) => Err(e),
             }
         };

@@ -66,14 +66,14 @@ impl<'a, R: Real> Gen<'a, R> {
 
     /// Scale the angle tolerance of the solves (the branch table's samples).
     pub(in crate::inverse) fn tighten(&mut self, k: R) {
-        self.tol_angle = self.tol_angle * k;
+        self.tol_angle *= k;
     }
 
     /// The stack's range: (t0 at 0 V, t_top at `top` x the ceiling, the top voltage).
     #[inline(never)]
     pub(in crate::inverse) fn stack_ends(&self, opts: &Options<R>) -> Result<(R, R, R), Error> {
         let p = self.p;
-        let t0 = R::from_u32(p.layers as u32) * p.z0;
+        let t0 = R::from_u32(p.layers) * p.z0;
         let v_top = self.f.ceiling_in_force(opts.hv_fs) * opts.top;
         let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
         Ok((t0, t_top, v_top))

@@ -34,7 +34,15 @@ impl<'a, R: Real> Gen<'a, R> {
 /// again).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) fn confirm_end<R: Real>(g: &mut Gen<'_, R>, tb: &BranchTable<R>, k: usize, e: usize, r: &mut TableEnd<R>, theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Result<bool, Error> {
+pub(super) fn confirm_end<R: Real>(
+    g: &mut Gen<'_, R>,
+    tb: &BranchTable<R>,
+    k: usize,
+    e: usize,
+    r: &mut TableEnd<R>,
+    theta: R,
+    q: &mut [[R; 3]; MAX_SUB],
+) -> Result<bool, Error> {
     let c = &tb.comp[e];
     if g.converged_march(k + 1, By::Cable(c), r.tension, r.hole, theta, q).is_some() {
         return Ok(false);
@@ -106,7 +114,12 @@ pub(super) fn confirm_bounds<R: Real>(
 /// Step 4's compliances at thickness `t`: the table's at either end of the stack's range, else
 /// evaluated into `c` (after a stiffness march that was not converged: a march more).
 #[inline(never)]
-pub(super) fn step_compliances<'c, R: Real>(g: &mut Gen<'_, R>, tb: &'c BranchTable<R>, t: R, c: &'c mut [Mat3<R>; MAX_SUB]) -> Result<&'c [Mat3<R>; MAX_SUB], Error> {
+pub(super) fn step_compliances<'c, R: Real>(
+    g: &mut Gen<'_, R>,
+    tb: &'c BranchTable<R>,
+    t: R,
+    c: &'c mut [Mat3<R>; MAX_SUB],
+) -> Result<&'c [Mat3<R>; MAX_SUB], Error> {
     let [t_top, t0, _] = tb.thickness;
     Ok(if t >= t0 {
         &tb.comp[1]
@@ -195,9 +208,7 @@ pub(in crate::inverse) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R
     out.tension_given = tension.is_some();
     out.interval = interval;
     out.tension = pt;
-    for k in 0..n {
-        out.angles[k] = angles[k];
-    }
+    out.angles[..n].copy_from_slice(&angles[..n]);
     for k in n..MAX_JOINTS {
         out.angles[k] = zr;
         out.volts[k] = zr;
@@ -261,7 +272,7 @@ pub(in crate::inverse) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R
                     jac: None,
                     exact: false,
                 };
-                let (l, h) = (held(&lo, t_top), held(&hi, t0));
+                let (l, h) = (held(lo, t_top), held(hi, t0));
                 let r = g.hold_thickness(k + 1, angles[k], pt, &l, &h, Some((md.tension, tm, md.hole)), &mut out.sub_q[k])?;
                 (r.thickness, r.st)
             }

@@ -43,10 +43,24 @@ fn main() {
             std::process::exit(1);
         }
     };
-    println!("# FE calibration ({}, {:?}); parameters: {}", kind.name(), d, if has("--paper") { "paper preset's E_de" } else if has("--set") { "the defaults (docs/model.md) with --set" } else { "the defaults (docs/model.md)" });
+    println!(
+        "# FE calibration ({}, {:?}); parameters: {}",
+        kind.name(),
+        d,
+        if has("--paper") {
+            "paper preset's E_de"
+        } else if has("--set") {
+            "the defaults (docs/model.md) with --set"
+        } else {
+            "the defaults (docs/model.md)"
+        }
+    );
     let c = run.cal;
     println!("hinge factors (C_x-Fx, C_y-Fy, C_y-M, C_θ-M): {:.6} {:.6} {:.6} {:.6}", c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3]);
-    println!("stack EA factor: {:.6} + {:.6} t; EI factor: {:.6} + {:.6} t (t in mm)", c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]);
+    println!(
+        "stack EA factor: {:.6} + {:.6} t; EI factor: {:.6} + {:.6} t (t in mm)",
+        c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]
+    );
     let none = Calibration::none();
     let row = |t: f64, fe: &[[f64; 3]; 3]| {
         let m0 = model_element_compliance(&p, &none, t).unwrap();
@@ -63,8 +77,12 @@ fn main() {
         println!("  (t = {:.3} mm alone: EA x {:.4}, EI x {:.4})", s.thickness_mm, s.factors[0], s.factors[1]);
         row(s.thickness_mm, &s.fe);
     }
-    println!("cal {:.6} {:.6} {:.6} {:.6} {:.6} {:.6} {:.6} {:.6}",
-        c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]);
-    println!("Calibration {{ hinge: [{:.6}, {:.6}, {:.6}, {:.6}], stack_axial: [{:.6}, {:.6}], stack_bending: [{:.6}, {:.6}] }}",
-        c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]);
+    println!(
+        "cal {:.6} {:.6} {:.6} {:.6} {:.6} {:.6} {:.6} {:.6}",
+        c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]
+    );
+    println!(
+        "Calibration {{ hinge: [{:.6}, {:.6}, {:.6}, {:.6}], stack_axial: [{:.6}, {:.6}], stack_bending: [{:.6}, {:.6}] }}",
+        c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]
+    );
 }

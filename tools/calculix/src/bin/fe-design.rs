@@ -30,7 +30,9 @@ fn main() {
                 None => usage(&format!("card {v}: one of {}", CARDS.iter().map(|c| c.name).collect::<Vec<_>>().join(", "))),
             },
             "tension" => tension = Some(v.parse::<f64>().unwrap_or_else(|_| usage("tension: a number (N)"))),
-            "stack" => stack = Some(v.split(',').map(|x| x.parse::<f64>().unwrap_or_else(|_| usage("stack: mm per joint, comma-separated"))).collect::<Vec<_>>()),
+            "stack" => {
+                stack = Some(v.split(',').map(|x| x.parse::<f64>().unwrap_or_else(|_| usage("stack: mm per joint, comma-separated"))).collect::<Vec<_>>())
+            }
             "kind" => {
                 kind = match v {
                     "3d" => Kind::Half3d,

@@ -33,11 +33,7 @@ fn scenes() -> Vec<Scene> {
 }
 
 fn cal32(c: &Calibration<f64>) -> Calibration<f32> {
-    Calibration {
-        hinge: c.hinge.map(|x| x as f32),
-        stack_axial: c.stack_axial.map(|x| x as f32),
-        stack_bending: c.stack_bending.map(|x| x as f32),
-    }
+    Calibration { hinge: c.hinge.map(|x| x as f32), stack_axial: c.stack_axial.map(|x| x as f32), stack_bending: c.stack_bending.map(|x| x as f32) }
 }
 
 /// The model's answer at one tension, f64 values of the f32 solve.
@@ -70,10 +66,7 @@ fn model_states(p: &Params<f64>, cal: &Calibration<f64>, volts: &[f64; 3], ts: &
         .map(|&t| {
             let s = f.solve_with(&c, t as f32, [0.0; 2], Method::converged()).map_err(|e| format!("model at {t} N: {e}"))?;
             let tip = s.tip();
-            Ok(ModelState {
-                joint: [0, 1, 2].map(|k| s.joint_angle[k] as f64),
-                tip: [tip.x as f64, tip.y as f64, tip.theta as f64],
-            })
+            Ok(ModelState { joint: [0, 1, 2].map(|k| s.joint_angle[k] as f64), tip: [tip.x as f64, tip.y as f64, tip.theta as f64] })
         })
         .collect()
 }
@@ -111,10 +104,7 @@ fn main() {
     let defaults = Params::<f64>::default();
     let paper = Params { de_rule: DeModulusRule::PaperEq3, ..defaults };
     eprintln!("calibrating (3D, {d3:?}) ...");
-    let cals: Vec<CalibrationRun> = [defaults, paper]
-        .iter()
-        .map(|p| calibrate::run(p, Kind::Half3d, &d3).unwrap_or_else(|e| fail(e.to_string())))
-        .collect();
+    let cals: Vec<CalibrationRun> = [defaults, paper].iter().map(|p| calibrate::run(p, Kind::Half3d, &d3).unwrap_or_else(|e| fail(e.to_string()))).collect();
     let l_total = 3.0 * defaults.l;
     let mut out = String::new();
     let w = &mut out;
@@ -124,7 +114,8 @@ fn main() {
     let _ = writeln!(w, "- **FE**: CalculiX 2.20 (`ccx`), NLGEOM, compressible neo-Hookean body and stacks with the model's small-strain E and ν (the elastomers' law; St Venant-Kirchhoff is shown beside it as a bound), quadratic elements (C3D20R, 3D half width with a symmetry plane: the reference; CPE8R plane strain for the 2D comparison). Mesh from `Params`: elliptical notches followed at every node, links as strips of the body, each DE stack a bonded layer of E_de at the thickness its voltage gives. Body E_b = {} MPa, ν_b = {}; stack E_de, ν = {}. The cable: constant-force springs between consecutive guide holes (base, and each link's proximal end and node k, at y = +e), anchored at the tip: a follower load; in 3D each guide loads the line across the width (one spring per node of it, consistent shares), not a single node. 3D mesh {:?}; plane strain {:?}.", defaults.e_b, defaults.nu_b, defaults.nu, d3, d2);
     let _ = writeln!(w, "- **Model**: `finger-model` in f32 with the firmware's `fast-trig` (the same operations the board's FPU runs; computed on the host), the model's defaults (docs/model.md \"Geometry\": m = {}, plate modulus, flexible links), converged solver; **uncal.** = `Finger::new`, **cal.** = `Finger::with_calibration` with the factors below.", defaults.m);
     let _ = writeln!(w, "- **Joint angle k** (FE): the angle of section x = k l minus that of section x = (k-1) l, each section's angle the least-squares rigid rotation of its nodes (section 0 is the clamp). Node k is where link k ends and hinge k+1 begins, so this is the model's node-to-node joint angle (hinge and link). The FE's links bend too, so an angle measured elsewhere on a link differs; the tip pose does not depend on that choice.");
-    let _ = writeln!(w, "- **Tip**: section x = 3 l (the end face): centre position and angle. Tip position error in % of the tip's travel (FE tip displacement).");
+    let _ =
+        writeln!(w, "- **Tip**: section x = 3 l (the end face): centre position and angle. Tip position error in % of the tip's travel (FE tip displacement).");
     let _ = writeln!(w, "- Errors are model minus FE, in % of the FE's value; \"worst joint\" is the joint with the largest |error|.\n");
 
     // calibration
@@ -157,11 +148,7 @@ fn main() {
             let m0 = model_element_compliance(p, &Calibration::none(), t).unwrap_or_else(|e| fail(e));
             let m1 = model_element_compliance(p, &r.cal, t).unwrap_or_else(|e| fail(e));
             let pc = |m: &[[f64; 3]; 3], i: usize, j: usize| 100.0 * (m[i][j] / fe[i][j] - 1.0);
-            let fx = if t > 0.0 {
-                format!("{:.4e} | {:+.2} % | {:+.2} %", fe[2][0], pc(&m0, 2, 0), pc(&m1, 2, 0))
-            } else {
-                "— | — | —".into()
-            };
+            let fx = if t > 0.0 { format!("{:.4e} | {:+.2} % | {:+.2} %", fe[2][0], pc(&m0, 2, 0), pc(&m1, 2, 0)) } else { "— | — | —".into() };
             let _ = writeln!(w, "| {name} | {t:.3} | {:.4e} | {:+.2} % | {:+.2} % | {fx} |", fe[2][2], pc(&m0, 2, 2), pc(&m1, 2, 2));
         }
     }
@@ -188,7 +175,8 @@ fn main() {
         } else {
             vec![0.0; 3]
         };
-        let run = |kind: Kind, d: &Density, law: Law| finger_under_cable(&sc.p, &th, kind, d, law, &TENSIONS).unwrap_or_else(|e| fail(format!("{}: {e}", sc.name)));
+        let run =
+            |kind: Kind, d: &Density, law: Law| finger_under_cable(&sc.p, &th, kind, d, law, &TENSIONS).unwrap_or_else(|e| fail(format!("{}: {e}", sc.name)));
         let fe = run(Kind::Half3d, &d3, Law::NeoHooke);
         let pe = run(Kind::PlaneStrain, &d2, Law::NeoHooke);
         let pe_svk = run(Kind::PlaneStrain, &d2, Law::StVenantKirchhoff);
@@ -292,9 +280,13 @@ fn main() {
         // plane-strain FE (the joint with the largest): the FE's law at finite strain shows in it
         let n = TENSIONS.len() - 1;
         let growth = |fe2: &[FeState]| {
-            (0..3)
-                .map(|k| 100.0 * ((m1[n].joint[k] / fe2[n].joint_angle[k]) / (m1[0].joint[k] / fe2[0].joint_angle[k]) - 1.0))
-                .fold(0.0f64, |a, e| if e.abs() > a.abs() { e } else { a })
+            (0..3).map(|k| 100.0 * ((m1[n].joint[k] / fe2[n].joint_angle[k]) / (m1[0].joint[k] / fe2[0].joint_angle[k]) - 1.0)).fold(0.0f64, |a, e| {
+                if e.abs() > a.abs() {
+                    e
+                } else {
+                    a
+                }
+            })
         };
         let g_nh = growth(&pe);
         let g_mixed = pe_mixed.as_ref().map_or("—".to_string(), |x| format!("{:+.2} %", growth(x)));
