@@ -21,30 +21,31 @@ macro_rules! err {
     }};
 }
 
-mod commands;
-#[cfg(feature = "settings")]
-pub mod config;
 pub mod errors;
-mod film;
-mod help;
-mod host;
-#[cfg(not(m3))]
-pub mod hv_cal;
-#[cfg(not(m3))]
-mod hv_cal_cmd;
+pub mod params;
 #[cfg(m3)]
 mod m3;
-pub mod params;
-#[cfg(all(not(feature = "hw"), not(m3)))]
-mod plant_cmd;
+mod solves;
+mod planner;
+mod help;
+mod film;
+#[cfg(not(m3))]
+pub mod hv_cal;
+#[cfg(feature = "settings")]
+mod stored;
+mod commands;
+#[cfg(not(m3))]
+mod hv_cal_cmd;
 #[cfg(any(feature = "pose", feature = "contact", m3))]
 pub mod pose;
 #[cfg(feature = "shape")]
 mod shape;
-mod solves;
-#[cfg(feature = "settings")]
-mod stored;
+#[cfg(all(not(feature = "hw"), not(m3)))]
+mod plant_cmd;
 mod wire;
+mod host;
+#[cfg(feature = "settings")]
+pub mod config;
 
 pub use crate::control::HvRefused;
 pub use commands::{Commands, TimingReport};

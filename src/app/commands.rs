@@ -1,8 +1,9 @@
 //! The command side's state and dispatch: [`Commands`] (console lines in, replies and
-//! [`Setpoints`] out), the ceilings, the servo plan, fmax, and the handlers of the commands
+//! [`Setpoints`] out), the ceilings, the servo plan, and the handlers of the commands
 //! that move or read the outputs and the model (`status`, `limits`, `solve`, `arm`, `volt`,
 //! `force`, `param`, `preset`, `cal`, `wait`). `pose` and `contact` are `super::pose`'s,
-//! `shape` `super::shape`'s, `save`/`config`/`factory` `super::config`'s.
+//! `shape` `super::shape`'s, `save`/`config`/`factory` `super::config`'s; the finger, fmax
+//! and the branch table `super::planner`'s.
 //!
 //! Safety rules, each in one place:
 //! - The ceiling per channel, `vmax = min(board hold ceiling, the model's ceiling at its
@@ -15,22 +16,20 @@
 //!   so that NaN fails them.
 //! - `stop` is acted on where the bytes arrive ([`crate::rx`]), not here.
 
-use core::cell::Cell;
 use core::fmt::Write;
 
 use finger_model::calibration::KEEPS_CALIBRATION;
 use finger_model::params::PARAMS;
-#[cfg(feature = "pose")]
-use finger_model::Solution;
-use finger_model::{BranchLimit, Calibration, Error as ModelError, Finger, Params};
+use finger_model::{Calibration, Error as ModelError, Finger, Params};
 
 use super::errors::{head, model_err, no_args, number, tension, CmdError, ErrorCode};
 use super::film;
 use super::help::{joints, list, solve_reply, Reply, Tip, DEG, HELP};
 use super::params::{board_params, calibration_for, default_finger, preset, FwParams, CAL_NAMES, CHANNELS, FW_PARAMS};
+use super::planner::Planner;
 #[cfg(m3)]
 use super::solves::forward_stiffness;
-use super::solves::{fmax_of, forward, Solved};
+use super::solves::{forward, Solved};
 #[cfg(feature = "settings")]
 use super::stored::ConfigState;
 use crate::board::HV_MAX_V;
@@ -59,7 +58,8 @@ pub trait TimingReport {
 /// The command side: console lines in, replies and [`Setpoints`] out. Owns no output; runs
 /// at the lowest priority on the chip (RTIC's idle), inside [`super::App`] on the host.
 pub struct Commands {
-    pub(super) finger: Finger<f32>,
+    /// The finger and what is kept from it: fmax, the branch table (app/planner.rs).
+    pub(super) planner: Planner,
     /// The board's film: its law, hold ceiling, settling (app/film.rs).
     pub(super) film: film::BoardFilm,
     pub(super) fw: FwParams,
@@ -109,16 +109,6 @@ pub struct Commands {
     pub(super) wait: Option<Wait>,
     /// A `stop` line reached [`Commands::execute`] (see [`Commands::take_stop`]).
     pub(super) stop_asked: bool,
-    /// `Finger::fmax` at the setpoints it was computed for ([`Commands::fmax`]), and how many
-    /// times it was computed.
-    pub(super) fmax_cache: Cell<Option<([f32; CHANNELS], Result<BranchLimit<f32>, ModelError>)>>,
-    pub(super) fmax_computed: Cell<u32>,
-    /// The finger's branch table (`inverse::BranchTable`: `solve`, `pose`, `force` and fmax
-    /// start from it), built at its first use after a model change (docs/inverse-cost.md has
-    /// its cost) and cleared by [`Commands::set_finger`] and [`Commands::recompute`]. None
-    /// inside for a finger without stacks.
-    #[cfg(feature = "pose")]
-    pub(super) inv_table: core::cell::OnceCell<Option<finger_model::inverse::BranchTable<f32>>>,
     /// The settings store and what the boot found in it (app/stored.rs, app/config.rs).
     #[cfg(feature = "settings")]
     pub(super) cfg: ConfigState,
@@ -128,9 +118,10 @@ impl Commands {
     /// Default parameters, disarmed. `board_name` and `nl` (line ending) from the board,
     /// `hv_max` / `servo_max` its PWMs' full-scale duties.
     pub fn new(board_name: &'static str, nl: &'static str, hv_max: [u16; CHANNELS], servo_max: u16) -> Self {
+        let film = film::BoardFilm::new();
         let mut c = Commands {
-            finger: default_finger(),
-            film: film::BoardFilm::new(),
+            planner: Planner::new(default_finger(), film.hold_ceiling().min(HV_MAX_V)),
+            film,
             fw: FwParams::default(),
             board_name,
             nl,
@@ -166,10 +157,6 @@ impl Commands {
             seq: 0,
             wait: None,
             stop_asked: false,
-            fmax_cache: Cell::new(None),
-            fmax_computed: Cell::new(0),
-            #[cfg(feature = "pose")]
-            inv_table: core::cell::OnceCell::new(),
             #[cfg(feature = "settings")]
             cfg: ConfigState::new(),
         };
@@ -178,7 +165,7 @@ impl Commands {
     }
 
     pub fn finger(&self) -> &Finger<f32> {
-        &self.finger
+        self.planner.finger()
     }
     pub fn fw_params(&self) -> &FwParams {
         &self.fw
@@ -316,14 +303,11 @@ impl Commands {
     /// HV limit)` and the duty it gives. Called on every parameter change.
     pub(super) fn recompute(&mut self) {
         // min(the model's ceiling, the board's hold ceiling, the modules' full scale and limit); NaN-proof
-        let v = self.finger.ceiling_in_force(Some(self.board_cap()));
+        let v = self.planner.finger().ceiling_in_force(Some(self.board_cap()));
         let v = if v >= 0.0 { v } else { 0.0 };
         let v = v.min(self.board_cap());
         // the inverse's branch table is built for the ceiling in force
-        #[cfg(feature = "pose")]
-        {
-            self.inv_table = core::cell::OnceCell::new();
-        }
+        self.planner.clear_table();
         for ch in 0..CHANNELS {
             self.vmax[ch] = v;
             self.duty_max[ch] = hv_duty_for(v, self.hv_max[ch]);
@@ -349,8 +333,11 @@ impl Commands {
             return Ok((0.0, 0.0));
         }
         let excursion = |s: &Solved| s.cable_excursion;
-        let cable =
-            if core::ptr::eq(finger, &self.finger) { self.forward_with(force, volts, excursion) } else { forward(finger, force, volts).map(|s| excursion(&s)) };
+        let cable = if core::ptr::eq(finger, self.planner.finger()) {
+            self.planner.forward_with(force, volts, excursion)
+        } else {
+            forward(finger, force, volts).map(|s| excursion(&s))
+        };
         let cable = cable.map_err(model_err)?.max(0.0);
         let deg = cable / fw.spool_r * DEG;
         if !(deg <= fw.servo_range) {
@@ -361,94 +348,9 @@ impl Commands {
         Ok((cable, deg))
     }
 
-    /// The end of the equilibrium branch at the HV setpoints `volts` (`Finger::fmax`),
-    /// cached: computed once per model and set of setpoints (the cache is keyed by the
-    /// setpoints and cleared when a parameter changes, [`Commands::set_finger`]).
-    pub(super) fn fmax(&self, volts: &[f32; CHANNELS]) -> Result<BranchLimit<f32>, ModelError> {
-        if let Some((key, r)) = self.fmax_cache.get() {
-            if key == *volts {
-                return r;
-            }
-        }
-        #[cfg(feature = "pose")]
-        let r = match self.branch_table() {
-            Some(t) => t.fmax(volts),
-            None => fmax_of(&self.finger, volts),
-        };
-        #[cfg(not(feature = "pose"))]
-        let r = fmax_of(&self.finger, volts);
-        self.fmax_cache.set(Some((*volts, r)));
-        self.fmax_computed.set(self.fmax_computed.get() + 1);
-        r
-    }
-
-    /// The finger's branch table, built at its first use after a model change (None for a
-    /// finger without stacks, or if it cannot be built: the full solves answer then).
-    #[cfg(feature = "pose")]
-    pub(super) fn branch_table(&self) -> Option<&finger_model::inverse::BranchTable<f32>> {
-        self.inv_table
-            .get_or_init(|| {
-                if self.finger.params().layers > 0 {
-                    finger_model::inverse::BranchTable::new(&self.finger, &self.inverse_options()).ok()
-                } else {
-                    None
-                }
-            })
-            .as_ref()
-    }
-
-    /// The forward solve under tension alone at these voltages, handed to `use_it`: from the
-    /// branch table when there is one (`BranchTable::solve_into`, into storage here: no copy
-    /// of the solution; the full model's converged answer, Newton started at the table's guide
-    /// holes), else the full solve (`forward`: f32, or fixed point on the M3).
-    pub(super) fn forward_with<T>(&self, p: f32, volts: &[f32; CHANNELS], use_it: impl FnOnce(&Solved) -> T) -> Result<T, ModelError> {
-        #[cfg(feature = "pose")]
-        if let Some(t) = self.branch_table() {
-            let c = self.finger.compliances(volts)?;
-            let mut sol = Solution::empty();
-            t.solve_into(&c, p, &mut sol)?;
-            return Ok(use_it(&sol));
-        }
-        forward(&self.finger, p, volts).map(|s| use_it(&s))
-    }
-
-    /// [`Commands::forward_with`] with the stacks at `thick_mm` now instead of relaxed at
-    /// `volts` (`status`: the film creeps toward its voltages). The M3 image solves at the
-    /// voltages (its fixed-point path takes no thickness).
-    pub(super) fn forward_now<T>(
-        &self,
-        p: f32,
-        volts: &[f32; CHANNELS],
-        thick_mm: &[f32; CHANNELS],
-        use_it: impl FnOnce(&Solved) -> T,
-    ) -> Result<T, ModelError> {
-        #[cfg(m3)]
-        {
-            let _ = thick_mm;
-            self.forward_with(p, volts, use_it)
-        }
-        #[cfg(not(m3))]
-        {
-            let c = self.finger.compliances_at_thickness(volts, thick_mm)?;
-            #[cfg(feature = "pose")]
-            if let Some(t) = self.branch_table() {
-                let mut sol = Solution::empty();
-                t.solve_into(&c, p, &mut sol)?;
-                return Ok(use_it(&sol));
-            }
-            self.finger.solve_with(&c, p, [0.0; 2], finger_model::Method::converged()).map(|s| use_it(&s))
-        }
-    }
-
     /// How many times `Finger::fmax` ran (the cache's misses), for the tests.
     pub fn fmax_evaluations(&self) -> u32 {
-        self.fmax_computed.get()
-    }
-
-    /// The inverse's options on this board: its ceiling is the one in force (HV full scale too).
-    #[cfg(feature = "pose")]
-    pub(super) fn inverse_options(&self) -> finger_model::inverse::Options<f32> {
-        finger_model::inverse::Options { hv_fs: Some(self.board_cap()), ..Default::default() }
+        self.planner.fmax_evaluations()
     }
 
     /// The finger of `p` with calibration `cal` as the model (`param`, `preset`, `cal`): the
@@ -458,21 +360,11 @@ impl Commands {
     pub(super) fn adopt_model(&mut self, p: Params<f32>, cal: Calibration<f32>) -> Result<(), CmdError> {
         let f = Finger::with_calibration(p, cal).map_err(model_err)?;
         let (cable, deg) = self.plan_servo(&f, &self.fw, self.force, &self.target_v)?;
-        self.set_finger(f);
+        self.planner.set_finger(f);
         self.cable = cable;
         self.set_servo(deg);
         self.recompute();
         Ok(())
-    }
-
-    /// A new model (parameter or preset change): the fmax cache no longer holds.
-    pub(super) fn set_finger(&mut self, f: Finger<f32>) {
-        self.finger = f;
-        self.fmax_cache.set(None);
-        #[cfg(feature = "pose")]
-        {
-            self.inv_table = core::cell::OnceCell::new();
-        }
     }
 
     /// The checks every setpoint change passes (`volt`, `force`, an armed `pose`), after
@@ -483,12 +375,12 @@ impl Commands {
     #[inline(never)]
     pub(super) fn plan_setpoints(&self, force: f32, volts: &[f32; CHANNELS]) -> Result<(f32, f32), CmdError> {
         if force > 0.0 {
-            let end = self.fmax(volts).map_err(model_err)?;
+            let end = self.planner.fmax(volts).map_err(model_err)?;
             if !(force <= end.tension) {
                 return Err(model_err(ModelError::ForceLimit { tension: force.into(), fmax: end.tension.into() }));
             }
         }
-        self.plan_servo(&self.finger, &self.fw, force, volts)
+        self.plan_servo(self.planner.finger(), &self.fw, force, volts)
     }
 
     // ---------------------------------------------------------------- console
@@ -659,7 +551,7 @@ impl Commands {
             fault = fault.or(self.config_fault());
         }
         // the posture of the stacks as they are now, not as they will relax
-        let shown = self.forward_now(self.force, &self.volts, &thick, |s| {
+        let shown = self.planner.forward_now(self.force, &self.volts, &thick, |s| {
             let _ = w!(r; " joints=");
             joints(r, s);
             let tip = s.tip();
@@ -705,7 +597,7 @@ impl Commands {
 
     /// A stack's thickness at rest, mm: layers x z0 of the model (0 without stacks).
     pub(super) fn stack_mm(&self) -> f32 {
-        let p = self.finger.params();
+        let p = self.planner.finger().params();
         p.layers as f32 * p.z0
     }
 
@@ -713,9 +605,9 @@ impl Commands {
     pub(super) fn cmd_limits(&self, r: &mut Reply) {
         let _ = w!(r; "vmax=");
         list(r, &self.vmax, 1);
-        let p = self.finger.params();
-        let _ = w!(r; " vpullin=", Fixed(self.finger.pull_in_voltage(), 1), " supply=", Fixed(p.v_supply, 1), " margin=", Short(p.margin));
-        match self.fmax(&self.target_v) {
+        let p = self.planner.finger().params();
+        let _ = w!(r; " vpullin=", Fixed(self.planner.finger().pull_in_voltage(), 1), " supply=", Fixed(p.v_supply, 1), " margin=", Short(p.margin));
+        match self.planner.fmax(&self.target_v) {
             Ok(b) => {
                 let kind = match b.kind {
                     finger_model::BranchEnd::Contact => "contact",
@@ -779,7 +671,7 @@ impl Commands {
     pub(super) fn model_request(&self, args: &[&[u8]], usage: &str) -> Result<(f32, [f32; CHANNELS]), CmdError> {
         let v = match args {
             [_, v1, v2, v3] => [number(v1, "V1")?, number(v2, "V2")?, number(v3, "V3")?],
-            [_] if self.finger.params().layers == 0 => [0.0; CHANNELS],
+            [_] if self.planner.finger().params().layers == 0 => [0.0; CHANNELS],
             _ => return Err(err!(Usage; usage, " (", usage.split(' ').next().unwrap_or(""), " <P> without stacks)")),
         };
         let p = tension(number(args[0], "P")?)?;
@@ -791,11 +683,14 @@ impl Commands {
     pub(super) fn cmd_solve(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let (p, vf) = self.model_request(args, "solve <P> <V1> <V2> <V3>")?;
         #[cfg(not(m3))]
-        return self.forward_with(p, &vf, |sol| solve_reply(r, sol, self.finger.tip_stiffness(sol).map_err(model_err)?)).map_err(model_err)?;
+        return self
+            .planner
+            .forward_with(p, &vf, |sol| solve_reply(r, sol, self.planner.finger().tip_stiffness(sol).map_err(model_err)?))
+            .map_err(model_err)?;
         // the M3's: from the fixed-point state (app/m3.rs)
         #[cfg(m3)]
         {
-            let (sol, k) = forward_stiffness(&self.finger, p, &vf).map_err(model_err)?;
+            let (sol, k) = forward_stiffness(self.planner.finger(), p, &vf).map_err(model_err)?;
             solve_reply(r, &sol, k)
         }
     }
@@ -824,7 +719,7 @@ impl Commands {
         // the cable keeps its tension, held at the posture of 0 V; if that cannot be
         // held, the cable is released
         let zero = [0.0; CHANNELS];
-        self.hold_or_release(self.plan_servo(&self.finger, &self.fw, self.force, &zero));
+        self.hold_or_release(self.plan_servo(self.planner.finger(), &self.fw, self.force, &zero));
         // the control core ramps the HV to 0, then drops the enable
         self.armed = false;
         self.target_v = zero;
@@ -900,7 +795,7 @@ impl Commands {
         let name = match args.first() {
             None => {
                 let nl = self.nl;
-                let p = self.finger.params();
+                let p = self.planner.finger().params();
                 let model = PARAMS.iter().map(|i| (i.name, i.range, p.get(i.name).unwrap_or(f64::NAN) as f32));
                 let fw = FW_PARAMS.iter().map(|i| (i.name, i.range, self.fw.get(i.name).unwrap_or(0.0)));
                 for (name, range, v) in model.chain(fw) {
@@ -925,22 +820,22 @@ impl Commands {
                 if name == "n" && v != CHANNELS as f32 {
                     return Err(err!(Usage; "parameter n: the board drives ", CHANNELS, " joints"));
                 }
-                let mut p = *self.finger.params();
+                let mut p = *self.planner.finger().params();
                 p.set(name, v.into()).map_err(model_err)?;
                 // the FE calibration belongs to the mechanical parameters it was computed for
-                let cal = if KEEPS_CALIBRATION.contains(&name) { *self.finger.calibration() } else { calibration_for(&p) };
+                let cal = if KEEPS_CALIBRATION.contains(&name) { *self.planner.finger().calibration() } else { calibration_for(&p) };
                 self.adopt_model(p, cal)?;
             } else {
                 let mut fw = self.fw;
                 fw.set(name, v)?;
-                let (cable, deg) = self.plan_servo(&self.finger, &fw, self.force, &self.target_v)?;
+                let (cable, deg) = self.plan_servo(self.planner.finger(), &fw, self.force, &self.target_v)?;
                 self.fw = fw;
                 self.cable = cable;
                 self.set_servo(deg);
                 self.recompute();
             }
         }
-        let v = match self.finger.params().get(name) {
+        let v = match self.planner.finger().params().get(name) {
             Some(v) => v as f32,
             None => self.fw.get(name).unwrap_or(0.0),
         };
@@ -985,9 +880,9 @@ impl Commands {
         };
         if let Some(cal) = cal {
             self.require_disarmed("cal")?;
-            self.adopt_model(*self.finger.params(), cal)?;
+            self.adopt_model(*self.planner.finger().params(), cal)?;
         }
-        let c = self.finger.calibration();
+        let c = self.planner.finger().calibration();
         let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];
         let _ = w!(r; "cal=");
         list(r, &g, 6);

@@ -28,7 +28,7 @@ impl Commands {
     /// its tension there).
     fn put_settings(&mut self, finger: Finger<f32>, fw: FwParams) {
         self.hold_or_release(self.plan_servo(&finger, &fw, self.force, &self.target_v));
-        self.set_finger(finger);
+        self.planner.set_finger(finger);
         self.fw = fw;
         self.recompute();
     }
@@ -82,12 +82,12 @@ impl Commands {
         if self.cfg.store.is_none() {
             return Err(err!(Unknown; "save: this board has no settings store"));
         }
-        let rec = record_with(&self.finger, &self.fw, &self.sense_cal, self.cfg.saves.wrapping_add(1));
+        let rec = record_with(self.planner.finger(), &self.fw, &self.sense_cal, self.cfg.saves.wrapping_add(1));
         match settings_of(&rec) {
-            Ok((f, fw)) if f.params() == self.finger.params() && f.calibration() == self.finger.calibration() && fw == self.fw => {}
+            Ok((f, fw)) if f.params() == self.planner.finger().params() && f.calibration() == self.planner.finger().calibration() && fw == self.fw => {}
             Ok(_) => return Err(err!(Usage; "save: the settings in force do not read back as themselves; not saved")),
             Err(Reject::Ceiling) => {
-                let v = self.finger.ceiling_in_force(None);
+                let v = self.planner.finger().ceiling_in_force(None);
                 return Err(
                     err!(Limit; "save: these settings raise the model's ceiling to ", Fixed(v, 1), " V, past the compiled ", Fixed(board_ceiling(), 1), " V; not saved"),
                 );

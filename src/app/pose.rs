@@ -230,13 +230,13 @@ impl Commands {
     #[inline(never)]
     pub(super) fn cmd_pose<W: Write>(&mut self, args: &[&[u8]], out: &mut W) -> Result<(), CmdError> {
         let (deg, p) = pose_args(args, 0.0f32, |d| d)?;
-        let table = self.branch_table();
+        let table = self.planner.branch_table();
         let armed = self.armed;
         let mut plan = None;
         let mut answer = None;
         let mut line: String<240> = String::new();
         let this = &*self;
-        let done = pose_with(&mut line, &this.finger, table, &this.inverse_options(), &deg, p, |t, v| {
+        let done = pose_with(&mut line, this.planner.finger(), table, &this.planner.inverse_options(), &deg, p, |t, v| {
             let target = [v[0], v[1], v[2]];
             this.check_domain(t, &target)?;
             answer = Some(target);
@@ -272,7 +272,7 @@ impl Commands {
     #[cfg(feature = "pose")]
     #[inline(never)]
     pub(super) fn check_domain(&self, p: f32, v: &[f32; CHANNELS]) -> Result<(), CmdError> {
-        let end = self.fmax(v).map_err(super::errors::model_err)?;
+        let end = self.planner.fmax(v).map_err(super::errors::model_err)?;
         if !(p <= end.tension) {
             let why = match end.kind {
                 finger_model::BranchEnd::Contact => "its notch closes (links touch)",
@@ -280,7 +280,7 @@ impl Commands {
             };
             return Err(err!(Unreachable; "pose: needs ", Fixed(p, 3), " N, past fmax ", Fixed(end.tension, 3), " N: at joint ", end.joint, " ", why));
         }
-        let x = self.forward_with(p, v, |s| s.tip().x).map_err(super::errors::model_err)?;
+        let x = self.planner.forward_with(p, v, |s| s.tip().x).map_err(super::errors::model_err)?;
         if !(x > 0.0) {
             return Err(err!(Unreachable; "pose: the tip would be behind the base (x=", Fixed(x, 3), " mm), outside the model's domain"));
         }
@@ -336,7 +336,7 @@ impl Commands {
         self.check_volts(&v)?;
         let mut line: String<240> = String::new();
         let volts: &[f32] = if args.len() > 2 { &v } else { &[] };
-        let _ = contact(&mut line, &self.finger, p0, p, volts);
+        let _ = contact(&mut line, self.planner.finger(), p0, p, volts);
         let _ = w!(out; line, self.nl);
         Ok(())
     }
@@ -358,9 +358,9 @@ impl Commands {
     pub(super) fn cmd_pose(&mut self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let (rad, given) = pose_args(args, Rad::ZERO, |d| Rad::from_f32(d / DEG))?;
         let mut ff = FixedFinger::empty();
-        ff.prepare(&self.finger, &[0.0; CHANNELS]).map_err(model_err)?;
+        ff.prepare(self.planner.finger(), &[0.0; CHANNELS]).map_err(model_err)?;
         let top = finger_model::inverse::Options::<f32>::default().top;
-        let inv = FixedInverseDirect::new(&self.finger, &ff, self.vmax[0] * top).map_err(model_err)?;
+        let inv = FixedInverseDirect::new(self.planner.finger(), &ff, self.vmax[0] * top).map_err(model_err)?;
         let mut at = Nt::from_f32(given.unwrap_or(0.0));
         let res = match given {
             Some(_) => inv.solve(&rad, at).map(|s| (s, None)),
@@ -379,7 +379,7 @@ impl Commands {
         let target = [v[0], v[1], v[2]];
         // the ceilings as `volt` checks them, armed or not; 0 V (rest thickness) is off
         self.check_volts_of(&target, true)?;
-        let held = forward(&self.finger, p, &target).map_err(model_err)?;
+        let held = forward(self.planner.finger(), p, &target).map_err(model_err)?;
         if self.armed {
             self.require_armed("pose")?;
             let (cable, sdeg) = self.plan_setpoints(p, &target)?;

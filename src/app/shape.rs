@@ -15,8 +15,8 @@ impl Commands {
     #[inline(never)]
     pub(super) fn cmd_shape(&self, args: &[&[u8]], r: &mut Reply) -> Result<(), CmdError> {
         let (p, v) = self.model_request(args, "shape <P> <V1> <V2> <V3>")?;
-        let sol = self.finger.solve(p, &v, Method::converged()).map_err(model_err)?;
-        let link_len = self.finger.params().l - self.finger.params().hinge_len();
+        let sol = self.planner.finger().solve(p, &v, Method::converged()).map_err(model_err)?;
+        let link_len = self.planner.finger().params().l - self.planner.finger().params().hinge_len();
         let _ = w!(r; "nodes=");
         for k in 0..=CHANNELS {
             pose(r, k > 0, &sol.nodes[k]);
