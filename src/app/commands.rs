@@ -120,7 +120,7 @@ impl Commands {
     pub fn new(board_name: &'static str, nl: &'static str, hv_max: [u16; CHANNELS], servo_max: u16) -> Self {
         let film = film::BoardFilm::new();
         let mut c = Commands {
-            planner: Planner::new(default_finger(), film.hold_ceiling().min(HV_MAX_V)),
+            planner: Planner::new(default_finger(), board_cap_of(&film)),
             film,
             fw: FwParams::default(),
             board_name,
@@ -296,7 +296,7 @@ impl Commands {
     /// the HV modules' full scale and limit), V. The model's ceiling in force takes it as its
     /// `hv_fs` term (`Finger::ceiling_in_force`), so the inverse and the board agree.
     pub(super) fn board_cap(&self) -> f32 {
-        self.film.hold_ceiling().min(HV_MAX_V)
+        board_cap_of(&self.film)
     }
 
     /// The ceilings: per channel `min(board hold ceiling, the model's ceiling, HV full scale,
@@ -903,4 +903,9 @@ pub(crate) fn largest_below(vmax: f32) -> f32 {
         tenths -= 1;
     }
     tenths as f32 / 10.0
+}
+
+/// [`Commands::board_cap`] of the board's film, V (the planner's `hv_fs` takes it at start).
+fn board_cap_of(film: &film::BoardFilm) -> f32 {
+    film.hold_ceiling().min(HV_MAX_V)
 }
