@@ -633,9 +633,10 @@ impl<B: Board> Control<B> {
             let d = {
                 let t0 = clock();
                 // the ceiling in force, for the duty as for the measured voltage: a shaped
-                // drive's guarded value is its bound itself; a plain one's, the lower of the hold
-                // and the sensed ceilings (a monitor reading low never lifts the true voltage past it)
-                let in_force = if self.shaped { nv } else { v_cap.min(hold) };
+                // drive's guarded value is its bound itself, a plain one's the hold ceiling; both
+                // within the sensed ceiling at once (a monitor reading low never lifts the true
+                // voltage past it)
+                let in_force = if self.shaped { nv.min(v_cap) } else { v_cap.min(hold) };
                 let d = self.loop_duty(ch, nv, in_force);
                 cost.read_back = cost.read_back.wrapping_add(clock().wrapping_sub(t0));
                 d
@@ -751,6 +752,7 @@ impl<B: Board> Control<B> {
         self.read_plant();
         let source = clock().wrapping_sub(t0);
         let hold = self.hold_ceiling_v();
+        let s_hold = self.s_hold();
         let sn = &mut self.sensing;
         sn.present = true;
         let mut fault = None;
@@ -780,7 +782,7 @@ impl<B: Board> Control<B> {
                 if let (Some(st), true) = (self.stacks.as_ref(), sn.guard_on) {
                     let s_model = st.ratios()[ch];
                     let (at_model, at_meas) = (st.equilibrium_voltage_at(s_model), st.equilibrium_voltage_at(s_meas));
-                    sn.guard[ch].update(s_meas, s_model, self.s_floor[ch], at_model, at_meas, sn.ripple_ms[ch]);
+                    sn.guard[ch].update(s_meas, s_model, s_hold, at_model, at_meas, sn.ripple_ms[ch]);
                 }
             }
             sn.view.ceiling_v[ch] = sn.guard[ch].derate * hold;

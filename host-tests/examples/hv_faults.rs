@@ -5,7 +5,7 @@
 //! thickness; every 10,000 fault histories a progress line (seeds so far, missed, worst
 //! breakdown cut), so the soak can run in parts over consecutive seed ranges.
 use finger_fw::control::Fault;
-use host_tests::plant_runs::{clean_history, fault_history, soft_film_history, Kind};
+use host_tests::plant_runs::{clean_history, fault_history, soft_film_history, Kind, SOFT_TIME_SCALE};
 use std::time::Instant;
 
 fn arg(k: usize, d: u64) -> u64 {
@@ -56,10 +56,10 @@ fn main() {
     );
     for guard in [true, false] {
         let t2 = Instant::now();
-        let runs: Vec<_> = (0..n_soft).map(|s| soft_film_history(2_000_000_000 + s, 3000, 30.0, guard)).collect();
+        let runs: Vec<_> = (0..n_soft).map(|s| soft_film_history(2_000_000_000 + s, 3000, SOFT_TIME_SCALE, guard)).collect();
         let bad = runs.iter().filter(|r| r.collapsed || r.s_min <= 2.0 / 3.0 || r.field_max >= 18.0).count();
         let s_min = runs.iter().map(|r| r.s_min).fold(1.0f32, f32::min);
         let e_max = runs.iter().map(|r| r.field_max).fold(0.0f32, f32::max);
-        println!("soft films (G_eq 6.7..13.4 kPa, 30x fast creep), guard {}: {n_soft} histories, past 2/3 or collapsed: {bad}, thinnest s {s_min:.4}, highest field {e_max:.2} V/um ({:.0} s)", if guard { "on" } else { "off" }, t2.elapsed().as_secs_f64());
+        println!("soft films (G_eq 6.7..13.4 kPa, {SOFT_TIME_SCALE}x fast creep), guard {}: {n_soft} histories, past 2/3 or collapsed: {bad}, thinnest s {s_min:.4}, highest field {e_max:.2} V/um ({:.0} s)", if guard { "on" } else { "off" }, t2.elapsed().as_secs_f64());
     }
 }

@@ -130,6 +130,10 @@ pub fn clean_history(seed: u64, ms: u32) -> Option<Fault> {
     c.view().fault.get()
 }
 
+/// The soft films creep this many times faster than the card's (the board's model keeps the
+/// card's times): 3 s of board time are five times the film's slowest branch (61 s / 100).
+pub const SOFT_TIME_SCALE: f32 = 100.0;
+
 /// A soft-film history's worst: the thinnest the true film got, whether it collapsed, its
 /// highest field (V/µm).
 #[derive(Clone, Copy, Debug)]

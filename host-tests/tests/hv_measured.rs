@@ -6,7 +6,7 @@
 use finger_fw::control::watch::HV_SETTLE_MS;
 use finger_fw::control::Fault;
 use finger_fw::plant::{Inject, Plant};
-use host_tests::plant_runs::{armed, clean_history, run, Rng};
+use host_tests::plant_runs::{armed, clean_history, run, Rng, SOFT_TIME_SCALE};
 
 /// A breakdown on a held or slewing channel above 500 V: the analog watchdog cuts the
 /// enable within 1 ms of board time, and the core latches `breakdown` with every duty 0.
@@ -56,7 +56,8 @@ fn a_stuck_module_is_cut_within_the_settling_time() {
     }
 }
 
-/// A module stuck under the hold ceiling, 800-2,300 V above a held 3 kV command, plain at
+/// A module stuck under the hold ceiling, 800-2,300 V above a held 3 kV command (a shaped
+/// drive's command in force: still over 3 kV after 40 s), plain at
 /// 100, 2,000 and 100,000 V/s and shaped at the two faster slews: `hv-mismatch` within the
 /// settling time. The slew holds the loop's ask back all the while the ask descends; a
 /// mismatch count that restarted on every such tick never cut the plain channel at 2,000 V/s or
@@ -67,11 +68,13 @@ fn a_module_stuck_under_the_ceiling_is_cut_within_the_settling_time_at_any_slew(
     use finger_fw::sim::SimBoard;
     use host_tests::hv::setpoints;
     for (shaped, slew) in [(false, 100.0), (false, 2000.0), (false, 100_000.0), (true, 2000.0), (true, 100_000.0)] {
-        for stuck in [3800.0, 4500.0, 5300.0] {
+        for above in [800.0, 1500.0, 2300.0] {
             let mut c = Control::new(SimBoard::with_plant(Plant::new(3).unwrap()), 2000, slew);
             assert!(c.apply(&setpoints(&c, [3000.0; 3], shaped, slew)));
             run(&mut c, 40_000);
             assert_eq!(c.view().fault.get(), None);
+            // above the command in force (a shaped drive's is still over its 3 kV target)
+            let stuck = (c.view().volts[0] + above).min(5300.0);
             c.board_mut().plant.as_mut().unwrap().inject(0, Inject::Stuck(stuck)).unwrap();
             run(&mut c, HV_SETTLE_MS + 20);
             assert_eq!(c.view().fault.get(), Some(Fault::HvMismatch), "shaped {shaped} at {slew} V/s, stuck at {stuck} V");
@@ -177,6 +180,39 @@ fn the_cards_own_film_held_for_two_minutes_lowers_no_ceiling() {
     }
 }
 
+/// The card's own film under a shaped drive, held 20 s: the guard lowers no ceiling. Its floor
+/// is the film's safety floor (the hold's), never the shaped drive's aim: with the aim (the
+/// target's own thickness, which the film reaches by design) the guard took every shaped
+/// channel down to a few volts within a second, and a plain command after it stepped the
+/// drive up (the fault-free histories' false `breakdown`s).
+#[test]
+fn the_cards_own_film_under_a_shaped_drive_lowers_no_ceiling() {
+    use finger_fw::control::Control;
+    use finger_fw::sim::SimBoard;
+    use host_tests::hv::setpoints;
+    for (seed, frac) in [(0u32, 0.3f32), (1, 0.6), (2, 0.9)] {
+        let mut c = Control::new(SimBoard::with_plant(Plant::new(seed).unwrap()), 2000, 2000.0);
+        let v = (frac * c.hold_ceiling_v()).floor();
+        assert!(c.apply(&setpoints(&c, [v; 3], true, 2000.0)));
+        for _ in 0..20_000 {
+            run(&mut c, 1);
+            let view = c.view();
+            let sense = view.sense.unwrap();
+            assert!(sense.ceiling_v.iter().all(|&x| x == c.hold_ceiling_v()), "shaped {v} V, at {} ms: {sense:?}", view.now_ms);
+        }
+        assert_eq!(c.view().fault.get(), None);
+    }
+}
+
+/// The fault-free histories that tripped `breakdown` falsely (a shaped command after a
+/// guarded one: the drive stepped up past the module's ask, which read as a collapse).
+#[test]
+fn no_false_breakdown_after_a_shaped_drive_in_the_histories_that_found_it() {
+    for idx in [515u64, 538, 1237, 1488, 1498] {
+        assert_eq!(clean_history(1_000_000_000 + idx, 3000), None, "history {idx}");
+    }
+}
+
 /// A module 10 % weak held just under the hold ceiling: the loop asks up to the ceiling's
 /// duty, and every duty it writes is under the card's hold ceiling computed in f64 (the f32
 /// ceiling, 5,400.0, is above the card's 5,399.9999 V: its own duty was one count past it, which
@@ -235,10 +271,6 @@ fn soft_films(seed0: u64, n: u64, guard: bool, stop_at_first_failure: bool) -> (
     let bad = runs.iter().filter(|r| r.collapsed || r.s_min <= 2.0 / 3.0 || r.field_max >= 18.0).count() as u64;
     (runs, bad)
 }
-
-/// The plant's film creeps this many times faster than the card's (the board's model keeps
-/// the card's times): 3 s of board time are five times the film's slowest branch (61 s / 100).
-const SOFT_TIME_SCALE: f32 = 100.0;
 
 /// A film softer than the card (G_eq half the card's to the card's), under random targets
 /// up to the board's ceiling: the true film never thinner than 2/3 of its thickness, its

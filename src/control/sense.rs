@@ -80,6 +80,8 @@ pub struct Estimator {
     /// The last window that swung: (ΔV, T, Q, its voltage integral), or zeros.
     prev: (f32, f32, f32, f32),
     swings: u32,
+    /// Windows that measured the leakage.
+    leaks: u32,
     windows: u32,
 }
 
@@ -100,6 +102,7 @@ impl Estimator {
             leak_us_per_v: 0.0,
             prev: (0.0, 0.0, 0.0, 0.0),
             swings: 0,
+            leaks: 0,
             windows: 0,
         }
     }
@@ -170,6 +173,7 @@ impl Estimator {
         }
         if let Some(leak) = leak.filter(|l| l.is_finite()) {
             self.leak_ua += LEAK_WEIGHT * (leak - self.leak_ua);
+            self.leaks = self.leaks.saturating_add(1);
             if v_mid > RIPPLE_MIN_V {
                 self.leak_us_per_v = self.leak_ua / v_mid;
             }
@@ -186,9 +190,10 @@ impl Estimator {
         (self.swings >= WINDOWS_TO_MEASURE).then_some(self.c_pf)
     }
 
-    /// The leakage through the stack, µA, once measured.
+    /// The leakage through the stack, µA, once measured (by its own windows: a leak large
+    /// beside the stack's charge leaves the capacitance unmeasured, never the leakage).
     pub fn leakage_ua(&self) -> Option<f32> {
-        (self.swings >= WINDOWS_TO_MEASURE).then_some(self.leak_ua)
+        (self.swings >= WINDOWS_TO_MEASURE || self.leaks >= WINDOWS_TO_MEASURE).then_some(self.leak_ua)
     }
 
     /// The stack's thickness stretch from its capacitance: sqrt(C0 / (C - stray)), or NaN

@@ -28,7 +28,8 @@ pub const OVER_MS: u32 = 60;
 /// The module's fall, the time constant the over-ceiling bound decays with after a command
 /// drops (the module's datasheet lag, with margin), ms.
 pub const MODULE_FALL_MS: f32 = 25.0;
-/// A held command whose measured voltage fell under this fraction of it: a collapse.
+/// A held command whose measured voltage fell under this fraction of it (and of the module's
+/// ask): a collapse.
 pub const COLLAPSE_FRAC: f32 = 0.5;
 /// An open stack: the sensed capacitance under this fraction of the stack's.
 pub const OPEN_FRAC: f32 = 0.3;
@@ -123,7 +124,9 @@ impl Watch {
         self.prev_ask = ask.volts;
         let follows_ask = !((r.v - ask.volts).abs() > MISMATCH_V.max(FOLLOW_FRAC * ask.volts) + lag_v);
         self.mismatch_ms = if !off || (enabled && ask.slew_held && follows_ask) { 0 } else { self.mismatch_ms + 1 };
-        if enabled && self.steady_ms >= 30 && drive_v > 1000.0 && r.v < COLLAPSE_FRAC * drive_v {
+        // against what the module was asked as well: one still catching up with its ask (a drive
+        // that stepped up) follows it; a short pulls the output under an ask at or above the drive
+        if enabled && self.steady_ms >= 30 && drive_v > 1000.0 && r.v < COLLAPSE_FRAC * drive_v.min(ask.volts) {
             self.collapse_ms += 1;
             if self.collapse_ms >= 3 {
                 return Some(Fault::Breakdown);
