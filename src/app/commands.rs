@@ -408,7 +408,8 @@ impl Commands {
         match r {
             Ok(true) => {}
             Ok(false) => {
-                let _ = if reply.is_empty() { w!(out; "ok", nl) } else { w!(out; "ok ", reply, nl) };
+                let _ = finger_protocol::Reply::Ok(finger_protocol::reply::Fields::new(&reply)).emit(out);
+                let _ = w!(out; nl);
             }
             Err(e) => {
                 e.emit(out);
