@@ -737,7 +737,9 @@ impl<B: Board> Control<B> {
         let limit_v = self.write_ceiling_v[ch].min(in_force_v * (1.0 - 8.0 * f32::EPSILON));
         let drive = (nv - ripple).min(limit_v);
         sn.drive[ch] = drive;
-        let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v - ripple, limit_v, self.slew * 0.001);
+        // held, the ripple swings at its own rate under a slower slew (it only lowers the ask)
+        let max_step = if held { (self.slew * 0.001).max(sense::RIPPLE_STEP_V) } else { self.slew * 0.001 };
+        let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v - ripple, limit_v, max_step);
         sn.ask[ch] = ask;
         hv_duty_for(ask.volts, max).min(limit)
     }

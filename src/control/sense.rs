@@ -24,6 +24,10 @@ pub const WINDOW_MAX_MS: u32 = 400;
 pub const RIPPLE_PP_V: f32 = 100.0;
 pub const RIPPLE_PERIOD_MS: u32 = 200;
 pub const RIPPLE_MIN_V: f32 = 300.0;
+/// The ripple's own rate, V a tick (1 ms): a held channel's ask may move this fast whatever the
+/// slew (under a slew of 200 V/s the ripple swung 20 V, its charge under the current sense's
+/// resolution: no capacitance measured, a soft film past 2/3 and an open stack unseen).
+pub const RIPPLE_STEP_V: f32 = 2.0 * RIPPLE_PP_V / RIPPLE_PERIOD_MS as f32;
 /// The most the film's incremental capacitance ratio takes off a swing's capacitance (above
 /// it, the sensed film reads thinner than it is, never thicker): the board's film under the
 /// hold ceiling stays under 1.15 (1.139 after 10 min at the ceiling; docs/firmware.md

@@ -40,6 +40,10 @@ pub const OPEN_FRAC: f32 = 0.3;
 pub const LEAK_BOUND_UA: f32 = 1.0;
 pub const LEAK_BOUND_UA_PER_V: f32 = 2e-4;
 pub const LEAK_CHECK_MIN_V: f32 = 50.0;
+/// The leakage bound is never under two counts of the current sense (24.4 nA each): the
+/// conductance's bound at a low voltage (14 nA at 69 V) was under the sense's resolution, and
+/// a film's creep current there latched `leakage` in a fault-free history.
+pub const LEAK_FLOOR_UA: f32 = 0.05;
 /// The thickness guard lowers the ceiling once the sensed film is within this of its floor.
 pub const FLOOR_MARGIN_S: f32 = 0.03;
 /// The sensed and the model's thickness disagree past this (absolute, in s), over this many
@@ -50,6 +54,11 @@ pub const DISAGREE_WINDOWS: u32 = 3;
 /// charge carries the film's creep, which reads thinner, and the running mean keeps the
 /// slew's windows for a while).
 pub const GUARD_HELD_MS: u32 = 1000;
+/// A disagreement this large counts at once, held or not: past the 0.02-0.03 a slew's windows
+/// read thin (`hv_measured`'s `the_sensed_thickness_follows_the_film`). A film half the card's
+/// modulus creeping 94 times faster, held at the ceiling, passed 2/3 within 3.2 s while the
+/// guard waited out its hold (`fuzz/regressions/plant/soft-film-5399-fast-slew`).
+pub const DISAGREE_FAST_S: f32 = 0.06;
 
 /// One tick's reading of a channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -156,7 +165,7 @@ impl Watch {
                     return Some(Fault::StackOpen);
                 }
             }
-            let bound = LEAK_BOUND_UA.min(LEAK_BOUND_UA_PER_V * drive_v);
+            let bound = LEAK_BOUND_UA.min(LEAK_BOUND_UA_PER_V * drive_v).max(LEAK_FLOOR_UA);
             let leaking = drive_v > LEAK_CHECK_MIN_V && est.leakage_ua().is_some_and(|l| !(l <= bound));
             self.leak_ms = if leaking { self.leak_ms + 1 } else { 0 };
             if self.leak_ms >= 200 {
@@ -196,7 +205,10 @@ impl ThicknessGuard {
         if !(s_meas > 0.0 && s_meas <= 1.5) {
             return;
         }
-        let thinner = held_ms >= GUARD_HELD_MS && s_meas < s_model - DISAGREE_S;
+        // before the channel has been held GUARD_HELD_MS, only a disagreement past what a slew's
+        // windows read (DISAGREE_FAST_S)
+        let gap = s_model - s_meas;
+        let thinner = gap > DISAGREE_S && (held_ms >= GUARD_HELD_MS || gap > DISAGREE_FAST_S);
         self.disagree_windows = if thinner { self.disagree_windows.saturating_add(1) } else { 0 };
         if self.disagree_windows >= DISAGREE_WINDOWS {
             self.disagreed = true;
