@@ -784,7 +784,7 @@ impl<B: Board> Control<B> {
                 if let (Some(st), true) = (self.stacks.as_ref(), sn.guard_on) {
                     let s_model = st.ratios()[ch];
                     let (at_model, at_meas) = (st.equilibrium_voltage_at(s_model), st.equilibrium_voltage_at(s_meas));
-                    sn.guard[ch].update(s_meas, s_model, s_hold, at_model, at_meas, sn.ripple_ms[ch]);
+                    sn.guard[ch].update(s_meas, s_model, s_hold, at_model, at_meas, sn.ripple_ms[ch], sn.est[ch].last_window_joint());
                 }
             }
             sn.view.ceiling_v[ch] = sn.guard[ch].derate * hold;

@@ -87,6 +87,9 @@ pub struct Estimator {
     /// Windows that measured the leakage.
     leaks: u32,
     windows: u32,
+    /// The last window solved its capacitance jointly with the leakage (a held pair): its
+    /// capacitance owes nothing to a leakage assumed from before.
+    joint: bool,
 }
 
 /// Each new window's weight in the capacitance's and the leakage's running means.
@@ -108,6 +111,7 @@ impl Estimator {
             swings: 0,
             leaks: 0,
             windows: 0,
+            joint: false,
         }
     }
 
@@ -153,6 +157,7 @@ impl Estimator {
         let det = dv * pt - pdv * t;
         let paired = swing && dv * pdv < 0.0 && pdv.abs() >= 0.5 * WINDOW_DV_V && det.abs() >= 0.5 * WINDOW_DV_V * (t + pt);
         self.prev = if swing { (dv, t, q, s) } else { (0.0, 0.0, 0.0, 0.0) };
+        self.joint = paired;
         let leak_now = self.leak_us_per_v * v_mid;
         let secant = |c_inc: f32| SENSE_STRAY_PF + (c_inc - SENSE_STRAY_PF) / c_ratio;
         // the pair's leakage ohmic (Q = C dV + G S) where both windows are held high enough
@@ -187,6 +192,12 @@ impl Estimator {
     /// Windows closed so far.
     pub fn windows(&self) -> u32 {
         self.windows
+    }
+
+    /// The last window closed solved the capacitance and the leakage together (a held pair); a
+    /// lone swing's capacitance carries any leakage that arose since the last measure.
+    pub fn last_window_joint(&self) -> bool {
+        self.joint
     }
 
     /// The capacitance the sense sees, pF, once measured.

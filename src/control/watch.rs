@@ -54,10 +54,14 @@ pub const DISAGREE_WINDOWS: u32 = 3;
 /// charge carries the film's creep, which reads thinner, and the running mean keeps the
 /// slew's windows for a while).
 pub const GUARD_HELD_MS: u32 = 1000;
-/// A disagreement this large counts at once, held or not: past the 0.02-0.03 a slew's windows
-/// read thin (`hv_measured`'s `the_sensed_thickness_follows_the_film`). A film half the card's
-/// modulus creeping 94 times faster, held at the ceiling, passed 2/3 within 3.2 s while the
-/// guard waited out its hold (`fuzz/regressions/plant/soft-film-5399-fast-slew`).
+/// A disagreement this large counts at once, on a window that solved its capacitance jointly
+/// with the leakage (a held pair): past the 0.02-0.03 a slew's windows read thin
+/// (`hv_measured`'s `the_sensed_thickness_follows_the_film`). A film half the card's modulus
+/// creeping 94 times faster, held at the ceiling, passed 2/3 within 3.2 s while the guard
+/// waited out its hold (`fuzz/regressions/plant/soft-film-5399-fast-slew`). A slew's lone
+/// windows do not count: a leak that arose on a ramp reads there as charge, so as a thick
+/// capacitance (a 2-5 µA leak on a 2,000 V/s ramp read s 0.87 for 0.998, and the guard held
+/// the channel under the leakage check's voltage: the leak never latched).
 pub const DISAGREE_FAST_S: f32 = 0.06;
 
 /// One tick's reading of a channel.
@@ -200,15 +204,15 @@ impl ThicknessGuard {
 
     /// After a window: `s_meas` sensed, `s_model` the model's, `s_floor` the floor, the
     /// card's equilibrium voltages of the two thicknesses, and `held_ms` how long the channel
-    /// has been held.
-    pub fn update(&mut self, s_meas: f32, s_model: f32, s_floor: f32, volts_model_at_model: f32, volts_model_at_meas: f32, held_ms: u32) {
+    /// has been held, `joint` whether the window solved its capacitance with the leakage.
+    pub fn update(&mut self, s_meas: f32, s_model: f32, s_floor: f32, volts_model_at_model: f32, volts_model_at_meas: f32, held_ms: u32, joint: bool) {
         if !(s_meas > 0.0 && s_meas <= 1.5) {
             return;
         }
-        // before the channel has been held GUARD_HELD_MS, only a disagreement past what a slew's
-        // windows read (DISAGREE_FAST_S)
+        // before the channel has been held GUARD_HELD_MS, only a held pair's disagreement past
+        // what a slew's windows read (DISAGREE_FAST_S)
         let gap = s_model - s_meas;
-        let thinner = gap > DISAGREE_S && (held_ms >= GUARD_HELD_MS || gap > DISAGREE_FAST_S);
+        let thinner = gap > DISAGREE_S && (held_ms >= GUARD_HELD_MS || (joint && gap > DISAGREE_FAST_S));
         self.disagree_windows = if thinner { self.disagree_windows.saturating_add(1) } else { 0 };
         if self.disagree_windows >= DISAGREE_WINDOWS {
             self.disagreed = true;
