@@ -5,8 +5,9 @@
 //! The estimator (docs/firmware.md "Thickness sensed"): the return current is integrated
 //! over windows that close once the voltage has moved [`WINDOW_DV_V`] on a slew, or at each
 //! turn of the hold ripple ([`RIPPLE_PP_V`] at [`RIPPLE_PERIOD_MS`]); each window gives
-//! Q = C ΔV + I_leak T (ohmic, G ∫V dt, for a held pair): two opposite swings both unknowns, a lone swing its capacitance (the
-//! leakage known), a slow window its leakage, each kept as a running mean over the windows.
+//! Q = C ΔV + I_leak T (ohmic, G ∫V dt, for a held pair): two windows at rates a swing apart both unknowns, a lone swing its capacitance (the
+//! leakage known), a slow window its leakage (when its swing's charge is under half its own),
+//! each kept as a running mean over the windows.
 //! A swing's charge measures the film's dQ/dV; the capacitance kept is its Q/V (the model's
 //! incremental ratio taken off).
 //!
@@ -33,6 +34,9 @@ pub const RIPPLE_STEP_V: f32 = 2.0 * RIPPLE_PP_V / RIPPLE_PERIOD_MS as f32;
 /// hold ceiling stays under 1.15 (1.139 after 10 min at the ceiling; docs/firmware.md
 /// "Thickness sensed").
 pub const C_RATIO_MAX: f32 = 1.25;
+/// The shortest window of a pair, ms (a fast step's few-millisecond windows carry the module's
+/// own transient: a pair of them once solved a 0.29 µA leakage on a healthy stack).
+pub const PAIR_MIN_MS: f32 = 20.0;
 /// Windows with a swing before the capacitance counts as measured.
 pub const WINDOWS_TO_MEASURE: u32 = 3;
 
@@ -145,18 +149,27 @@ impl Estimator {
     }
 
     /// A window of swing `dv` (V), length `t` (ms), charge `q` (nC), voltage integral `s`
-    /// (V ms), mean voltage `v_mid`: Q = C ΔV + I_leak T. Two windows that swing opposite ways
-    /// (the ripple's up and down) give both unknowns at once, the leakage ohmic (Q = C ΔV + G S)
-    /// when both are held above [`RIPPLE_MIN_V`]; a lone swing (a slew) its capacitance with
-    /// the leakage taken as ohmic from the last measured conductance; a slow window its
-    /// leakage. A swing's capacitance is the stack's dQ/dV: over `c_ratio`, its Q/V.
+    /// (V ms), mean voltage `v_mid`: Q = C ΔV + I_leak T. Two windows in a row whose rates
+    /// differ by a swing's (the ripple's up and down; on a slow ramp, the ripple's halves; a
+    /// slew's last swing and a hold's slow window) give both unknowns at once, the leakage
+    /// ohmic (Q = C ΔV + G S) when both are held above [`RIPPLE_MIN_V`]; a lone swing (a fast
+    /// slew) its capacitance with the leakage taken as ohmic from the last measured
+    /// conductance; a slow window its leakage. A swing's capacitance is the stack's dQ/dV:
+    /// over `c_ratio`, its Q/V.
     fn close(&mut self, dv: f32, t: f32, q: f32, s: f32, v_mid: f32, c_ratio: f32) {
         let c0 = BOARD_STACK_C0_PF + SENSE_STRAY_PF;
         let swing = dv.abs() >= 0.5 * WINDOW_DV_V && t >= 5.0;
         let (pdv, pt, pq, ps) = self.prev;
         let det = dv * pt - pdv * t;
-        let paired = swing && dv * pdv < 0.0 && pdv.abs() >= 0.5 * WINDOW_DV_V && det.abs() >= 0.5 * WINDOW_DV_V * (t + pt);
-        self.prev = if swing { (dv, t, q, s) } else { (0.0, 0.0, 0.0, 0.0) };
+        // two windows at rates far enough apart solve both unknowns: two swings opposite ways
+        // (the ripple's up and down), or a swing beside a window that is not one (on a slow
+        // ramp, the ripple's halves; a slew's last swing and a hold). Two swings the same way
+        // at two rates do not: the monitor's lag on a fast fall solved 143 pF and 0.26 µA on a
+        // healthy 73 pF stack
+        let pswing = pdv.abs() >= 0.5 * WINDOW_DV_V;
+        let rates_apart = (swing && pswing && dv * pdv < 0.0) || (swing != pswing);
+        let paired = rates_apart && pt >= PAIR_MIN_MS && t >= PAIR_MIN_MS && det.abs() >= 0.5 * WINDOW_DV_V * (t + pt);
+        self.prev = if t >= 5.0 { (dv, t, q, s) } else { (0.0, 0.0, 0.0, 0.0) };
         self.joint = paired;
         let leak_now = self.leak_us_per_v * v_mid;
         let secant = |c_inc: f32| SENSE_STRAY_PF + (c_inc - SENSE_STRAY_PF) / c_ratio;
@@ -170,13 +183,19 @@ impl Estimator {
             (secant((q * pt - pq * t) / det * 1e3), Some((dv * pq - pdv * q) / det))
         } else if swing {
             (secant((q - leak_now * t) / dv * 1e3), None)
-        } else if t >= 50.0 {
+        } else if t >= 50.0 && !(2.0 * (self.c_pf * 1e-3 * dv).abs() > q.abs()) {
+            // a slow window's leakage, unless its swing's charge at the capacitance kept is
+            // more than half its own: then the leakage would be that capacitance's error (an
+            // open stack's charge taken for a negative leakage, which then cancelled each of
+            // its swings' charge: the capacitance never fell to the open stack's)
             (f32::NAN, Some((q - self.c_pf * 1e-3 * dv) / t))
         } else {
             (f32::NAN, None)
         };
-        // an outlier (a window cut by a stop, a step) left out
-        if c > 0.05 * c0 && c < 4.0 * c0 {
+        // an outlier (a window cut by a stop, a step) left out, and with a pair's, its leakage
+        let plausible = c > 0.05 * c0 && c < 4.0 * c0;
+        let leak = if paired && !plausible { None } else { leak };
+        if plausible {
             self.c_pf += C_WEIGHT * (c - self.c_pf);
             self.swings = self.swings.saturating_add(1);
         }
