@@ -18,7 +18,7 @@
 //! - `stop` drops the lines queued ahead of it: each answered `err stopped`, in their place,
 //!   none run (the board is still stopped when the command side comes to them);
 //! - the model-only commands (`solve`, `shape`, `contact`) answer what a board that saw only
-//!   the same parameter changes answers.
+//!   the same parameter changes (`param`, `preset`, `cal`, `factory`) answers.
 //!
 //! What it is not: the QEMU image's console (host-tests/tests/qemu_console.rs).
 
@@ -195,7 +195,9 @@ impl Run {
                 let want = self.reference.run(line);
                 assert_eq!(reply, want, "model-only {:?} differs from the reference board's", String::from_utf8_lossy(line));
             }
-            b"param" | b"preset" | b"cal" if reply.starts_with("ok") => {
+            // `factory` too: the defaults back (the checker once left the reference board at
+            // the parameters before it: `regressions/console/factory-then-contact`)
+            b"param" | b"preset" | b"cal" | b"factory" if reply.starts_with("ok") => {
                 let want = self.reference.run(line);
                 assert_eq!(reply, want, "{:?} on the reference board", String::from_utf8_lossy(line));
             }
