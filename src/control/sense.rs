@@ -91,7 +91,7 @@ pub struct Estimator {
     /// Windows that measured the leakage.
     leaks: u32,
     windows: u32,
-    /// The last window solved its capacitance jointly with the leakage (a held pair): its
+    /// The last window solved its capacitance jointly with the leakage (a pair): its
     /// capacitance owes nothing to a leakage assumed from before.
     joint: bool,
 }
@@ -213,8 +213,8 @@ impl Estimator {
         self.windows
     }
 
-    /// The last window closed solved the capacitance and the leakage together (a held pair); a
-    /// lone swing's capacitance carries any leakage that arose since the last measure.
+    /// The last window closed solved the capacitance and the leakage together (a pair); a lone
+    /// swing's capacitance carries any leakage that arose since the last measure.
     pub fn last_window_joint(&self) -> bool {
         self.joint
     }

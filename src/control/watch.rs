@@ -55,7 +55,7 @@ pub const DISAGREE_WINDOWS: u32 = 3;
 /// slew's windows for a while).
 pub const GUARD_HELD_MS: u32 = 1000;
 /// A disagreement this large counts at once, on a window that solved its capacitance jointly
-/// with the leakage (a held pair): past the 0.02-0.03 a slew's windows read thin
+/// with the leakage (a pair): past the 0.02-0.03 a slew's windows read thin
 /// (`hv_measured`'s `the_sensed_thickness_follows_the_film`). A film half the card's modulus
 /// creeping 94 times faster, held at the ceiling, passed 2/3 within 3.2 s while the guard
 /// waited out its hold (`fuzz/regressions/plant/soft-film-5399-fast-slew`). A slew's lone
@@ -209,8 +209,8 @@ impl ThicknessGuard {
         if !(s_meas > 0.0 && s_meas <= 1.5) {
             return;
         }
-        // before the channel has been held GUARD_HELD_MS, only a held pair's disagreement past
-        // what a slew's windows read (DISAGREE_FAST_S)
+        // before the channel has been held GUARD_HELD_MS, only a pair's disagreement past what
+        // a slew's windows read (DISAGREE_FAST_S)
         let gap = s_model - s_meas;
         let thinner = gap > DISAGREE_S && (held_ms >= GUARD_HELD_MS || (joint && gap > DISAGREE_FAST_S));
         self.disagree_windows = if thinner { self.disagree_windows.saturating_add(1) } else { 0 };
