@@ -65,6 +65,8 @@ pub const BOARD_STACK_AREA_MM2: f32 = 200.0;
 /// The stray capacitance the return sense sees besides the stack (the HV lead beside the
 /// return lead in the stack's cable: 10 pF/m x 0.5 m), pF.
 pub const SENSE_STRAY_PF: f32 = 5.0;
+/// The least stray the parts allow (the lead's length and routing: 5 pF ± 1 pF), pF.
+pub const SENSE_STRAY_MIN_PF: f32 = 4.0;
 
 /// Each stack's capacitance at rest, pF: N_L layers in parallel, eps0 eps_r A / z0 (68 pF).
 pub const BOARD_STACK_C0_PF: f32 = BOARD_LAYERS as f32 * 8.854e-3 * BOARD_CARD.eps_r as f32 * BOARD_STACK_AREA_MM2 / BOARD_Z0_MM;

@@ -121,7 +121,7 @@ fn the_plant_corpus_latches_every_kind_of_fault() {
     assert!(latched.iter().all(|&l| l > 0), "breakdown, stuck, open, leak latched: {latched:?} of {counted:?}");
 }
 
-/// The plant target's first find (open: the core's fix is not in yet; docs/reliability.md):
+/// The plant target's first find (fixed; docs/reliability.md):
 /// a module stuck at 6..9 kV on a channel in shaped actuation is not cut within the 320 ms
 /// stated for `hv-mismatch` (plain: 91-107 ms). Shaped, the over-ceiling check's bound is the
 /// writer's ceiling, the compiled cap (10 kV), not the 5.4 kV hold ceiling the shaped drive is
@@ -136,7 +136,7 @@ fn a_stuck_module_on_a_shaped_channel_is_cut_within_320_ms() {
     }
 }
 
-/// The plant target's second find (open): armed setpoints taken by the core while a fault is
+/// The plant target's second find (fixed): armed setpoints taken by the core while a fault is
 /// latched (no stop since: a breakdown, then a disarm and an arm) set its targets, and the
 /// values and the loop's ask climb: nonzero duties written with the enable low (which the
 /// fault holds low until a stop, so no HV reaches a stack). Against "a fault cuts the HV:

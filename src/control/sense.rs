@@ -14,7 +14,9 @@
 //! What it is not: the faults that act on these figures (`super::watch`), the loop
 //! (`super::hv_loop`).
 
-use crate::board::{ADC_FULL_CODE, BOARD_STACK_C0_PF, IMON_SPAN_UA, IMON_ZERO_CODE, SENSE_STRAY_PF, VMON_FULL_SCALE_V};
+use crate::board::{
+    ADC_FULL_CODE, BOARD_STACK_C0_PF, IMON_SPAN_UA, IMON_ZERO_CODE, SENSE_STRAY_MIN_PF, SENSE_STRAY_PF, VMON_FULL_SCALE_V,
+};
 
 /// A window closes once the voltage moved this far from its start, V.
 pub const WINDOW_DV_V: f32 = 60.0;
@@ -192,8 +194,10 @@ impl Estimator {
         } else {
             (f32::NAN, None)
         };
-        // an outlier (a window cut by a stop, a step) left out, and with a pair's, its leakage
-        let plausible = c > 0.05 * c0 && c < 4.0 * c0;
+        // an outlier (a window cut by a stop, a step) left out, and with a pair's, its leakage;
+        // the floor under the least stray, so an open stack's readings (the stray alone, 4 pF
+        // at the parts' extreme) all count
+        let plausible = c > 0.5 * SENSE_STRAY_MIN_PF && c < 4.0 * c0;
         let leak = if paired && !plausible { None } else { leak };
         if plausible {
             self.c_pf += C_WEIGHT * (c - self.c_pf);
