@@ -14,9 +14,7 @@
 //! What it is not: the faults that act on these figures (`super::watch`), the loop
 //! (`super::hv_loop`).
 
-use crate::board::{
-    ADC_FULL_CODE, BOARD_STACK_C0_PF, IMON_SPAN_UA, IMON_ZERO_CODE, SENSE_STRAY_MIN_PF, SENSE_STRAY_PF, VMON_FULL_SCALE_V,
-};
+use crate::board::{ADC_FULL_CODE, BOARD_STACK_C0_PF, IMON_SPAN_UA, IMON_ZERO_CODE, SENSE_STRAY_MIN_PF, SENSE_STRAY_PF, VMON_FULL_SCALE_V};
 
 /// A window closes once the voltage moved this far from its start, V.
 pub const WINDOW_DV_V: f32 = 60.0;
