@@ -26,6 +26,7 @@ mod branch_end;
 mod joint;
 mod loaded;
 mod march;
+pub(crate) use march::{march_subs, Frame, SubElement};
 mod march_stiffness;
 mod pinned;
 mod posture;
@@ -96,8 +97,9 @@ struct SpanLoads<R, T> {
     ftot: [T; 2],
 }
 
+/// Why a march stopped: the span at its floor (contact), or a state it cannot continue from.
 #[derive(Clone, Copy, Debug)]
-enum MarchError {
+pub(crate) enum MarchError {
     Contact,
     Singular,
 }

@@ -1,6 +1,7 @@
 //! A joint's march: from a guessed guide hole, sub-element by sub-element, each one's
 //! equilibrium q = C w under the loads in the deformed geometry (the paper's Eq. 7/15), to the
-//! hole it arrives at. One loop (`Finger::march_joint`) over two parts:
+//! hole it arrives at. One loop (`march_subs`; `Finger::march_joint` over a float finger's
+//! sub-elements) over two parts:
 //! - a sub-element's equilibrium (`SubElement`) in one of three forms: `ByCompliance` (q from
 //!   C in closed form, the moment about the proximal end), `ByComplianceLoaded` (the same
 //!   equation from the moment about the undeflected distal end: the dual/tip-load form) and
@@ -20,8 +21,8 @@
 //! | one march under tension alone, by compliance or stiffness | `march_cable` (here) |
 //! | the inverse's march of a joint | `Finger::joint_march` with a `By` (joint.rs) |
 //!
-//! The fixed-point march (`fixed::forward`) follows `ByComplianceLoaded` in `PoseFrame` in Q
-//! formats.
+//! The fixed-point march (`fixed::forward`) runs `march_subs` on the Q forms of
+//! `ByComplianceLoaded` and `PoseFrame`.
 
 use super::{norm2, Finger, JointState, MarchError, Pose, TipLoad};
 use crate::dual::D;
@@ -49,15 +50,23 @@ pub(super) trait Scalar<R>: Real + Mul<R, Output = Self> + Add<R, Output = Self>
 impl<R, T: Real + Mul<R, Output = T> + Add<R, Output = T> + Sub<R, Output = T>> Scalar<R> for T {}
 
 /// One sub-element's equilibrium in its own frame (the paper's Eq. 7/15, docs/model.md
-/// "Equilibrium"): from f, the force on the distal chain in the sub-element's proximal frame,
-/// and the loads' moment m (about the point the form names), its displacement q = C (f, M)
-/// with M the moment about its deformed distal end (linear in q: M = m0 - f1 q0 + f0 q1, m0
-/// the moment about the undeflected distal end), and M.
-pub(super) trait SubElement<R: Real, T> {
+/// "Equilibrium"): from its `Loads` (f, the force on the distal chain in the sub-element's
+/// proximal frame, and the loads' moment m about the point the form names), its `Disp`: the
+/// displacement q = C (f, M) with M the moment about its deformed distal end (linear in q:
+/// M = m0 - f1 q0 + f0 q1, m0 the moment about the undeflected distal end). The float forms
+/// take `SubLoads` and give `SubDisp`; the fixed-point form (`fixed::forward`) its Q formats.
+pub(crate) trait SubElement<Loads> {
     /// What each sub-element carries (its compliance, or its hinge's stiffness).
-    fn subs(&self) -> &[Mat3<R>; MAX_SUB];
-    fn equilibrium(&self, sub: &Mat3<R>, f: [T; 2], m: T, sub_len: R) -> Result<([T; 3], T), MarchError>;
+    type Sub;
+    type Disp;
+    fn subs(&self) -> &[Self::Sub; MAX_SUB];
+    fn equilibrium(&self, sub: &Self::Sub, loads: Loads) -> Result<Self::Disp, MarchError>;
 }
+
+/// A float sub-element's loads: f, the moment m and the sub-element's length.
+pub(super) type SubLoads<R, T> = ([T; 2], T, R);
+/// A float sub-element's displacement q and the moment about its deformed distal end.
+pub(super) type SubDisp<T> = ([T; 3], T);
 
 /// The compliance form from mm, the moment about the proximal end (m0 = mm - f1 L): q =
 /// C (f, M) in closed form, C symmetric (`Finger::compliances` makes it so: its upper triangle
@@ -65,13 +74,15 @@ pub(super) trait SubElement<R: Real, T> {
 /// refuses a non-positive den (the tabled marches: the full model's Newton then takes it).
 pub(super) struct ByCompliance<'a, R>(pub &'a [Mat3<R>; MAX_SUB]);
 
-impl<R: Real> SubElement<R, R> for ByCompliance<'_, R> {
+impl<R: Real> SubElement<SubLoads<R, R>> for ByCompliance<'_, R> {
+    type Sub = Mat3<R>;
+    type Disp = SubDisp<R>;
     #[inline(always)]
     fn subs(&self) -> &[Mat3<R>; MAX_SUB] {
         self.0
     }
     #[inline(always)]
-    fn equilibrium(&self, cj: &Mat3<R>, f: [R; 2], mm: R, l: R) -> Result<([R; 3], R), MarchError> {
+    fn equilibrium(&self, cj: &Mat3<R>, (f, mm, l): SubLoads<R, R>) -> Result<SubDisp<R>, MarchError> {
         debug_assert!(cj[1][0] == cj[0][1] && cj[2][0] == cj[0][2] && cj[2][1] == cj[1][2]);
         let (c00, c01, c02, c11, c12, c22) = (cj[0][0], cj[0][1], cj[0][2], cj[1][1], cj[1][2], cj[2][2]);
         let a = [f[0] * c00 + f[1] * c01, f[0] * c01 + f[1] * c11, f[0] * c02 + f[1] * c12];
@@ -89,13 +100,15 @@ impl<R: Real> SubElement<R, R> for ByCompliance<'_, R> {
 /// / den, q = q0 + s C(:, 2); refuses only |den| at or below 1e-6.
 pub(super) struct ByComplianceLoaded<'a, R>(pub &'a [Mat3<R>; MAX_SUB]);
 
-impl<R: Real, T: Scalar<R>> SubElement<R, T> for ByComplianceLoaded<'_, R> {
+impl<R: Real, T: Scalar<R>> SubElement<SubLoads<R, T>> for ByComplianceLoaded<'_, R> {
+    type Sub = Mat3<R>;
+    type Disp = SubDisp<T>;
     #[inline(always)]
     fn subs(&self) -> &[Mat3<R>; MAX_SUB] {
         self.0
     }
     #[inline(always)]
-    fn equilibrium(&self, cj: &Mat3<R>, f: [T; 2], m0: T, _l: R) -> Result<([T; 3], T), MarchError> {
+    fn equilibrium(&self, cj: &Mat3<R>, (f, m0, _l): SubLoads<R, T>) -> Result<SubDisp<T>, MarchError> {
         let q0 = [
             f[0] * cj[0][0] + f[1] * cj[0][1] + m0 * cj[0][2],
             f[0] * cj[1][0] + f[1] * cj[1][1] + m0 * cj[1][2],
@@ -114,13 +127,36 @@ impl<R: Real, T: Scalar<R>> SubElement<R, T> for ByComplianceLoaded<'_, R> {
 /// angle and the squared hole residual |b - hole|².
 pub(super) type MarchEnd<T> = (Pose<T>, [T; 2], [T; 2], T);
 
-/// How a march carries the loads from one sub-element to the next.
-pub(super) trait Frame<R, T> {
-    /// The next sub-element's f and moment (the one its `SubElement` form takes).
-    fn loads(&self, sub_len: R) -> ([T; 2], T);
-    /// Past a sub-element displaced by q, with m_end the moment about its distal end; its
-    /// rotation q2 turns by `Real::turn` (series bound `small`).
-    fn advance(&mut self, q: [T; 3], m_end: T, sub_len: R, small: T);
+/// How a march carries the loads from one sub-element to the next: `L` the loads its
+/// `SubElement` form takes, `D` the displacement it gives.
+pub(crate) trait Frame<L, D> {
+    /// The next sub-element's loads.
+    fn loads(&self) -> L;
+    /// Past a sub-element displaced by `d`; its rotation turns by the turn rule (`Real::turn`:
+    /// the sub-element's own (sin, cos), composed with the frame's).
+    fn advance(&mut self, d: D);
+}
+
+/// The march: sub-element by sub-element, `kernel`'s equilibrium under the loads `frame`
+/// carries, for as many sub-elements as `out` holds; each one's displacement goes to its slot
+/// of `out` through `keep` (`()` slots keep nothing). Returns the frame at the hinge's end.
+/// The one loop of every march, float and fixed point.
+#[inline(always)]
+pub(crate) fn march_subs<L, K: SubElement<L>, F: Frame<L, K::Disp>, O>(
+    kernel: &K,
+    mut frame: F,
+    out: &mut [O],
+    keep: impl Fn(&K::Disp) -> O,
+) -> Result<F, MarchError>
+where
+    K::Disp: Copy,
+{
+    for (sub, o) in kernel.subs().iter().zip(out.iter_mut()) {
+        let d = kernel.equilibrium(sub, frame.loads())?;
+        *o = keep(&d);
+        frame.advance(d);
+    }
+    Ok(frame)
 }
 
 /// Tension alone (P > 0), in each sub-element's own frame: the cable's force f turned into it,
@@ -132,6 +168,8 @@ pub(super) struct CableFrame<R> {
     mm: R,
     dot: R,
     theta: R,
+    sub_len: R,
+    small: R,
 }
 
 /// A `CableFrame` march's start, for its end: the hole guess and two factors of the tension.
@@ -157,14 +195,15 @@ impl<R: Real> CableFrame<R> {
         let fc = [span_v[0] * k, span_v[1] * k];
         let (mm, dot) = (b[0] * fc[1] - b[1] * fc[0], b[0] * fc[0] + b[1] * fc[1]);
         let inv_p2 = R::one() / (tension * tension);
-        Ok((CableStart { b, inv_p2, k_p2: k * inv_p2 }, CableFrame { f: fc, mm, dot, theta: R::zero() }))
+        let small = R::from_f64(small_turn(R::EPS));
+        Ok((CableStart { b, inv_p2, k_p2: k * inv_p2 }, CableFrame { f: fc, mm, dot, theta: R::zero(), sub_len: finger.sub_len, small }))
     }
 
     /// The end (`MarchEnd`) from the march's start, `e` the hole's offset from the hinge's
     /// axis; refuses a state that is not finite (`Singular`).
     #[inline(always)]
     pub(super) fn end(self, start: CableStart<R>, e: R) -> Result<MarchEnd<R>, MarchError> {
-        let (CableStart { b, inv_p2: inv, k_p2 }, CableFrame { f, mm, dot, theta }) = (start, self);
+        let (CableStart { b, inv_p2: inv, k_p2 }, CableFrame { f, mm, dot, theta, .. }) = (start, self);
         let span_v = [b[0], b[1] - e];
         let co = (f[0] * span_v[0] + f[1] * span_v[1]) * k_p2;
         let s = (f[0] * span_v[1] - f[1] * span_v[0]) * k_p2;
@@ -182,20 +221,20 @@ impl<R: Real> CableFrame<R> {
     }
 }
 
-impl<R: Real> Frame<R, R> for CableFrame<R> {
+impl<R: Real> Frame<SubLoads<R, R>, SubDisp<R>> for CableFrame<R> {
     #[inline(always)]
-    fn loads(&self, _l: R) -> ([R; 2], R) {
-        (self.f, self.mm)
+    fn loads(&self) -> SubLoads<R, R> {
+        (self.f, self.mm, self.sub_len)
     }
     #[inline(always)]
-    fn advance(&mut self, q: [R; 3], m_end: R, l: R, small: R) {
-        let f = self.f;
+    fn advance(&mut self, (q, m_end): SubDisp<R>) {
+        let (f, l) = (self.f, self.sub_len);
         self.mm = m_end;
         self.theta += q[2];
         // w - (L + q0, q1) is B - the next proximal end: its dot with f; then f into the next
         // frame (dot and cross products keep)
         self.dot = self.dot - (q[0] + l) * f[0] - q[1] * f[1];
-        let (sd, cd) = q[2].turn(small);
+        let (sd, cd) = q[2].turn(self.small);
         self.f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
     }
 }
@@ -211,6 +250,8 @@ pub(super) struct PoseFrame<R, T> {
     pose: Pose<T>,
     s: T,
     co: T,
+    sub_len: R,
+    small: T,
 }
 
 impl<R: Real, T: Scalar<R>> PoseFrame<R, T> {
@@ -219,7 +260,8 @@ impl<R: Real, T: Scalar<R>> PoseFrame<R, T> {
     #[inline(always)]
     pub(super) fn new(finger: &Finger<R>, tension: R, b: [T; 2], tip: Option<TipLoad<R>>) -> Result<Self, MarchError> {
         let loads = finger.span_loads(tension, b, tip)?;
-        Ok(PoseFrame { b, fc: loads.fc, tip, ftot: loads.ftot, pose: Pose::origin(), s: T::zero(), co: T::one() })
+        let small = T::from_f64(small_turn(T::EPS));
+        Ok(PoseFrame { b, fc: loads.fc, tip, ftot: loads.ftot, pose: Pose::origin(), s: T::zero(), co: T::one(), sub_len: finger.sub_len, small })
     }
 
     #[inline(always)]
@@ -235,21 +277,21 @@ impl<R: Real, T: Scalar<R>> PoseFrame<R, T> {
     }
 }
 
-impl<R: Real, T: Scalar<R>> Frame<R, T> for PoseFrame<R, T> {
+impl<R: Real, T: Scalar<R>> Frame<SubLoads<R, T>, SubDisp<T>> for PoseFrame<R, T> {
     #[inline(always)]
-    fn loads(&self, l: R) -> ([T; 2], T) {
-        let (s, co, ft) = (self.s, self.co, self.ftot);
+    fn loads(&self) -> SubLoads<R, T> {
+        let (s, co, ft, l) = (self.s, self.co, self.ftot, self.sub_len);
         let d0 = [self.pose.x + co * l, self.pose.y + s * l];
         let mut m0 = (self.b[0] - d0[0]) * self.fc[1] - (self.b[1] - d0[1]) * self.fc[0];
         if let Some(t) = self.tip {
             m0 += (d0[1] - t.point[1]) * t.force[0] - (d0[0] - t.point[0]) * t.force[1];
         }
-        ([co * ft[0] + s * ft[1], -s * ft[0] + co * ft[1]], m0)
+        ([co * ft[0] + s * ft[1], -s * ft[0] + co * ft[1]], m0, l)
     }
     #[inline(always)]
-    fn advance(&mut self, q: [T; 3], _m_end: T, l: R, small: T) {
-        let (p, s, co) = (self.pose, self.s, self.co);
-        let (sd, cd) = q[2].turn(small);
+    fn advance(&mut self, (q, _m_end): SubDisp<T>) {
+        let (p, s, co, l) = (self.pose, self.s, self.co, self.sub_len);
+        let (sd, cd) = q[2].turn(self.small);
         let ax = q[0] + l;
         self.pose = Pose { x: p.x + co * ax - s * q[1], y: p.y + s * ax + co * q[1], theta: p.theta + q[2] };
         (self.s, self.co) = T::compose_turn((s, co), (sd, cd), self.pose.theta);
@@ -260,29 +302,19 @@ impl<R: Real, T: Scalar<R>> Frame<R, T> for PoseFrame<R, T> {
 pub(super) type Eval<R> = (JointState<R>, [R; 2], [[R; 2]; 2]);
 
 impl<R: Real> Finger<R> {
-    /// The march: sub-element by sub-element, `kernel`'s equilibrium under the loads `frame`
-    /// carries, each turn by `Real::turn`; returns the frame at the hinge's end (its `end`
-    /// gives the pose and the hole). The sub-element displacements go to `q_out` as values
-    /// (`val`), which keeps the fixed-capacity array out of T (no zeroing and copying of dual
-    /// arrays).
+    /// `march_subs` over this finger's m sub-elements, their displacements written to `q_out`
+    /// as values (`val`), which keeps the fixed-capacity array out of T (no zeroing and copying
+    /// of dual arrays).
     #[inline(always)]
-    pub(super) fn march_joint<T: Real, K: SubElement<R, T>, F: Frame<R, T>>(
+    pub(super) fn march_joint<T: Real, K: SubElement<SubLoads<R, T>, Sub = Mat3<R>, Disp = SubDisp<T>>, F: Frame<SubLoads<R, T>, SubDisp<T>>>(
         &self,
         kernel: &K,
-        mut frame: F,
+        frame: F,
         q_out: &mut [[R; 3]; MAX_SUB],
         val: impl Fn(T) -> R,
     ) -> Result<F, MarchError> {
-        let l = self.sub_len;
-        let small = T::from_f64(small_turn(T::EPS));
         let m = self.p.m.min(MAX_SUB);
-        for (sub, qo) in kernel.subs()[..m].iter().zip(q_out[..m].iter_mut()) {
-            let (f, m) = frame.loads(l);
-            let (q, m_end) = kernel.equilibrium(sub, f, m, l)?;
-            *qo = [val(q[0]), val(q[1]), val(q[2])];
-            frame.advance(q, m_end, l, small);
-        }
-        Ok(frame)
+        march_subs(kernel, frame, &mut q_out[..m], |(q, _)| [val(q[0]), val(q[1]), val(q[2])])
     }
 
     /// The march under tension alone in the running frame (`CableFrame`), by either form that
@@ -290,7 +322,7 @@ impl<R: Real> Finger<R> {
     /// `ByStiffness` (the tabled inverse's, no compliance formed). Refuses what `CableFrame`
     /// refuses and a non-positive den or last pivot; the full model's Newton then takes the joint.
     #[inline(always)]
-    pub(super) fn march_cable<K: SubElement<R, R>>(&self, kernel: &K, tension: R, b: [R; 2], q_out: &mut [[R; 3]; MAX_SUB]) -> Result<MarchEnd<R>, MarchError> {
+    pub(super) fn march_cable<K: SubElement<SubLoads<R, R>, Sub = Mat3<R>, Disp = SubDisp<R>>>(&self, kernel: &K, tension: R, b: [R; 2], q_out: &mut [[R; 3]; MAX_SUB]) -> Result<MarchEnd<R>, MarchError> {
         let (start, frame) = CableFrame::new(self, tension, b)?;
         self.march_joint(kernel, frame, q_out, |x| x)?.end(start, self.p.e)
     }

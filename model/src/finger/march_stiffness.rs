@@ -3,7 +3,7 @@
 //! compliance computed beforehand. For the tabled inverse, whose thickness is new at every
 //! solve: no compliance array is formed. The march around it is `Finger::march_cable`.
 
-use super::march::SubElement;
+use super::march::{SubDisp, SubElement, SubLoads};
 use super::{JointStiffness, MarchError};
 use crate::mat3::Mat3;
 use crate::params::MAX_SUB;
@@ -15,13 +15,15 @@ use crate::real::Real;
 /// non-positive den).
 pub(super) struct ByStiffness<'a, R>(pub JointStiffness<'a, R>);
 
-impl<R: Real> SubElement<R, R> for ByStiffness<'_, R> {
+impl<R: Real> SubElement<SubLoads<R, R>> for ByStiffness<'_, R> {
+    type Sub = Mat3<R>;
+    type Disp = SubDisp<R>;
     #[inline(always)]
     fn subs(&self) -> &[Mat3<R>; MAX_SUB] {
         self.0.hinges()
     }
     #[inline(always)]
-    fn equilibrium(&self, kh: &Mat3<R>, f: [R; 2], mm: R, l: R) -> Result<([R; 3], R), MarchError> {
+    fn equilibrium(&self, kh: &Mat3<R>, (f, mm, l): SubLoads<R, R>) -> Result<SubDisp<R>, MarchError> {
         let zr = R::zero();
         let [k00, k01, k02, k11, k12, k22] = self.0.add_to(kh);
         // rows: K q = (f0, f1, g + f0 q1 - f1 q0), g = mm - f1 L; eliminate below k00, then

@@ -1,12 +1,12 @@
 //! The fixed-point forward solve under tension alone: per joint, Newton on the guide-hole
-//! position with the float march's recurrence (`Finger::march_joint` in `PoseFrame` with
-//! `ByComplianceLoaded`, its turn rule without an FPU; docs/model.md "Which march to call"), then the chain of
+//! position with the float march's loop (`march_subs`) on the Q forms of `ByComplianceLoaded`
+//! and `PoseFrame`, its turn rule without an FPU (docs/model.md "Which march to call"), then the chain of
 //! links and the cable excursion. Same equations as the float model, Q formats of [`q`].
 use super::q::{narrow, shr_round, Mm, Nmm, Nt, Rad, Scaled, Unit, Q};
 use super::trig::{hypot, hypot_inv, sin_cos};
 use crate::de;
 use crate::error::Error;
-use crate::finger::{uniform_beam_compliance, Compliances, Finger, Pose, Solution};
+use crate::finger::{march_subs, uniform_beam_compliance, Compliances, Finger, Frame, Pose, Solution, SubElement};
 use crate::mat3;
 use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
@@ -164,11 +164,7 @@ impl FixedSolution {
     }
 }
 
-#[derive(Clone, Copy, Debug)]
-pub(super) enum MarchError {
-    Contact,
-    Singular,
-}
+pub(super) use crate::finger::MarchError;
 
 pub(super) fn cmat<R: Real>(m: &[[R; 3]; 3]) -> CMat {
     let mut v = [[0f64; 3]; 3];
@@ -184,6 +180,76 @@ pub(super) fn cmat<R: Real>(m: &[[R; 3]; 3]) -> CMat {
 #[inline(always)]
 fn row(cm: &CMat, i: usize, f0: Nt, f1: Nt, m: Nmm) -> i64 {
     (cm.m[i][0] as i64 * f0.0 as i64).saturating_add(cm.m[i][1] as i64 * f1.0 as i64).saturating_add(cm.m[i][2] as i64 * m.0 as i64)
+}
+
+/// A sub-element's loads in Q formats: the force in its frame and the cable's moment about
+/// its undeflected distal end (the float `SubLoads`).
+type FixedLoads = ([Nt; 2], Nmm);
+/// A sub-element's displacement (q0, q1, q2) in Q formats.
+type FixedDisp = (Mm, Mm, Rad);
+
+/// The Q form of `ByComplianceLoaded`: q0 = C (f, m0), then the moment arm's own change
+/// s = (-f1 q0_0 + f0 q0_1) / den, q = q0 + s C(:, 2); refuses |den| at or below 2^-20.
+struct FixedByCompliance<'a>(&'a [CMat; MAX_SUB]);
+
+impl SubElement<FixedLoads> for FixedByCompliance<'_> {
+    type Sub = CMat;
+    type Disp = FixedDisp;
+    #[inline(always)]
+    fn subs(&self) -> &[CMat; MAX_SUB] {
+        self.0
+    }
+    #[inline(always)]
+    fn equilibrium(&self, cj: &CMat, (f, m0): FixedLoads) -> Result<FixedDisp, MarchError> {
+        let q0 = [row(cj, 0, f[0], f[1], m0), row(cj, 1, f[0], f[1], m0), row(cj, 2, f[0], f[1], m0)];
+        // den = 1 + f_y C02 - f_x C12, at frac ACC
+        let den = (1i64 << ACC).saturating_add(cj.d02.wide(f[1], ACC)).saturating_sub(cj.d12.wide(f[0], ACC));
+        let den26 = shr_round(den, ACC - 26);
+        if den26.abs() <= (1 << 6) {
+            return Err(MarchError::Singular);
+        }
+        let (q0x, q0y) = (shr_round(q0[0], cj.t[0] - 22), shr_round(q0[1], cj.t[1] - 22));
+        // frac 44 over den at frac 26: s at frac 18 (no left shift: f q reaches 2^59 at
+        // hundreds of newtons)
+        let num = (-(f[1].0 as i64)).saturating_mul(q0x).saturating_add((f[0].0 as i64).saturating_mul(q0y));
+        let sm: Nmm = narrow(num.checked_div(den26).ok_or(MarchError::Singular)?, 18);
+        let qx: Mm = narrow(q0[0].saturating_add(cj.m[0][2] as i64 * sm.0 as i64), cj.t[0]);
+        let qy: Mm = narrow(q0[1].saturating_add(cj.m[1][2] as i64 * sm.0 as i64), cj.t[1]);
+        let qt: Rad = narrow(q0[2].saturating_add(cj.m[2][2] as i64 * sm.0 as i64), cj.t[2]);
+        Ok((qx, qy, qt))
+    }
+}
+
+/// The Q form of `PoseFrame` under tension alone: the pose in the joint's proximal frame, its
+/// (sin, cos), the cable's force `fc` toward the hole guess `b`.
+struct FixedPoseFrame {
+    b: [Mm; 2],
+    fc: [Nt; 2],
+    sub_len: Mm,
+    pose: FixedPose,
+    s: Unit,
+    co: Unit,
+}
+
+impl Frame<FixedLoads, FixedDisp> for FixedPoseFrame {
+    #[inline(always)]
+    fn loads(&self) -> FixedLoads {
+        let (pose, s, co, fc, l) = (self.pose, self.s, self.co, self.fc, self.sub_len);
+        let d0 = [pose.x + co.mul_q(l), pose.y + s.mul_q(l)];
+        let m0: Nmm = narrow((self.b[0] - d0[0]).wide(fc[1]).saturating_sub((self.b[1] - d0[1]).wide(fc[0])), 44);
+        let f: [Nt; 2] = [narrow(co.wide(fc[0]) + s.wide(fc[1]), 52), narrow(co.wide(fc[1]) - s.wide(fc[0]), 52)];
+        (f, m0)
+    }
+    #[inline(always)]
+    fn advance(&mut self, (qx, qy, qt): FixedDisp) {
+        let (p, s, co) = (self.pose, self.s, self.co);
+        let ax = qx + self.sub_len;
+        self.pose = FixedPose { x: p.x + narrow(co.wide(ax) - s.wide(qy), 52), y: p.y + narrow(s.wide(ax) + co.wide(qy), 52), theta: p.theta + qt };
+        // the turn rule (`Real::turn`) on a core without an FPU: the sub-element's own
+        // (sin, cos), composed
+        let (sd, cd) = sin_cos(qt);
+        (self.s, self.co) = (narrow(s.wide(cd) + co.wide(sd), 60), narrow(co.wide(cd) - s.wide(sd), 60));
+    }
 }
 
 impl FixedFinger {
@@ -247,7 +313,9 @@ impl FixedFinger {
         Ok(())
     }
 
-    /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it arrives at.
+    /// A joint's march (compliances `c`) at hole guess `b`: the hinge end and the hole it
+    /// arrives at. The float march's loop (`march_subs`) over the Q forms of its
+    /// `ByComplianceLoaded` and `PoseFrame`.
     pub(super) fn march(&self, c: &[CMat; MAX_SUB], tension: Nt, b: [Mm; 2]) -> Result<(FixedPose, [Mm; 2]), MarchError> {
         let e = self.e;
         let span_v = [b[0], b[1] - e];
@@ -258,37 +326,8 @@ impl FixedFinger {
         }
         let dir: [Unit; 2] = [narrow(span_v[0].wide(inv), 48), narrow(span_v[1].wide(inv), 48)];
         let fc: [Nt; 2] = [-dir[0].mul_q(tension), -dir[1].mul_q(tension)];
-        let mut pose = FixedPose::default();
-        let (mut s, mut co) = (Unit::ZERO, Q::<30>(1 << 30));
-        for cj in c[..self.m].iter() {
-            let d0 = [pose.x + co.mul_q(self.sub_len), pose.y + s.mul_q(self.sub_len)];
-            // moment of the cable force about the sub-element's (undeflected) end
-            let m0: Nmm = narrow((b[0] - d0[0]).wide(fc[1]).saturating_sub((b[1] - d0[1]).wide(fc[0])), 44);
-            // the force in the sub-element's frame
-            let f: [Nt; 2] = [narrow(co.wide(fc[0]) + s.wide(fc[1]), 52), narrow(co.wide(fc[1]) - s.wide(fc[0]), 52)];
-            let q0 = [row(cj, 0, f[0], f[1], m0), row(cj, 1, f[0], f[1], m0), row(cj, 2, f[0], f[1], m0)];
-            // den = 1 + f_y C02 - f_x C12, at frac ACC
-            let den = (1i64 << ACC).saturating_add(cj.d02.wide(f[1], ACC)).saturating_sub(cj.d12.wide(f[0], ACC));
-            let den26 = shr_round(den, ACC - 26);
-            if den26.abs() <= (1 << 6) {
-                return Err(MarchError::Singular);
-            }
-            // the moment arm's own change: s = (-f_y q0x + f_x q0y) / den, N mm
-            let (q0x, q0y) = (shr_round(q0[0], cj.t[0] - 22), shr_round(q0[1], cj.t[1] - 22));
-            // frac 44 over den at frac 26: s at frac 18 (no left shift: f q reaches 2^59 at
-            // hundreds of newtons)
-            let num = (-(f[1].0 as i64)).saturating_mul(q0x).saturating_add((f[0].0 as i64).saturating_mul(q0y));
-            let sm: Nmm = narrow(num.checked_div(den26).ok_or(MarchError::Singular)?, 18);
-            let qx: Mm = narrow(q0[0].saturating_add(cj.m[0][2] as i64 * sm.0 as i64), cj.t[0]);
-            let qy: Mm = narrow(q0[1].saturating_add(cj.m[1][2] as i64 * sm.0 as i64), cj.t[1]);
-            let qt: Rad = narrow(q0[2].saturating_add(cj.m[2][2] as i64 * sm.0 as i64), cj.t[2]);
-            let ax = qx + self.sub_len;
-            pose = FixedPose { x: pose.x + narrow(co.wide(ax) - s.wide(qy), 52), y: pose.y + narrow(s.wide(ax) + co.wide(qy), 52), theta: pose.theta + qt };
-            // the turn rule of the float march on a core without an FPU: the sub-element's own
-            // (sin, cos), composed
-            let (sd, cd) = sin_cos(qt);
-            (s, co) = (narrow(s.wide(cd) + co.wide(sd), 60), narrow(co.wide(cd) - s.wide(sd), 60));
-        }
+        let frame = FixedPoseFrame { b, fc, sub_len: self.sub_len, pose: FixedPose::default(), s: Unit::ZERO, co: Q::<30>(1 << 30) };
+        let FixedPoseFrame { pose, s, co, .. } = march_subs(&FixedByCompliance(c), frame, &mut [(); MAX_SUB][..self.m], |_| ())?;
         let hole = [pose.x - s.mul_q(e), pose.y + co.mul_q(e)];
         if hole[0].is_sat() || hole[1].is_sat() || pose.theta.is_sat() || pose.x.is_sat() || pose.y.is_sat() {
             return Err(MarchError::Singular);
