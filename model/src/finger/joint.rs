@@ -85,7 +85,7 @@ impl<R: Real> Finger<R> {
                 }
             },
             By::Stiffness(k, link) => {
-                let (end, hole, _, _) = self.march_cable(&march_stiffness::ByStiffness(*k), tension, b, q).map_err(refused)?;
+                let (end, hole, _, _) = self.march_cable(&march_stiffness::ByStiffness(k), tension, b, q).map_err(refused)?;
                 (end, hole, link)
             }
             By::Compliance(c) => {

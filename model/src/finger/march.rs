@@ -169,7 +169,6 @@ pub(super) struct CableFrame<R> {
     dot: R,
     theta: R,
     sub_len: R,
-    small: R,
 }
 
 /// A `CableFrame` march's start, for its end: the hole guess and two factors of the tension.
@@ -195,8 +194,7 @@ impl<R: Real> CableFrame<R> {
         let fc = [span_v[0] * k, span_v[1] * k];
         let (mm, dot) = (b[0] * fc[1] - b[1] * fc[0], b[0] * fc[0] + b[1] * fc[1]);
         let inv_p2 = R::one() / (tension * tension);
-        let small = R::from_f64(small_turn(R::EPS));
-        Ok((CableStart { b, inv_p2, k_p2: k * inv_p2 }, CableFrame { f: fc, mm, dot, theta: R::zero(), sub_len: finger.sub_len, small }))
+        Ok((CableStart { b, inv_p2, k_p2: k * inv_p2 }, CableFrame { f: fc, mm, dot, theta: R::zero(), sub_len: finger.sub_len }))
     }
 
     /// The end (`MarchEnd`) from the march's start, `e` the hole's offset from the hinge's
@@ -234,7 +232,7 @@ impl<R: Real> Frame<SubLoads<R, R>, SubDisp<R>> for CableFrame<R> {
         // w - (L + q0, q1) is B - the next proximal end: its dot with f; then f into the next
         // frame (dot and cross products keep)
         self.dot = self.dot - (q[0] + l) * f[0] - q[1] * f[1];
-        let (sd, cd) = q[2].turn(self.small);
+        let (sd, cd) = q[2].turn(R::from_f64(small_turn(R::EPS)));
         self.f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
     }
 }
@@ -251,7 +249,6 @@ pub(super) struct PoseFrame<R, T> {
     s: T,
     co: T,
     sub_len: R,
-    small: T,
 }
 
 impl<R: Real, T: Scalar<R>> PoseFrame<R, T> {
@@ -260,8 +257,7 @@ impl<R: Real, T: Scalar<R>> PoseFrame<R, T> {
     #[inline(always)]
     pub(super) fn new(finger: &Finger<R>, tension: R, b: [T; 2], tip: Option<TipLoad<R>>) -> Result<Self, MarchError> {
         let loads = finger.span_loads(tension, b, tip)?;
-        let small = T::from_f64(small_turn(T::EPS));
-        Ok(PoseFrame { b, fc: loads.fc, tip, ftot: loads.ftot, pose: Pose::origin(), s: T::zero(), co: T::one(), sub_len: finger.sub_len, small })
+        Ok(PoseFrame { b, fc: loads.fc, tip, ftot: loads.ftot, pose: Pose::origin(), s: T::zero(), co: T::one(), sub_len: finger.sub_len })
     }
 
     #[inline(always)]
@@ -291,7 +287,7 @@ impl<R: Real, T: Scalar<R>> Frame<SubLoads<R, T>, SubDisp<T>> for PoseFrame<R, T
     #[inline(always)]
     fn advance(&mut self, (q, _m_end): SubDisp<T>) {
         let (p, s, co, l) = (self.pose, self.s, self.co, self.sub_len);
-        let (sd, cd) = q[2].turn(self.small);
+        let (sd, cd) = q[2].turn(T::from_f64(small_turn(T::EPS)));
         let ax = q[0] + l;
         self.pose = Pose { x: p.x + co * ax - s * q[1], y: p.y + s * ax + co * q[1], theta: p.theta + q[2] };
         (self.s, self.co) = T::compose_turn((s, co), (sd, cd), self.pose.theta);

@@ -16,8 +16,10 @@ use crate::real::Real;
 #[derive(Clone, Copy, Debug)]
 pub struct JointStiffness<'a, R> {
     f: &'a Finger<R>,
-    /// K_de(t)'s upper triangle (k01 = 0); None: the hinge alone (no stacks in the set or build).
-    upper: Option<[R; 6]>,
+    /// K_de(t)'s upper triangle (k01 = 0); zeros with no stacks (in the set or the build).
+    upper: [R; 6],
+    /// The set has stacks: without them C_j is the hinge's own compliance.
+    stacks: bool,
     t: R,
 }
 
@@ -28,14 +30,15 @@ impl<'a, R: Real> JointStiffness<'a, R> {
     pub fn new(f: &'a Finger<R>, stack: &StackStiffness<R>, t: R) -> Self {
         // a build without the `de` feature refuses stacks in `Finger::new` and leaves the
         // stack's code out of the image
-        let upper = if f.p.layers == 0 || cfg!(not(feature = "de")) { None } else { Some(stack.upper(t)) };
-        JointStiffness { f, upper, t }
+        let stacks = f.p.layers > 0 && cfg!(feature = "de");
+        let upper = if stacks { stack.upper(t) } else { [R::zero(); 6] };
+        JointStiffness { f, upper, stacks, t }
     }
 
     /// Only the tests' stiffness from a given stack triangle (a bad one, say).
     #[cfg(test)]
     pub(crate) fn with_upper(f: &'a Finger<R>, upper: [R; 6]) -> Self {
-        JointStiffness { f, upper: Some(upper), t: R::zero() }
+        JointStiffness { f, upper, stacks: true, t: R::zero() }
     }
 
     /// The stack thickness it was built at, mm.
@@ -50,12 +53,11 @@ impl<'a, R: Real> JointStiffness<'a, R> {
 
     /// `kh` + K_de's upper triangle (k00, k01, k02, k11, k12, k22): the one place the two add.
     /// The stack couples no shear to the axial force (its k01 is zero), so k01 is the hinge's.
+    /// Without stacks the zeros add (a test per sub-element costs more than five adds).
     #[inline(always)]
     pub(crate) fn add_to(&self, kh: &Mat3<R>) -> [R; 6] {
-        match self.upper {
-            Some([d00, _, d02, d11, d12, d22]) => [kh[0][0] + d00, kh[0][1], kh[0][2] + d02, kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22],
-            None => [kh[0][0], kh[0][1], kh[0][2], kh[1][1], kh[1][2], kh[2][2]],
-        }
+        let [d00, _, d02, d11, d12, d22] = self.upper;
+        [kh[0][0] + d00, kh[0][1], kh[0][2] + d02, kh[1][1] + d11, kh[1][2] + d12, kh[2][2] + d22]
     }
 
     /// K_j's upper triangle.
@@ -72,9 +74,10 @@ impl<'a, R: Real> JointStiffness<'a, R> {
     /// dK_j/dt, the same for every sub-element (zero without stacks); `stack` the stack's
     /// constants it was built with.
     pub fn dt(&self, stack: &StackStiffness<R>) -> Mat3<R> {
-        match self.upper {
-            Some(_) => mat3::from_upper(stack.upper_dt(self.t)),
-            None => mat3::zero(),
+        if self.stacks {
+            mat3::from_upper(stack.upper_dt(self.t))
+        } else {
+            mat3::zero()
         }
     }
 
@@ -82,7 +85,7 @@ impl<'a, R: Real> JointStiffness<'a, R> {
     /// own compliance (the Castigliano integrals, not an inverted inverse) and check 0.
     #[inline(always)]
     fn compliance_checked(&self, j: usize) -> (Mat3<R>, R) {
-        if self.upper.is_none() {
+        if !self.stacks {
             return (self.f.hinge_c[j.min(MAX_SUB - 1)], R::zero());
         }
         let (o, check) = mat3::inverse_spd_upper(self.upper(j));
@@ -93,7 +96,7 @@ impl<'a, R: Real> JointStiffness<'a, R> {
     /// `mat3::inverse_spd` out of line: the set-up's one copy (flash; `compliances_into` is
     /// the solves' inline one, the same arithmetic).
     pub fn compliance(&self, j: usize) -> Result<Mat3<R>, Error> {
-        if self.upper.is_none() {
+        if !self.stacks {
             return Ok(self.f.hinge_c[j.min(MAX_SUB - 1)]);
         }
         mat3::inverse_spd(&self.matrix(j)).ok_or(Error::Singular { what: "joint stiffness" })

@@ -202,7 +202,7 @@ pub struct JointEquilibrium<R> {
 pub(crate) enum By<'a, 'k, R> {
     Compliance(&'a [Mat3<R>; MAX_SUB]),
     Cable(&'a [Mat3<R>; MAX_SUB]),
-    Stiffness(&'a JointStiffness<'k, R>, [R; 3]),
+    Stiffness(JointStiffness<'k, R>, [R; 3]),
 }
 
 /// One march of a joint without Newton (`Finger::joint_march`): where it arrives.
