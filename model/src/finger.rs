@@ -26,6 +26,8 @@ mod branch_end;
 mod joint;
 mod loaded;
 mod march;
+pub(crate) use march::turn;
+#[cfg(feature = "fixed")]
 pub(crate) use march::{march_subs, Frame, SubElement};
 mod march_stiffness;
 mod pinned;
@@ -42,7 +44,7 @@ pub use prepare::uniform_beam_compliance;
 pub use stiffness::JointStiffness;
 use types::cast_mat;
 pub use types::{BranchEnd, BranchLimit, Compliances, JointEquilibrium, Method, Pose, Solution};
-pub(crate) use types::{By, JointMarch};
+pub(crate) use types::{By, Heading, JointMarch};
 
 use crate::solve::continuation::{self, Step};
 use crate::solve::newton::{self as newton_solve, Equations};

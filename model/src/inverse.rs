@@ -13,7 +13,7 @@
 use crate::calibration::Calibration;
 use crate::de;
 use crate::error::Error;
-use crate::finger::{Finger, JointStiffness, Pose, Solution};
+use crate::finger::{Finger, Heading, JointStiffness, Pose, Solution};
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -475,7 +475,7 @@ fn solve<R: Real>(f: &Finger<R>, table: Table<'_, R>, angles: &[R], tension: Opt
     let ctx = Ctx::new(f, opts)?;
     let mut ang = [Angle { theta: R::zero(), s: R::zero(), c: R::one() }; MAX_JOINTS];
     for k in 0..n {
-        let (s, c) = angles[k].sin_cos();
+        let (s, c) = crate::finger::turn(angles[k]);
         ang[k] = Angle { theta: angles[k], s, c };
     }
     let out = if p.layers == 0 { no_stacks(&ctx, &ang, tension, opts, out)? } else { fast(f, &ctx, &ang, tension, opts, out)? };
@@ -733,7 +733,6 @@ impl<R: Real> PoseSolution<R> {
         }
         let n = self.n;
         let lh = p.hinge_len();
-        let sub_len = lh / R::from_u32(p.m as u32);
         let link = p.l - lh;
         let mut sol = Solution {
             n,
@@ -752,18 +751,18 @@ impl<R: Real> PoseSolution<R> {
             residual: R::zero(),
             tangent_det: [R::one(); MAX_JOINTS],
         };
+        let mut node = Heading::origin();
         for k in 0..n {
-            let mut end = Pose::origin();
-            for q in self.sub_q[k].iter().take(p.m) {
-                end = end.then(sub_len + q[0], q[1], q[2]);
-            }
+            let end = f.walk(&self.sub_q[k]);
             let l = self.links[k];
-            sol.joint_angle[k] = end.theta + l[2];
+            sol.joint_angle[k] = end.pose.theta + l[2];
             let hole = end.point(R::zero(), p.e);
             let span = (hole[0].sq() + (hole[1] - p.e).sq()).sqrt();
             sol.span[k] = span;
             sol.cable_excursion += lh - span;
-            sol.nodes[k + 1] = sol.nodes[k].then(end.x, end.y, end.theta).then(link + l[0], l[1], l[2]);
+            let e = end.pose;
+            node = node.then(e.x, e.y, e.theta).then(link + l[0], l[1], l[2]);
+            sol.nodes[k + 1] = node.pose;
         }
         Ok(sol)
     }

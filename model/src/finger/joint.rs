@@ -78,10 +78,10 @@ impl<R: Real> Finger<R> {
         };
         let (end, hole, link) = match by {
             By::Cable(c) => match self.march_cable(&march::ByCompliance(c), tension, b, q) {
-                Ok((end, hole, _, _)) => (end, hole, self.link_q(tension, &end, None)),
+                Ok((end, hole, _, _)) => (end, hole, self.link_q(tension, None)),
                 Err(_) => {
                     let (end, hole, _) = self.march(c, tension, b, None, q).map_err(refused)?;
-                    (end, hole, self.link_q(tension, &end, None))
+                    (end, hole, self.link_q(tension, None))
                 }
             },
             By::Stiffness(k, link) => {
@@ -90,7 +90,7 @@ impl<R: Real> Finger<R> {
             }
             By::Compliance(c) => {
                 let (end, hole, _) = self.march(c, tension, b, None, q).map_err(refused)?;
-                (end, hole, self.link_q(tension, &end, None))
+                (end, hole, self.link_q(tension, None))
             }
         };
         Ok(JointMarch::arrived(end, hole, link))
@@ -99,6 +99,6 @@ impl<R: Real> Finger<R> {
     /// A link's deflection under tension alone, the same for every joint (`link_q` without a
     /// tip load).
     pub(crate) fn tension_link_q(&self, tension: R) -> [R; 3] {
-        self.link_q(tension, &Pose::origin(), None)
+        self.link_q(tension, None)
     }
 }

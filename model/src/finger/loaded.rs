@@ -46,7 +46,7 @@ impl<R: Real> Finger<R> {
         let tip = [x[2 * n], x[2 * n + 1]];
         let mut states = [self.straight(); MAX_JOINTS];
         let mut r = [R::zero(); 2 * MAX_JOINTS + 2];
-        let mut frame = Pose::origin();
+        let mut frame = Heading::origin();
         for k in 0..n {
             let tl = Self::tip_in_frame(&frame, force, tip);
             let b = [x[2 * k], x[2 * k + 1]];
@@ -54,12 +54,12 @@ impl<R: Real> Finger<R> {
             r[2 * k] = b[0] - st.hole[0];
             r[2 * k + 1] = b[1] - st.hole[1];
             let hinge_end = frame.then(st.end.x, st.end.y, st.end.theta);
-            let ql = self.link_q(tension, &hinge_end, Some((force, tip)));
+            let ql = self.link_q(tension, Some((&hinge_end, force, tip)));
             frame = hinge_end.then(self.link_len + ql[0], ql[1], ql[2]);
             states[k] = st;
         }
-        r[2 * n] = tip[0] - frame.x;
-        r[2 * n + 1] = tip[1] - frame.y;
+        r[2 * n] = tip[0] - frame.pose.x;
+        r[2 * n + 1] = tip[1] - frame.pose.y;
         Ok((r, states))
     }
 

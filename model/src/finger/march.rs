@@ -44,6 +44,13 @@ pub(super) fn small_turn(eps: f64) -> f64 {
     }
 }
 
+/// The turn rule's (sin, cos) of one step's rotation `x` (a sub-element's, a hinge end's, a
+/// link's): `Real::turn` with the scalar's series bound.
+#[inline(always)]
+pub(crate) fn turn<R: Real>(x: R) -> (R, R) {
+    x.turn(R::from_f64(small_turn(R::EPS)))
+}
+
 /// A march's scalar: R itself, or dual numbers over R (the hole residual's exact Jacobian);
 /// parameters and compliances stay in R.
 pub(super) trait Scalar<R>: Real + Mul<R, Output = Self> + Add<R, Output = Self> + Sub<R, Output = Self> {}
@@ -232,7 +239,7 @@ impl<R: Real> Frame<SubLoads<R, R>, SubDisp<R>> for CableFrame<R> {
         // w - (L + q0, q1) is B - the next proximal end: its dot with f; then f into the next
         // frame (dot and cross products keep)
         self.dot = self.dot - (q[0] + l) * f[0] - q[1] * f[1];
-        let (sd, cd) = q[2].turn(R::from_f64(small_turn(R::EPS)));
+        let (sd, cd) = turn(q[2]);
         self.f = [cd * f[0] + sd * f[1], cd * f[1] - sd * f[0]];
     }
 }
@@ -287,7 +294,7 @@ impl<R: Real, T: Scalar<R>> Frame<SubLoads<R, T>, SubDisp<T>> for PoseFrame<R, T
     #[inline(always)]
     fn advance(&mut self, (q, _m_end): SubDisp<T>) {
         let (p, s, co, l) = (self.pose, self.s, self.co, self.sub_len);
-        let (sd, cd) = q[2].turn(T::from_f64(small_turn(T::EPS)));
+        let (sd, cd) = turn(q[2]);
         let ax = q[0] + l;
         self.pose = Pose { x: p.x + co * ax - s * q[1], y: p.y + s * ax + co * q[1], theta: p.theta + q[2] };
         (self.s, self.co) = T::compose_turn((s, co), (sd, cd), self.pose.theta);
@@ -318,7 +325,13 @@ impl<R: Real> Finger<R> {
     /// `ByStiffness` (the tabled inverse's, no compliance formed). Refuses what `CableFrame`
     /// refuses and a non-positive den or last pivot; the full model's Newton then takes the joint.
     #[inline(always)]
-    pub(super) fn march_cable<K: SubElement<SubLoads<R, R>, Sub = Mat3<R>, Disp = SubDisp<R>>>(&self, kernel: &K, tension: R, b: [R; 2], q_out: &mut [[R; 3]; MAX_SUB]) -> Result<MarchEnd<R>, MarchError> {
+    pub(super) fn march_cable<K: SubElement<SubLoads<R, R>, Sub = Mat3<R>, Disp = SubDisp<R>>>(
+        &self,
+        kernel: &K,
+        tension: R,
+        b: [R; 2],
+        q_out: &mut [[R; 3]; MAX_SUB],
+    ) -> Result<MarchEnd<R>, MarchError> {
         let (start, frame) = CableFrame::new(self, tension, b)?;
         self.march_joint(kernel, frame, q_out, |x| x)?.end(start, self.p.e)
     }

@@ -72,11 +72,7 @@ impl<R: Real> Finger<R> {
         let point = [free0.tip().x, free0.tip().y];
         let mut x = [R::zero(); COUPLED];
         for k in 0..n {
-            let mut end = super::Pose::origin();
-            for q in free0.q[k].iter().take(self.p.m) {
-                end = end.then(self.sub_len + q[0], q[1], q[2]);
-            }
-            let hole = end.point(R::zero(), self.p.e);
+            let hole = self.walk(&free0.q[k]).point(R::zero(), self.p.e);
             x[2 * k] = hole[0];
             x[2 * k + 1] = hole[1];
         }

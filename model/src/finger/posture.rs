@@ -9,15 +9,16 @@ impl<R: Real> Finger<R> {
     /// Deflection of a link (proximal frame `hinge_end`, base frame) when `flex_links` is set:
     /// the cable inside the link compresses it with P at the offset e (moment P·e about its
     /// axis), plus the tip load if any; linear, loads in the undeformed link frame.
-    pub(super) fn link_q(&self, tension: R, hinge_end: &Pose<R>, tip: Option<([R; 2], [R; 2])>) -> [R; 3] {
+    /// `tip`: the hinge's end (the link's proximal frame), the tip force and its point.
+    pub(super) fn link_q(&self, tension: R, tip: Option<(&Heading<R>, [R; 2], [R; 2])>) -> [R; 3] {
         if !self.p.flex_links {
             return [R::zero(); 3];
         }
         let mut w = [-tension, R::zero(), tension * self.p.e];
-        if let Some((force, point)) = tip {
+        if let Some((hinge_end, force, point)) = tip {
             let end = hinge_end.then(self.link_len, R::zero(), R::zero());
             let tl = Self::tip_in_frame(&end, force, point);
-            let (s, c) = hinge_end.theta.sin_cos();
+            let (s, c) = (hinge_end.s, hinge_end.c);
             w[0] += c * force[0] + s * force[1];
             w[1] += -s * force[0] + c * force[1];
             w[2] += tl.point[0] * tl.force[1] - tl.point[1] * tl.force[0];
@@ -25,7 +26,13 @@ impl<R: Real> Finger<R> {
         mat3::mul_vec(&self.link_c, &w)
     }
 
-    /// Node poses 0..=n (node k-1 is joint k's proximal frame; node n the tip) for given joint
+    /// A joint's hinge end from its sub-elements' displacements `q` (its first m rows), in the
+    /// joint's proximal frame.
+    pub(crate) fn walk(&self, q: &[[R; 3]; MAX_SUB]) -> Heading<R> {
+        q.iter().take(self.p.m).fold(Heading::origin(), |h, q| h.then(self.sub_len + q[0], q[1], q[2]))
+    }
+
+    /// Nodes 0..=n (node k-1 is joint k's proximal frame; node n the tip) for given joint
     /// states, and each link's deflection.
     pub(super) fn chain(
         &self,
@@ -33,7 +40,7 @@ impl<R: Real> Finger<R> {
         tension: R,
         tip_force: [R; 2],
         tip_point: Option<[R; 2]>,
-    ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
+    ) -> ([Heading<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
         let mut ends = [Pose::origin(); MAX_JOINTS];
         for k in 0..self.p.n {
             ends[k] = states[k].end;
@@ -49,9 +56,9 @@ impl<R: Real> Finger<R> {
         tension: R,
         tip_force: [R; 2],
         tip_point: Option<[R; 2]>,
-    ) -> ([Pose<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
+    ) -> ([Heading<R>; MAX_JOINTS + 1], [[R; 3]; MAX_JOINTS]) {
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
-        let mut nodes = [Pose::origin(); MAX_JOINTS + 1];
+        let mut nodes = [Heading::origin(); MAX_JOINTS + 1];
         let mut links = [[R::zero(); 3]; MAX_JOINTS];
         // with a tip load on flexible links the tip point enters the links' loads: the solved
         // tip when the caller has it (the coupled and pinned solves carry it as an unknown),
@@ -65,11 +72,11 @@ impl<R: Real> Finger<R> {
             for k in 0..n {
                 let e = ends[k];
                 let hinge_end = nodes[k].then(e.x, e.y, e.theta);
-                links[k] = if loaded && tip.is_none() { [R::zero(); 3] } else { self.link_q(tension, &hinge_end, tip) };
+                links[k] = if loaded && tip.is_none() { [R::zero(); 3] } else { self.link_q(tension, tip.map(|(f, t)| (&hinge_end, f, t))) };
                 let q = links[k];
                 nodes[k + 1] = hinge_end.then(self.link_len + q[0], q[1], q[2]);
             }
-            let new_tip = [nodes[n].x, nodes[n].y];
+            let new_tip = [nodes[n].pose.x, nodes[n].pose.y];
             if given {
                 break;
             }
@@ -85,10 +92,10 @@ impl<R: Real> Finger<R> {
 
     /// The tip load as joint k sees it (its proximal frame), from a base-frame force at a
     /// base-frame point.
-    pub(super) fn tip_in_frame(frame: &Pose<R>, force: [R; 2], point: [R; 2]) -> TipLoad<R> {
-        let (s, c) = frame.theta.sin_cos();
-        let dx = point[0] - frame.x;
-        let dy = point[1] - frame.y;
+    pub(super) fn tip_in_frame(frame: &Heading<R>, force: [R; 2], point: [R; 2]) -> TipLoad<R> {
+        let (s, c) = (frame.s, frame.c);
+        let dx = point[0] - frame.pose.x;
+        let dy = point[1] - frame.pose.y;
         TipLoad { force: [c * force[0] + s * force[1], -s * force[0] + c * force[1]], point: [c * dx + s * dy, -s * dx + c * dy] }
     }
 
@@ -103,7 +110,8 @@ impl<R: Real> Finger<R> {
         iterations: u32,
     ) -> Result<Solution<R>, Error> {
         let n = self.p.n;
-        let (nodes, links) = self.chain(states, tension, tip_force, tip_point);
+        let (heads, links) = self.chain(states, tension, tip_force, tip_point);
+        let nodes = Heading::poses(&heads);
         let mut sol = Solution { n, m: self.p.m, tension, tip_force, nodes, thickness: c.thickness, volts: c.volts, iterations, ..Solution::empty() };
         let loaded = tip_force[0] != R::zero() || tip_force[1] != R::zero();
         // the solved tip (the load's point in the joints' residuals), and its mismatch with
@@ -125,7 +133,7 @@ impl<R: Real> Finger<R> {
             }
             sol.span[k] = span;
             sol.cable_excursion += self.p.hinge_len() - span;
-            let tl = if loaded { Some(Self::tip_in_frame(&nodes[k], tip_force, tip)) } else { None };
+            let tl = if loaded { Some(Self::tip_in_frame(&heads[k], tip_force, tip)) } else { None };
             // tension alone: one dual march gives the residual and the exact tangent; a joint
             // equal to the one before (same compliance, same hole) has the same ones
             let same = k > 0 && c.c[k][..self.p.m] == c.c[k - 1][..self.p.m] && st.hole == states[k - 1].hole;

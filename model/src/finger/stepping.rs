@@ -27,7 +27,7 @@ impl<R: Real> Finger<R> {
             let p = tension * lam;
             let f = [force[0] * lam, force[1] * lam];
             let (nodes, _) = self.chain(&states, p, f, None);
-            let tip = [nodes[n].x, nodes[n].y];
+            let tip = [nodes[n].pose.x, nodes[n].pose.y];
             let mut next = states;
             for k in 0..n {
                 let tl = Self::tip_in_frame(&nodes[k], f, tip);
@@ -45,30 +45,27 @@ impl<R: Real> Finger<R> {
         let e = self.p.e;
         let b = prev.hole;
         let SpanLoads { fc, ft, tp, ftot } = self.span_loads(tension, b, tip)?;
-        let mut pose: Pose<R> = Pose::origin();
+        let mut frame = Heading::origin();
         let mut q = [[R::zero(); 3]; MAX_SUB];
         for j in 0..self.p.m {
-            let (s, co) = pose.theta.sin_cos();
+            let (s, co) = (frame.s, frame.c);
             let qp = prev.q[j];
             // previous distal end of this sub-element
-            let d = [pose.x + co * (self.sub_len + qp[0]) - s * qp[1], pose.y + s * (self.sub_len + qp[0]) + co * qp[1]];
+            let d = frame.point(self.sub_len + qp[0], qp[1]);
             let mut mo = (b[0] - d[0]) * fc[1] - (b[1] - d[1]) * fc[0];
             if tip.is_some() {
                 mo += (tp[0] - d[0]) * ft[1] - (tp[1] - d[1]) * ft[0];
             }
             let f = [co * ftot[0] + s * ftot[1], -s * ftot[0] + co * ftot[1]];
             q[j] = mat3::mul_vec(&c[j], &[f[0], f[1], mo]);
-            pose = Pose { x: d[0], y: d[1], theta: pose.theta + qp[2] };
+            frame = frame.then(self.sub_len + qp[0], qp[1], qp[2]);
         }
         // new geometry from the new q
-        let mut end = Pose::origin();
-        for qj in q.iter().take(self.p.m) {
-            end = end.then(self.sub_len + qj[0], qj[1], qj[2]);
-        }
+        let end = self.walk(&q);
         let hole = end.point(R::zero(), e);
         if !(hole[0].is_finite() && hole[1].is_finite()) {
             return Err(MarchError::Singular);
         }
-        Ok(JointState { q, end, hole, tangent: None })
+        Ok(JointState { q, end: end.pose, hole, tangent: None })
     }
 }

@@ -66,9 +66,9 @@ impl<R: Real> Finger<R> {
         sol.tip_force = [R::zero(); 2];
         sol.thickness = c.thickness;
         sol.volts = c.volts;
-        let link = self.link_q(tension, &Pose::origin(), None);
+        let link = self.link_q(tension, None);
         // the link's rotation by the march's turn rule
-        let (ls, lc) = link[2].turn(R::from_f64(march::small_turn(R::EPS)));
+        let (ls, lc) = march::turn(link[2]);
         let (lx, ly) = (self.link_len + link[0], link[1]);
         let mut node = Pose::origin();
         let (mut s, mut co) = (R::zero(), R::one());
@@ -94,7 +94,7 @@ impl<R: Real> Finger<R> {
                             let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
                             iters += it;
                             sol.q[k][..m].copy_from_slice(&st.q[..m]);
-                            let (se, ce) = st.end.theta.sin_cos();
+                            let (se, ce) = march::turn(st.end.theta);
                             let (r, det) = st.tangent.unwrap_or(([R::zero(); 2], R::one()));
                             (st.end, [se, ce], st.hole, r[0] * r[0] + r[1] * r[1], det)
                         }

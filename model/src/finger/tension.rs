@@ -76,7 +76,8 @@ impl<R: Real> Finger<R> {
         sol: &mut Solution<R>,
     ) -> Result<(), Error> {
         let n = self.p.n;
-        let (nodes, links) = self.chain_ends(ends, tension, [R::zero(); 2], None);
+        let (heads, links) = self.chain_ends(ends, tension, [R::zero(); 2], None);
+        let nodes = Heading::poses(&heads);
         sol.nodes = nodes;
         sol.links = links;
         sol.iterations = iters;
@@ -206,7 +207,7 @@ impl<R: Real> Finger<R> {
             Some(v) => v,
             None => self.newton_joint(k, c, tension, tol, 200, tension / R::from_f64(4096.0))?,
         };
-        let link = self.link_q(tension, &st.end, None);
+        let link = self.link_q(tension, None);
         Ok(JointEquilibrium { q: st.q, end: st.end, hole: st.hole, link, angle: st.end.theta + link[2], iterations })
     }
 }

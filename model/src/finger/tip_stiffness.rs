@@ -12,26 +12,29 @@ impl<R: Real> Finger<R> {
         let n = sol.n;
         let tip = sol.nodes[n];
         let mut ct = mat3::zero();
+        let mut node = Heading::origin();
         for k in 0..n {
-            let mut pose = sol.nodes[k];
+            let mut pose = node;
             for j in 0..sol.m {
                 let qj = sol.q[k][j];
-                let (s, co) = pose.theta.sin_cos();
+                let (s, co) = (pose.s, pose.c);
                 let next = pose.then(self.sub_len + qj[0], qj[1], qj[2]);
-                let (dx, dy) = (tip.x - next.x, tip.y - next.y);
+                let (dx, dy) = (tip.x - next.pose.x, tip.y - next.pose.y);
                 let jm: Mat3<R> = [[co, -s, -dy], [s, co, dx], [R::zero(), R::zero(), R::one()]];
                 let jc = mat3::mul(&jm, &c.c[k][j]);
                 ct = mat3::add(&ct, &mat3::mul(&jc, &mat3::transpose(&jm)));
                 pose = next;
             }
             if self.p.flex_links {
-                let (s, co) = pose.theta.sin_cos();
+                let (s, co) = (pose.s, pose.c);
                 let end = sol.nodes[k + 1];
                 let (dx, dy) = (tip.x - end.x, tip.y - end.y);
                 let jm: Mat3<R> = [[co, -s, -dy], [s, co, dx], [R::zero(), R::zero(), R::one()]];
                 let jc = mat3::mul(&jm, &self.link_c);
                 ct = mat3::add(&ct, &mat3::mul(&jc, &mat3::transpose(&jm)));
             }
+            let l = sol.links[k];
+            node = pose.then(self.link_len + l[0], l[1], l[2]);
         }
         ct
     }
@@ -48,11 +51,7 @@ impl<R: Real> Finger<R> {
         let c = self.compliances(&sol.volts[..n])?;
         let mut x = [R::zero(); COUPLED];
         for k in 0..n {
-            let mut end = Pose::origin();
-            for q in sol.q[k].iter().take(self.p.m) {
-                end = end.then(self.sub_len + q[0], q[1], q[2]);
-            }
-            let hole = end.point(R::zero(), self.p.e);
+            let hole = self.walk(&sol.q[k]).point(R::zero(), self.p.e);
             x[2 * k] = hole[0];
             x[2 * k + 1] = hole[1];
         }

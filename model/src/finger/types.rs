@@ -19,7 +19,8 @@ impl<R: Real> Pose<R> {
     pub fn origin() -> Self {
         Pose { x: R::zero(), y: R::zero(), theta: R::zero() }
     }
-    /// `self ∘ (dx, dy, dθ)`: move by (dx, dy) in this pose's frame, then turn by dθ.
+    /// `self ∘ (dx, dy, dθ)`: move by (dx, dy) in this pose's frame, then turn by dθ. One
+    /// step from a pose known by its angle; a chain of steps carries a `Heading`.
     pub fn then(&self, dx: R, dy: R, dtheta: R) -> Self {
         let (s, c) = self.theta.sin_cos();
         Pose { x: self.x + c * dx - s * dy, y: self.y + s * dx + c * dy, theta: self.theta + dtheta }
@@ -28,6 +29,42 @@ impl<R: Real> Pose<R> {
     pub fn point(&self, px: R, py: R) -> [R; 2] {
         let (s, c) = self.theta.sin_cos();
         [self.x + c * px - s * py, self.y + s * px + c * py]
+    }
+}
+
+/// A pose with its angle's (sin, cos), carried along a chain (a joint's sub-elements, the
+/// finger's nodes): each step turns it by the turn rule, the march frames' own (`Real::turn`
+/// of the step's rotation, composed by `Real::compose_turn`), so no chain takes the sine and
+/// cosine of a summed angle (docs/model.md "The turn rule").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Heading<R> {
+    pub pose: Pose<R>,
+    pub s: R,
+    pub c: R,
+}
+
+impl<R: Real> Heading<R> {
+    pub fn origin() -> Self {
+        Heading { pose: Pose::origin(), s: R::zero(), c: R::one() }
+    }
+
+    /// `self ∘ (dx, dy, dθ)`: move by (dx, dy) in this frame, then turn by dθ.
+    #[inline(always)]
+    pub fn then(&self, dx: R, dy: R, dtheta: R) -> Self {
+        let (p, s, c) = (self.pose, self.s, self.c);
+        let pose = Pose { x: p.x + c * dx - s * dy, y: p.y + s * dx + c * dy, theta: p.theta + dtheta };
+        let (s, c) = R::compose_turn((s, c), super::march::turn(dtheta), pose.theta);
+        Heading { pose, s, c }
+    }
+
+    /// A point given in this frame, in the parent frame.
+    pub fn point(&self, px: R, py: R) -> [R; 2] {
+        [self.pose.x + self.c * px - self.s * py, self.pose.y + self.s * px + self.c * py]
+    }
+
+    /// The poses of a chain of headings.
+    pub fn poses<const N: usize>(h: &[Heading<R>; N]) -> [Pose<R>; N] {
+        h.map(|h| h.pose)
     }
 }
 

@@ -582,6 +582,11 @@ impl FixedFinger {
         for k in 0..=n {
             s.nodes[k] = pose(&sol.nodes[k]);
         }
+        // the links' deflection (`tip_compliance` walks the chain: sub-elements, then the link)
+        let (lx, ly, lt) = self.link_q(sol.tension);
+        for k in 0..n {
+            s.links[k] = [lx.to_real(), ly.to_real(), lt.to_real()];
+        }
         // C_tip is symmetric positive definite (Σ J C Jᵀ), as in `Finger::tip_stiffness`
         mat3::inverse_spd(&f.tip_compliance(&c, &s)).ok_or(Error::Singular { what: "tip compliance" })
     }

@@ -288,12 +288,8 @@ fn no_stacks<R: Real>(g: &mut Gen<'_, R>, angles: &[R], tension: Option<R>, opts
     if pt > z {
         let sol = g.f.solve(pt, &[z; MAX_JOINTS][..n], Method::converged())?;
         g.iters += sol.iterations;
-        let sub_len = lh / R::from_u32(g.p.m as u32);
         for k in 0..n {
-            let mut end = Pose::origin();
-            for q in sol.q[k].iter().take(g.p.m) {
-                end = end.then(sub_len + q[0], q[1], q[2]);
-            }
+            let end = g.f.walk(&sol.q[k]).pose;
             out.q[k] = [end.x - lh, end.y, end.theta];
             out.sub_q[k] = sol.q[k];
             out.links[k] = sol.links[k];
