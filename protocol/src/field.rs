@@ -1,10 +1,13 @@
-//! Reply fields: [`FIELDS`], every field docs/console.md's "Units of every field" lists, with
-//! its [`Kind`] (how its value reads) and unit. A new reply field is declared here, one row
-//! (and its row in the docs' table: a test checks the two agree); [`crate::reply`] reads a
-//! declared field by its kind and any other `key=value` by its syntax.
+//! Reply fields: a constant for each field docs/console.md's "Units of every field" lists
+//! ([`FORCE`], [`VOLTS`], ...), with its [`Kind`] (how its value reads) and unit, and
+//! [`FIELDS`], all of them. A new reply field is declared here, one row (and its row in the
+//! docs' table: a test checks the two agree); [`crate::reply`] reads a declared field by its
+//! kind and any other `key=value` by its syntax.
 //!
-//! What it is not: the firmware's writing of each reply (src/app/*): the firmware writes the
-//! keys; the host tests check every key it writes is declared here.
+//! The firmware writes each key through its constant ([`Field::first`] `key=`,
+//! [`Field::after`] ` key=`), so a key is spelled here only.
+//!
+//! What it is not: the firmware's writing of each reply (src/app/*), or a field's value.
 
 /// How a field's value reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,71 +30,99 @@ pub struct Field {
     pub key: &'static str,
     pub kind: Kind,
     pub unit: &'static str,
+    /// ` key=`, and `key=` a slice of it: the key as a line holds it.
+    after: &'static str,
+    first: &'static str,
 }
 
-const fn f(key: &'static str, kind: Kind, unit: &'static str) -> Field {
-    Field { key, kind, unit }
+impl Field {
+    /// `key=`: the key of a line's first field.
+    pub const fn first(self) -> &'static str {
+        self.first
+    }
+
+    /// ` key=`: the key of a field after another (the space between them).
+    pub const fn after(self) -> &'static str {
+        self.after
+    }
+}
+
+/// The field of ` key=` (`after`), its key and `key=` slices of that one text.
+const fn f(after: &'static str, kind: Kind, unit: &'static str) -> Field {
+    let (_, first) = after.split_at(1);
+    let (key, _) = first.split_at(first.len() - 1);
+    Field { key, kind, unit, after, first }
 }
 
 use Kind::{Number, Numbers, Word, Words};
 
-/// Every documented reply field, in the order of docs/console.md's table.
-pub const FIELDS: &[Field] = &[
-    f("armed", Number, "0/1"),
-    f("force", Number, "N"),
-    f("volts", Numbers, "V"),
-    f("target", Numbers, "V"),
-    f("thick", Numbers, "mm"),
-    f("thick_eq", Numbers, "mm"),
-    f("vmeas", Numbers, "V"),
-    f("imeas", Numbers, "µA"),
-    f("thick_meas", Numbers, "mm"),
-    f("vceil", Numbers, "V"),
-    // per channel: `ok` or `thinner`
-    f("film_check", Words, "-"),
-    f("trip_us", Number, "µs"),
-    f("tick_sense_us", Number, "µs"),
-    f("tick_source_us", Number, "µs"),
-    f("joints", Numbers, "deg"),
-    f("tip", Numbers, "mm, mm, deg"),
-    f("cable", Number, "mm"),
-    // status: the horn's angle; limits: its travel (two)
-    f("servo", Numbers, "deg"),
-    f("fault", Word, "name"),
-    f("enable", Number, "0/1"),
-    f("stiffness", Numbers, "N/mm, N/mm, N·mm/rad"),
-    f("iters", Number, "count"),
-    f("range", Numbers, "N, N"),
-    f("settle", Number, "s"),
-    f("fx", Number, "N"),
-    f("fy", Number, "N"),
-    f("point", Numbers, "mm, mm"),
-    f("nodes", Numbers, "mm, mm, deg per pose"),
-    f("hinges", Numbers, "mm, mm, deg per pose"),
-    f("vmax", Numbers, "V"),
-    f("vpullin", Number, "V"),
-    f("supply", Number, "V"),
-    f("margin", Number, "fraction"),
-    f("fmax", Number, "N"),
-    f("fmax_end", Words, "why, joint"),
-    f("slew", Number, "V/s"),
-    f("cable_max", Number, "mm"),
-    f("dutymax", Numbers, "counts"),
-    f("vmax_ok", Numbers, "V"),
-    f("moved", Number, "0/1"),
-    f("units", Words, ""),
-    f("vhold", Number, "V"),
-    f("g_eq", Number, "MPa"),
-    f("branches", Words, "MPa:s"),
-    f("eps_r", Number, "1"),
-    f("breakdown", Number, "V/µm"),
-    f("z0", Number, "mm"),
-    f("s_hold", Number, "1"),
-    f("cal", Numbers, "1 (ea1, ei1: 1/mm)"),
-    f("waited", Number, "s"),
-    f("saved", Number, "count"),
-    f("bytes", Number, "count"),
-];
+/// `NAME: "key", Kind, "unit";` rows: a constant for each field, and [`FIELDS`], every one
+/// in the rows' order.
+macro_rules! fields {
+    ($($(#[$doc:meta])* $name:ident: $key:literal, $kind:ident, $unit:literal;)*) => {
+        $($(#[$doc])* pub const $name: Field = f(concat!(" ", $key, "="), $kind, $unit);)*
+
+        /// Every documented reply field, in the order of docs/console.md's table.
+        pub const FIELDS: &[Field] = &[$($name),*];
+    };
+}
+
+fields! {
+    ARMED: "armed", Number, "0/1";
+    FORCE: "force", Number, "N";
+    VOLTS: "volts", Numbers, "V";
+    TARGET: "target", Numbers, "V";
+    THICK: "thick", Numbers, "mm";
+    THICK_EQ: "thick_eq", Numbers, "mm";
+    VMEAS: "vmeas", Numbers, "V";
+    IMEAS: "imeas", Numbers, "µA";
+    THICK_MEAS: "thick_meas", Numbers, "mm";
+    VCEIL: "vceil", Numbers, "V";
+    /// per channel: `ok` or `thinner`
+    FILM_CHECK: "film_check", Words, "-";
+    TRIP_US: "trip_us", Number, "µs";
+    TICK_SENSE_US: "tick_sense_us", Number, "µs";
+    TICK_SOURCE_US: "tick_source_us", Number, "µs";
+    JOINTS: "joints", Numbers, "deg";
+    TIP: "tip", Numbers, "mm, mm, deg";
+    CABLE: "cable", Number, "mm";
+    /// status: the horn's angle; limits: its travel (two)
+    SERVO: "servo", Numbers, "deg";
+    FAULT: "fault", Word, "name";
+    ENABLE: "enable", Number, "0/1";
+    STIFFNESS: "stiffness", Numbers, "N/mm, N/mm, N·mm/rad";
+    ITERS: "iters", Number, "count";
+    RANGE: "range", Numbers, "N, N";
+    SETTLE: "settle", Number, "s";
+    FX: "fx", Number, "N";
+    FY: "fy", Number, "N";
+    POINT: "point", Numbers, "mm, mm";
+    NODES: "nodes", Numbers, "mm, mm, deg per pose";
+    HINGES: "hinges", Numbers, "mm, mm, deg per pose";
+    VMAX: "vmax", Numbers, "V";
+    VPULLIN: "vpullin", Number, "V";
+    SUPPLY: "supply", Number, "V";
+    MARGIN: "margin", Number, "fraction";
+    FMAX: "fmax", Number, "N";
+    FMAX_END: "fmax_end", Words, "why, joint";
+    SLEW: "slew", Number, "V/s";
+    CABLE_MAX: "cable_max", Number, "mm";
+    DUTYMAX: "dutymax", Numbers, "counts";
+    VMAX_OK: "vmax_ok", Numbers, "V";
+    MOVED: "moved", Number, "0/1";
+    UNITS: "units", Words, "";
+    VHOLD: "vhold", Number, "V";
+    G_EQ: "g_eq", Number, "MPa";
+    BRANCHES: "branches", Words, "MPa:s";
+    EPS_R: "eps_r", Number, "1";
+    BREAKDOWN: "breakdown", Number, "V/µm";
+    Z0: "z0", Number, "mm";
+    S_HOLD: "s_hold", Number, "1";
+    CAL: "cal", Numbers, "1 (ea1, ei1: 1/mm)";
+    WAITED: "waited", Number, "s";
+    SAVED: "saved", Number, "count";
+    BYTES: "bytes", Number, "count";
+}
 
 /// The declared field of `key`, if any.
 pub fn field(key: &str) -> Option<&'static Field> {

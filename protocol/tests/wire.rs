@@ -176,6 +176,17 @@ fn the_field_table_is_the_docs_table() {
     assert!(FIELDS.iter().filter(|f| f.kind == Kind::Numbers).count() > 10);
 }
 
+/// Each field's key as a line holds it: `key=` first, ` key=` after another field.
+#[test]
+fn each_fields_key_is_written_as_the_line_holds_it() {
+    for f in FIELDS {
+        assert_eq!(f.first(), format!("{}=", f.key));
+        assert_eq!(f.after(), format!(" {}=", f.key));
+        assert!(!f.key.is_empty() && f.key.bytes().all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_'), "{}", f.key);
+    }
+    assert_eq!(finger_protocol::field::FORCE.after(), " force=");
+}
+
 #[test]
 fn every_command_round_trips() {
     use finger_protocol::Command;
