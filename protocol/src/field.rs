@@ -122,6 +122,43 @@ fields! {
     WAITED: "waited", Number, "s";
     SAVED: "saved", Number, "count";
     BYTES: "bytes", Number, "count";
+    VERSION: "version", Word, "-";
+    NAME: "name", Word, "-";
+    BOARD: "board", Word, "-";
+    CARD: "card", Word, "name";
+    VGAIN: "vgain", Numbers, "1";
+    VOFF: "voff", Numbers, "V";
+    C0_PF: "c0_pf", Numbers, "pF";
+    /// `input`
+    EARLY: "early", Word, "-";
+    /// min, max
+    TICK_PERIOD_US: "tick_period_us", Numbers, "µs";
+    /// min, max
+    TICK_LATENCY_US: "tick_latency_us", Numbers, "µs";
+    TICK_RUN_US: "tick_run_us", Number, "µs";
+    TICK_STACK_US: "tick_stack_us", Number, "µs";
+    TICKS: "ticks", Number, "count";
+    STOP_US: "stop_us", Number, "µs";
+    STOPS: "stops", Number, "count";
+    /// `word:max` per command word
+    CMD_US: "cmd_us", Words, "word:µs";
+    PARAMS: "params", Number, "count";
+    PRESET: "preset", Word, "name";
+    STORE: "store", Word, "-";
+    SAVES: "saves", Number, "count";
+    BOOT: "boot", Word, "-";
+    REASON: "reason", Word, "-";
+    FORMAT: "format", Number, "-";
+    VALUES: "values", Number, "count";
+    DIFFER: "differ", Number, "count";
+    /// a parameter's compiled default (`-`: none), in its unit
+    DEFAULT: "default", Number, "as the parameter";
+    /// always `1`
+    FACTORY: "factory", Number, "-";
+    /// the boot banner's, not a reply's
+    CONFIG: "config", Word, "-";
+    FILM_KPA: "film_kpa", Number, "kPa";
+    CURRENT_UA: "current_ua", Numbers, "µA";
 }
 
 /// The declared field of `key`, if any.
