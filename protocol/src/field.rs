@@ -30,9 +30,10 @@ pub struct Field {
     pub key: &'static str,
     pub kind: Kind,
     pub unit: &'static str,
-    /// ` key=`, and `key=` a slice of it: the key as a line holds it.
-    after: &'static str,
+    /// The key as a line holds it, `key=` first and ` key=` after another field: one text
+    /// each, so a reply writes it in one piece.
     first: &'static str,
+    after: &'static str,
 }
 
 impl Field {
@@ -47,20 +48,14 @@ impl Field {
     }
 }
 
-/// The field of ` key=` (`after`), its key and `key=` slices of that one text.
-const fn f(after: &'static str, kind: Kind, unit: &'static str) -> Field {
-    let (_, first) = after.split_at(1);
-    let (key, _) = first.split_at(first.len() - 1);
-    Field { key, kind, unit, after, first }
-}
-
 use Kind::{Number, Numbers, Word, Words};
 
 /// `NAME: "key", Kind, "unit";` rows: a constant for each field, and [`FIELDS`], every one
 /// in the rows' order.
 macro_rules! fields {
     ($($(#[$doc:meta])* $name:ident: $key:literal, $kind:ident, $unit:literal;)*) => {
-        $($(#[$doc])* pub const $name: Field = f(concat!(" ", $key, "="), $kind, $unit);)*
+        $($(#[$doc])* pub const $name: Field =
+            Field { key: $key, kind: $kind, unit: $unit, first: concat!($key, "="), after: concat!(" ", $key, "=") };)*
 
         /// Every documented reply field, in the order of docs/console.md's table.
         pub const FIELDS: &[Field] = &[$($name),*];
@@ -159,6 +154,52 @@ fields! {
     CONFIG: "config", Word, "-";
     FILM_KPA: "film_kpa", Number, "kPa";
     CURRENT_UA: "current_ua", Numbers, "µA";
+}
+
+/// `const_concat!(a, b, ...)`: the `&'static str` constants `a`, `b`, ... end to end, one
+/// text built by the compiler: a field's key and a fixed value as one piece
+/// (`const_concat!(ARMED.first(), "1")` is `"armed=1"`), where two would each cost a write.
+#[macro_export]
+macro_rules! const_concat {
+    ($($s:expr),+ $(,)?) => {{
+        const PARTS: &[&str] = &[$($s),+];
+        const BYTES: [u8; $crate::field::joined_len(PARTS)] = $crate::field::joined(PARTS);
+        const TEXT: &str = match ::core::str::from_utf8(&BYTES) {
+            Ok(t) => t,
+            Err(_) => panic!("not UTF-8"),
+        };
+        TEXT
+    }};
+}
+
+/// The length of `parts` end to end ([`const_concat!`]).
+#[doc(hidden)]
+pub const fn joined_len(parts: &[&str]) -> usize {
+    let (mut n, mut i) = (0, 0);
+    while i < parts.len() {
+        n += parts[i].len();
+        i += 1;
+    }
+    n
+}
+
+/// `parts` end to end, `N` their length ([`const_concat!`]).
+#[doc(hidden)]
+pub const fn joined<const N: usize>(parts: &[&str]) -> [u8; N] {
+    let mut out = [0u8; N];
+    let (mut at, mut i) = (0, 0);
+    while i < parts.len() {
+        let p = parts[i].as_bytes();
+        let mut j = 0;
+        while j < p.len() {
+            out[at] = p[j];
+            at += 1;
+            j += 1;
+        }
+        i += 1;
+    }
+    assert!(at == N, "N is not the parts' length");
+    out
 }
 
 /// The declared field of `key`, if any.

@@ -203,3 +203,13 @@ fn every_command_round_trips() {
     assert_eq!(Command::parse(b""), None);
     assert_eq!(Command::parse(b"helpversion"), None);
 }
+
+/// A key and a fixed value as one text, built by the compiler.
+#[test]
+fn const_concat_joins_a_key_and_its_value() {
+    use finger_protocol::field::{ARMED, FMAX, FMAX_END};
+    const ARMED_1: &str = finger_protocol::const_concat!(ARMED.first(), "1");
+    assert_eq!(ARMED_1, "armed=1");
+    assert_eq!(finger_protocol::const_concat!(FMAX.after(), "-", FMAX_END.after(), "error"), " fmax=- fmax_end=error");
+    assert_eq!(finger_protocol::const_concat!("µ"), "µ");
+}
