@@ -2,7 +2,9 @@
 //! the firmware's source names codes only as `finger_protocol::ErrorCode` variants (no
 //! `"err <code>` text of its own), and the simulated board's refusals, one per code it can give
 //! here, parse to their code. Every reply of a session parses as a final line, its declared
-//! fields as their kinds.
+//! fields as their kinds. Every key the firmware writes is a declared field: the source writes
+//! none as text (each is a `finger_protocol::field` constant, so the compiler proves it
+//! declared), and a session's replies hold no other.
 use std::path::Path;
 
 use finger_fw::sim::SimBoard;
@@ -64,6 +66,102 @@ fn every_code_the_firmware_names_is_the_protocols_and_parses() {
     let e = finger_model::Error::Singular { what: "tangent" };
     assert_eq!(e.code(), ErrorCode::Fault);
     assert_eq!(e.to_string(), "singular tangent");
+}
+
+/// The string literals of Rust source `text` outside comments (their text as written, escapes
+/// kept; no raw strings or `'"'` in src/).
+fn literals(text: &str) -> Vec<&str> {
+    let mut out = Vec::new();
+    for line in text.lines() {
+        let b = line.as_bytes();
+        let (mut i, mut start) = (0, None);
+        while i < b.len() {
+            match (start, b[i]) {
+                (None, b'/') if b.get(i + 1) == Some(&b'/') => break,
+                (None, b'"') => start = Some(i + 1),
+                (Some(_), b'\\') => i += 1,
+                (Some(s), b'"') => {
+                    out.push(&line[s..i]);
+                    start = None;
+                }
+                _ => {}
+            }
+            i += 1;
+        }
+    }
+    out
+}
+
+/// The `key=` words of `text`: a key at its start or after a space, then `=`.
+fn keys_in(text: &str) -> Vec<&str> {
+    text.split(' ')
+        .filter_map(|w| w.split_once('='))
+        .map(|(k, _)| k)
+        .filter(|k| !k.is_empty() && k.bytes().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == b'_'))
+        .collect()
+}
+
+/// The firmware writes no reply key as text: each one is a `finger_protocol::field` constant
+/// (`field::FORCE.after()`, `const_concat!(field::ARMED.first(), "1")`), so every key it writes
+/// is declared (FIELDS, docs/console.md's units table) or it does not build. A string literal
+/// of src/ holding a `key=` word fails here.
+#[test]
+fn the_firmware_writes_every_key_through_the_protocols_fields() {
+    let mut files = Vec::new();
+    sources(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../src"), &mut files);
+    let mut through = 0;
+    for (path, text) in &files {
+        for l in literals(text) {
+            assert!(keys_in(l).is_empty(), "{path}: {l:?} writes a key as text (finger_protocol::field has each key)");
+        }
+        through += text.matches("field::").count();
+    }
+    assert!(through > 100, "{through} keys written through finger_protocol::field");
+    assert_eq!(keys_in("ok force=1 volts=2"), ["force", "volts"]);
+    assert_eq!(literals(r#"w!(r; " thick=", "a\"b", "c"); // "x=""#), [" thick=", "a\\\"b", "c"]);
+}
+
+/// Every key of a session's final replies (the simulated board with its plant behind the
+/// read-back) is a declared field.
+#[test]
+fn every_key_of_a_session_is_declared() {
+    let mut a = App::new(SimBoard::with_plant(finger_fw::plant::Plant::new(3).unwrap()));
+    let mut seen = std::collections::BTreeSet::new();
+    for line in [
+        "version",
+        "status",
+        "limits",
+        "material",
+        "solve 0.5 100 0 0",
+        "shape 0.5 0 0 0",
+        "pose 5 5 5",
+        "contact 0.1 0.3",
+        "param",
+        "preset default",
+        "cal",
+        "cal show",
+        "wait 0",
+        "plant status",
+        "config",
+        "factory",
+        "arm",
+        "volt all 100",
+        "force 0.3",
+        "pose 5 5 5",
+        "wait 0.1",
+        "status",
+        "disarm",
+        "stop",
+    ] {
+        let r = cmd(&mut a, line);
+        let Ok(Reply::Ok(f)) = Reply::parse(&r) else { panic!("{line:?} -> {r:?}") };
+        assert_eq!(f.check(), Ok(()), "{line:?} -> {r}: a declared field does not read as its kind");
+        for (k, _) in f.pairs() {
+            assert!(finger_protocol::field::field(k).is_some(), "{line:?} -> {r}: {k} is not a declared field");
+            seen.insert(k.to_string());
+        }
+    }
+    assert!(seen.len() > 60, "{seen:?}");
 }
 
 fn app() -> App<SimBoard> {

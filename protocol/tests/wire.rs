@@ -176,6 +176,17 @@ fn the_field_table_is_the_docs_table() {
     assert!(FIELDS.iter().filter(|f| f.kind == Kind::Numbers).count() > 10);
 }
 
+/// Each field's key as a line holds it: `key=` first, ` key=` after another field.
+#[test]
+fn each_fields_key_is_written_as_the_line_holds_it() {
+    for f in FIELDS {
+        assert_eq!(f.first(), format!("{}=", f.key));
+        assert_eq!(f.after(), format!(" {}=", f.key));
+        assert!(!f.key.is_empty() && f.key.bytes().all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_'), "{}", f.key);
+    }
+    assert_eq!(finger_protocol::field::FORCE.after(), " force=");
+}
+
 #[test]
 fn every_command_round_trips() {
     use finger_protocol::Command;
@@ -191,4 +202,14 @@ fn every_command_round_trips() {
     assert_eq!(Command::parse(b"Help"), None, "the board's line buffer is lowercase");
     assert_eq!(Command::parse(b""), None);
     assert_eq!(Command::parse(b"helpversion"), None);
+}
+
+/// A key and a fixed value as one text, built by the compiler.
+#[test]
+fn const_concat_joins_a_key_and_its_value() {
+    use finger_protocol::field::{ARMED, FMAX, FMAX_END};
+    const ARMED_1: &str = finger_protocol::const_concat!(ARMED.first(), "1");
+    assert_eq!(ARMED_1, "armed=1");
+    assert_eq!(finger_protocol::const_concat!(FMAX.after(), "-", FMAX_END.after(), "error"), " fmax=- fmax_end=error");
+    assert_eq!(finger_protocol::const_concat!("µ"), "µ");
 }

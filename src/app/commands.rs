@@ -33,7 +33,7 @@ use crate::console;
 use crate::control::{hv_duty_for, Setpoints, View};
 use crate::num::{Fixed, Short};
 use crate::rx::Record;
-use finger_protocol::Command;
+use finger_protocol::{const_concat, field, Command};
 
 mod handlers;
 
@@ -278,9 +278,9 @@ impl Commands {
         let nl = self.nl;
         let el = self.now_ms.wrapping_sub(w.start_ms);
         if el >= w.ms {
-            let _ = w!(out; "ok waited=", Short(w.s), nl);
+            let _ = w!(out; const_concat!("ok ", field::WAITED.first()), Short(w.s), nl);
         } else if input {
-            let _ = w!(out; "ok waited=", Short(el as f32 / 1000.0), " early=input", nl);
+            let _ = w!(out; const_concat!("ok ", field::WAITED.first()), Short(el as f32 / 1000.0), const_concat!(field::EARLY.after(), "input"), nl);
         } else {
             return false;
         }
@@ -432,7 +432,7 @@ impl Commands {
             }
             Some(Command::Version) => {
                 no_args(args, "version")?;
-                let _ = w!(r; "version=", crate::VERSION, " name=", crate::NAME, " board=", self.board_name);
+                let _ = w!(r; field::VERSION.first(), crate::VERSION, field::NAME.after(), crate::NAME, field::BOARD.after(), self.board_name);
             }
             Some(Command::Status) => {
                 no_args(args, "status")?;
@@ -459,12 +459,12 @@ impl Commands {
                     return Err(err!(Fault; "fault ", f, " latched; send stop to clear it"));
                 }
                 self.armed = true;
-                let _ = w!(r; "armed=1");
+                let _ = w!(r; const_concat!(field::ARMED.first(), "1"));
             }
             Some(Command::Disarm) => {
                 no_args(args, "disarm")?;
                 self.cmd_disarm()?;
-                let _ = w!(r; "armed=0");
+                let _ = w!(r; const_concat!(field::ARMED.first(), "0"));
             }
             Some(Command::Stop) => {
                 // reached only when a line is executed directly (App::execute): the RX part
@@ -516,7 +516,7 @@ impl Commands {
                 }
                 let ms = (s * 1000.0 + 0.5) as u32;
                 if ms == 0 {
-                    let _ = w!(r; "waited=0");
+                    let _ = w!(r; const_concat!(field::WAITED.first(), "0"));
                     return Ok(false);
                 }
                 self.wait = Some(Wait { start_ms: self.now_ms, ms, s });

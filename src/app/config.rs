@@ -9,6 +9,7 @@
 use core::fmt::Write;
 
 use finger_model::Finger;
+use finger_protocol::{const_concat, field};
 
 use super::commands::Commands;
 use super::errors::{no_args, CmdError};
@@ -100,7 +101,7 @@ impl Commands {
         store.write(&buf[..n]).map_err(|e| err!(Store; "save failed (", e.name(), "): the store holds the previous record or none; see config"))?;
         self.cfg.saves = rec.counter;
         self.cfg.rejected = false;
-        let _ = w!(r; "saved=", rec.counter, " bytes=", n);
+        let _ = w!(r; field::SAVED.first(), rec.counter, field::BYTES.after(), n);
         Ok(())
     }
 
@@ -118,7 +119,7 @@ impl Commands {
         self.cfg.saves = 0;
         self.cfg.rejected = false;
         // nothing is stored now, with a store or without one (the simulated board's)
-        let _ = w!(r; "factory=1 store=empty");
+        let _ = w!(r; const_concat!(field::FACTORY.first(), "1", field::STORE.after(), "empty"));
         Ok(())
     }
 
@@ -150,7 +151,7 @@ impl Commands {
                     continue;
                 }
                 differ += 1;
-                let _ = w!(out; "stored ", name_of(t), "=", Short(v), " default=");
+                let _ = w!(out; "stored ", name_of(t), "=", Short(v), field::DEFAULT.after());
                 let _ = match d {
                     Some(d) => w!(out; Short(d), nl),
                     None => w!(out; "-", nl),
@@ -163,13 +164,13 @@ impl Commands {
             Boot::Loaded => "loaded",
             Boot::Rejected(_) => "rejected",
         };
-        let _ = w!(r; "store=", state, " saves=", rec.as_ref().map_or(self.cfg.saves, |r| r.counter), " boot=", boot);
+        let _ = w!(r; field::STORE.first(), state, field::SAVES.after(), rec.as_ref().map_or(self.cfg.saves, |r| r.counter), field::BOOT.after(), boot);
         if let Boot::Rejected(e) = self.cfg.boot {
-            let _ = w!(r; " reason=", e);
+            let _ = w!(r; field::REASON.after(), e);
         }
-        let _ = w!(r; " fault=", self.config_fault().unwrap_or("none"), " format=", FORMAT_VERSION);
+        let _ = w!(r; field::FAULT.after(), self.config_fault().unwrap_or("none"), field::FORMAT.after(), FORMAT_VERSION);
         if let Some(rec) = &rec {
-            let _ = w!(r; " values=", rec.values.len(), " differ=", differ, " preset=", if rec.preset == 1 { "paper" } else { "default" });
+            let _ = w!(r; field::VALUES.after(), rec.values.len(), field::DIFFER.after(), differ, field::PRESET.after(), if rec.preset == 1 { "paper" } else { "default" });
         }
         Ok(())
     }

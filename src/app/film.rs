@@ -14,6 +14,8 @@ use finger_model::material::hold_ratio;
 use finger_model::material::Relaxation;
 use finger_model::material::{equilibrium_ratio, StackLaw};
 use finger_model::Error as ModelError;
+#[cfg(not(m3))]
+use finger_protocol::field;
 
 #[cfg(not(m3))]
 use super::help::Reply;
@@ -104,15 +106,15 @@ impl BoardFilm {
     /// margin= s_hold= vhold=` (MPa, s, V/um, mm, V; docs/firmware.md).
     pub fn write_material(&self, r: &mut Reply) {
         let c = BOARD_CARD;
-        let _ = w!(r; "card=", c.name, " g_eq=", Short(c.g_eq_mpa as f32), " branches=");
+        let _ = w!(r; field::CARD.first(), c.name, field::G_EQ.after(), Short(c.g_eq_mpa as f32), field::BRANCHES.after());
         if c.branches().is_empty() {
             let _ = w!(r; "-");
         }
         for (i, b) in c.branches().iter().enumerate() {
             let _ = w!(r; if i > 0 { "," } else { "" }, Short(b.g_mpa as f32), ":", Short(b.tau_s as f32));
         }
-        let _ = w!(r; " eps_r=", Short(c.eps_r as f32), " breakdown=", Short(c.breakdown.field0_v_per_um as f32));
-        let _ = w!(r; " z0=", Short(BOARD_Z0_MM), " margin=", Short(BOARD_MARGIN), " s_hold=", crate::num::Fixed(self.s_hold, 4), " vhold=", crate::num::Fixed(self.vhold, 1));
-        let _ = w!(r; " units=", MATERIAL_UNITS);
+        let _ = w!(r; field::EPS_R.after(), Short(c.eps_r as f32), field::BREAKDOWN.after(), Short(c.breakdown.field0_v_per_um as f32));
+        let _ = w!(r; field::Z0.after(), Short(BOARD_Z0_MM), field::MARGIN.after(), Short(BOARD_MARGIN), field::S_HOLD.after(), crate::num::Fixed(self.s_hold, 4), field::VHOLD.after(), crate::num::Fixed(self.vhold, 1));
+        let _ = w!(r; field::UNITS.after(), MATERIAL_UNITS);
     }
 }

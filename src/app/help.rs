@@ -5,6 +5,7 @@
 
 use core::fmt::Write;
 
+use finger_protocol::field;
 use heapless::String;
 
 use super::errors::CmdError;
@@ -119,12 +120,12 @@ impl Emit for Tip<'_> {
 
 /// `solve`'s reply: joints, tip, cable, thicknesses, tip stiffness, iterations.
 pub(crate) fn solve_reply(r: &mut Reply, sol: &Solved, k: finger_model::mat3::Mat3<f32>) -> Result<(), CmdError> {
-    let _ = w!(r; "joints=");
+    let _ = w!(r; field::JOINTS.first());
     joints(r, sol);
     let tip = sol.tip();
-    let _ = w!(r; " tip=", Tip(&tip), " cable=", Fixed(sol.cable_excursion, 4), " thick=");
+    let _ = w!(r; field::TIP.after(), Tip(&tip), field::CABLE.after(), Fixed(sol.cable_excursion, 4), field::THICK.after());
     list(r, &sol.thickness[..CHANNELS], 4);
-    let _ = w!(r; " stiffness=", Exp(k[0][0], 4), ",", Exp(k[1][1], 4), ",", Exp(k[2][2], 4), " iters=", sol.iterations);
+    let _ = w!(r; field::STIFFNESS.after(), Exp(k[0][0], 4), ",", Exp(k[1][1], 4), ",", Exp(k[2][2], 4), field::ITERS.after(), sol.iterations);
     Ok(())
 }
 

@@ -3,6 +3,8 @@
 
 use core::fmt::Write;
 
+use finger_protocol::field;
+
 use super::commands::Commands;
 use super::errors::{number, CmdError};
 use super::help::Reply;
@@ -69,15 +71,15 @@ impl Commands {
 
 /// `vgain=g1,g2,g3 voff=o1,o2,o3 c0_pf=c1,c2,c3`.
 fn write_cal(r: &mut dyn Write, c: &SenseCal) {
-    let _ = w!(r; "vgain=");
+    let _ = w!(r; field::VGAIN.first());
     for k in 0..HV_CHANNELS {
         let _ = w!(r; if k > 0 { "," } else { "" }, Fixed(c.monitor[k].gain, 4));
     }
-    let _ = w!(r; " voff=");
+    let _ = w!(r; field::VOFF.after());
     for k in 0..HV_CHANNELS {
         let _ = w!(r; if k > 0 { "," } else { "" }, Fixed(c.monitor[k].offset_v, 1));
     }
-    let _ = w!(r; " c0_pf=");
+    let _ = w!(r; field::C0_PF.after());
     for k in 0..HV_CHANNELS {
         let _ = w!(r; if k > 0 { "," } else { "" }, Fixed(c.c0_pf[k], 2));
     }

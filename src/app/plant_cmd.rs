@@ -4,6 +4,8 @@
 //! ([`crate::control::Control::plant_request`]); `plant status` reads the plant's truth from
 //! the core's view.
 
+use finger_protocol::{const_concat, field};
+
 use super::commands::Commands;
 use super::errors::{number, CmdError};
 use super::help::{list, Reply};
@@ -40,13 +42,13 @@ impl Commands {
                 for ch in 0..3 {
                     t[ch] = pv.s[ch] * stack_mm;
                 }
-                let _ = w!(r; "plant film_kpa=", Fixed(pv.film_kpa, 2), " volts=");
+                let _ = w!(r; const_concat!("plant", field::FILM_KPA.after()), Fixed(pv.film_kpa, 2), field::VOLTS.after());
                 list(r, &pv.volts, 1);
-                let _ = w!(r; " current_ua=");
+                let _ = w!(r; field::CURRENT_UA.after());
                 list(r, &pv.current_ua, 3);
-                let _ = w!(r; " thick=");
+                let _ = w!(r; field::THICK.after());
                 list(r, &t, 4);
-                let _ = w!(r; " trip_us=", self.trip_max_us.unwrap_or(0));
+                let _ = w!(r; field::TRIP_US.after(), self.trip_max_us.unwrap_or(0));
                 return Ok(());
             }
             (b"film", [g]) | (b"film", [g, _]) => {

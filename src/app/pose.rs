@@ -31,6 +31,9 @@ use finger_model::Error as ModelError;
 #[cfg(any(feature = "pose", feature = "contact"))]
 use finger_model::{Error, Finger, Real, MAX_JOINTS};
 #[cfg(any(feature = "pose", feature = "contact"))]
+use finger_protocol::const_concat;
+use finger_protocol::field;
+#[cfg(any(feature = "pose", feature = "contact"))]
 use heapless::String;
 
 use super::commands::Commands;
@@ -168,11 +171,11 @@ where
         e.emit(out);
         return Ok(false);
     }
-    w!(out; "ok force=", Fixed(f32_of(sol.tension), 4), " volts=")?;
+    w!(out; const_concat!("ok ", field::FORCE.first()), Fixed(f32_of(sol.tension), 4), field::VOLTS.after())?;
     write_list(out, sol.volts[..n].iter().map(|&v| f32_of(v)), 1)?;
-    out.write_str(" joints=")?;
+    out.write_str(field::JOINTS.after())?;
     write_list(out, sol.angles[..n].iter().map(|&a| f32_of(a * R::from_f64(180.0 / core::f64::consts::PI))), 3)?;
-    out.write_str(" range=")?;
+    out.write_str(field::RANGE.after())?;
     write_list(out, sol.interval.iter().map(|&p| f32_of(p)), 4)?;
     Ok(true)
 }
@@ -211,7 +214,7 @@ where
         Ok(c) => {
             // the finger presses on the object with minus the object's force on the tip
             let (fx, fy) = (f32_of(-c.force[0]), f32_of(-c.force[1]));
-            w!(out; "ok fx=", Fixed(fx, 4), " fy=", Fixed(fy, 4), " force=", Fixed(f32_of(c.magnitude()), 4), " point=", Fixed(f32_of(c.point[0]), 3), ",", Fixed(f32_of(c.point[1]), 3))?;
+            w!(out; const_concat!("ok ", field::FX.first()), Fixed(fx, 4), field::FY.after(), Fixed(fy, 4), field::FORCE.after(), Fixed(f32_of(c.magnitude()), 4), field::POINT.after(), Fixed(f32_of(c.point[0]), 3), ",", Fixed(f32_of(c.point[1]), 3))?;
             Ok(true)
         }
         Err(e) => {
@@ -258,9 +261,9 @@ impl Commands {
         }
         // the answer holds the posture once the film has relaxed; how long that takes
         if let (Ok(true), Some(v)) = (done, answer) {
-            let _ = w!(&mut line; " settle=");
+            let _ = w!(&mut line; field::SETTLE.after());
             self.write_settle(&mut line, &v);
-            let _ = w!(&mut line; " moved=", armed as u8);
+            let _ = w!(&mut line; field::MOVED.after(), armed as u8);
         }
         let _ = w!(out; line, self.nl);
         Ok(())
@@ -388,12 +391,12 @@ impl Commands {
             self.cable = cable;
             self.set_servo(sdeg);
         }
-        let _ = w!(r; "force=", Fixed(p, 4), " volts=");
+        let _ = w!(r; field::FORCE.first(), Fixed(p, 4), field::VOLTS.after());
         list(r, &target, 1);
-        let _ = w!(r; " joints=");
+        let _ = w!(r; field::JOINTS.after());
         joints(r, &held);
         if let Some(i) = range {
-            let _ = w!(r; " range=", Fixed(i[0].to_f32(), 4), ",", Fixed(i[1].to_f32(), 4));
+            let _ = w!(r; field::RANGE.after(), Fixed(i[0].to_f32(), 4), ",", Fixed(i[1].to_f32(), 4));
         }
         Ok(())
     }

@@ -5,6 +5,7 @@
 //! distal end (where link k starts), mm and degrees in the base frame.
 
 use finger_model::Method;
+use finger_protocol::field;
 
 use super::commands::Commands;
 use super::errors::{model_err, CmdError};
@@ -17,11 +18,11 @@ impl Commands {
         let (p, v) = self.model_request(args, "shape <P> <V1> <V2> <V3>")?;
         let sol = self.planner.finger().solve(p, &v, Method::converged()).map_err(model_err)?;
         let link_len = self.planner.finger().params().l - self.planner.finger().params().hinge_len();
-        let _ = w!(r; "nodes=");
+        let _ = w!(r; field::NODES.first());
         for k in 0..=CHANNELS {
             pose(r, k > 0, &sol.nodes[k]);
         }
-        let _ = w!(r; " hinges=");
+        let _ = w!(r; field::HINGES.after());
         for k in 0..CHANNELS {
             // link k's proximal end: node k+1 taken back along the link's own deflection
             let (n1, q) = (sol.nodes[k + 1], sol.links[k]);
@@ -31,7 +32,7 @@ impl Commands {
             let start = finger_model::Pose { x: n1.x - (c * dx - s * q[1]), y: n1.y - (s * dx + c * q[1]), theta };
             pose(r, k > 0, &start);
         }
-        let _ = w!(r; " thick=");
+        let _ = w!(r; field::THICK.after());
         list(r, &sol.thickness[..CHANNELS], 4);
         Ok(())
     }

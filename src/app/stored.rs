@@ -17,6 +17,7 @@ use core::fmt::Write;
 
 use finger_model::params::PARAMS;
 use finger_model::{Calibration, Finger, Params};
+use finger_protocol::{const_concat, field};
 
 use super::params::{board_params, calibration_for, default_finger, preset, FwParams, CAL_NAMES, CHANNELS, FW_PARAMS};
 use crate::board::HV_MAX_V;
@@ -41,10 +42,10 @@ pub enum Boot {
 impl Emit for Boot {
     fn emit(&self, f: &mut dyn Write) {
         let _ = match self {
-            Boot::NoStore => w!(f; "config=none"),
-            Boot::Empty => w!(f; "config=empty"),
-            Boot::Loaded => w!(f; "config=loaded"),
-            Boot::Rejected(e) => w!(f; "config=rejected reason=", *e, " defaults"),
+            Boot::NoStore => w!(f; const_concat!(field::CONFIG.first(), "none")),
+            Boot::Empty => w!(f; const_concat!(field::CONFIG.first(), "empty")),
+            Boot::Loaded => w!(f; const_concat!(field::CONFIG.first(), "loaded")),
+            Boot::Rejected(e) => w!(f; const_concat!(field::CONFIG.first(), "rejected", field::REASON.after()), *e, " defaults"),
         };
     }
 }

@@ -10,6 +10,7 @@ use crate::num::Fixed;
 use crate::rx::Record;
 use core::fmt::Write;
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use finger_protocol::field;
 
 /// Core clock, MHz: 168 on the board and in QEMU netduinoplus2, 120 in QEMU netduino2 (M3).
 #[cfg(not(m3))]
@@ -145,16 +146,16 @@ impl Default for Durations {
 pub fn write_timing(o: &mut dyn Write, t: &Timing, d: &Durations) {
     let us = |c: u32| Fixed(c as f32 / CORE_MHZ as f32, 2);
     let unset0 = |v: u32| if v == u32::MAX { 0 } else { v };
-    let _ = w!(o; "tick_period_us=", us(unset0(t.period.0)), ",", us(t.period.1), " tick_latency_us=", us(unset0(t.tick_latency.0)), ",", us(t.tick_latency.1), " tick_run_us=", us(t.tick_run_max), " tick_stack_us=", Fixed(t.tick_stack_max as f32 / CORE_MHZ as f32, 3), " ticks=", t.ticks);
-    let _ = w!(o; " stop_us=", us(t.stop_max), " stops=", t.stops);
+    let _ = w!(o; field::TICK_PERIOD_US.first(), us(unset0(t.period.0)), ",", us(t.period.1), field::TICK_LATENCY_US.after(), us(unset0(t.tick_latency.0)), ",", us(t.tick_latency.1), field::TICK_RUN_US.after(), us(t.tick_run_max), field::TICK_STACK_US.after(), Fixed(t.tick_stack_max as f32 / CORE_MHZ as f32, 3), field::TICKS.after(), t.ticks);
+    let _ = w!(o; field::STOP_US.after(), us(t.stop_max), field::STOPS.after(), t.stops);
     if let Some(trip) = t.trip_max_us {
-        let _ = w!(o; " trip_us=", trip);
+        let _ = w!(o; field::TRIP_US.after(), trip);
     }
     #[cfg(not(m3))]
     if t.tick_sense_max > 0 {
-        let _ = w!(o; " tick_sense_us=", Fixed(t.tick_sense_max as f32 / CORE_MHZ as f32, 3), " tick_source_us=", Fixed(t.tick_source_max as f32 / CORE_MHZ as f32, 3));
+        let _ = w!(o; field::TICK_SENSE_US.after(), Fixed(t.tick_sense_max as f32 / CORE_MHZ as f32, 3), field::TICK_SOURCE_US.after(), Fixed(t.tick_source_max as f32 / CORE_MHZ as f32, 3));
     }
-    let _ = w!(o; " cmd_us=");
+    let _ = w!(o; field::CMD_US.after());
     let mut first = true;
     for (word, c) in d.0.iter() {
         if word[0] == 0 {

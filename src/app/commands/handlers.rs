@@ -10,6 +10,7 @@ use core::fmt::Write;
 use finger_model::calibration::KEEPS_CALIBRATION;
 use finger_model::params::PARAMS;
 use finger_model::{Calibration, Params};
+use finger_protocol::{const_concat, field};
 
 #[cfg(not(m3))]
 use super::largest_below;
@@ -25,7 +26,7 @@ use crate::num::{Fixed, Short};
 impl Commands {
     #[inline(never)]
     pub(in crate::app) fn cmd_status(&self, r: &mut Reply) {
-        let _ = w!(r; "armed=", self.armed as u8, " force=", Fixed(self.force, 3), " volts=");
+        let _ = w!(r; field::ARMED.first(), self.armed as u8, field::FORCE.after(), Fixed(self.force, 3), field::VOLTS.after());
         list(r, &self.volts, 1);
         // each stack now: the film creeps under a held voltage (the control tick's state)
         let stack_mm = self.stack_mm();
@@ -35,7 +36,7 @@ impl Commands {
             let t = stack_mm * self.stack_ratio[ch];
             thick[ch] = if t > stack_mm { stack_mm } else { t };
         }
-        let _ = w!(r; " thick=");
+        let _ = w!(r; field::THICK.after());
         list(r, &thick, 4);
         let mut fault = self.fault;
         #[cfg(feature = "settings")]
@@ -44,42 +45,43 @@ impl Commands {
         }
         // the posture of the stacks as they are now, not as they will relax
         let shown = self.planner.forward_now(self.force, &self.volts, &thick, |s| {
-            let _ = w!(r; " joints=");
+            let _ = w!(r; field::JOINTS.after());
             joints(r, s);
             let tip = s.tip();
-            let _ = w!(r; " tip=", Tip(&tip));
+            let _ = w!(r; field::TIP.after(), Tip(&tip));
         });
         if shown.is_err() {
-            let _ = w!(r; " joints=-,-,- tip=-,-,-");
+            let _ = w!(r; const_concat!(field::JOINTS.after(), "-,-,-", field::TIP.after(), "-,-,-"));
             fault = fault.or(Some("model"));
         }
-        let _ = w!(r; " cable=", Fixed(self.cable, 3), " servo=", Fixed(self.servo_deg, 2), " fault=", fault.unwrap_or("none"));
-        let _ = w!(r; " enable=", self.enable as u8, " target=");
+        let _ =
+            w!(r; field::CABLE.after(), Fixed(self.cable, 3), field::SERVO.after(), Fixed(self.servo_deg, 2), field::FAULT.after(), fault.unwrap_or("none"));
+        let _ = w!(r; field::ENABLE.after(), self.enable as u8, field::TARGET.after());
         list(r, &self.target_v, 1);
         // each stack once the film has relaxed at the targets
         let mut eq = [0.0f32; CHANNELS];
         for ch in 0..CHANNELS {
             eq[ch] = stack_mm * self.film.equilibrium_ratio(self.target_v[ch]).unwrap_or(0.0);
         }
-        let _ = w!(r; " thick_eq=");
+        let _ = w!(r; field::THICK_EQ.after());
         list(r, &eq, 4);
         #[cfg(not(m3))]
         if let Some(sv) = self.sense {
             // the read-back (docs/console.md "Measured HV"): measured volts, µA, the sensed
             // thickness (mm; `-` until measured), each channel's ceiling now and its film check
-            let _ = w!(r; " vmeas=");
+            let _ = w!(r; field::VMEAS.after());
             list(r, &sv.volts, 1);
-            let _ = w!(r; " imeas=");
+            let _ = w!(r; field::IMEAS.after());
             list(r, &sv.current_ua, 3);
-            let _ = w!(r; " thick_meas=");
+            let _ = w!(r; field::THICK_MEAS.after());
             for ch in 0..CHANNELS {
                 let s = sv.stack_ratio[ch];
                 let _ = if ch > 0 { r.write_str(",") } else { Ok(()) };
                 let _ = if s > 0.0 { w!(r; Fixed(stack_mm * s, 4)) } else { r.write_str("-") };
             }
-            let _ = w!(r; " vceil=");
+            let _ = w!(r; field::VCEIL.after());
             list(r, &sv.ceiling_v, 1);
-            let _ = w!(r; " film_check=");
+            let _ = w!(r; field::FILM_CHECK.after());
             for ch in 0..CHANNELS {
                 let _ = if ch > 0 { r.write_str(",") } else { Ok(()) };
                 let _ = r.write_str(if sv.disagreed[ch] { "thinner" } else { "ok" });
@@ -95,10 +97,10 @@ impl Commands {
 
     #[inline(never)]
     pub(in crate::app) fn cmd_limits(&self, r: &mut Reply) {
-        let _ = w!(r; "vmax=");
+        let _ = w!(r; field::VMAX.first());
         list(r, &self.vmax, 1);
         let p = self.planner.finger().params();
-        let _ = w!(r; " vpullin=", Fixed(self.planner.finger().pull_in_voltage(), 1), " supply=", Fixed(p.v_supply, 1), " margin=", Short(p.margin));
+        let _ = w!(r; field::VPULLIN.after(), Fixed(self.planner.finger().pull_in_voltage(), 1), field::SUPPLY.after(), Fixed(p.v_supply, 1), field::MARGIN.after(), Short(p.margin));
         match self.planner.fmax(&self.target_v) {
             Ok(b) => {
                 let kind = match b.kind {
@@ -106,15 +108,15 @@ impl Commands {
                     finger_model::BranchEnd::LimitPoint => "limit-point",
                     finger_model::BranchEnd::SearchBound => "search-bound",
                 };
-                let _ = w!(r; " fmax=", Fixed(b.tension, 4), " fmax_end=", kind, ",", b.joint);
+                let _ = w!(r; field::FMAX.after(), Fixed(b.tension, 4), field::FMAX_END.after(), kind, ",", b.joint);
             }
             Err(_) => {
-                let _ = w!(r; " fmax=- fmax_end=error");
+                let _ = w!(r; const_concat!(field::FMAX.after(), "-", field::FMAX_END.after(), "error"));
             }
         }
-        let _ = w!(r; " slew=", Short(self.fw.slew), " servo=0,", Short(self.fw.servo_range), " cable_max=", Fixed(self.fw.servo_range / DEG * self.fw.spool_r, 2), " dutymax=");
+        let _ = w!(r; field::SLEW.after(), Short(self.fw.slew), const_concat!(field::SERVO.after(), "0,"), Short(self.fw.servo_range), field::CABLE_MAX.after(), Fixed(self.fw.servo_range / DEG * self.fw.spool_r, 2), field::DUTYMAX.after());
         let d = self.duty_max;
-        let _ = w!(r; d[0], ",", d[1], ",", d[2], " vhold=", Fixed(self.film.hold_ceiling(), 1));
+        let _ = w!(r; d[0], ",", d[1], ",", d[2], field::VHOLD.after(), Fixed(self.film.hold_ceiling(), 1));
         // vmax itself is refused (at or past the ceiling): the largest `volt` takes, 0.1 V steps
         #[cfg(not(m3))]
         {
@@ -122,7 +124,7 @@ impl Commands {
             for ch in 0..CHANNELS {
                 ok[ch] = largest_below(self.vmax[ch]);
             }
-            let _ = w!(r; " vmax_ok=");
+            let _ = w!(r; field::VMAX_OK.after());
             list(r, &ok, 1);
         }
     }
@@ -243,7 +245,7 @@ impl Commands {
         self.target_v = target;
         self.cable = cable;
         self.set_servo(deg);
-        let _ = w!(r; "volts=");
+        let _ = w!(r; field::VOLTS.first());
         list(r, &self.target_v, 1);
         Ok(())
     }
@@ -267,7 +269,7 @@ impl Commands {
         self.force = p;
         self.cable = cable;
         self.set_servo(deg);
-        let _ = w!(r; "force=", Fixed(self.force, 3), " cable=", Fixed(self.cable, 3), " servo=", Fixed(self.servo_deg, 2));
+        let _ = w!(r; field::FORCE.first(), Fixed(self.force, 3), field::CABLE.after(), Fixed(self.cable, 3), field::SERVO.after(), Fixed(self.servo_deg, 2));
         Ok(())
     }
 
@@ -293,7 +295,7 @@ impl Commands {
                 for (name, range, v) in model.chain(fw) {
                     let _ = w!(out; name, "=", Short(v), " (", range, ")", nl);
                 }
-                let _ = w!(r; "params=", PARAMS.len() + FW_PARAMS.len());
+                let _ = w!(r; field::PARAMS.first(), PARAMS.len() + FW_PARAMS.len());
                 return Ok(());
             }
             Some(n) => *n,
@@ -345,7 +347,7 @@ impl Commands {
         };
         self.require_disarmed("preset")?;
         self.adopt_model(p, calibration_for(&p))?;
-        let _ = w!(r; "preset=", name);
+        let _ = w!(r; field::PRESET.first(), name);
         Ok(())
     }
 
@@ -376,7 +378,7 @@ impl Commands {
         }
         let c = self.planner.finger().calibration();
         let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];
-        let _ = w!(r; "cal=");
+        let _ = w!(r; field::CAL.first());
         list(r, &g, 6);
         Ok(())
     }
