@@ -663,14 +663,16 @@ fn plot(rows: &[Row]) -> String {
 }
 
 /// Why the counts of the last structural change moved (the section `moved` writes).
-const MOVED_WHY: &str = "This round's structural change (issue 35): the fixed-point march runs on the float march's \
-loop (`march_subs`), bit for bit as before, so no M3 fixed-point count or digit moves; one turn rule for every chain \
-(`Heading`: the posture chain, the coupled solve's frames and the re-walks of a joint's sub-elements carry their \
-(sin, cos) and compose each step's turn, where they took the sine and cosine of the summed angle), which moves \
-f32 digits at the scalar's rounding (the converged solves' error columns move in their last digits, either way; \
-the f64 rows' errors stay at 1e-11 and below); the tabled inverse's stiffness march without a test per \
-sub-element (`JointStiffness` adds its zeros without stacks). Instruction counts move where the chain's \
-turns replace sines and cosines and where the inlining around the marches changed.";
+const MOVED_WHY: &str = "This round's structural change (issue 35): the firmware's fixed-point forward (`fixed/forward.rs`, \
+docs/fixed-point.md) runs on the float march's loop (`march_subs`) with the same arithmetic, so its errors keep \
+every digit and its counts move by about 1 %; one turn rule for every chain (`Heading`: the posture chain, the \
+coupled solve's frames and the re-walks of a joint's sub-elements carry their (sin, cos) and compose each step's \
+turn, where they took the sine and cosine of the summed angle), which moves the digits of every scalar run \
+through the generic model at that scalar's rounding: f32, and this report's I16F16 and I32F32 rows, the `Real` \
+newtypes of bench/src/fix.rs (the converged solves' error columns move in their last digits, either way; the f64 \
+rows' errors stay at 1e-11 and below); the tabled inverse's stiffness march without a test per sub-element \
+(`JointStiffness` adds its zeros without stacks). Instruction counts move where the chain's turns replace sines \
+and cosines and where the inlining around the marches changed.";
 
 /// The rows of the tables under `heading` in `md`: the first `key` cells joined, then the next `cols` cells.
 fn table_rows(md: &str, heading: &str, key: usize, cols: usize) -> BTreeMap<String, Vec<String>> {
