@@ -24,6 +24,8 @@ const CASES: &[Case] = &[
     Case { name: "three different joints, tension free", env: &["PROFILE_HARD", "PROFILE_INVERSE", "PROFILE_FREE"] },
     Case { name: "identical joints, tension given", env: &["PROFILE_HARD", "PROFILE_INVERSE", "PROFILE_SAME"] },
     Case { name: "identical joints, tension free", env: &["PROFILE_HARD", "PROFILE_INVERSE", "PROFILE_SAME", "PROFILE_FREE"] },
+    Case { name: "m = 1 (the paper's finger), three different joints, tension given", env: &["PROFILE_HARD", "PROFILE_INVERSE", "PROFILE_M1"] },
+    Case { name: "m = 1 (the paper's finger), three different joints, tension free", env: &["PROFILE_HARD", "PROFILE_INVERSE", "PROFILE_M1", "PROFILE_FREE"] },
 ];
 
 /// The parts the report groups functions into: a name and the function-name fragments it holds
@@ -37,7 +39,7 @@ const PARTS: &[(&str, &[&str])] = &[
 
 fn build(case: &Case) -> PathBuf {
     let env: Vec<(&str, Option<&str>)> =
-        ["PROFILE_HARD", "PROFILE_INVERSE", "PROFILE_FREE", "PROFILE_SAME"].iter().map(|v| (*v, case.env.contains(v).then_some("1"))).collect();
+        ["PROFILE_HARD", "PROFILE_INVERSE", "PROFILE_FREE", "PROFILE_SAME", "PROFILE_M1"].iter().map(|v| (*v, case.env.contains(v).then_some("1"))).collect();
     let name = format!("profile-{}", case.env.join("-").to_lowercase());
     build_with_env("table", M4F, "de,fast-trig,table,profile", &name, &env).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -155,7 +157,7 @@ fn main() {
         doc,
         "One `solve_pose_tabled_into` in f32 with the firmware's model features (fast-trig), the \
          bench image `bench/src/bin/table.rs` built with its `profile` feature: the calibrated \
-         model (m = 8), the joint angles of its forward solve at 1 N with the voltages 2, 6 and \
+         model (m = 8; the last two cases the paper's m = 1 finger, `m1-paper`), the joint angles of its forward solve at 1 N with the voltages 2, 6 and \
          9 kV (three different joints) or 5 kV on all three (identical joints), inverted at 1 N \
          (tension given) or with the midpoint rule (tension free). QEMU netduinoplus2 with \
          `-icount shift=0 -singlestep -d exec,nochain` logs every instruction executed; each one \

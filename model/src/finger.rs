@@ -40,11 +40,12 @@ mod tension;
 mod tip_stiffness;
 mod types;
 
+pub(crate) use joint::{by, By};
 pub use prepare::uniform_beam_compliance;
 pub use stiffness::JointStiffness;
 use types::cast_mat;
 pub use types::{BranchEnd, BranchLimit, Compliances, JointEquilibrium, Method, Pose, Solution};
-pub(crate) use types::{By, Heading, JointMarch};
+pub(crate) use types::{Heading, JointMarch};
 
 use crate::solve::continuation::{self, Step};
 use crate::solve::newton::{self as newton_solve, Equations};

@@ -68,7 +68,9 @@ pub struct PoseSolution<R> {
     pub q: [[R; 3]; MAX_JOINTS],
     /// Sub-elements per hinge the solution is for.
     pub m: usize,
-    /// Sub-element displacements q = (δax, δtr, Δθ), `sub_q[k][j]` (as `Solution::q`).
+    /// Sub-element displacements q = (δax, δtr, Δθ), `sub_q[k][j]` (as `Solution::q`); the
+    /// rows past its n joints and m sub-elements are zero (`solve_pose_tabled_into` clears only
+    /// the rows an earlier answer held there).
     pub sub_q: [[[R; 3]; MAX_SUB]; MAX_JOINTS],
     /// Link deflections (as `Solution::links`; zero for rigid links).
     pub links: [[R; 3]; MAX_JOINTS],

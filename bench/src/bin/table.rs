@@ -136,8 +136,9 @@ fn run_model(m: &scenes::TableModel) {
 /// Profiling markers (`--features profile`): the execution trace between the two calls is one
 /// tabled forward solve of the default model at three different voltages (or, built with
 /// PROFILE_SAME set, one voltage; with PROFILE_HARD, the calibrated model's 15 N scene at
-/// 2/6/9 kV; with PROFILE_INVERSE, the tabled inverse of its angles at 1 N, with PROFILE_FREE
-/// too without a tension).
+/// 2/6/9 kV; with PROFILE_M1 too, the paper's m = 1 finger at those voltages; with
+/// PROFILE_INVERSE, the tabled inverse of its angles at 1 N, with PROFILE_FREE too without a
+/// tension).
 #[inline(never)]
 #[no_mangle]
 pub extern "C" fn profile_start() {
@@ -156,7 +157,14 @@ fn main() -> ! {
     if cfg!(feature = "profile") {
         // PROFILE_HARD set at build time: the calibrated model's 15 N scene at 2/6/9 kV instead
         let hard = option_env!("PROFILE_HARD").is_some();
-        let f = model(&scenes::TABLE_MODELS[if hard { 1 } else { 0 }]).unwrap();
+        let which = if option_env!("PROFILE_M1").is_some() {
+            2
+        } else if hard {
+            1
+        } else {
+            0
+        };
+        let f = model(&scenes::TABLE_MODELS[which]).unwrap();
         let tb = BranchTable::new(&f, &Options::default()).unwrap();
         // PROFILE_SAME=1 at build time: the three joints at the same voltage instead
         let v = if option_env!("PROFILE_SAME").is_some() {

@@ -66,33 +66,16 @@ impl<R: Real> Finger<R> {
     }
 
     /// One march of joint `joint` (1-based) under tension alone from the hole guess `b` (no
-    /// Newton), `by` one of the three ways (`By`): the state it arrives at, with `hole` the hole
-    /// it arrives at (the residual is `b - hole`) and `angle` the joint angle (hinge and
-    /// flexible link). For the inverse's quasi-Newton solves and the tabled inverse's
+    /// Newton), `by` one of the three ways (`by`'s types): the state it arrives at, with `hole`
+    /// the hole it arrives at (the residual is `b - hole`) and `angle` the joint angle (hinge
+    /// and flexible link). For the inverse's quasi-Newton solves and the tabled inverse's
     /// confirming marches; `iterations` is 0. The sub-element displacements go to `q`.
     #[inline(always)]
-    pub(crate) fn joint_march(&self, joint: usize, by: By<'_, '_, R>, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<JointMarch<R>, Error> {
-        let refused = |e| match e {
+    pub(crate) fn joint_march<B: By<R>>(&self, joint: usize, by: B, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<JointMarch<R>, Error> {
+        let (end, hole, link) = by.arrive(self, tension, b, q).map_err(|e| match e {
             MarchError::Contact => Error::Contact { joint, tension: tension.to_f64() },
             MarchError::Singular => Error::Singular { what: "joint march" },
-        };
-        let (end, hole, link) = match by {
-            By::Cable(c) => match self.march_cable(&march::ByCompliance(c), tension, b, q) {
-                Ok((end, hole, _, _)) => (end, hole, self.link_q(tension, None)),
-                Err(_) => {
-                    let (end, hole, _) = self.march(c, tension, b, None, q).map_err(refused)?;
-                    (end, hole, self.link_q(tension, None))
-                }
-            },
-            By::Stiffness(k, link) => {
-                let (end, hole, _, _) = self.march_cable(&march_stiffness::ByStiffness(k), tension, b, q).map_err(refused)?;
-                (end, hole, link)
-            }
-            By::Compliance(c) => {
-                let (end, hole, _) = self.march(c, tension, b, None, q).map_err(refused)?;
-                (end, hole, self.link_q(tension, None))
-            }
-        };
+        })?;
         Ok(JointMarch::arrived(end, hole, link))
     }
 
@@ -100,5 +83,60 @@ impl<R: Real> Finger<R> {
     /// tip load).
     pub(crate) fn tension_link_q(&self, tension: R) -> [R; 3] {
         self.link_q(tension, None)
+    }
+}
+
+/// A way `Finger::joint_march` marches a joint under tension alone (`by`'s types): the hinge's
+/// end, the hole it arrives at and the link's deflection. One type per way, so each caller's
+/// march is built for its way, with no choice made at run time.
+pub(crate) trait By<R: Real> {
+    fn arrive(self, f: &Finger<R>, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError>;
+}
+
+/// The ways of `Finger::joint_march`.
+pub(crate) mod by {
+    use super::*;
+    use crate::de::StackStiffness;
+
+    /// By compliances in `PoseFrame` (`Finger::march`).
+    #[derive(Clone, Copy)]
+    pub(crate) struct Compliance<'a, R>(pub &'a [Mat3<R>; MAX_SUB]);
+
+    /// By compliances in the running frame (`march_cable` by `ByCompliance`) where that march
+    /// applies, else as `Compliance`.
+    #[derive(Clone, Copy)]
+    pub(crate) struct Cable<'a, R>(pub &'a [Mat3<R>; MAX_SUB]);
+
+    /// By the joint's stiffness with its stack at thickness `.1` (mm; the stack's constants
+    /// `.0`), no compliance formed, the link's deflection at that tension given (`.2`); refused
+    /// where its last pivot is not positive (the caller takes the compliance path).
+    #[derive(Clone, Copy)]
+    pub(crate) struct Stiffness<'a, R>(pub &'a StackStiffness<R>, pub R, pub [R; 3]);
+
+    impl<R: Real> By<R> for Compliance<'_, R> {
+        #[inline(always)]
+        fn arrive(self, f: &Finger<R>, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError> {
+            let (end, hole, _) = f.march(self.0, tension, b, None, q)?;
+            Ok((end, hole, f.link_q(tension, None)))
+        }
+    }
+
+    impl<R: Real> By<R> for Cable<'_, R> {
+        #[inline(always)]
+        fn arrive(self, f: &Finger<R>, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError> {
+            match f.march_cable(&march::ByCompliance(self.0), tension, b, q) {
+                Ok((end, hole, _, _)) => Ok((end, hole, f.link_q(tension, None))),
+                Err(_) => Compliance(self.0).arrive(f, tension, b, q),
+            }
+        }
+    }
+
+    impl<R: Real> By<R> for Stiffness<'_, R> {
+        #[inline(always)]
+        fn arrive(self, f: &Finger<R>, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError> {
+            let k = JointStiffness::new(f, self.0, self.1);
+            let (end, hole, _, _) = f.march_cable(&march_stiffness::ByStiffness(k), tension, b, q)?;
+            Ok((end, hole, self.2))
+        }
     }
 }

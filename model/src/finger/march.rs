@@ -19,7 +19,7 @@
 //! | one plain march, any load | `Finger::march` (joint.rs) |
 //! | a converged joint under tension alone | `newton_dual` on `march_dual` (here) |
 //! | one march under tension alone, by compliance or stiffness | `march_cable` (here) |
-//! | the inverse's march of a joint | `Finger::joint_march` with a `By` (joint.rs) |
+//! | the inverse's march of a joint | `Finger::joint_march` by one of `by`'s ways (joint.rs) |
 //!
 //! The fixed-point march (`fixed::forward`) runs `march_subs` on the Q forms of
 //! `ByComplianceLoaded` and `PoseFrame`.

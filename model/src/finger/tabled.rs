@@ -73,22 +73,23 @@ impl<R: Real> Finger<R> {
         let mut node = Pose::origin();
         let (mut s, mut co) = (R::zero(), R::one());
         sol.nodes[0] = node;
-        // the joint before: hinge end, (sin, cos) of its angle, the hole it arrived at, its
-        // squared residual and tangent determinant
-        let mut prev = (Pose::origin(), [R::zero(), R::one()], [R::zero(); 2], R::zero(), R::one());
+        // the joint before: hinge end, (sin, cos) of its angle and squared residual (its
+        // tangent determinant and span are read back from `sol`: fewer values held across a
+        // march)
+        let mut prev = (Pose::origin(), [R::zero(), R::one()], R::zero());
         let (mut res2, mut iters, mut excursion, mut dets) = (R::zero(), 0u32, R::zero(), R::zero());
         for k in 0..n {
             let b = holes[k];
             // a joint with the same voltage, thickness and guess as the one before has its
             // state (`compliances` makes a joint's compliances a function of its voltage; the
             // first sub-element's are compared too)
-            let (end, turn, hole, r2, det) =
+            let (end, turn, r2, det, span) =
                 if k > 0 && b == holes[k - 1] && c.volts[k] == c.volts[k - 1] && c.thickness[k] == c.thickness[k - 1] && c.c[k][0] == c.c[k - 1][0] {
                     // the whole row: its sub-elements past m are zero in both
                     sol.q[k] = sol.q[k - 1];
-                    prev
+                    (prev.0, prev.1, prev.2, sol.tangent_det[k - 1], sol.span[k - 1])
                 } else {
-                    match self.march_cable(&march::ByCompliance(&c.c[k]), tension, b, &mut sol.q[k]) {
+                    let (end, turn, hole, r2, det) = match self.march_cable(&march::ByCompliance(&c.c[k]), tension, b, &mut sol.q[k]) {
                         Ok((end, hole, sc, r2)) if r2 <= tol * tol => (end, sc, hole, r2, R::one()),
                         _ => {
                             let (st, it) = self.polish_joint(k, &c.c[k], tension, b, tol, max_iter)?;
@@ -98,9 +99,11 @@ impl<R: Real> Finger<R> {
                             let (r, det) = st.tangent.unwrap_or(([R::zero(); 2], R::one()));
                             (st.end, [se, ce], st.hole, r[0] * r[0] + r[1] * r[1], det)
                         }
-                    }
+                    };
+                    // the span as the final geometry has it (not the one the loads came from)
+                    (end, turn, r2, det, norm2([hole[0], hole[1] - self.p.e]))
                 };
-            prev = (end, turn, hole, r2, det);
+            prev = (end, turn, r2);
             res2 += r2;
             dets += det;
             sol.tangent_det[k] = det;
@@ -112,8 +115,6 @@ impl<R: Real> Finger<R> {
             sol.nodes[k + 1] = node;
             sol.links[k] = link;
             sol.joint_angle[k] = end.theta + link[2];
-            // the span as the final geometry has it (not the one the loads came from)
-            let span = norm2([hole[0], hole[1] - self.p.e]);
             if !(span >= self.p.span_floor) {
                 return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() });
             }

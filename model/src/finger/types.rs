@@ -2,7 +2,6 @@
 //! a solved posture, how the equilibrium branch ends, one joint's equilibrium and march.
 //! No solving here (see the solvers in `finger`'s other modules).
 
-use super::JointStiffness;
 use crate::mat3::{self, Mat3};
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -228,18 +227,6 @@ pub struct JointEquilibrium<R> {
     pub angle: R,
     /// Newton iterations.
     pub iterations: u32,
-}
-
-/// How `Finger::joint_march` marches a joint under tension alone: by compliances in
-/// `PoseFrame` (`Compliance`), by compliances in the running frame where that march applies,
-/// else as `Compliance` (`Cable`), or by the joint's stiffness, no compliance formed, with the
-/// link's deflection at that tension given (`Stiffness`; refused where its last pivot is not
-/// positive: the caller takes the compliance path).
-#[derive(Clone, Copy)]
-pub(crate) enum By<'a, 'k, R> {
-    Compliance(&'a [Mat3<R>; MAX_SUB]),
-    Cable(&'a [Mat3<R>; MAX_SUB]),
-    Stiffness(JointStiffness<'k, R>, [R; 3]),
 }
 
 /// One march of a joint without Newton (`Finger::joint_march`): where it arrives.

@@ -17,7 +17,7 @@ use super::table::{BranchTable, TableEnd, TABLE_BAND};
 use super::{choose_tension, feasible_interval, one_tension, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
-use crate::finger::{uniform_beam_compliance, By, Finger, JointEquilibrium, JointMarch, JointStiffness, Method, Pose};
+use crate::finger::{by, uniform_beam_compliance, By, Finger, JointEquilibrium, JointMarch, JointStiffness, Method, Pose};
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -319,7 +319,7 @@ mod tests {
         // P at fixed t (step 1), forward-difference Jacobian
         let p_lin = theta / g.slope0(&c0);
         let b0 = g.arc_hole(theta);
-        let mut ev = |x: [f64; 3], q: &mut [[f64; 3]; MAX_SUB]| f.joint_march(1, By::Compliance(&c0), x[2], [x[0], x[1]], q);
+        let mut ev = |x: [f64; 3], q: &mut [[f64; 3]; MAX_SUB]| f.joint_march(1, by::Compliance(&c0), x[2], [x[0], x[1]], q);
         let mut qb = [[0.0; 3]; MAX_SUB];
         let (q, n) = g.broyden(&mut ev, [b0[0], b0[1], p_lin], [lh, lh, p_lin], mat3::zero(), [true; 3], theta, &mut qb);
         let q = q.expect("Broyden converges for the tension");
@@ -331,7 +331,7 @@ mod tests {
         let pt = q.x[2] * 0.995;
         let mut ev = |x: [f64; 3], qb: &mut [[f64; 3]; MAX_SUB]| {
             let c = g.comp(x[2])?;
-            f.joint_march(1, By::Compliance(&c), pt, [x[0], x[1]], qb)
+            f.joint_march(1, by::Compliance(&c), pt, [x[0], x[1]], qb)
         };
         let (r, _) = g.broyden(&mut ev, [q.x[0], q.x[1], t0 * 0.995], [lh, lh, t0], q.jac.unwrap(), [false, false, true], theta, &mut qb);
         let r = r.expect("Broyden converges for the thickness");

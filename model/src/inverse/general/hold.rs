@@ -107,7 +107,7 @@ impl<'a, R: Real> Gen<'a, R> {
                 if !(x[2] > R::zero()) {
                     return Err(Error::Input { input: "tension", reason: "trial below zero" });
                 }
-                f.joint_march(joint, By::Compliance(c), x[2], [x[0], x[1]], q)
+                f.joint_march(joint, by::Compliance(c), x[2], [x[0], x[1]], q)
             };
             let (q, n) = self.broyden(&mut ev, [b0[0], b0[1], x0], scale, jac, fd, theta, q_out);
             self.iters += n;
@@ -188,7 +188,7 @@ impl<'a, R: Real> Gen<'a, R> {
                     me.comp_into(x[2], &mut c)?;
                     c_at = Some(x[2]);
                 }
-                me.f.joint_march(joint, By::Compliance(&c), pt, [x[0], x[1]], q)
+                me.f.joint_march(joint, by::Compliance(&c), pt, [x[0], x[1]], q)
             };
             let (q, n) = self.broyden(&mut ev, [guess[0], guess[1], x0], [lh, lh, t0], jac, fd, theta, q_out);
             self.iters += n;

@@ -86,7 +86,7 @@ impl<'a, R: Real> Gen<'a, R> {
             return Ok(h.st);
         }
         let mut q = [[R::zero(); 3]; MAX_SUB];
-        self.f.joint_march(joint, By::Compliance(c), h.tension, h.st.hole, &mut q)
+        self.f.joint_march(joint, by::Compliance(c), h.tension, h.st.hole, &mut q)
     }
 
     /// The unloaded joint's state.

@@ -7,12 +7,12 @@ use super::*;
 
 impl<'a, R: Real> Gen<'a, R> {
     /// One march of joint `joint` at tension `p` from hole `b` (`Finger::joint_march`, `by`
-    /// `By::Cable` or `By::Stiffness`): its state when that is already an equilibrium of the
+    /// `by::Cable` or `by::Stiffness`): its state when that is already an equilibrium of the
     /// full model to the quasi-Newton solves' own tolerance (`broyden_steps`: hole residual and
     /// joint angle), else None (also when the march fails). The sub-element displacements go to
     /// `q`.
     #[inline(never)]
-    pub(super) fn converged_march(&self, joint: usize, by: By<'_, '_, R>, p: R, b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
+    pub(super) fn converged_march(&self, joint: usize, by: impl By<R>, p: R, b: [R; 2], theta: R, q: &mut [[R; 3]; MAX_SUB]) -> Option<JointMarch<R>> {
         let st = self.f.joint_march(joint, by, p, b, q).ok()?;
         self.converged(st, b, theta)
     }
@@ -44,7 +44,7 @@ pub(super) fn confirm_end<R: Real>(
     q: &mut [[R; 3]; MAX_SUB],
 ) -> Result<bool, Error> {
     let c = &tb.comp[e];
-    if g.converged_march(k + 1, By::Cable(c), r.tension, r.hole, theta, q).is_some() {
+    if g.converged_march(k + 1, by::Cable(c), r.tension, r.hole, theta, q).is_some() {
         return Ok(false);
     }
     let h = g.hold_tension(k + 1, theta, c, tb.thickness[e], tb.slope0[e], Some((r.tension, r.hole)), None, Some(theta / r.tension), q)?;
@@ -111,25 +111,33 @@ pub(super) fn confirm_bounds<R: Real>(
     }
 }
 
-/// Step 4's compliances at thickness `t`: the table's at either end of the stack's range, else
-/// evaluated into `c` (after a stiffness march that was not converged: a march more).
+/// Step 4's march of joint `k` (0-based) by compliances at thickness `t`: the table's at either
+/// end of the stack's range, else evaluated (after a stiffness march that was not converged:
+/// a march more). `Gen::converged_march`'s answer; out of line, with its compliances' room.
 #[inline(never)]
-pub(super) fn step_compliances<'c, R: Real>(
+#[allow(clippy::too_many_arguments)]
+pub(super) fn step_by_compliance<R: Real>(
     g: &mut Gen<'_, R>,
-    tb: &'c BranchTable<R>,
+    tb: &BranchTable<R>,
+    k: usize,
     t: R,
-    c: &'c mut [Mat3<R>; MAX_SUB],
-) -> Result<&'c [Mat3<R>; MAX_SUB], Error> {
+    p: R,
+    b: [R; 2],
+    theta: R,
+    q: &mut [[R; 3]; MAX_SUB],
+) -> Result<Option<JointMarch<R>>, Error> {
     let [t_top, t0, _] = tb.thickness;
-    Ok(if t >= t0 {
+    let mut c = [tb.comp[1][0]; MAX_SUB];
+    let ck = if t >= t0 {
         &tb.comp[1]
     } else if t <= t_top {
         &tb.comp[0]
     } else {
         g.iters += 1;
-        g.comp_into(t, c)?;
-        c
-    })
+        g.comp_into(t, &mut c)?;
+        &c
+    };
+    Ok(g.converged_march(k + 1, by::Cable(ck), p, b, theta, q))
 }
 
 /// `solve_pose_tabled`'s path (docs/inverse.md, "The tabled inverse"): every joint's range
@@ -165,6 +173,20 @@ pub(in crate::inverse) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R
             _ => return Ok(false),
         }
     }
+    // a solution's sub-element rows past its own (n, m) are zero (`PoseSolution`): only the
+    // rows `out` held past this finger's (n, m) are cleared (none for `PoseSolution::empty()`
+    // or an answer of this finger), before any march writes the rows inside them
+    let (held_n, held_m) = (out.n.min(MAX_JOINTS), out.m.min(MAX_SUB));
+    for k in 0..held_n {
+        let from = if k < n { p.m } else { 0 };
+        if from < held_m {
+            for qj in out.sub_q[k][from..held_m].iter_mut() {
+                *qj = [R::zero(); 3];
+            }
+        }
+    }
+    out.n = n;
+    out.m = p.m;
     let band = R::from_f64(TABLE_BAND);
     let mut interval = feasible_interval(n, |k| [rd[k][0].tension, rd[k][1].tension]);
     // a target the readings refuse (the interval empty; a given tension outside a joint's
@@ -203,8 +225,6 @@ pub(in crate::inverse) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R
     }
     // the answer's scalars, and zeros past the n joints and m sub-elements (written in place)
     let zr = R::zero();
-    out.n = n;
-    out.m = p.m;
     out.tension_given = tension.is_some();
     out.interval = interval;
     out.tension = pt;
@@ -219,14 +239,6 @@ pub(in crate::inverse) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R
         out.thickness[k] = zr;
         out.q[k] = [zr; 3];
         out.links[k] = [zr; 3];
-    }
-    out.sub_q[n..].as_flattened_mut().as_flattened_mut().fill(zr);
-    if p.m < MAX_SUB {
-        for row in out.sub_q.iter_mut().take(n) {
-            for qj in row.iter_mut().skip(p.m) {
-                *qj = [zr; 3];
-            }
-        }
     }
     // 4. every joint's thickness at that tension: one compliance evaluation and one march at
     //    the table's start along the level curve, the quasi-Newton solve only if that march is
@@ -251,15 +263,11 @@ pub(in crate::inverse) fn solve_tabled<R: Real>(tb: &BranchTable<R>, angles: &[R
         // inside the stack's range one march from the stiffnesses (no compliance formed); the
         // compliance march at either end, and inside it only where that one is not converged
         let inside = t_guess < t0 && t_guess > t_top;
-        let quick = if inside { g.converged_march(k + 1, By::Stiffness(g.stiffness(t_guess), link), pt, b, angles[k], &mut out.sub_q[k]) } else { None };
+        let quick = if inside { g.converged_march(k + 1, by::Stiffness(&g.stack, t_guess, link), pt, b, angles[k], &mut out.sub_q[k]) } else { None };
         g.iters += 1;
         let marched = match quick {
             Some(st) => Some(st),
-            None => {
-                let mut c = [tb.comp[1][0]; MAX_SUB];
-                let ck = step_compliances(&mut g, tb, t_guess, &mut c)?;
-                g.converged_march(k + 1, By::Cable(ck), pt, b, angles[k], &mut out.sub_q[k])
-            }
+            None => step_by_compliance(&mut g, tb, k, t_guess, pt, b, angles[k], &mut out.sub_q[k])?,
         };
         let (t, st) = match marched {
             Some(st) => (t_guess, st),
