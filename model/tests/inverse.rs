@@ -633,3 +633,31 @@ fn tabled_inverse_is_a_converged_solve_f32() {
     let n = tabled_is_a_converged_solve(&f, &[0.2, 1.0, 4.0, 12.0], 2e-4, 2e-5, 1e-5);
     assert!(n > 320, "{n} answers");
 }
+
+/// `solve_pose_tabled_into` writes every field of storage it is given again: an answer of the
+/// m = 8 finger (sub-element rows past m = 2 non-zero), given next to an m = 2 finger's table,
+/// comes back equal to that finger's answer into fresh storage (its rows past (n, m) zero),
+/// and back to the m = 8 finger equal to its own. In f32, where the table's path answers
+/// these postures (the iterations: one march per joint).
+#[test]
+fn tabled_into_clears_the_rows_an_earlier_answer_held() {
+    let opts = Options::default();
+    let f8 = Finger::new(Params::<f32>::default()).unwrap();
+    let f2 = Finger::new(Params::<f32> { m: 2, ..Params::default() }).unwrap();
+    assert!(f8.params().m > 2);
+    let (t8, t2) = (inverse::BranchTable::new(&f8, &opts).unwrap(), inverse::BranchTable::new(&f2, &opts).unwrap());
+    let at = |f: &Finger<f32>| f.solve(1.0, &[2000.0, 6000.0, 9000.0], Method::converged()).unwrap().joint_angles().to_vec();
+    let (a8, a2) = (at(&f8), at(&f2));
+    let fresh = |t: &inverse::BranchTable<f32>, a: &[f32]| {
+        let mut s = inverse::PoseSolution::empty();
+        inverse::solve_pose_tabled_into(t, a, Some(1.0), &mut s).unwrap();
+        s
+    };
+    let mut reused = fresh(&t8, &a8);
+    assert!(reused.sub_q[0][2..].iter().any(|q| q.iter().any(|&x| x != 0.0)), "the m = 8 answer fills its rows");
+    inverse::solve_pose_tabled_into(&t2, &a2, Some(1.0), &mut reused).unwrap();
+    assert_eq!(reused.iterations, 3, "the table's path: one march per joint");
+    assert_eq!(reused, fresh(&t2, &a2), "an m = 2 answer over an m = 8 one");
+    inverse::solve_pose_tabled_into(&t8, &a8, Some(1.0), &mut reused).unwrap();
+    assert_eq!(reused, fresh(&t8, &a8), "and back");
+}
