@@ -16,6 +16,11 @@
 //! - a contact answer is in equilibrium under its tip load with the tip on the stop;
 //! - fmax is finite and not negative.
 //!
+//! Its decoder (`run_ops`: the parameter set, then each op's byte and voltages) is shared with
+//! the split targets (model_forward, model_inverse, model_contact, model_fmax: one check each,
+//! their tensions on `linear_tension`'s scale or, for model_fmax, on fmax's; docs/reliability.md
+//! "The model target split"); this target and its committed inputs are as they were.
+//!
 //! What it is not: the domain's property tests (model/tests/proptest_domain.rs), which draw
 //! from the documented domain; this draws from everywhere.
 
@@ -25,10 +30,10 @@ use finger_model::{de, DeModulusRule, Finger, Method, Params, Solution, MAX_JOIN
 pub const MAX_OPS: usize = 4;
 
 /// Bytes read in order; zeros past the end.
-struct Bytes<'a>(&'a [u8]);
+pub(crate) struct Bytes<'a>(&'a [u8]);
 
 impl Bytes<'_> {
-    fn u8(&mut self) -> u8 {
+    pub(crate) fn u8(&mut self) -> u8 {
         match self.0.split_first() {
             Some((&b, rest)) => {
                 self.0 = rest;
@@ -37,7 +42,7 @@ impl Bytes<'_> {
             None => 0,
         }
     }
-    fn raw_f64(&mut self) -> f64 {
+    pub(crate) fn raw_f64(&mut self) -> f64 {
         let mut b = [0u8; 8];
         for x in &mut b {
             *x = self.u8();
@@ -45,7 +50,7 @@ impl Bytes<'_> {
         f64::from_le_bytes(b)
     }
     /// `unit` x 2^((s-120)/20) for s < 240, else a special value.
-    fn scaled(&mut self, unit: f64) -> f64 {
+    pub(crate) fn scaled(&mut self, unit: f64) -> f64 {
         let s = self.u8();
         match s {
             0..=239 => unit * ((s as f64 - 120.0) / 20.0).exp2(),
@@ -61,7 +66,7 @@ impl Bytes<'_> {
         }
     }
     /// `top` x s/200 (s < 240: 0 to 1.2 x top), else a special value.
-    fn fraction(&mut self, top: f64) -> f64 {
+    pub(crate) fn fraction(&mut self, top: f64) -> f64 {
         let s = self.u8();
         match s {
             0..=239 => top * s as f64 / 200.0,
@@ -77,7 +82,7 @@ impl Bytes<'_> {
     }
 }
 
-fn params(b: &mut Bytes) -> Params<f64> {
+pub(crate) fn params(b: &mut Bytes) -> Params<f64> {
     let d = Params::<f64>::default();
     let flags = b.u8();
     let base = if flags & 1 != 0 { Params::paper() } else { d };
@@ -126,18 +131,18 @@ fn params(b: &mut Bytes) -> Params<f64> {
 }
 
 /// The voltages refused by `de::check_voltage`: negative, not finite, at or past the ceiling.
-fn volts_refused(f: &Finger<f64>, v: &[f64]) -> bool {
+pub(crate) fn volts_refused(f: &Finger<f64>, v: &[f64]) -> bool {
     v.iter().enumerate().any(|(k, &x)| de::check_voltage(f.params(), k, x).is_err())
 }
 
-fn check_answer_volts(f: &Finger<f64>, v: &[f64], what: &str) {
+pub(crate) fn check_answer_volts(f: &Finger<f64>, v: &[f64], what: &str) {
     let ceiling = f.voltage_ceiling();
     for &x in v {
         assert!(x == 0.0 || (x > 0.0 && x < ceiling), "{what}: voltage {x} with ceiling {ceiling}");
     }
 }
 
-fn check_finite_solution(s: &Solution<f64>, what: &str) {
+pub(crate) fn check_finite_solution(s: &Solution<f64>, what: &str) {
     let n = s.n;
     let finite = s.nodes[..=n].iter().all(|q| q.x.is_finite() && q.y.is_finite() && q.theta.is_finite())
         && s.joint_angle[..n].iter().all(|a| a.is_finite())
@@ -150,6 +155,35 @@ fn check_finite_solution(s: &Solution<f64>, what: &str) {
 
 /// Runs one input; panics when an invariant breaks.
 pub fn check(data: &[u8]) {
+    run_ops(data, MAX_OPS, |c, op, v, refused, b| {
+        // fmax at these voltages (every op needs it for its tension)
+        let fmax = checked_fmax(c, v, refused);
+        let scale = fmax.unwrap_or(1.0);
+        let tension = b.fraction(scale);
+        match op % 4 {
+            0 => forward(&c.f, tension, v, refused, c.len),
+            1 => inverse(&c.f, tension, v, c.len),
+            2 => {
+                let p0 = b.fraction(scale);
+                contact(&c.f, p0, tension, v, refused, c.len);
+            }
+            _ => {}
+        }
+    });
+}
+
+/// A parameter set the model took, and what every op reads from it.
+pub(crate) struct Case {
+    pub f: Finger<f64>,
+    /// The finger's length (n x l), mm: the equilibrium checks' scale.
+    pub len: f64,
+}
+
+/// The model targets' shared start (one decoder for all of them): the parameter set (a refused
+/// one ends the input: a typed refusal is all it asks), the ceiling's check, then up to
+/// `max_ops` ops, each its op byte then one voltage per joint (fractions of the ceiling), handed
+/// to `op` with whether `de::check_voltage` refuses them and the bytes that follow.
+pub(crate) fn run_ops(data: &[u8], max_ops: usize, mut op: impl FnMut(&Case, u8, &[f64], bool, &mut Bytes)) {
     let mut b = Bytes(data);
     let p = params(&mut b);
     if std::env::var_os("FUZZ_VERBOSE").is_some() {
@@ -163,37 +197,46 @@ pub fn check(data: &[u8]) {
     let len = f.params().l * n as f64;
     let ceiling = f.voltage_ceiling();
     assert!(!(ceiling < 0.0) && !ceiling.is_nan(), "ceiling {ceiling} of {p:?}");
-    for _ in 0..MAX_OPS {
-        let op = b.u8();
-        if b.0.is_empty() && op == 0 {
+    let c = Case { f, len };
+    for _ in 0..max_ops {
+        let o = b.u8();
+        if b.0.is_empty() && o == 0 {
             break;
         }
         let v: Vec<f64> = (0..n).map(|_| b.fraction(ceiling)).collect();
-        let refused = volts_refused(&f, &v);
-        // fmax at these voltages (every op needs it for its tension)
-        let fmax = match f.fmax(&v) {
-            Ok(l) => {
-                assert!(!refused, "fmax answered at refused voltages {v:?} (ceiling {ceiling}): {l:?}");
-                assert!(l.tension.is_finite() && l.tension >= 0.0, "fmax {l:?} at {v:?}");
-                Some(l.tension)
-            }
-            Err(_) => None,
-        };
-        let scale = fmax.unwrap_or(1.0);
-        let tension = b.fraction(scale);
-        match op % 4 {
-            0 => forward(&f, tension, &v, refused, len),
-            1 => inverse(&f, tension, &v, len),
-            2 => {
-                let p0 = b.fraction(scale);
-                contact(&f, p0, tension, &v, refused, len);
-            }
-            _ => {}
-        }
+        let refused = volts_refused(&c.f, &v);
+        op(&c, o, &v, refused, &mut b);
     }
 }
 
-fn forward(f: &Finger<f64>, tension: f64, v: &[f64], refused: bool, len: f64) {
+/// fmax at these voltages, checked: never answered at refused voltages, finite and >= 0.
+pub(crate) fn checked_fmax(c: &Case, v: &[f64], refused: bool) -> Option<f64> {
+    match c.f.fmax(v) {
+        Ok(l) => {
+            assert!(!refused, "fmax answered at refused voltages {v:?} (ceiling {}): {l:?}", c.f.voltage_ceiling());
+            assert!(l.tension.is_finite() && l.tension >= 0.0, "fmax {l:?} at {v:?}");
+            Some(l.tension)
+        }
+        Err(_) => None,
+    }
+}
+
+/// A tension scale that costs one compliance evaluation, not fmax's search: the tension that
+/// would turn the softest joint by 1 rad linearly, `1 / (e x sum of its sub-elements' C33)`
+/// (fmax's own unit: its search bound is 1000 of it). On the corpus fmax is 4e-4 to 98 of it
+/// (median 1.5). At the voltages' compliances, or at 0 V where they are refused, else 1 N.
+pub(crate) fn linear_tension(f: &Finger<f64>, v: &[f64]) -> f64 {
+    let p = f.params();
+    let Ok(c) = f.compliances(v).or_else(|_| f.compliances(&vec![0.0; p.n])) else { return 1.0 };
+    let softest = (0..p.n).map(|k| 1.0 / (p.e * c.c[k][..p.m].iter().map(|x| x[2][2]).sum::<f64>())).fold(f64::INFINITY, f64::min);
+    if softest.is_finite() && softest > 0.0 {
+        softest
+    } else {
+        1.0
+    }
+}
+
+pub(crate) fn forward(f: &Finger<f64>, tension: f64, v: &[f64], refused: bool, len: f64) {
     if let Ok(s) = f.solve(tension, v, Method::converged()) {
         assert!(!refused, "forward answered at refused voltages {v:?}");
         check_finite_solution(&s, "forward");
@@ -208,7 +251,7 @@ fn forward(f: &Finger<f64>, tension: f64, v: &[f64], refused: bool, len: f64) {
     }
 }
 
-fn inverse(f: &Finger<f64>, tension: f64, v: &[f64], len: f64) {
+pub(crate) fn inverse(f: &Finger<f64>, tension: f64, v: &[f64], len: f64) {
     let n = f.params().n;
     // angles the forward model reaches (a reachable target), and a given tension or none
     let Ok(s) = f.solve(tension, v, Method::converged()) else { return };
@@ -229,7 +272,7 @@ fn inverse(f: &Finger<f64>, tension: f64, v: &[f64], len: f64) {
     }
 }
 
-fn contact(f: &Finger<f64>, p0: f64, tension: f64, v: &[f64], refused: bool, len: f64) {
+pub(crate) fn contact(f: &Finger<f64>, p0: f64, tension: f64, v: &[f64], refused: bool, len: f64) {
     let n = f.params().n;
     if let Ok(c) = contact_force(f, p0, &vec![0.0; n], tension, v) {
         assert!(!refused, "contact answered at refused voltages {v:?}");

@@ -35,6 +35,28 @@ fn model_inputs_hold() {
     assert!(run_dir("model", finger_fuzz::model::check) > 0);
 }
 
+/// The model target's split (each from its own corpus; the model target's corpus and
+/// regressions still run through `model::check` above).
+#[test]
+fn model_forward_inputs_hold() {
+    assert!(run_dir("model_forward", finger_fuzz::model_forward::check) > 0);
+}
+
+#[test]
+fn model_inverse_inputs_hold() {
+    assert!(run_dir("model_inverse", finger_fuzz::model_inverse::check) > 0);
+}
+
+#[test]
+fn model_contact_inputs_hold() {
+    assert!(run_dir("model_contact", finger_fuzz::model_contact::check) > 0);
+}
+
+#[test]
+fn model_fmax_inputs_hold() {
+    assert!(run_dir("model_fmax", finger_fuzz::model_fmax::check) > 0);
+}
+
 #[test]
 fn scene_inputs_hold() {
     assert!(run_dir("scene", finger_fuzz::scene::check) > 0);

@@ -13,14 +13,16 @@
 //! - `posture`: nodes, links and the assembled solution; `tip_stiffness`: C_tip and K_tip;
 //! - `pinned`: the tip pinned at a point; `branch_end`: the end of the branch (fmax).
 //!
+//! The solvers (`tension`, `tabled`, `loaded`, `stepping`, `pinned`, `branch_end`) are functions
+//! over `&Finger`; `Finger`'s solving methods below delegate to them.
+//!
 //! The sub-element state and the solver's unknowns: docs/model.md "Finger solver layout".
 
 use crate::calibration::Calibration;
 use crate::error::Error;
-use crate::mat3::{self, Mat3};
+use crate::mat3::Mat3;
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
-use crate::{de, hinge};
 
 mod branch_end;
 mod joint;
@@ -43,13 +45,8 @@ mod types;
 pub(crate) use joint::{by, By};
 pub use prepare::uniform_beam_compliance;
 pub use stiffness::JointStiffness;
-use types::cast_mat;
 pub use types::{BranchEnd, BranchLimit, Compliances, JointEquilibrium, Method, Pose, Solution};
 pub(crate) use types::{Heading, JointMarch};
-
-use crate::solve::continuation::{self, Step};
-use crate::solve::newton::{self as newton_solve, Equations};
-use crate::solve::{self, SolveOptions};
 
 /// Unknowns of the coupled (tip-loaded) solve: each joint's hole, then the tip position.
 const COUPLED: usize = 2 * MAX_JOINTS + 2;
@@ -134,9 +131,52 @@ impl<R: Real> Finger<R> {
     #[inline(always)]
     pub fn solve_with(&self, c: &Compliances<R>, tension: R, tip_force: [R; 2], method: Method<R>) -> Result<Solution<R>, Error> {
         match method {
-            Method::Stepping { n_inc } => self.solve_stepping(c, tension, tip_force, n_inc),
+            Method::Stepping { n_inc } => stepping::solve(self, c, tension, tip_force, n_inc),
             Method::Converged { tol, max_iter } => self.solve_converged(c, tension, tip_force, tol, max_iter),
         }
+    }
+
+    // The solvers' entry points below delegate to their modules, inlined always: the image is
+    // as when they were the solvers' own methods.
+
+    /// The end of the equilibrium branch under tension alone for these voltages (to 1e-4
+    /// relative): the tension, the first joint (1-based) and how it ends. If neither happens
+    /// below a search bound (1000 times the tension that would turn the softest joint by 1 rad
+    /// linearly), that bound is returned as `SearchBound`. The converged solver refuses
+    /// tensions past this end (its continuation cannot pass it).
+    #[inline(always)]
+    pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
+        branch_end::fmax(self, volts)
+    }
+
+    /// `fmax` with precomputed compliances and optional starting points per joint
+    /// (`branch_end::fmax_with`).
+    #[inline(always)]
+    pub(crate) fn fmax_with(&self, c: &Compliances<R>, starts: Option<&[Option<[(R, [R; 2]); 2]>; MAX_JOINTS]>) -> Result<BranchLimit<R>, Error> {
+        branch_end::fmax_with(self, c, starts)
+    }
+
+    /// Joint `joint`'s (1-based) equilibrium under tension alone for its sub-element compliances
+    /// `c` (as in `Compliances::c[k]`), the same solve as `solve_with` does per joint. Newton
+    /// from `guess` (link k's proximal hole, the joint's proximal frame) when given, accepted
+    /// if the hole moved less than half a hinge length; else, or if it fails, load continuation
+    /// from the straight joint. Additive, for the inverse model's per-joint root finding.
+    #[inline(always)]
+    pub fn joint_equilibrium(&self, joint: usize, c: &[Mat3<R>; MAX_SUB], tension: R, guess: Option<[R; 2]>, tol: R) -> Result<JointEquilibrium<R>, Error> {
+        tension::joint_equilibrium(self, joint, c, tension, guess, tol)
+    }
+
+    /// The converged solve under tension alone from a guide-hole guess per joint, into `sol`
+    /// (`tabled::solve_from_holes_into`).
+    #[inline(always)]
+    pub(crate) fn solve_from_holes_into(&self, c: &Compliances<R>, tension: R, holes: &[[R; 2]; MAX_JOINTS], sol: &mut Solution<R>) -> Result<(), Error> {
+        tabled::solve_from_holes_into(self, c, tension, holes, sol)
+    }
+
+    /// The tip pinned where `free0`'s tip is, at tension `p` and `volts` (`pinned::solve`).
+    #[inline(always)]
+    pub(crate) fn pinned_tip(&self, free0: &Solution<R>, p: R, volts: &[R]) -> Result<pinned::Pinned<R>, Error> {
+        pinned::solve(self, free0, p, volts)
     }
 
     /// The inputs every solve checks first.
@@ -164,10 +204,10 @@ impl<R: Real> Finger<R> {
         }
         let tol = tol.max(self.resolution());
         if tip_force[0] != R::zero() || tip_force[1] != R::zero() {
-            let (states, tip, iterations) = self.newton_coupled(c, tension, tip_force, tol, max_iter)?;
+            let (states, tip, iterations) = loaded::newton_coupled(self, c, tension, tip_force, tol, max_iter)?;
             self.assemble(c, tension, tip_force, &states, Some(tip), iterations)
         } else {
-            self.solve_tension_alone(c, tension, tol, max_iter)
+            tension::solve(self, c, tension, tol, max_iter)
         }
     }
 

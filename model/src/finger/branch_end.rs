@@ -15,7 +15,7 @@
 //! than one joint's. A point's Newton takes few line-search halvings: on the branch the
 //! predictor's full steps converge, past its end a trial fails fast (docs/fmax-cost.md).
 
-use super::{BranchEnd, BranchLimit, Compliances, Finger, JointState, MarchError};
+use super::{tension, BranchEnd, BranchLimit, Compliances, Finger, JointState, MarchError};
 use crate::error::Error;
 use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
@@ -41,198 +41,198 @@ struct Pt<R> {
     det: R,
 }
 
-impl<R: Real> Finger<R> {
-    /// The end of the equilibrium branch under tension alone for these voltages (to 1e-4
-    /// relative): the tension, the first joint (1-based) and how it ends. If neither happens
-    /// below a search bound (1000 times the tension that would turn the softest joint by 1 rad
-    /// linearly), that bound is returned as `SearchBound`. The converged solver refuses
-    /// tensions past this end (its continuation cannot pass it).
-    pub fn fmax(&self, volts: &[R]) -> Result<BranchLimit<R>, Error> {
-        let c = self.compliances(volts)?;
-        self.fmax_with(&c, None)
-    }
+/// `Finger::fmax`: `fmax_with` at these voltages' compliances.
+pub(super) fn fmax<R: Real>(f: &Finger<R>, volts: &[R]) -> Result<BranchLimit<R>, Error> {
+    let c = f.compliances(volts)?;
+    fmax_with(f, &c, None)
+}
 
-    /// `fmax` with precomputed compliances and, per joint, optionally two points near its
-    /// branch (tensions and hole guesses, from the branch table: the march up the branch
-    /// continues from them instead of starting at the straight joint).
-    pub(crate) fn fmax_with(&self, c: &Compliances<R>, starts: Option<&[Option<[(R, [R; 2]); 2]>; MAX_JOINTS]>) -> Result<BranchLimit<R>, Error> {
-        let (n, m) = (self.p.n, self.p.m);
-        // the most thinned stack first (it usually ends first); each later joint marches only
-        // up to the end found so far: reaching it, it does not end before
-        let mut order = [0usize; MAX_JOINTS];
-        for k in 0..n {
-            order[k] = k;
-        }
-        order[..n].sort_unstable_by(|&a, &b| c.volts[b].partial_cmp(&c.volts[a]).unwrap_or(core::cmp::Ordering::Equal).then(a.cmp(&b)));
-        let mut best: Option<BranchLimit<R>> = None;
-        for (i, &k) in order[..n].iter().enumerate() {
-            // a joint with the compliances of one before it ends where that one ends
-            if order[..i].iter().any(|&j| c.c[j][..m] == c.c[k][..m]) {
-                continue;
-            }
-            let start = starts.and_then(|s| s[k]);
-            let Some(end) = self.joint_branch_end(k, &c.c[k], best.map(|b| b.tension), start)? else { continue };
-            if best.is_none_or(|b| end.tension < b.tension || (end.tension == b.tension && end.joint < b.joint)) {
-                best = Some(end);
-            }
-        }
-        best.ok_or(Error::Input { input: "n", reason: "no joints" })
+/// `fmax` with precomputed compliances and, per joint, optionally two points near its
+/// branch (tensions and hole guesses, from the branch table: the march up the branch
+/// continues from them instead of starting at the straight joint).
+pub(super) fn fmax_with<R: Real>(f: &Finger<R>, c: &Compliances<R>, starts: Option<&[Option<[(R, [R; 2]); 2]>; MAX_JOINTS]>) -> Result<BranchLimit<R>, Error> {
+    let (n, m) = (f.p.n, f.p.m);
+    // the most thinned stack first (it usually ends first); each later joint marches only
+    // up to the end found so far: reaching it, it does not end before
+    let mut order = [0usize; MAX_JOINTS];
+    for k in 0..n {
+        order[k] = k;
     }
-
-    fn branch_point(&self, c: &[Mat3<R>; MAX_SUB], from: &Pt<R>, prev: Option<&Pt<R>>, p: R) -> Result<Pt<R>, Option<MarchError>> {
-        let tol = self.resolution().max(R::from_f64(1e-9));
-        let dp = p - from.p;
-        let guess = match prev {
-            Some(a) if from.p > a.p => {
-                let s = dp / (from.p - a.p);
-                [from.st.hole[0] + s * (from.st.hole[0] - a.st.hole[0]), from.st.hole[1] + s * (from.st.hole[1] - a.st.hole[1])]
-            }
-            _ => from.st.hole,
-        };
-        // a point on the branch converges from the predictor in full steps; past the end there
-        // is none: few halvings, so that a trial there fails fast
-        let opts = SolveOptions { max_halvings: POINT_HALVINGS, ..SolveOptions::new(tol, self.resolution(), POINT_ITER) };
-        let attempt = match self.newton_dual_with(c, p, guess, &opts) {
-            Err(_) if guess != from.st.hole => self.newton_dual_with(c, p, from.st.hole, &opts),
-            other => other,
-        };
-        let (st, _) = attempt.map_err(|(why, _)| why)?;
-        if !self.same_branch(&from.st, &st) {
-            return Err(None);
+    order[..n].sort_unstable_by(|&a, &b| c.volts[b].partial_cmp(&c.volts[a]).unwrap_or(core::cmp::Ordering::Equal).then(a.cmp(&b)));
+    let mut best: Option<BranchLimit<R>> = None;
+    for (i, &k) in order[..n].iter().enumerate() {
+        // a joint with the compliances of one before it ends where that one ends
+        if order[..i].iter().any(|&j| c.c[j][..m] == c.c[k][..m]) {
+            continue;
         }
-        let span = super::norm2([st.hole[0], st.hole[1] - self.p.e]);
-        let det = st.tangent.map_or(R::one(), |t| t.1);
-        Ok(Pt { p, st, span, det })
+        let start = starts.and_then(|s| s[k]);
+        let Some(end) = joint_end(f, k, &c.c[k], best.map(|b| b.tension), start)? else { continue };
+        if best.is_none_or(|b| end.tension < b.tension || (end.tension == b.tension && end.joint < b.joint)) {
+            best = Some(end);
+        }
     }
+    best.ok_or(Error::Input { input: "n", reason: "no joints" })
+}
 
-    /// Where the branch ends, estimated from its last two points: the span's secant through the
-    /// floor, the squared determinant's through zero, whichever comes first past `b`.
-    fn end_estimate(&self, a: Option<&Pt<R>>, b: &Pt<R>) -> Option<R> {
-        let a = a?;
-        let dp = b.p - a.p;
-        if !(dp > R::zero()) {
-            return None;
+fn branch_point<R: Real>(f: &Finger<R>, c: &[Mat3<R>; MAX_SUB], from: &Pt<R>, prev: Option<&Pt<R>>, p: R) -> Result<Pt<R>, Option<MarchError>> {
+    let tol = f.resolution().max(R::from_f64(1e-9));
+    let dp = p - from.p;
+    let guess = match prev {
+        Some(a) if from.p > a.p => {
+            let s = dp / (from.p - a.p);
+            [from.st.hole[0] + s * (from.st.hole[0] - a.st.hole[0]), from.st.hole[1] + s * (from.st.hole[1] - a.st.hole[1])]
         }
-        let mut best: Option<R> = None;
-        let mut take = |x: R| {
-            if x.is_finite() && x > b.p {
-                best = Some(best.map_or(x, |y: R| y.min(x)));
-            }
-        };
-        if b.span < a.span {
-            take(b.p + (b.span - self.p.span_floor) * dp / (a.span - b.span));
-        }
-        let (d2a, d2b) = (a.det * a.det, b.det * b.det);
-        if d2b < d2a {
-            take(b.p + d2b * dp / (d2a - d2b));
-        }
-        best
+        _ => from.st.hole,
+    };
+    // a point on the branch converges from the predictor in full steps; past the end there
+    // is none: few halvings, so that a trial there fails fast
+    let opts = SolveOptions { max_halvings: POINT_HALVINGS, ..SolveOptions::new(tol, f.resolution(), POINT_ITER) };
+    let attempt = match f.newton_dual_with(c, p, guess, &opts) {
+        Err(_) if guess != from.st.hole => f.newton_dual_with(c, p, from.st.hole, &opts),
+        other => other,
+    };
+    let (st, _) = attempt.map_err(|(why, _)| why)?;
+    if !tension::same_branch(f, &from.st, &st) {
+        return Err(None);
     }
+    let span = super::norm2([st.hole[0], st.hole[1] - f.p.e]);
+    let det = st.tangent.map_or(R::one(), |t| t.1);
+    Ok(Pt { p, st, span, det })
+}
 
-    /// Joint `k`'s branch end (see the module header); None if it has an equilibrium at
-    /// `bound` (it does not end below the end found so far).
-    fn joint_branch_end(&self, k: usize, c: &[Mat3<R>; MAX_SUB], bound: Option<R>, start: Option<[(R, [R; 2]); 2]>) -> Result<Option<BranchLimit<R>>, Error> {
-        let c33 = c[..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
-        let p_lin = R::one() / (self.p.e * c33);
-        let p_search = R::from_f64(1000.0) * p_lin;
-        let p_hi = bound.map_or(p_search, |b| b.min(p_search));
-        let lh = self.p.hinge_len();
-        let mut lo = Pt { p: R::zero(), st: self.straight(), span: lh, det: R::one() };
-        let mut prev: Option<Pt<R>> = None;
-        let mut step = p_lin / R::from_f64(8.0);
-        // two points on the branch from the table (its last two samples at this stack): solved
-        // there, the march continues from them (secant predictor, the table's spacing as the
-        // first step)
-        if let Some(pts) = start.filter(|s| s[0].0 > R::zero() && s[0].0 < s[1].0 && s[1].0 < p_hi) {
-            let tol = self.resolution().max(R::from_f64(1e-9));
-            let opts = SolveOptions { max_halvings: POINT_HALVINGS, ..SolveOptions::new(tol, self.resolution(), POINT_ITER) };
-            let solved = pts.map(|(ps, guess)| {
-                let (st, _) = self.newton_dual_with(c, ps, guess, &opts).ok()?;
-                // on the table's branch: the solved hole within a twentieth of a hinge length
-                // of the table's
-                (super::norm2([st.hole[0] - guess[0], st.hole[1] - guess[1]]) <= lh / R::from_f64(20.0)).then(|| {
-                    let span = super::norm2([st.hole[0], st.hole[1] - self.p.e]);
-                    Pt { p: ps, st, span, det: st.tangent.map_or(R::one(), |t| t.1) }
-                })
-            });
-            if let [Some(a), Some(b)] = solved {
-                step = b.p - a.p;
-                prev = Some(a);
-                lo = b;
-            }
+/// Where the branch ends, estimated from its last two points: the span's secant through the
+/// floor, the squared determinant's through zero, whichever comes first past `b`.
+fn end_estimate<R: Real>(f: &Finger<R>, a: Option<&Pt<R>>, b: &Pt<R>) -> Option<R> {
+    let a = a?;
+    let dp = b.p - a.p;
+    if !(dp > R::zero()) {
+        return None;
+    }
+    let mut best: Option<R> = None;
+    let mut take = |x: R| {
+        if x.is_finite() && x > b.p {
+            best = Some(best.map_or(x, |y: R| y.min(x)));
         }
-        let mut why: Option<MarchError> = None;
-        let min_step = p_lin * R::from_f64(1e-6);
-        let mut stalled = 0u32;
-        for _ in 0..64 {
-            let start_p = lo.p;
-            // march: doubling steps until a refusal (or the search bound)
-            let hi = loop {
-                let p = (lo.p + step).min(p_hi);
-                match self.branch_point(c, &lo, prev.as_ref(), p) {
-                    Ok(pt) => {
-                        prev = Some(lo);
-                        lo = pt;
-                        if p >= p_hi {
-                            if bound.is_some_and(|b| b <= p_search) {
-                                return Ok(None);
-                            }
-                            return Ok(Some(BranchLimit { tension: p_hi, joint: k + 1, kind: BranchEnd::SearchBound }));
-                        }
-                        step = step + step;
-                    }
-                    Err(w) => {
-                        why = w.or(why);
-                        break p;
-                    }
-                }
-            };
-            // the boundary between lo and hi
-            let est = self.end_estimate(prev.as_ref(), &lo);
-            let lo_p = lo.p;
-            let (lo_ref, prev_ref, why_ref) = (&mut lo, &mut prev, &mut why);
-            let mut probe = |x: R| match self.branch_point(c, lo_ref, prev_ref.as_ref(), x) {
+    };
+    if b.span < a.span {
+        take(b.p + (b.span - f.p.span_floor) * dp / (a.span - b.span));
+    }
+    let (d2a, d2b) = (a.det * a.det, b.det * b.det);
+    if d2b < d2a {
+        take(b.p + d2b * dp / (d2a - d2b));
+    }
+    best
+}
+
+/// Joint `k`'s branch end (see the module header); None if it has an equilibrium at
+/// `bound` (it does not end below the end found so far).
+fn joint_end<R: Real>(
+    f: &Finger<R>,
+    k: usize,
+    c: &[Mat3<R>; MAX_SUB],
+    bound: Option<R>,
+    start: Option<[(R, [R; 2]); 2]>,
+) -> Result<Option<BranchLimit<R>>, Error> {
+    let c33 = c[..f.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
+    let p_lin = R::one() / (f.p.e * c33);
+    let p_search = R::from_f64(1000.0) * p_lin;
+    let p_hi = bound.map_or(p_search, |b| b.min(p_search));
+    let lh = f.p.hinge_len();
+    let mut lo = Pt { p: R::zero(), st: f.straight(), span: lh, det: R::one() };
+    let mut prev: Option<Pt<R>> = None;
+    let mut step = p_lin / R::from_f64(8.0);
+    // two points on the branch from the table (its last two samples at this stack): solved
+    // there, the march continues from them (secant predictor, the table's spacing as the
+    // first step)
+    if let Some(pts) = start.filter(|s| s[0].0 > R::zero() && s[0].0 < s[1].0 && s[1].0 < p_hi) {
+        let tol = f.resolution().max(R::from_f64(1e-9));
+        let opts = SolveOptions { max_halvings: POINT_HALVINGS, ..SolveOptions::new(tol, f.resolution(), POINT_ITER) };
+        let solved = pts.map(|(ps, guess)| {
+            let (st, _) = f.newton_dual_with(c, ps, guess, &opts).ok()?;
+            // on the table's branch: the solved hole within a twentieth of a hinge length
+            // of the table's
+            (super::norm2([st.hole[0] - guess[0], st.hole[1] - guess[1]]) <= lh / R::from_f64(20.0)).then(|| {
+                let span = super::norm2([st.hole[0], st.hole[1] - f.p.e]);
+                Pt { p: ps, st, span, det: st.tangent.map_or(R::one(), |t| t.1) }
+            })
+        });
+        if let [Some(a), Some(b)] = solved {
+            step = b.p - a.p;
+            prev = Some(a);
+            lo = b;
+        }
+    }
+    let mut why: Option<MarchError> = None;
+    let min_step = p_lin * R::from_f64(1e-6);
+    let mut stalled = 0u32;
+    for _ in 0..64 {
+        let start_p = lo.p;
+        // march: doubling steps until a refusal (or the search bound)
+        let hi = loop {
+            let p = (lo.p + step).min(p_hi);
+            match branch_point(f, c, &lo, prev.as_ref(), p) {
                 Ok(pt) => {
-                    *prev_ref = Some(*lo_ref);
-                    *lo_ref = pt;
-                    Some(self.end_estimate(prev_ref.as_ref(), lo_ref))
+                    prev = Some(lo);
+                    lo = pt;
+                    if p >= p_hi {
+                        if bound.is_some_and(|b| b <= p_search) {
+                            return Ok(None);
+                        }
+                        return Ok(Some(BranchLimit { tension: p_hi, joint: k + 1, kind: BranchEnd::SearchBound }));
+                    }
+                    step = step + step;
                 }
                 Err(w) => {
-                    *why_ref = w.or(*why_ref);
-                    None
+                    why = w.or(why);
+                    break p;
                 }
-            };
-            let ([_, hi_end], _trials) = bracket::boundary(lo_p, hi, R::from_f64(REL), 60, est, &mut probe);
-            let near_contact =
-                matches!(why, Some(MarchError::Contact)) || lo.span - self.p.span_floor <= R::from_f64(0.05) * (lh - self.p.span_floor).max(self.p.span_floor);
-            let near_fold = lo.det.abs() < R::from_f64(NEAR_FOLD);
-            if near_contact || near_fold {
-                // the last tension with an equilibrium: a forward solve at fmax answers
-                let contact = near_contact && (!near_fold || matches!(why, Some(MarchError::Contact)));
-                let kind = if contact { BranchEnd::Contact } else { BranchEnd::LimitPoint };
+            }
+        };
+        // the boundary between lo and hi
+        let est = end_estimate(f, prev.as_ref(), &lo);
+        let lo_p = lo.p;
+        let (lo_ref, prev_ref, why_ref) = (&mut lo, &mut prev, &mut why);
+        let mut probe = |x: R| match branch_point(f, c, lo_ref, prev_ref.as_ref(), x) {
+            Ok(pt) => {
+                *prev_ref = Some(*lo_ref);
+                *lo_ref = pt;
+                Some(end_estimate(f, prev_ref.as_ref(), lo_ref))
+            }
+            Err(w) => {
+                *why_ref = w.or(*why_ref);
+                None
+            }
+        };
+        let ([_, hi_end], _trials) = bracket::boundary(lo_p, hi, R::from_f64(REL), 60, est, &mut probe);
+        let near_contact =
+            matches!(why, Some(MarchError::Contact)) || lo.span - f.p.span_floor <= R::from_f64(0.05) * (lh - f.p.span_floor).max(f.p.span_floor);
+        let near_fold = lo.det.abs() < R::from_f64(NEAR_FOLD);
+        if near_contact || near_fold {
+            // the last tension with an equilibrium: a forward solve at fmax answers
+            let contact = near_contact && (!near_fold || matches!(why, Some(MarchError::Contact)));
+            let kind = if contact { BranchEnd::Contact } else { BranchEnd::LimitPoint };
+            return Ok(Some(BranchLimit { tension: lo.p, joint: k + 1, kind }));
+        }
+        // short steps from lo no longer advance (twice): the branch ends at lo in this
+        // scalar type (its solve stops existing there short of both criteria); named by
+        // the nearer one, the last tension with an equilibrium
+        if lo.p - start_p <= R::from_f64(STALL) * lo.p {
+            stalled += 1;
+            if stalled >= 2 {
+                // stalled just short of the end found so far: it does not end before it
+                if bound.is_some_and(|b| lo.p >= b * (R::one() - R::from_f64(STALL))) {
+                    return Ok(None);
+                }
+                let to_floor = (lo.span - f.p.span_floor) / (lh - f.p.span_floor).max(f.p.span_floor);
+                let kind = if to_floor <= lo.det.abs() { BranchEnd::Contact } else { BranchEnd::LimitPoint };
                 return Ok(Some(BranchLimit { tension: lo.p, joint: k + 1, kind }));
             }
-            // short steps from lo no longer advance (twice): the branch ends at lo in this
-            // scalar type (its solve stops existing there short of both criteria); named by
-            // the nearer one, the last tension with an equilibrium
-            if lo.p - start_p <= R::from_f64(STALL) * lo.p {
-                stalled += 1;
-                if stalled >= 2 {
-                    // stalled just short of the end found so far: it does not end before it
-                    if bound.is_some_and(|b| lo.p >= b * (R::one() - R::from_f64(STALL))) {
-                        return Ok(None);
-                    }
-                    let to_floor = (lo.span - self.p.span_floor) / (lh - self.p.span_floor).max(self.p.span_floor);
-                    let kind = if to_floor <= lo.det.abs() { BranchEnd::Contact } else { BranchEnd::LimitPoint };
-                    return Ok(Some(BranchLimit { tension: lo.p, joint: k + 1, kind }));
-                }
-            } else {
-                stalled = 0;
-            }
-            // a step too long, not the end: march on from lo with short steps
-            step = ((hi_end - lo.p) / R::from_f64(4.0)).max(min_step);
-            why = None;
+        } else {
+            stalled = 0;
         }
-        Err(Error::NotConverged { iterations: 0, residual: f64::INFINITY })
+        // a step too long, not the end: march on from lo with short steps
+        step = ((hi_end - lo.p) / R::from_f64(4.0)).max(min_step);
+        why = None;
     }
+    Err(Error::NotConverged { iterations: 0, residual: f64::INFINITY })
 }

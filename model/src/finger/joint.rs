@@ -3,7 +3,11 @@
 //! inverse calls (`joint_march`). The march's loop and forms are in `march` and
 //! `march_stiffness`.
 
-use super::*;
+use super::{march, march_stiffness, norm2, Finger, JointMarch, JointState, JointStiffness, MarchError, Pose, SpanLoads, TipLoad};
+use crate::error::Error;
+use crate::mat3::Mat3;
+use crate::params::MAX_SUB;
+use crate::real::Real;
 
 impl<R: Real> Finger<R> {
     /// Cable statics, `f = -P (B - A)/|B - A|` along span k (docs/model.md "Cable", "Equilibrium").
@@ -95,8 +99,11 @@ pub(crate) trait By<R: Real> {
 
 /// The ways of `Finger::joint_march`.
 pub(crate) mod by {
-    use super::*;
+    use super::{march, march_stiffness, By, Finger, JointStiffness, MarchError, Pose};
     use crate::de::StackStiffness;
+    use crate::mat3::Mat3;
+    use crate::params::MAX_SUB;
+    use crate::real::Real;
 
     /// By compliances in `PoseFrame` (`Finger::march`).
     #[derive(Clone, Copy)]

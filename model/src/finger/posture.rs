@@ -2,7 +2,11 @@
 //! deflections, node poses, the tip load in a joint's frame, and the assembled `Solution`.
 //! No solving here.
 
-use super::*;
+use super::{norm2, Compliances, Finger, Heading, JointState, Pose, Solution, TipLoad};
+use crate::error::Error;
+use crate::mat3;
+use crate::params::{MAX_JOINTS, MAX_SUB};
+use crate::real::Real;
 
 impl<R: Real> Finger<R> {
     /// Link compliance, `q = C_link w` (a uniform beam; the model's `flex_links`, docs/model.md).

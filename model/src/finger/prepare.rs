@@ -2,7 +2,14 @@
 //! stiffness and the sub-element compliances for a set of channel voltages (docs/model.md
 //! "Joint compliance with the stack"). No solving here.
 
-use super::*;
+use super::types::cast_mat;
+use super::{Compliances, Finger};
+use crate::calibration::Calibration;
+use crate::error::Error;
+use crate::mat3::{self, Mat3};
+use crate::params::{Params, MAX_JOINTS, MAX_SUB};
+use crate::real::Real;
+use crate::{de, hinge};
 
 impl<R: Real> Finger<R> {
     /// Validate the parameters and compute the hinge compliances (once per parameter set).

@@ -1,71 +1,78 @@
 //! The paper's explicit load stepping (Eq. 29): each step's loads from the geometry of the
 //! step before, first order in 1/n_inc. Not the converged solve.
 
-use super::*;
+use super::{Compliances, Finger, Heading, JointState, MarchError, Solution, SpanLoads, TipLoad};
+use crate::error::Error;
+use crate::mat3::{self, Mat3};
+use crate::params::{MAX_JOINTS, MAX_SUB};
+use crate::real::Real;
 
-impl<R: Real> Finger<R> {
-    /// The paper's explicit load stepping (Eq. 29), `n_inc` steps.
-    pub(super) fn solve_stepping(&self, c: &Compliances<R>, tension: R, tip_force: [R; 2], n_inc: u32) -> Result<Solution<R>, Error> {
-        self.check_load(c, tension, tip_force)?;
-        if n_inc == 0 {
-            return Err(Error::Input { input: "n_inc", reason: "at least one load step" });
-        }
-        let states = self.stepping(c, tension, tip_force, n_inc)?;
-        self.assemble(c, tension, tip_force, &states, None, n_inc)
+/// The paper's explicit load stepping (Eq. 29), `n_inc` steps.
+pub(super) fn solve<R: Real>(f: &Finger<R>, c: &Compliances<R>, tension: R, tip_force: [R; 2], n_inc: u32) -> Result<Solution<R>, Error> {
+    f.check_load(c, tension, tip_force)?;
+    if n_inc == 0 {
+        return Err(Error::Input { input: "n_inc", reason: "at least one load step" });
     }
+    let states = states(f, c, tension, tip_force, n_inc)?;
+    f.assemble(c, tension, tip_force, &states, None, n_inc)
+}
 
-    /// The paper's load stepping (Eq. 29): P_n = n/n_inc P; each step's loads (direction of the
-    /// span, moment arms, tip-load point) come from the geometry of the step before, and each
-    /// sub-element takes `q = C w` at once.
-    // same parameters as `newton_coupled` (the finger's loads): the paper's stepping, another solver
-    pub(super) fn stepping(&self, c: &Compliances<R>, tension: R, force: [R; 2], n_inc: u32) -> Result<[JointState<R>; MAX_JOINTS], Error> {
-        let n = self.p.n;
-        let mut states = [self.straight(); MAX_JOINTS];
-        let loaded = force[0] != R::zero() || force[1] != R::zero();
-        for step in 1..=n_inc {
-            let lam = R::from_u32(step) / R::from_u32(n_inc);
-            let p = tension * lam;
-            let f = [force[0] * lam, force[1] * lam];
-            let (nodes, _) = self.chain(&states, p, f, None);
-            let tip = [nodes[n].pose.x, nodes[n].pose.y];
-            let mut next = states;
-            for k in 0..n {
-                let tl = Self::tip_in_frame(&nodes[k], f, tip);
-                next[k] = self
-                    .explicit_step(&c.c[k], p, &states[k], if loaded { Some(tl) } else { None })
-                    .map_err(|_| Error::Contact { joint: k + 1, tension: p.to_f64() })?;
-            }
-            states = next;
+/// The paper's load stepping (Eq. 29): P_n = n/n_inc P; each step's loads (direction of the
+/// span, moment arms, tip-load point) come from the geometry of the step before, and each
+/// sub-element takes `q = C w` at once.
+// same parameters as `loaded::newton_coupled` (the finger's loads): the paper's stepping, another solver
+fn states<R: Real>(f: &Finger<R>, c: &Compliances<R>, tension: R, force: [R; 2], n_inc: u32) -> Result<[JointState<R>; MAX_JOINTS], Error> {
+    let n = f.p.n;
+    let mut states = [f.straight(); MAX_JOINTS];
+    let loaded = force[0] != R::zero() || force[1] != R::zero();
+    for step in 1..=n_inc {
+        let lam = R::from_u32(step) / R::from_u32(n_inc);
+        let p = tension * lam;
+        let load = [force[0] * lam, force[1] * lam];
+        let (nodes, _) = f.chain(&states, p, load, None);
+        let tip = [nodes[n].pose.x, nodes[n].pose.y];
+        let mut next = states;
+        for k in 0..n {
+            let tl = Finger::tip_in_frame(&nodes[k], load, tip);
+            next[k] = explicit_step(f, &c.c[k], p, &states[k], if loaded { Some(tl) } else { None })
+                .map_err(|_| Error::Contact { joint: k + 1, tension: p.to_f64() })?;
         }
-        Ok(states)
+        states = next;
     }
+    Ok(states)
+}
 
-    /// One explicit step for a joint: loads from the previous geometry `prev`.
-    pub(super) fn explicit_step(&self, c: &[Mat3<R>; MAX_SUB], tension: R, prev: &JointState<R>, tip: Option<TipLoad<R>>) -> Result<JointState<R>, MarchError> {
-        let e = self.p.e;
-        let b = prev.hole;
-        let SpanLoads { fc, ft, tp, ftot } = self.span_loads(tension, b, tip)?;
-        let mut frame = Heading::origin();
-        let mut q = [[R::zero(); 3]; MAX_SUB];
-        for j in 0..self.p.m {
-            let (s, co) = (frame.s, frame.c);
-            let qp = prev.q[j];
-            // previous distal end of this sub-element
-            let d = frame.point(self.sub_len + qp[0], qp[1]);
-            let mut mo = (b[0] - d[0]) * fc[1] - (b[1] - d[1]) * fc[0];
-            if tip.is_some() {
-                mo += (tp[0] - d[0]) * ft[1] - (tp[1] - d[1]) * ft[0];
-            }
-            let f = [co * ftot[0] + s * ftot[1], -s * ftot[0] + co * ftot[1]];
-            q[j] = mat3::mul_vec(&c[j], &[f[0], f[1], mo]);
-            frame = frame.then(self.sub_len + qp[0], qp[1], qp[2]);
+/// One explicit step for a joint: loads from the previous geometry `prev`.
+fn explicit_step<R: Real>(
+    f: &Finger<R>,
+    c: &[Mat3<R>; MAX_SUB],
+    tension: R,
+    prev: &JointState<R>,
+    tip: Option<TipLoad<R>>,
+) -> Result<JointState<R>, MarchError> {
+    let e = f.p.e;
+    let b = prev.hole;
+    let SpanLoads { fc, ft, tp, ftot } = f.span_loads(tension, b, tip)?;
+    let mut frame = Heading::origin();
+    let mut q = [[R::zero(); 3]; MAX_SUB];
+    for j in 0..f.p.m {
+        let (s, co) = (frame.s, frame.c);
+        let qp = prev.q[j];
+        // previous distal end of this sub-element
+        let d = frame.point(f.sub_len + qp[0], qp[1]);
+        let mut mo = (b[0] - d[0]) * fc[1] - (b[1] - d[1]) * fc[0];
+        if tip.is_some() {
+            mo += (tp[0] - d[0]) * ft[1] - (tp[1] - d[1]) * ft[0];
         }
-        // new geometry from the new q
-        let end = self.walk(&q);
-        let hole = end.point(R::zero(), e);
-        if !(hole[0].is_finite() && hole[1].is_finite()) {
-            return Err(MarchError::Singular);
-        }
-        Ok(JointState { q, end: end.pose, hole, tangent: None })
+        let fj = [co * ftot[0] + s * ftot[1], -s * ftot[0] + co * ftot[1]];
+        q[j] = mat3::mul_vec(&c[j], &[fj[0], fj[1], mo]);
+        frame = frame.then(f.sub_len + qp[0], qp[1], qp[2]);
     }
+    // new geometry from the new q
+    let end = f.walk(&q);
+    let hole = end.point(R::zero(), e);
+    if !(hole[0].is_finite() && hole[1].is_finite()) {
+        return Err(MarchError::Singular);
+    }
+    Ok(JointState { q, end: end.pose, hole, tangent: None })
 }

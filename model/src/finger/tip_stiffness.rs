@@ -2,7 +2,10 @@
 //! compliance Σ J C Jᵀ and its inverse, and the equilibrium residual as an independent check
 //! of any solve.
 
-use super::*;
+use super::{loaded, Compliances, Finger, Heading, Solution, COUPLED};
+use crate::error::Error;
+use crate::mat3::{self, Mat3};
+use crate::real::Real;
 
 impl<R: Real> Finger<R> {
     /// Linearised tip compliance `C_tip = Σ J C Jᵀ` over every sub-element (docs/model.md "Tip
@@ -57,7 +60,8 @@ impl<R: Real> Finger<R> {
         }
         x[2 * n] = sol.tip().x;
         x[2 * n + 1] = sol.tip().y;
-        let (r, _) = self.coupled_residual(&c, sol.tension, sol.tip_force, &x).map_err(|_| Error::Contact { joint: 0, tension: sol.tension.to_f64() })?;
+        let (r, _) =
+            loaded::coupled_residual(self, &c, sol.tension, sol.tip_force, &x).map_err(|_| Error::Contact { joint: 0, tension: sol.tension.to_f64() })?;
         Ok(r[..2 * n + 2].iter().fold(R::zero(), |a, &v| a + v * v).sqrt())
     }
 
