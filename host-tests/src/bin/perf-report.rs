@@ -675,7 +675,9 @@ rows' errors stay at 1e-11 and below); the tabled inverse's stiffness march with
 march built for its way), the tabled inverse's sub-element rows past (n, m) cleared only where an earlier answer \
 held them and the tabled forward holding fewer values across a march, which bring the branch-table rows back to \
 their counts before the round (forward within 0.5 %, inverse below). Instruction counts move where the chain's \
-turns replace sines and cosines and where the inlining around the marches changed.";
+turns replace sines and cosines and where the inlining around the marches changed. The finger's solvers as \
+functions over `&Finger` in their own modules and the m = 1 inverse in `inverse/fast.rs` are pure moves: the \
+firmware images' instructions are the same. \"Before\" is this report as the round found it (21dcb1b).";
 
 /// The rows of the tables under `heading` in `md`: the first `key` cells joined, then the next `cols` cells.
 fn table_rows(md: &str, heading: &str, key: usize, cols: usize) -> BTreeMap<String, Vec<String>> {
