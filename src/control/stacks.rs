@@ -155,11 +155,11 @@ impl Stacks {
 }
 
 /// The M3 image's step arithmetic (its `Stacks::step`), compiled on every target so the host
-/// tests reach it: the voltage after one tick from `volts_now` toward `target_v`, by at most
+/// tests reach it: the model's slew (`material::drive::slew_toward`) clamped at 0 V; the voltage after one tick from `volts_now` toward `target_v`, by at most
 /// `slew_step` (>= 0), never past the target, never below +0 V. Never NaN: a NaN that reaches
 /// the end answers 0 V.
 pub fn plain_slew_step(volts_now: f32, target_v: f32, slew_step: f32) -> f32 {
-    let v = if target_v > volts_now { (volts_now + slew_step).min(target_v) } else { (volts_now - slew_step).max(target_v) };
+    let v = finger_model::material::drive::slew_toward(volts_now, target_v, slew_step);
     if v > 0.0 {
         v
     } else {
