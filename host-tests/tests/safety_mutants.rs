@@ -1,9 +1,11 @@
 //! The safety core's boundaries, one assertion per rule, written against the mutants that
 //! survived the other host tests (scripts/mutants, docs/reliability.md): the control core
 //! (the single duty writer's ceiling and cap, the slew step, stale setpoints, the watchdog's
-//! check-in bound, stop) and the RX ring (overrun counts, a full ring, the `wait` input flag).
+//! check-in bound, stop), the RX ring (overrun counts, a full ring, the `wait` input flag) and
+//! the Cortex-M3 image's step arithmetic (`plain_slew_step`, which the host compiles).
 use finger_fw::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V};
 use finger_fw::console::LINE_MAX;
+use finger_fw::control::stacks::plain_slew_step;
 use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Setpoints, CHECKIN_BOUND_MS};
 use finger_fw::rx::{Record, RxEvent, RxLines, OVERRUN_RECORD, RX_RING};
 use finger_fw::sim::SimBoard;
@@ -408,4 +410,59 @@ fn the_stacks_floor_plain_and_shaped() {
     assert_eq!(st.floor(v, false), Some(st.s_hold()));
     assert_eq!(st.floor(v, true), Some(s_v));
     assert_eq!(st.floor(2.0 * st.hold_ceiling_v(), true), None, "past the hold ceiling");
+}
+
+// The Cortex-M3 image's step (`Stacks::step` under `cfg(m3)`) is `plain_slew_step`: the host
+// never builds that image, so its arithmetic is checked here, one rule a test.
+
+#[test]
+fn m3_step_slews_up_by_one_step() {
+    assert_eq!(plain_slew_step(0.0, 1_000.0, 20.0), 20.0);
+    assert_eq!(plain_slew_step(100.0, 1_000.0, 20.0), 120.0);
+}
+
+#[test]
+fn m3_step_slews_down_by_one_step() {
+    assert_eq!(plain_slew_step(1_000.0, 100.0, 20.0), 980.0);
+    assert_eq!(plain_slew_step(1_000.0, 0.0, 20.0), 980.0);
+}
+
+#[test]
+fn m3_step_stops_at_the_target() {
+    assert_eq!(plain_slew_step(990.0, 1_000.0, 20.0), 1_000.0, "up, within a step");
+    assert_eq!(plain_slew_step(110.0, 100.0, 20.0), 100.0, "down, within a step");
+    assert_eq!(plain_slew_step(1_000.0, 1_000.0, 20.0), 1_000.0, "at the target");
+    // from rest to the target in whole steps, then held there
+    let mut v = 0.0;
+    for _ in 0..60 {
+        v = plain_slew_step(v, 1_000.0, 20.0);
+    }
+    assert_eq!(v, 1_000.0);
+}
+
+#[test]
+fn m3_step_is_never_negative() {
+    assert_eq!(plain_slew_step(10.0, 0.0, 20.0), 0.0, "a step past 0 V ends at 0 V");
+    assert_eq!(plain_slew_step(10.0, -500.0, 20.0), 0.0, "a negative target");
+    assert_eq!(plain_slew_step(-50.0, -100.0, 20.0), 0.0, "a negative start");
+    // the floor is +0 V: `status` never shows -0.0
+    let v = plain_slew_step(0.0, -0.0, 20.0);
+    assert!(v == 0.0 && v.is_sign_positive(), "{v}");
+}
+
+#[test]
+fn m3_step_of_zero_holds_the_voltage() {
+    assert_eq!(plain_slew_step(500.0, 1_000.0, 0.0), 500.0);
+    assert_eq!(plain_slew_step(500.0, 100.0, 0.0), 500.0);
+    assert_eq!(plain_slew_step(0.0, 1_000.0, 0.0), 0.0);
+}
+
+#[test]
+fn m3_step_is_never_nan() {
+    let n = f32::NAN;
+    assert_eq!(plain_slew_step(n, n, 20.0), 0.0, "nothing known: 0 V");
+    for (v, t, s) in [(n, 1_000.0, 20.0), (500.0, n, 20.0), (500.0, 1_000.0, n), (n, n, n), (500.0, 100.0, n)] {
+        let out = plain_slew_step(v, t, s);
+        assert!(out >= 0.0, "({v}, {t}, {s}) -> {out}");
+    }
 }

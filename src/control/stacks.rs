@@ -14,8 +14,9 @@
 //!
 //! On the Cortex-M3 image (`cfg(m3)`) the integration does not fit its 64 KiB of flash
 //! (docs/firmware.md): there the stacks keep the card's hold ceiling and `s_hold` only, a step
-//! applies the voltage asked (the targets are already within the hold ceiling), shaped
-//! actuation is plain, and the thickness now is not known (NaN).
+//! is a plain slew to the voltage asked ([`plain_slew_step`], compiled on every target so the
+//! host tests reach it; the targets are already within the hold ceiling), shaped actuation is
+//! plain, and the thickness now is not known (NaN).
 
 #[cfg(not(m3))]
 use finger_model::material::drive::{Channel, DriveLimits, Mode};
@@ -145,11 +146,23 @@ impl Stacks {
     }
 
     /// The M3 image's step: the slew toward the target (already within the hold ceiling),
-    /// nothing integrated.
+    /// nothing integrated ([`plain_slew_step`]).
     #[cfg(m3)]
     #[allow(clippy::too_many_arguments)]
     pub fn step(&mut self, _ch: usize, volts_now: f32, target_v: f32, _s_floor: f32, _shaped: bool, slew_step: f32, _v_cap: f32) -> Result<f32, StepRefused> {
-        let v = if target_v > volts_now { (volts_now + slew_step).min(target_v) } else { (volts_now - slew_step).max(target_v) };
-        Ok(if v > 0.0 { v } else { 0.0 })
+        Ok(plain_slew_step(volts_now, target_v, slew_step))
+    }
+}
+
+/// The M3 image's step arithmetic (its `Stacks::step`), compiled on every target so the host
+/// tests reach it: the model's slew (`material::drive::slew_toward`) clamped at 0 V; the voltage after one tick from `volts_now` toward `target_v`, by at most
+/// `slew_step` (>= 0), never past the target, never below +0 V. Never NaN: a NaN that reaches
+/// the end answers 0 V.
+pub fn plain_slew_step(volts_now: f32, target_v: f32, slew_step: f32) -> f32 {
+    let v = finger_model::material::drive::slew_toward(volts_now, target_v, slew_step);
+    if v > 0.0 {
+        v
+    } else {
+        0.0
     }
 }

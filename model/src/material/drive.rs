@@ -68,11 +68,21 @@ impl<R: Real> Channel<R> {
             _ => target_v,
         };
         let v = self.volts;
-        let v = if goal > v { (v + lim.slew_step).min(goal) } else { (v - lim.slew_step).max(goal) };
+        let v = slew_toward(v, goal, lim.slew_step);
         let mut next = self.state;
         self.volts = guarded_tick(law, relax, &mut next, v, floor)?;
         self.state = next;
         Ok(())
+    }
+}
+
+/// One tick's slew: from `v` toward `goal` by at most `step` (>= 0), never past the goal.
+#[inline(always)]
+pub fn slew_toward<R: Real>(v: R, goal: R, step: R) -> R {
+    if goal > v {
+        (v + step).min(goal)
+    } else {
+        (v - step).max(goal)
     }
 }
 
