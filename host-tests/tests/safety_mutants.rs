@@ -412,6 +412,26 @@ fn the_stacks_floor_plain_and_shaped() {
     assert_eq!(st.floor(2.0 * st.hold_ceiling_v(), true), None, "past the hold ceiling");
 }
 
+/// The read-back's thickness guard compares the film's equilibrium voltage at the model's and
+/// at the measured stretch (`Stacks::equilibrium_voltage_at`); a wrong one hides a soft film.
+#[test]
+fn the_stacks_equilibrium_voltage_is_the_cards() {
+    use finger_fw::control::Stacks;
+    let st = Stacks::board().unwrap();
+    let law = finger_fw::board::board_law().unwrap();
+    let hold = st.hold_ceiling_v();
+    // the hold's own stretch gives back the voltage that holds it, within f32's rounding
+    let at_hold = st.equilibrium_voltage_at(st.s_hold());
+    assert!((at_hold - finger_model::material::equilibrium_voltage(&law, st.s_hold()).unwrap()).abs() <= 1e-3 * hold);
+    assert!(at_hold >= hold * 0.9 && at_hold.is_finite(), "{at_hold} V for s_hold (hold ceiling {hold} V)");
+    // thinner film, higher voltage; the unstretched film holds at 0 V
+    let at_mid = st.equilibrium_voltage_at(0.5 * (1.0 + st.s_hold()));
+    assert!(at_mid > 0.0 && at_mid < at_hold, "{at_mid} V between 0 and {at_hold} V");
+    assert!(st.equilibrium_voltage_at(1.0).abs() < 1e-3);
+    // past the film's reach: no voltage holds it
+    assert_eq!(st.equilibrium_voltage_at(f32::NAN), f32::INFINITY);
+}
+
 // The Cortex-M3 image's step (`Stacks::step` under `cfg(m3)`) is `plain_slew_step`: the host
 // never builds that image, so its arithmetic is checked here, one rule a test.
 
