@@ -432,6 +432,27 @@ fn the_stacks_equilibrium_voltage_is_the_cards() {
     assert_eq!(st.equilibrium_voltage_at(f32::NAN), f32::INFINITY);
 }
 
+/// The read-back solves a swing's charge for the capacitance with the film's dQ/dV over Q/V
+/// (`Stacks::incremental_capacitance_ratio`): 1 at rest, above 1 on a thinned film. A wrong
+/// ratio reads a held film thicker or thinner than it is.
+#[test]
+fn the_stacks_incremental_capacitance_ratio_follows_the_film() {
+    use finger_fw::control::Stacks;
+    let mut st = Stacks::board().unwrap();
+    let target = 0.8 * st.hold_ceiling_v();
+    let mut v = 0.0;
+    for _ in 0..20_000 {
+        v = st.step(0, v, target, st.s_hold(), false, 100.0, target).unwrap();
+    }
+    assert_eq!(v, target);
+    let s = st.ratios()[0];
+    assert!(s < 1.0, "the held film thinned: {s}");
+    // channel 0 held and thinned; channel 1 at rest
+    let r = st.incremental_capacitance_ratio(0);
+    assert!(r > 1.0 && r.is_finite(), "{r}");
+    assert!((st.incremental_capacitance_ratio(1) - 1.0).abs() < 1e-6, "at rest: {}", st.incremental_capacitance_ratio(1));
+}
+
 // The Cortex-M3 image's step (`Stacks::step` under `cfg(m3)`) is `plain_slew_step`: the host
 // never builds that image, so its arithmetic is checked here, one rule a test.
 
