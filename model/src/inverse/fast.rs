@@ -245,7 +245,7 @@ pub(super) fn solve<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>, op
         let (s, c) = crate::finger::turn(angles[k]);
         ang[k] = Angle { theta: angles[k], s, c };
     }
-    let out = if f.params().layers == 0 { no_stacks(&ctx, &ang, tension, opts, out)? } else { with_stacks(f, &ctx, &ang, tension, opts, out)? };
+    let out = if f.params().layers == 0 { no_stacks(&ctx, &ang, tension, opts, out)? } else { with_stacks(&ctx, &ang, tension, opts, out)? };
     // a posture held only by a pushing cable is no answer (a cable cannot push)
     if !(out.tension >= R::zero()) {
         return Err(Error::Input { input: "angles", reason: "the posture needs a pushing cable (tension < 0)" });
@@ -263,19 +263,18 @@ fn fill_sub<R: Real>(mut out: PoseSolution<R>) -> PoseSolution<R> {
 
 /// The m = 1, rigid-link solve with stacks (docs/inverse.md "Module notes: the m = 1 fast path", steps 1-4).
 fn with_stacks<R: Real>(
-    f: &Finger<R>,
     ctx: &Ctx<'_, R>,
     ang: &[Angle<R>; MAX_JOINTS],
     tension: Option<R>,
     opts: &Options<R>,
     mut out: PoseSolution<R>,
 ) -> Result<PoseSolution<R>, Error> {
-    let p = f.params();
+    let p = ctx.p;
     let n = out.n;
 
     // 1. every joint's tension range: stiffest stack (0 V) and softest (top voltage)
     let t0 = R::from_u32(p.layers) * p.z0;
-    let v_top = f.ceiling_in_force(opts.hv_fs) * opts.top;
+    let v_top = ctx.f.ceiling_in_force(opts.hv_fs) * opts.top;
     let t_top = if v_top > R::zero() { de::stack_thickness(p, 1, v_top)? } else { t0 };
     let mut hi = [ctx.hold_tension(1, &ang[0], t0, [R::zero(); 2])?; MAX_JOINTS];
     let mut lo = hi;
@@ -342,7 +341,6 @@ fn with_stacks<R: Real>(
 }
 
 /// The finger without stacks: only the tension is free.
-// same parameters as `with_stacks`: the other branch of one dispatch, another computation
 fn no_stacks<R: Real>(
     ctx: &Ctx<'_, R>,
     ang: &[Angle<R>; MAX_JOINTS],
