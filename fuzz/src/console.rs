@@ -151,6 +151,37 @@ fn chunks(text: &str) -> Vec<String> {
     v
 }
 
+/// The final and `err stopped` replies in the output so far, counted once per line as the
+/// output grows (re-reading the whole output at every line made the checker quadratic).
+#[derive(Default)]
+struct Tally {
+    /// Bytes of the output whose lines are counted (up to a line end).
+    scanned: usize,
+    finals: usize,
+    stopped: usize,
+}
+
+impl Tally {
+    fn line(l: &str) -> (usize, usize) {
+        (is_final(l) as usize, l.starts_with("err stopped: ") as usize)
+    }
+
+    /// The counts over all of `out` (`str::lines`' lines: an unended last line counts too).
+    fn counts(&mut self, out: &str) -> (usize, usize) {
+        if let Some(end) = out[self.scanned..].rfind('\n') {
+            let end = self.scanned + end + 1;
+            for l in out[self.scanned..end].lines() {
+                let (f, s) = Tally::line(l);
+                self.finals += f;
+                self.stopped += s;
+            }
+            self.scanned = end;
+        }
+        let (f, s) = out[self.scanned..].lines().map(Tally::line).fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        (self.finals + f, self.stopped + s)
+    }
+}
+
 /// The checker's state across one input.
 struct Run {
     app: App<SimBoard>,
@@ -169,18 +200,19 @@ struct Run {
     dropped: usize,
     /// A stop came while held, and no line after it.
     stop_last: bool,
+    tally: Tally,
 }
 
 impl Run {
-    fn finals(&self) -> usize {
-        self.out.lines().filter(|l| is_final(l)).count()
+    fn finals(&mut self) -> usize {
+        self.tally.counts(&self.out).0
     }
 
-    fn check_counts(&self, when: &str) {
+    fn check_counts(&mut self, when: &str) {
+        let (finals, stopped) = self.tally.counts(&self.out);
         if !self.app.busy() {
-            assert_eq!(self.finals(), self.due, "replies {when}:\n{}", self.out);
+            assert_eq!(finals, self.due, "replies {when}:\n{}", self.out);
         }
-        let stopped = self.out.lines().filter(|l| l.starts_with("err stopped: ")).count();
         assert_eq!(stopped, self.stopped_due, "`err stopped` replies {when}:\n{}", self.out);
     }
 
@@ -299,6 +331,7 @@ pub fn check(data: &[u8]) {
         queued: Vec::new(),
         dropped: 0,
         stop_last: false,
+        tally: Tally::default(),
     };
     let mut ticks = 0u32;
     let mut i = 0;
