@@ -6,7 +6,8 @@
 use finger_fw::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V};
 use finger_fw::console::LINE_MAX;
 use finger_fw::control::stacks::plain_slew_step;
-use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Setpoints, CHECKIN_BOUND_MS};
+use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Setpoints, CHECKIN_BOUND_MS, LOW_CHECK_V};
+use finger_fw::plant::{Inject, Plant};
 use finger_fw::rx::{Record, RxEvent, RxLines, OVERRUN_RECORD, RX_RING};
 use finger_fw::sim::SimBoard;
 
@@ -239,6 +240,33 @@ fn a_latched_fault_keeps_the_enable_low_until_a_stop() {
     c.stop();
     assert!(c.apply(&setpoints(&c, 500.0, ceiling)));
     assert!(c.view().enable && c.board().enable.high, "after the stop it arms");
+}
+
+/// Only a fault of the read-back makes the next arm run the low-voltage check (300 ms at no
+/// more than 200 V): after a breakdown the stacks wait under 200 V, after a refused setpoint
+/// they ramp at their slew at once. On the plant's board (the read-back present).
+#[test]
+fn only_a_fault_of_the_read_back_makes_the_next_arm_check_at_low_voltage() {
+    let ceiling = hv_duty_for(2_000.0, MAX);
+    let after = |fault: &dyn Fn(&mut Control<SimBoard>)| {
+        let mut c = Control::new(SimBoard::with_plant(Plant::new(1).unwrap()), 2_000, 2_000.0);
+        fault(&mut c);
+        assert!(c.view().fault.get().is_some());
+        c.stop();
+        assert!(c.apply(&setpoints(&c, 1_500.0, ceiling)));
+        ticks(&mut c, 250);
+        c.view().volts
+    };
+    let refused = after(&|c| assert!(c.apply(&setpoints(c, 2_400.0, ceiling))));
+    assert!(refused.iter().all(|&v| v > 2.0 * LOW_CHECK_V), "250 ms after the arm at 2,000 V/s: {refused:?} V");
+    let broke = after(&|c| {
+        assert!(c.apply(&setpoints(c, 1_500.0, ceiling)));
+        ticks(c, 1_000);
+        c.board_mut().plant.as_mut().unwrap().inject(0, Inject::Breakdown { clears_after_ms: Some(1) }).unwrap();
+        ticks(c, 5);
+        assert_eq!(c.view().fault, Some("breakdown"));
+    });
+    assert!(broke.iter().all(|&v| v <= LOW_CHECK_V), "250 ms after the arm that follows a breakdown: {broke:?} V");
 }
 
 #[test]
