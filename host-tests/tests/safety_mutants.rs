@@ -5,8 +5,9 @@
 //! the Cortex-M3 image's step arithmetic (`plain_slew_step`, which the host compiles).
 use finger_fw::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V};
 use finger_fw::console::LINE_MAX;
+use finger_fw::control::hv_loop::VoltageLoop;
 use finger_fw::control::stacks::plain_slew_step;
-use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Setpoints, CHECKIN_BOUND_MS, LOW_CHECK_V};
+use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Fault, Latched, Setpoints, CHECKIN_BOUND_MS, LOW_CHECK_V};
 use finger_fw::plant::{Inject, Plant};
 use finger_fw::rx::{Record, RxEvent, RxLines, OVERRUN_RECORD, RX_RING};
 use finger_fw::sim::SimBoard;
@@ -267,6 +268,47 @@ fn only_a_fault_of_the_read_back_makes_the_next_arm_check_at_low_voltage() {
         assert_eq!(c.view().fault, Some("breakdown"));
     });
     assert!(broke.iter().all(|&v| v <= LOW_CHECK_V), "250 ms after the arm that follows a breakdown: {broke:?} V");
+}
+
+/// A latched fault compares equal to its console text and to nothing else (the tests'
+/// `assert_eq!(view.fault, Some("breakdown"))` rest on it).
+#[test]
+fn a_latched_fault_equals_its_own_text_only() {
+    assert_eq!(Latched(None), None);
+    assert_ne!(Latched(None), Some("breakdown"));
+    assert_eq!(Latched(Some(Fault::Breakdown)), Some("breakdown"));
+    assert_ne!(Latched(Some(Fault::Breakdown)), Some("sensor"));
+    assert_ne!(Latched(Some(Fault::Breakdown)), None);
+}
+
+/// A drive of 0 (a disarm) or a ceiling of 0 ends the voltage loop's integral: the ask ramps
+/// to 0 (the ceiling: at once) and stays there, and the next drive runs as on a new loop. The
+/// module here is 20 % weak, so the integral had grown while held.
+#[test]
+fn the_voltage_loop_forgets_its_integral_when_the_drive_or_the_ceiling_is_0() {
+    let (top, step) = (5_000.0, 2.0);
+    let run = |l: &mut VoltageLoop, drive: f32, limit: f32, ticks: u32, measured: &mut f32| -> Vec<f32> {
+        (0..ticks)
+            .map(|_| {
+                let a = l.step(drive, *measured, top, limit, step);
+                *measured = 0.8 * a.volts;
+                a.volts
+            })
+            .collect()
+    };
+    for (drive_off, limit_off) in [(0.0, top), (1_000.0, 0.0)] {
+        let (mut l, mut measured) = (VoltageLoop::new(), 0.0);
+        run(&mut l, 1_000.0, top, 2_000, &mut measured);
+        assert!(l.asked_v() > 1_100.0, "the weak module's ask {} V", l.asked_v());
+        let off = run(&mut l, drive_off, limit_off, 2_000, &mut measured);
+        assert!(off[1_000..].iter().all(|&v| v == 0.0), "drive {drive_off} V, ceiling {limit_off} V: the ask ends at {:?} V", off.last());
+        if limit_off == 0.0 {
+            assert_eq!(off[0], 0.0, "a ceiling of 0 is obeyed at once");
+        }
+        let (mut fresh, mut measured_fresh) = (VoltageLoop::new(), 0.0);
+        let again = run(&mut l, 1_000.0, top, 2_000, &mut measured);
+        assert_eq!(again, run(&mut fresh, 1_000.0, top, 2_000, &mut measured_fresh), "drive {drive_off} V, ceiling {limit_off} V");
+    }
 }
 
 #[test]
