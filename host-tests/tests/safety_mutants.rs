@@ -5,7 +5,7 @@
 //! the Cortex-M3 image's step arithmetic (`plain_slew_step`, which the host compiles).
 use finger_fw::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V};
 use finger_fw::console::LINE_MAX;
-use finger_fw::control::hv_loop::VoltageLoop;
+use finger_fw::control::hv_loop::{VoltageLoop, INTEGRAL_FRAC, KI_PER_S, KP};
 use finger_fw::control::stacks::plain_slew_step;
 use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Fault, Latched, Setpoints, CHECKIN_BOUND_MS, LOW_CHECK_V};
 use finger_fw::plant::{Inject, Plant};
@@ -311,6 +311,33 @@ fn the_voltage_loop_forgets_its_integral_when_the_drive_or_the_ceiling_is_0() {
         let differs = again.iter().zip(&new).position(|(a, b)| a != b);
         assert_eq!(differs, None, "drive {drive_off} V, ceiling {limit_off} V: the next drive's asks differ from a new loop's from this tick on");
     }
+}
+
+/// The loop's one tick from rest, the slew out of the way: the feed-forward, KP x the error
+/// and KI x the error x 1 ms (900 V read for 1,000 V: 1,000 + 50 + 3 V).
+#[test]
+fn the_voltage_loop_is_feed_forward_plus_its_pi_terms() {
+    let mut l = VoltageLoop::new();
+    let a = l.step(1_000.0, 900.0, 5_000.0, 5_000.0, 1e6);
+    let want = 1_000.0 + KP * 100.0 + KI_PER_S * 1e-3 * 100.0;
+    assert!((a.volts - want).abs() < 1e-3, "{} V against {want} V", a.volts);
+    assert!(!a.slew_held);
+}
+
+/// A monitor that reads half the true voltage: the integral stops at its bound (a quarter of
+/// the drive and 50 V), so the ask stays under the drive + KP x the drive + that bound, far
+/// under the ceiling, however long it runs.
+#[test]
+fn the_voltage_loops_integral_is_bounded_under_a_monitor_reading_half() {
+    let (drive, top) = (1_000.0, 5_000.0);
+    let (mut l, mut measured, mut highest) = (VoltageLoop::new(), 0.0f32, 0.0f32);
+    for _ in 0..20_000 {
+        let a = l.step(drive, measured, top, top, 2.0);
+        measured = 0.5 * a.volts;
+        highest = highest.max(a.volts);
+    }
+    let bound = drive + KP * drive + INTEGRAL_FRAC * drive + 50.0;
+    assert!(highest <= bound, "the ask reached {highest} V, bound {bound} V");
 }
 
 #[test]
