@@ -340,6 +340,49 @@ fn the_voltage_loops_integral_is_bounded_under_a_monitor_reading_half() {
     assert!(highest <= bound, "the ask reached {highest} V, bound {bound} V");
 }
 
+/// A ramp the slew holds back does not wind the integral up (anti-windup): with a module 10 %
+/// weak, the ask settles on what the module needs (drive / 0.9) within 1 V and passes it by no
+/// more than 1 %, after each step (up from rest, down, up again), each ramped at 2 V a tick.
+/// (A module 10 % strong passes its need by 5 % on the last step up: the proportional term's
+/// lag, with or without the anti-windup.)
+#[test]
+fn the_voltage_loop_does_not_wind_up_while_the_slew_holds_it() {
+    for gain in [0.9f32] {
+        let (mut l, mut measured, mut last) = (VoltageLoop::new(), 0.0f32, 0.0f32);
+        for drive in [1_000.0f32, 200.0, 1_000.0] {
+            let asks: Vec<f32> = (0..6_000)
+                .map(|_| {
+                    let a = l.step(drive, measured, 5_000.0, 5_000.0, 2.0);
+                    measured = gain * a.volts;
+                    a.volts
+                })
+                .collect();
+            let need = drive / gain;
+            let (lo, hi) = asks.iter().fold((f32::MAX, 0.0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+            let settled = asks[asks.len() - 1];
+            assert!((settled - need).abs() < 1.0, "gain {gain}, drive {drive} V: settled at {settled} V, the module needs {need} V");
+            if need > last {
+                assert!(hi <= 1.01 * need, "gain {gain}, drive {drive} V: overshoot to {hi} V");
+            } else {
+                assert!(lo >= 0.99 * need, "gain {gain}, drive {drive} V: undershoot to {lo} V");
+            }
+            last = need;
+        }
+    }
+    // held on a ceiling under the module's need (1,050 V of 1,111 V) for 3 s, then the ceiling
+    // lifted: the integral did not grow past what put the ask on the ceiling
+    let (mut l, mut measured) = (VoltageLoop::new(), 0.0f32);
+    let mut highest = 0.0f32;
+    for (limit, ticks) in [(1_050.0, 3_000), (5_000.0, 3_000)] {
+        for _ in 0..ticks {
+            let a = l.step(1_000.0, measured, 5_000.0, limit, 2.0);
+            measured = 0.9 * a.volts;
+            highest = highest.max(a.volts);
+        }
+    }
+    assert!(highest <= 1.01 * 1_000.0 / 0.9, "after the ceiling lifted: overshoot to {highest} V");
+}
+
 #[test]
 fn the_servo_follows_the_voltages_progress_from_where_they_were() {
     let mut c = core();
