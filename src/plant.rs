@@ -274,6 +274,10 @@ impl Plant {
                 c.awd_cut = false;
             }
             self.record_cut();
+        } else if self.ch.iter().all(|c| c.awd_cut) {
+            // the analog watchdog's latch still holds every module off (the enable was not low
+            // for a tick since it tripped): a fault injected meanwhile finds the supply cut
+            self.record_cut();
         }
         for _ in 0..SUBSTEPS {
             self.now_us += (DT_S * 1e6) as u64;
