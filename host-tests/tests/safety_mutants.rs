@@ -6,7 +6,7 @@
 use finger_fw::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V};
 use finger_fw::console::LINE_MAX;
 use finger_fw::control::hv_loop::{VoltageLoop, INTEGRAL_FRAC, KI_PER_S, KP};
-use finger_fw::control::sense::{ripple_v, Estimator, RIPPLE_PERIOD_MS, RIPPLE_PP_V, RIPPLE_STEP_V};
+use finger_fw::control::sense::{ripple_v, Estimator, RIPPLE_PERIOD_MS, RIPPLE_PP_V, RIPPLE_STEP_V, WINDOW_DV_V};
 use finger_fw::control::stacks::plain_slew_step;
 use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Fault, Latched, Setpoints, CHECKIN_BOUND_MS, LOW_CHECK_V};
 use finger_fw::plant::{Inject, Plant};
@@ -677,4 +677,16 @@ fn the_estimator_skips_a_reading_that_is_not_a_number() {
         let c = est.capacitance_pf();
         assert!(matches!(c, Some(c) if (c - c_pf).abs() < 0.05 * c_pf), "a NaN current every {nan_every} ticks: {c:?} pF");
     }
+}
+
+/// On a slew (the channel not held) a sense window closes at each `WINDOW_DV_V` of swing, not
+/// at the hold ripple's turns: 1,200 ms at 500 V/s are 10 windows of 60 V.
+#[test]
+fn a_slews_sense_windows_close_on_its_swing() {
+    let mut est = Estimator::new();
+    for k in 0..=1_200u32 {
+        est.tick(1_000.0 + 0.5 * k as f32, 80.0 * 0.5 * 1e-3, 0, 1.0);
+    }
+    assert_eq!(WINDOW_DV_V, 60.0);
+    assert_eq!(est.windows(), 10);
 }
