@@ -9,6 +9,12 @@ use finger_fw::sim::SimBoard;
 
 use crate::hv::setpoints;
 
+/// How many random histories a history test runs: `HV_HISTORIES` when set (scripts/mutants runs
+/// fewer per mutant), else 10,000.
+pub fn histories() -> u64 {
+    std::env::var("HV_HISTORIES").ok().and_then(|s| s.parse().ok()).unwrap_or(10_000)
+}
+
 /// A small deterministic generator (splitmix64).
 pub struct Rng(u64);
 

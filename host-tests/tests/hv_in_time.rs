@@ -177,7 +177,7 @@ fn history(seed: u64, hold: f32) {
 
 #[test]
 fn random_histories_never_thin_past_s_hold_nor_write_past_the_ceiling() {
-    let n: u64 = std::env::var("HV_HISTORIES").ok().and_then(|s| s.parse().ok()).unwrap_or(10_000);
+    let n = host_tests::plant_runs::histories();
     let first: u64 = std::env::var("HV_HISTORIES_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(1);
     let hold = App::new(SimBoard::default()).control().hold_ceiling_v();
     for seed in first..first + n {

@@ -6,13 +6,7 @@
 use finger_fw::control::watch::HV_SETTLE_MS;
 use finger_fw::control::Fault;
 use finger_fw::plant::{Inject, Plant};
-use host_tests::plant_runs::{armed, clean_history, fault_history, run, Kind, Rng, SOFT_TIME_SCALE};
-
-/// Histories of the two 10,000-history tests: `HV_HISTORIES` (as hv_in_time.rs reads it) when
-/// set, else 10,000 (scripts/mutants runs fewer per mutant).
-fn histories() -> u64 {
-    std::env::var("HV_HISTORIES").ok().and_then(|s| s.parse().ok()).unwrap_or(10_000)
-}
+use host_tests::plant_runs::{armed, clean_history, fault_history, histories, run, Kind, Rng, SOFT_TIME_SCALE};
 
 /// A breakdown on a held or slewing channel above 500 V: the analog watchdog cuts the
 /// enable within 1 ms of board time, and the core latches `breakdown` with every duty 0.
