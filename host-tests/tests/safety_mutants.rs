@@ -282,33 +282,46 @@ fn a_latched_fault_equals_its_own_text_only() {
     assert_ne!(Latched(Some(Fault::Breakdown)), None);
 }
 
+/// A module whose output is `gain` x the voltage asked, read back without noise, behind a voltage
+/// loop at a 5,000 V top and 2 V a tick.
+struct Module {
+    gain: f32,
+    measured: f32,
+}
+
+impl Module {
+    fn new(gain: f32) -> Self {
+        Module { gain, measured: 0.0 }
+    }
+    /// `ticks` of the loop for `drive` under the ceiling `limit`: the voltage asked at each.
+    fn asks(&mut self, l: &mut VoltageLoop, drive: f32, limit: f32, ticks: u32) -> Vec<f32> {
+        (0..ticks)
+            .map(|_| {
+                let a = l.step(drive, self.measured, 5_000.0, limit, 2.0);
+                self.measured = self.gain * a.volts;
+                a.volts
+            })
+            .collect()
+    }
+}
+
 /// A drive of 0 (a disarm) or a ceiling of 0 ends the voltage loop's integral: the ask ramps
 /// to 0 (the ceiling: at once) and stays there, and the next drive runs as on a new loop. The
 /// module here is 20 % weak, so the integral had grown while held.
 #[test]
 fn the_voltage_loop_forgets_its_integral_when_the_drive_or_the_ceiling_is_0() {
-    let (top, step) = (5_000.0, 2.0);
-    let run = |l: &mut VoltageLoop, drive: f32, limit: f32, ticks: u32, measured: &mut f32| -> Vec<f32> {
-        (0..ticks)
-            .map(|_| {
-                let a = l.step(drive, *measured, top, limit, step);
-                *measured = 0.8 * a.volts;
-                a.volts
-            })
-            .collect()
-    };
+    let top = 5_000.0;
     for (drive_off, limit_off) in [(0.0, top), (1_000.0, 0.0)] {
-        let (mut l, mut measured) = (VoltageLoop::new(), 0.0);
-        run(&mut l, 1_000.0, top, 2_000, &mut measured);
+        let (mut l, mut module) = (VoltageLoop::new(), Module::new(0.8));
+        module.asks(&mut l, 1_000.0, top, 2_000);
         assert!(l.asked_v() > 1_100.0, "the weak module's ask {} V", l.asked_v());
-        let off = run(&mut l, drive_off, limit_off, 2_000, &mut measured);
+        let off = module.asks(&mut l, drive_off, limit_off, 2_000);
         assert!(off[1_000..].iter().all(|&v| v == 0.0), "drive {drive_off} V, ceiling {limit_off} V: the ask ends at {:?} V", off.last());
         if limit_off == 0.0 {
             assert_eq!(off[0], 0.0, "a ceiling of 0 is obeyed at once");
         }
-        let (mut fresh, mut measured_fresh) = (VoltageLoop::new(), 0.0);
-        let again = run(&mut l, 1_000.0, top, 2_000, &mut measured);
-        let new = run(&mut fresh, 1_000.0, top, 2_000, &mut measured_fresh);
+        let again = module.asks(&mut l, 1_000.0, top, 2_000);
+        let new = Module::new(0.8).asks(&mut VoltageLoop::new(), 1_000.0, top, 2_000);
         let differs = again.iter().zip(&new).position(|(a, b)| a != b);
         assert_eq!(differs, None, "drive {drive_off} V, ceiling {limit_off} V: the next drive's asks differ from a new loop's from this tick on");
     }
@@ -330,13 +343,9 @@ fn the_voltage_loop_is_feed_forward_plus_its_pi_terms() {
 /// under the ceiling, however long it runs.
 #[test]
 fn the_voltage_loops_integral_is_bounded_under_a_monitor_reading_half() {
-    let (drive, top) = (1_000.0, 5_000.0);
-    let (mut l, mut measured, mut highest) = (VoltageLoop::new(), 0.0f32, 0.0f32);
-    for _ in 0..20_000 {
-        let a = l.step(drive, measured, top, top, 2.0);
-        measured = 0.5 * a.volts;
-        highest = highest.max(a.volts);
-    }
+    let drive = 1_000.0;
+    let asks = Module::new(0.5).asks(&mut VoltageLoop::new(), drive, 5_000.0, 20_000);
+    let highest = asks.iter().fold(0.0f32, |h, &v| h.max(v));
     let bound = drive + KP * drive + INTEGRAL_FRAC * drive + 50.0;
     assert!(highest <= bound, "the ask reached {highest} V, bound {bound} V");
 }
@@ -349,15 +358,9 @@ fn the_voltage_loops_integral_is_bounded_under_a_monitor_reading_half() {
 #[test]
 fn the_voltage_loop_does_not_wind_up_while_the_slew_holds_it() {
     let gain = 0.9f32;
-    let (mut l, mut measured, mut last) = (VoltageLoop::new(), 0.0f32, 0.0f32);
+    let (mut l, mut module, mut last) = (VoltageLoop::new(), Module::new(gain), 0.0f32);
     for drive in [1_000.0f32, 200.0, 1_000.0] {
-        let asks: Vec<f32> = (0..6_000)
-            .map(|_| {
-                let a = l.step(drive, measured, 5_000.0, 5_000.0, 2.0);
-                measured = gain * a.volts;
-                a.volts
-            })
-            .collect();
+        let asks = module.asks(&mut l, drive, 5_000.0, 6_000);
         let need = drive / gain;
         let (lo, hi) = asks.iter().fold((f32::MAX, 0.0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         let settled = asks[asks.len() - 1];
@@ -371,16 +374,11 @@ fn the_voltage_loop_does_not_wind_up_while_the_slew_holds_it() {
     }
     // held on a ceiling under the module's need (1,050 V of 1,111 V) for 3 s, then the ceiling
     // lifted: the integral did not grow past what put the ask on the ceiling
-    let (mut l, mut measured) = (VoltageLoop::new(), 0.0f32);
-    let mut highest = 0.0f32;
-    for (limit, ticks) in [(1_050.0, 3_000), (5_000.0, 3_000)] {
-        for _ in 0..ticks {
-            let a = l.step(1_000.0, measured, 5_000.0, limit, 2.0);
-            measured = 0.9 * a.volts;
-            highest = highest.max(a.volts);
-        }
-    }
-    assert!(highest <= 1.01 * 1_000.0 / 0.9, "after the ceiling lifted: overshoot to {highest} V");
+    let (mut l, mut module) = (VoltageLoop::new(), Module::new(gain));
+    let mut asks = module.asks(&mut l, 1_000.0, 1_050.0, 3_000);
+    asks.extend(module.asks(&mut l, 1_000.0, 5_000.0, 3_000));
+    let highest = asks.iter().fold(0.0f32, |h, &v| h.max(v));
+    assert!(highest <= 1.01 * 1_000.0 / gain, "after the ceiling lifted: overshoot to {highest} V");
 }
 
 #[test]
