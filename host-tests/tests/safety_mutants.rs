@@ -6,7 +6,6 @@
 use finger_fw::board::{HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V};
 use finger_fw::console::LINE_MAX;
 use finger_fw::control::hv_loop::{VoltageLoop, INTEGRAL_FRAC, KI_PER_S, KP};
-use finger_fw::control::sense::{ripple_v, Estimator, RIPPLE_PERIOD_MS, RIPPLE_PP_V, RIPPLE_STEP_V, WINDOW_DV_V};
 use finger_fw::control::stacks::plain_slew_step;
 use finger_fw::control::{hv_duty_cap, hv_duty_for, Control, Fault, Latched, Setpoints, CHECKIN_BOUND_MS, LOW_CHECK_V};
 use finger_fw::plant::{Inject, Plant};
@@ -646,45 +645,4 @@ fn m3_step_is_never_nan() {
         let out = plain_slew_step(v, t, s);
         assert!(out >= 0.0, "({v}, {t}, {s}) -> {out}");
     }
-}
-
-/// The hold ripple's rate sweeps its whole swing in each half period (a sense window spans one,
-/// turn to turn, and swings the whole peak to peak).
-#[test]
-fn the_hold_ripple_sweeps_its_swing_in_each_half_period() {
-    assert_eq!(RIPPLE_STEP_V * (RIPPLE_PERIOD_MS / 2) as f32, RIPPLE_PP_V);
-    assert_eq!(ripple_v(RIPPLE_PERIOD_MS / 2) - ripple_v(0), RIPPLE_PP_V);
-}
-
-/// A reading that is not a number (a voltage or a current) is no tick of the estimator: the
-/// capacitance it measures on a held, rippled 80 pF stack stays within 5 % of the stack's (the
-/// skipped ticks' charge lost), a NaN current every 97th tick or not; never NaN.
-#[test]
-fn the_estimator_skips_a_reading_that_is_not_a_number() {
-    let c_pf = 80.0f32;
-    for nan_every in [0u32, 97] {
-        let mut est = Estimator::new();
-        let mut v_before = 3_000.0f32;
-        for held_ms in 1..5_000u32 {
-            let v = 3_000.0 - ripple_v(held_ms);
-            let i_ua = c_pf * (v - v_before) * 1e-3;
-            v_before = v;
-            let i_ua = if nan_every > 0 && held_ms % nan_every == 0 { f32::NAN } else { i_ua };
-            est.tick(v, i_ua, held_ms, 1.0);
-        }
-        let c = est.capacitance_pf();
-        assert!(matches!(c, Some(c) if (c - c_pf).abs() < 0.05 * c_pf), "a NaN current every {nan_every} ticks: {c:?} pF");
-    }
-}
-
-/// On a slew (the channel not held) a sense window closes at each `WINDOW_DV_V` of swing, not
-/// at the hold ripple's turns: 1,200 ms at 500 V/s are 10 windows of 60 V.
-#[test]
-fn a_slews_sense_windows_close_on_its_swing() {
-    let mut est = Estimator::new();
-    for k in 0..=1_200u32 {
-        est.tick(1_000.0 + 0.5 * k as f32, 80.0 * 0.5 * 1e-3, 0, 1.0);
-    }
-    assert_eq!(WINDOW_DV_V, 60.0);
-    assert_eq!(est.windows(), 10);
 }
