@@ -1,0 +1,74 @@
+//! The tick's fault checks (`finger_fw::control::watch::Watch::check`) on synthetic readings:
+//! a module's voltage written tick by tick (a first-order fall, a stuck monitor, a rail), the
+//! fault read back. The plant runs (hv_measured, hv_in_time) show the checks against a board;
+//! these pin each check's own bound (docs/reliability.md "The read-back's files").
+use finger_fw::board::{ADC_FULL_CODE, VMON_FULL_SCALE_V};
+use finger_fw::control::hv_loop::Ask;
+use finger_fw::control::sense::Estimator;
+use finger_fw::control::watch::{Reading, Watch, MODULE_FALL_MS, OVER_FRAC, OVER_MS, OVER_V};
+use finger_fw::control::Fault;
+
+/// A reading at `v` volts (its monitor code at the nominal calibration) and `i_ua`.
+fn reading(v: f32, i_ua: f32) -> Reading {
+    Reading { v, i_ua, v_code: v * (ADC_FULL_CODE / VMON_FULL_SCALE_V) }
+}
+
+/// A tick of the checks with the loop asking `ask_v` (not held by the slew), enabled.
+fn check(w: &mut Watch, r: &Reading, drive_v: f32, ceiling_v: f32) -> Option<Fault> {
+    w.check(r, drive_v, &Ask { volts: drive_v, slew_held: false }, ceiling_v, true, &Estimator::new())
+}
+
+/// A reading that is not a number, a monitor code under 0 or at its rail is a sensor fault,
+/// each alone (the voltage NaN, the current NaN, the code -1, the code 4095); a healthy reading
+/// beside them is none.
+#[test]
+fn each_reading_out_of_its_range_alone_is_a_sensor_fault() {
+    let healthy = reading(1_000.0, 0.1);
+    let bad = [
+        Reading { v: f32::NAN, ..healthy },
+        Reading { i_ua: f32::NAN, ..healthy },
+        Reading { v_code: -1.0, ..healthy },
+        Reading { v_code: ADC_FULL_CODE, ..healthy },
+        Reading { v_code: f32::NAN, ..healthy },
+    ];
+    for r in bad {
+        assert_eq!(check(&mut Watch::new(), &r, 1_000.0, 5_000.0), Some(Fault::Sensor), "{r:?}");
+    }
+    assert_eq!(check(&mut Watch::new(), &healthy, 1_000.0, 5_000.0), None);
+    assert_eq!(check(&mut Watch::new(), &Reading { v_code: ADC_FULL_CODE - 1.0, ..healthy }, 1_000.0, 5_000.0), None);
+}
+
+/// Held at 5 kV, then the command and the ceiling cut to 1 kV at once (a guard's cut): a module
+/// that falls at its datasheet's 15 ms (the plant's) stays under the over-ceiling bound, which
+/// decays from the last command at `MODULE_FALL_MS`; one three times slower than the bound is a
+/// module past its ceiling, latched within `OVER_MS` of leaving the bound (well before the
+/// mismatch's 300 ms).
+#[test]
+fn a_module_falls_under_the_decaying_bound_and_a_slow_one_trips_it() {
+    let fall = |tau_ms: f32| -> Option<(u32, Fault)> {
+        let mut w = Watch::new();
+        for _ in 0..500 {
+            assert_eq!(check(&mut w, &reading(5_000.0, 0.1), 5_000.0, 5_000.0), None);
+        }
+        let mut v = 5_000.0f32;
+        for k in 1..=1_000u32 {
+            v += (1_000.0 - v) / tau_ms;
+            if let Some(f) = check(&mut w, &reading(v, 0.1), 1_000.0, 1_000.0) {
+                return Some((k, f));
+            }
+        }
+        None
+    };
+    assert_eq!(fall(15.0), None);
+    assert_eq!(fall(MODULE_FALL_MS), None, "a module at the bound's own rate");
+    let (k, f) = fall(3.0 * MODULE_FALL_MS).expect("a slow module trips");
+    assert_eq!(f, Fault::HvMismatch);
+    assert!(k <= 2 * OVER_MS, "latched after {k} ms");
+    // the bound's margin: 2 % and 60 V over the ceiling held is no fault, past it is
+    let over = |v: f32| {
+        let mut w = Watch::new();
+        (0..OVER_MS + 5).find_map(|_| check(&mut w, &reading(v, 0.1), 3_000.0, 3_000.0))
+    };
+    assert_eq!(over(3_000.0 * (1.0 + OVER_FRAC) + OVER_V - 1.0), None);
+    assert_eq!(over(3_000.0 * (1.0 + OVER_FRAC) + OVER_V + 1.0), Some(Fault::HvMismatch));
+}
