@@ -71,8 +71,8 @@ fn a_held_ripple_solves_the_capacitance_and_an_ohmic_leakage_together() {
 
 /// After a hold has measured the leakage's conductance (6 s: its running mean settled), a slew's lone swings take the leakage
 /// at each window's mean voltage off their charge: a slew down from 3 kV to 600 V at 1 V/ms
-/// (40 windows of 60 V) on a stack leaking 0.5 µA at 3 kV (half the leak bound) still reads its
-/// 80 pF within 2 %.
+/// (40 windows of 60 V) on a stack leaking 0.5 µA at 3 kV (half the leak bound), 80 pF held and
+/// 70 pF on the way down (a film that relaxes thicker), reads its 70 pF within 2 %.
 #[test]
 fn a_slews_swings_take_the_leakage_at_their_mean_voltage() {
     let (c_pf, g) = (80.0f32, 0.5 / 3_000.0);
@@ -81,9 +81,10 @@ fn a_slews_swings_take_the_leakage_at_their_mean_voltage() {
     stack.tick(&mut est, 3_000.0, 0, 1.0);
     let v = stack.hold(&mut est, 3_000.0, 0.0, 6_000);
     let before = est.windows();
+    stack.c_pf = 70.0;
     stack.slew(&mut est, v, 600.0, 1.0);
     assert!(est.windows() - before >= 38, "{} windows on the slew", est.windows() - before);
-    assert!(within(est.capacitance_pf(), c_pf, 0.02), "{:?} pF", est.capacitance_pf());
+    assert!(within(est.capacitance_pf(), 70.0, 0.02), "{:?} pF", est.capacitance_pf());
 }
 
 /// A hold below the ripple (no swing: the voltage still within 0.1 V) measures the leakage from
@@ -223,8 +224,8 @@ fn a_slews_swings_alone_bring_the_capacitance_to_the_stacks() {
 }
 
 /// A window whose charge is no stack's (a partial discharge: 100 nC in one tick of a held
-/// ripple) is left out, with the window paired after it: the 80 pF stack's estimate never
-/// leaves 1 % of it.
+/// ripple's rise, which reads as 580 pF: past 4 times the card's stack) is left out, with the
+/// window paired after it: the 80 pF stack's estimate never leaves 1 % of it.
 #[test]
 fn a_window_with_a_charge_burst_is_left_out() {
     let c_pf = 80.0f32;
@@ -235,7 +236,7 @@ fn a_window_with_a_charge_burst_is_left_out() {
     let mut v_before = 3_000.0 - ripple_v(6_000);
     for held_ms in 6_001..=7_000u32 {
         let v = 3_000.0 - ripple_v(held_ms);
-        let burst_nc = if held_ms == 6_050 { 100.0 } else { 0.0 };
+        let burst_nc = if held_ms == 6_150 { 100.0 } else { 0.0 };
         est.tick(v, c_pf * (v - v_before) * 1e-3 + 0.2 / 3_000.0 * v + burst_nc, held_ms, 1.0);
         v_before = v;
         assert!(within(est.capacitance_pf(), c_pf, 0.01), "{:?} pF at {held_ms} ms", est.capacitance_pf());
