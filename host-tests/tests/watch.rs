@@ -2,10 +2,13 @@
 //! a module's voltage written tick by tick (a first-order fall, a stuck monitor, a rail), the
 //! fault read back. The plant runs (hv_measured, hv_in_time) show the checks against a board;
 //! these pin each check's own bound (docs/reliability.md "The read-back's files").
-use finger_fw::board::{ADC_FULL_CODE, VMON_FULL_SCALE_V};
+use finger_fw::board::{ADC_FULL_CODE, BOARD_STACK_C0_PF, SENSE_STRAY_PF, VMON_FULL_SCALE_V};
 use finger_fw::control::hv_loop::Ask;
-use finger_fw::control::sense::Estimator;
-use finger_fw::control::watch::{Reading, Watch, COLLAPSE_FRAC, HV_SETTLE_MS, MISMATCH_FRAC, MISMATCH_V, MODULE_FALL_MS, OVER_FRAC, OVER_MS, OVER_V};
+use finger_fw::control::sense::{ripple_v, Estimator};
+use finger_fw::control::watch::{
+    Reading, ThicknessGuard, Watch, COLLAPSE_FRAC, DISAGREE_FAST_S, DISAGREE_S, DISAGREE_WINDOWS, FLOOR_MARGIN_S, GUARD_HELD_MS, HV_SETTLE_MS, LEAK_BOUND_UA,
+    LEAK_BOUND_UA_PER_V, LEAK_FLOOR_UA, MISMATCH_FRAC, MISMATCH_V, MODULE_FALL_MS, OPEN_FRAC, OVER_FRAC, OVER_MS, OVER_V,
+};
 use finger_fw::control::Fault;
 
 /// A reading at `v` volts (its monitor code at the nominal calibration) and `i_ua`.
@@ -122,4 +125,141 @@ fn a_module_off_its_command_past_the_larger_bound_latches_after_the_settling() {
 fn an_output_left_on_with_the_enable_low_latches() {
     assert_eq!(first_fault(1_000, false, |_| 0.0, |_| 500.0), None);
     assert_eq!(first_fault(1_000, false, |_| 0.0, |_| 700.0), Some((HV_SETTLE_MS, Fault::HvMismatch)));
+}
+
+/// A monitor code that does not move for 50 ticks while the command moves more than 200 V is a
+/// stuck sensor: the command ramping 1 kV -> 1.3 kV at 3 V/ms under a frozen reading latches
+/// once both hold (frozen from tick 1, at 1,003 V; past 1,203 V at tick 68); frozen under a
+/// still command, or one that moves 150 V, it is none.
+#[test]
+fn a_reading_frozen_while_its_command_moves_200_v_is_a_stuck_sensor() {
+    let frozen = |ramp_v: f32| {
+        let mut w = Watch::new();
+        let r = reading(1_000.0, 0.1);
+        (0..300u32).find_map(|k| {
+            let drive = 1_000.0 + (3.0 * k as f32).min(ramp_v);
+            check(&mut w, &r, drive, 5_400.0).map(|f| (k, f))
+        })
+    };
+    assert_eq!(frozen(300.0), Some((68, Fault::Sensor)));
+    assert_eq!(frozen(0.0), None);
+    assert_eq!(frozen(150.0), None);
+}
+
+/// An estimator that has measured a stack of `c_pf` leaking `leak_ua` (a held ripple at `v`,
+/// or a still hold under the ripple's voltage).
+fn measured(c_pf: f32, leak_ua: f32, v: f32) -> Estimator {
+    let mut est = Estimator::new();
+    let mut v_before = v;
+    for held_ms in 1..=10_000u32 {
+        let vt = if v > 300.0 { v - ripple_v(held_ms) } else { v + 0.05 * (held_ms % 2) as f32 };
+        est.tick(vt, c_pf * (vt - v_before) * 1e-3 + leak_ua * vt / v, held_ms, 1.0);
+        v_before = vt;
+    }
+    est
+}
+
+/// The ticks until `est`'s figures latch a fault, enabled, at a still `drive_v`.
+fn with_estimate(est: &Estimator, drive_v: f32) -> Option<(u32, Fault)> {
+    let mut w = Watch::new();
+    (0..400u32).find_map(|k| {
+        let r = reading(drive_v + 0.5 * (k % 2) as f32, 0.1);
+        w.check(&r, drive_v, &Ask { volts: drive_v, slew_held: false }, 5_400.0, true, est).map(|f| (k, f))
+    })
+}
+
+/// A sensed capacitance under the stray plus 30 % of the card's stack is an open stack, at once;
+/// just over it is none.
+#[test]
+fn a_capacitance_under_the_open_fraction_is_an_open_stack() {
+    let open_at = SENSE_STRAY_PF + OPEN_FRAC * BOARD_STACK_C0_PF;
+    assert_eq!(with_estimate(&measured(0.95 * open_at, 0.0, 3_000.0), 3_000.0), Some((0, Fault::StackOpen)));
+    assert_eq!(with_estimate(&measured(1.05 * open_at, 0.0, 3_000.0), 3_000.0), None);
+}
+
+/// A leakage past the lower of 1 µA and 2e-4 µA/V of the drive (never under the sense's floor,
+/// 0.05 µA) for 200 ticks is a leak: 20 % over the bound latches at tick 199, 20 % under is
+/// none, at 3 kV (0.6 µA) and at 200 V (the floor's 0.05 µA).
+#[test]
+fn a_leakage_past_its_bound_for_200_ticks_is_a_leak() {
+    for v in [3_000.0f32, 200.0] {
+        let bound = LEAK_BOUND_UA.min(LEAK_BOUND_UA_PER_V * v).max(LEAK_FLOOR_UA);
+        let c_pf = BOARD_STACK_C0_PF + SENSE_STRAY_PF;
+        assert_eq!(with_estimate(&measured(c_pf, 1.2 * bound, v), v), Some((199, Fault::Leakage)), "{v} V");
+        assert_eq!(with_estimate(&measured(c_pf, 0.8 * bound, v), v), None, "{v} V");
+    }
+}
+
+/// The ceiling at 1 and no disagreement.
+fn untouched(g: &ThicknessGuard) -> bool {
+    g.derate == 1.0 && !g.disagreed
+}
+
+/// The thickness guard after `windows` windows of a sensed `s_meas` against the model's 0.9,
+/// the floor 0.667, the card's voltages 3,000 V (the model's thickness) and 3,300 V (the
+/// sensed one), held `held_ms`, each window `joint` or not.
+fn guarded(windows: u32, s_meas: f32, held_ms: u32, joint: bool) -> ThicknessGuard {
+    let mut g = ThicknessGuard::new();
+    for _ in 0..windows {
+        g.update(s_meas, 0.9, 0.667, 3_000.0, 3_300.0, held_ms, joint);
+    }
+    g
+}
+
+/// Held past `GUARD_HELD_MS`, a film sensed thinner than the model's by more than `DISAGREE_S`
+/// for `DISAGREE_WINDOWS` windows in a row lowers the ceiling by the card's voltage ratio to
+/// the power 1.5 ((3,000 / 3,300)^1.5 = 0.867); one window fewer, or a gap under the bound, or
+/// not yet held (a lone window), leaves it at 1; before the hold, a pair's gap past
+/// `DISAGREE_FAST_S` counts.
+#[test]
+fn a_film_sensed_thinner_for_three_windows_lowers_the_ceiling_by_the_cards_voltages() {
+    let c = 3_000.0f32 / 3_300.0;
+    let thinner = 0.9 - 1.5 * DISAGREE_S;
+    let g = guarded(DISAGREE_WINDOWS, thinner, GUARD_HELD_MS, false);
+    assert!(g.disagreed && (g.derate - c * c.sqrt()).abs() < 1e-6, "{g:?}");
+    assert!(untouched(&guarded(DISAGREE_WINDOWS - 1, thinner, GUARD_HELD_MS, false)));
+    assert!(untouched(&guarded(10, 0.9 - 0.5 * DISAGREE_S, GUARD_HELD_MS, false)));
+    assert!(untouched(&guarded(10, thinner, GUARD_HELD_MS - 1, false)));
+    assert!(untouched(&guarded(10, thinner, GUARD_HELD_MS - 1, true)));
+    let fast = guarded(DISAGREE_WINDOWS, 0.9 - 1.5 * DISAGREE_FAST_S, 0, true);
+    assert!(fast.disagreed && fast.derate < 1.0, "{fast:?}");
+    // a window in between that agrees starts the count again
+    let mut g = ThicknessGuard::new();
+    for s in [thinner, thinner, 0.9, thinner, thinner] {
+        g.update(s, 0.9, 0.667, 3_000.0, 3_300.0, GUARD_HELD_MS, false);
+    }
+    assert!(untouched(&g));
+}
+
+/// A sensed film within `FLOOR_MARGIN_S` of its floor lowers the ceiling by 4 x its depth into
+/// the margin each window (0.01 in: x 0.96, twice 0.9216); the derate never leaves [0, 1] and a
+/// sensed stretch out of (0, 1.5] (not a number, a reading of nothing) changes nothing.
+#[test]
+fn a_film_near_its_floor_lowers_the_ceiling_in_proportion() {
+    let floor = 0.667f32;
+    let s = floor + FLOOR_MARGIN_S - 0.01;
+    let mut g = ThicknessGuard::new();
+    g.update(s, s, floor, 3_000.0, 3_000.0, 0, false);
+    assert!((g.derate - 0.96).abs() < 1e-5, "{g:?}");
+    g.update(s, s, floor, 3_000.0, 3_000.0, 0, false);
+    assert!((g.derate - 0.96 * 0.96).abs() < 1e-5, "{g:?}");
+    let mut deep = ThicknessGuard::new();
+    deep.update(0.1, 0.1, floor, 3_000.0, 3_000.0, 0, false);
+    assert_eq!(deep.derate, 0.0);
+    for bad in [f32::NAN, 0.0, -0.5, 1.6] {
+        let mut g = ThicknessGuard::new();
+        for _ in 0..DISAGREE_WINDOWS {
+            g.update(bad, 0.9, floor, 3_000.0, 3_300.0, GUARD_HELD_MS, false);
+        }
+        assert!(untouched(&g), "{bad}");
+    }
+    // a model voltage at the sensed thickness under the model's own raises nothing
+    let g = {
+        let mut g = ThicknessGuard::new();
+        for _ in 0..DISAGREE_WINDOWS {
+            g.update(0.85, 0.9, floor, 3_300.0, 3_000.0, GUARD_HELD_MS, false);
+        }
+        g
+    };
+    assert!(g.disagreed && g.derate == 1.0, "{g:?}");
 }
