@@ -233,7 +233,8 @@ fn a_film_sensed_thinner_for_three_windows_lowers_the_ceiling_by_the_cards_volta
 
 /// A sensed film within `FLOOR_MARGIN_S` of its floor lowers the ceiling by 4 x its depth into
 /// the margin each window (0.01 in: x 0.96, twice 0.9216); the derate never leaves [0, 1] and a
-/// sensed stretch out of (0, 1.5] (not a number, a reading of nothing) changes nothing.
+/// sensed stretch out of (0, 1.5] (not a number, a reading of nothing) changes nothing; a film
+/// sensed thinner where the card's voltage says thicker, or the model at 0 V, derates nothing.
 #[test]
 fn a_film_near_its_floor_lowers_the_ceiling_in_proportion() {
     let floor = 0.667f32;
@@ -261,5 +262,11 @@ fn a_film_near_its_floor_lowers_the_ceiling_in_proportion() {
         }
         g
     };
+    assert!(g.disagreed && g.derate == 1.0, "{g:?}");
+    // nor does a channel the model holds at 0 V (its voltage ratio would be 0: a cut until stop)
+    let mut g = ThicknessGuard::new();
+    for _ in 0..DISAGREE_WINDOWS {
+        g.update(0.95, 1.0, floor, 0.0, 800.0, GUARD_HELD_MS, false);
+    }
     assert!(g.disagreed && g.derate == 1.0, "{g:?}");
 }
