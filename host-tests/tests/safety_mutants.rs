@@ -380,6 +380,30 @@ fn the_voltage_loop_does_not_wind_up_while_the_slew_holds_it() {
     assert!(highest <= 1.01 * 1_000.0 / gain, "after the ceiling lifted: overshoot to {highest} V");
 }
 
+/// The loop says when the slew holds it back from what it wants, both ways: a step up from rest
+/// and a step down from a settled 3 kV are held; settled (a module 20 % weak, its integral a
+/// fifth of the drive) it is not; against the ceiling (up) or at 0 V (down) the slew is not what
+/// holds it.
+#[test]
+fn the_voltage_loop_says_when_the_slew_holds_it_back() {
+    let step = |l: &mut VoltageLoop, drive: f32, measured: f32| l.step(drive, measured, 5_000.0, 5_000.0, 2.0);
+    assert!(step(&mut VoltageLoop::new(), 3_000.0, 0.0).slew_held, "a step up from rest");
+    let (mut l, mut module) = (VoltageLoop::new(), Module::new(0.8));
+    module.asks(&mut l, 3_000.0, 5_000.0, 8_000);
+    assert!((module.measured - 3_000.0).abs() < 1.0, "settled at {} V", module.measured);
+    let settled = l;
+    assert!(!step(&mut l, 3_000.0, module.measured).slew_held, "settled, the integral at {} V", l.asked_v() - 3_000.0);
+    let mut l = settled;
+    assert!(step(&mut l, 1_000.0, module.measured).slew_held, "a step down from 3 kV");
+    // the ceiling holds it, not the slew
+    let mut l = VoltageLoop::new();
+    let near_top: Vec<bool> = (0..3_000).map(|_| l.step(5_000.0, 0.0, 5_000.0, 1_000.0, 2.0).slew_held).collect();
+    assert!(near_top[0] && !near_top[2_999], "at the ceiling, {} V asked", l.asked_v());
+    // at 0 V the floor holds it, not the slew
+    let mut l = VoltageLoop::new();
+    assert!(!l.step(100.0, 5_000.0, 5_000.0, 5_000.0, 2.0).slew_held);
+}
+
 #[test]
 fn the_servo_follows_the_voltages_progress_from_where_they_were() {
     let mut c = core();
