@@ -85,18 +85,24 @@ fn a_slews_swings_take_the_leakage_at_their_mean_voltage() {
     stack.slew(&mut est, v, 600.0, 1.0);
     assert!(est.windows() - before >= 38, "{} windows on the slew", est.windows() - before);
     assert!(within(est.capacitance_pf(), 70.0, 0.02), "{:?} pF", est.capacitance_pf());
+    assert!(!est.last_window_joint(), "a slew's lone swing is no joint solve");
 }
 
 /// A hold below the ripple (no swing: the voltage still within 0.1 V) measures the leakage from
-/// its slow windows and leaves the capacitance unmeasured: 0.04 µA at 200 V within 2 %.
+/// its slow windows (none before the third) and leaves the capacitance unmeasured: 0.04 µA at
+/// 200 V within 2 %.
 #[test]
 fn a_hold_below_the_ripple_measures_its_leakage_and_no_capacitance() {
     let mut est = Estimator::new();
+    assert_eq!(est.leakage_ua(), None);
     let mut stack = Stack::new(80.0, 2e-4, 0.0);
     stack.tick(&mut est, 200.0, 0, 1.0);
     for held_ms in 1..=3_000u32 {
         let wobble = 0.1 * ((held_ms % 7) as f32 / 7.0 - 0.5);
         stack.tick(&mut est, 200.0 + wobble, held_ms, 1.0);
+        if est.windows() < 3 {
+            assert_eq!(est.leakage_ua(), None, "{} windows", est.windows());
+        }
     }
     assert!(within(est.leakage_ua(), 0.04, 0.02), "{:?} µA", est.leakage_ua());
     assert_eq!(est.capacitance_pf(), None);
