@@ -4,48 +4,8 @@
 //! that thins); the estimate read back. The fault checks that act on it run against the plant
 //! (hv_measured); these pin the solve itself (docs/reliability.md "The read-back's files").
 use finger_fw::board::{BOARD_STACK_C0_PF, SENSE_STRAY_MIN_PF, SENSE_STRAY_PF};
-use finger_fw::control::sense::{ripple_v, Estimator, RIPPLE_MIN_V, RIPPLE_PERIOD_MS, RIPPLE_PP_V, RIPPLE_STEP_V, WINDOW_DV_V};
-
-/// A stack the sense sees: capacitance (pF, the stray included), ohmic leakage (µA/V) and a
-/// constant leakage (µA); it answers each tick's voltage with that tick's current.
-struct Stack {
-    c_pf: f32,
-    g_ua_per_v: f32,
-    i0_ua: f32,
-    v_before: Option<f32>,
-}
-
-impl Stack {
-    fn new(c_pf: f32, g_ua_per_v: f32, i0_ua: f32) -> Self {
-        Stack { c_pf, g_ua_per_v, i0_ua, v_before: None }
-    }
-
-    /// One 1 ms tick at `v` into `est`; `held_ms` as the core passes it.
-    fn tick(&mut self, est: &mut Estimator, v: f32, held_ms: u32, c_ratio: f32) {
-        let dv = v - self.v_before.unwrap_or(v);
-        self.v_before = Some(v);
-        est.tick(v, self.c_pf * dv * 1e-3 + self.g_ua_per_v * v + self.i0_ua, held_ms, c_ratio);
-    }
-
-    /// Held at `guard_v` drifting `drift_v_per_ms`, rippled below it as the core does, for `ms`.
-    fn hold(&mut self, est: &mut Estimator, guard_v: f32, drift_v_per_ms: f32, ms: u32) -> f32 {
-        let mut v = guard_v;
-        for held_ms in 1..=ms {
-            let top = guard_v + drift_v_per_ms * held_ms as f32;
-            v = if top > RIPPLE_MIN_V { top - ripple_v(held_ms) } else { top };
-            self.tick(est, v, held_ms, 1.0);
-        }
-        v
-    }
-
-    /// A slew (not held) from `from_v` to `to_v` at `v_per_ms`.
-    fn slew(&mut self, est: &mut Estimator, from_v: f32, to_v: f32, v_per_ms: f32) {
-        let n = ((to_v - from_v).abs() / v_per_ms) as u32;
-        for k in 1..=n {
-            self.tick(est, from_v + (to_v - from_v) * k as f32 / n as f32, 0, 1.0);
-        }
-    }
-}
+use finger_fw::control::sense::{ripple_v, Estimator, RIPPLE_PERIOD_MS, RIPPLE_PP_V, RIPPLE_STEP_V, WINDOW_DV_V};
+use host_tests::synthetic::Stack;
 
 fn within(got: Option<f32>, want: f32, frac: f32) -> bool {
     matches!(got, Some(g) if (g - want).abs() <= frac * want.abs())

@@ -4,12 +4,13 @@
 //! these pin each check's own bound (docs/reliability.md "The read-back's files").
 use finger_fw::board::{ADC_FULL_CODE, BOARD_STACK_C0_PF, SENSE_STRAY_PF, VMON_FULL_SCALE_V};
 use finger_fw::control::hv_loop::Ask;
-use finger_fw::control::sense::{ripple_v, Estimator};
+use finger_fw::control::sense::Estimator;
 use finger_fw::control::watch::{
     Reading, ThicknessGuard, Watch, COLLAPSE_FRAC, DISAGREE_FAST_S, DISAGREE_S, DISAGREE_WINDOWS, FLOOR_MARGIN_S, GUARD_HELD_MS, HV_SETTLE_MS, LEAK_BOUND_UA,
     LEAK_BOUND_UA_PER_V, LEAK_FLOOR_UA, MISMATCH_FRAC, MISMATCH_V, MODULE_FALL_MS, OPEN_FRAC, OVER_FRAC, OVER_MS, OVER_V,
 };
 use finger_fw::control::Fault;
+use host_tests::synthetic::Stack;
 
 /// A reading at `v` volts (its monitor code at the nominal calibration) and `i_ua`.
 fn reading(v: f32, i_ua: f32) -> Reading {
@@ -146,16 +147,13 @@ fn a_reading_frozen_while_its_command_moves_200_v_is_a_stuck_sensor() {
     assert_eq!(frozen(150.0), None);
 }
 
-/// An estimator that has measured a stack of `c_pf` leaking `leak_ua` (a held ripple at `v`,
-/// or a still hold under the ripple's voltage).
+/// An estimator that has measured a stack of `c_pf` leaking `leak_ua` (ohmic) at `v`: held
+/// 10 s (rippled above the ripple's voltage, still under it).
 fn measured(c_pf: f32, leak_ua: f32, v: f32) -> Estimator {
     let mut est = Estimator::new();
-    let mut v_before = v;
-    for held_ms in 1..=10_000u32 {
-        let vt = if v > 300.0 { v - ripple_v(held_ms) } else { v + 0.05 * (held_ms % 2) as f32 };
-        est.tick(vt, c_pf * (vt - v_before) * 1e-3 + leak_ua * vt / v, held_ms, 1.0);
-        v_before = vt;
-    }
+    let mut stack = Stack::new(c_pf, leak_ua / v, 0.0);
+    stack.tick(&mut est, v, 0, 1.0);
+    stack.hold(&mut est, v, 0.0, 10_000);
     est
 }
 
