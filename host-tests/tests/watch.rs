@@ -26,11 +26,16 @@ fn check(w: &mut Watch, r: &Reading, drive_v: f32, ceiling_v: f32) -> Option<Fau
 /// enabled or not, with the tick it came at; the monitor's last bit moves every other tick (a
 /// reading that never moves is a stuck sensor).
 fn first_fault(ticks: u32, enabled: bool, drive: impl Fn(u32) -> f32, v: impl Fn(u32) -> f32) -> Option<(u32, Fault)> {
+    first_fault_with(&Estimator::new(), ticks, enabled, drive, v)
+}
+
+/// As [`first_fault`], with `est`'s figures (capacitance, leakage) read by the checks.
+fn first_fault_with(est: &Estimator, ticks: u32, enabled: bool, drive: impl Fn(u32) -> f32, v: impl Fn(u32) -> f32) -> Option<(u32, Fault)> {
     let mut w = Watch::new();
     (0..ticks).find_map(|k| {
         let ask = Ask { volts: drive(k), slew_held: false };
         let dither_v = (k % 2) as f32 * 0.5;
-        w.check(&reading(v(k) + dither_v, 0.1), drive(k), &ask, 5_400.0, enabled, &Estimator::new()).map(|f| (k, f))
+        w.check(&reading(v(k) + dither_v, 0.1), drive(k), &ask, 5_400.0, enabled, est).map(|f| (k, f))
     })
 }
 
@@ -159,11 +164,7 @@ fn measured(c_pf: f32, leak_ua: f32, v: f32) -> Estimator {
 
 /// The ticks until `est`'s figures latch a fault, enabled, at a still `drive_v`.
 fn with_estimate(est: &Estimator, drive_v: f32) -> Option<(u32, Fault)> {
-    let mut w = Watch::new();
-    (0..400u32).find_map(|k| {
-        let r = reading(drive_v + 0.5 * (k % 2) as f32, 0.1);
-        w.check(&r, drive_v, &Ask { volts: drive_v, slew_held: false }, 5_400.0, true, est).map(|f| (k, f))
-    })
+    first_fault_with(est, 400, true, |_| drive_v, |_| drive_v)
 }
 
 /// A sensed capacitance under the stray plus 30 % of the card's stack is an open stack, at once;
