@@ -125,6 +125,32 @@ fn a_module_off_its_command_past_the_larger_bound_latches_after_the_settling() {
     }
 }
 
+/// While the slew holds the loop's ask back, a module behind its ask by up to the larger of
+/// `MISMATCH_V` and `FOLLOW_FRAC` of the ask plus the ask's rate times `MODULE_FALL_MS` follows
+/// it: the command stepped from 1 kV to 5 kV, the ask slewing at 2 V/ms (100 V of allowance),
+/// a module running 170 ms behind it (340 V, a dead time) is no fault; one 195 ms behind (390 V)
+/// is one that does not follow, latched after the settling time once past the allowance.
+#[test]
+fn a_module_behind_its_slewing_ask_by_the_slews_allowance_follows_it() {
+    let (from_v, to_v, v_per_ms) = (1_000.0f32, 5_000.0f32, 2.0f32);
+    assert!(MISMATCH_V.max(MISMATCH_FRAC * to_v) < to_v - from_v);
+    let ramp = |k: i64| (from_v + v_per_ms * k.max(0) as f32).min(to_v);
+    let behind = |dead_ms: i64| {
+        let mut w = Watch::new();
+        let est = Estimator::new();
+        (-500..3_000i64).find_map(|k| {
+            let drive = if k < 0 { from_v } else { to_v };
+            let ask = Ask { volts: ramp(k), slew_held: ramp(k) < drive };
+            let dither_v = (k % 2) as f32 * 0.5;
+            w.check(&reading(ramp(k - dead_ms) + dither_v, 0.1), drive, &ask, 5_400.0, true, &est).map(|f| (k, f))
+        })
+    };
+    assert_eq!(behind(170), None);
+    let (k, f) = behind(195).expect("a module past the allowance");
+    let past_from = (MISMATCH_V + v_per_ms * MODULE_FALL_MS) / v_per_ms;
+    assert_eq!((f, k), (Fault::HvMismatch, past_from as i64 + 1 + HV_SETTLE_MS as i64));
+}
+
 /// With the HV enable low, an output that stays above twice `MISMATCH_V` (a module that does
 /// not switch off) latches after the settling time; one that reads 500 V is none.
 #[test]
