@@ -31,11 +31,23 @@ fn first_fault(ticks: u32, enabled: bool, drive: impl Fn(u32) -> f32, v: impl Fn
 
 /// As [`first_fault`], with `est`'s figures (capacitance, leakage) read by the checks.
 fn first_fault_with(est: &Estimator, ticks: u32, enabled: bool, drive: impl Fn(u32) -> f32, v: impl Fn(u32) -> f32) -> Option<(u32, Fault)> {
+    first_fault_asking(est, ticks, enabled, &drive, |k| Ask { volts: drive(k), slew_held: false }, v)
+}
+
+/// As [`first_fault_with`], the loop asking `ask(k)` of the module (a slew may hold the ask
+/// apart from the drive).
+fn first_fault_asking(
+    est: &Estimator,
+    ticks: u32,
+    enabled: bool,
+    drive: impl Fn(u32) -> f32,
+    ask: impl Fn(u32) -> Ask,
+    v: impl Fn(u32) -> f32,
+) -> Option<(u32, Fault)> {
     let mut w = Watch::new();
     (0..ticks).find_map(|k| {
-        let ask = Ask { volts: drive(k), slew_held: false };
         let dither_v = (k % 2) as f32 * 0.5;
-        w.check(&reading(v(k) + dither_v, 0.1), drive(k), &ask, 5_400.0, enabled, est).map(|f| (k, f))
+        w.check(&reading(v(k) + dither_v, 0.1), drive(k), &ask(k), 5_400.0, enabled, est).map(|f| (k, f))
     })
 }
 
@@ -134,21 +146,18 @@ fn a_module_off_its_command_past_the_larger_bound_latches_after_the_settling() {
 fn a_module_behind_its_slewing_ask_by_the_slews_allowance_follows_it() {
     let (from_v, to_v, v_per_ms) = (1_000.0f32, 5_000.0f32, 2.0f32);
     assert!(MISMATCH_V.max(MISMATCH_FRAC * to_v) < to_v - from_v);
-    let ramp = |k: i64| (from_v + v_per_ms * k.max(0) as f32).min(to_v);
-    let behind = |dead_ms: i64| {
-        let mut w = Watch::new();
-        let est = Estimator::new();
-        (-500..3_000i64).find_map(|k| {
-            let drive = if k < 0 { from_v } else { to_v };
-            let ask = Ask { volts: ramp(k), slew_held: ramp(k) < drive };
-            let dither_v = (k % 2) as f32 * 0.5;
-            w.check(&reading(ramp(k - dead_ms) + dither_v, 0.1), drive, &ask, 5_400.0, true, &est).map(|f| (k, f))
-        })
+    // held 500 ms at 1 kV, then the step: tick k is k - 500 ms after it
+    let step_ms = 500u32;
+    let ramp = |k: u32| (from_v + v_per_ms * k.saturating_sub(step_ms) as f32).min(to_v);
+    let drive = |k: u32| if k < step_ms { from_v } else { to_v };
+    let behind = |dead_ms: u32| {
+        let ask = |k: u32| Ask { volts: ramp(k), slew_held: ramp(k) < drive(k) };
+        first_fault_asking(&Estimator::new(), step_ms + 3_000, true, drive, ask, |k| ramp(k.saturating_sub(dead_ms)))
     };
     assert_eq!(behind(170), None);
     let (k, f) = behind(195).expect("a module past the allowance");
     let past_from = (MISMATCH_V + v_per_ms * MODULE_FALL_MS) / v_per_ms;
-    assert_eq!((f, k), (Fault::HvMismatch, past_from as i64 + 1 + HV_SETTLE_MS as i64));
+    assert_eq!((f, k - step_ms), (Fault::HvMismatch, past_from as u32 + 1 + HV_SETTLE_MS));
 }
 
 /// With the HV enable low, an output that stays above twice `MISMATCH_V` (a module that does
