@@ -12,7 +12,7 @@
 //! - the ceiling is not negative nor NaN;
 //! - a voltage refused by `de::check_voltage` is never answered;
 //! - a contact answer's force and posture are finite, in equilibrium under its tip load
-//!   (`Finger::equilibrium_residual` within 1e-4 of the finger's length), the tip on the stop
+//!   (`Finger::equilibrium_residual` within `model::equilibrium_bound`), the tip on the stop
 //!   (within 1e-4 of the length).
 
 use crate::model::{contact, linear_tension, run_ops};

@@ -12,7 +12,7 @@
 //! - fmax is finite and not negative, and never answered at voltages `de::check_voltage`
 //!   refuses;
 //! - a forward answer at a fraction of fmax is in equilibrium (`equilibrium_residual` within
-//!   1e-4 of the finger's length), its voltages 0 or below the ceiling.
+//!   `model::equilibrium_bound`), its voltages 0 or below the ceiling.
 
 use crate::model::{checked_fmax, forward, run_ops, MAX_OPS};
 
@@ -21,6 +21,6 @@ pub fn check(data: &[u8]) {
     run_ops(data, MAX_OPS, |c, _, v, refused, b| {
         let fmax = checked_fmax(c, v, refused);
         let tension = b.fraction(fmax.unwrap_or(1.0));
-        forward(&c.f, tension, v, refused, c.len);
+        forward(&c.f, tension, v, refused);
     });
 }

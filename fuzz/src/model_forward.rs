@@ -12,8 +12,8 @@
 //! - the ceiling is not negative nor NaN;
 //! - an answer's voltages are 0 or below the ceiling, and a voltage refused by
 //!   `de::check_voltage` (negative, not finite, at/past the ceiling) is never answered;
-//! - a forward answer is in equilibrium (`Finger::equilibrium_residual` within 1e-4 of the
-//!   finger's length).
+//! - a forward answer is in equilibrium (`Finger::equilibrium_residual` within
+//!   `model::equilibrium_bound`).
 
 use crate::model::{forward, linear_tension, run_ops, MAX_OPS};
 
@@ -21,6 +21,6 @@ use crate::model::{forward, linear_tension, run_ops, MAX_OPS};
 pub fn check(data: &[u8]) {
     run_ops(data, MAX_OPS, |c, _, v, refused, b| {
         let tension = b.scaled(linear_tension(&c.f, v));
-        forward(&c.f, tension, v, refused, c.len);
+        forward(&c.f, tension, v, refused);
     });
 }

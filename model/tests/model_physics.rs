@@ -448,3 +448,67 @@ fn compliances_at_a_thickness_between_rest_and_relaxed() {
     }
     assert!(f.compliances_at_thickness(&v, &[rest; 2]).is_err());
 }
+
+/// The 27 mm one-joint finger of the fuzz find `regressions/model_fmax/forward-not-in-equilibrium-27-mm-one-joint`:
+/// a 0.19 MPa body, flexible links, m = 1, at 7,950 V and 19.16 N its joint coils to 7 rad and
+/// its span closes to 1.14 times its floor.
+fn near_contact_finger() -> (Finger<f64>, f64, [f64; 1]) {
+    let p =
+        Params { n: 1, e_b: 0.1875, m: 1, plate: false, flex_links: true, nu_b: 0.007801660350477037, span_floor: 2.957507967970532e-5, ..Params::default() };
+    (Finger::new(p).unwrap(), 19.16291832247657, [7950.0])
+}
+
+/// `equilibrium_residual` is the posture's relative wrench imbalance (docs/model.md
+/// "Equilibrium"): a converged solve reads near 0, and a solution whose tension is off by δ
+/// reads δ (the cable's loads off by δ against what the posture's deflections hold).
+#[test]
+fn equilibrium_residual_reads_a_load_error_at_its_size() {
+    let f = default_finger();
+    let ceiling = f.voltage_ceiling();
+    for v in [[0.0; 3], [0.6 * ceiling; 3], [0.0, 0.3 * ceiling, 0.9 * ceiling]] {
+        let fmax = f.fmax(&v).unwrap().tension;
+        for frac in [0.05, 0.5, 0.95] {
+            let s = f.solve(frac * fmax, &v, conv()).unwrap();
+            let r = f.equilibrium_residual(&s).unwrap();
+            assert!(r < 1e-9, "converged at {frac} fmax, {v:?}: {r:e}");
+            for delta in [1e-6, 1e-3] {
+                let off = finger_model::Solution { tension: s.tension * (1.0 + delta), ..s };
+                let r = f.equilibrium_residual(&off).unwrap();
+                assert!(r > 0.5 * delta && r < 2.0 * delta, "tension off by {delta:e} at {frac} fmax, {v:?}: reads {r:e}");
+            }
+        }
+    }
+}
+
+/// A posture whose deflections the loads do not hold reads as such: one sub-element's
+/// rotation off by 1e-4 rad (the nodes left as they were) reads at least 1e-5.
+#[test]
+fn equilibrium_residual_reads_a_deflection_the_loads_do_not_hold() {
+    let f = default_finger();
+    let s = f.solve(1.0, &[0.0; 3], conv()).unwrap();
+    for k in 0..3 {
+        for j in 0..s.m {
+            let mut off = s;
+            off.q[k][j][2] += 1e-4;
+            let r = f.equilibrium_residual(&off).unwrap();
+            assert!(r > 1e-5, "joint {k} sub-element {j}: {r:e}");
+        }
+    }
+}
+
+/// A backward error, not a re-march: on the near-contact finger the forward's answer, converged
+/// to 4.2e-10 mm, puts the hole a re-march arrives at 4.6e-3 mm off (the march's gain there is
+/// about 1e7); its wrench imbalance is the cable's direction over the span, 4.2e-10 mm over
+/// 3.4e-5 mm: 1.2e-5, under what 1e-9 mm over that span allows.
+#[test]
+fn equilibrium_residual_is_not_the_marchs_gain() {
+    let (f, p, v) = near_contact_finger();
+    let s = f.solve(p, &v, conv()).unwrap();
+    assert!(s.residual <= 1e-9 && s.span[0] < 1.2 * f.params().span_floor, "{:e} mm, span {:e}", s.residual, s.span[0]);
+    let r = f.equilibrium_residual(&s).unwrap();
+    assert!(r <= 1e-9 / s.span[0], "{r:e} against {:e}", 1e-9 / s.span[0]);
+    // tighter holes, a smaller imbalance in proportion (the direction's own)
+    let tight = f.solve(p, &v, Method::Converged { tol: 1e-11, max_iter: 800 }).unwrap();
+    let rt = f.equilibrium_residual(&tight).unwrap();
+    assert!(rt < r / 10.0, "{rt:e} at {:e} mm against {r:e} at {:e} mm", tight.residual, s.residual);
+}

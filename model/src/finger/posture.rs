@@ -18,6 +18,11 @@ impl<R: Real> Finger<R> {
         if !self.p.flex_links {
             return [R::zero(); 3];
         }
+        mat3::mul_vec(&self.link_c, &self.link_wrench(tension, tip))
+    }
+
+    /// `link_q`'s wrench (Fx, Fy, M) on a link's distal end, in its undeformed frame.
+    pub(super) fn link_wrench(&self, tension: R, tip: Option<(&Heading<R>, [R; 2], [R; 2])>) -> [R; 3] {
         let mut w = [-tension, R::zero(), tension * self.p.e];
         if let Some((hinge_end, force, point)) = tip {
             let end = hinge_end.then(self.link_len, R::zero(), R::zero());
@@ -27,7 +32,7 @@ impl<R: Real> Finger<R> {
             w[1] += -s * force[0] + c * force[1];
             w[2] += tl.point[0] * tl.force[1] - tl.point[1] * tl.force[0];
         }
-        mat3::mul_vec(&self.link_c, &w)
+        w
     }
 
     /// A joint's hinge end from its sub-elements' displacements `q` (its first m rows), in the

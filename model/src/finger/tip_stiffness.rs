@@ -2,9 +2,9 @@
 //! compliance Σ J C Jᵀ and its inverse, and the equilibrium residual as an independent check
 //! of any solve.
 
-use super::{loaded, Compliances, Finger, Heading, Solution, COUPLED};
+use super::{Compliances, Finger, Heading, Solution};
 use crate::error::Error;
-use crate::mat3::{self, Mat3};
+use crate::mat3::{self, Mat3, Vec3};
 use crate::real::Real;
 
 impl<R: Real> Finger<R> {
@@ -42,27 +42,65 @@ impl<R: Real> Finger<R> {
         ct
     }
 
-    /// The forward equilibrium residual of a solved posture under its own tension, voltages
-    /// and tip load (docs/model.md "Equilibrium": each guide hole where its joint's march puts it,
-    /// the tip where the chain ends), mm: the coupled system's residual, evaluated afresh from
-    /// the solution's holes and tip. An independent check of any solve (forward, pinned).
+    /// The equilibrium residual of a solved posture under its own tension, voltages and tip
+    /// load (docs/model.md "Equilibrium": `q = C · w(q)` for every sub-element, `q = C_link w`
+    /// for each flexible link, the tip where the chain ends), relative: the largest wrench
+    /// imbalance `|C⁻¹ q - w|` over the largest wrench `|w|` (moments over the hinge's length),
+    /// w from the posture itself (the cable's pull along each span at its hole, the tip load at
+    /// the tip, moments about each deformed distal end), or the tip's mismatch over the
+    /// finger's length if larger. A backward error: no re-march, so neither a march's gain nor a
+    /// compliance's size enters it. An independent check of any solve (forward, loaded,
+    /// pinned); 0 for the unloaded straight finger.
     pub fn equilibrium_residual(&self, sol: &Solution<R>) -> Result<R, Error> {
-        let n = self.p.n;
-        if sol.n != n || sol.m != self.p.m {
+        let (n, m) = (self.p.n, self.p.m);
+        if sol.n != n || sol.m != m {
             return Err(Error::Input { input: "solution", reason: "solved for other parameters" });
         }
         let c = self.compliances(&sol.volts[..n])?;
-        let mut x = [R::zero(); COUPLED];
+        let (lh, e, p) = (self.p.hinge_len(), self.p.e, sol.tension);
+        let ft = sol.tip_force;
+        let loaded = ft[0] != R::zero() || ft[1] != R::zero();
+        let tip = [sol.tip().x, sol.tip().y];
+        let size = |w: Vec3<R>| (w[0] * w[0] + w[1] * w[1] + (w[2] / lh) * (w[2] / lh)).sqrt();
+        let (mut worst_imbalance, mut worst_load) = (R::zero(), R::zero());
+        let mut compare = |q: &Vec3<R>, w: Vec3<R>, cm: &Mat3<R>| -> Result<(), Error> {
+            let held = mat3::mul_vec(&mat3::inverse_spd(cm).ok_or(Error::Singular { what: "compliance" })?, q);
+            worst_imbalance = worst_imbalance.max(size([held[0] - w[0], held[1] - w[1], held[2] - w[2]]));
+            worst_load = worst_load.max(size(w)).max(size(held));
+            Ok(())
+        };
+        let cross = |r: [R; 2], f: [R; 2]| r[0] * f[1] - r[1] * f[0];
+        let mut node = Heading::origin();
         for k in 0..n {
-            let hole = self.walk(&sol.q[k]).point(R::zero(), self.p.e);
-            x[2 * k] = hole[0];
-            x[2 * k + 1] = hole[1];
+            let hinge_end = sol.q[k][..m].iter().fold(node, |h, q| h.then(self.sub_len + q[0], q[1], q[2]));
+            // the cable's pull on joint k's distal chain: P along span k at its hole B, toward
+            // the proximal node's hole A
+            let (a, b) = (node.point(R::zero(), e), hinge_end.point(R::zero(), e));
+            let span_v = [b[0] - a[0], b[1] - a[1]];
+            let span = (span_v[0] * span_v[0] + span_v[1] * span_v[1]).sqrt();
+            if !(span >= self.p.span_floor) {
+                return Err(Error::Contact { joint: k + 1, tension: p.to_f64() });
+            }
+            let fc = [-p * span_v[0] / span, -p * span_v[1] / span];
+            let f = [fc[0] + ft[0], fc[1] + ft[1]];
+            let mut pose = node;
+            for (q, cj) in sol.q[k][..m].iter().zip(&c.c[k][..m]) {
+                let d = pose.then(self.sub_len + q[0], q[1], q[2]);
+                let at = [d.pose.x, d.pose.y];
+                let moment = cross([b[0] - at[0], b[1] - at[1]], fc) + cross([tip[0] - at[0], tip[1] - at[1]], ft);
+                compare(q, [pose.c * f[0] + pose.s * f[1], -pose.s * f[0] + pose.c * f[1], moment], cj)?;
+                pose = d;
+            }
+            let link = sol.links[k];
+            if self.p.flex_links {
+                compare(&link, self.link_wrench(p, if loaded { Some((&pose, ft, tip)) } else { None }), &self.link_c)?;
+            }
+            node = pose.then(self.link_len + link[0], link[1], link[2]);
         }
-        x[2 * n] = sol.tip().x;
-        x[2 * n + 1] = sol.tip().y;
-        let (r, _) =
-            loaded::coupled_residual(self, &c, sol.tension, sol.tip_force, &x).map_err(|_| Error::Contact { joint: 0, tension: sol.tension.to_f64() })?;
-        Ok(r[..2 * n + 2].iter().fold(R::zero(), |a, &v| a + v * v).sqrt())
+        let len = R::from_u32(n as u32) * self.p.l;
+        let tip_off = ((node.pose.x - tip[0]) * (node.pose.x - tip[0]) + (node.pose.y - tip[1]) * (node.pose.y - tip[1])).sqrt() / len;
+        let of_loads = if worst_load > R::zero() { worst_imbalance / worst_load } else { R::zero() };
+        Ok(of_loads.max(tip_off))
     }
 
     /// Linearised tip stiffness K_tip = C_tip⁻¹ (rows/columns x mm, y mm, θ rad; N/mm and

@@ -94,10 +94,10 @@ pub fn contact(f: &Finger<f64>, p0: f64, pfrac: f64, vfrac: [f64; 3]) -> Result<
         Ok(c) => {
             let fwd = f.equilibrium_residual(&c.solution).map_err(|e| format!("contact P0={p0} P={p}: {e:?}"))?;
             let on = (c.solution.tip().x - c.point[0]).hypot(c.solution.tip().y - c.point[1]);
-            if c.force.iter().all(|x| x.is_finite()) && fwd < 1e-6 * len && on < 1e-8 * len {
+            if c.force.iter().all(|x| x.is_finite()) && fwd < 1e-8 && on < 1e-8 * len {
                 Ok("answer")
             } else {
-                Err(format!("contact P0={p0} P={p} V={v:?}: force {:?}, forward residual {fwd:e}, tip {on:e} mm off", c.force))
+                Err(format!("contact P0={p0} P={p} V={v:?}: force {:?}, relative wrench imbalance {fwd:e}, tip {on:e} mm off", c.force))
             }
         }
         Err(e) => refusal(&e).ok_or_else(|| format!("contact P0={p0} P={p} V={v:?}: {e:?}")),
