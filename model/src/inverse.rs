@@ -247,9 +247,33 @@ fn solve<R: Real>(f: &Finger<R>, table: Table<'_, R>, angles: &[R], tension: Opt
             }
         }
         general::solve(f, table.table(), angles, tension, opts, &mut out)?;
-        return Ok(out);
+    } else {
+        out = fast::solve(f, angles, tension, opts, out)?;
     }
-    fast::solve(f, angles, tension, opts, out)
+    reached_from_rest(f, &out, opts)?;
+    Ok(out)
+}
+
+/// The answer's check against the forward model (docs/inverse.md "Reached from rest"): the
+/// converged forward solve at the answer's tension and voltages, from the straight finger,
+/// gives back every joint's angle. Each joint's hold solves find an equilibrium at its target
+/// angle; where a joint's branch from rest folds (far-off parameter sets, never the board's
+/// finger) that can be another equilibrium than the one the finger reaches, or one past the
+/// branch's limit point. Refused as `LimitPoint` at the first joint off, or with the forward's
+/// own refusal. The tabled path needs no check: the table is the branch from rest.
+fn reached_from_rest<R: Real>(f: &Finger<R>, out: &PoseSolution<R>, opts: &Options<R>) -> Result<(), Error> {
+    let n = out.n;
+    let back = f.solve(out.tension, &out.volts[..n], crate::finger::Method::converged())?;
+    // the inverse's own accuracy (docs/inverse.md "Tolerances": 1e-9 rad in f64, 2e-5 in f32),
+    // 100 and 1 times over; without stacks its angle tolerance
+    let mut tol = R::from_f64(if R::EPS > 1e-10 { 2e-5 } else { 1e-7 });
+    if f.params().layers == 0 {
+        tol = tol.max(opts.angle_tol * R::from_f64(1.001));
+    }
+    match (0..n).find(|&k| !((back.joint_angle[k] - out.angles[k]).abs() <= tol)) {
+        Some(k) => Err(Error::LimitPoint { joint: k + 1, tension: out.tension.to_f64() }),
+        None => Ok(()),
+    }
 }
 
 /// The no-stacks rule, for both paths: without stacks only the tension is free. Joint k holds

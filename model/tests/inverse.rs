@@ -661,3 +661,98 @@ fn tabled_into_clears_the_rows_an_earlier_answer_held() {
     inverse::solve_pose_tabled_into(&t8, &a8, Some(1.0), &mut reused).unwrap();
     assert_eq!(reused, fresh(&t8, &a8), "and back");
 }
+
+/// The stack's range bounds the thickness the inverse may answer (the fuzz finds
+/// `regressions/model_inverse/joint-off-by-1.8e-3`, the m = 1 fast path, and
+/// `four-joints-off-by-1.2-rad`, the general path): where the posture's tension needs a
+/// thickness past either end of the range (the joint's root outside it), the inverse used to
+/// clamp the thickness and answer voltages whose forward solve missed the angles by 1.8e-3 and
+/// 1.2 rad; it now refuses (`NotConverged`). Every answer it still gives holds its angles.
+#[test]
+fn inverse_refuses_a_thickness_past_the_stacks_range() {
+    let fast = Params {
+        t_min: 0.0735547591778204,
+        a: 0.078125,
+        e_b: 0.1875,
+        e: 0.4419417382415922,
+        de_rule: finger_model::DeModulusRule::PaperEq3,
+        m: 1,
+        plate: true,
+        nu_b: 0.00703125,
+        span_floor: 0.005440941020600776,
+        flex_links: false,
+        ..Params::default()
+    };
+    let general = Params {
+        n: 4,
+        l: 64.21718421014694,
+        b: 1.1662912394210092,
+        w: 26.390158215457884,
+        t_min: 0.10769047078097205,
+        a: 9.012504626108303,
+        e: 0.3349292070425916,
+        de_rule: finger_model::DeModulusRule::PaperEq3,
+        n_inc: 7,
+        m: 3,
+        plate: false,
+        nu_b: 0.45,
+        span_floor: 0.1,
+        flex_links: false,
+        ..Params::default()
+    };
+    for (params, p, v) in [(fast, 3.5217924879716205, vec![0.0, 0.0, 8600.0]), (general, 0.4481913517375981, vec![1650.0, 0.0, 0.0, 0.0])] {
+        let f = Finger::new(params).unwrap();
+        let target = f.solve(p, &v, Method::converged()).unwrap();
+        let n = f.params().n;
+        match solve_pose(&f, &target.joint_angle[..n], None) {
+            Err(Error::NotConverged { .. }) => {}
+            Ok(s) => {
+                let back = f.solve(s.tension, &s.volts[..n], Method::converged()).unwrap();
+                for k in 0..n {
+                    let err = (back.joint_angle[k] - target.joint_angle[k]).abs();
+                    assert!(err <= 1e-9, "{}: joint {k} off by {err:e} rad (P {} V {:?})", label(f.params()), s.tension, &s.volts[..n]);
+                }
+            }
+            Err(e) => panic!("{}: {e:?}", label(f.params())),
+        }
+    }
+}
+
+/// An answer is one the forward model reaches from rest (docs/inverse.md "Reached from rest";
+/// the fuzz find `open/model_inverse/one-joint-no-stacks-off-by-0.8-rad`, now a regression):
+/// one joint without stacks on a 9.4 kPa body holds 0.74 rad at 0.0104 N from rest, and at
+/// 1.278 N in another equilibrium (larger deflections, the same angle), where the finger from
+/// rest stands at 1.54 rad. The hold solve found the second; the inverse now refuses it
+/// (`LimitPoint`) or answers a tension the forward gives back.
+#[test]
+fn inverse_answers_only_what_the_forward_reaches_from_rest() {
+    let params = Params {
+        n: 1,
+        t_min: 0.0234375,
+        a: 0.078125,
+        e_b: 0.1875,
+        e: 0.078125,
+        layers: 0,
+        z0: 0.02061731110582648,
+        g: 0.009375,
+        de_rule: finger_model::DeModulusRule::Isotropic,
+        m: 1,
+        plate: false,
+        nu_b: 0.46586921572861995,
+        span_floor: 0.0015625,
+        flex_links: false,
+        ..Params::default()
+    };
+    let f = Finger::new(params).unwrap();
+    let target = f.solve(0.0104099749640833, &[0.0], Method::converged()).unwrap();
+    assert!((target.joint_angle[0] - 0.7404).abs() < 1e-3, "{}", target.joint_angle[0]);
+    match solve_pose(&f, &target.joint_angle[..1], None) {
+        Err(Error::LimitPoint { joint: 1, .. }) => {}
+        Ok(s) => {
+            let back = f.solve(s.tension, &s.volts[..1], Method::converged()).unwrap();
+            let err = (back.joint_angle[0] - target.joint_angle[0]).abs();
+            assert!(err <= Options::<f64>::default().angle_tol, "off by {err:e} rad at P {}", s.tension);
+        }
+        Err(e) => panic!("{e:?}"),
+    }
+}

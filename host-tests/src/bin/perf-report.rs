@@ -164,7 +164,10 @@ fn main() {
          netduinoplus2 with `-icount shift=0`, bench image `bench/src/bin/inverse.rs`; the same table as \
          docs/inverse-cost.md (`cargo run --release --example inverse_cost`), docs/inverse.md (\"Cost on the \
          target\") says what bounds it. `m1-rigid`: the paper's model (m = 1, E_b, rigid links); \
-         `m8-plate-flex`: the default (m = 8, plate modulus, flexible links). Target: at most 20,000.\n\n{inverse_table}\n"
+         `m8-plate-flex`: the default (m = 8, plate modulus, flexible links). Target: at most 20,000 on the \
+         firmware's path (the last column). The untabled columns end with the forward solve from rest at \
+         the answer (docs/inverse.md \"Reached from rest\": an answer the finger does not reach is \
+         refused), which the tabled path does not need: 13,000 to 19,000 (m = 1) and 20,000 to 39,000 (m = 8) of theirs.\n\n{inverse_table}\n"
     );
     // ---- the branch-table path
     eprintln!("perf-report: branch-table image");
@@ -663,21 +666,12 @@ fn plot(rows: &[Row]) -> String {
 }
 
 /// Why the counts of the last structural change moved (the section `moved` writes).
-const MOVED_WHY: &str = "This round's structural change (issue 35): the firmware's fixed-point forward (`fixed/forward.rs`, \
-docs/fixed-point.md) runs on the float march's loop (`march_subs`) with the same arithmetic, so its errors keep \
-every digit and its counts move by about 1 %; one turn rule for every chain (`Heading`: the posture chain, the \
-coupled solve's frames and the re-walks of a joint's sub-elements carry their (sin, cos) and compose each step's \
-turn, where they took the sine and cosine of the summed angle), which moves the digits of every scalar run \
-through the generic model at that scalar's rounding: f32, and this report's I16F16 and I32F32 rows, the `Real` \
-newtypes of bench/src/fix.rs (the converged solves' error columns move in their last digits, either way; the f64 \
-rows' errors stay at 1e-11 and below); the tabled inverse's stiffness march without a test per sub-element \
-(`JointStiffness` adds its zeros without stacks); `joint_march`'s ways as types (the trait `By`: each caller's \
-march built for its way), the tabled inverse's sub-element rows past (n, m) cleared only where an earlier answer \
-held them and the tabled forward holding fewer values across a march, which bring the branch-table rows back to \
-their counts before the round (forward within 0.5 %, inverse below). Instruction counts move where the chain's \
-turns replace sines and cosines and where the inlining around the marches changed. The finger's solvers as \
-functions over `&Finger` in their own modules and the m = 1 inverse in `inverse/fast.rs` are pure moves: the \
-firmware images' instructions are the same. \"Before\" is this report as the round found it (21dcb1b).";
+const MOVED_WHY: &str = "This change (issue 37, 2026-12-06): `Finger::equilibrium_residual` is the posture's relative wrench \
+imbalance (docs/model.md \"Equilibrium\") and `link_q` takes its wrench from `link_wrench`, which \
+moves the M4F libm images' solves by a few instructions (at most 0.25 %: the inlining around the \
+link's deflection), every error the same; the other images are as they were. The untabled inverse \
+now ends with the forward solve from rest at its answer (docs/inverse.md \"Reached from rest\"), in \
+the inverse table above, not in these. \"Before\" is this report at 17a88de2.";
 
 /// The rows of the tables under `heading` in `md`: the first `key` cells joined, then the next `cols` cells.
 fn table_rows(md: &str, heading: &str, key: usize, cols: usize) -> BTreeMap<String, Vec<String>> {

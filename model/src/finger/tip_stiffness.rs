@@ -72,30 +72,41 @@ impl<R: Real> Finger<R> {
         let cross = |r: [R; 2], f: [R; 2]| r[0] * f[1] - r[1] * f[0];
         let mut node = Heading::origin();
         for k in 0..n {
-            let hinge_end = sol.q[k][..m].iter().fold(node, |h, q| h.then(self.sub_len + q[0], q[1], q[2]));
+            // in the joint's own frame (node k-1), as its march: no rounding of far-off positions
+            // enters a short span's direction
+            let (ftl, tpl) = match loaded {
+                true => {
+                    let t = Self::tip_in_frame(&node, ft, tip);
+                    (t.force, t.point)
+                }
+                false => ([R::zero(); 2], [R::zero(); 2]),
+            };
+            let hinge_end = sol.q[k][..m].iter().fold(Heading::origin(), |h, q| h.then(self.sub_len + q[0], q[1], q[2]));
             // the cable's pull on joint k's distal chain: P along span k at its hole B, toward
-            // the proximal node's hole A
-            let (a, b) = (node.point(R::zero(), e), hinge_end.point(R::zero(), e));
-            let span_v = [b[0] - a[0], b[1] - a[1]];
+            // the proximal node's hole A = (0, e)
+            let b = hinge_end.point(R::zero(), e);
+            let span_v = [b[0], b[1] - e];
             let span = (span_v[0] * span_v[0] + span_v[1] * span_v[1]).sqrt();
             if !(span >= self.p.span_floor) {
                 return Err(Error::Contact { joint: k + 1, tension: p.to_f64() });
             }
             let fc = [-p * span_v[0] / span, -p * span_v[1] / span];
-            let f = [fc[0] + ft[0], fc[1] + ft[1]];
-            let mut pose = node;
+            let f = [fc[0] + ftl[0], fc[1] + ftl[1]];
+            let mut pose = Heading::origin();
             for (q, cj) in sol.q[k][..m].iter().zip(&c.c[k][..m]) {
                 let d = pose.then(self.sub_len + q[0], q[1], q[2]);
                 let at = [d.pose.x, d.pose.y];
-                let moment = cross([b[0] - at[0], b[1] - at[1]], fc) + cross([tip[0] - at[0], tip[1] - at[1]], ft);
+                let moment = cross([b[0] - at[0], b[1] - at[1]], fc) + cross([tpl[0] - at[0], tpl[1] - at[1]], ftl);
                 compare(q, [pose.c * f[0] + pose.s * f[1], -pose.s * f[0] + pose.c * f[1], moment], cj)?;
                 pose = d;
             }
+            let end = pose.pose;
+            let hinge_end = node.then(end.x, end.y, end.theta);
             let link = sol.links[k];
             if self.p.flex_links {
-                compare(&link, self.link_wrench(p, if loaded { Some((&pose, ft, tip)) } else { None }), &self.link_c)?;
+                compare(&link, self.link_wrench(p, if loaded { Some((&hinge_end, ft, tip)) } else { None }), &self.link_c)?;
             }
-            node = pose.then(self.link_len + link[0], link[1], link[2]);
+            node = hinge_end.then(self.link_len + link[0], link[1], link[2]);
         }
         let len = R::from_u32(n as u32) * self.p.l;
         let tip_off = ((node.pose.x - tip[0]) * (node.pose.x - tip[0]) + (node.pose.y - tip[1]) * (node.pose.y - tip[1])).sqrt() / len;

@@ -332,6 +332,13 @@ fn with_stacks<R: Real>(
         let guess = Hold { delta: [lerp(lo[k].delta[0], hi[k].delta[0]), lerp(lo[k].delta[1], hi[k].delta[1])], thickness: lerp(t_top, t0), ..hi[k] };
         let h = ctx.hold_thickness(k + 1, &ang[k], pt, guess)?;
         out.iterations += h.iters;
+        // a thickness the stack cannot take (past either end of its range by more than
+        // rounding): Newton found a root outside it, and the clamped thickness would not hold
+        // the angle
+        let slack = R::from_f64(1e-6_f64.max(256.0 * R::EPS)) * t0;
+        if !(h.thickness >= t_top - slack && h.thickness <= t0 + slack) {
+            return Err(Error::NotConverged { iterations: out.iterations, residual: f64::INFINITY });
+        }
         let t = h.thickness.max(t_top).min(t0);
         out.thickness[k] = t;
         out.volts[k] = if t >= t0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, t)?.min(v_top) };

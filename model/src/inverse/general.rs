@@ -235,6 +235,13 @@ pub(super) fn solve<R: Real>(
         } else {
             g.hold_thickness(k + 1, angles[k], pt, &lo[k], &hi[k], mid[k], q_out)?
         };
+        // the root find ends at an end of the stack's range when no thickness inside it holds
+        // the angle at this tension: refused, not clamped
+        let slack = R::from_f64(1e-6_f64.max(256.0 * R::EPS)) * t0;
+        let at_end = held.thickness <= t_top + slack || held.thickness >= t0 - slack;
+        if at_end && (held.st.angle - angles[k]).abs() > R::from_f64(16.0) * g.tol_angle * (angles[k].abs() + R::from_f64(0.1)) {
+            return Err(Error::NotConverged { iterations: g.iters, residual: f64::INFINITY });
+        }
         let t = held.thickness.max(t_top).min(t0);
         out.thickness[k] = t;
         out.volts[k] = if t >= t0 { R::zero() } else { de::voltage_for_thickness(p, k + 1, t)?.min(v_top) };
