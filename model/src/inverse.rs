@@ -11,7 +11,7 @@
 
 use crate::calibration::Calibration;
 use crate::error::Error;
-use crate::finger::{Finger, Heading, Pose, Solution};
+use crate::finger::{Finger, Heading, Method, Pose, Solution};
 use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -263,7 +263,7 @@ fn solve<R: Real>(f: &Finger<R>, table: Table<'_, R>, angles: &[R], tension: Opt
 /// own refusal. The tabled path needs no check: the table is the branch from rest.
 fn reached_from_rest<R: Real>(f: &Finger<R>, out: &PoseSolution<R>, opts: &Options<R>) -> Result<(), Error> {
     let n = out.n;
-    let back = f.solve(out.tension, &out.volts[..n], crate::finger::Method::converged())?;
+    let back = f.solve(out.tension, &out.volts[..n], Method::converged())?;
     // the inverse's own accuracy (docs/inverse.md "Tolerances": 1e-9 rad in f64, 2e-5 in f32),
     // 100 and 1 times over; without stacks its angle tolerance
     let mut tol = R::from_f64(if R::EPS > 1e-10 { 2e-5 } else { 1e-7 });
@@ -274,6 +274,13 @@ fn reached_from_rest<R: Real>(f: &Finger<R>, out: &PoseSolution<R>, opts: &Optio
         Some(k) => Err(Error::LimitPoint { joint: k + 1, tension: out.tension.to_f64() }),
         None => Ok(()),
     }
+}
+
+/// How far past either end of the stack's thickness range [t at the top voltage, `t0`] a solved
+/// thickness may lie and still be that end (rounding, both paths): 1e-6 of t0, or 256 eps in a
+/// coarser scalar (f32's Newton wanders 1e-5 of t0 at a low tension).
+fn thickness_slack<R: Real>(t0: R) -> R {
+    R::from_f64(1e-6_f64.max(256.0 * R::EPS)) * t0
 }
 
 /// The no-stacks rule, for both paths: without stacks only the tension is free. Joint k holds

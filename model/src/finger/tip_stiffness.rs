@@ -74,12 +74,11 @@ impl<R: Real> Finger<R> {
         for k in 0..n {
             // in the joint's own frame (node k-1), as its march: no rounding of far-off positions
             // enters a short span's direction
-            let (ftl, tpl) = match loaded {
-                true => {
-                    let t = Self::tip_in_frame(&node, ft, tip);
-                    (t.force, t.point)
-                }
-                false => ([R::zero(); 2], [R::zero(); 2]),
+            let (ftl, tpl) = if loaded {
+                let t = Self::tip_in_frame(&node, ft, tip);
+                (t.force, t.point)
+            } else {
+                ([R::zero(); 2], [R::zero(); 2])
             };
             let hinge_end = sol.q[k][..m].iter().fold(Heading::origin(), |h, q| h.then(self.sub_len + q[0], q[1], q[2]));
             // the cable's pull on joint k's distal chain: P along span k at its hole B, toward

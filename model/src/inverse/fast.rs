@@ -3,7 +3,7 @@
 //! for the tension at a thickness and for the thickness at a tension. What it is not: the
 //! general path (`general`, any m and flexible links) or the steps both share (`inverse`).
 
-use super::{choose_tension, one_tension, Options, PoseSolution};
+use super::{choose_tension, one_tension, thickness_slack, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
 use crate::finger::{Finger, JointStiffness};
@@ -335,7 +335,7 @@ fn with_stacks<R: Real>(
         // a thickness the stack cannot take (past either end of its range by more than
         // rounding): Newton found a root outside it, and the clamped thickness would not hold
         // the angle
-        let slack = R::from_f64(1e-6_f64.max(256.0 * R::EPS)) * t0;
+        let slack = thickness_slack(t0);
         if !(h.thickness >= t_top - slack && h.thickness <= t0 + slack) {
             return Err(Error::NotConverged { iterations: out.iterations, residual: f64::INFINITY });
         }

@@ -14,7 +14,7 @@
 //! Here: the general solve (`solve`) and the finger without stacks.
 
 use super::table::{BranchTable, TableEnd, TABLE_BAND};
-use super::{choose_tension, feasible_interval, one_tension, Options, PoseSolution};
+use super::{choose_tension, feasible_interval, one_tension, thickness_slack, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
 use crate::finger::{by, uniform_beam_compliance, By, Finger, JointEquilibrium, JointMarch, JointStiffness, Method, Pose};
@@ -237,7 +237,7 @@ pub(super) fn solve<R: Real>(
         };
         // the root find ends at an end of the stack's range when no thickness inside it holds
         // the angle at this tension: refused, not clamped
-        let slack = R::from_f64(1e-6_f64.max(256.0 * R::EPS)) * t0;
+        let slack = thickness_slack(t0);
         let at_end = held.thickness <= t_top + slack || held.thickness >= t0 - slack;
         if at_end && (held.st.angle - angles[k]).abs() > R::from_f64(16.0) * g.tol_angle * (angles[k].abs() + R::from_f64(0.1)) {
             return Err(Error::NotConverged { iterations: g.iters, residual: f64::INFINITY });
