@@ -2,7 +2,7 @@
 //! compliance Σ J C Jᵀ and its inverse, and the equilibrium residual as an independent check
 //! of any solve.
 
-use super::{Compliances, Finger, Heading, Solution};
+use super::{norm2, Compliances, Finger, Heading, Solution};
 use crate::error::Error;
 use crate::mat3::{self, Mat3, Vec3};
 use crate::real::Real;
@@ -80,12 +80,12 @@ impl<R: Real> Finger<R> {
             } else {
                 ([R::zero(); 2], [R::zero(); 2])
             };
-            let hinge_end = sol.q[k][..m].iter().fold(Heading::origin(), |h, q| h.then(self.sub_len + q[0], q[1], q[2]));
+            let hinge_end = self.walk(&sol.q[k]);
             // the cable's pull on joint k's distal chain: P along span k at its hole B, toward
             // the proximal node's hole A = (0, e)
             let b = hinge_end.point(R::zero(), e);
             let span_v = [b[0], b[1] - e];
-            let span = (span_v[0] * span_v[0] + span_v[1] * span_v[1]).sqrt();
+            let span = norm2(span_v);
             if !(span >= self.p.span_floor) {
                 return Err(Error::Contact { joint: k + 1, tension: p.to_f64() });
             }
@@ -108,7 +108,7 @@ impl<R: Real> Finger<R> {
             node = hinge_end.then(self.link_len + link[0], link[1], link[2]);
         }
         let len = R::from_u32(n as u32) * self.p.l;
-        let tip_off = ((node.pose.x - tip[0]) * (node.pose.x - tip[0]) + (node.pose.y - tip[1]) * (node.pose.y - tip[1])).sqrt() / len;
+        let tip_off = norm2([node.pose.x - tip[0], node.pose.y - tip[1]]) / len;
         let of_loads = if worst_load > R::zero() { worst_imbalance / worst_load } else { R::zero() };
         Ok(of_loads.max(tip_off))
     }

@@ -239,7 +239,7 @@ pub(super) fn solve<R: Real>(
         // the angle at this tension: refused, not clamped
         let slack = thickness_slack(t0);
         let at_end = held.thickness <= t_top + slack || held.thickness >= t0 - slack;
-        if at_end && (held.st.angle - angles[k]).abs() > R::from_f64(16.0) * g.tol_angle * (angles[k].abs() + R::from_f64(0.1)) {
+        if at_end && (held.st.angle - angles[k]).abs() > R::from_f64(16.0) * g.angle_atol(angles[k]) {
             return Err(Error::NotConverged { iterations: g.iters, residual: f64::INFINITY });
         }
         let t = held.thickness.max(t_top).min(t0);

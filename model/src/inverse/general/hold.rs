@@ -29,12 +29,7 @@ impl<'a, R: Real> Gen<'a, R> {
         slope: R,
         beyond_ok: bool,
     ) -> Result<(Pt<R>, R), Error> {
-        let opts = bracket::RootOptions {
-            atol: self.tol_angle * (theta.abs() + R::from_f64(0.1)),
-            rel: self.rel,
-            beyond_rel: R::from_f64(1e-6),
-            max_iter: self.max_iter,
-        };
+        let opts = bracket::RootOptions { atol: self.angle_atol(theta), rel: self.rel, beyond_rel: R::from_f64(1e-6), max_iter: self.max_iter };
         let left = left.map(|p| bracket::Point { x: p.x, h: p.h, state: p.eq });
         let (mut hole, mut first) = (guess, true);
         let mut trial = |x: R, at: &bracket::Around<'_, R, JointEquilibrium<R>>| {

@@ -64,6 +64,13 @@ impl<'a, R: Real> Gen<'a, R> {
         JointStiffness::new(self.f, &self.stack, t)
     }
 
+    /// A joint angle's tolerance at a root (rad): `tol_angle` relative, 0.1 rad added so that
+    /// a small angle keeps an absolute floor.
+    #[inline(always)]
+    pub(super) fn angle_atol(&self, theta: R) -> R {
+        self.tol_angle * (theta.abs() + R::from_f64(0.1))
+    }
+
     /// Scale the angle tolerance of the solves (the branch table's samples).
     pub(in crate::inverse) fn tighten(&mut self, k: R) {
         self.tol_angle *= k;

@@ -76,7 +76,7 @@ impl<'a, R: Real> Gen<'a, R> {
     where
         F: FnMut([R; 3], &mut [[R; 3]; MAX_SUB]) -> Result<JointMarch<R>, Error>,
     {
-        let atol = self.tol_angle * (theta.abs() + R::from_f64(0.1));
+        let atol = self.angle_atol(theta);
         let htol = self.htol;
         let resid = |x: &[R; 3], st: &JointMarch<R>| [x[0] - st.hole[0], x[1] - st.hole[1], st.angle - theta];
         let mut x = x0;

@@ -20,7 +20,7 @@ impl<'a, R: Real> Gen<'a, R> {
     /// `st` if its hole is `b` and its angle `theta` within the quasi-Newton solves' tolerance.
     #[inline(always)]
     pub(super) fn converged(&self, st: JointMarch<R>, b: [R; 2], theta: R) -> Option<JointMarch<R>> {
-        let atol = self.tol_angle * (theta.abs() + R::from_f64(0.1));
+        let atol = self.angle_atol(theta);
         let htol = self.htol;
         let ok = (b[0] - st.hole[0]).abs() <= htol && (b[1] - st.hole[1]).abs() <= htol && (st.angle - theta).abs() <= atol;
         ok.then_some(st)
