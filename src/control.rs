@@ -640,8 +640,9 @@ impl<B: Board> Control<B> {
                 v_cap = ceil.min(hold);
                 t = t.min(ceil);
                 if sn.check_until_ms.is_some() {
-                    // the check's voltage on every channel, whatever its target
-                    t = LOW_CHECK_V.min(ceil).min(self.write_ceiling_v[ch]);
+                    // the check's voltage on every channel, whatever its target (under the
+                    // channel's ceiling, exclusive)
+                    t = LOW_CHECK_V.min(ceil).min(self.write_ceiling_v[ch] * (1.0 - 8.0 * f32::EPSILON));
                     v_cap = LOW_CHECK_V;
                 }
             }

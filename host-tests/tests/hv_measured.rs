@@ -558,8 +558,11 @@ fn a_short_that_stays_is_found_by_the_rearms_check_before_any_volt() {
         c.board_mut().plant.as_mut().unwrap().inject(ch, Inject::Breakdown { clears_after_ms: clears }).unwrap();
         run(&mut c, 3);
         assert_eq!((c.view().fault.get(), c.view().fault_ch), (Some(Fault::Breakdown), Some(ch as u8)), "seed {seed}");
+        // the module's own fall into the short over (its output still drove it, 15 ms), `stop`
+        run(&mut c, 200);
         c.stop();
-        assert_eq!((c.view().fault.get(), c.view().fault_ch), (None, None));
+        run(&mut c, 10);
+        assert_eq!((c.view().fault.get(), c.view().fault_ch), (None, None), "seed {seed}");
         // `arm` alone
         assert!(c.apply(&setpoints(&c, [0.0; 3], false, slew)));
         let mut highest: f32 = 0.0;
@@ -600,7 +603,10 @@ fn the_rearms_check_sees_a_stuck_monitor() {
     c.board_mut().plant.as_mut().unwrap().inject(2, Inject::MonitorStuck(0.0)).unwrap();
     run(&mut c, 20);
     assert_eq!((c.view().fault.get(), c.view().fault_ch), (Some(Fault::Breakdown), Some(2)));
+    run(&mut c, 200);
     c.stop();
+    run(&mut c, 10);
+    assert_eq!(c.view().fault.get(), None);
     assert!(c.apply(&setpoints(&c, [3000.0; 3], false, 2000.0)));
     let mut highest: f32 = 0.0;
     let mut latched_at = None;
