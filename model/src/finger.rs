@@ -72,9 +72,13 @@ pub struct Finger<R> {
     /// A fixed load on each joint's distal chain besides the cable (its proximal frame), and
     /// the wrench it adds on its link (the link's frame): the inverse's distal weight at a
     /// posture (docs/model.md "Gravity"); none on a finger `new` prepares.
-    held: [Option<TipLoad<R>>; MAX_JOINTS],
-    held_link: [[R; 3]; MAX_JOINTS],
+    held: [Option<TipLoad<R>>; HELD],
+    held_link: [[R; 3]; HELD],
 }
+
+/// Joints with a held load: every joint with the gravity feature, none without (the fields
+/// and their code leave the image).
+const HELD: usize = if cfg!(feature = "gravity") { MAX_JOINTS } else { 0 };
 
 /// The loads a joint sees besides the cable (a tip force, the distal weight), in its proximal
 /// frame (or the base frame, as its maker says): a force at a point and a couple (N·mm).

@@ -30,10 +30,13 @@ fn distributed_moment(p: &Params<f64>, sol: &Solution<f64>) -> (f64, f64) {
     let lh = 2.0 * p.a;
     let sub_len = lh / m as f64;
     let stack_per_mm = p.card.rho_g_cm3 * p.layers as f64 * p.z0 * p.w * 1e-3; // g/mm
-    // 16-point Gauss-Legendre on [0, 1] by the midpoint-refined composite rule (64 panels)
+                                                                               // 16-point Gauss-Legendre on [0, 1] by the midpoint-refined composite rule (64 panels)
     let quad = |f: &dyn Fn(f64) -> f64| -> f64 {
         let panels = 64;
-        let (xs, ws) = ([-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6], [0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9]);
+        let (xs, ws) = (
+            [-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6],
+            [0.347_854_845_137_453_9, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_9],
+        );
         let h = 1.0 / panels as f64;
         (0..panels).map(|i| xs.iter().zip(ws).map(|(x, w)| w * 0.5 * h * f(h * (i as f64 + 0.5 + 0.5 * x))).sum::<f64>()).sum()
     };

@@ -7,7 +7,7 @@
 //! proximal end is node k-1), and the link at its midpoint, on the centreline. Masses in g,
 //! forces in N.
 
-use super::{Finger, Heading, TipLoad};
+use super::{Finger, Heading, TipLoad, HELD};
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
@@ -92,13 +92,7 @@ impl<R: Real> Finger<R> {
     /// The base-frame load on link k (0-based) besides the cable: the tip force at `tip`, the
     /// weight beyond it (joint k+1's at its centroid `beyond`, and the next hinge's proximal half
     /// at the link's end) and its own at its midpoint. None if there is none.
-    pub(super) fn link_load(
-        &self,
-        k: usize,
-        hinge_end: &Heading<R>,
-        tip: Option<([R; 2], [R; 2])>,
-        w: Option<(&Weights<R>, R, [R; 2])>,
-    ) -> Option<TipLoad<R>> {
+    pub(super) fn link_load(&self, k: usize, hinge_end: &Heading<R>, tip: Option<([R; 2], [R; 2])>, w: Option<(&Weights<R>, R, [R; 2])>) -> Option<TipLoad<R>> {
         let n = self.p.n;
         let mut load = tip.map(|(f, t)| TipLoad::at(f, t));
         if let Some((w, scale, beyond)) = w {
@@ -123,12 +117,7 @@ impl<R: Real> Finger<R> {
     /// The base-frame load on joint k's (0-based) distal chain besides the cable: the tip force
     /// at `tip` and the distal weight (scaled by `scale`, the load continuation's factor) at its
     /// centroid `centroid`.
-    pub(super) fn joint_ext_load(
-        &self,
-        k: usize,
-        tip: Option<([R; 2], [R; 2])>,
-        w: Option<(&Weights<R>, R, [R; 2])>,
-    ) -> Option<TipLoad<R>> {
+    pub(super) fn joint_ext_load(&self, k: usize, tip: Option<([R; 2], [R; 2])>, w: Option<(&Weights<R>, R, [R; 2])>) -> Option<TipLoad<R>> {
         let load = tip.map(|(f, t)| TipLoad::at(f, t));
         match w {
             Some((w, scale, centroid)) => {
@@ -155,8 +144,8 @@ impl<R: Real> Finger<R> {
     /// deflections `links`: the inverse's fixed loads (`held`).
     pub(crate) fn weight_at_posture(&self, sub_q: &[[[R; 3]; MAX_SUB]; MAX_JOINTS], links: &[[R; 3]; MAX_JOINTS]) -> HeldLoads<R> {
         let n = self.p.n;
-        let mut held = [None; MAX_JOINTS];
-        let mut held_link = [[R::zero(); 3]; MAX_JOINTS];
+        let mut held = [None; HELD];
+        let mut held_link = [[R::zero(); 3]; HELD];
         let Some(w) = self.weights() else { return (held, held_link) };
         let mut nodes = [Heading::origin(); MAX_JOINTS];
         let mut ends = [Heading::origin(); MAX_JOINTS];
@@ -171,14 +160,14 @@ impl<R: Real> Finger<R> {
             node = hinge_end.then(self.link_len + l[0], l[1], l[2]);
         }
         let c = w.centroids(n, &lumps);
-        for k in 0..n {
+        for (k, (h, hl)) in held.iter_mut().zip(held_link.iter_mut()).enumerate().take(n) {
             let g = Some((&w, R::one(), c[k]));
-            held[k] = self.joint_ext_load(k, None, g).map(|l| Self::load_in_frame(&nodes[k], l));
+            *h = self.joint_ext_load(k, None, g).map(|l| Self::load_in_frame(&nodes[k], l));
             let beyond = Some((&w, R::one(), c[(k + 1).min(n - 1)]));
             if let Some(l) = self.link_load(k, &ends[k], None, beyond) {
                 let with = self.link_wrench(R::zero(), Some((&ends[k], l)));
                 let without = self.link_wrench(R::zero(), None);
-                held_link[k] = [with[0] - without[0], with[1] - without[1], with[2] - without[2]];
+                *hl = [with[0] - without[0], with[1] - without[1], with[2] - without[2]];
             }
         }
         (held, held_link)
@@ -212,4 +201,4 @@ impl<R: Real> Finger<R> {
 }
 
 /// Each joint's fixed load and each link's added wrench (`Finger::weight_at_posture`).
-pub(crate) type HeldLoads<R> = ([Option<TipLoad<R>>; MAX_JOINTS], [[R; 3]; MAX_JOINTS]);
+pub(crate) type HeldLoads<R> = ([Option<TipLoad<R>>; HELD], [[R; 3]; HELD]);

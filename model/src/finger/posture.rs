@@ -183,11 +183,11 @@ impl<R: Real> Finger<R> {
             let tl = self
                 .joint_ext_load(k, if loaded { Some((tip_force, tip)) } else { None }, weights.as_ref().map(|w| (w, R::one(), centroids[k])))
                 .map(|l| Self::load_in_frame(&heads[k], l))
-                .or(self.held[k]);
+                .or(self.held_at(k, R::one()));
             // tension alone: one dual march gives the residual and the exact tangent; a joint
             // equal to the one before (same compliance, same hole) has the same ones
             let same = k > 0 && c.c[k][..self.p.m] == c.c[k - 1][..self.p.m] && st.hole == states[k - 1].hole;
-            let dual = match (coupled || self.held[k].is_some(), same, prev) {
+            let dual = match (coupled || self.held_at(k, R::one()).is_some(), same, prev) {
                 (true, _, _) => None,
                 (false, true, Some(p)) => Some(p),
                 (false, _, _) => self.eval_dual(&c.c[k], tension, st.hole, None).ok().map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),

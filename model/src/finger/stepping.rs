@@ -47,8 +47,7 @@ fn states<R: Real>(f: &Finger<R>, c: &Compliances<R>, tension: R, force: [R; 2],
             let tl = f
                 .joint_ext_load(k, if loaded { Some((load, tip)) } else { None }, weights.as_ref().map(|w| (w, lam, centroids[k])))
                 .map(|l| Finger::load_in_frame(&nodes[k], l));
-            next[k] = explicit_step(f, &c.c[k], p, &states[k], tl)
-                .map_err(|_| Error::Contact { joint: k + 1, tension: p.to_f64() })?;
+            next[k] = explicit_step(f, &c.c[k], p, &states[k], tl).map_err(|_| Error::Contact { joint: k + 1, tension: p.to_f64() })?;
         }
         states = next;
     }
