@@ -85,7 +85,8 @@ mod app {
 
     #[init]
     fn init(cx: init::Context) -> (Shared, Local) {
-        // the HV pins are low since __pre_init (image/fault.rs)
+        // the HV pins are low since __pre_init (image/fault.rs), and again right after
+        // bring_up's GPIOB split (which resets the port) until their set-up
         let mut cp = cx.core;
         let chip = f405::bring_up(cx.device);
         #[allow(unused_mut)] // mutated by the settings' boot only
@@ -93,6 +94,10 @@ mod app {
         // the stored settings, before the control tick starts
         #[cfg(feature = "settings")]
         let boot = finger_fw::chip::flash::store(chip.flash).map(|s| finger_fw::app::config::boot(&mut cmds, &mut ctl, s));
+        // the watchdog from here: the store's read and repair above (erases, with no tick
+        // to feed it) ran before it
+        #[cfg(feature = "hw")]
+        finger_fw::chip::f405::start_watchdog();
         if cfg!(feature = "qemu") && chip.real_chip {
             // the emulator image has no watchdog: it never arms a real board
             ctl.lock_out(finger_fw::control::Fault::EmulatorOnChip);
