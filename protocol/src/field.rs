@@ -84,6 +84,8 @@ fields! {
     /// status: the horn's angle; limits: its travel (two)
     SERVO: "servo", Numbers, "deg";
     FAULT: "fault", Word, "name";
+    /// the channel whose read-back latched the fault, 1..3
+    FAULT_CH: "fault_ch", Number, "channel";
     ENABLE: "enable", Number, "0/1";
     STIFFNESS: "stiffness", Numbers, "N/mm, N/mm, N·mm/rad";
     ITERS: "iters", Number, "count";

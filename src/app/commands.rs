@@ -88,8 +88,10 @@ pub struct Commands {
     pub(super) sense_cal: super::hv_cal::SenseCal,
     #[cfg(not(m3))]
     pub(super) sense_cal_req: Option<super::hv_cal::SenseCal>,
-    /// The core's latched fault, as the console names it.
+    /// The core's latched fault, as the console names it, and the channel (0-based) whose
+    /// read-back latched it.
     pub(super) fault: Option<&'static str>,
+    pub(super) fault_ch: Option<u8>,
     pub(super) locked_out: bool,
     pub(super) now_ms: u32,
     /// HV setpoints (targets), V.
@@ -143,6 +145,7 @@ impl Commands {
             #[cfg(not(m3))]
             sense_cal_req: None,
             fault: None,
+            fault_ch: None,
             locked_out: false,
             now_ms: 0,
             target_v: [0.0; CHANNELS],
@@ -191,6 +194,14 @@ impl Commands {
         self.wait.is_some()
     }
 
+    /// `err fault` for a latched fault `f`, naming its channel when one latched it.
+    pub(in crate::app) fn latched(&self, f: &str) -> CmdError {
+        match self.fault_ch {
+            Some(k) => err!(Fault; "fault ", f, " latched on channel ", k + 1, "; send stop to clear it"),
+            None => err!(Fault; "fault ", f, " latched; send stop to clear it"),
+        }
+    }
+
     /// Take the control core's report. A stop since the last one (a new epoch): disarmed,
     /// tension 0, targets 0, as the core already is.
     pub fn sync(&mut self, v: &View) {
@@ -198,6 +209,10 @@ impl Commands {
         self.volts = v.volts;
         self.duty = v.duty;
         self.fault = v.fault.text();
+        #[cfg(not(m3))]
+        {
+            self.fault_ch = v.fault_ch;
+        }
         self.locked_out = v.locked_out;
         self.stack_ratio = v.stack_ratio;
         #[cfg(not(m3))]
@@ -456,7 +471,7 @@ impl Commands {
                     return Err(err!(Fault; f, ": this image never arms here"));
                 }
                 if let Some(f) = self.fault {
-                    return Err(err!(Fault; "fault ", f, " latched; send stop to clear it"));
+                    return Err(self.latched(f));
                 }
                 self.armed = true;
                 let _ = w!(r; const_concat!(field::ARMED.first(), "1"));

@@ -86,6 +86,10 @@ impl Commands {
                 let _ = if ch > 0 { r.write_str(",") } else { Ok(()) };
                 let _ = r.write_str(if sv.disagreed[ch] { "thinner" } else { "ok" });
             }
+            // the channel whose read-back latched the fault, 1-based (only while one is latched)
+            if let (Some(k), Some(_)) = (self.fault_ch, self.fault) {
+                let _ = w!(r; field::FAULT_CH.after(), k + 1);
+            }
         }
     }
 
@@ -252,7 +256,7 @@ impl Commands {
 
     pub(in crate::app) fn require_armed(&self, what: &str) -> Result<(), CmdError> {
         if let Some(f) = self.fault {
-            return Err(err!(Fault; "fault ", f, " latched; send stop to clear it"));
+            return Err(self.latched(f));
         }
         if !self.armed {
             return Err(err!(NotArmed; what, " needs arm"));
