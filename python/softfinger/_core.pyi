@@ -122,6 +122,10 @@ class Contact:
     def force_N(self) -> F64:
         """The force the object exerts on the tip, N, shape (2,); the finger presses with −force."""
     @property
+    def force_on_tip_N(self) -> F64:
+        """``force_N`` by the name of its sign: the stop's force on the tip, N, shape (2,) (the
+        console's ``force_on_tip``; its ``fx``, ``fy`` are the opposite)."""
+    @property
     def magnitude_N(self) -> float: ...
     @property
     def solution(self) -> Solution:

@@ -333,6 +333,12 @@ impl Contact {
     fn force_N<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
         arr1(py, &self.c.force)
     }
+    /// The stop's force on the tip, N, shape (2,): `force_N` by the name of its sign (the
+    /// console's `force_on_tip`; its `fx`, `fy` are the opposite).
+    #[getter]
+    fn force_on_tip_N<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, &self.c.force)
+    }
     /// |force|, N.
     #[getter]
     fn magnitude_N(&self) -> R {
@@ -350,7 +356,7 @@ impl Contact {
     }
     fn __repr__(&self) -> String {
         format!(
-            "Contact(point_mm=({:.3}, {:.3}), force_N=({:.4}, {:.4}), magnitude_N={:.4})",
+            "Contact(point_mm=({:.3}, {:.3}), force_on_tip_N=({:.4}, {:.4}), magnitude_N={:.4})",
             self.c.point[0],
             self.c.point[1],
             self.c.force[0],
@@ -383,13 +389,43 @@ fn board_calibration(p: &Params<R>) -> Calibration<R> {
     Calibration::for_params(&q)
 }
 
-/// An `InputError` for a calibration that does not apply to the finger asked for.
+/// The parameters in which `p` is not the finger the FE calibration belongs to (the rule of
+/// `Calibration::for_params`, the board's `param` too: docs/model.md's finger, every parameter
+/// but `KEEPS_CALIBRATION`'s at its default, `layers` the default or 0, on the board's film or
+/// the default one): each as `name = value (the calibrated finger's: default)`.
+fn calibration_differs(p: &Params<R>) -> Vec<(&'static str, String)> {
+    use finger_model::calibration::KEEPS_CALIBRATION;
+    let d = Params::<R>::default();
+    let b = Params::<R>::with_card(BOARD_CARD);
+    let boards_film = p.card == b.card && p.g == b.g && p.nu == b.nu && p.de_rule == b.de_rule;
+    let mut out = Vec::new();
+    if !boards_film && (p.card != d.card || p.de_rule != d.de_rule) {
+        out.push(("card", format!("card = {} (the calibrated finger's: {} or {})", p.card.name, d.card.name, b.card.name)));
+    }
+    for i in PARAMS {
+        let film = matches!(i.name, "g" | "nu" | "e_de");
+        if KEEPS_CALIBRATION.contains(&i.name) || (film && boards_film) || (i.name == "layers" && p.layers == 0) {
+            continue;
+        }
+        if let (Some(v), Some(dv)) = (p.get(i.name), d.get(i.name)) {
+            if v != dv {
+                out.push((i.name, format!("{} = {v} (the calibrated finger's: {dv})", i.name)));
+            }
+        }
+    }
+    out
+}
+
+/// An `InputError` for a calibration that does not apply to the finger asked for: named after
+/// the first parameter that leaves the calibrated finger, every such parameter in the message.
 fn calibration_refused(what: &str, p: &Params<R>) -> PyErr {
+    let differs = calibration_differs(p);
+    let name = differs.first().map_or("calibration", |d| d.0);
+    let which = if differs.is_empty() { format!("card {}, m = {}, layers = {}", p.card.name, p.m, p.layers) } else { differs.iter().map(|d| d.1.as_str()).collect::<Vec<_>>().join(", ") };
     errors::model_err_msg(
-        Error::Param { name: "calibration", range: "docs/model.md's finger (m = 8, plate, flexible links, its geometry) on VHB 4905 or the default film" },
+        Error::Param { name, range: "docs/model.md's finger (m = 8, plate, flexible links, its geometry, body modulus and stack count) on VHB 4905 or the default film" },
         format!(
-            "calibration {what} does not apply to this finger (card {}, m = {}, layers = {}): the FE factors were computed for docs/model.md's finger on VHB 4905 or the default film; pass calibration=None for the uncalibrated model, or 8 factors",
-            p.card.name, p.m, p.layers
+            "calibration {what} does not apply to this finger: {which}; the FE factors belong to docs/model.md's finger on VHB 4905 or the default film (a board's `param` set drops them the same way); pass calibration=None for the uncalibrated model, or 8 factors"
         ),
     )
 }

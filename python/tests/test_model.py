@@ -193,6 +193,14 @@ def test_presets_parameters_and_calibration():
             sf.Finger(**kw)
         assert "calibration" in str(e.value) and "calibration=None" in str(e.value), kw
     assert sf.Finger(layers=2, calibration=None).params["layers"] == 2
+    # the error names the parameter that left the calibrated finger, not those that did not
+    # (the board's `param e_b 15` drops the factors by the same rule and says `cal=`)
+    for kw, name in (({"e_b": 15}, "e_b"), ({"layers": 2}, "layers"), ({"card": "Elastosil-2030"}, "card")):
+        with pytest.raises(sf.InputError) as e:
+            sf.Finger(**kw)
+        assert e.value.name == name and f"{name} = " in str(e.value), (kw, str(e.value))
+        if name == "e_b":
+            assert "layers = " not in str(e.value) and "card " not in str(e.value), str(e.value)
     # the calibration changes the answer
     assert not np.array_equal(board.solve(1.0, 0).joints_rad, sf.Finger(calibration=None).solve(1.0, 0).joints_rad)
     names = [n for n, _ in sf.parameter_ranges()]

@@ -212,9 +212,11 @@ where
     }
     match contact_force(finger, R::from_f64(f64::from(p0)), &zero[..n], R::from_f64(f64::from(p)), &v[..n]) {
         Ok(c) => {
-            // the finger presses on the object with minus the object's force on the tip
-            let (fx, fy) = (f32_of(-c.force[0]), f32_of(-c.force[1]));
-            w!(out; const_concat!("ok ", field::FX.first()), Fixed(fx, 4), field::FY.after(), Fixed(fy, 4), field::FORCE.after(), Fixed(f32_of(c.magnitude()), 4), field::POINT.after(), Fixed(f32_of(c.point[0]), 3), ",", Fixed(f32_of(c.point[1]), 3))?;
+            // `force_on_tip`: the stop's force on the tip (the model's, Python's); `fx`, `fy`
+            // (the contract's first fields): the tip's on the stop, its opposite
+            let (fx, fy) = (f32_of(c.force[0]), f32_of(c.force[1]));
+            w!(out; const_concat!("ok ", field::FX.first()), Fixed(-fx, 4), field::FY.after(), Fixed(-fy, 4), field::FORCE.after(), Fixed(f32_of(c.magnitude()), 4), field::POINT.after(), Fixed(f32_of(c.point[0]), 3), ",", Fixed(f32_of(c.point[1]), 3))?;
+            w!(out; field::FORCE_ON_TIP.after(), Fixed(fx, 4), ",", Fixed(fy, 4))?;
             Ok(true)
         }
         Err(e) => {

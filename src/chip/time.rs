@@ -9,7 +9,7 @@
 use crate::num::Fixed;
 use crate::rx::Record;
 use core::fmt::Write;
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m::peripheral::{syst::SystClkSource, SCB, SYST};
 use finger_protocol::field;
 
 /// Core clock, MHz: 168 on the board and in QEMU netduinoplus2, 120 in QEMU netduino2 (M3).
@@ -32,6 +32,20 @@ pub fn start_systick(syst: &mut SYST) {
 /// SysTick counts since its last reload.
 pub fn systick_elapsed() -> u32 {
     (SYSTICK_PER_MS - 1).saturating_sub(SYST::get_current())
+}
+
+/// SysTick counts since the reload that began the running control tick, also past the next
+/// reload (whose exception pends while the control task runs): a clock that does not run
+/// backwards within a tick that overruns its millisecond once. Under the wall-clock emulator a
+/// host stall can pass two reloads; spans then read short (`saturating_sub`: 0), never 2^32.
+pub fn tick_clock() -> u32 {
+    loop {
+        let before = SCB::is_pendst_pending();
+        let c = systick_elapsed();
+        if SCB::is_pendst_pending() == before {
+            return if before { c + SYSTICK_PER_MS } else { c };
+        }
+    }
 }
 
 /// What the control and console tasks measure, SysTick counts.

@@ -308,6 +308,7 @@ impl Commands {
         let Some(name) = name else {
             return Err(err!(Usage; "no parameter ", (console::printable(args[0])), "; param lists them"));
         };
+        let mut cal_changed = false;
         if let Some(v) = args.get(1) {
             let v = number(v, name)?;
             if PARAMS.iter().any(|i| i.name == name) {
@@ -317,8 +318,10 @@ impl Commands {
                 let mut p = *self.planner.finger().params();
                 p.set(name, v.into()).map_err(model_err)?;
                 // the FE calibration belongs to the mechanical parameters it was computed for
-                let cal = if KEEPS_CALIBRATION.contains(&name) { *self.planner.finger().calibration() } else { calibration_for(&p) };
+                let was = *self.planner.finger().calibration();
+                let cal = if KEEPS_CALIBRATION.contains(&name) { was } else { calibration_for(&p) };
                 self.adopt_model(p, cal)?;
+                cal_changed = cal != was;
             } else {
                 let mut fw = self.fw;
                 fw.set(name, v)?;
@@ -334,6 +337,11 @@ impl Commands {
             None => self.fw.get(name).unwrap_or(0.0),
         };
         let _ = w!(r; name, "=", Short(v));
+        if cal_changed {
+            // the set left (or came back to) the finger the FE calibration belongs to
+            let _ = w!(r; field::CAL.after());
+            self.write_cal(r);
+        }
         Ok(())
     }
 
@@ -376,10 +384,15 @@ impl Commands {
             self.require_disarmed("cal")?;
             self.adopt_model(*self.planner.finger().params(), cal)?;
         }
+        let _ = w!(r; field::CAL.first());
+        self.write_cal(r);
+        Ok(())
+    }
+
+    /// The eight calibration factors in force, comma-separated (`cal=`'s value).
+    fn write_cal(&self, r: &mut Reply) {
         let c = self.planner.finger().calibration();
         let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];
-        let _ = w!(r; field::CAL.first());
         list(r, &g, 6);
-        Ok(())
     }
 }
