@@ -37,7 +37,7 @@ use finger_protocol::field;
 use heapless::String;
 
 use super::commands::Commands;
-#[cfg(m3)]
+#[cfg(any(m3, feature = "contact"))]
 use super::errors::model_err;
 #[cfg(any(feature = "pose", feature = "contact"))]
 use super::errors::{head, ErrorCode};
@@ -339,6 +339,13 @@ impl Commands {
             v = [number(args[2], "V1")?, number(args[3], "V2")?, number(args[4], "V3")?];
         }
         self.check_volts(&v)?;
+        // past fmax: `limits`' figure, the one every refusal quotes (the model's own check
+        // below finds the same limit to its bisection's last digit)
+        if let Ok(b) = self.planner.fmax(&v) {
+            if p > b.tension {
+                return Err(model_err(finger_model::Error::ForceLimit { tension: p.into(), fmax: b.tension.into() }));
+            }
+        }
         let mut line: String<240> = String::new();
         let volts: &[f32] = if args.len() > 2 { &v } else { &[] };
         let _ = contact(&mut line, self.planner.finger(), p0, p, volts);

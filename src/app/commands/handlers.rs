@@ -180,12 +180,28 @@ impl Commands {
         return self
             .planner
             .forward_with(p, &vf, |sol| solve_reply(r, sol, self.planner.finger().tip_stiffness(sol).map_err(model_err)?))
-            .map_err(model_err)?;
+            .map_err(|e| model_err(self.past_fmax(p, &vf, e)))?;
         // the M3's: from the fixed-point state (app/m3.rs)
         #[cfg(m3)]
         {
             let (sol, k) = forward_stiffness(self.planner.finger(), p, &vf).map_err(model_err)?;
             solve_reply(r, &sol, k)
+        }
+    }
+
+    /// A solve that ran off the branch's end (links touching, a limit point) quotes the limit
+    /// itself, fmax at its voltages (`limits`' figure, `force`'s refusal), not the tension
+    /// where the solver's steps found the end.
+    #[cfg(not(m3))]
+    fn past_fmax(&self, p: f32, volts: &[f32; CHANNELS], e: finger_model::Error) -> finger_model::Error {
+        use finger_model::Error;
+        match e {
+            // the planner's fmax: `limits`' own figure (its table's, when it has one)
+            Error::Contact { .. } | Error::LimitPoint { .. } => match self.planner.fmax(volts) {
+                Ok(b) if p > b.tension => Error::ForceLimit { tension: p.into(), fmax: b.tension.into() },
+                _ => e,
+            },
+            _ => e,
         }
     }
 
