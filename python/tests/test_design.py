@@ -101,6 +101,15 @@ def test_the_model_and_a_design_pickle():
     assert Design.from_toml(d.to_toml("a comment")) == d
     with pytest.raises(ValueError):
         Design.from_toml(d.to_toml() + "t_mni = 1.0\n")
+    # a path, as a Path or as the text of one, reads the file (was a TOMLDecodeError)
+    path = ROOT / "designs" / "VHB-4905.toml"
+    assert Design.from_toml(path) == Design.load(path) == Design.from_toml(str(path))
+    with pytest.raises(FileNotFoundError) as e:
+        Design.from_toml("designs/no-such.toml")
+    assert "Design.load" in str(e.value)
+    with pytest.raises(ValueError) as e:
+        Design.from_toml("not = toml = text")
+    assert "TOML text or a path" in str(e.value)
 
 
 def sim_lines(program, lines):
