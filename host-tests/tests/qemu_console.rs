@@ -34,6 +34,8 @@ fn reset_reboots_only_while_disarmed(img: Image) {
     }
     let help = send(&mut q, b"help\n", 1);
     assert!(help.iter().any(|l| l.starts_with("reset - ")), "{help:?}");
+    // the emulator image's plant: its commands listed too (they were not)
+    assert!(help.iter().any(|l| l.starts_with("plant film ")), "{help:?}");
     let e_b = field(&expect(&mut q, "param e_b", "ok e_b="), "e_b")[0];
     expect(&mut q, "param e_b 13", "ok e_b=13");
     expect(&mut q, "arm", "ok armed=1");

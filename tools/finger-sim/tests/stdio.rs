@@ -93,3 +93,19 @@ fn after_stop_the_stacks_read_discharged_a_moment_later() {
     drop(input);
     assert!(c.wait().unwrap().success());
 }
+
+/// `help` lists every command the simulated board answers: the plant's test console too, and
+/// not `reset` (the chip images' alone), which is refused as unknown here.
+#[test]
+fn help_lists_the_plant_and_reset_is_the_chips() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let mut c = Command::new(env!("CARGO_BIN_EXE_finger-sim")).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap();
+    c.stdin.take().unwrap().write_all(b"help\nplant status\nreset\n").unwrap();
+    let out = c.wait_with_output().unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.lines().any(|l| l.starts_with("plant film <G_eq kPa>") && l.contains(" | status - ")), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("ok plant film_kpa=")), "{text}");
+    assert!(!text.lines().any(|l| l.starts_with("reset")), "{text}");
+    assert!(text.lines().last().unwrap().starts_with("err unknown: reset"), "{text}");
+}
