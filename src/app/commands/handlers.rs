@@ -324,6 +324,7 @@ impl Commands {
         let Some(name) = name else {
             return Err(err!(Usage; "no parameter ", (console::printable(args[0])), "; param lists them"));
         };
+        #[allow(unused_mut)]
         let mut cal_changed = false;
         if let Some(v) = args.get(1) {
             let v = number(v, name)?;
@@ -337,7 +338,11 @@ impl Commands {
                 let was = *self.planner.finger().calibration();
                 let cal = if KEEPS_CALIBRATION.contains(&name) { was } else { calibration_for(&p) };
                 self.adopt_model(p, cal)?;
-                cal_changed = cal != was;
+                // said in the reply, not in the Cortex-M3 image (its flash)
+                #[cfg(not(m3))]
+                {
+                    cal_changed = cal != was;
+                }
             } else {
                 let mut fw = self.fw;
                 fw.set(name, v)?;
