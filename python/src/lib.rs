@@ -467,7 +467,11 @@ fn calibration_differs(p: &Params<R>) -> Vec<(&'static str, String)> {
 fn calibration_refused(what: &str, p: &Params<R>) -> PyErr {
     let differs = calibration_differs(p);
     let name = differs.first().map_or("calibration", |d| d.0);
-    let which = if differs.is_empty() { format!("card {}, m = {}, layers = {}", p.card.name, p.m, p.layers) } else { differs.iter().map(|d| d.1.as_str()).collect::<Vec<_>>().join(", ") };
+    let which = if differs.is_empty() {
+        format!("card {}, m = {}, layers = {}", p.card.name, p.m, p.layers)
+    } else {
+        differs.iter().map(|d| d.1.as_str()).collect::<Vec<_>>().join(", ")
+    };
     errors::model_err_msg(
         Error::Param { name, range: "docs/model.md's finger (m = 8, plate, flexible links, its geometry, body modulus and stack count) on VHB 4905 or the default film" },
         format!(
@@ -847,7 +851,9 @@ impl Finger {
             .enumerate()
             .map(|(i, r)| match r {
                 Ok(c) => *c,
-                Err(_) => Compact::refused(tensions[if p_rows.is_some() { i } else { 0 }], if v_rows.is_some() { &volts[i * n..(i + 1) * n] } else { &volts[..n] }),
+                Err(_) => {
+                    Compact::refused(tensions[if p_rows.is_some() { i } else { 0 }], if v_rows.is_some() { &volts[i * n..(i + 1) * n] } else { &volts[..n] })
+                }
             })
             .collect();
         let c = |i: usize| &rows_c[i];
