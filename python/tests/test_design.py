@@ -196,3 +196,18 @@ def test_the_page_is_what_its_command_writes(tmp_path):
     assert (again / "docs" / "design-pareto.png").read_bytes() == (tmp_path / "docs" / "design-pareto.png").read_bytes()
     page = (ROOT / "docs" / "design.md").read_text()
     assert "](design-pareto.png)" in page and "design-pareto.svg" in page
+
+
+def test_a_design_checks_figures_are_plain_numbers():
+    """`python -m softfinger.design fe` prints each check's ratios and errors: plain floats,
+    not numpy scalars (their repr was `np.float64(1.27...)`). The FE results here are the
+    model's own, 1 % stiffer: no CalculiX run."""
+    from softfinger.design import fe
+
+    d = Design.load(ROOT / "designs" / "VHB-4905.toml")
+    results = [fe.CaseResult(c, True, joints_rad=c.model_joints_rad, direct=tuple(np.float64(x) * 1.01 for x in c.model_direct)) for c in fe.cases_of(d)]
+    ch = fe.DesignCheck(d, results)
+    for figures in (ch.ratio("kyy"), ch.ratio("ktt"), ch.errors()):
+        assert figures and all(type(v) is float for v in figures.values()), figures
+        assert "np.float64" not in repr(figures)
+    assert ch.errors()["kyy_pct"] == pytest.approx(100 * (1 / 1.01 - 1))
