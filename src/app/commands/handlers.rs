@@ -87,6 +87,13 @@ impl Commands {
                 let _ = r.write_str(if sv.disagreed[ch] { "thinner" } else { "ok" });
             }
         }
+        self.orientation(r);
+    }
+
+    /// ` grav=<m/s²> grav_dir=<deg>`: the orientation in force (`status`, `limits`).
+    fn orientation(&self, r: &mut Reply) {
+        let p = self.planner.finger().params();
+        let _ = w!(r; field::GRAV.after(), Short(p.grav), field::GRAV_DIR.after(), Short(p.grav_dir));
     }
 
     /// A stack's thickness at rest, mm: layers x z0 of the model (0 without stacks).
@@ -127,6 +134,7 @@ impl Commands {
             let _ = w!(r; field::VMAX_OK.after());
             list(r, &ok, 1);
         }
+        self.orientation(r);
     }
 
     /// Check channel voltages against the ceilings: `limit` at or past ([`largest_below`]).
