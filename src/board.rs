@@ -38,9 +38,10 @@ pub const BOARD_MARGIN: f32 = design::BOARD_MARGIN;
 pub const BOARD_FINGER: &[(&str, f32)] = design::BOARD_FINGER;
 
 /// The board's finger's orientation (issue 53): gravity on, at standard gravity, hanging
-/// straight down (`grav_dir` 0: a finger on a downward-facing gripper). The one switch: false
-/// gives the board's finger without gravity (`grav` 0), as before gravity was modelled.
-pub const BOARD_GRAVITY: bool = true;
+/// straight down (`grav_dir` 0: a finger on a downward-facing gripper); off on the Cortex-M3
+/// image, whose fixed-point model has no gravity. The one switch: false gives the board's
+/// finger without gravity (`grav` 0), as before gravity was modelled.
+pub const BOARD_GRAVITY: bool = !cfg!(m3);
 /// The board's default finger's `grav` (m/s²) and `grav_dir` (degrees from the straight
 /// finger's axis toward the cable side); a design file's `grav` and `grav_dir` override them
 /// (`BOARD_FINGER`).

@@ -203,13 +203,15 @@ fn fmax_against_f64(q: &mut Qemu, img: Image) {
     }
 }
 
-/// The host's f64 model of the board's finger: docs/model.md's on VHB 4905 under the board's
-/// gravity (`board_params`), the board's calibration.
+/// The host's f64 model of the board's finger: docs/model.md's on VHB 4905 (`board_params`) in
+/// the image's orientation (`param grav`, `param grav_dir`: the Cortex-M3 image has none), the
+/// board's calibration.
 fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
     let c = expect(q, "cal", "ok cal=");
     let g: Vec<f64> = c["ok cal=".len()..].split(',').map(|x| x.parse().unwrap()).collect();
     let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
-    finger_model::Finger::with_calibration(finger_fw::app::board_params::<f64>(), cal).unwrap()
+    let [grav, dir] = ["grav", "grav_dir"].map(|n| expect(q, &format!("param {n}"), &format!("ok {n}="))[n.len() + 4..].parse::<f64>().unwrap());
+    finger_model::Finger::with_calibration(finger_fw::app::board_params::<f64>().with_gravity(grav, dir), cal).unwrap()
 }
 
 /// The M3 image's `pose` (the fixed-point inverse at the given tension), armed: at a posture

@@ -87,10 +87,13 @@ impl Commands {
                 let _ = r.write_str(if sv.disagreed[ch] { "thinner" } else { "ok" });
             }
         }
+        #[cfg(not(m3))]
         self.orientation(r);
     }
 
-    /// ` grav=<m/s²> grav_dir=<deg>`: the orientation in force (`status`, `limits`).
+    /// ` grav=<m/s²> grav_dir=<deg>`: the orientation in force (`status`, `limits`; not on the
+    /// Cortex-M3 image: its flash, and its fixed-point model has no gravity).
+    #[cfg(not(m3))]
     fn orientation(&self, r: &mut Reply) {
         let p = self.planner.finger().params();
         let _ = w!(r; field::GRAV.after(), Short(p.grav), field::GRAV_DIR.after(), Short(p.grav_dir));
@@ -134,6 +137,7 @@ impl Commands {
             let _ = w!(r; field::VMAX_OK.after());
             list(r, &ok, 1);
         }
+        #[cfg(not(m3))]
         self.orientation(r);
     }
 
