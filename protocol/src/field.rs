@@ -160,6 +160,10 @@ fields! {
     CONFIG: "config", Word, "-";
     FILM_KPA: "film_kpa", Number, "kPa";
     CURRENT_UA: "current_ua", Numbers, "µA";
+    /// status, limits: gravity's magnitude in force (0: off)
+    GRAV: "grav", Number, "m/s²";
+    /// status, limits: gravity's direction from the straight finger's axis toward the cable side
+    GRAV_DIR: "grav_dir", Number, "deg";
 }
 
 /// `const_concat!(a, b, ...)`: the `&'static str` constants `a`, `b`, ... end to end, one

@@ -86,6 +86,11 @@ def _float(v: Value) -> float:
     raise BoardLinkError(f"a number was expected, got {v!r}")
 
 
+def _optional(f: Dict[str, Value], key: str) -> Optional[float]:
+    """A number field a newer firmware adds (None when the reply lacks it)."""
+    return _float(f[key]) if key in f else None
+
+
 @dataclass(frozen=True)
 class Status:
     """The board's ``status``: what it is doing now."""
@@ -113,6 +118,11 @@ class Status:
     imeas_uA: Optional[Tuple[float, ...]] = None
     #: each stack's thickness sensed from its capacitance, mm (nan until measured)
     thick_meas_mm: Optional[Tuple[float, ...]] = None
+    #: the orientation in force (firmware with gravity; None otherwise): gravity's magnitude,
+    #: m/s² (0: off), and its direction, degrees from the straight finger's axis toward the
+    #: cable side (0 hanging straight down)
+    grav_m_s2: Optional[float] = None
+    grav_dir_deg: Optional[float] = None
     #: every field of the reply, parsed (newer firmware may add some)
     fields: Dict[str, Value] = field(default_factory=dict, compare=False)
 
@@ -137,6 +147,8 @@ class Status:
             vmeas_V=cls._measured(line, "vmeas"),
             imeas_uA=cls._measured(line, "imeas"),
             thick_meas_mm=cls._measured(line, "thick_meas"),
+            grav_m_s2=_optional(f, "grav"),
+            grav_dir_deg=_optional(f, "grav_dir"),
             fields=f,
         )
 
@@ -165,6 +177,9 @@ class Limits:
     #: the largest cable tension at the present voltages (end of the equilibrium branch), N;
     #: None when the board could not compute it
     fmax_N: Optional[float]
+    #: the orientation in force, as :class:`Status`' (None: firmware without gravity)
+    grav_m_s2: Optional[float] = None
+    grav_dir_deg: Optional[float] = None
     #: every field of the reply, parsed
     fields: Dict[str, Value] = field(default_factory=dict, compare=False)
 
@@ -178,6 +193,8 @@ class Limits:
             supply_V=_float(f["supply"]),
             margin=_float(f["margin"]),
             fmax_N=fmax if isinstance(fmax, float) else None,
+            grav_m_s2=_optional(f, "grav"),
+            grav_dir_deg=_optional(f, "grav_dir"),
             fields=f,
         )
 

@@ -514,6 +514,12 @@ fn calibration_of(arg: Option<CalArg>, p: &Params<R>, preset: &str) -> PyResult<
 
 /// The board's film, compiled into the firmware (src/board.rs `BOARD_CARD`).
 const BOARD_CARD: &Card = &finger_model::material::VHB_4905;
+/// The board's finger's orientation (src/board.rs `BOARD_GRAVITY`, issue 53): standard gravity,
+/// hanging straight down. The one switch: false gives preset "board" without gravity.
+const BOARD_GRAVITY: bool = true;
+/// The board's finger's `grav` (m/s²) and `grav_dir` (degrees).
+const BOARD_GRAV_M_S2: R = if BOARD_GRAVITY { finger_model::params::G_STANDARD } else { 0.0 };
+const BOARD_GRAV_DIR_DEG: R = 0.0;
 /// The board's HV modules' limit, V (src/board.rs `HV_MAX_V`).
 const BOARD_HV_MAX_V: R = 10_000.0;
 
@@ -529,7 +535,7 @@ fn hold_ceiling_of(p: &Params<R>) -> PyResult<R> {
 /// "Geometry"). An override that is only consistent with a later one is retried after the others.
 fn params_of(preset: &str, card: Option<&str>, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Params<R>> {
     let mut p = match preset {
-        "board" => Params::with_card(BOARD_CARD),
+        "board" => Params::with_card(BOARD_CARD).with_gravity(BOARD_GRAV_M_S2, BOARD_GRAV_DIR_DEG),
         "default" => Params::default(),
         "paper" => Params::paper(),
         "paper_model" => Params::paper_model(),
@@ -770,14 +776,16 @@ impl Finger {
     }
 
     /// `solve` over N postures in parallel, without the GIL: `P` shape (N,) or a number,
-    /// `volts` shape (N, n), (n,) or a number.
-    #[pyo3(signature = (P, volts, *, method = "converged", n_inc = None, tol = 1e-9, max_iter = 200, stiffness = true, errors = "raise"))]
+    /// `volts` shape (N, n), (n,) or a number; `grav_dir` (degrees, the finger's orientation,
+    /// docs/python.md) shape (N,) or a number, None: the finger's own.
+    #[pyo3(signature = (P, volts, *, grav_dir = None, method = "converged", n_inc = None, tol = 1e-9, max_iter = 200, stiffness = true, errors = "raise"))]
     #[allow(non_snake_case, clippy::too_many_arguments)]
     fn solve_many(
         &self,
         py: Python<'_>,
         P: &Bound<'_, PyAny>,
         volts: &Bound<'_, PyAny>,
+        grav_dir: Option<&Bound<'_, PyAny>>,
         method: &str,
         n_inc: Option<u32>,
         tol: R,
@@ -817,12 +825,45 @@ impl Finger {
             }
             (v, None)
         };
+        // the orientations: one finger per distinct grav_dir, each checked as `Finger(grav_dir=)`
+        let (dirs, d_rows): (Vec<R>, Option<usize>) = match grav_dir {
+            None => (vec![], None),
+            Some(g) => match g.extract::<R>() {
+                Ok(x) => (vec![x], None),
+                Err(_) => {
+                    let a = g.extract::<PyArrayLike1<'_, R, AllowTypeChange>>()?;
+                    let v = a.as_array().to_vec();
+                    let len = v.len();
+                    (v, Some(len))
+                }
+            },
+        };
+        let mut fingers: Vec<(R, Model<R>)> = Vec::new();
+        for &d in &dirs {
+            if !fingers.iter().any(|x| x.0.to_bits() == d.to_bits()) {
+                let mut p = *self.f.params();
+                p.set("grav_dir", d).map_err(model_err)?;
+                fingers.push((d, Model::with_calibration(p, *self.f.calibration()).map_err(model_err)?));
+            }
+        }
         let rows = match (p_rows, v_rows) {
             (Some(a), Some(b)) if a != b => return Err(PyValueError::new_err(format!("P has {a} rows, volts {b}"))),
             (Some(a), _) | (None, Some(a)) => a,
             (None, None) => 1,
         };
-        let f = &self.f;
+        let rows = match (d_rows, rows) {
+            (Some(d), r) if d != r && (p_rows.is_some() || v_rows.is_some()) => {
+                return Err(PyValueError::new_err(format!("grav_dir has {d} rows, P and volts {r}")))
+            }
+            (Some(d), _) => d,
+            (None, r) => r,
+        };
+        let finger_of = |i: usize| -> &Model<R> {
+            match dirs.get(if d_rows.is_some() { i } else { 0 }) {
+                Some(d) => &fingers.iter().find(|x| x.0.to_bits() == d.to_bits()).expect("every grav_dir prepared").1,
+                None => &self.f,
+            }
+        };
         // one compact row per posture (not the whole model Solution, which carries every
         // sub-element's state), filled in parallel
         let out: Vec<Result<Compact, Error>> = py.detach(|| {
@@ -832,7 +873,7 @@ impl Finger {
                     let t = tensions[if p_rows.is_some() { i } else { 0 }];
                     let v = if v_rows.is_some() { &volts[i * n..(i + 1) * n] } else { &volts[..n] };
                     self.check_hold(v)?;
-                    solve_row(f, t, v, m, stiffness).map(|r| Compact::of(&r))
+                    solve_row(finger_of(i), t, v, m, stiffness).map(|r| Compact::of(&r))
                 })
                 .collect()
         });
@@ -977,7 +1018,7 @@ impl Finger {
             _ => "margin x pull-in",
         };
         format!(
-            "Finger(preset={:?}, card={:?}, calibration={:?}, ceiling={:.1} V ({why}), n={}, m={}, layers={}, e_de={:.4} MPa)",
+            "Finger(preset={:?}, card={:?}, calibration={:?}, ceiling={:.1} V ({why}), n={}, m={}, layers={}, e_de={:.4} MPa, grav={} m/s2 at {} deg)",
             self.preset,
             p.card.name,
             self.cal_name,
@@ -985,7 +1026,9 @@ impl Finger {
             p.n,
             p.m,
             p.layers,
-            p.e_de()
+            p.e_de(),
+            p.grav,
+            p.grav_dir
         )
     }
 }
@@ -1005,6 +1048,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Contact>()?;
     m.add_class::<BranchLimit>()?;
     m.add_function(wrap_pyfunction!(parameter_ranges, m)?)?;
+    // the board's finger's orientation (preset "board"; softfinger.design's default)
+    m.add("BOARD_GRAV_M_S2", BOARD_GRAV_M_S2)?;
+    m.add("BOARD_GRAV_DIR_DEG", BOARD_GRAV_DIR_DEG)?;
     m.add_function(wrap_pyfunction!(cards, m)?)?;
     m.add_function(wrap_pyfunction!(_finger_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(design::evaluate_designs, m)?)?;

@@ -112,6 +112,31 @@ def test_the_model_and_a_design_pickle():
     assert "TOML text or a path" in str(e.value)
 
 
+def test_a_design_file_carries_the_orientation_of_the_board_it_builds():
+    d = Design(card="VHB-4905")
+    # the board's orientation by default: standard gravity, hanging straight down
+    assert (d.grav, d.grav_dir) == (sf.Finger().params["grav"], sf.Finger().params["grav_dir"]) == (9.81, 0.0)
+    text = d.to_toml()
+    assert "grav = 9.81\n" in text and "grav_dir = 0.0\n" in text
+    h = d.replace(grav_dir=90.0)
+    assert Design.from_toml(h.to_toml()) == h
+    f = h.finger()
+    assert (f.params["grav"], f.params["grav_dir"]) == (9.81, 90.0)
+    # a file from before gravity (no orientation keys) builds the board's
+    old = "\n".join(l for l in text.splitlines() if not l.startswith("grav")) + "\n"
+    assert Design.from_toml(old) == d
+    for bad in ("grav = 25.0", "grav_dir = 200.0", "grav_dir = \"down\""):
+        key = bad.split(" ")[0]
+        with pytest.raises(ValueError, match=key):
+            Design.from_toml(old + bad + "\n")
+    # the study's inputs stay the design variables; its evaluation takes an orientation
+    assert "grav" not in d.params() and d.orientation() == {"grav": 9.81, "grav_dir": 0.0}
+    with pytest.raises(sf.InputError) as e:
+        evaluate("VHB-4905", [d], grip=False, grav_dir=200.0)
+    assert e.value.fields["name"] == "grav_dir"
+    assert evaluate("VHB-4905", [d], grip=False, grav=9.81, grav_dir=90.0).feasible.shape == (1,)
+
+
 def sim_lines(program, lines):
     out = subprocess.run([str(program)], input="".join(l + "\n" for l in lines), capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stderr
@@ -125,9 +150,12 @@ def fields(line):
 def check_board_is_the_designs(d, send):
     """`send(lines)` -> the replies, on a board built for design `d`: `limits` is the design's
     ceiling, `material` its card, and the console's parameters cannot raise the ceiling."""
-    t_min, layers, lim, mat, *_, lim2 = send(["param t_min", "param layers", "limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"])
-    # the board's default finger is the design's
+    grav, grav_dir, t_min, layers, lim, mat, *_, lim2 = send(
+        ["param grav", "param grav_dir", "param t_min", "param layers", "limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"]
+    )
+    # the board's default finger is the design's, in the design's orientation
     assert float(t_min.split("=")[1]) == pytest.approx(d.t_min) and float(layers.split("=")[1]) == d.layers, (t_min, layers)
+    assert (float(grav.split("=")[1]), float(grav_dir.split("=")[1])) == (pytest.approx(d.grav), d.grav_dir), (grav, grav_dir)
     ceiling = d.finger().ceiling()
     vmax = [float(v) for v in fields(lim)["vmax"].split(",")]
     assert vmax == [pytest.approx(ceiling, abs=0.15)] * 3, (lim, ceiling)

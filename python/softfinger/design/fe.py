@@ -102,8 +102,9 @@ def run_case(case: Case, program: Optional[str] = None) -> CaseResult:
 
 def cases_of(design: Design, *, kind: str = "3d", density: str = "notch", reference_deg: float = REFERENCE_DEG) -> List[Case]:
     """The two FE cases of a design: its reference posture by the model's inverse at both ends
-    of the tension interval (the ends `evaluate` takes its ratios at)."""
-    f = design.finger()
+    of the tension interval (the ends `evaluate` takes its ratios at), without gravity as the
+    study and the FE driver's cases are."""
+    f = design.replace(grav=0.0).finger()
     angles = [reference_deg] * f.n
     q = f.pose(angles, degrees=True)
     out = []

@@ -91,6 +91,16 @@ impl Commands {
                 let _ = w!(r; field::FAULT_CH.after(), k + 1);
             }
         }
+        #[cfg(not(m3))]
+        self.orientation(r);
+    }
+
+    /// ` grav=<m/s²> grav_dir=<deg>`: the orientation in force (`status`, `limits`; not on the
+    /// Cortex-M3 image: its flash, and its fixed-point model has no gravity).
+    #[cfg(not(m3))]
+    fn orientation(&self, r: &mut Reply) {
+        let p = self.planner.finger().params();
+        let _ = w!(r; field::GRAV.after(), Short(p.grav), field::GRAV_DIR.after(), Short(p.grav_dir));
     }
 
     /// A stack's thickness at rest, mm: layers x z0 of the model (0 without stacks).
@@ -131,6 +141,8 @@ impl Commands {
             let _ = w!(r; field::VMAX_OK.after());
             list(r, &ok, 1);
         }
+        #[cfg(not(m3))]
+        self.orientation(r);
     }
 
     /// Check channel voltages against the ceilings: `limit` at or past ([`largest_below`]).
