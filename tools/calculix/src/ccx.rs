@@ -147,8 +147,54 @@ impl Law {
     }
 }
 
-/// A material card for (E, ν) in this law.
-fn material(s: &mut String, name: &str, e: f64, nu: f64, law: Law) {
+/// Gravity on the finger (docs/fidelity-fe.md "Under its own weight"): a body load of constant
+/// magnitude and direction in the base frame, on every step of the run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gravity {
+    /// Magnitude, m/s² (0: off).
+    pub g_m_s2: f64,
+    /// Direction in the base frame, degrees from the straight finger's axis (+x) toward the
+    /// cable side (+y): 90 held horizontally curling downward with it, -90 curling upward
+    /// against it, 0 hanging straight down, 180 pointing up.
+    pub dir_deg: f64,
+    /// The body's density, g/cm³.
+    pub rho_body_g_cm3: f64,
+    /// The stacks' (film's) density, g/cm³.
+    pub rho_stack_g_cm3: f64,
+}
+
+impl Gravity {
+    /// No gravity (the calibration's runs and every run before it).
+    pub const OFF: Gravity = Gravity { g_m_s2: 0.0, dir_deg: 0.0, rho_body_g_cm3: 0.0, rho_stack_g_cm3: 0.0 };
+
+    pub fn is_on(&self) -> bool {
+        self.g_m_s2 != 0.0
+    }
+    /// The magnitude in the mesh's units, mm/s².
+    pub fn mm_s2(&self) -> f64 {
+        1e3 * self.g_m_s2
+    }
+    /// The unit direction (x, y) in the base frame.
+    pub fn unit(&self) -> [f64; 2] {
+        let (s, c) = self.dir_deg.to_radians().sin_cos();
+        [c, s]
+    }
+}
+
+/// g/cm³ to the mesh's units (mm, N, MPa: mass in tonnes), t/mm³.
+pub fn t_per_mm3(g_cm3: f64) -> f64 {
+    g_cm3 * 1e-9
+}
+
+/// A material card for (E, ν) in this law, with its density (t/mm³) if gravity is on.
+fn material(s: &mut String, name: &str, e: f64, nu: f64, law: Law, rho_t_mm3: Option<f64>) {
+    material_law(s, name, e, nu, law);
+    if let Some(r) = rho_t_mm3 {
+        let _ = writeln!(s, "*DENSITY\n{r:.9e}");
+    }
+}
+
+fn material_law(s: &mut String, name: &str, e: f64, nu: f64, law: Law) {
     match law {
         Law::StVenantKirchhoff => {
             let _ = writeln!(s, "*MATERIAL, NAME={name}\n*ELASTIC\n{e:.9e}, {nu:.6}");
@@ -167,7 +213,8 @@ pub type NodalLoads = Vec<(usize, f64, f64)>;
 pub enum Loads {
     /// The cable: constant-force springs between consecutive guide holes (node ids), NLGEOM, one
     /// step per tension (N), each ramped from the last.
-    Cable { holes: Vec<usize>, tensions: Vec<f64>, law: Law },
+    /// Gravity (`grav`) is applied in the first step, ramped with its tension, and held.
+    Cable { holes: Vec<usize>, tensions: Vec<f64>, law: Law, grav: Gravity },
     /// Linear steps, one per load case.
     Unit(Vec<NodalLoads>),
 }
@@ -288,9 +335,13 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
         Loads::Cable { law, .. } => *law,
         Loads::Unit(_) => Law::StVenantKirchhoff, // linear steps: Hooke's law
     };
+    let grav = match loads {
+        Loads::Cable { grav, .. } if grav.is_on() => Some(*grav),
+        _ => None,
+    };
     let (body_law, stack_law) = law.parts();
-    material(&mut s, "BODY", p.e_b, p.nu_b, body_law);
-    material(&mut s, "STACK", p.e_de(), p.nu, stack_law);
+    material(&mut s, "BODY", p.e_b, p.nu_b, body_law, grav.map(|g| t_per_mm3(g.rho_body_g_cm3)));
+    material(&mut s, "STACK", p.e_de(), p.nu, stack_law, grav.map(|g| t_per_mm3(g.rho_stack_g_cm3)));
     let thick = if kind == Kind::Half3d { String::new() } else { format!("\n{:.9e}", p.w) };
     for (set, _, mat, _) in &blocks {
         let name = if *mat == Material::Body { "BODY" } else { "STACK" };
@@ -313,8 +364,16 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
             let _ = writeln!(s, "*INITIAL CONDITIONS, TYPE=TEMPERATURE\nNALL, 0.");
             write_bcs(&mut s, mesh);
             for (i, t) in tensions.iter().enumerate() {
-                let _ =
-                    writeln!(s, "*STEP, NLGEOM, INC=2000\n*STATIC\n0.25, 1., 1.e-6, 0.5\n*TEMPERATURE\nNALL, {t:.9e}\n*NODE PRINT, NSET=NOUT\nU\n*END STEP");
+                let _ = writeln!(s, "*STEP, NLGEOM, INC=2000\n*STATIC\n0.25, 1., 1.e-6, 0.5\n*TEMPERATURE\nNALL, {t:.9e}");
+                if let (0, Some(g)) = (i, grav) {
+                    // the body load on the solid elements (not the cable's springs)
+                    let u = g.unit();
+                    let _ = writeln!(s, "*DLOAD");
+                    for (set, _, _, _) in &blocks {
+                        let _ = writeln!(s, "{set}, GRAV, {:.9e}, {:.12e}, {:.12e}, 0.", g.mm_s2(), u[0], u[1]);
+                    }
+                }
+                let _ = writeln!(s, "*NODE PRINT, NSET=NOUT\nU\n*NODE PRINT, NSET=NCLAMP\nRF\n*END STEP");
                 times.push((i + 1) as f64);
             }
         }
@@ -400,6 +459,42 @@ pub fn run(deck: &Deck) -> Result<Results, FeError> {
 
 /// `run`, keeping the steps that ended before a failure: (their results, the failure).
 pub fn run_partial(deck: &Deck) -> Result<(Results, Option<FeError>), FeError> {
+    let (dat, failure) = run_dat(deck)?;
+    steps_done(&dat, deck, "displacements", failure)
+}
+
+/// `run_partial` with the clamp's reaction forces (nodes of NCLAMP, (RF_x, RF_y), this model's
+/// share of the width) at the same step ends: (displacements, reactions, the failure). A cable
+/// deck prints them.
+pub fn run_partial_reactions(deck: &Deck) -> Result<(Results, Results, Option<FeError>), FeError> {
+    let (dat, failure) = run_dat(deck)?;
+    let (u, failure) = steps_done(&dat, deck, "displacements", failure)?;
+    let d = Deck { text: String::new(), out_nodes: Vec::new(), times: deck.times[..u.len()].to_vec() };
+    let rf = parse_blocks(&dat, &d, "forces")?;
+    Ok((u, rf, failure))
+}
+
+/// The steps' results read from a `.dat`: all of them, or after a failure the steps that ended
+/// before it.
+fn steps_done(dat: &str, deck: &Deck, what: &str, failure: Option<FeError>) -> Result<(Results, Option<FeError>), FeError> {
+    match failure {
+        None => Ok((parse_blocks(dat, deck, what)?, None)),
+        Some(e) => {
+            let mut done = Vec::new();
+            for k in 1..=deck.times.len() {
+                let d = Deck { text: String::new(), out_nodes: deck.out_nodes.clone(), times: deck.times[..k].to_vec() };
+                match parse_blocks(dat, &d, what) {
+                    Ok(r) => done = r,
+                    Err(_) => break,
+                }
+            }
+            Ok((done, Some(e)))
+        }
+    }
+}
+
+/// Run ccx on the deck in a fresh scratch directory: (the `.dat`, the failure if it failed).
+fn run_dat(deck: &Deck) -> Result<(String, Option<FeError>), FeError> {
     let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
     let dir: PathBuf = std::env::temp_dir().join(format!("finger-calculix-{}-{n}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| FeError::Spawn(e.to_string()))?;
@@ -421,27 +516,24 @@ pub fn run_partial(deck: &Deck) -> Result<(Results, Option<FeError>), FeError> {
     if !out.status.success() || log.contains("*ERROR") {
         let tail: Vec<&str> = log.lines().filter(|l| !l.trim().is_empty()).collect();
         let tail = tail[tail.len().saturating_sub(6)..].join(" | ");
-        // the steps that ended before it
-        let mut done = Vec::new();
-        for k in 1..=deck.times.len() {
-            let d = Deck { text: String::new(), out_nodes: deck.out_nodes.clone(), times: deck.times[..k].to_vec() };
-            match parse_dat(&dat, &d) {
-                Ok(r) => done = r,
-                Err(_) => break,
-            }
-        }
-        return Ok((done, Some(FeError::Ccx(tail))));
+        return Ok((dat, Some(FeError::Ccx(tail))));
     }
-    Ok((parse_dat(&dat, deck)?, None))
+    Ok((dat, None))
 }
 
 /// The `.dat` blocks "displacements (vx,vy,vz) for set NOUT and time T", at the step ends.
 pub fn parse_dat(dat: &str, deck: &Deck) -> Result<Results, FeError> {
+    parse_blocks(dat, deck, "displacements")
+}
+
+/// The `.dat` blocks whose header starts with `what` ("displacements", "forces"), at the step
+/// ends; for "displacements" every output node must be there.
+fn parse_blocks(dat: &str, deck: &Deck, what: &str) -> Result<Results, FeError> {
     let mut blocks: Vec<(f64, BTreeMap<usize, [f64; 2]>)> = Vec::new();
     let mut cur: Option<(f64, BTreeMap<usize, [f64; 2]>)> = None;
     for line in dat.lines() {
         let l = line.trim();
-        if l.starts_with("displacements") {
+        if l.starts_with(what) {
             if let Some(b) = cur.take() {
                 blocks.push(b);
             }
@@ -471,7 +563,7 @@ pub fn parse_dat(dat: &str, deck: &Deck) -> Result<Results, FeError> {
             .iter()
             .rev()
             .find(|b| (b.0 - t).abs() < 1e-6 * t.max(1.0))
-            .ok_or_else(|| FeError::Parse(format!("no displacements at step end t = {t} (did the step converge?)")))?;
+            .ok_or_else(|| FeError::Parse(format!("no {what} at step end t = {t} (did the step converge?)")))?;
         if deck.out_nodes.iter().any(|n| !b.1.contains_key(n)) {
             return Err(FeError::Parse(format!("missing output nodes at t = {t}")));
         }

@@ -1,9 +1,12 @@
-//! `cargo run --bin fe-report [-- --coarse]` (in tools/calculix): writes docs/fidelity-fe.md,
-//! the board's f32 model (calibrated and not) against CalculiX's nonlinear solution of the
-//! same finger, scene by scene. The default (fine) 3D mesh is slow (the report ends with its
-//! run time); `--coarse` is for trying the tool, not for the report.
+//! `cargo run --bin fe-report [-- --coarse] [--gravity]` (in tools/calculix): writes
+//! docs/fidelity-fe.md, the board's f32 model (calibrated and not) against CalculiX's nonlinear
+//! solution of the same finger, scene by scene, and under its own weight in three
+//! orientations. The default (fine) 3D mesh is slow (the report ends with its run time);
+//! `--coarse` is for trying the tool, not for the report; `--gravity` regenerates only the
+//! section "Under its own weight" in place (the rest does not depend on gravity).
 use finger_calculix::calibrate::{self, model_element_compliance, CalibrationRun};
 use finger_calculix::ccx::{Kind, Law};
+use finger_calculix::gravity::{self, ORIENTATIONS, TENSIONS_N};
 use finger_calculix::mesh::Density;
 use finger_calculix::{finger_under_cable, finger_under_cable_partial, FeState};
 use finger_model::{BranchEnd, Calibration, DeModulusRule, Finger, Method, Params};
@@ -103,6 +106,24 @@ fn main() {
     };
     let defaults = Params::<f64>::default();
     let paper = Params { de_rule: DeModulusRule::PaperEq3, ..defaults };
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/fidelity-fe.md");
+    if args.iter().any(|a| a == "--gravity") {
+        eprintln!("calibrating (3D, {d3:?}) ...");
+        let cal = calibrate::run(&defaults, Kind::Half3d, &d3).unwrap_or_else(|e| fail(e.to_string())).cal;
+        let section = gravity_section(&cal, &d3, coarse, started).unwrap_or_else(|e| fail(e));
+        let doc = std::fs::read_to_string(&path).unwrap_or_else(|e| fail(format!("{}: {e}", path.display())));
+        // the section in place, or (first run) before "Per scene"
+        let (a, b) = match doc.split_once(GRAVITY_HEADING) {
+            Some((a, rest)) => (a, rest.find("\n## ").map_or("", |i| &rest[i + 1..])),
+            None => doc
+                .split_once("## Per scene")
+                .map(|(a, _)| (a, &doc[a.len()..]))
+                .unwrap_or_else(|| fail(format!("{}: no \"## Per scene\": run the whole report", path.display()))),
+        };
+        std::fs::write(&path, format!("{a}{section}{b}")).unwrap_or_else(|e| fail(format!("{}: {e}", path.display())));
+        eprintln!("wrote the gravity section of {} in {}", path.display(), fmt_dur(started.elapsed()));
+        return;
+    }
     eprintln!("calibrating (3D, {d3:?}) ...");
     let cals: Vec<CalibrationRun> = [defaults, paper].iter().map(|p| calibrate::run(p, Kind::Half3d, &d3).unwrap_or_else(|e| fail(e.to_string()))).collect();
     let l_total = 3.0 * defaults.l;
@@ -350,12 +371,75 @@ fn main() {
     let _ = writeln!(w, "- **The continuum reference** (docs/fidelity.md, `host_tests::continuum`): a planar extensible elastica of the real geometry with exact follower loads and bonded stacks. It shares the model's beam assumptions (plane sections stay plane, no shear, a modulus chosen for the whole width), so it checks the model's discretisation (m, links, the load stepping) to 1e-8 and cannot see what those assumptions leave out.");
     let _ = writeln!(w, "- **The FE** (this report): a continuum of the real geometry, 3D over the width. It sees what the beams cannot: sections that warp in a short, steep notch, shear, the stress concentration at the notch waist, the anticlastic (2D-to-3D) stiffening, the stack bonded along the notch face (it thins toward the ends, not a uniform strip of length L_h), the cable's loads along the guides at the notch corners. It cannot see what it was not given: the body and the stacks are neo-Hookean with the model's small-strain E and ν (no measured stress-strain curve of TPU or of the stack material, no viscoelasticity), the stack is passive (no electrostatic pressure: its thickness at a voltage comes from the model's thinning law), the cable has no friction, the notch faces do not touch (no contact elements), and the mesh has its own error (last column above; tests/convergence.rs).");
     let _ = writeln!(w, "- **The calibration** carries what the FE sees at small loads into the model's sub-element compliances; beyond small loads the model's subdivision carries it on, and the growth column above is what it does not carry.\n");
+    let _ = write!(w, "{}", gravity_section(&cals[0].cal, &d3, coarse, started).unwrap_or_else(|e| fail(e)));
     let _ = writeln!(w, "## Per scene\n");
     let _ = write!(w, "{per_scene}");
     let _ = writeln!(w, "Report run time: {} (ccx on one thread; a 2-core machine shared with other builds).", fmt_dur(started.elapsed()));
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/fidelity-fe.md");
     std::fs::write(&path, out).unwrap_or_else(|e| fail(format!("{}: {e}", path.display())));
     eprintln!("wrote {} in {}", path.display(), fmt_dur(started.elapsed()));
+}
+
+const GRAVITY_HEADING: &str = "## Under its own weight";
+
+/// The section "Under its own weight": the 3D FE (mesh `d3`) with gravity in three
+/// orientations, with and without the board's stacks (0 V), against the board's calibrated
+/// model (calibration `cal`, computed without gravity).
+fn gravity_section(cal: &Calibration<f64>, d3: &Density, coarse: bool, started: std::time::Instant) -> Result<String, String> {
+    let d = Params::<f64>::default();
+    let mut w = String::new();
+    let _ = writeln!(w, "{GRAVITY_HEADING}\n");
+    let _ = writeln!(
+        w,
+        "Regenerated alone by `cd tools/calculix && cargo run --bin fe-report -- --gravity` (the rest of this report does not depend on gravity).{}\n",
+        if coarse { " **This run used `--coarse`: a trial, not the report.**" } else { "" }
+    );
+    let _ = writeln!(w, "The same 3D FE (mesh {d3:?}) with a body load: `*DENSITY` (body {} g/cm³, TPU; stacks {} g/cm³) and `*DLOAD … GRAV` of {} m/s² in the base frame (mesh units: t/mm³ and mm/s²), applied with the first cable step and held. Gravity's direction in degrees from the straight finger's axis (+x) toward the cable side (+y): 90 held horizontally curling downward with it, −90 curling upward against it, 0 hanging straight down. The calibration above is computed without gravity (its unit loads carry no body load, so it cannot absorb it) and is the one the model uses here. Tip error: model − FE tip position in % of the FE tip's travel from the straight finger's tip ({} l, 0) (no % below {} mm of travel); joint 1 error: model − FE, degrees. Goals: the tip within 2 % of its travel and joint 1 within 1° at 0 to 2 N; 3 N is shown.\n", gravity::RHO_BODY_G_CM3, gravity::RHO_STACK_G_CM3, gravity::G_M_S2, d.n, gravity::MIN_TRAVEL_MM);
+    let mut rows = String::new();
+    let mut summary = String::new();
+    for (name, p) in [("no stacks", d.without_stacks()), ("stacks, 0 V", d)] {
+        let th = gravity::stacks_at_0v(&p)?;
+        for (dir, what) in ORIENTATIONS {
+            eprintln!("[{}] gravity: {name}, {dir}° ...", fmt_dur(started.elapsed()));
+            let t0 = std::time::Instant::now();
+            let fe = gravity::fe_states(&p, Kind::Half3d, d3, &gravity::earth(&p, dir), &TENSIONS_N).map_err(|e| format!("{name} {dir}°: {e}"))?;
+            let fe_s = t0.elapsed().as_secs_f64();
+            // the model without gravity (today's), against the FE with it
+            let m0 = gravity::model_poses(&p, cal, &TENSIONS_N)?;
+            let (mut worst_tip0, mut worst_j0) = (0.0f64, 0.0f64);
+            for (i, t) in TENSIONS_N.iter().enumerate() {
+                let f = &fe[i];
+                let e0 = gravity::pose_error(&p, &m0[i], f);
+                let tip = f.tip();
+                let pct = |e: &gravity::PoseError| e.tip_pct.map_or(format!("— ({:.2} mm)", e.tip_mm), |x| format!("{x:.1} % ({:.2} mm)", e.tip_mm));
+                let _ = writeln!(
+                    rows,
+                    "| {name} | {dir} | {t:.1} | {} | {:.2}, {:.2}, {:.2} | {:.2} | {} | {:+.2} |",
+                    f.joint_angle.iter().map(|a| format!("{:.2}", a.to_degrees())).collect::<Vec<_>>().join(" / "),
+                    tip.x,
+                    tip.y,
+                    tip.theta.to_degrees(),
+                    e0.travel_mm,
+                    pct(&e0),
+                    e0.joint1_deg,
+                );
+                if *t <= 2.0 {
+                    worst_tip0 = worst_tip0.max(e0.tip_pct.unwrap_or(0.0));
+                    worst_j0 = if e0.joint1_deg.abs() > worst_j0.abs() { e0.joint1_deg } else { worst_j0 };
+                }
+            }
+            let _ = writeln!(summary, "| {name} | {dir} ({what}) | {:.2} | {worst_tip0:.1} % | {worst_j0:+.2}° | {fe_s:.0} s |", th[0]);
+        }
+    }
+    let _ = writeln!(w, "### Summary (worst over 0 to 2 N)\n");
+    let _ = writeln!(w, "| stacks | gravity's direction (°) | stack (mm) | model without gravity: tip (% travel) | its joint 1 | FE run time |");
+    let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- |");
+    let _ = write!(w, "{summary}");
+    let _ = writeln!(w, "\n### Per orientation and tension\n");
+    let _ = writeln!(w, "| stacks | gravity (°) | P (N) | FE 3D joints (°) | FE tip x, y (mm), θ (°) | FE tip travel (mm) | model without gravity: tip error (% travel, mm) | its joint 1 error (°) |");
+    let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- | --- | --- |");
+    let _ = write!(w, "{rows}");
+    let _ = writeln!(w);
+    Ok(w)
 }
 
 fn fmt_dur(d: std::time::Duration) -> String {
