@@ -167,6 +167,12 @@ impl Gravity {
     /// No gravity (the calibration's runs and every run before it).
     pub const OFF: Gravity = Gravity { g_m_s2: 0.0, dir_deg: 0.0, rho_body_g_cm3: 0.0, rho_stack_g_cm3: 0.0 };
 
+    /// The gravity these parameters carry (`grav`, `grav_dir`, `rho_b`, the card's film
+    /// density).
+    pub fn of(p: &Params<f64>) -> Gravity {
+        Gravity { g_m_s2: p.grav, dir_deg: p.grav_dir, rho_body_g_cm3: p.rho_b, rho_stack_g_cm3: p.card.rho_g_cm3 }
+    }
+
     pub fn is_on(&self) -> bool {
         self.g_m_s2 != 0.0
     }
@@ -493,8 +499,38 @@ fn steps_done(dat: &str, deck: &Deck, what: &str, failure: Option<FeError>) -> R
     }
 }
 
-/// Run ccx on the deck in a fresh scratch directory: (the `.dat`, the failure if it failed).
+static CACHE: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
+
+/// Keep every successful run's `.dat` in `dir` by its deck (a hash of the deck's text and its
+/// length), and read it from there when the same deck runs again (ccx is deterministic on one
+/// thread): the report's runs, so that rerunning the report after a model change does not solve
+/// the FE again. None (the default, and the tests'): every deck is solved.
+pub fn set_cache(dir: Option<PathBuf>) {
+    *CACHE.lock().unwrap_or_else(|e| e.into_inner()) = dir;
+}
+
+fn cache_file(deck: &Deck) -> Option<PathBuf> {
+    let dir = CACHE.lock().unwrap_or_else(|e| e.into_inner()).clone()?;
+    // FNV-1a, 64 bits
+    let h = deck.text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3));
+    Some(dir.join(format!("{h:016x}-{}.dat", deck.text.len())))
+}
+
+/// Run ccx on the deck in a fresh scratch directory (or read its kept `.dat`, `set_cache`):
+/// (the `.dat`, the failure if it failed).
 fn run_dat(deck: &Deck) -> Result<(String, Option<FeError>), FeError> {
+    let cached = cache_file(deck);
+    if let Some(dat) = cached.as_ref().and_then(|f| std::fs::read_to_string(f).ok()) {
+        return Ok((dat, None));
+    }
+    let (dat, failure) = run_ccx(deck)?;
+    if let (Some(f), None) = (&cached, &failure) {
+        let _ = std::fs::create_dir_all(f.parent().unwrap_or(f)).and_then(|_| std::fs::write(f, &dat));
+    }
+    Ok((dat, failure))
+}
+
+fn run_ccx(deck: &Deck) -> Result<(String, Option<FeError>), FeError> {
     let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
     let dir: PathBuf = std::env::temp_dir().join(format!("finger-calculix-{}-{n}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| FeError::Spawn(e.to_string()))?;

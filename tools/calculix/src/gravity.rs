@@ -20,18 +20,13 @@ pub const TENSIONS_N: [f64; 5] = [0.0, 0.5, 1.0, 2.0, 3.0];
 /// Gravity's magnitude in the comparison, m/s².
 pub const G_M_S2: f64 = 9.81;
 
-/// TPU's density, g/cm³ (the body).
-pub const RHO_BODY_G_CM3: f64 = 1.2;
-/// The stacks' film density, g/cm³.
-pub const RHO_STACK_G_CM3: f64 = 1.0;
-
 /// A tip travel below this (mm) gives no % error (hanging straight down without cable the
 /// tip only stretches).
 pub const MIN_TRAVEL_MM: f64 = 1.0;
 
-/// Gravity of magnitude `G_M_S2` in direction `dir_deg` on this finger's materials.
-pub fn earth(_p: &Params<f64>, dir_deg: f64) -> Gravity {
-    Gravity { g_m_s2: G_M_S2, dir_deg, rho_body_g_cm3: RHO_BODY_G_CM3, rho_stack_g_cm3: RHO_STACK_G_CM3 }
+/// These parameters under gravity of `G_M_S2` in direction `dir_deg`.
+pub fn oriented(p: &Params<f64>, dir_deg: f64) -> Params<f64> {
+    p.with_gravity(G_M_S2, dir_deg)
 }
 
 /// The board's stacks at 0 V (the model's thickness, mm per joint), zeros without stacks.
@@ -44,10 +39,11 @@ pub fn stacks_at_0v(p: &Params<f64>) -> Result<Vec<f64>, String> {
     Ok(c.thickness[..p.n].to_vec())
 }
 
-/// The FE (neo-Hooke) under gravity `grav` and each tension.
-pub fn fe_states(p: &Params<f64>, kind: Kind, d: &Density, grav: &Gravity, tensions: &[f64]) -> Result<Vec<FeState>, FeError> {
+/// The FE (neo-Hooke, the board's stacks at 0 V) under the gravity `p` carries and each
+/// tension.
+pub fn fe_states(p: &Params<f64>, kind: Kind, d: &Density, tensions: &[f64]) -> Result<Vec<FeState>, FeError> {
     let th = stacks_at_0v(p).map_err(FeError::Mesh)?;
-    finger_under_load(p, &th, kind, d, Law::NeoHooke, grav, tensions)
+    finger_under_load(p, &th, kind, d, Law::NeoHooke, &Gravity::of(p), tensions)
 }
 
 /// A model posture: joint angles (rad) and tip (x, y mm, θ rad).
@@ -58,7 +54,7 @@ pub struct Pose {
 }
 
 /// The board's model (f32, `fast-trig`, converged solver) with calibration `cal`, at 0 V, under
-/// each tension, with the gravity its parameters carry.
+/// each tension, with the gravity `p` carries.
 pub fn model_poses(p: &Params<f64>, cal: &Calibration<f64>, tensions: &[f64]) -> Result<Vec<Pose>, String> {
     let cal32 =
         Calibration { hinge: cal.hinge.map(|x| x as f32), stack_axial: cal.stack_axial.map(|x| x as f32), stack_bending: cal.stack_bending.map(|x| x as f32) };
@@ -93,4 +89,59 @@ pub fn pose_error(p: &Params<f64>, m: &Pose, fe: &FeState) -> PoseError {
     let tip_mm = (m.tip[0] - t.x).hypot(m.tip[1] - t.y);
     let tip_pct = (travel_mm >= MIN_TRAVEL_MM).then(|| 100.0 * tip_mm / travel_mm);
     PoseError { travel_mm, tip_mm, tip_pct, joint1_deg: (m.joint[0] - fe.joint_angle[0]).to_degrees() }
+}
+
+/// The model's worst errors over a range of tensions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Worst {
+    /// Largest tip error, % of travel (over the states with a travel of `MIN_TRAVEL_MM` or more).
+    pub tip_pct: f64,
+    /// Joint 1's error of the largest magnitude, degrees (signed).
+    pub joint1_deg: f64,
+}
+
+/// One orientation: the FE and the model, with gravity and without, at each tension.
+#[derive(Clone, Debug)]
+pub struct Case {
+    pub dir_deg: f64,
+    pub tensions: Vec<f64>,
+    pub fe: Vec<FeState>,
+    /// The model under the same gravity.
+    pub model: Vec<Pose>,
+    pub err: Vec<PoseError>,
+    /// The model without gravity, against the same FE.
+    pub err_without: Vec<PoseError>,
+    /// The FE's run time, s.
+    pub fe_s: f64,
+}
+
+/// The finger `p` (its gravity replaced by `G_M_S2` along `dir_deg`) in the FE and in the
+/// board's model with calibration `cal` (computed without gravity), at each tension.
+pub fn compare(p: &Params<f64>, dir_deg: f64, kind: Kind, d: &Density, cal: &Calibration<f64>, tensions: &[f64]) -> Result<Case, String> {
+    let pg = oriented(p, dir_deg);
+    let t0 = std::time::Instant::now();
+    let fe = fe_states(&pg, kind, d, tensions).map_err(|e| format!("FE at {dir_deg}°: {e}"))?;
+    let fe_s = t0.elapsed().as_secs_f64();
+    let model = model_poses(&pg, cal, tensions)?;
+    let without = model_poses(&Params { grav: 0.0, ..pg }, cal, tensions)?;
+    let err = model.iter().zip(&fe).map(|(m, f)| pose_error(&pg, m, f)).collect();
+    let err_without = without.iter().zip(&fe).map(|(m, f)| pose_error(&pg, m, f)).collect();
+    Ok(Case { dir_deg, tensions: tensions.to_vec(), fe, model, err, err_without, fe_s })
+}
+
+impl Case {
+    /// The worst errors over the tensions up to `up_to_n` N, with gravity in the model or not.
+    pub fn worst(&self, with_gravity: bool, up_to_n: f64) -> Worst {
+        let errs = if with_gravity { &self.err } else { &self.err_without };
+        let mut w = Worst { tip_pct: 0.0, joint1_deg: 0.0 };
+        for (e, t) in errs.iter().zip(&self.tensions) {
+            if *t <= up_to_n {
+                w.tip_pct = w.tip_pct.max(e.tip_pct.unwrap_or(0.0));
+                if e.joint1_deg.abs() > w.joint1_deg.abs() {
+                    w.joint1_deg = e.joint1_deg;
+                }
+            }
+        }
+        w
+    }
 }
