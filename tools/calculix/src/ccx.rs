@@ -521,40 +521,82 @@ fn cache_file(deck: &Deck) -> Option<PathBuf> {
 fn run_dat(deck: &Deck) -> Result<(String, Option<FeError>), FeError> {
     let cached = cache_file(deck);
     if let Some(dat) = cached.as_ref().and_then(|f| std::fs::read_to_string(f).ok()) {
+        // its CPU time beside it
+        let cpu = cached.as_ref().and_then(|f| std::fs::read_to_string(f.with_extension("cpu")).ok()).and_then(|s| s.trim().parse::<f64>().ok()).unwrap_or(0.0);
+        CPU_S.with(|c| c.set(c.get() + cpu));
         return Ok((dat, None));
     }
-    let (dat, failure) = run_ccx(deck)?;
+    let (dat, failure, cpu) = run_ccx(deck)?;
+    CPU_S.with(|c| c.set(c.get() + cpu));
     if let (Some(f), None) = (&cached, &failure) {
-        let _ = std::fs::create_dir_all(f.parent().unwrap_or(f)).and_then(|_| std::fs::write(f, &dat));
+        let _ = std::fs::create_dir_all(f.parent().unwrap_or(f))
+            .and_then(|_| std::fs::write(f.with_extension("cpu"), format!("{cpu}\n")))
+            .and_then(|_| std::fs::write(f, &dat));
     }
     Ok((dat, failure))
 }
 
-fn run_ccx(deck: &Deck) -> Result<(String, Option<FeError>), FeError> {
+thread_local! {
+    static CPU_S: std::cell::Cell<f64> = const { std::cell::Cell::new(0.0) };
+}
+
+/// The CPU time (user + system, s) of the ccx runs this thread has made so far, a kept run
+/// counting what it took when it was solved (Linux; 0 where /proc is not there).
+pub fn thread_cpu_seconds() -> f64 {
+    CPU_S.with(|c| c.get())
+}
+
+/// A child's CPU time (s) once it has exited and before it is reaped: fields 14 and 15 of
+/// /proc/<pid>/stat (clock ticks of 1/100 s, Linux's USER_HZ). None while it runs.
+fn exited_cpu_s(pid: u32) -> Option<Option<f64>> {
+    let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else { return Some(None) };
+    let f: Vec<&str> = stat.rsplit_once(')').map_or("", |x| x.1).split_whitespace().collect();
+    match f.first() {
+        Some(&"Z") | Some(&"X") => Some(f.get(11).zip(f.get(12)).and_then(|(u, s)| Some((u.parse::<f64>().ok()? + s.parse::<f64>().ok()?) / 100.0))),
+        Some(_) => None,
+        None => Some(None),
+    }
+}
+
+fn run_ccx(deck: &Deck) -> Result<(String, Option<FeError>, f64), FeError> {
     let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
     let dir: PathBuf = std::env::temp_dir().join(format!("finger-calculix-{}-{n}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| FeError::Spawn(e.to_string()))?;
     std::fs::write(dir.join("job.inp"), &deck.text).map_err(|e| FeError::Spawn(e.to_string()))?;
-    let out = Command::new("ccx")
+    let file = |name: &str| std::fs::File::create(dir.join(name)).map_err(|e| FeError::Spawn(e.to_string()));
+    let mut child = Command::new("ccx")
         .arg("-i")
         .arg("job")
         .current_dir(&dir)
         .env("OMP_NUM_THREADS", "1")
         .env("CCX_NPROC_EQUATION_SOLVER", "1")
-        .output()
+        .stdout(file("log.out")?)
+        .stderr(file("log.err")?)
+        .spawn()
         .map_err(|e| FeError::Spawn(e.to_string()))?;
-    let log = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
-    let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap_or_default();
+    // wait for it to exit, read its CPU time, then reap it
+    let mut nap = std::time::Duration::from_millis(1);
+    let cpu = loop {
+        if let Some(c) = exited_cpu_s(child.id()) {
+            break c.unwrap_or(0.0);
+        }
+        std::thread::sleep(nap);
+        nap = (nap * 2).min(std::time::Duration::from_millis(20));
+    };
+    let status = child.wait().map_err(|e| FeError::Spawn(e.to_string()))?;
+    let read = |name: &str| std::fs::read(dir.join(name)).map(|b| String::from_utf8_lossy(&b).into_owned()).unwrap_or_default();
+    let log = read("log.out") + &read("log.err");
+    let dat = read("job.dat");
     let keep = std::env::var_os("FINGER_CALCULIX_KEEP").is_some();
     if !keep {
         let _ = std::fs::remove_dir_all(&dir);
     }
-    if !out.status.success() || log.contains("*ERROR") {
+    if !status.success() || log.contains("*ERROR") {
         let tail: Vec<&str> = log.lines().filter(|l| !l.trim().is_empty()).collect();
         let tail = tail[tail.len().saturating_sub(6)..].join(" | ");
-        return Ok((dat, Some(FeError::Ccx(tail))));
+        return Ok((dat, Some(FeError::Ccx(tail)), cpu));
     }
-    Ok((dat, None))
+    Ok((dat, None, cpu))
 }
 
 /// The `.dat` blocks "displacements (vx,vy,vz) for set NOUT and time T", at the step ends.

@@ -111,22 +111,22 @@ pub struct Case {
     pub err: Vec<PoseError>,
     /// The model without gravity, against the same FE.
     pub err_without: Vec<PoseError>,
-    /// The FE's run time, s.
-    pub fe_s: f64,
+    /// The FE's CPU time (ccx, one thread), s.
+    pub fe_cpu_s: f64,
 }
 
 /// The finger `p` (its gravity replaced by `G_M_S2` along `dir_deg`) in the FE and in the
 /// board's model with calibration `cal` (computed without gravity), at each tension.
 pub fn compare(p: &Params<f64>, dir_deg: f64, kind: Kind, d: &Density, cal: &Calibration<f64>, tensions: &[f64]) -> Result<Case, String> {
     let pg = oriented(p, dir_deg);
-    let t0 = std::time::Instant::now();
+    let cpu0 = crate::ccx::thread_cpu_seconds();
     let fe = fe_states(&pg, kind, d, tensions).map_err(|e| format!("FE at {dir_deg}°: {e}"))?;
-    let fe_s = t0.elapsed().as_secs_f64();
+    let fe_cpu_s = crate::ccx::thread_cpu_seconds() - cpu0;
     let model = model_poses(&pg, cal, tensions)?;
     let without = model_poses(&Params { grav: 0.0, ..pg }, cal, tensions)?;
     let err = model.iter().zip(&fe).map(|(m, f)| pose_error(&pg, m, f)).collect();
     let err_without = without.iter().zip(&fe).map(|(m, f)| pose_error(&pg, m, f)).collect();
-    Ok(Case { dir_deg, tensions: tensions.to_vec(), fe, model, err, err_without, fe_s })
+    Ok(Case { dir_deg, tensions: tensions.to_vec(), fe, model, err, err_without, fe_cpu_s })
 }
 
 impl Case {

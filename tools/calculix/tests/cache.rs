@@ -12,11 +12,18 @@ fn a_deck_solved_once_is_read_back() {
     set_cache(Some(dir.clone()));
     let p = Params::<f64>::default();
     let d = Density::coarse();
-    let files = || std::fs::read_dir(&dir).map(|r| r.count()).unwrap_or(0);
+    let dats = || -> Vec<std::path::PathBuf> {
+        let mut v: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|f| f.extension().is_some_and(|x| x == "dat")).collect();
+        v.sort();
+        v
+    };
     let a = beam_compliance(&p, 20.0, Kind::PlaneStrain, &d).unwrap();
-    assert_eq!(files(), 1);
+    assert_eq!(dats().len(), 1);
+    // its CPU time beside it
+    let f = dats().remove(0);
+    let cpu: f64 = std::fs::read_to_string(f.with_extension("cpu")).unwrap().trim().parse().unwrap();
+    assert!(cpu >= 0.0 && cpu < 60.0, "{cpu} s");
     // the kept .dat is what the second run reads: change it and the answer follows
-    let f = std::fs::read_dir(&dir).unwrap().next().unwrap().unwrap().path();
     let dat = std::fs::read_to_string(&f).unwrap();
     let b = beam_compliance(&p, 20.0, Kind::PlaneStrain, &d).unwrap();
     assert_eq!(a, b);
@@ -24,7 +31,7 @@ fn a_deck_solved_once_is_read_back() {
     let c = beam_compliance(&p, 20.0, Kind::PlaneStrain, &d).unwrap();
     assert_ne!(a, c, "the second run solved the deck again");
     let _ = beam_compliance(&p, 25.0, Kind::PlaneStrain, &d).unwrap();
-    assert_eq!(files(), 2, "another deck is solved and kept");
+    assert_eq!(dats().len(), 2, "another deck is solved and kept");
     set_cache(None);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -132,7 +132,7 @@ fn the_model_under_gravity_meets_the_fe_in_each_orientation() {
         let c = compare(&q, dir, Kind::Half3d, &d, &cal, &[1.0]).unwrap();
         let (with, without) = (c.worst(true, 1.0), c.worst(false, 1.0));
         let name = format!("{} layers, {dir}°", q.layers);
-        eprintln!("{name}: with gravity {with:?}, without {without:?}, FE {:.1} s", c.fe_s);
+        eprintln!("{name}: with gravity {with:?}, without {without:?}, FE {:.1} s CPU", c.fe_cpu_s);
         assert!(
             with.tip_pct <= TIP_PCT && with.joint1_deg.abs() <= JOINT1_DEG,
             "{name}: tip {:.2} % of travel, joint 1 {:+.2}°",
