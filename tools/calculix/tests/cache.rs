@@ -22,7 +22,7 @@ fn a_deck_solved_once_is_read_back() {
     // its CPU time beside it
     let f = dats().remove(0);
     let cpu: f64 = std::fs::read_to_string(f.with_extension("cpu")).unwrap().trim().parse().unwrap();
-    assert!(cpu >= 0.0 && cpu < 60.0, "{cpu} s");
+    assert!((0.0..60.0).contains(&cpu), "{cpu} s");
     // the kept .dat is what the second run reads: change it and the answer follows
     let dat = std::fs::read_to_string(&f).unwrap();
     let b = beam_compliance(&p, 20.0, Kind::PlaneStrain, &d).unwrap();
