@@ -610,7 +610,8 @@ impl<B: Board> Control<B> {
     /// too, at 0 V: the film recovers in time); the duty of the guarded value is written. Then
     /// the servo follows; a disarm ramp that reached 0 drops the enable; the watchdog is fed if
     /// the command side checked in at `last_checkin_ms` within [`CHECKIN_BOUND_MS`]. Returns
-    /// what the tick's parts cost, in `clock` counts.
+    /// what the tick's parts cost, in `clock` counts (`clock` runs forward within a tick; a
+    /// reading that went back, a wrap, spans 0, never 2^32).
     pub fn tick_timed(&mut self, last_checkin_ms: u32, clock: fn() -> u32) -> TickCost {
         self.now_ms = self.now_ms.wrapping_add(1);
         let mut cost = TickCost::default();
@@ -618,7 +619,7 @@ impl<B: Board> Control<B> {
         {
             let t0 = clock();
             cost.sense_source = self.read_back(clock);
-            cost.read_back = clock().wrapping_sub(t0).saturating_sub(cost.sense_source);
+            cost.read_back = clock().saturating_sub(t0).saturating_sub(cost.sense_source);
         }
         let step = self.slew_now() * 0.001;
         let mut worst = 0u32;
@@ -648,7 +649,7 @@ impl<B: Board> Control<B> {
             }
             let t0 = clock();
             let applied = stacks.step(ch, v, t, self.s_floor[ch], self.shaped, step, v_cap);
-            worst = worst.max(clock().wrapping_sub(t0));
+            worst = worst.max(clock().saturating_sub(t0));
             // a fault stop zeroes every channel; the later ones still step (at 0 V)
             let nv = match applied {
                 Ok(nv) if nv >= 0.0 => nv,
@@ -666,7 +667,7 @@ impl<B: Board> Control<B> {
                 // voltage past it)
                 let in_force = if self.shaped { nv.min(v_cap) } else { v_cap.min(hold) };
                 let d = self.loop_duty(ch, nv, in_force);
-                cost.read_back = cost.read_back.wrapping_add(clock().wrapping_sub(t0));
+                cost.read_back = cost.read_back.wrapping_add(clock().saturating_sub(t0));
                 d
             };
             #[cfg(m3)]
@@ -798,7 +799,7 @@ impl<B: Board> Control<B> {
         let Some(hs) = self.board.hv_sense() else { return 0 };
         #[cfg(not(feature = "hw"))]
         self.read_plant();
-        let source = clock().wrapping_sub(t0);
+        let source = clock().saturating_sub(t0);
         let hold = self.hold_ceiling_v();
         let s_hold = self.s_hold();
         let sn = &mut self.sensing;

@@ -109,6 +109,9 @@ pub struct Commands {
     pub(super) wait: Option<Wait>,
     /// A `stop` line reached [`Commands::execute`] (see [`Commands::take_stop`]).
     pub(super) stop_asked: bool,
+    /// A `reset` was answered: the chip's command task reboots (see [`Commands::take_reset`]).
+    #[cfg(all(target_os = "none", not(m3)))]
+    pub(super) reset_asked: bool,
     /// The settings store and what the boot found in it (app/stored.rs, app/config.rs).
     #[cfg(feature = "settings")]
     pub(super) cfg: ConfigState,
@@ -158,6 +161,8 @@ impl Commands {
             seq: 0,
             wait: None,
             stop_asked: false,
+            #[cfg(all(target_os = "none", not(m3)))]
+            reset_asked: false,
             #[cfg(feature = "settings")]
             cfg: ConfigState::new(),
         };
@@ -238,6 +243,12 @@ impl Commands {
     /// A `stop` was executed as a line: the caller stops the control core.
     pub fn take_stop(&mut self) -> bool {
         core::mem::take(&mut self.stop_asked)
+    }
+
+    /// A `reset` was answered: the caller sends the reply, then reboots the chip.
+    #[cfg(all(target_os = "none", not(m3)))]
+    pub fn take_reset(&mut self) -> bool {
+        core::mem::take(&mut self.reset_asked)
     }
 
     /// What the outputs should do now (a new `seq` each call).
@@ -444,6 +455,10 @@ impl Commands {
                 if report.is_some() {
                     let _ = w!(out; super::help::HELP_TIMING, nl);
                 }
+                #[cfg(all(not(feature = "hw"), not(m3)))]
+                if self.plant_view.is_some() {
+                    let _ = w!(out; super::help::HELP_PLANT, nl);
+                }
             }
             Some(Command::Version) => {
                 no_args(args, "version")?;
@@ -523,6 +538,16 @@ impl Commands {
             Some(Command::Factory) => self.cmd_factory(args, r)?,
             #[cfg(feature = "settings")]
             Some(Command::Config) => self.cmd_config(args, r, out)?,
+            // a reboot from the console (the chip images): disarmed and the HV at 0 only
+            #[cfg(all(target_os = "none", not(m3)))]
+            Some(Command::Reset) => {
+                no_args(args, "reset")?;
+                self.require_disarmed("reset")?;
+                self.reset_asked = true;
+                let _ = w!(r; const_concat!(field::RESET.first(), "1"));
+            }
+            #[cfg(not(target_os = "none"))]
+            Some(Command::Reset) => return Err(err!(Unknown; "reset reboots the chip images only; here, start the board again")),
             Some(Command::Wait) => {
                 let [s] = args else { return Err(err!(Usage; "wait <seconds>")) };
                 let s = number(s, "seconds")?;
