@@ -16,6 +16,7 @@
 
 pub mod calibrate;
 pub mod ccx;
+pub mod em;
 pub mod mesh;
 
 use ccx::{AnyMesh, FeError, Kind, Law, Loads, NodalLoads};
