@@ -64,6 +64,8 @@ pub struct Card {
     pub branch_count: usize,
     pub eps_r: f64,
     pub breakdown: Breakdown,
+    /// The film's density, g/cm³ (its stack's weight under gravity).
+    pub rho_g_cm3: f64,
 }
 
 impl PartialEq for Card {
@@ -783,6 +785,7 @@ mod tests {
             branch_count: 1,
             eps_r: 4.8,
             breakdown: Breakdown { field0_v_per_um: 100.0 },
+            rho_g_cm3: 1.0,
         };
         let law = StackLaw::<f64>::new(&card, 0.5, 0.9).unwrap();
         let (ge, g1, tau) = (0.02, 0.03, 1.5);

@@ -16,6 +16,12 @@ pub const MAX_LAYERS: u32 = 64;
 
 pub use crate::material::EPS0;
 
+/// Standard gravity, m/s² (the board's finger's `grav`).
+pub const G_STANDARD: f64 = 9.81;
+/// The body's density, g/cm³: a TPU of Shore 85A, NinjaTek NinjaFlex technical data sheet
+/// (specific gravity 1.19, ASTM D792).
+pub const RHO_TPU_G_CM3: f64 = 1.19;
+
 /// How the stack's Young's modulus follows from G and nu.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DeModulusRule {
@@ -76,6 +82,14 @@ pub struct Params<R> {
     /// The film's material card: its branches and breakdown field (its equilibrium modulus and
     /// permittivity are `g`/`nu`/`de_rule` and `eps_r` here).
     pub card: &'static Card,
+    /// Gravity's magnitude, m/s² (0: off; docs/model.md "Gravity").
+    pub grav: R,
+    /// Gravity's direction in the base frame, degrees from the straight finger's axis (+x)
+    /// toward the cable side (+y): 0 hanging straight down, 90 held horizontally curling
+    /// downward, -90 curling upward, 180 pointing up. Kept in the console's unit (degrees).
+    pub grav_dir: R,
+    /// The body's density, g/cm³ (TPU; docs/model.md "Gravity").
+    pub rho_b: R,
 }
 
 impl<R: Real> Default for Params<R> {
@@ -110,6 +124,11 @@ impl<R: Real> Default for Params<R> {
             span_floor: f(0.1),
             flex_links: true,
             card: &PAPER_ELASTIC,
+            // the model's default finger and the paper have no gravity; the board's finger has it
+            // (`with_card`)
+            grav: f(0.0),
+            grav_dir: f(0.0),
+            rho_b: f(RHO_TPU_G_CM3),
         }
     }
 }
@@ -201,6 +220,9 @@ pub const PARAMS: &[ParamInfo] = &[
     info("nu_b", 0.0, 0.499, false, "0..0.499"),
     info("span_floor", 1e-6, 1e3, false, "1e-6 mm..L_h"),
     info("flex_links", 0.0, 1.0, false, "0 or 1"),
+    info("grav", 0.0, 20.0, false, "0..20 m/s2 (0: off)"),
+    info("grav_dir", -180.0, 180.0, false, "-180..180 deg from +x toward +y"),
+    info("rho_b", 0.0, 25.0, false, "0..25 g/cm3"),
 ];
 
 fn is_integer_name(name: &str) -> bool {
@@ -225,6 +247,17 @@ impl<R: Real> Params<R> {
     /// isotropic rule), permittivity, branches and breakdown field.
     pub fn with_card(card: &'static Card) -> Self {
         Params { g: R::from_f64(card.g_eq_mpa), eps_r: R::from_f64(card.eps_r), de_rule: DeModulusRule::Isotropic, card, ..Self::default() }
+    }
+
+    /// These parameters under gravity: `grav` m/s² along `grav_dir` degrees (docs/model.md
+    /// "Gravity").
+    pub fn with_gravity(self, grav: R, grav_dir: R) -> Self {
+        Params { grav, grav_dir, ..self }
+    }
+
+    /// Whether gravity acts (a magnitude and a mass).
+    pub fn has_gravity(&self) -> bool {
+        self.grav > R::zero() && (self.rho_b > R::zero() || (self.layers > 0 && self.card.rho_g_cm3 > 0.0))
     }
 
     /// The default finger (docs/model.md) with the board's film, VHB 4905.
@@ -293,6 +326,9 @@ impl<R: Real> Params<R> {
             "nu_b" => self.nu_b.to_f64(),
             "span_floor" => self.span_floor.to_f64(),
             "flex_links" => self.flex_links as u32 as f64,
+            "grav" => self.grav.to_f64(),
+            "grav_dir" => self.grav_dir.to_f64(),
+            "rho_b" => self.rho_b.to_f64(),
             _ => return None,
         })
     }
@@ -337,6 +373,9 @@ impl<R: Real> Params<R> {
             "nu_b" => p.nu_b = r,
             "span_floor" => p.span_floor = r,
             "flex_links" => p.flex_links = k != 0,
+            "grav" => p.grav = r,
+            "grav_dir" => p.grav_dir = r,
+            "rho_b" => p.rho_b = r,
             _ => return Err(bad),
         }
         p.validate()?;
@@ -405,6 +444,9 @@ impl<R: Real> Params<R> {
             span_floor: c(self.span_floor),
             flex_links: self.flex_links,
             card: self.card,
+            grav: c(self.grav),
+            grav_dir: c(self.grav_dir),
+            rho_b: c(self.rho_b),
         }
     }
 }

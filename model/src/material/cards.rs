@@ -21,6 +21,8 @@ pub const VHB_4905: Card = Card {
     branch_count: 3,
     eps_r: 4.8,
     breakdown: Breakdown { field0_v_per_um: 18.0 },
+    // 3M VHB 4910/4905 technical data sheet: foam density 960 kg/m³
+    rho_g_cm3: 0.96,
 };
 
 /// The paper's card as printed: G = 0.6 MPa, elastic. Kept to reproduce the paper's scenes,
@@ -37,6 +39,8 @@ pub const PAPER_ELASTIC: Card = Card {
     branch_count: 0,
     eps_r: 4.7,
     breakdown: Breakdown { field0_v_per_um: 35.0 },
+    // the paper's film is VHB 4905: its data sheet's 960 kg/m³
+    rho_g_cm3: 0.96,
 };
 
 /// Wacker Elastosil Film 2030 (silicone): elastic and stiffer than the acrylic.
@@ -53,6 +57,8 @@ pub const ELASTOSIL_2030: Card = Card {
     branch_count: 0,
     eps_r: 2.48,
     breakdown: Breakdown { field0_v_per_um: 70.0 },
+    // Wacker Elastosil Film 2030 data sheet: density 1.1 g/cm³ (silicone, DIN EN ISO 1183-1 A)
+    rho_g_cm3: 1.1,
 };
 
 /// Every card, for reports and the console.
