@@ -24,6 +24,8 @@
 //! nearly incompressible ([`FILM_NU`]). The body: neo-Hookean (E_b, ν_b). 3D, half the width
 //! (symmetry plane z = 0): the stack's side edge z = w/2 is free, so the bonded stack can thin
 //! by spreading across the width (the model's free film spreads both ways).
+//!
+//! `FINGER_EM_TRACE=1` prints each run's update; `FINGER_CALCULIX_KEEP=1` keeps the decks.
 
 use crate::ccx::{self, AnyMesh, FeError, Kind, Law};
 use crate::mesh::{self, Density, Material, Mesh3, Segment};

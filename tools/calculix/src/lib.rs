@@ -6,6 +6,8 @@
 //! - this file: the finger under cable tension (NLGEOM, follower springs), section poses,
 //!   joint angles and tip; one element's small-load compliance (linear unit loads).
 //! - [`calibrate`]: corrections to the model's sub-element compliances from those unit loads.
+//! - [`em`]: the electromechanical FE: the voltage applied to the stacks (the Maxwell stress at
+//!   each layer's current thickness, to a fixed point), not the model's thicknesses (`fe-em`).
 //!
 //! Definitions (the same in the report):
 //! - a section's pose: the least-squares rigid motion of its nodes (position of its centre,

@@ -1,5 +1,5 @@
 //! `fe-em card=<card> <name>=<value> ... [volts=<V>[,<V>,<V>]] [tension=<N>[,<N>...]]
-//! [theta=<deg>] [density=coarse|fine] [rtol=<x>]` (in tools/calculix; `--release` for fine
+//! [theta=<deg>] [density=coarse|medium|fine] [rtol=<x>]` (in tools/calculix; `--release` for fine
 //! meshes): the electromechanical FE (`em`), the voltage applied to the stacks, not the
 //! model's thicknesses. The card and the console parameters as `fe-design` takes them.
 //!
@@ -50,7 +50,10 @@ fn main() {
                 density = match v {
                     "coarse" => Density::coarse(),
                     "fine" => Density::fine(),
-                    _ => usage("density: coarse or fine"),
+                    // between the two: the notch and the stack across its depth and the width
+                    // refined, the body's rows and links left coarse
+                    "medium" => Density { notch_cols: 12, stack_rows: 2, layers: 3, ..Density::coarse() },
+                    _ => usage("density: coarse, medium or fine"),
                 }
             }
             _ => sets.push((k.to_string(), v.parse::<f64>().unwrap_or_else(|_| usage(&format!("{k}: a number"))))),
