@@ -398,8 +398,8 @@ fn write_deck(pr: &Problem, steps: &[Step], forces: &[BTreeMap<usize, [f64; 3]>]
         node_set(&mut s, "NFACE", face);
         let _ = writeln!(s, "*RIGID BODY, NSET=NFACE, REF NODE={refn}, ROT NODE={rotn}");
     }
-    ccx::material(&mut s, "BODY", pr.p.e_b, pr.p.nu_b, Law::NeoHooke);
-    ccx::material(&mut s, "STACK", pr.film.e_mpa(), FILM_NU, Law::NeoHooke);
+    ccx::material_law(&mut s, "BODY", pr.p.e_b, pr.p.nu_b, Law::NeoHooke);
+    ccx::material_law(&mut s, "STACK", pr.film.e_mpa(), FILM_NU, Law::NeoHooke);
     for (set, mat) in &blocks {
         let name = if *mat == Material::Body { "BODY" } else { "STACK" };
         let _ = writeln!(s, "*SOLID SECTION, ELSET={set}, MATERIAL={name}");
