@@ -48,8 +48,12 @@ pub struct Film {
 }
 
 impl Film {
-    /// The parameter set's film (its `stack_law`: g_eq = E_de / (2 (1 + ν)), εr, z0).
+    /// The parameter set's film (its `stack_law`: g_eq = E_de / (2 (1 + ν)), εr, z0). Refuses a
+    /// set with gravity on (the FE has no body load).
     pub fn of(p: &Params<f64>) -> Result<Film, FeError> {
+        if p.grav != 0.0 {
+            return Err(FeError::Mesh("gravity is not in the electromechanical FE: set grav=0".into()));
+        }
         let law = p.stack_law().map_err(|e| FeError::Mesh(format!("stack law: {e:?}")))?;
         Ok(Film { g_mpa: law.g_eq, eps: EPS0 * p.eps_r, z0_mm: p.z0 })
     }

@@ -43,3 +43,12 @@ fn the_boards_hinge_under_its_ceiling_bends_toward_the_cable_and_barely_softens(
     let s_free = finger_model::de::layer_thickness_ratio(&p, 1, v).unwrap();
     assert!(on.s_mid_centre > s_free && on.s_mid_edge > s_free, "bonded {:.4}/{:.4}, free {s_free:.4}", on.s_mid_centre, on.s_mid_edge);
 }
+
+/// The FE has no body load: a set with gravity on is refused before any run, not solved
+/// without it.
+#[test]
+fn gravity_is_refused_not_ignored() {
+    let p = Params::<f64>::vhb4905().with_gravity(9.81, 90.0);
+    assert!(matches!(free_film(&p, 1000.0, FixedPoint::default()), Err(finger_calculix::ccx::FeError::Mesh(_))));
+    assert!(matches!(hinge_em(&p, 1000.0, 0.1, 0.01, &Density::coarse(), FixedPoint::default()), Err(finger_calculix::ccx::FeError::Mesh(_))));
+}
