@@ -245,7 +245,7 @@ pub fn ceiling_hold(seed: u64, g_kpa: f32, frac: [f32; 3], film_s: u32, time_sca
 pub fn ceiling_holds(seed0: u64, runs: u64, film_s: u32, time_scale: f32, threads: u64) -> Vec<(u64, f32, HoldRun)> {
     let one = |seed: u64| {
         let mut r = Rng::new(seed);
-        let g = if seed % 3 == 0 { finger_fw::board::BOARD_CARD.g_eq_mpa as f32 * 1e3 } else { r.range(SPREAD_KPA.0, SPREAD_KPA.1) };
+        let g = if seed.is_multiple_of(3) { finger_fw::board::BOARD_CARD.g_eq_mpa as f32 * 1e3 } else { r.range(SPREAD_KPA.0, SPREAD_KPA.1) };
         let frac = [r.range(0.9, 1.0), r.range(0.9, 1.0), 1.0];
         (seed, g, ceiling_hold(seed, g, frac, film_s, time_scale))
     };
