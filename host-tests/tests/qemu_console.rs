@@ -61,7 +61,7 @@ fn reset_reboots_only_while_disarmed(img: Image) {
 /// taken before the stop came depends on QEMU's byte timing, so every outcome is checked and at
 /// least one of three boots must find lines queued.
 fn stop_drops_a_pasted_arm(img: Image) {
-    let front = if img.has_inverse() { "pose 10 10 10" } else { "force 0.5" };
+    let front = if img.has_inverse() { "pose 8.62 9.76 11.15" } else { "force 0.5" };
     let lines = [front, "arm", "volt all 3000"];
     let mut dropped_any = false;
     for attempt in 0..3 {
@@ -230,6 +230,9 @@ fn fmax_against_f64(q: &mut Qemu, img: Image) {
     match img {
         // on the board's VHB film the fixed-point branch end measured 0.14 % short (safe side)
         Image::M3 => assert!((-2e-3..=0.0).contains(&rel), "M3 fmax {got} vs the f64 model's {want} ({r})"),
+        // under gravity (the F405's default, docs/model.md "Gravity") the f32 coupled solve's
+        // continuation gives up a little before the f64 one's end (measured 0.39 % short)
+        _ if board_finger(q).has_weight() => assert!((-5e-3..=1e-3).contains(&rel), "fmax {got} vs the f64 model's {want} ({r})"),
         _ => assert!(rel.abs() <= 1e-3, "fmax {got} vs the f64 model's {want} ({r})"),
     }
 }
@@ -241,7 +244,15 @@ fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
     let c = expect(q, "cal", "ok cal=");
     let g: Vec<f64> = c["ok cal=".len()..].split(',').map(|x| x.parse().unwrap()).collect();
     let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
-    let [grav, dir] = ["grav", "grav_dir"].map(|n| expect(q, &format!("param {n}"), &format!("ok {n}="))[n.len() + 4..].parse::<f64>().unwrap());
+    // the Cortex-M3 image knows no gravity parameter (its model has no weight): none
+    let [grav, dir] = ["grav", "grav_dir"].map(|n| {
+        let r = q.cmd(&format!("param {n}"));
+        match r.strip_prefix(&format!("ok {n}=")) {
+            Some(v) => v.parse::<f64>().unwrap(),
+            None if r.starts_with(&format!("err usage: no parameter {n}")) => 0.0,
+            None => panic!("param {n} -> {r}"),
+        }
+    });
     finger_model::Finger::with_calibration(finger_fw::app::board_params::<f64>().with_gravity(grav, dir), cal).unwrap()
 }
 

@@ -265,20 +265,34 @@ fn fmax_coupled<R: Real>(f: &Finger<R>, c: &Compliances<R>) -> Result<BranchLimi
             Err(e) => break Some(e),
         }
     };
+    let mut contact = matches!(why, Some(Error::Contact { .. }));
+    let mut last = None;
     while hi - lo > R::from_f64(REL) * hi {
         let mid = R::from_f64(0.5) * (lo + hi);
         match holds(mid) {
-            Ok(_) => lo = mid,
+            Ok(s) => {
+                lo = mid;
+                last = Some(s);
+            }
             Err(e) => {
                 hi = mid;
+                contact |= matches!(e, Error::Contact { .. });
                 why = Some(e);
             }
         }
     }
-    let (joint, kind) = match why {
-        Some(Error::Contact { joint, .. }) => (joint.max(1), BranchEnd::Contact),
-        Some(Error::LimitPoint { joint, .. }) => (joint.max(1), BranchEnd::LimitPoint),
-        _ => (1, BranchEnd::LimitPoint),
+    // how it ends: a span at its floor (or within ten floors of it at the last tension held, where
+    // the coupled continuation gives up before the march meets the floor) is contact, at the
+    // joint of the shortest span; else a limit point
+    let shortest = last.map(|s| (0..n).fold((0, s.span[0]), |b, k| if s.span[k] < b.1 { (k, s.span[k]) } else { b }));
+    if let Some((_, span)) = shortest {
+        contact |= span <= R::from_f64(10.0) * f.p.span_floor;
+    }
+    let joint = match (why, shortest) {
+        (_, Some((k, _))) if contact => k + 1,
+        (Some(Error::Contact { joint, .. } | Error::LimitPoint { joint, .. }), _) => joint.max(1),
+        _ => 1,
     };
+    let kind = if contact { BranchEnd::Contact } else { BranchEnd::LimitPoint };
     Ok(BranchLimit { tension: lo, joint, kind })
 }
