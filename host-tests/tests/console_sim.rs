@@ -76,7 +76,7 @@ fn every_command_answers() {
     assert!((val(&l, "vpullin").parse::<f64>().unwrap() - want).abs() < 1e-3 * want, "{l}");
     // pose: the inverse model; disarmed it moves nothing
     let before = snapshot(&mut a);
-    let r = cmd(&mut a, "pose 4.21 4.75 5.42");
+    let r = cmd(&mut a, "pose 4.66 5.35 6.21");
     assert!(r.starts_with("ok force=") || r.starts_with("err unreachable:"), "{r}");
     assert_eq!(snapshot(&mut a), before);
     // case-insensitive, extra spaces
@@ -624,7 +624,7 @@ fn pose_preview_stays_below_the_hv_full_scale() {
         assert!(r.starts_with("err unreachable: "), "{r}");
     }
     // a pose the ceiling allows answers
-    let r = ok(&mut a, "pose 8.62 9.76 11.15");
+    let r = ok(&mut a, "pose 9.58 11.04 12.84");
     assert!(nums(val(&r, "volts")).iter().all(|&x| x < fs), "{r}");
 }
 
@@ -671,10 +671,10 @@ fn pose_settle_is_the_time_the_board_takes() {
         let mut a = app();
         ok(&mut a, &format!("param shaped {shaped}"));
         assert_eq!(ok(&mut a, "param shaped"), format!("ok shaped={shaped}"));
-        let r = ok(&mut a, "pose 4.21 4.75 5.42");
+        let r = ok(&mut a, "pose 4.66 5.35 6.21");
         let settle: f64 = val(&r, "settle").parse().unwrap();
         ok(&mut a, "arm");
-        assert_eq!(ok(&mut a, "pose 4.21 4.75 5.42"), r.replace(" moved=0", " moved=1"), "armed, the same answer, and it moved");
+        assert_eq!(ok(&mut a, "pose 4.66 5.35 6.21"), r.replace(" moved=0", " moved=1"), "armed, the same answer, and it moved");
         let st = ok(&mut a, "status");
         let (now, eq) = (nums(val(&st, "thick")), nums(val(&st, "thick_eq")));
         assert!(now.iter().zip(&eq).all(|(n, e)| n > e), "{st}");

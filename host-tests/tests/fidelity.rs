@@ -135,7 +135,9 @@ fn console_limits_reports_fmax_and_force_refuses_past_it() {
     let mut cmd = |line: &str| host_tests::sim_console::cmd(&mut a, line);
     assert!(cmd("param m 9").starts_with("err usage: "));
     assert!(cmd("param nu_b 0.5").starts_with("err usage: "));
-    for set in ["param layers 0", "param m 8", "param plate 1", "param nu_b 0.45", "param flex_links 1"] {
+    // the fidelity parameters' finger without gravity (the model's below has none; the board's
+    // weight is docs/model.md "Gravity"'s and gravity_console's)
+    for set in ["param grav 0", "param layers 0", "param m 8", "param plate 1", "param nu_b 0.45", "param flex_links 1"] {
         let r = cmd(set);
         assert!(r.starts_with("ok "), "{set} -> {r}");
     }

@@ -61,7 +61,7 @@ fn reset_reboots_only_while_disarmed(img: Image) {
 /// taken before the stop came depends on QEMU's byte timing, so every outcome is checked and at
 /// least one of three boots must find lines queued.
 fn stop_drops_a_pasted_arm(img: Image) {
-    let front = if img.has_inverse() { "pose 8.62 9.76 11.15" } else { "force 0.5" };
+    let front = if img.has_inverse() { "pose 9.58 11.04 12.84" } else { "force 0.5" };
     let lines = [front, "arm", "volt all 3000"];
     let mut dropped_any = false;
     for attempt in 0..3 {
@@ -131,7 +131,7 @@ fn console_commands_and_bad_inputs(img: Image) {
     let l = expect(&mut q, "limits", "ok vmax=");
     let vm = field(&l, "vmax");
     assert!(vm.iter().all(|&v| v == vm[0]) && vm[0] > 0.0 && vm[0] <= vhold, "{l} (vhold {vhold})");
-    solve_stiffness(&mut q);
+    solve_stiffness(&mut q, img);
     fmax_against_f64(&mut q, img);
     // bad inputs
     check_refusals(&mut q, &REFUSED_DISARMED);
@@ -208,8 +208,8 @@ fn pose_and_contact(q: &mut Qemu, vmax: f64) {
 /// `solve`'s tip stiffness (the M3's: from the fixed-point state, in f32) against the host's f64
 /// model with the board's calibration (read with `cal`): each diagonal term within 5e-4
 /// relative (the reply's 5 digits and f32's J C Jᵀ and inverse).
-fn solve_stiffness(q: &mut Qemu) {
-    let f = board_finger(q);
+fn solve_stiffness(q: &mut Qemu, img: Image) {
+    let f = board_finger(q, img);
     let (p, v) = (0.5, [0.0, 1000.0, 2000.0]);
     let want = f.tip_stiffness(&f.solve(p, &v, finger_model::Method::converged()).unwrap()).unwrap();
     let r = expect(q, &format!("solve {p} {} {} {}", v[0], v[1], v[2]), "ok joints=");
@@ -223,7 +223,7 @@ fn solve_stiffness(q: &mut Qemu) {
 /// branch tracking) within 1e-3 of it; the M3's (the fixed-point branch end) below it and
 /// within 0.2 % (docs/fixed-point.md).
 fn fmax_against_f64(q: &mut Qemu, img: Image) {
-    let want = board_finger(q).fmax(&[0.0; 3]).unwrap().tension;
+    let want = board_finger(q, img).fmax(&[0.0; 3]).unwrap().tension;
     let r = expect(q, "limits", "ok vmax=");
     let got: f64 = r.split_whitespace().find_map(|w| w.strip_prefix("fmax=")).unwrap().parse().unwrap();
     let rel = got / want - 1.0;
@@ -232,7 +232,7 @@ fn fmax_against_f64(q: &mut Qemu, img: Image) {
         Image::M3 => assert!((-2e-3..=0.0).contains(&rel), "M3 fmax {got} vs the f64 model's {want} ({r})"),
         // under gravity (the F405's default, docs/model.md "Gravity") the f32 coupled solve's
         // continuation gives up a little before the f64 one's end (measured 0.39 % short)
-        _ if board_finger(q).has_weight() => assert!((-5e-3..=1e-3).contains(&rel), "fmax {got} vs the f64 model's {want} ({r})"),
+        _ if board_finger(q, img).has_weight() => assert!((-5e-3..=1e-3).contains(&rel), "fmax {got} vs the f64 model's {want} ({r})"),
         _ => assert!(rel.abs() <= 1e-3, "fmax {got} vs the f64 model's {want} ({r})"),
     }
 }
@@ -240,19 +240,16 @@ fn fmax_against_f64(q: &mut Qemu, img: Image) {
 /// The host's f64 model of the board's finger: docs/model.md's on VHB 4905 (`board_params`) in
 /// the image's orientation (`param grav`, `param grav_dir`: the Cortex-M3 image has none), the
 /// board's calibration.
-fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
+fn board_finger(q: &mut Qemu, img: Image) -> finger_model::Finger<f64> {
     let c = expect(q, "cal", "ok cal=");
     let g: Vec<f64> = c["ok cal=".len()..].split(',').map(|x| x.parse().unwrap()).collect();
     let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
     // the Cortex-M3 image knows no gravity parameter (its model has no weight): none
-    let [grav, dir] = ["grav", "grav_dir"].map(|n| {
-        let r = q.cmd(&format!("param {n}"));
-        match r.strip_prefix(&format!("ok {n}=")) {
-            Some(v) => v.parse::<f64>().unwrap(),
-            None if r.starts_with(&format!("err usage: no parameter {n}")) => 0.0,
-            None => panic!("param {n} -> {r}"),
-        }
-    });
+    let [grav, dir] = if img == Image::M3 {
+        [0.0; 2]
+    } else {
+        ["grav", "grav_dir"].map(|n| expect(q, &format!("param {n}"), &format!("ok {n}="))[n.len() + 4..].parse::<f64>().unwrap())
+    };
     finger_model::Finger::with_calibration(finger_fw::app::board_params::<f64>().with_gravity(grav, dir), cal).unwrap()
 }
 
@@ -262,7 +259,7 @@ fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
 /// 14); they are the setpoints afterwards; past the stacks, `unreachable`. Without a tension:
 /// the F405's rule.
 fn pose_at_a_tension(q: &mut Qemu, vmax: f64) {
-    let f = board_finger(q);
+    let f = board_finger(q, Image::M3);
     let p = 0.8;
     let s = f.solve(p, &[0.1, 0.3, 0.5].map(|x| (x * vmax).floor()), finger_model::Method::converged()).unwrap();
     let deg = [0, 1, 2].map(|k| format!("{:.6}", s.joint_angle[k].to_degrees()).parse::<f64>().unwrap());

@@ -61,7 +61,7 @@ fn duty_step_within_slew(img: Image) {
     let mut q = Qemu::boot_traced(img, "ramp");
     assert_eq!(q.cmd("param slew 100000"), "ok slew=100000");
     assert_eq!(q.cmd("arm"), "ok armed=1");
-    q.write(b"volt 1 5000\r\nhelp\r\nparam\r\npose 8.62 9.76 11.15\r\nforce 0.3\r\ncontact 1 1.5\r\nvolt 2 5000\r\n");
+    q.write(b"volt 1 5000\r\nhelp\r\nparam\r\npose 9.58 11.04 12.84\r\nforce 0.3\r\ncontact 1 1.5\r\nvolt 2 5000\r\n");
     let lines = q.finals(7);
     assert!(lines.iter().any(|l| l.starts_with("ok force=")), "{lines:?}");
     assert_eq!(q.cmd("wait 0.2"), "ok waited=0.2");
@@ -121,7 +121,7 @@ fn stop_within_one_tick(img: Image) {
     // table), during `force` (its fmax bisection: many fixed-point solves)
     let mut q = Qemu::boot_traced(img, "pose");
     armed_at_3kv(&mut q);
-    let long = if img.has_inverse() { "pose 8.62 9.76 11.15" } else { "force 0.5" };
+    let long = if img.has_inverse() { "pose 9.58 11.04 12.84" } else { "force 0.5" };
     q.write(format!("{long}\r\nstop\r\n").as_bytes());
     let r = q.finals(2);
     assert_eq!(r[0], "ok stopped", "the stop is answered before {long}: {r:?}");

@@ -48,7 +48,7 @@ fn slew_bound_holds_per_tick_while_long_commands_run() {
     assert_eq!(line(&mut sim, &mut out, "arm"), "ok armed=1");
     // the ramp, with help, param, pose, force and contact queued behind it (the case of a command queue behind a ramp)
     let t0 = sim.t_us;
-    assert!(sim.send(b"volt 1 5000\nhelp\nparam\npose 8.62 9.76 11.15\nforce 0.3\ncontact 1 1.5\nvolt 2 5000\nhelp\n"));
+    assert!(sim.send(b"volt 1 5000\nhelp\nparam\npose 9.58 11.04 12.84\nforce 0.3\ncontact 1 1.5\nvolt 2 5000\nhelp\n"));
     let ticks = run(&mut sim, &mut out);
     assert_eq!(finals(&out.0).len(), 2 + 8, "{}", out.0);
     // 100 V per 1 ms tick at 10 kV full scale, 8400 counts: 84 counts, +1 for rounding
@@ -108,7 +108,7 @@ fn stop_acts_within_one_tick_during_wait_table_build_and_help() {
     assert!(text.lines().any(|l| l.starts_with("ok waited=") && l.ends_with(" early=input")), "{text}");
     // the first armed pose builds the branch table: its setpoints, planned before the stop,
     // are dropped when it ends
-    let (_, text) = stop_during(&setup, "pose 8.62 9.76 11.15", 5_000);
+    let (_, text) = stop_during(&setup, "pose 9.58 11.04 12.84", 5_000);
     assert!(text.lines().any(|l| l.starts_with("ok force=")), "{text}");
     stop_during(&setup, "help", 30_000);
 }

@@ -208,18 +208,18 @@ test('moving the tension slider draws the posture that solve returns', async () 
 test('a pose shows its feasible tension interval, the stiffness at both ends, and the plot', async () => {
   // a posture the board's finger reaches hanging under its weight (issue 53: a uniform one it
   // does not: its stacks change a joint's stiffness by 1 %)
-  for (const [id, v] of [['d1', '8.62'], ['d2', '9.76'], ['d3', '11.15'], ['dp', '']]) await page.fill('#' + id, v);
+  for (const [id, v] of [['d1', '9.58'], ['d2', '11.04'], ['d3', '12.84'], ['dp', '']]) await page.fill('#' + id, v);
   await page.click('#pose');
   await page.waitForFunction(() => window.finger.plot && window.finger.plot.kind === 'pose' && window.finger.plot.samples.length === 9);
   const out = await page.textContent('#pose-out');
-  const r = await board('pose 8.62 9.76 11.15');
+  const r = await board('pose 9.58 11.04 12.84');
   const [lo, hi] = r.kv.range.split(',');
   assert.ok(out.includes(`feasible tension ${lo} .. ${hi} N`), out);
   assert.match(out, new RegExp(`tip stiffness at ${lo} N: kxx=`));
   assert.match(out, new RegExp(`tip stiffness at ${hi} N: kxx=`));
   assert.equal(await page.locator('#plot polyline.k1').count(), 1);
   // the plotted low end is the board's solve at the low end's voltages
-  const lowPose = await board(`pose 8.62 9.76 11.15 ${lo}`);
+  const lowPose = await board(`pose 9.58 11.04 12.84 ${lo}`);
   const lowSolve = await board(`solve ${lo} ${lowPose.kv.volts.split(',').join(' ')}`);
   const kyy = await page.evaluate(() => window.finger.plot.samples[0].k[1]);
   assert.equal(kyy, Number(lowSolve.kv.stiffness.split(',')[1]));
@@ -227,12 +227,12 @@ test('a pose shows its feasible tension interval, the stiffness at both ends, an
 });
 
 test('a pose outside the range shows the board refusal', async () => {
-  for (const [id, v] of [['d1', '8.62'], ['d2', '9.76'], ['d3', '11.15'], ['dp', '5']]) await page.fill('#' + id, v);
+  for (const [id, v] of [['d1', '9.58'], ['d2', '11.04'], ['d3', '12.84'], ['dp', '5']]) await page.fill('#' + id, v);
   await page.click('#pose');
-  await page.waitForFunction(() => document.getElementById('refusal').textContent.startsWith('pose 8.62 9.76 11.15 5'));
-  const direct = await board('pose 8.62 9.76 11.15 5');
+  await page.waitForFunction(() => document.getElementById('refusal').textContent.startsWith('pose 9.58 11.04 12.84 5'));
+  const direct = await board('pose 9.58 11.04 12.84 5');
   assert.match(direct.line, /^err unreachable: /);
-  assert.equal(await page.textContent('#refusal'), `pose 8.62 9.76 11.15 5  ->  ${direct.line}`);
+  assert.equal(await page.textContent('#refusal'), `pose 9.58 11.04 12.84 5  ->  ${direct.line}`);
   assert.equal(await page.getAttribute('#refusal', 'class'), 'mono err');
   assert.equal(await page.textContent('#pose-out'), direct.line);
   await shot('refusal');
