@@ -28,6 +28,8 @@ fn check_solve(a: &mut App<SimBoard>, p: f32, v: [f32; 3]) -> u32 {
 #[test]
 fn solve_and_fmax_come_from_the_table_and_follow_a_parameter_change() {
     let mut a = App::new(SimBoard::default());
+    // the table is the finger's without its weight (under gravity the board keeps none)
+    assert_eq!(host_tests::sim_console::cmd(&mut a, "param grav 0"), "ok grav=0");
     let vm = ceiling(&mut a);
     let at = |f: [f64; 3]| f.map(|f| frac_of(vm, f));
     let fmax = |a: &mut App<SimBoard>| val(&cmd(a, "limits"), "fmax").parse::<f64>().unwrap();

@@ -239,9 +239,12 @@ def test_contact_has_one_sign_on_the_board_and_in_python(sim_program):
     with sf.Board.sim(sim_program) as b:
         r = b.fields("contact 1 1.5")
     c = sf.Finger().contact(1.0, 1.5, [0, 0, 0])
-    assert np.allclose(r["force_on_tip"], c.force_on_tip_N, atol=2e-4), (r, c)
+    # the board solves in f32: under its weight (the coupled pinned solve) 4e-4 N from f64
+    assert np.allclose(r["force_on_tip"], c.force_on_tip_N, atol=1e-3), (r, c)
     assert np.allclose(c.force_on_tip_N, c.force_N)
-    assert np.allclose((r["fx"], r["fy"]), -c.force_on_tip_N, atol=2e-4), (r, c)
+    assert np.allclose((r["fx"], r["fy"]), -c.force_on_tip_N, atol=1e-3), (r, c)
+    # one sign: the board's two fields are each other's opposite to their digits
+    assert np.allclose((r["fx"], r["fy"]), -np.asarray(r["force_on_tip"]), atol=1e-4), r
     assert "force_on_tip_N=" in repr(c)
 
 
