@@ -49,7 +49,7 @@ fn everything(a: &mut App<SimBoard>) -> String {
 #[test]
 fn the_boards_finger_hangs_straight_down_and_the_paper_has_no_gravity() {
     let mut a = app();
-    assert!(BOARD_GRAVITY, "the board's default is gravity on (issue 53)");
+    const { assert!(BOARD_GRAVITY, "the board's default is gravity on (issue 53)") };
     assert_eq!((BOARD_GRAV_M_S2, BOARD_GRAV_DIR_DEG), (finger_model::params::G_STANDARD, 0.0));
     is(&mut a, "9.81", "0");
     assert_eq!(ok(&mut a, "param grav"), "ok grav=9.81");

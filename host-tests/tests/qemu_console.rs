@@ -204,13 +204,16 @@ fn fmax_against_f64(q: &mut Qemu, img: Image) {
 }
 
 /// The host's f64 model of the board's finger: docs/model.md's on VHB 4905 (`board_params`) in
-/// the image's orientation (`param grav`, `param grav_dir`: the Cortex-M3 image has none), the
-/// board's calibration.
+/// the image's orientation (`param grav`, `param grav_dir`; none on an image without gravity,
+/// the Cortex-M3's, whose `param` may not know them), the board's calibration.
 fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
     let c = expect(q, "cal", "ok cal=");
     let g: Vec<f64> = c["ok cal=".len()..].split(',').map(|x| x.parse().unwrap()).collect();
     let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
-    let [grav, dir] = ["grav", "grav_dir"].map(|n| expect(q, &format!("param {n}"), &format!("ok {n}="))[n.len() + 4..].parse::<f64>().unwrap());
+    let [grav, dir] = ["grav", "grav_dir"].map(|n| {
+        let r = q.cmd(&format!("param {n}"));
+        r.strip_prefix(&format!("ok {n}=")).map_or(0.0, |v| v.parse::<f64>().unwrap())
+    });
     finger_model::Finger::with_calibration(finger_fw::app::board_params::<f64>().with_gravity(grav, dir), cal).unwrap()
 }
 
