@@ -20,6 +20,37 @@ host_tests::on_both_images! {
     qemu_ceiling_stays_below_the_cards_hold_ceiling => ceiling_stays_below_the_cards_hold_ceiling;
     qemu_status_follows_the_creep => status_follows_the_creep;
     qemu_stop_drops_a_pasted_arm => stop_drops_a_pasted_arm;
+    qemu_reset_reboots_only_while_disarmed => reset_reboots_only_while_disarmed;
+}
+
+/// `reset` (docs/console.md): refused armed and while the HV ramps down; disarmed, its reply,
+/// then the boot banner, and the board as booted (an unsaved `param` gone). The Cortex-M3
+/// image has none (`err unknown`).
+fn reset_reboots_only_while_disarmed(img: Image) {
+    let mut q = Qemu::boot_on(img, "reset");
+    if img != Image::M4f {
+        expect(&mut q, "reset", "err unknown:");
+        return;
+    }
+    let help = send(&mut q, b"help\n", 1);
+    assert!(help.iter().any(|l| l.starts_with("reset - ")), "{help:?}");
+    // the emulator image's plant: its commands listed too (they were not)
+    assert!(help.iter().any(|l| l.starts_with("plant film ")), "{help:?}");
+    let e_b = field(&expect(&mut q, "param e_b", "ok e_b="), "e_b")[0];
+    expect(&mut q, "param e_b 13", "ok e_b=13");
+    expect(&mut q, "arm", "ok armed=1");
+    expect(&mut q, "volt all 500", "ok volts=");
+    expect(&mut q, "wait 0.5", "ok waited=0.5");
+    expect(&mut q, "reset", "err armed:");
+    expect(&mut q, "disarm", "ok armed=0");
+    // the ramp down: still refused until the HV is at 0
+    expect(&mut q, "reset", "err armed:");
+    expect(&mut q, "wait 1", "ok waited=1");
+    expect(&mut q, "version", "ok version=");
+    assert_eq!(q.cmd("reset"), "ok reset=1");
+    q.read_banner();
+    assert_eq!(field(&expect(&mut q, "param e_b", "ok e_b="), "e_b")[0], e_b, "the unsaved param is gone");
+    expect(&mut q, "status", "ok armed=0 force=0.000 volts=0.0,0.0,0.0 ");
 }
 
 /// `stop` drops the lines queued ahead of it (docs/console.md "Lines"). Armed, `arm`, `volt

@@ -55,7 +55,7 @@ class Solution:
 
 class Solutions:
     """``solve_many``'s answers; the first axis of every array is the posture (N). A refused
-    row (``errors="mask"``) holds zeros, ``ok`` False, and its exception in ``errors``."""
+    row (``errors="mask"``) holds NaN in every result (its asked tension and voltages kept), ``ok`` False, and its exception in ``errors``."""
 
     tension_N: F64
     """(N,), N."""
@@ -108,7 +108,7 @@ class PoseSolution:
         """The feasible interval of tensions [low, high], N."""
     @property
     def solution(self) -> Solution:
-        """The posture as a forward solution (no tip stiffness)."""
+        """The posture as a forward solution, with its tip stiffness."""
     @property
     def iterations(self) -> int: ...
 
@@ -121,6 +121,10 @@ class Contact:
     @property
     def force_N(self) -> F64:
         """The force the object exerts on the tip, N, shape (2,); the finger presses with −force."""
+    @property
+    def force_on_tip_N(self) -> F64:
+        """``force_N`` by the name of its sign: the stop's force on the tip, N, shape (2,) (the
+        console's ``force_on_tip``; its ``fx``, ``fy`` are the opposite)."""
     @property
     def magnitude_N(self) -> float: ...
     @property

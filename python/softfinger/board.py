@@ -456,8 +456,9 @@ class Board:
         self._link = _link
         self.timeout_s = timeout_s
         self._closed = False
-        #: the board's ``status`` after the ``stop`` that :meth:`close` sent (None before, or
-        #: when the board did not answer it)
+        #: the board's ``status`` 0.2 s (board time) after the ``stop`` that :meth:`close` sent,
+        #: the HV modules' discharge of the stacks over (``vmeas_V`` ~0; None before, or when
+        #: the board did not answer)
         self.final_status: Optional[Status] = None
         #: the lines before the last command's final reply (``help``'s list)
         self.before: List[str] = []
@@ -470,7 +471,9 @@ class Board:
     @classmethod
     def sim(cls, program: Union[str, Path, None] = None, *, timeout_s: float = 30.0) -> "Board":
         """finger-sim (the firmware's application on a simulated board) as a child process,
-        over its stdin and stdout. Time passes only through :meth:`wait` (1 ms control ticks).
+        over its stdin and stdout. Its time runs with the wall clock while it waits for the next
+        line (a line takes none; :meth:`wait` runs its seconds of 1 ms control ticks at once), as
+        a real board lives on between commands.
         ``timeout_s`` finds a board that hangs, not a slow one: a local child process on a
         loaded machine can wait seconds for the CPU.
         ``program``: default :func:`find_sim`."""
@@ -678,10 +681,12 @@ class Board:
 
     def _safe_stop(self) -> None:
         """``stop`` (its ``ok stopped`` wherever it comes among the late replies of an
-        interrupted command), then the board's ``status`` (:attr:`final_status`: HV at 0 and
-        disarmed, as the board reports it), read past those late replies."""
+        interrupted command), then 0.2 s for the stacks to discharge (right after a stop they
+        still hold their charge: ~0.1 s), then the board's ``status`` (:attr:`final_status`: HV
+        at 0 and disarmed, as the board measures it), read past those late replies."""
         try:
             self.command("stop")
+            self.command("wait 0.2")
             self.final_status = self.status()
         except (BoardTimeout, BoardLinkError, BoardError):
             return

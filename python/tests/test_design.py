@@ -101,6 +101,15 @@ def test_the_model_and_a_design_pickle():
     assert Design.from_toml(d.to_toml("a comment")) == d
     with pytest.raises(ValueError):
         Design.from_toml(d.to_toml() + "t_mni = 1.0\n")
+    # a path, as a Path or as the text of one, reads the file (was a TOMLDecodeError)
+    path = ROOT / "designs" / "VHB-4905.toml"
+    assert Design.from_toml(path) == Design.load(path) == Design.from_toml(str(path))
+    with pytest.raises(FileNotFoundError) as e:
+        Design.from_toml("designs/no-such.toml")
+    assert "Design.load" in str(e.value)
+    with pytest.raises(ValueError) as e:
+        Design.from_toml("not = toml = text")
+    assert "TOML text or a path" in str(e.value)
 
 
 def test_a_design_file_carries_the_orientation_of_the_board_it_builds():
@@ -206,6 +215,27 @@ def test_the_page_is_what_its_command_writes(tmp_path):
     for card in res["cards"]:
         assert (tmp_path / "designs" / f"{card}.toml").read_text() == (ROOT / "designs" / f"{card}.toml").read_text()
     assert (tmp_path / "docs" / "design-pareto.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert "<svg" in (tmp_path / "docs" / "design-pareto.svg").read_text()[:2000]
+    # the figure too: a regeneration with nothing changed gives no diff (no date, fixed ids)
+    svg = (tmp_path / "docs" / "design-pareto.svg").read_text()
+    assert "<svg" in svg[:2000] and "<dc:date>" not in svg
+    assert svg == (ROOT / "docs" / "design-pareto.svg").read_text(), "docs/design-pareto.svg is not what `report --from docs/design-results.json` writes"
+    again = tmp_path / "again"
+    report.write(res, again)
+    assert (again / "docs" / "design-pareto.png").read_bytes() == (tmp_path / "docs" / "design-pareto.png").read_bytes()
     page = (ROOT / "docs" / "design.md").read_text()
     assert "](design-pareto.png)" in page and "design-pareto.svg" in page
+
+
+def test_a_design_checks_figures_are_plain_numbers():
+    """`python -m softfinger.design fe` prints each check's ratios and errors: plain floats,
+    not numpy scalars (their repr was `np.float64(1.27...)`). The FE results here are the
+    model's own, 1 % stiffer: no CalculiX run."""
+    from softfinger.design import fe
+
+    d = Design.load(ROOT / "designs" / "VHB-4905.toml")
+    results = [fe.CaseResult(c, True, joints_rad=c.model_joints_rad, direct=tuple(np.float64(x) * 1.01 for x in c.model_direct)) for c in fe.cases_of(d)]
+    ch = fe.DesignCheck(d, results)
+    for figures in (ch.ratio("kyy"), ch.ratio("ktt"), ch.errors()):
+        assert figures and all(type(v) is float for v in figures.values()), figures
+        assert "np.float64" not in repr(figures)
+    assert ch.errors()["kyy_pct"] == pytest.approx(100 * (1 / 1.01 - 1))

@@ -182,6 +182,12 @@ def figure(res: Dict, png: Path, svg: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    # the same figure from the same results, byte for byte: fixed SVG ids, no date nor version
+    with matplotlib.rc_context({"svg.hashsalt": "softfinger-design-pareto"}):
+        _draw(plt, res, png, svg)
+
+
+def _draw(plt, res: Dict, png: Path, svg: Path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
     colors = {"VHB-4905": "tab:red", "Elastosil-2030": "tab:blue"}
     for card, c in res["cards"].items():
@@ -200,8 +206,8 @@ def figure(res: Dict, png: Path, svg: Path) -> None:
     fig.suptitle(f"Feasible designs (faint) and the Pareto front, reference posture {REFERENCE_DEG:g}° per joint")
     fig.tight_layout()
     png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(png, dpi=110)
-    fig.savefig(svg)
+    fig.savefig(png, dpi=110, metadata={"Software": None})
+    fig.savefig(svg, metadata={"Date": None, "Creator": None})
     plt.close(fig)
 
 

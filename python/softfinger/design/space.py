@@ -154,10 +154,20 @@ class Design:
         return "\n".join(lines) + "\n"
 
     @classmethod
-    def from_toml(cls, text: str) -> "Design":
-        """A design from its TOML; unknown keys or a missing one are an error (a typo must not
-        build a default board)."""
-        d = tomllib.loads(text)
+    def from_toml(cls, text: "str | Path") -> "Design":
+        """A design from its TOML text, or from a TOML file given as a :class:`pathlib.Path`
+        (or a ``str`` that names an existing ``.toml`` file; :meth:`load` takes a path too);
+        unknown keys or a missing one are an error (a typo must not build a default board)."""
+        if isinstance(text, Path):
+            return cls.load(text)
+        if text.strip().endswith(".toml") and "\n" not in text.strip():
+            if not Path(text.strip()).is_file():
+                raise FileNotFoundError(f"design TOML: {text.strip()!r} looks like a path but is no file (from_toml takes TOML text or a path; Design.load(path) reads a file)")
+            return cls.load(text.strip())
+        try:
+            d = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise ValueError(f"design TOML: not TOML text ({e}); from_toml takes TOML text or a path, Design.load(path) reads a file") from e
         want = {"card", *TOML_KEYS}
         extra, missing = set(d) - want - set(ORIENTATION_KEYS), want - set(d)
         if extra or missing:
@@ -176,6 +186,7 @@ class Design:
 
     @classmethod
     def load(cls, path: Path | str) -> "Design":
+        """A design from its TOML file."""
         return cls.from_toml(Path(path).read_text())
 
     def replace(self, **kw) -> "Design":
