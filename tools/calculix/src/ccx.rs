@@ -200,7 +200,7 @@ fn material(s: &mut String, name: &str, e: f64, nu: f64, law: Law, rho_t_mm3: Op
     }
 }
 
-fn material_law(s: &mut String, name: &str, e: f64, nu: f64, law: Law) {
+pub(crate) fn material_law(s: &mut String, name: &str, e: f64, nu: f64, law: Law) {
     match law {
         Law::StVenantKirchhoff => {
             let _ = writeln!(s, "*MATERIAL, NAME={name}\n*ELASTIC\n{e:.9e}, {nu:.6}");
@@ -238,6 +238,103 @@ pub struct Deck {
 pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &Loads, out_nodes: Vec<usize>) -> Deck {
     let mut s = String::new();
     let _ = writeln!(s, "*HEADING\nfinger-calculix: {}", kind.name());
+    let (blocks, mut next) = write_mesh(&mut s, kind, mesh);
+    let share = kind.load_share();
+    match loads {
+        Loads::Cable { holes, .. } => {
+            for (set, pairs, _) in cable_springs(mesh, holes) {
+                let _ = writeln!(s, "*ELEMENT, TYPE=SPRINGA, ELSET={set}");
+                for (a, b) in pairs {
+                    let _ = writeln!(s, "{next}, {}, {}", a + 1, b + 1);
+                    next += 1;
+                }
+            }
+        }
+        Loads::Unit(_) => {}
+    }
+    let _ = writeln!(s, "*NSET, NSET=NCLAMP");
+    for i in mesh.at_x(clamp_x) {
+        let _ = writeln!(s, "{},", i + 1);
+    }
+    let _ = writeln!(s, "*NSET, NSET=NOUT");
+    for &i in &out_nodes {
+        let _ = writeln!(s, "{},", i + 1);
+    }
+    if let AnyMesh::Three(m) = mesh {
+        let _ = writeln!(s, "*NSET, NSET=NSYM");
+        for (i, n) in m.nodes.iter().enumerate() {
+            if n[2].abs() < 1e-9 {
+                let _ = writeln!(s, "{},", i + 1);
+            }
+        }
+    }
+    let law = match loads {
+        Loads::Cable { law, .. } => *law,
+        Loads::Unit(_) => Law::StVenantKirchhoff, // linear steps: Hooke's law
+    };
+    let grav = match loads {
+        Loads::Cable { grav, .. } if grav.is_on() => Some(*grav),
+        _ => None,
+    };
+    let (body_law, stack_law) = law.parts();
+    material(&mut s, "BODY", p.e_b, p.nu_b, body_law, grav.map(|g| t_per_mm3(g.rho_body_g_cm3)));
+    material(&mut s, "STACK", p.e_de(), p.nu, stack_law, grav.map(|g| t_per_mm3(g.rho_stack_g_cm3)));
+    let thick = if kind == Kind::Half3d { String::new() } else { format!("\n{:.9e}", p.w) };
+    for (set, mat) in &blocks {
+        let name = if *mat == Material::Body { "BODY" } else { "STACK" };
+        let _ = writeln!(s, "*SOLID SECTION, ELSET={set}, MATERIAL={name}{thick}");
+    }
+    let mut times = Vec::new();
+    match loads {
+        Loads::Cable { tensions, .. } => {
+            // force = share x temperature: the step's temperature is the tension, ramped
+            let tmax = 1000.0;
+            if let Loads::Cable { holes, .. } = loads {
+                for (set, _, frac) in cable_springs(mesh, holes) {
+                    let _ = writeln!(
+                        s,
+                        "*SPRING, ELSET={set}, NONLINEAR\n0., -1.e4, 0.\n0., 1.e4, 0.\n{f:.9e}, -1.e4, {tmax:.1}\n{f:.9e}, 1.e4, {tmax:.1}",
+                        f = share * frac * tmax
+                    );
+                }
+            }
+            let _ = writeln!(s, "*INITIAL CONDITIONS, TYPE=TEMPERATURE\nNALL, 0.");
+            write_bcs(&mut s, mesh);
+            for (i, t) in tensions.iter().enumerate() {
+                let _ = writeln!(s, "*STEP, NLGEOM, INC=2000\n*STATIC\n0.25, 1., 1.e-6, 0.5\n*TEMPERATURE\nNALL, {t:.9e}");
+                if let (0, Some(g)) = (i, grav) {
+                    // the body load on the solid elements (not the cable's springs)
+                    let u = g.unit();
+                    let _ = writeln!(s, "*DLOAD");
+                    for (set, _) in &blocks {
+                        let _ = writeln!(s, "{set}, GRAV, {:.9e}, {:.12e}, {:.12e}, 0.", g.mm_s2(), u[0], u[1]);
+                    }
+                }
+                let _ = writeln!(s, "*NODE PRINT, NSET=NOUT\nU\n*NODE PRINT, NSET=NCLAMP\nRF\n*END STEP");
+                times.push((i + 1) as f64);
+            }
+        }
+        Loads::Unit(cases) => {
+            write_bcs(&mut s, mesh);
+            for (i, c) in cases.iter().enumerate() {
+                let _ = writeln!(s, "*STEP\n*STATIC\n*CLOAD, OP=NEW");
+                for &(n, fx, fy) in c {
+                    let _ = writeln!(s, "{}, 1, {fx:.12e}\n{}, 2, {fy:.12e}", n + 1, n + 1);
+                }
+                let _ = writeln!(s, "*NODE PRINT, NSET=NOUT\nU\n*END STEP");
+                times.push((i + 1) as f64);
+            }
+        }
+    }
+    Deck { text: s, out_nodes, times }
+}
+
+/// An element block of a deck: (element set, material).
+pub type Block = (String, Material);
+
+/// The mesh's nodes and elements (sets EBODY, ESTACK, and their 6-node triangles EBODYT,
+/// ESTACKT in 2D): the blocks written and the next free element id.
+pub fn write_mesh(s: &mut String, kind: Kind, mesh: &AnyMesh) -> (Vec<Block>, usize) {
     let _ = writeln!(s, "*NODE, NSET=NALL");
     for i in 0..mesh.node_count() {
         match mesh {
@@ -308,94 +405,7 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
             next += 1;
         }
     }
-    let share = kind.load_share();
-    match loads {
-        Loads::Cable { holes, .. } => {
-            for (set, pairs, _) in cable_springs(mesh, holes) {
-                let _ = writeln!(s, "*ELEMENT, TYPE=SPRINGA, ELSET={set}");
-                for (a, b) in pairs {
-                    let _ = writeln!(s, "{next}, {}, {}", a + 1, b + 1);
-                    next += 1;
-                }
-            }
-        }
-        Loads::Unit(_) => {}
-    }
-    let _ = writeln!(s, "*NSET, NSET=NCLAMP");
-    for i in mesh.at_x(clamp_x) {
-        let _ = writeln!(s, "{},", i + 1);
-    }
-    let _ = writeln!(s, "*NSET, NSET=NOUT");
-    for &i in &out_nodes {
-        let _ = writeln!(s, "{},", i + 1);
-    }
-    if let AnyMesh::Three(m) = mesh {
-        let _ = writeln!(s, "*NSET, NSET=NSYM");
-        for (i, n) in m.nodes.iter().enumerate() {
-            if n[2].abs() < 1e-9 {
-                let _ = writeln!(s, "{},", i + 1);
-            }
-        }
-    }
-    let law = match loads {
-        Loads::Cable { law, .. } => *law,
-        Loads::Unit(_) => Law::StVenantKirchhoff, // linear steps: Hooke's law
-    };
-    let grav = match loads {
-        Loads::Cable { grav, .. } if grav.is_on() => Some(*grav),
-        _ => None,
-    };
-    let (body_law, stack_law) = law.parts();
-    material(&mut s, "BODY", p.e_b, p.nu_b, body_law, grav.map(|g| t_per_mm3(g.rho_body_g_cm3)));
-    material(&mut s, "STACK", p.e_de(), p.nu, stack_law, grav.map(|g| t_per_mm3(g.rho_stack_g_cm3)));
-    let thick = if kind == Kind::Half3d { String::new() } else { format!("\n{:.9e}", p.w) };
-    for (set, _, mat, _) in &blocks {
-        let name = if *mat == Material::Body { "BODY" } else { "STACK" };
-        let _ = writeln!(s, "*SOLID SECTION, ELSET={set}, MATERIAL={name}{thick}");
-    }
-    let mut times = Vec::new();
-    match loads {
-        Loads::Cable { tensions, .. } => {
-            // force = share x temperature: the step's temperature is the tension, ramped
-            let tmax = 1000.0;
-            if let Loads::Cable { holes, .. } = loads {
-                for (set, _, frac) in cable_springs(mesh, holes) {
-                    let _ = writeln!(
-                        s,
-                        "*SPRING, ELSET={set}, NONLINEAR\n0., -1.e4, 0.\n0., 1.e4, 0.\n{f:.9e}, -1.e4, {tmax:.1}\n{f:.9e}, 1.e4, {tmax:.1}",
-                        f = share * frac * tmax
-                    );
-                }
-            }
-            let _ = writeln!(s, "*INITIAL CONDITIONS, TYPE=TEMPERATURE\nNALL, 0.");
-            write_bcs(&mut s, mesh);
-            for (i, t) in tensions.iter().enumerate() {
-                let _ = writeln!(s, "*STEP, NLGEOM, INC=2000\n*STATIC\n0.25, 1., 1.e-6, 0.5\n*TEMPERATURE\nNALL, {t:.9e}");
-                if let (0, Some(g)) = (i, grav) {
-                    // the body load on the solid elements (not the cable's springs)
-                    let u = g.unit();
-                    let _ = writeln!(s, "*DLOAD");
-                    for (set, _, _, _) in &blocks {
-                        let _ = writeln!(s, "{set}, GRAV, {:.9e}, {:.12e}, {:.12e}, 0.", g.mm_s2(), u[0], u[1]);
-                    }
-                }
-                let _ = writeln!(s, "*NODE PRINT, NSET=NOUT\nU\n*NODE PRINT, NSET=NCLAMP\nRF\n*END STEP");
-                times.push((i + 1) as f64);
-            }
-        }
-        Loads::Unit(cases) => {
-            write_bcs(&mut s, mesh);
-            for (i, c) in cases.iter().enumerate() {
-                let _ = writeln!(s, "*STEP\n*STATIC\n*CLOAD, OP=NEW");
-                for &(n, fx, fy) in c {
-                    let _ = writeln!(s, "{}, 1, {fx:.12e}\n{}, 2, {fy:.12e}", n + 1, n + 1);
-                }
-                let _ = writeln!(s, "*NODE PRINT, NSET=NOUT\nU\n*END STEP");
-                times.push((i + 1) as f64);
-            }
-        }
-    }
-    Deck { text: s, out_nodes, times }
+    (blocks.into_iter().map(|(set, _, mat, _)| (set, mat)).collect(), next)
 }
 
 /// The cable's springs between consecutive guide holes: (element set, node pairs, share of the
@@ -403,7 +413,7 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
 /// spring per node of the hole's line across the half width (z), each carrying the consistent
 /// share of a uniform line load on the quadratic edges (end corners 1/6, inner corners 1/3,
 /// midsides 2/3 of a layer), so the cable loads a line, not a single node.
-fn cable_springs(mesh: &AnyMesh, holes: &[usize]) -> Vec<(String, Vec<(usize, usize)>, f64)> {
+pub(crate) fn cable_springs(mesh: &AnyMesh, holes: &[usize]) -> Vec<(String, Vec<(usize, usize)>, f64)> {
     match mesh {
         AnyMesh::Two(_) => vec![("ECABLE".into(), holes.windows(2).map(|w| (w[0], w[1])).collect(), 1.0)],
         AnyMesh::Three(m) => {
@@ -597,6 +607,32 @@ fn run_ccx(deck: &Deck) -> Result<(String, Option<FeError>, f64), FeError> {
         return Ok((dat, Some(FeError::Ccx(tail)), cpu));
     }
     Ok((dat, None, cpu))
+}
+
+/// Run ccx on a deck's text in a fresh scratch directory: its `.dat`, or the tail of its log.
+pub fn run_text(text: &str) -> Result<String, FeError> {
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    let dir: PathBuf = std::env::temp_dir().join(format!("finger-calculix-{}-{n}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| FeError::Spawn(e.to_string()))?;
+    std::fs::write(dir.join("job.inp"), text).map_err(|e| FeError::Spawn(e.to_string()))?;
+    let out = Command::new("ccx")
+        .arg("-i")
+        .arg("job")
+        .current_dir(&dir)
+        .env("OMP_NUM_THREADS", "1")
+        .env("CCX_NPROC_EQUATION_SOLVER", "1")
+        .output()
+        .map_err(|e| FeError::Spawn(e.to_string()))?;
+    let log = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap_or_default();
+    if std::env::var_os("FINGER_CALCULIX_KEEP").is_none() {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    if !out.status.success() || log.contains("*ERROR") {
+        let tail: Vec<&str> = log.lines().filter(|l| !l.trim().is_empty()).collect();
+        return Err(FeError::Ccx(tail[tail.len().saturating_sub(6)..].join(" | ")));
+    }
+    Ok(dat)
 }
 
 /// The `.dat` blocks "displacements (vx,vy,vz) for set NOUT and time T", at the step ends.

@@ -8,6 +8,8 @@
 //!   joint angles and tip; one element's small-load compliance (linear unit loads).
 //! - [`gravity`]: the finger under its own weight in three orientations, model against FE.
 //! - [`calibrate`]: corrections to the model's sub-element compliances from those unit loads.
+//! - [`em`]: the electromechanical FE: the voltage applied to the stacks (the Maxwell stress at
+//!   each layer's current thickness, to a fixed point), not the model's thicknesses (`fe-em`).
 //!
 //! Definitions (the same in the report):
 //! - a section's pose: the least-squares rigid motion of its nodes (position of its centre,
@@ -19,6 +21,7 @@
 pub mod calibrate;
 pub mod gravity;
 pub mod ccx;
+pub mod em;
 pub mod mesh;
 
 pub use ccx::Gravity;
