@@ -20,6 +20,17 @@ pub const TENSIONS_N: [f64; 5] = [0.0, 0.5, 1.0, 2.0, 3.0];
 /// Gravity's magnitude in the comparison, m/s².
 pub const G_M_S2: f64 = 9.81;
 
+/// The goals (issue 53): the tip within this % of its travel from the straight finger ...
+pub const GOAL_TIP_PCT: f64 = 2.0;
+/// ... and joint 1 within this many degrees, at 0 to `GOAL_UP_TO_N`.
+pub const GOAL_JOINT1_DEG: f64 = 1.0;
+pub const GOAL_UP_TO_N: f64 = 2.0;
+
+/// CI's check (tests/gravity.rs): (stacks, gravity's direction) at `CI_TENSION_N` on the coarse
+/// 3D mesh, calibrated on it.
+pub const CI_CASES: [(bool, f64); 4] = [(false, 90.0), (false, -90.0), (false, 0.0), (true, 90.0)];
+pub const CI_TENSION_N: f64 = 1.0;
+
 /// A tip travel below this (mm) gives no % error (hanging straight down without cable the
 /// tip only stretches).
 pub const MIN_TRAVEL_MM: f64 = 1.0;
@@ -96,6 +107,9 @@ pub fn pose_error(p: &Params<f64>, m: &Pose, fe: &FeState) -> PoseError {
 pub struct Worst {
     /// Largest tip error, % of travel (over the states with a travel of `MIN_TRAVEL_MM` or more).
     pub tip_pct: f64,
+    /// That state's tip error and travel, mm.
+    pub tip_mm: f64,
+    pub travel_mm: f64,
     /// Joint 1's error of the largest magnitude, degrees (signed).
     pub joint1_deg: f64,
 }
@@ -133,10 +147,12 @@ impl Case {
     /// The worst errors over the tensions up to `up_to_n` N, with gravity in the model or not.
     pub fn worst(&self, with_gravity: bool, up_to_n: f64) -> Worst {
         let errs = if with_gravity { &self.err } else { &self.err_without };
-        let mut w = Worst { tip_pct: 0.0, joint1_deg: 0.0 };
+        let mut w = Worst { tip_pct: 0.0, tip_mm: 0.0, travel_mm: 0.0, joint1_deg: 0.0 };
         for (e, t) in errs.iter().zip(&self.tensions) {
             if *t <= up_to_n {
-                w.tip_pct = w.tip_pct.max(e.tip_pct.unwrap_or(0.0));
+                if e.tip_pct.unwrap_or(0.0) > w.tip_pct {
+                    (w.tip_pct, w.tip_mm, w.travel_mm) = (e.tip_pct.unwrap_or(0.0), e.tip_mm, e.travel_mm);
+                }
                 if e.joint1_deg.abs() > w.joint1_deg.abs() {
                     w.joint1_deg = e.joint1_deg;
                 }

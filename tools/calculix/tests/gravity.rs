@@ -113,32 +113,31 @@ fn the_stacks_weight_is_their_volume_times_their_density() {
 }
 
 /// The board's model under gravity against the FE (coarse 3D mesh, calibrated on it without
-/// gravity) at 1 N of cable, in each orientation, without stacks and with the board's (0 V):
-/// the tip within `TIP_PCT` % of its travel and joint 1 within `JOINT1_DEG`°; the same model
-/// without gravity misses both by far (held horizontally its tip is off by a third of its
-/// travel). The report's fine-mesh numbers: docs/fidelity-fe.md "Under its own weight".
+/// gravity) at `CI_TENSION_N` (1 N) of cable, in each orientation without stacks and held
+/// horizontally with the board's (0 V): the goals, the tip within `GOAL_TIP_PCT` (2 %) of its
+/// travel and joint 1 within `GOAL_JOINT1_DEG` (1°) (measured: tip 0.35 / 0.23 / 0.40 / 1.0 %,
+/// joint 1 within 0.12°); the same model without gravity misses the tip by more than four
+/// times the goal (36 / 266 / 29 / 42 %). The report's fine-mesh numbers at 0 to 3 N:
+/// docs/fidelity-fe.md "Under its own weight".
 #[test]
 fn the_model_under_gravity_meets_the_fe_in_each_orientation() {
     use finger_calculix::calibrate;
-    use finger_calculix::gravity::{compare, ORIENTATIONS};
-    const TIP_PCT: f64 = 2.0;
-    const JOINT1_DEG: f64 = 1.0;
+    use finger_calculix::gravity::{compare, CI_CASES, CI_TENSION_N, GOAL_JOINT1_DEG, GOAL_TIP_PCT};
     let d = Density::coarse();
     let p = Params::<f64>::default();
     let cal = calibrate::run(&p, Kind::Half3d, &d).unwrap().cal;
-    let cases = [(p.without_stacks(), 90.0), (p.without_stacks(), -90.0), (p.without_stacks(), 0.0), (p, 90.0)];
-    for (q, dir) in cases {
-        assert!(ORIENTATIONS.iter().any(|o| o.0 == dir));
-        let c = compare(&q, dir, Kind::Half3d, &d, &cal, &[1.0]).unwrap();
-        let (with, without) = (c.worst(true, 1.0), c.worst(false, 1.0));
+    for (stacks, dir) in CI_CASES {
+        let q = if stacks { p } else { p.without_stacks() };
+        let c = compare(&q, dir, Kind::Half3d, &d, &cal, &[CI_TENSION_N]).unwrap();
+        let (with, without) = (c.worst(true, CI_TENSION_N), c.worst(false, CI_TENSION_N));
         let name = format!("{} layers, {dir}°", q.layers);
         eprintln!("{name}: with gravity {with:?}, without {without:?}, FE {:.1} s CPU", c.fe_cpu_s);
         assert!(
-            with.tip_pct <= TIP_PCT && with.joint1_deg.abs() <= JOINT1_DEG,
+            with.tip_pct <= GOAL_TIP_PCT && with.joint1_deg.abs() <= GOAL_JOINT1_DEG,
             "{name}: tip {:.2} % of travel, joint 1 {:+.2}°",
             with.tip_pct,
             with.joint1_deg
         );
-        assert!(without.tip_pct > 4.0 * TIP_PCT, "{name}: without gravity the tip is off by only {:.2} %", without.tip_pct);
+        assert!(without.tip_pct > 4.0 * GOAL_TIP_PCT, "{name}: without gravity the tip is off by only {:.2} %", without.tip_pct);
     }
 }

@@ -1,11 +1,13 @@
-//! `cargo run --release --bin fe-report [-- --coarse] [--gravity] [--no-cache]` (in tools/calculix): writes
+//! `cargo run --release --bin fe-report [-- --coarse] [--gravity] [--no-cache] [--threads N]` (in
+//! tools/calculix): writes
 //! docs/fidelity-fe.md, the board's f32 model (calibrated and not) against CalculiX's nonlinear
 //! solution of the same finger, scene by scene, and under its own weight in three
 //! orientations. The default (fine) 3D mesh is slow (the report ends with its run time);
 //! `--coarse` is for trying the tool, not for the report; `--gravity` regenerates only the
 //! section "Under its own weight" in place (the rest does not depend on gravity). Every
 //! successful ccx run is kept in target/fe-cache by its deck and read back when the same deck
-//! runs again (a rerun after a model change solves no FE); `--no-cache` solves every deck.
+//! runs again (a rerun after a model change solves no FE); `--no-cache` solves every deck;
+//! `--threads N` runs the gravity section's six FE cases N at a time (default 2).
 use finger_calculix::calibrate::{self, model_element_compliance, CalibrationRun};
 use finger_calculix::ccx::{Kind, Law};
 use finger_calculix::gravity::{self, ORIENTATIONS, TENSIONS_N};
@@ -98,6 +100,8 @@ fn fe_contact(states: &[FeState], floor: f64) -> Option<f64> {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let coarse = args.iter().any(|a| a == "--coarse");
+    // the gravity section's FE runs at once (ccx on one thread each)
+    let threads: usize = args.iter().position(|a| a == "--threads").and_then(|i| args.get(i + 1)).and_then(|n| n.parse().ok()).unwrap_or(2);
     let d3 = if coarse { Density::coarse() } else { Density::fine() };
     let d2 = Density::fine();
     let dc = Density::coarse();
@@ -115,7 +119,7 @@ fn main() {
     if args.iter().any(|a| a == "--gravity") {
         eprintln!("calibrating (3D, {d3:?}) ...");
         let cal = calibrate::run(&defaults, Kind::Half3d, &d3).unwrap_or_else(|e| fail(e.to_string())).cal;
-        let section = gravity_section(&cal, &d3, coarse, started).unwrap_or_else(|e| fail(e));
+        let section = gravity_section(&cal, &d3, coarse, threads, started).unwrap_or_else(|e| fail(e));
         let doc = std::fs::read_to_string(&path).unwrap_or_else(|e| fail(format!("{}: {e}", path.display())));
         // the section in place, or (first run) before "Per scene"
         let (a, b) = match doc.split_once(GRAVITY_HEADING) {
@@ -376,7 +380,7 @@ fn main() {
     let _ = writeln!(w, "- **The continuum reference** (docs/fidelity.md, `host_tests::continuum`): a planar extensible elastica of the real geometry with exact follower loads and bonded stacks. It shares the model's beam assumptions (plane sections stay plane, no shear, a modulus chosen for the whole width), so it checks the model's discretisation (m, links, the load stepping) to 1e-8 and cannot see what those assumptions leave out.");
     let _ = writeln!(w, "- **The FE** (this report): a continuum of the real geometry, 3D over the width. It sees what the beams cannot: sections that warp in a short, steep notch, shear, the stress concentration at the notch waist, the anticlastic (2D-to-3D) stiffening, the stack bonded along the notch face (it thins toward the ends, not a uniform strip of length L_h), the cable's loads along the guides at the notch corners. It cannot see what it was not given: the body and the stacks are neo-Hookean with the model's small-strain E and ν (no measured stress-strain curve of TPU or of the stack material, no viscoelasticity), the stack is passive (no electrostatic pressure: its thickness at a voltage comes from the model's thinning law), the cable has no friction, the notch faces do not touch (no contact elements), and the mesh has its own error (last column above; tests/convergence.rs).");
     let _ = writeln!(w, "- **The calibration** carries what the FE sees at small loads into the model's sub-element compliances; beyond small loads the model's subdivision carries it on, and the growth column above is what it does not carry.\n");
-    let _ = write!(w, "{}", gravity_section(&cals[0].cal, &d3, coarse, started).unwrap_or_else(|e| fail(e)));
+    let _ = write!(w, "{}", gravity_section(&cals[0].cal, &d3, coarse, threads, started).unwrap_or_else(|e| fail(e)));
     let _ = writeln!(w, "## Per scene\n");
     let _ = write!(w, "{per_scene}");
     let _ = writeln!(w, "Report run time: {} (ccx on one thread; a 2-core machine shared with other builds).", fmt_dur(started.elapsed()));
@@ -389,7 +393,7 @@ const GRAVITY_HEADING: &str = "## Under its own weight";
 /// The section "Under its own weight": the 3D FE (mesh `d3`) with gravity in three
 /// orientations, with and without the board's stacks (0 V), against the board's calibrated
 /// model (calibration `cal`, computed without gravity), with gravity and without.
-fn gravity_section(cal: &Calibration<f64>, d3: &Density, coarse: bool, started: std::time::Instant) -> Result<String, String> {
+fn gravity_section(cal: &Calibration<f64>, d3: &Density, coarse: bool, threads: usize, started: std::time::Instant) -> Result<String, String> {
     let d = Params::<f64>::default();
     let mut w = String::new();
     let _ = writeln!(w, "{GRAVITY_HEADING}\n");
@@ -397,13 +401,13 @@ fn gravity_section(cal: &Calibration<f64>, d3: &Density, coarse: bool, started: 
     let _ = writeln!(w, "The same 3D FE (mesh {d3:?}) with a body load: `*DENSITY` (the body's `rho_b` = {} g/cm³, TPU; the stacks' film {} g/cm³, card {}) and `*DLOAD … GRAV` of {} m/s² in the base frame (mesh units: t/mm³ and mm/s²), applied with the first cable step and held. Gravity's direction (`grav_dir`) in degrees from the straight finger's axis (+x) toward the cable side (+y): 90 held horizontally curling downward with it, −90 curling upward against it, 0 hanging straight down. The model is the board's (f32, `fast-trig`, converged solver) with `grav` = {} m/s² and the same `grav_dir`, calibrated with the factors above, which are computed without gravity (the FE's unit loads carry no body load and `calibrate` sets `grav` to 0, so the calibration cannot absorb it); \"without gravity\" is the same model with `grav` = 0 against the same FE. Tip error: model − FE tip position in % of the FE tip's travel from the straight finger's tip ({} l, 0) (no % below {} mm of travel: hanging straight down without cable the tip only stretches); joint 1 error: model − FE, degrees. **Goals: the tip within 2 % of its travel and joint 1 within 1°, at 0 to 2 N**; 3 N is shown.\n", d.rho_b, d.card.rho_g_cm3, d.card.name, gravity::G_M_S2, gravity::G_M_S2, d.n, gravity::MIN_TRAVEL_MM);
     let mut rows = String::new();
     let mut summary = String::new();
-    // the six FE runs on two threads (ccx itself on one each)
+    // the six FE runs on `threads` threads (ccx itself on one each)
     let jobs: Vec<(&str, Params<f64>, f64, &str)> =
         [("no stacks", d.without_stacks()), ("stacks, 0 V", d)].into_iter().flat_map(|(n, p)| ORIENTATIONS.map(|(dir, what)| (n, p, dir, what))).collect();
     let next = std::sync::atomic::AtomicUsize::new(0);
     let done: std::sync::Mutex<Vec<Option<Result<gravity::Case, String>>>> = std::sync::Mutex::new(vec![None; jobs.len()]);
     std::thread::scope(|s| {
-        for _ in 0..2 {
+        for _ in 0..threads.max(1) {
             s.spawn(|| loop {
                 let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
                 let Some((name, p, dir, _)) = jobs.get(i) else { break };
@@ -414,10 +418,12 @@ fn gravity_section(cal: &Calibration<f64>, d3: &Density, coarse: bool, started: 
         }
     });
     let done = done.into_inner().unwrap_or_else(|e| e.into_inner());
+    let mut cases: Vec<(bool, gravity::Case)> = Vec::new();
     for ((name, p, dir, what), c) in jobs.iter().zip(done) {
         let (name, dir, what) = (*name, *dir, *what);
         let th = gravity::stacks_at_0v(p)?;
         let c = c.ok_or("a gravity case did not run")??;
+        cases.push((p.layers > 0, c.clone()));
         {
             let pct = |e: &gravity::PoseError| e.tip_pct.map_or(format!("— ({:.2} mm)", e.tip_mm), |x| format!("{x:.2} % ({:.2} mm)", e.tip_mm));
             for (i, t) in c.tensions.iter().enumerate() {
@@ -439,16 +445,21 @@ fn gravity_section(cal: &Calibration<f64>, d3: &Density, coarse: bool, started: 
                     e0.joint1_deg,
                 );
             }
-            let (g, g3, n) = (c.worst(true, 2.0), c.worst(true, 3.0), c.worst(false, 2.0));
-            let ok = g.tip_pct <= 2.0 && g.joint1_deg.abs() <= 1.0;
+            let up = gravity::GOAL_UP_TO_N;
+            let (g, g3, n) = (c.worst(true, up), c.worst(true, f64::INFINITY), c.worst(false, up));
+            let ok = g.tip_pct <= gravity::GOAL_TIP_PCT && g.joint1_deg.abs() <= gravity::GOAL_JOINT1_DEG;
             let _ = writeln!(
                 summary,
-                "| {name} | {dir} ({what}) | {:.2} | {:.2} % | {:+.2}° | {} | {:.2} % | {:+.2}° | {:.1} % | {:+.2}° | {:.0} s |",
+                "| {name} | {dir} ({what}) | {:.2} | {:.2} % ({:.2} of {:.1} mm) | {:+.2}° | {} | {:.2} % ({:.2} of {:.1} mm) | {:+.2}° | {:.1} % | {:+.2}° | {:.0} s |",
                 th[0],
                 g.tip_pct,
+                g.tip_mm,
+                g.travel_mm,
                 g.joint1_deg,
                 if ok { "yes" } else { "no" },
                 g3.tip_pct,
+                g3.tip_mm,
+                g3.travel_mm,
                 g3.joint1_deg,
                 n.tip_pct,
                 n.joint1_deg,
@@ -456,12 +467,60 @@ fn gravity_section(cal: &Calibration<f64>, d3: &Density, coarse: bool, started: 
             );
         }
     }
+    let last = TENSIONS_N[TENSIONS_N.len() - 1];
     let _ = writeln!(w, "### Summary\n");
-    let _ = writeln!(w, "Worst over 0 to 2 N (the goals), then over 0 to 3 N; the model without gravity over 0 to 2 N.\n");
-    let _ = writeln!(w, "| stacks | gravity's direction (°) | stack (mm) | tip (% travel), 0-2 N | joint 1, 0-2 N | goals met | tip, 0-3 N | joint 1, 0-3 N | without gravity: tip, 0-2 N | without gravity: joint 1 | FE CPU time |");
+    let _ = writeln!(w, "Worst over 0 to {} N (the goals), then over 0 to {last} N; the model without gravity over 0 to {} N. FE CPU time: ccx on one thread, all {} tensions of the orientation in one run.\n", gravity::GOAL_UP_TO_N, gravity::GOAL_UP_TO_N, TENSIONS_N.len());
+    let _ = writeln!(w, "| stacks | gravity's direction (°) | stack (mm) | tip: % of travel (error of travel, mm), 0-{up} N | joint 1, 0-{up} N | goals met | tip, 0-{last} N | joint 1, 0-{last} N | without gravity: tip, 0-{up} N | without gravity: joint 1 | FE CPU time |", up = gravity::GOAL_UP_TO_N);
     let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let _ = write!(w, "{summary}");
-    let _ = writeln!(w, "\nCI's check (`tools/calculix/tests/gravity.rs`, `the_model_under_gravity_meets_the_fe_in_each_orientation`) runs the coarse 3D mesh at 1 N and asserts its own errors (the coarse FE and its own calibration; stated there).\n");
+    let ci: Vec<String> = gravity::CI_CASES.iter().map(|(st, dir)| format!("{} at {dir}°", if *st { "stacks" } else { "no stacks" })).collect();
+    // what bounds it where the goals are not met
+    let up = gravity::GOAL_UP_TO_N;
+    let miss = |st: bool| {
+        cases.iter().filter(|(s, _)| *s == st).any(|(_, c)| {
+            let g = c.worst(true, up);
+            g.tip_pct > gravity::GOAL_TIP_PCT || g.joint1_deg.abs() > gravity::GOAL_JOINT1_DEG
+        })
+    };
+    // the cases that miss a goal, with the tip's error in mm of its travel there
+    let missed = |st: bool| -> String {
+        let m: Vec<String> = cases
+            .iter()
+            .filter(|(s, _)| *s == st)
+            .filter_map(|(_, c)| {
+                let g = c.worst(true, up);
+                (g.tip_pct > gravity::GOAL_TIP_PCT || g.joint1_deg.abs() > gravity::GOAL_JOINT1_DEG).then(|| {
+                    format!("at {}°: tip {:.2} % = {:.2} mm of a {:.1} mm travel, joint 1 {:+.2}°", c.dir_deg, g.tip_pct, g.tip_mm, g.travel_mm, g.joint1_deg)
+                })
+            })
+            .collect();
+        if m.is_empty() {
+            "met in every orientation".into()
+        } else {
+            format!("missed {}", m.join("; "))
+        }
+    };
+    let j1_at_0 = |st: bool, dir: f64, fe: bool| {
+        cases
+            .iter()
+            .find(|(s, c)| *s == st && c.dir_deg == dir)
+            .map_or(f64::NAN, |(_, c)| if fe { c.fe[0].joint_angle[0] } else { c.model[0].joint[0] }.to_degrees())
+    };
+    let growth = |st: bool| {
+        let j: Vec<(f64, f64)> = cases
+            .iter()
+            .filter(|(s, c)| *s == st && c.dir_deg == 90.0)
+            .flat_map(|(_, c)| c.tensions.iter().zip(&c.err).map(|(t, e)| (*t, e.joint1_deg)).collect::<Vec<_>>())
+            .collect();
+        j
+    };
+    let _ = writeln!(w, "\n**Where it stands.** Without stacks the goals are {}. With the stacks they are {}.\n", missed(false), missed(true));
+    if miss(true) {
+        let j1max = cases.iter().map(|(_, c)| c.worst(true, up).joint1_deg.abs()).fold(0.0, f64::max);
+        let g: Vec<String> = growth(true).iter().map(|(t, e)| format!("{e:+.2}° at {t} N")).collect();
+        let _ = writeln!(w, "What bounds the stacked finger: (1) the stacks' finite-strain response, which the model's constant sub-element compliances do not carry (the same cause as the stacked scenes' growth with load above, \"Where 2 % is not reached\"): held horizontally curling down, joint 1's error drifts with the tension ({}); (2) the stacked joint is not the same both ways in the FE: under its own weight alone joint 1 bends {:+.2}° curling down (the stack on the extensor side stretched) and {:+.2}° curling up (it compressed), where the model, linear in the stack, bends {:+.2}° and {:+.2}°; (3) where cable and gravity nearly cancel (curling up against gravity at 0.5 to 1 N), the tip's travel is a few mm, and a few tenths of a mm of error are many % of it (the mm beside each % above). Joint 1's largest error over every case at 0 to {up} N is {j1max:.2}°{}.\n", g.join(", "), j1_at_0(true, 90.0, true), j1_at_0(true, -90.0, true), j1_at_0(true, 90.0, false), j1_at_0(true, -90.0, false), if j1max <= gravity::GOAL_JOINT1_DEG { ": the weight's load on the joints is carried; what is left is the stacked joint's stiffness" } else { "" });
+    }
+    let _ = writeln!(w, "CI's check (`tools/calculix/tests/gravity.rs`, `the_model_under_gravity_meets_the_fe_in_each_orientation`) asserts the goals (tip within {} % of its travel, joint 1 within {}°) at {} N on the coarse 3D mesh calibrated on it, for {}; and that the model without gravity misses the tip by more than four times the goal there.\n", gravity::GOAL_TIP_PCT, gravity::GOAL_JOINT1_DEG, gravity::CI_TENSION_N, ci.join(", "));
     let _ = writeln!(w, "### Per orientation and tension\n");
     let _ = writeln!(w, "| stacks | gravity (°) | P (N) | FE 3D joints (°) | FE tip x, y (mm), θ (°) | FE tip travel (mm) | model joints (°) | tip error (% travel, mm) | joint 1 error (°) | without gravity: tip error | without gravity: joint 1 error (°) |");
     let _ = writeln!(w, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
