@@ -37,6 +37,17 @@ pub const BOARD_MARGIN: f32 = design::BOARD_MARGIN;
 /// (`app::params::board_params`); empty for the paper's finger.
 pub const BOARD_FINGER: &[(&str, f32)] = design::BOARD_FINGER;
 
+/// The board's finger's orientation (issue 53): gravity on, at standard gravity, hanging
+/// straight down (`grav_dir` 0: a finger on a downward-facing gripper); off on the Cortex-M3
+/// image, whose fixed-point model has no gravity. The one switch: false gives the board's
+/// finger without gravity (`grav` 0), as before gravity was modelled.
+pub const BOARD_GRAVITY: bool = !cfg!(m3);
+/// The board's default finger's `grav` (m/s²) and `grav_dir` (degrees from the straight
+/// finger's axis toward the cable side); a design file's `grav` and `grav_dir` override them
+/// (`BOARD_FINGER`).
+pub const BOARD_GRAV_M_S2: f64 = if BOARD_GRAVITY { finger_model::params::G_STANDARD } else { 0.0 };
+pub const BOARD_GRAV_DIR_DEG: f64 = 0.0;
+
 /// The constants above as build.rs wrote them from the design file (`FINGER_DESIGN`,
 /// docs/design.md), or the paper's finger on VHB 4905 without one.
 mod design {
@@ -46,13 +57,20 @@ mod design {
 /// The HV read-back chain, board constants (docs/firmware.md "HV read-back"): each channel's
 /// module output through an HV divider and each stack's return current through a low-side
 /// sense, sampled by the ADCs at [`SENSE_SAMPLES_PER_TICK`] per 1 ms tick and averaged.
-/// The ADC's full-scale code (12 bits).
+/// The ADC's bits, its full-scale code, and its reference (VREF+ = VDDA), V.
+pub const ADC_BITS: u32 = 12;
 pub const ADC_FULL_CODE: f32 = 4095.0;
+pub const ADC_VREF_V: f32 = 3.3;
 /// Voltage monitor: the HV at the ADC's full scale, V (1 GΩ over 301 kΩ into 3.3 V).
 pub const VMON_FULL_SCALE_V: f32 = 10_967.0;
-/// Return-current sense, bipolar (a stack's current flows back as it discharges): the span
-/// of the ADC's codes, µA (-50..+50 µA: 10 kΩ sense, gain 1.65, offset to mid-scale), and the
-/// code of 0 µA.
+/// Return-current sense, bipolar (a stack's current flows back as it discharges), its parts:
+/// the low-side sense resistor, Ω, and its amplifier's gain around mid-scale.
+pub const IMON_SENSE_OHM: f32 = 10_000.0;
+pub const IMON_GAIN: f32 = 3.3;
+/// The span of the ADC's codes, µA: `ADC_VREF_V` / (`IMON_SENSE_OHM` x `IMON_GAIN`) = 100
+/// (-50..+50 µA: ±0.5 V on the resistor, ±1.65 V after the gain, around mid-scale;
+/// host-tests/tests/hv_sampling.rs derives it and the watchdog's codes from the parts),
+/// and the code of 0 µA.
 pub const IMON_SPAN_UA: f32 = 100.0;
 pub const IMON_ZERO_CODE: f32 = 2048.0;
 /// ADC samples of each reading per tick (10 kHz).
@@ -67,6 +85,20 @@ pub const BOARD_STACK_AREA_MM2: f32 = 200.0;
 pub const SENSE_STRAY_PF: f32 = 5.0;
 /// The least stray the parts allow (the lead's length and routing: 5 pF ± 1 pF), pF.
 pub const SENSE_STRAY_MIN_PF: f32 = 4.0;
+
+/// The independent watchdog (board build; `chip::f405::start_watchdog`): the LSI divided by
+/// `IWDG_DIV` (IWDG_PR = 011), `IWDG_RELOAD` + 1 counts: 1.0 s at the LSI's typical 32 kHz,
+/// [`iwdg_timeout_s`] over its 17-47 kHz (DS8626 f_LSI).
+pub const IWDG_PR: u16 = 0b011;
+pub const IWDG_DIV: u32 = 32;
+pub const IWDG_RELOAD: u16 = 999;
+pub const LSI_MIN_HZ: f32 = 17_000.0;
+pub const LSI_MAX_HZ: f32 = 47_000.0;
+
+/// The watchdog's timeout at an LSI of `lsi_hz`, s (0.68 s at 47 kHz, 1.88 s at 17 kHz).
+pub fn iwdg_timeout_s(lsi_hz: f32) -> f32 {
+    (IWDG_RELOAD + 1) as f32 * IWDG_DIV as f32 / lsi_hz
+}
 
 /// Each stack's capacitance at rest, pF: N_L layers in parallel, eps0 eps_r A / z0 (68 pF).
 pub const BOARD_STACK_C0_PF: f32 = BOARD_LAYERS as f32 * 8.854e-3 * BOARD_CARD.eps_r as f32 * BOARD_STACK_AREA_MM2 / BOARD_Z0_MM;

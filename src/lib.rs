@@ -16,9 +16,12 @@
 //! - [`sim`]: a simulated board (records every output; with [`plant`] behind its read-back).
 //! - [`plant`]: the simulated HV plant (modules, divider, stacks, faults, ADC), never in the
 //!   board build.
+//! - [`cut`]: the analog watchdog's cut on the board build's HV outputs (host-tested).
 //! - [`sampling`]: the board's HV read-back sampling arithmetic (DMA halves, means, the
 //!   analog watchdog's codes); host and board build only.
 //! - [`out`], [`num`]: console text and numbers without core's formatting machinery.
+//! - [`flash_ctl`]: the F405 flash controller's sequences over a register trait (host-tested;
+//!   the board build's settings flash).
 //! - [`settings`], [`flash_ram`]: the stored settings' record and store, and the emulator's
 //!   RAM flash (feature `settings`).
 #![no_std]
@@ -31,6 +34,9 @@ pub mod board;
 pub mod chip;
 pub mod console;
 pub mod control;
+pub mod cut;
+#[cfg(any(feature = "hw", not(target_os = "none")))]
+pub mod flash_ctl;
 #[cfg(feature = "settings")]
 pub mod flash_ram;
 pub mod num;

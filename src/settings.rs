@@ -20,7 +20,7 @@
 
 use crc::{Crc, NoTable, CRC_16_IBM_3740, CRC_32_ISO_HDLC};
 use embassy_futures::block_on;
-use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
+use embedded_storage_async::nor_flash::{ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash};
 use heapless::Vec;
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
@@ -129,6 +129,9 @@ pub enum StoreError {
     Corrupted,
     /// Anything else the crate reports (full, buffer, a logic error).
     Other,
+    /// The pages need a repair (an erase or a write), which a read that may not write
+    /// ([`ConfigStore::peek`]) refused.
+    Repair,
 }
 
 impl StoreError {
@@ -137,6 +140,7 @@ impl StoreError {
             StoreError::Flash => "flash",
             StoreError::Corrupted => "corrupted",
             StoreError::Other => "store",
+            StoreError::Repair => "repair",
         }
     }
 }
@@ -145,6 +149,10 @@ impl StoreError {
 pub trait ConfigStore {
     /// The newest record's bytes into `buf`: their length, or None when nothing is stored.
     fn read(&mut self, buf: &mut [u8; RECORD_MAX]) -> Result<Option<usize>, StoreError>;
+    /// As `read`, but writing nothing: where `read` would repair, [`StoreError::Repair`]
+    /// (an erase stalls every fetch from flash, the trip handler's included: `config` while
+    /// armed reads this way).
+    fn peek(&mut self, buf: &mut [u8; RECORD_MAX]) -> Result<Option<usize>, StoreError>;
     /// Store `record` as the newest.
     fn write(&mut self, record: &[u8]) -> Result<(), StoreError>;
     /// Erase every page: nothing stored.
@@ -164,16 +172,41 @@ pub struct Counted<S> {
     pub erases: u32,
     pub writes: u32,
     pub bytes_written: u32,
+    /// Erases and writes refused ([`ConfigStore::peek`]).
+    refuse: bool,
+}
+
+impl<S> Counted<S> {
+    /// The flash itself.
+    pub fn flash_mut(&mut self) -> &mut S {
+        &mut self.flash
+    }
+}
+
+/// The flash's error, or an erase or write refused while the store may not write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CountedError<E> {
+    Flash(E),
+    Refused,
+}
+
+impl<E: NorFlashError> NorFlashError for CountedError<E> {
+    fn kind(&self) -> NorFlashErrorKind {
+        match self {
+            CountedError::Flash(e) => e.kind(),
+            CountedError::Refused => NorFlashErrorKind::Other,
+        }
+    }
 }
 
 impl<S: ErrorType> ErrorType for Counted<S> {
-    type Error = S::Error;
+    type Error = CountedError<S::Error>;
 }
 
 impl<S: ReadNorFlash> ReadNorFlash for Counted<S> {
     const READ_SIZE: usize = S::READ_SIZE;
     async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
-        self.flash.read(offset, bytes).await
+        self.flash.read(offset, bytes).await.map_err(CountedError::Flash)
     }
     fn capacity(&self) -> usize {
         self.flash.capacity()
@@ -184,13 +217,19 @@ impl<S: NorFlash> NorFlash for Counted<S> {
     const WRITE_SIZE: usize = S::WRITE_SIZE;
     const ERASE_SIZE: usize = S::ERASE_SIZE;
     async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+        if self.refuse {
+            return Err(CountedError::Refused);
+        }
         self.erases += (to.saturating_sub(from) as usize / S::ERASE_SIZE) as u32;
-        self.flash.erase(from, to).await
+        self.flash.erase(from, to).await.map_err(CountedError::Flash)
     }
     async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+        if self.refuse {
+            return Err(CountedError::Refused);
+        }
         self.writes += 1;
         self.bytes_written += bytes.len() as u32;
-        self.flash.write(offset, bytes).await
+        self.flash.write(offset, bytes).await.map_err(CountedError::Flash)
     }
 }
 
@@ -208,7 +247,7 @@ impl<S: NorFlash> FlashStore<S> {
             Ok(c) => c,
             Err(_) => panic!("settings store: at least two whole erase pages"),
         };
-        let flash = Counted { flash, erases: 0, writes: 0, bytes_written: 0 };
+        let flash = Counted { flash, erases: 0, writes: 0, bytes_written: 0, refuse: false };
         FlashStore { map: MapStorage::new(flash, config, Cache::new_uncached()), buf: [0; BUF] }
     }
 
@@ -223,8 +262,9 @@ impl<S: NorFlash> FlashStore<S> {
     }
 }
 
-fn store_err<E>(e: sequential_storage::Error<E>) -> StoreError {
+fn store_err<E>(e: sequential_storage::Error<CountedError<E>>) -> StoreError {
     match e {
+        sequential_storage::Error::Storage { value: CountedError::Refused, .. } => StoreError::Repair,
         sequential_storage::Error::Storage { .. } => StoreError::Flash,
         sequential_storage::Error::Corrupted { .. } => StoreError::Corrupted,
         _ => StoreError::Other,
@@ -268,6 +308,13 @@ impl<S: NorFlash> ConfigStore for FlashStore<S> {
             return Err(StoreError::Corrupted);
         }
         Ok(found)
+    }
+
+    fn peek(&mut self, out: &mut [u8; RECORD_MAX]) -> Result<Option<usize>, StoreError> {
+        self.map.flash().refuse = true;
+        let r = self.read(out);
+        self.map.flash().refuse = false;
+        r
     }
 
     fn write(&mut self, record: &[u8]) -> Result<(), StoreError> {

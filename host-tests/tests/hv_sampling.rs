@@ -3,7 +3,10 @@
 //! buffer's means at any phase of the halves against the tick, the halves' bookkeeping and the
 //! stale cut-off, the analog watchdog's threshold codes against the plant's and the tick's
 //! bounds, and the trip's channel.
-use finger_fw::board::{ADC_FULL_CODE, HV_CHANNELS, HV_LIMIT_V, IMON_SPAN_UA, IMON_ZERO_CODE, SENSE_SAMPLES_PER_TICK, TRIP_CURRENT_UA};
+use finger_fw::board::{
+    ADC_BITS, ADC_FULL_CODE, ADC_VREF_V, HV_CHANNELS, HV_LIMIT_V, IMON_GAIN, IMON_SENSE_OHM, IMON_SPAN_UA, IMON_ZERO_CODE, SENSE_SAMPLES_PER_TICK,
+    TRIP_CURRENT_UA,
+};
 use finger_fw::control::sense::{microamps_of_code, volts_of_code, MonitorCal};
 use finger_fw::control::watch::{OVER_FRAC, OVER_V};
 use finger_fw::sampling::{awd_codes, split, trip_channel, window_means, writing_at, HalfFlags, Halves, BUF_WORDS, HALF_WORDS, STALE_LIMIT};
@@ -152,6 +155,54 @@ fn the_watchdog_codes_trip_where_the_plant_and_the_tick_do() {
     // a healthy charge at the module's own slew (24 µA at the 2/3 limit) never trips
     let at_slew = (IMON_ZERO_CODE + 24.0 / IMON_SPAN_UA * ADC_FULL_CODE) as u16;
     assert!(at_slew <= c.current_high && (4096 - at_slew) >= c.current_low);
+}
+
+/// The number just before `unit` (or just after `word`) in `text`.
+fn number_near(text: &str, at: usize, forward: bool) -> f64 {
+    let digit = |c: char| c.is_ascii_digit() || c == '.' || c == ',';
+    let s: String = if forward {
+        text[at..].chars().skip_while(|c| *c == ' ').take_while(|&c| digit(c)).collect()
+    } else {
+        let rev: String = text[..at].chars().rev().skip_while(|c| *c == ' ').take_while(|&c| digit(c)).collect();
+        rev.chars().rev().collect()
+    };
+    s.replace(',', "").parse().unwrap_or_else(|_| panic!("no number near {:?}", &text[at.saturating_sub(20)..(at + 20).min(text.len())]))
+}
+
+/// The return-current chain as docs/firmware.md documents its parts (the sense resistor and
+/// its gain, in the hardware table) with the ADC's reference and bits: the span they give, and
+/// the watchdog's codes from it, are the board's constants and the codes written to ADC1; a
+/// charge at the module's own slew stays inside them; the docs state the codes the code
+/// computes. (A board built to a gain of 1.65 with a 100 µA span read currents 2x high and
+/// tripped at a real 15 µA.)
+#[test]
+fn the_current_chain_codes_follow_from_the_documented_parts() {
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/firmware.md")).unwrap();
+    let row = doc.lines().find(|l| l.starts_with("| return current")).expect("docs/firmware.md: the return current's row");
+    let r_ohm = number_near(row, row.find(" kΩ").expect("the sense resistor, kΩ"), false) * 1e3;
+    let gain = number_near(row, row.find("gain ").expect("the gain") + 5, true);
+    assert_eq!((r_ohm as f32, gain as f32), (IMON_SENSE_OHM, IMON_GAIN), "the documented parts are the board's");
+    let (vref, bits) = (ADC_VREF_V as f64, ADC_BITS);
+    let full = ((1u32 << bits) - 1) as f64;
+    let zero = (1u32 << (bits - 1)) as f64;
+    assert_eq!((full as f32, zero as f32), (ADC_FULL_CODE, IMON_ZERO_CODE));
+    // the reference's span at the ADC is vref / (R x gain) of current
+    let span_ua = vref / (r_ohm * gain) * 1e6;
+    assert!((span_ua - IMON_SPAN_UA as f64).abs() < 1e-3, "the parts give a {span_ua} µA span; IMON_SPAN_UA is {IMON_SPAN_UA}");
+    let code_of = |ua: f64| zero + ua * 1e-6 * r_ohm * gain / vref * full;
+    let trip = TRIP_CURRENT_UA as f64;
+    // HTR the highest code below the trip, LTR the lowest above its mirror
+    let (htr, ltr) = ((code_of(trip).ceil() - 1.0) as u16, (code_of(-trip).floor() + 1.0) as u16);
+    let c = awd_codes();
+    assert_eq!((c.current_high, c.current_low), (htr, ltr), "ADC1's HTR, LTR from the parts");
+    // the charging current the docs allow on a fast slew (C at the 2/3 limit x 150 kV/s) flags neither way
+    let slew_ua = 24.0;
+    assert!(code_of(slew_ua) < htr as f64 && code_of(-slew_ua) > ltr as f64, "{} .. {}", code_of(-slew_ua), code_of(slew_ua));
+    // the docs say what the code computes
+    let flat = doc.split_whitespace().collect::<Vec<_>>().join(" ");
+    for claim in [format!("ADC_HTR {}:", c.current_high), format!("ADC_LTR {}:", c.current_low), format!("60 V, ADC_HTR {})", c.volts_high)] {
+        assert!(flat.contains(&claim), "docs/firmware.md should say {claim:?}");
+    }
 }
 
 /// The trip's channel: the newest sample out of the window in the last two groups, at any

@@ -29,6 +29,7 @@ const SCRIPTS: &[&[&str]] = &[
     &["param e_b 15", "param nu_b 0.4", "param slew 4000"],
     &["param layers 0"],
     &["param t_min 1.2", "param e 4.4", "param b 9", "cal none"],
+    &["param grav_dir 90", "param grav 3.5", "param rho_b 1.3"],
 ];
 
 /// A deterministic generator for the random sequences (SplitMix64).
@@ -495,4 +496,58 @@ fn factory_defaults_are_the_compiled_ones() {
     assert_eq!(a.finger().calibration(), default_finger().calibration());
     assert_eq!(*a.fw_params(), FwParams::default());
     assert!(settings_of(&record_of(a.finger(), a.fw_params(), 1)).is_ok());
+}
+
+/// `config` while armed never writes the flash: an erase stalls every fetch from flash on the
+/// board, the analog watchdog's handler included. A store the map must repair (page marks
+/// torn as a failed flash operation leaves them, in each page): armed, `config` answers
+/// `err armed` without a byte moved; disarmed, it repairs and answers `ok`.
+#[test]
+fn config_while_armed_never_repairs_the_store() {
+    let flash = Flash::new(PAGES);
+    // fill the pages so the map has closed and opened pages
+    for s in SCRIPTS.iter().skip(1).chain(SCRIPTS.iter().skip(1)) {
+        assert!(save_with_cut(&flash, s, None).starts_with("ok saved="));
+    }
+    let good = flash.bytes();
+    let mut refused = 0;
+    for p in 0..PAGES {
+        for edit in 0..6 {
+            let mut b = good.clone();
+            let pg = &mut b[p * PAGE..(p + 1) * PAGE];
+            match edit {
+                0 => pg[..8].fill(0),
+                1 => pg[..8].fill(0xFF),
+                2 => pg[PAGE - 8..].fill(0),
+                3 => pg[PAGE - 8..].fill(0xFF),
+                4 => pg[..PAGE / 2].fill(0xFF),
+                _ => pg[PAGE / 2..].fill(0xFF),
+            }
+            // whether a read repairs this store (on a copy)
+            let probe = flash.fork();
+            probe.set_bytes(&b);
+            let st = store_on(&probe);
+            let _ = st.read(&mut [0u8; RECORD_MAX]);
+            let repairs = st.flash().erases + st.flash().writes > 0;
+
+            let f = flash.fork();
+            let mut a = boot(&f);
+            run(&mut a, &["arm"]);
+            f.set_bytes(&b);
+            let moved = f.bytes_moved();
+            let r = cmd(&mut a, "config");
+            assert_eq!(f.bytes_moved(), moved, "page {p} edit {edit}: `config` while armed moved bytes ({r})");
+            if repairs {
+                assert!(r.starts_with("err armed: config: the store needs a repair"), "page {p} edit {edit}: {r}");
+                refused += 1;
+            } else {
+                assert!(!r.starts_with("err armed"), "page {p} edit {edit}: {r}");
+            }
+            run(&mut a, &["stop"]);
+            let r = cmd(&mut a, "config");
+            assert!(r.starts_with("ok store="), "page {p} edit {edit}, disarmed: {r}");
+            assert_eq!(f.bytes_moved() > moved, repairs, "page {p} edit {edit}: disarmed, the repair");
+        }
+    }
+    assert!(refused > 0, "no edit needed a repair");
 }

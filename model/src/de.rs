@@ -15,7 +15,7 @@
 use crate::calibration::Calibration;
 use crate::error::Error;
 use crate::mat3::{self, Mat3};
-use crate::material::{self, StackLaw, LIMIT_RATIO};
+use crate::material::{self, Hold, StackLaw, LIMIT_RATIO};
 use crate::params::Params;
 use crate::real::Real;
 
@@ -87,6 +87,22 @@ fn ratio<R: Real>(l: &StackLaw<R>, joint: usize, volts: R) -> Result<R, Error> {
 /// Whole-stack thickness t_k = N_L z(V_k), mm, after checking the voltage against the ceiling.
 pub fn stack_thickness<R: Real>(p: &Params<R>, joint: usize, volts: R) -> Result<R, Error> {
     Stack::new(p).thickness(joint, volts)
+}
+
+/// The stack's thickness t_k = N_L z(V_k) under `hold`, mm, after checking the voltage against
+/// the ceiling (the free film's, whatever the hold): `Hold::FreeFilm` is `stack_thickness`;
+/// `Hold::Bonded` is the stack as bonded to the hinge (docs/materials.md "Free film and bonded
+/// stack"), the law for the stiffness a voltage buys. Not yet what the solves use: they take
+/// the free film's thickness at the original width.
+pub fn stack_thickness_held<R: Real>(p: &Params<R>, joint: usize, volts: R, hold: Hold) -> Result<R, Error> {
+    let st = Stack::new(p);
+    st.check(joint, volts)?;
+    let l = st.law.as_ref().map_err(|e| *e)?;
+    let s = material::held_equilibrium_ratio(l, volts, hold).map_err(|e| match e {
+        Error::PullIn { volts, pull_in } => Error::VoltageCeiling { joint, volts, ceiling: pull_in },
+        e => e,
+    })?;
+    Ok(st.t0 * s)
 }
 
 /// The voltage that thins the stack to `thickness_mm` once relaxed, V. Refuses a thickness at or
@@ -276,6 +292,25 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// The held thickness: the free film's is `stack_thickness` exactly; the bonded stack is
+    /// thicker at every voltage in (0, ceiling), the same at 0 V; a voltage past the ceiling is
+    /// refused for both holds (the ceiling stays the free film's).
+    #[test]
+    fn stack_thickness_held_is_the_free_film_or_the_thicker_bonded_stack_under_one_ceiling() {
+        let p = Params::<f64>::vhb4905();
+        let top = voltage_ceiling(&p);
+        for i in 0..=10 {
+            let v = 0.999 * top * f64::from(i) / 10.0;
+            let free = stack_thickness_held(&p, 1, v, Hold::FreeFilm).unwrap();
+            assert_eq!(free.to_bits(), stack_thickness(&p, 1, v).unwrap().to_bits());
+            let bonded = stack_thickness_held(&p, 1, v, Hold::Bonded).unwrap();
+            assert!(if i == 0 { bonded == free } else { bonded > free }, "{v}: {bonded} vs {free}");
+        }
+        for h in [Hold::FreeFilm, Hold::Bonded] {
+            assert!(matches!(stack_thickness_held(&p, 1, top * 1.001, h), Err(Error::VoltageCeiling { .. })), "{h:?}");
         }
     }
 

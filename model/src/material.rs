@@ -386,6 +386,68 @@ pub fn equilibrium_pull_in_voltage<R: Real>(law: &StackLaw<R>) -> R {
     law.volts_of(Balance::relaxed(law).stress(R::from_f64(EQUILIBRIUM_PULL_IN_RATIO)))
 }
 
+/// How a layer is held in its plane while a voltage thins it (docs/materials.md "Free film and
+/// bonded stack: one law, two holds"): one incompressible neo-Hookean layer, its in-plane
+/// stretches along the hinge `λ1 = s^(-(1-c)/2)` and across it `λ2 = s^(-(1+c)/2)` (λ1 λ2 s = 1),
+/// the width's edges free (σ2 = 0). Relaxed, the balance is `G_eq (s^(1-c) - s^4) = beta`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Hold {
+    /// c = 0: free and equal-biaxial, `G_eq (s - s^4) = beta`. The hold ceiling's and the
+    /// thinning guard's law: of the two it thins the most (the conservative side).
+    FreeFilm,
+    /// c = 1: bonded to the hinge's face, held along the hinge, free across its width (pure
+    /// shear), `G_eq (1 - s^4) = beta`. The law of the stiffness a voltage buys.
+    Bonded,
+}
+
+impl Hold {
+    /// The share c of the layer's in-plane spread the hold takes away along the hinge.
+    pub fn c(self) -> f64 {
+        match self {
+            Hold::FreeFilm => 0.0,
+            Hold::Bonded => 1.0,
+        }
+    }
+}
+
+/// The relaxed film stress under `hold` at thickness stretch s, MPa: `G_eq (s^(1-c) - s^4)`.
+pub fn held_stress<R: Real>(law: &StackLaw<R>, s: R, hold: Hold) -> R {
+    match hold {
+        Hold::FreeFilm => Balance::relaxed(law).stress(s),
+        Hold::Bonded => {
+            let s2 = s * s;
+            law.g_eq * (R::one() - s2 * s2)
+        }
+    }
+}
+
+/// The thickness stretch once relaxed at `volts` under `hold`. `FreeFilm` is
+/// [`equilibrium_ratio`] itself (the same code: the ceiling and the guard are unchanged).
+/// `Bonded` has no pull-in before s = 0: `s = (1 - beta / G_eq)^(1/4)`, refused (as pull-in, at
+/// the voltage of `beta = G_eq`) where the layer would thin to nothing.
+pub fn held_equilibrium_ratio<R: Real>(law: &StackLaw<R>, volts: R, hold: Hold) -> Result<R, Error> {
+    match hold {
+        Hold::FreeFilm => equilibrium_ratio(law, volts),
+        Hold::Bonded => {
+            check_volts(volts)?;
+            let x = R::one() - law.beta(volts) / law.g_eq;
+            if !(x > R::zero()) {
+                return Err(Error::PullIn { volts: volts.to_f64(), pull_in: law.volts_of(law.g_eq).to_f64() });
+            }
+            Ok(x.sqrt().sqrt())
+        }
+    }
+}
+
+/// The layer's width stretch under `hold` at thickness stretch s: `λ2 = s^(-(1+c)/2)`
+/// (volume kept: the section's area w t grows by 1/λ1 = s^((1-c)/2), 1 when bonded).
+pub fn held_width_stretch<R: Real>(s: R, hold: Hold) -> R {
+    match hold {
+        Hold::FreeFilm => R::one() / s.sqrt(),
+        Hold::Bonded => R::one() / s,
+    }
+}
+
 /// `Balance::pull_in` relaxed, where P = Q: s_pi = 4^(-1/3) (a constant: no cube root on the
 /// equilibrium path).
 const EQUILIBRIUM_PULL_IN_RATIO: f64 = 0.629_960_524_947_436_6;
@@ -584,6 +646,45 @@ mod tests {
             let v = |s: f64| equilibrium_voltage(&law, s).unwrap();
             assert!(v(0.63) < v_pi && v(0.64) < v_pi);
         }
+    }
+
+    /// One law, two holds: the free film is `equilibrium_ratio` bit for bit (the ceiling and
+    /// the guard's law unchanged); the bonded layer (pure shear) balances `G (1 - s^4) = beta`,
+    /// thins less than the free film at every voltage up to the ceiling (VHB at its 5.4 kV
+    /// ceiling: 0.891 against 0.818, the figures of issue 55), and keeps its section's area.
+    #[test]
+    fn the_bonded_layer_is_the_same_law_held_along_the_hinge_and_thins_less() {
+        for card in CARDS {
+            let law = StackLaw::<f64>::new(card, 0.5, 0.9).unwrap();
+            let top = hold_ceiling(&law, law.margin);
+            for i in 1..=20 {
+                let v = top * f64::from(i) / 20.0;
+                let free = held_equilibrium_ratio(&law, v, Hold::FreeFilm).unwrap();
+                assert_eq!(free.to_bits(), equilibrium_ratio(&law, v).unwrap().to_bits());
+                let bonded = held_equilibrium_ratio(&law, v, Hold::Bonded).unwrap();
+                assert!(bonded > free && bonded < 1.0, "{} at {v}: bonded {bonded}, free {free}", card.name);
+                for (h, s) in [(Hold::FreeFilm, free), (Hold::Bonded, bonded)] {
+                    // the balance G (s^(1-c) - s^4) = beta, with c from the hold
+                    let beta = law.eps * v * v / (law.z0 * law.z0);
+                    let c = h.c();
+                    assert!((law.g_eq * (s.powf(1.0 - c) - s.powi(4)) - beta).abs() < 1e-12 * beta.max(law.g_eq), "{h:?}");
+                    assert!((held_stress(&law, s, h) - beta).abs() < 1e-12 * beta.max(law.g_eq), "{h:?}");
+                }
+                // volume: the bonded section's area t w is kept, the free film's grows by s^-1/2
+                assert!((bonded * held_width_stretch(bonded, Hold::Bonded) - 1.0).abs() < 1e-15);
+                assert!((free * held_width_stretch(free, Hold::FreeFilm) - free.sqrt()).abs() < 1e-15);
+            }
+        }
+        let law = vhb::<f64>();
+        let top = hold_ceiling(&law, law.margin);
+        let (free, bonded) = (equilibrium_ratio(&law, top).unwrap(), held_equilibrium_ratio(&law, top, Hold::Bonded).unwrap());
+        assert!((free - 0.818).abs() < 1e-3 && (bonded - 0.891).abs() < 1e-3, "free {free}, bonded {bonded}");
+        // the bonded layer thins to nothing only at beta = G: refused there, with a typed error
+        let v_zero = law.z0 * (law.g_eq / law.eps).sqrt();
+        assert!(matches!(held_equilibrium_ratio(&law, v_zero * (1.0 + 1e-9), Hold::Bonded), Err(Error::PullIn { .. })));
+        assert!(held_equilibrium_ratio(&law, v_zero * (1.0 - 1e-6), Hold::Bonded).unwrap() < 0.05);
+        assert!(matches!(held_equilibrium_ratio(&law, -1.0, Hold::Bonded), Err(Error::Input { .. })));
+        assert!(matches!(held_equilibrium_ratio(&law, f64::NAN, Hold::Bonded), Err(Error::NonFinite { .. })));
     }
 
     #[test]

@@ -124,6 +124,8 @@ impl Commands {
     }
 
     /// `config`: the stored values that differ from the compiled defaults, one line each
+    /// (armed, or the HV still on: read without a repair, refused `err armed` if one is
+    /// needed)
     /// (`stored <name>=<value> default=<value>`), then `ok store=<none|empty|saved|unreadable>
     /// saves=<n> boot=<none|empty|loaded|rejected> [reason=<why>] fault=<config-rejected|none>
     /// format=<v> values=<n> differ=<n> preset=<default|paper>`.
@@ -132,7 +134,13 @@ impl Commands {
         no_args(args, "config")?;
         let nl = self.nl;
         let mut buf = [0u8; RECORD_MAX];
-        let read = self.cfg.store.as_mut().map(|s| s.read(&mut buf));
+        // armed (or the HV still on), a read that may not repair: an erase stalls every fetch
+        // from flash, the analog watchdog's handler included
+        let armed = self.require_disarmed("config").is_err();
+        let read = self.cfg.store.as_mut().map(|s| if armed { s.peek(&mut buf) } else { s.read(&mut buf) });
+        if let Some(Err(crate::settings::StoreError::Repair)) = read {
+            return Err(err!(Armed; "config: the store needs a repair (a flash erase, which stalls the chip); disarm first"));
+        }
         let (state, rec) = match read {
             None => ("none", None),
             Some(Ok(None)) => ("empty", None),

@@ -14,8 +14,6 @@
 use crate::Board;
 use core::convert::Infallible;
 use embedded_hal::digital::{ErrorType, OutputPin};
-#[cfg(feature = "hw")]
-use embedded_hal::pwm::SetDutyCycle;
 use stm32f4xx_hal::{
     gpio::{Output, PinState, PB12},
     pac,
@@ -30,25 +28,17 @@ use stm32f4xx_hal::{
 pub type HvPwm = ErasedChannel<pac::TIM4>;
 
 /// The board build's HV control PWM: a TIM4 channel held at duty 0 while the analog
-/// watchdog's cut stands (`hv_adc::cut`), whatever the core writes before it has seen the trip.
+/// watchdog's cut stands (`crate::cut`), whatever the core writes before it has seen the trip.
 #[cfg(feature = "hw")]
-pub struct HvPwm(ErasedChannel<pac::TIM4>);
+pub type HvPwm = crate::cut::CutPwm<ErasedChannel<pac::TIM4>>;
 
+/// The HV enable as the core drives it: the pin, and on the board build the pin under the
+/// watchdog's cut (it does not rise until the tick has taken the trip).
+#[cfg(not(feature = "hw"))]
+pub type Enable = EnablePin;
 #[cfg(feature = "hw")]
-impl embedded_hal::pwm::ErrorType for HvPwm {
-    type Error = Infallible;
-}
+pub type Enable = crate::cut::CutEnable<EnablePin>;
 
-#[cfg(feature = "hw")]
-impl SetDutyCycle for HvPwm {
-    fn max_duty_cycle(&self) -> u16 {
-        self.0.max_duty_cycle()
-    }
-    fn set_duty_cycle(&mut self, duty: u16) -> Result<(), Infallible> {
-        let d = if super::hv_adc::cut() { 0 } else { duty };
-        self.0.set_duty_cycle(d)
-    }
-}
 /// The console USART's halves.
 pub type ConsoleRx = Rx<pac::USART1>;
 pub type ConsoleTx = Tx<pac::USART1>;
@@ -67,17 +57,9 @@ impl OutputPin for EnablePin {
     fn set_low(&mut self) -> Result<(), Infallible> {
         self.pin.set_low();
         self.high = false;
-        // the core dropped the enable itself: a watchdog's cut is acknowledged
-        #[cfg(feature = "hw")]
-        super::hv_adc::acknowledge_cut();
         Ok(())
     }
     fn set_high(&mut self) -> Result<(), Infallible> {
-        // the board build: never over a watchdog's cut the core has not acknowledged
-        #[cfg(feature = "hw")]
-        if super::hv_adc::cut() {
-            return Ok(());
-        }
         self.pin.set_high();
         self.high = true;
         Ok(())
@@ -87,7 +69,7 @@ impl OutputPin for EnablePin {
 pub struct F405Board {
     servo: PwmChannel<pac::TIM3, 0>,
     hv: [HvPwm; 3],
-    enable: EnablePin,
+    enable: Enable,
     /// The emulator image's HV plant behind the read-back (QEMU's ADC is a sawtooth).
     #[cfg(all(feature = "qemu", not(m3)))]
     plant: crate::plant::Plant,
@@ -100,7 +82,7 @@ pub struct F405Board {
 impl Board for F405Board {
     type Servo = PwmChannel<pac::TIM3, 0>;
     type Hv = HvPwm;
-    type Enable = EnablePin;
+    type Enable = Enable;
     fn servo(&mut self) -> &mut Self::Servo {
         &mut self.servo
     }
@@ -145,6 +127,39 @@ impl Board for F405Board {
     }
 }
 
+/// PB6-8 (the HV control PWMs) and PB12 (the HV enable) low as outputs: GPIOB BSRR, then
+/// MODER, the stores of `__pre_init` (image/fault.rs).
+fn hv_pins_low() {
+    // SAFETY: stores to GPIOB that only drive the HV pins low (the port's owner is this
+    // bring-up, which configures these pins next).
+    unsafe {
+        let gpiob = &*pac::GPIOB::ptr();
+        gpiob.bsrr().write(|w| w.bits(0x11C0_0000));
+        gpiob.moder().modify(|r, w| w.bits((r.bits() & !0x0303_F000) | 0x0101_5000));
+    }
+}
+
+/// The IWDG started (board build): LSI / [`IWDG_DIV`](crate::board::IWDG_DIV),
+/// [`IWDG_RELOAD`](crate::board::IWDG_RELOAD) + 1 counts (docs/firmware.md "Safety": 0.68 s
+/// at the LSI's fastest). Init calls it after the stored settings are read (and repaired:
+/// erases, with no tick to feed it), before the control tick starts.
+#[cfg(feature = "hw")]
+pub fn start_watchdog() {
+    use crate::board::{IWDG_PR, IWDG_RELOAD};
+    // SAFETY: the IWDG's key, prescaler and reload registers (RM0090 §21.3): the access key,
+    // the values, their update waited for, then the start key. The board's
+    // `IndependentWatchdog` only feeds.
+    unsafe {
+        let iwdg = &*pac::IWDG::ptr();
+        iwdg.kr().write(|w| w.bits(0x5555));
+        iwdg.pr().write(|w| w.bits(IWDG_PR));
+        iwdg.rlr().write(|w| w.bits(IWDG_RELOAD));
+        while iwdg.sr().read().bits() & 0b11 != 0 {}
+        iwdg.kr().write(|w| w.bits(0xAAAA));
+        iwdg.kr().write(|w| w.bits(0xCCCC));
+    }
+}
+
 /// The chip brought up: the board, the console's halves (receive interrupt on), whether
 /// this is a real chip, and the flash controller (the settings store's).
 pub struct Chip {
@@ -155,9 +170,9 @@ pub struct Chip {
     pub flash: pac::FLASH,
 }
 
-/// Clocks (board: 168 MHz from the 8 MHz crystal's PLL; QEMU: the HSI), the PWMs at duty 0
-/// and running, the HV enable low, USART1 at 115200 with its receive interrupt, and on the
-/// board the IWDG (1 s) started.
+/// Clocks (board: 168 MHz from the 8 MHz crystal's PLL, the clock security system on; QEMU:
+/// the HSI), the PWMs at duty 0 and running, the HV enable low, USART1 at 115200 with its
+/// receive interrupt; on the board the IWDG taken (not started: [`start_watchdog`]).
 pub fn bring_up(dp: pac::Peripherals) -> Chip {
     // before the clocks are touched: a real chip answers at RCC, QEMU does not model it
     let real_chip = dp.RCC.cr().read().hsirdy().bit_is_set();
@@ -165,9 +180,23 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
     let mut rcc = dp.RCC.freeze(Config::hse(8.MHz()).sysclk(168.MHz()));
     #[cfg(feature = "qemu")]
     let mut rcc = dp.RCC.freeze(Config::hsi());
+    // the clock security system: a crystal that stops raises the NMI, whose handler drives
+    // the HV pins low (image/fault.rs); the IWDG then resets the board
+    #[cfg(feature = "hw")]
+    rcc.cr().modify(|_, w| w.csson().set_bit());
+    // with a probe's log: the IWDG stops while the core is halted, and the debug port stays
+    // clocked in WFI (idle), which RTT needs
+    #[cfg(all(feature = "hw", feature = "log"))]
+    {
+        dp.DBGMCU.cr().modify(|_, w| w.dbg_sleep().set_bit());
+        dp.DBGMCU.apb1_fz().modify(|_, w| w.dbg_iwdg_stop().set_bit());
+    }
 
     let gpioa = dp.GPIOA.split(&mut rcc);
     let gpiob = dp.GPIOB.split(&mut rcc);
+    // the split resets GPIOB (its pins inputs, floating): the HV pins low again at once, as
+    // `__pre_init` left them, until their set-up below
+    hv_pins_low();
     let enable = EnablePin { pin: gpiob.pb12.into_push_pull_output_in_state(PinState::Low), high: false };
 
     let (_, (s1, ..)) = dp.TIM3.pwm_hz(50.Hz(), &mut rcc);
@@ -181,18 +210,17 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
         ch.enable();
     }
     #[cfg(feature = "hw")]
-    let hv = hv.map(HvPwm);
+    let hv = hv.map(|ch| HvPwm::new(ch, &super::hv_adc::TRIP));
+    #[cfg(feature = "hw")]
+    let enable = Enable::new(enable, &super::hv_adc::TRIP);
 
     let serial: stm32f4xx_hal::serial::Serial<pac::USART1, u8> = dp.USART1.serial((gpioa.pa9, gpioa.pa10), 115_200.bps(), &mut rcc).unwrap();
     let (tx, mut rx) = serial.split();
     rx.listen();
 
+    // fed from here on; started by init ([`start_watchdog`])
     #[cfg(feature = "hw")]
-    let iwdg = {
-        let mut w = stm32f4xx_hal::watchdog::IndependentWatchdog::new(dp.IWDG);
-        w.start(1000.millis());
-        w
-    };
+    let iwdg = stm32f4xx_hal::watchdog::IndependentWatchdog::new(dp.IWDG);
     // the HV read-back: its pins analog, then the chain started (board build)
     #[cfg(feature = "hw")]
     let adc = {

@@ -1,11 +1,11 @@
 //! The settings store's flash on each image (feature `settings`; docs/firmware.md "Settings").
 //!
 //! - Board (`hw`): flash sectors 1-3 of the F405 (three 16 KiB erase sectors that
-//!   memory.x leaves out of the program), through the HAL's flash driver (stm32f4xx-hal's
-//!   `UnlockedFlash`, its `embedded-storage` NorFlash). The HAL's NorFlash erases in 128 KiB
-//!   units (its largest sector); [`SectorFlash`] offers the three 16 KiB sectors as pages and
-//!   erases one at a time (an erase stalls the CPU, the control tick included, for at most the
-//!   datasheet's 0.8 s a sector: inside the 1 s watchdog, fed by the tick between sectors).
+//!   memory.x leaves out of the program) as the store's pages, erased one at a time
+//!   (`crate::flash_ctl::SectorFlash`: the controller's sequences, host-tested; here only
+//!   FLASH's registers and the loads and stores). An erase stalls the CPU, the control tick
+//!   included, for at most 0.5 s a sector at x32: inside the watchdog's shortest timeout,
+//!   fed by the tick between sectors (docs/firmware.md "Settings").
 //! - QEMU (`qemu`): QEMU does not model the flash controller, so the store is RAM
 //!   ([`crate::flash_ram::RamFlash`]) at a fixed address that no ELF segment covers:
 //!   QEMU's `system_reset` rewrites only the ELF's segments (and zero-fills their .bss
@@ -22,7 +22,7 @@ pub use crate::flash_ram::{PAGE, PAGES};
 #[cfg(feature = "qemu")]
 pub type StoreFlash = crate::flash_ram::RamFlash<PAGE>;
 #[cfg(feature = "hw")]
-pub type StoreFlash = SectorFlash;
+pub type StoreFlash = crate::flash_ctl::SectorFlash<F405Flash>;
 
 /// The emulator's store: RAM past memory.x's (F405 image), the pages then the formatted mark.
 #[cfg(feature = "qemu")]
@@ -44,53 +44,50 @@ pub use hw::*;
 #[cfg(feature = "hw")]
 mod hw {
     use super::*;
-    use embedded_storage_async::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
-    use stm32f4xx_hal::flash::{Error, FlashExt, LockedFlash};
-    #[allow(unused_imports)]
-    use FlashExt as _;
+    use crate::flash_ctl::{FlashRegs, SectorFlash};
+    use stm32f4xx_hal::pac;
 
-    /// The store's first byte: sector 1 (memory.x `_settings_flash_start`), as an offset
-    /// from the start of flash.
-    const BASE: u32 = 0x4000;
+    /// FLASH's registers and the flash itself: the controller's sequences are
+    /// `crate::flash_ctl`'s (host-tested); this is loads and stores.
+    pub struct F405Flash(pac::FLASH);
 
-    /// Flash sectors 1-3 as `PAGE`-byte pages, offsets from sector 1.
-    pub struct SectorFlash(LockedFlash);
-
-    pub fn store(flash: stm32f4xx_hal::pac::FLASH) -> Option<&'static mut FlashStore<StoreFlash>> {
-        let f = SectorFlash(LockedFlash::new(flash));
+    pub fn store(flash: pac::FLASH) -> Option<&'static mut FlashStore<StoreFlash>> {
+        let f = SectorFlash::new(F405Flash(flash));
         cortex_m::singleton!(: FlashStore<StoreFlash> = FlashStore::new(f, 0..(PAGES * PAGE) as u32))
     }
 
-    impl ErrorType for SectorFlash {
-        type Error = Error;
-    }
-
-    impl ReadNorFlash for SectorFlash {
-        const READ_SIZE: usize = 1;
-        async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Error> {
-            embedded_storage::nor_flash::ReadNorFlash::read(&mut self.0, BASE + offset, bytes)
+    // SAFETY (every `bits` below): whole-register values of RM0090's fields (crate::flash_ctl).
+    impl FlashRegs for F405Flash {
+        fn sr(&mut self) -> u32 {
+            self.0.sr().read().bits()
         }
-        fn capacity(&self) -> usize {
-            PAGES * PAGE
+        fn write_sr(&mut self, v: u32) {
+            unsafe { self.0.sr().write(|w| w.bits(v)) };
         }
-    }
-
-    impl NorFlash for SectorFlash {
-        const WRITE_SIZE: usize = 1;
-        const ERASE_SIZE: usize = PAGE;
-        async fn erase(&mut self, from: u32, to: u32) -> Result<(), Error> {
-            let mut a = from;
-            while a < to && a < (PAGES * PAGE) as u32 {
-                embedded_storage::nor_flash::NorFlash::erase(&mut self.0.unlocked(), BASE + a, BASE + a + PAGE as u32)?;
-                a += PAGE as u32;
+        fn cr(&mut self) -> u32 {
+            self.0.cr().read().bits()
+        }
+        fn write_cr(&mut self, v: u32) {
+            unsafe { self.0.cr().write(|w| w.bits(v)) };
+        }
+        fn write_keyr(&mut self, v: u32) {
+            unsafe { self.0.keyr().write(|w| w.bits(v)) };
+        }
+        fn acr(&mut self) -> u32 {
+            self.0.acr().read().bits()
+        }
+        fn write_acr(&mut self, v: u32) {
+            unsafe { self.0.acr().write(|w| w.bits(v)) };
+        }
+        fn read_mem(&mut self, addr: u32, out: &mut [u8]) {
+            for (k, b) in out.iter_mut().enumerate() {
+                // SAFETY: a load from the store's sectors (SectorFlash checks the bounds)
+                *b = unsafe { core::ptr::read_volatile((addr as usize + k) as *const u8) };
             }
-            Ok(())
         }
-        async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Error> {
-            if offset as usize + bytes.len() > PAGES * PAGE {
-                return Err(Error::ProgrammingAlignment);
-            }
-            embedded_storage::nor_flash::NorFlash::write(&mut self.0.unlocked(), BASE + offset, bytes)
+        fn write_mem(&mut self, addr: u32, byte: u8) {
+            // SAFETY: a store to the store's sectors with CR.PG set: it programs the byte
+            unsafe { core::ptr::write_volatile(addr as usize as *mut u8, byte) };
         }
     }
 }

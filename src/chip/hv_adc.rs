@@ -14,11 +14,10 @@
 //! Pins (docs/firmware.md): PC0..PC2 ADC2 IN10..12 (voltage monitors 1..3), PC3 ADC1 IN13,
 //! PA1 ADC1 IN1, PA2 ADC1 IN2 (return currents 1..3).
 
-use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
-
 use stm32f4xx_hal::{pac, rcc::Enable, rcc::Rcc};
 
 use crate::board::HvSense;
+use crate::cut::TripCell;
 use crate::sampling::{awd_codes, trip_channel, writing_at, HalfFlags, Halves, BUF_WORDS};
 
 /// The DMA's buffer (SRAM1, which DMA2 reaches): written by the DMA only, read by volatile loads.
@@ -26,26 +25,14 @@ use crate::sampling::{awd_codes, trip_channel, writing_at, HalfFlags, Halves, BU
 struct Buf([u32; BUF_WORDS]);
 static mut BUF: Buf = Buf([0; BUF_WORDS]);
 
-/// The watchdog cut the HV (set by its interrupt; cleared when the core drops the enable itself).
-static CUT: AtomicBool = AtomicBool::new(false);
-/// The channel of the last trip + 1 (0: none), taken by the next tick.
-static TRIP: AtomicU8 = AtomicU8::new(0);
+/// The last trip, from the interrupt to the tick; while the tick has not taken it, the cut
+/// stands on the HV outputs (`crate::cut`, `f405`'s pins).
+pub static TRIP: TripCell = TripCell::new();
 
 /// The buffer's word `i` (volatile: the DMA writes it).
 fn word(i: usize) -> u32 {
     // SAFETY: an aligned in-bounds read of the DMA buffer; the DMA is its only writer.
     unsafe { core::ptr::read_volatile(core::ptr::addr_of!(BUF.0[i % BUF_WORDS])) }
-}
-
-/// The watchdog's cut is in force: the HV duties are held at 0 and the enable low until the
-/// core has dropped the enable itself (`f405`'s pins ask).
-pub fn cut() -> bool {
-    CUT.load(Ordering::Acquire)
-}
-
-/// The core dropped the enable: the cut is acknowledged.
-pub fn acknowledge_cut() {
-    CUT.store(false, Ordering::Release);
 }
 
 // RM0090 bit positions used below
@@ -56,6 +43,8 @@ const CR2_ADON: u32 = 1 << 0;
 const CR2_EXTSEL_TIM2_TRGO: u32 = 0b0110 << 24;
 const CR2_EXTEN_RISING: u32 = 0b01 << 28;
 const SR_AWD: u32 = 1 << 0;
+/// TIMx_EGR.UG: an update event (the preloaded registers into the active ones).
+const TIM_EGR_UG: u32 = 1 << 0;
 /// ADC_CCR: MULTI = 00110 (dual regular simultaneous), DMA mode 2 (DMA = 10), DDS = 1,
 /// ADCPRE = 01 (PCLK2 / 4 = 21 MHz).
 const CCR_DUAL_REGULAR: u32 = 0b00110;
@@ -92,6 +81,13 @@ pub fn start(rcc: &mut Rcc, adc1: pac::ADC1, adc2: pac::ADC2, common: pac::ADC_C
     let codes = awd_codes();
     // SAFETY (every `bits` below): whole-register values built from RM0090's fields above.
     unsafe {
+        // TIM2 first: UG loads PSC and ARR while CR2.MMS is still 000 (reset), in which UG
+        // itself is TRGO: that pulse comes before any ADC takes the trigger. Then the update
+        // event as TRGO (MMS = 010).
+        tim2.psc().write(|w| w.bits(TIM2_PSC));
+        tim2.arr().write(|w| w.bits(TIM2_ARR));
+        tim2.egr().write(|w| w.bits(TIM_EGR_UG));
+        tim2.cr2().write(|w| w.bits(0b010 << 4));
         common.ccr().write(|w| w.bits(CCR_DUAL_REGULAR | CCR_DDS | CCR_DMA_MODE2 | CCR_ADCPRE_DIV4));
         // DMA2 stream 0 (channel 0: ADC1, which carries the pairs in dual mode)
         let st = dma2.st(0);
@@ -123,11 +119,8 @@ pub fn start(rcc: &mut Rcc, adc1: pac::ADC1, adc2: pac::ADC2, common: pac::ADC_C
         adc1.cr2().write(|w| w.bits(CR2_ADON | CR2_EXTSEL_TIM2_TRGO | CR2_EXTEN_RISING));
         adc2.cr2().write(|w| w.bits(CR2_ADON));
 
-        // TIM2: update event as TRGO (CR2.MMS = 010)
-        tim2.psc().write(|w| w.bits(TIM2_PSC));
-        tim2.arr().write(|w| w.bits(TIM2_ARR));
-        tim2.cr2().write(|w| w.bits(0b010 << 4));
-        tim2.egr().write(|w| w.bits(1));
+        // TIM2 runs: its first update (TRGO) is one period (100 µs) after CEN, well past
+        // the ADCs' power-up after ADON (t_STAB, 3 µs)
         tim2.cr1().write(|w| w.bits(1));
     }
     HvAdc { halves: Halves::new() }
@@ -144,11 +137,8 @@ impl HvAdc {
         // SAFETY: LIFCR clears exactly the flags read (one set after the read waits for the next tick).
         unsafe { dma2.lifcr().write(|w| w.bits(seen)) };
         let flags = HalfFlags { half: seen & HTIF0 != 0, full: seen & TCIF0 != 0 };
-        let trip = match TRIP.swap(0, Ordering::AcqRel) {
-            0 => None,
-            k => Some(k - 1),
-        };
-        self.halves.sense(flags, at, word, trip)
+        // the trip taken here ends the cut: this tick latches `breakdown` from it
+        self.halves.sense(flags, at, word, TRIP.take())
     }
 
     /// The bookkeeping so far (ticks, stale ticks, halves no tick read).
@@ -180,9 +170,11 @@ pub fn on_watchdog() {
             for k in 0..3 {
                 tim4.ccr(k).write(|w| w.bits(0));
             }
-            CUT.store(true, Ordering::Release);
+            // the compare registers are preloaded (OCxPE): an update event moves the zeros
+            // into the active registers now, not at the period's end (up to 50 µs)
+            tim4.egr().write(|w| w.bits(TIM_EGR_UG));
             let at = writing_at((*pac::DMA2::ptr()).st(0).ndtr().read().bits());
-            TRIP.store(trip_channel(at, word, &awd_codes()) + 1, Ordering::Release);
+            TRIP.trip(trip_channel(at, word, &awd_codes()));
         }
         adc1.sr().write(|w| w.bits(!SR_AWD & 0x3F));
         adc2.sr().write(|w| w.bits(!SR_AWD & 0x3F));

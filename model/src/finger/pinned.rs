@@ -46,14 +46,14 @@ struct PinnedTip<'a, R> {
 impl<R: Real> Equations<R, COUPLED> for PinnedTip<'_, R> {
     type Refusal = MarchError;
     fn dim(&self) -> usize {
-        2 * self.f.p.n + 2
+        loaded::coupled_dim(self.f)
     }
     fn residual(&mut self, x: &[R; COUPLED], slot: usize) -> Result<[R; COUPLED], MarchError> {
         let n = self.f.p.n;
         let mut xx = *x;
         xx[2 * n] = self.point[0];
         xx[2 * n + 1] = self.point[1];
-        let (r, st) = loaded::coupled_residual(self.f, &self.c, self.tension, [x[2 * n], x[2 * n + 1]], &xx)?;
+        let (r, st) = loaded::coupled_residual(self.f, &self.c, self.tension, [x[2 * n], x[2 * n + 1]], R::one(), &xx)?;
         self.states[slot] = st;
         Ok(r)
     }
@@ -87,6 +87,12 @@ fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R])
         x[2 * k] = hole[0];
         x[2 * k + 1] = hole[1];
     }
+    let mut free_states = [f.straight(); MAX_JOINTS];
+    for k in 0..n {
+        free_states[k].end = f.walk(&free0.q[k]).pose;
+    }
+    f.put_centroids(&free_states, &mut x);
+    let dim = loaded::coupled_dim(f);
     let scale = f.p.l * R::from_u32(n as u32);
     // tight: a re-march amplifies the hole residual by the march's gain (hundreds near fmax)
     let tol = R::from_f64(1e-11_f64.max(R::EPS * 256.0)) * scale;
@@ -119,7 +125,7 @@ fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R])
         if let Some((l0, x0)) = last {
             if from > l0 {
                 let s = (to - from) / (from - l0);
-                for i in 0..2 * n + 2 {
+                for i in 0..dim {
                     xt[i] += s * (at.1[i] - x0[i]);
                 }
             }

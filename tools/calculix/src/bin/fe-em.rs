@@ -1,0 +1,131 @@
+//! `fe-em card=<card> <name>=<value> ... [volts=<V>[,<V>,<V>]] [tension=<N>[,<N>...]]
+//! [theta=<deg>] [density=coarse|medium|fine] [rtol=<x>]` (in tools/calculix; `--release` for fine
+//! meshes): the electromechanical FE (`em`), the voltage applied to the stacks, not the
+//! model's thicknesses. The card and the console parameters as `fe-design` takes them.
+//!
+//! - without `tension`: one hinge of the design (`hinge_em`) at 0 V and at `volts` (default:
+//!   the film's hold ceiling): its rotation under the voltage alone, its stiffness at the fixed
+//!   rotation `theta` (default 10°) at both and their ratio, the bonded layers' thickness
+//!   stretch at mid-hinge, and the free film's (the model's) at that voltage; beside them the
+//!   model's ratio (one joint, uncalibrated, 1/C_θM) at the free film's thickness (what the
+//!   solves use), at the bonded stack's, and at the bonded stack's with its volume kept;
+//! - with `tension`: the whole finger under the cable with `volts` per joint (one value: every
+//!   joint), its joint angles per tension (`finger_under_cable_em`).
+//!
+//! Prints `key=value` lines; an error on stderr with exit code 1 (ccx failed) or 2 (bad
+//! arguments).
+use finger_calculix::calibrate::model_element_compliance;
+use finger_calculix::em::{finger_under_cable_em, hinge_em, FixedPoint};
+use finger_calculix::mesh::Density;
+use finger_model::material::cards::CARDS;
+use finger_model::material::{held_width_stretch, Hold};
+use finger_model::{de, Calibration, Params};
+
+fn usage(msg: &str) -> ! {
+    eprintln!("error: {msg}");
+    std::process::exit(2)
+}
+
+fn list(v: &str, what: &str) -> Vec<f64> {
+    v.split(',').map(|x| x.parse::<f64>().unwrap_or_else(|_| usage(&format!("{what}: comma-separated numbers")))).collect()
+}
+
+fn main() {
+    let started = std::time::Instant::now();
+    let mut p: Option<Params<f64>> = None;
+    let (mut sets, mut volts, mut tensions, mut theta_deg, mut density) = (Vec::new(), None, None, 10.0, Density::coarse());
+    let mut fp = FixedPoint::default();
+    for a in std::env::args().skip(1) {
+        let Some((k, v)) = a.split_once('=') else { usage(&format!("{a}: name=value expected")) };
+        match k {
+            "card" => match CARDS.iter().find(|c| c.name == v) {
+                Some(c) => p = Some(Params::with_card(c)),
+                None => usage(&format!("card {v}: one of {}", CARDS.iter().map(|c| c.name).collect::<Vec<_>>().join(", "))),
+            },
+            "volts" => volts = Some(list(v, "volts")),
+            "tension" => tensions = Some(list(v, "tension")),
+            "theta" => theta_deg = v.parse::<f64>().unwrap_or_else(|_| usage("theta: degrees")),
+            "rtol" => fp.rtol = v.parse::<f64>().unwrap_or_else(|_| usage("rtol: a number")),
+            "density" => {
+                density = match v {
+                    "coarse" => Density::coarse(),
+                    "fine" => Density::fine(),
+                    // between the two: the notch and the stack across its depth and the width
+                    // refined, the body's rows and links left coarse
+                    "medium" => Density { notch_cols: 12, stack_rows: 2, layers: 3, ..Density::coarse() },
+                    _ => usage("density: coarse, medium or fine"),
+                }
+            }
+            _ => sets.push((k.to_string(), v.parse::<f64>().unwrap_or_else(|_| usage(&format!("{k}: a number"))))),
+        }
+    }
+    let mut p = p.unwrap_or_else(|| usage("card=<card> first"));
+    // an override only consistent with a later one (a before l) is retried after the others
+    while !sets.is_empty() {
+        let before = sets.len();
+        let mut first = None;
+        sets.retain(|(k, v)| match p.set(k, *v) {
+            Ok(()) => false,
+            Err(e) => {
+                first.get_or_insert(format!("{k}={v}: {e}"));
+                true
+            }
+        });
+        if sets.len() == before {
+            usage(&first.unwrap_or_default());
+        }
+    }
+    let ceiling = de::voltage_ceiling(&p);
+    let volts = volts.unwrap_or_else(|| vec![ceiling]);
+    if volts.iter().any(|&v| !(0.0..=ceiling).contains(&v)) {
+        usage(&format!("volts: 0 to the ceiling, {ceiling:.1} V"));
+    }
+    let fail = |e: finger_calculix::ccx::FeError| -> ! {
+        eprintln!("error: {e}");
+        std::process::exit(1)
+    };
+    let join = |v: &[f64]| v.iter().map(|x| format!("{x:e}")).collect::<Vec<_>>().join(",");
+    println!("ceiling_volts={ceiling:.3}");
+    match tensions {
+        None => {
+            if volts.len() != 1 {
+                usage("volts: one value for a hinge");
+            }
+            let (th, dth) = (theta_deg.to_radians(), 0.5f64.to_radians());
+            let off = hinge_em(&p, 0.0, th, dth, &density, fp).unwrap_or_else(|e| fail(e));
+            let on = hinge_em(&p, volts[0], th, dth, &density, fp).unwrap_or_else(|e| fail(e));
+            let s_free = de::layer_thickness_ratio(&p, 1, volts[0]).unwrap_or(f64::NAN);
+            println!("volts={:.3}", volts[0]);
+            println!("rotation_deg={:.6}", on.rotation.to_degrees());
+            println!("turned_deg={:.6},{:.6}", off.turned.to_degrees(), on.turned.to_degrees());
+            println!("stiffness_nmm_per_rad={:.9e},{:.9e}", off.k, on.k);
+            println!("ratio={:.6}", off.k / on.k);
+            println!("s_mid_bonded={:.6},{:.6}", on.s_mid_centre, on.s_mid_edge);
+            println!("s_free_film={s_free:.6}");
+            println!("runs={}", off.iterations + on.iterations);
+            // the model's hinge (one joint, uncalibrated) at the thickness each hold gives: its
+            // rotational stiffness 1/C_θM at 0 V over that at the voltage
+            let t0 = f64::from(p.layers) * p.z0;
+            let c33 = |q: &Params<f64>, t: f64| model_element_compliance(q, &Calibration::none(), t).map(|c| c[2][2]).unwrap_or(f64::NAN);
+            let c0 = c33(&p, t0);
+            let held = |h: Hold| de::stack_thickness_held(&p, 1, volts[0].min(0.999_999 * ceiling), h).unwrap_or(f64::NAN);
+            let (t_free, t_bonded) = (held(Hold::FreeFilm), held(Hold::Bonded));
+            // volume kept: the bonded stack widens by 1/s (E_de w scaled through g)
+            let wide = Params { g: p.g * held_width_stretch(t_bonded / t0, Hold::Bonded), ..p };
+            println!("model_ratio_free_film={:.6}", c33(&p, t_free) / c0);
+            println!("model_ratio_bonded={:.6}", c33(&p, t_bonded) / c0);
+            println!("model_ratio_bonded_volume={:.6}", c33(&wide, t_bonded) / c0);
+        }
+        Some(t) => {
+            let v: Vec<f64> = if volts.len() == 1 { vec![volts[0]; p.n] } else { volts };
+            if v.len() != p.n {
+                usage(&format!("volts: one value or {} (one per joint)", p.n));
+            }
+            let joints = finger_under_cable_em(&p, &v, &density, &t, fp).unwrap_or_else(|e| fail(e));
+            for (tn, j) in t.iter().zip(&joints) {
+                println!("tension={tn} joints={}", join(j));
+            }
+        }
+    }
+    println!("seconds={:.3}", started.elapsed().as_secs_f64());
+}
