@@ -37,7 +37,7 @@ pub fn request(data: &[u8]) -> Option<(finger_model::Finger<f64>, f64, f64, Vec<
     run_ops(data, MAX_OPS, |c, _, v, _, b| {
         let tension = b.scaled(linear_tension(&c.f, v));
         let p0 = b.scaled(linear_tension(&c.f, &vec![0.0; v.len()]));
-        out = Some((c.f.clone(), p0, tension, v.to_vec()));
+        out = Some((c.f, p0, tension, v.to_vec()));
     });
     out
 }
