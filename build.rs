@@ -117,7 +117,7 @@ fn main() {
             // F405's settings sectors
             println!("cargo:rustc-link-arg-{kind}=--defsym=_m3_image=1");
             // the fault-injection test image (tests/qemu_faults) carries the `crash` command,
-            // which no shipped image has: its budget is 64 KiB plus that command's 1 KiB
+            // which no shipped image has: its budget is 128 KiB plus that command's 1 KiB
             let slack = if env::var_os("CARGO_FEATURE_FAULT_INJECT").is_some() { 1024 } else { 0 };
             println!("cargo:rustc-link-arg-{kind}=--defsym=_m3_test_slack={slack}");
             println!("cargo:rustc-link-arg-{kind}=-Tmemory-m3.x");

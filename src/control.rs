@@ -555,6 +555,12 @@ impl<B: Board> Control<B> {
             self.target = [0.0; HV_CHANNELS];
             self.ramping_down = self.enable;
             self.s_floor = [self.s_hold(); HV_CHANNELS];
+            // a disarm ends the low-voltage check unfinished: the next arm runs it again
+            #[cfg(not(m3))]
+            {
+                let sn = &mut self.sensing;
+                sn.recheck |= sn.check_until_ms.take().is_some();
+            }
         }
         self.shaped = sp.shaped;
         self.v_from = self.volts;
@@ -640,9 +646,10 @@ impl<B: Board> Control<B> {
                 let ceil = sn.view.ceiling_v[ch];
                 v_cap = ceil.min(hold);
                 t = t.min(ceil);
-                if sn.check_until_ms.is_some() {
-                    // the check's voltage on every channel, whatever its target
-                    t = LOW_CHECK_V.min(ceil).min(self.write_ceiling_v[ch]);
+                if sn.check_until_ms.is_some() && self.enable {
+                    // the check's voltage on every channel, whatever its target (under the
+                    // channel's ceiling, exclusive; armed only: a disarm ends the check)
+                    t = LOW_CHECK_V.min(ceil).min(self.write_ceiling_v[ch] * (1.0 - 8.0 * f32::EPSILON));
                     v_cap = LOW_CHECK_V;
                 }
             }

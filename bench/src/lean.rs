@@ -58,13 +58,13 @@ fn main() -> ! {
     let tension = core::hint::black_box(1.0f64);
     #[cfg(not(feature = "fixed"))]
     let y = {
-        let s = scenes::Scene { name: "", layers: layers(), tension, volts: [0.0; 3], fidelity: false };
+        let s = scenes::Scene { name: "", layers: layers(), tension, volts: [0.0; 3], fidelity: false, gravity: None };
         let f = Finger::new(params(&s).cast::<f32>());
         f.and_then(|f| f.solve(tension as f32, &[0.0; 3], Method::converged())).map(|s| s.tip().y.to_f64())
     };
     #[cfg(feature = "fixed")]
     let y = {
-        let s = scenes::Scene { name: "", layers: layers(), tension, volts: [0.0; 3], fidelity: false };
+        let s = scenes::Scene { name: "", layers: layers(), tension, volts: [0.0; 3], fidelity: false, gravity: None };
         fix::prep::<fix::Q16>(&s).and_then(|(f, c, _)| {
             // the tolerance at the scalar's resolution (the default 1e-9 mm is 0 in I16F16)
             let m = Method::Converged { tol: fix::Q16::from_f64(<fix::Q16 as Real>::EPS), max_iter: 200 };

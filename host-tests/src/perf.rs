@@ -34,13 +34,13 @@ pub const M3: &str = "thumbv7m-none-eabi";
 
 /// Every image the report runs.
 pub const IMAGES: &[Image] = &[
-    Image { name: "m4f-libm", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,f64" },
-    Image { name: "m4f-micromath", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,micromath" },
-    Image { name: "m4f-fasttrig", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,fast-trig" },
-    Image { name: "m3-softfloat", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32" },
-    Image { name: "m3-micromath", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32,micromath" },
-    Image { name: "m3-fasttrig", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32,fast-trig" },
-    Image { name: "m3-fixed", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,fixed" },
+    Image { name: "m4f-libm", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,f64,gravity" },
+    Image { name: "m4f-micromath", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,micromath,gravity" },
+    Image { name: "m4f-fasttrig", core: "M4F", triple: M4F, machine: "netduinoplus2", shift: 0, features: "de,f32,fast-trig,gravity" },
+    Image { name: "m3-softfloat", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32,gravity" },
+    Image { name: "m3-micromath", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32,micromath,gravity" },
+    Image { name: "m3-fasttrig", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,f32,fast-trig,gravity" },
+    Image { name: "m3-fixed", core: "M3", triple: M3, machine: "mps2-an385", shift: 4, features: "de,fixed,gravity" },
 ];
 
 /// The quick image for the CI smoke test: one scene, converged solver, f32 with the model's

@@ -531,9 +531,10 @@ fn fault_free_holds_near_the_ceiling_on_the_cards_spread_lower_no_ceiling() {
     let runs = ceiling_holds(0, 34, 600, 10.0, 2);
     let holds: u32 = runs.len() as u32 * 3;
     let lowered: Vec<_> = runs.iter().filter(|(_, _, r)| r.lowered > 0 || r.fault.is_some()).collect();
+    let holds_lowered: u32 = runs.iter().map(|(_, _, r)| r.lowered).sum();
     let worst = runs.iter().map(|(_, _, r)| r.worst_gap).fold(f32::NEG_INFINITY, f32::max);
     assert!(holds >= 100);
-    assert!(lowered.is_empty(), "{} of {holds} holds lowered or faulted: {lowered:?}", lowered.len());
+    assert!(lowered.is_empty(), "{holds_lowered} of {holds} holds lowered, in {} of {} runs (or faulted): {lowered:?}", lowered.len(), runs.len());
     assert!(worst < finger_fw::control::watch::NEAR_GAP_S, "the sensed film {worst} thinner than the model's");
 }
 
@@ -558,8 +559,11 @@ fn a_short_that_stays_is_found_by_the_rearms_check_before_any_volt() {
         c.board_mut().plant.as_mut().unwrap().inject(ch, Inject::Breakdown { clears_after_ms: clears }).unwrap();
         run(&mut c, 3);
         assert_eq!((c.view().fault.get(), c.view().fault_ch), (Some(Fault::Breakdown), Some(ch as u8)), "seed {seed}");
+        // the module's own fall into the short over (its output still drove it, 15 ms), `stop`
+        run(&mut c, 200);
         c.stop();
-        assert_eq!((c.view().fault.get(), c.view().fault_ch), (None, None));
+        run(&mut c, 10);
+        assert_eq!((c.view().fault.get(), c.view().fault_ch), (None, None), "seed {seed}");
         // `arm` alone
         assert!(c.apply(&setpoints(&c, [0.0; 3], false, slew)));
         let mut highest: f32 = 0.0;
@@ -600,7 +604,10 @@ fn the_rearms_check_sees_a_stuck_monitor() {
     c.board_mut().plant.as_mut().unwrap().inject(2, Inject::MonitorStuck(0.0)).unwrap();
     run(&mut c, 20);
     assert_eq!((c.view().fault.get(), c.view().fault_ch), (Some(Fault::Breakdown), Some(2)));
+    run(&mut c, 200);
     c.stop();
+    run(&mut c, 10);
+    assert_eq!(c.view().fault.get(), None);
     assert!(c.apply(&setpoints(&c, [3000.0; 3], false, 2000.0)));
     let mut highest: f32 = 0.0;
     let mut latched_at = None;

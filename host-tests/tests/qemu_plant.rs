@@ -44,6 +44,8 @@ fn a_short_that_stays_is_found_at_rearm_before_any_volt() {
     assert_eq!((field(&st, "fault"), field(&st, "fault_ch")), ("breakdown", "2"), "{st}");
     let refused = q.cmd("arm");
     assert!(refused.starts_with("err fault:") && refused.contains("breakdown latched on channel 2"), "{refused}");
+    // the module's own fall into the short over (15 ms), then `stop`
+    assert_eq!(q.cmd("wait 0.2"), "ok waited=0.2");
     assert_eq!(q.cmd("stop"), "ok stopped");
     let st = q.cmd("status");
     assert_eq!(field(&st, "fault"), "none", "{st}");

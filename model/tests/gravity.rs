@@ -277,3 +277,17 @@ fn gravity_parameters_are_checked() {
     p.set("grav", 0.0).unwrap();
     assert!(!p.has_gravity());
 }
+
+/// A uniform posture the board's finger cannot hold under its own weight (its stacks change a
+/// joint's stiffness by 1 %, the weight loads joint 1 most) is refused as unreachable and names
+/// the joint, as without gravity; before the equal-angle shortcut knew the held loads, every
+/// joint took joint 1's state and the answer failed the forward check (`LimitPoint`).
+#[test]
+fn an_unreachable_posture_under_gravity_is_refused_as_unreachable() {
+    for dir in [0.0, -90.0] {
+        let f = board(dir);
+        let e = inverse::solve_pose(&f, &[5f64.to_radians(); 3], None).unwrap_err();
+        println!("dir {dir}: {e:?}");
+        assert!(matches!(e, Error::Unreachable { .. }), "dir {dir}: {e:?}");
+    }
+}

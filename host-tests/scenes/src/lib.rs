@@ -19,20 +19,32 @@ pub struct Scene {
     pub volts: [f64; 3],
     /// The fidelity model (m = 8, plate modulus, flexible links) instead of the paper's.
     pub fidelity: bool,
+    /// Under standard gravity along this direction (degrees, docs/model.md "Gravity"), or none.
+    pub gravity: Option<f64>,
 }
 
 const fn sc(name: &'static str, layers: u32, tension: f64, volts: [f64; 3]) -> Scene {
-    Scene { name, layers, tension, volts, fidelity: false }
+    Scene { name, layers, tension, volts, fidelity: false, gravity: None }
 }
 
 const fn fid(name: &'static str, layers: u32, tension: f64, volts: [f64; 3]) -> Scene {
-    Scene { name, layers, tension, volts, fidelity: true }
+    Scene { name, layers, tension, volts, fidelity: true, gravity: None }
 }
 
-/// The scene's parameters: docs/model.md's values with the hinge model pinned.
+/// A fidelity-model scene under gravity along `dir` degrees.
+const fn fid_grav(name: &'static str, layers: u32, tension: f64, volts: [f64; 3], dir: f64) -> Scene {
+    Scene { name, layers, tension, volts, fidelity: true, gravity: Some(dir) }
+}
+
+/// The scene's parameters: docs/model.md's values with the hinge model pinned (and gravity, if
+/// the scene has it).
 pub fn params(s: &Scene) -> finger_model::Params<f64> {
     let (m, plate, flex_links) = if s.fidelity { (8, true, true) } else { (1, false, false) };
-    finger_model::Params { layers: s.layers, m, plate, flex_links, ..finger_model::Params::default() }
+    let p = finger_model::Params { layers: s.layers, m, plate, flex_links, ..finger_model::Params::default() };
+    match s.gravity {
+        Some(dir) => p.with_gravity(finger_model::params::G_STANDARD, dir),
+        None => p,
+    }
 }
 
 pub const SCENES: &[Scene] = &[
@@ -48,6 +60,8 @@ pub const SCENES: &[Scene] = &[
     sc("bare-250N-contact", 0, 250.0, [0.0; 3]),
     fid("bare-1.0N-fid", 0, 1.0, [0.0; 3]),
     fid("de-1.0N-per9/5/0kV-fid", 4, 1.0, [9000.0, 5000.0, 0.0]),
+    fid_grav("de-1.0N-per9/5/0kV-fid-g0", 4, 1.0, [9000.0, 5000.0, 0.0], 0.0),
+    fid_grav("de-1.0N-per9/5/0kV-fid-g90", 4, 1.0, [9000.0, 5000.0, 0.0], 90.0),
 ];
 
 /// The paper's stepping at these increment counts; plus the converged solver.

@@ -20,7 +20,7 @@ use std::path::Path;
 /// The paper's scenes (0.2..1.0 N, paper's model): the error and instruction summaries use
 /// these; the two high-tension scenes and the fidelity-model scenes are reported separately.
 fn is_paper_scene(name: &str) -> bool {
-    !(name.starts_with("bare-7N") || name.starts_with("bare-250N") || name.ends_with("-fid"))
+    !(name.starts_with("bare-7N") || name.starts_with("bare-250N") || name.contains("-fid"))
 }
 
 fn method_label(m: &str) -> String {
@@ -246,7 +246,7 @@ fn report(
     .unwrap();
     writeln!(w, "  loads 0.2, 0.5, 1.0 N, uniform (8 kV) and per-joint (9/5/0 kV) voltages, and two high tensions: 7 N and").unwrap();
     writeln!(w, "  250 N (the links touch at about 300 N). The hinge model is pinned to the paper's (m = 1, E_b, rigid").unwrap();
-    writeln!(w, "  links); two `-fid` scenes use the fidelity model (m = 8, plate modulus, flexible links) to show its cost.").unwrap();
+    writeln!(w, "  links); two `-fid` scenes use the fidelity model (m = 8, plate modulus, flexible links) to show its cost, and two more put it under gravity (docs/model.md \"Gravity\"): `-g0` hanging straight down (the board's default), `-g90` held horizontally; the joints are then coupled and the converged solve is the coupled one.").unwrap();
     writeln!(w, "- **Instructions on the target**: the bench image (`bench/`, its own `no_std` binary, not the firmware) runs every").unwrap();
     writeln!(w, "  scene in QEMU 7.2 with `-icount` (deterministic: one instruction, one fixed virtual time step) and reads").unwrap();
     writeln!(w, "  SysTick around each `Finger::solve_with` (equilibrium, posture, excursion; the compliances for the scene's").unwrap();

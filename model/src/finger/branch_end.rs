@@ -65,7 +65,7 @@ pub(super) fn fmax_with<R: Real>(f: &Finger<R>, c: &Compliances<R>, starts: Opti
     let mut best: Option<BranchLimit<R>> = None;
     for (i, &k) in order[..n].iter().enumerate() {
         // a joint with the compliances of one before it ends where that one ends
-        if order[..i].iter().any(|&j| c.c[j][..m] == c.c[k][..m]) {
+        if order[..i].iter().any(|&j| c.c[j][..m] == c.c[k][..m] && f.same_held(j, k)) {
             continue;
         }
         let start = starts.and_then(|s| s[k]);

@@ -185,6 +185,12 @@ impl<R: Real> Finger<R> {
         }
     }
 
+    /// Whether joints k and j (0-based) carry the same held loads (always without any): only
+    /// then may a solve take one's state for the other's.
+    pub(crate) fn same_held(&self, k: usize, j: usize) -> bool {
+        self.held.get(k) == self.held.get(j) && self.held_link.get(k) == self.held_link.get(j)
+    }
+
     /// Whether this finger carries fixed loads (`holding`).
     pub(crate) fn has_held(&self) -> bool {
         self.held.iter().any(|h| h.is_some())

@@ -32,7 +32,7 @@ fn solve_into<R: Real>(f: &Finger<R>, c: &Compliances<R>, tension: R, tol: R, ma
     let mut iters = 0;
     for k in 0..n {
         // a joint with the same compliance as the one before has the same state (no work)
-        if k > 0 && c.c[k][..m] == c.c[k - 1][..m] {
+        if k > 0 && c.c[k][..m] == c.c[k - 1][..m] && f.same_held(k, k - 1) {
             let (done, rest) = sol.q.split_at_mut(k);
             rest[0][..m].copy_from_slice(&done[k - 1][..m]);
             ends[k] = ends[k - 1];

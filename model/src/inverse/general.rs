@@ -184,9 +184,9 @@ pub(super) fn solve<R: Real>(
         }
         let hint = if unknown[k] { None } else { Some((h.tension, h.st.hole)) };
         let solved = g.hold_tension(k + 1, angles[k], c, t, s, hint, jac, Some(h.slope), &mut scratch)?;
-        // the same angle, the same end
+        // the same angle (and held load), the same end
         for j in 0..n {
-            if angles[j] == angles[k] {
+            if angles[j] == angles[k] && f.same_held(j, k) {
                 if e == 0 {
                     lo[j] = solved;
                 } else {
@@ -218,7 +218,7 @@ pub(super) fn solve<R: Real>(
     // 4. every joint's thickness at that tension, then its voltage (0 V for the straight
     //    finger at zero tension)
     for k in 0..n {
-        if k > 0 && angles[k] == angles[k - 1] {
+        if k > 0 && angles[k] == angles[k - 1] && f.same_held(k, k - 1) {
             // the joint before, recorded already: the same state
             out.thickness[k] = out.thickness[k - 1];
             out.volts[k] = out.volts[k - 1];
@@ -266,7 +266,7 @@ fn no_stacks<R: Real>(g: &mut Gen<'_, R>, angles: &[R], tension: Option<R>, opts
             let cl = s_lin / g.p.e;
             return Err(Error::Unreachable { joint: k + 1, needed: -cl.to_f64(), min: cl.to_f64(), max: cl.to_f64() });
         }
-        if k > 0 && angles[k] == angles[k - 1] {
+        if k > 0 && angles[k] == angles[k - 1] && g.f.same_held(k, k - 1) {
             h[k] = h[k - 1];
             out.sub_q[k] = out.sub_q[k - 1];
         } else {

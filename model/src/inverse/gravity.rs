@@ -5,7 +5,7 @@
 //! moves the loads a little: repeated until they stop moving. What it is not: a second march
 //! (every joint solve is the one march, with the held load as its external load).
 
-use super::{fast, general, takes_general, Options, PoseSolution};
+use super::{general, Options, PoseSolution};
 use crate::error::Error;
 use crate::finger::Finger;
 use crate::params::{MAX_JOINTS, MAX_SUB};
@@ -36,11 +36,9 @@ pub(super) fn solve<R: Real>(f: &Finger<R>, angles: &[R], tension: Option<R>, op
     let mut ask = None;
     for _ in 0..ROUNDS {
         let held = f.holding(&f.weight_at_posture(&sub_q, &links));
-        if takes_general(&held) {
-            general::solve(&held, None, angles, ask, opts, out)?;
-        } else {
-            *out = fast::solve(&held, angles, ask, opts, *out)?;
-        }
+        // the general path: its per-joint marches carry the held loads (the m = 1 fast path's
+        // closed forms have none)
+        general::solve(&held, None, angles, ask, opts, out)?;
         iterations += out.iterations;
         let now = (out.tension, out.volts);
         if let Some((pt, v)) = prev {
