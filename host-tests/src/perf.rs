@@ -613,7 +613,7 @@ pub fn contact_cost_section() -> String {
         let instr = bench.instructions(f[3].parse().unwrap()).round();
         let ms = instr / HZ * 1e3;
         let what = if f[2] == "ok" {
-            format!("{} iterations, |F| {:.4} N", f[4], f[5].parse::<f64>().unwrap())
+            format!("{} iterations, force {:.4} N", f[4], f[5].parse::<f64>().unwrap())
         } else {
             format!("`err {}`: {}", f[4], f[5..].join(" "))
         };

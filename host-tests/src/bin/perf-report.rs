@@ -669,12 +669,7 @@ fn plot(rows: &[Row]) -> String {
 }
 
 /// Why the counts of the last structural change moved (the section `moved` writes).
-const MOVED_WHY: &str = "This change (issue 37, 2026-12-06): `Finger::equilibrium_residual` is the posture's relative wrench \
-imbalance (docs/model.md \"Equilibrium\") and `link_q` takes its wrench from `link_wrench`, which \
-moves the M4F libm images' solves by a few instructions (at most 0.25 %: the inlining around the \
-link's deflection), every error the same; the other images are as they were. The untabled inverse \
-now ends with the forward solve from rest at its answer (docs/inverse.md \"Reached from rest\"), in \
-the inverse table above, not in these. \"Before\" is this report at 17a88de2.";
+const MOVED_WHY: &str = "This change (issue 54, 2026-12-07): the section \"`contact` on the Cortex-M4F\" is new (the pinned continuation's refusal at a step of 1/8,192 or past 2,048 Newton iterations); no solve above it changed, and no count moved. \"Before\" is this report at a750fd7b.";
 
 /// The rows of the tables under `heading` in `md`: the first `key` cells joined, then the next `cols` cells.
 fn table_rows(md: &str, heading: &str, key: usize, cols: usize) -> BTreeMap<String, Vec<String>> {
