@@ -1,7 +1,7 @@
 //! The board's design constants, every build (host ones too): `$OUT_DIR/board_design.rs`,
 //! which src/board.rs includes, from the design file `FINGER_DESIGN` names (a TOML: `card`
-//! plus the console's t_min, a, e_b, w, layers, z0, v_supply, margin; docs/design.md), or the
-//! paper's finger on VHB 4905 without it. Then the linker setup for the firmware binary
+//! plus the console's t_min, a, e_b, w, layers, z0, v_supply, margin, optionally grav and
+//! grav_dir; docs/design.md), or the paper's finger on VHB 4905 without it. Then the linker setup for the firmware binary
 //! (target only): memory.x, cortex-m-rt's link.x, then memory-m3.x for the Cortex-M3 image
 //! (thumbv7m-none-eabi, which also gets `cfg(m3)`: stack placement and its 64 KiB / 20 KiB
 //! budget) and defmt's defmt.x (feature `log`). Host builds of the library (host-tests) need
@@ -23,6 +23,9 @@ const KEYS: [(&str, f64, f64); 8] = [
     ("v_supply", 1.0, 1e5),
     ("margin", 0.0, 1.0),
 ];
+/// Keys a design file may give (issue 53): the finger's orientation, else the board's
+/// (src/board.rs `BOARD_GRAVITY`: standard gravity, hanging straight down).
+const OPTIONAL_KEYS: [(&str, f64, f64); 2] = [("grav", 0.0, 20.0), ("grav_dir", -180.0, 180.0)];
 
 fn design_constants() -> String {
     println!("cargo:rerun-if-env-changed=FINGER_DESIGN");
@@ -39,9 +42,9 @@ fn design_constants() -> String {
     let fail = |msg: String| -> ! { panic!("FINGER_DESIGN={}: {msg}", path.display()) };
     let text = fs::read_to_string(&path).unwrap_or_else(|e| fail(e.to_string()));
     let t: toml::Table = text.parse().unwrap_or_else(|e: toml::de::Error| fail(e.to_string()));
-    let known = |k: &str| k == "card" || KEYS.iter().any(|x| x.0 == k);
+    let known = |k: &str| k == "card" || KEYS.iter().chain(&OPTIONAL_KEYS).any(|x| x.0 == k);
     if let Some(k) = t.keys().find(|k| !known(k)) {
-        fail(format!("unknown key {k}; keys: card, t_min, a, e_b, w, layers, z0, v_supply, margin"));
+        fail(format!("unknown key {k}; keys: card, t_min, a, e_b, w, layers, z0, v_supply, margin (and optional grav, grav_dir)"));
     }
     let card = t.get("card").and_then(|v| v.as_str()).unwrap_or_else(|| fail("card = \"<name>\" missing".into()));
     let Some(&(_, card_const)) = CARDS.iter().find(|c| c.0 == card) else {
@@ -70,6 +73,18 @@ fn design_constants() -> String {
     s += "pub const BOARD_FINGER: &[(&str, f32)] = &[";
     for (i, &(k, _, _)) in KEYS.iter().enumerate() {
         s += &format!("(\"{k}\", {:?}), ", v[i] as f32);
+    }
+    for &(k, lo, hi) in &OPTIONAL_KEYS {
+        let x = match t.get(k) {
+            None => continue,
+            Some(toml::Value::Float(x)) => *x,
+            Some(toml::Value::Integer(x)) => *x as f64,
+            _ => fail(format!("{k} = <number>")),
+        };
+        if !(x.is_finite() && x >= lo && x <= hi) {
+            fail(format!("{k} = {x} is outside {lo}..{hi}"));
+        }
+        s += &format!("(\"{k}\", {:?}), ", x as f32);
     }
     s + "];\n"
 }

@@ -37,6 +37,17 @@ pub const BOARD_MARGIN: f32 = design::BOARD_MARGIN;
 /// (`app::params::board_params`); empty for the paper's finger.
 pub const BOARD_FINGER: &[(&str, f32)] = design::BOARD_FINGER;
 
+/// The board's finger's orientation (issue 53): gravity on, at standard gravity, hanging
+/// straight down (`grav_dir` 0: a finger on a downward-facing gripper); off on the Cortex-M3
+/// image, whose fixed-point model has no gravity. The one switch: false gives the board's
+/// finger without gravity (`grav` 0), as before gravity was modelled.
+pub const BOARD_GRAVITY: bool = !cfg!(m3);
+/// The board's default finger's `grav` (m/s²) and `grav_dir` (degrees from the straight
+/// finger's axis toward the cable side); a design file's `grav` and `grav_dir` override them
+/// (`BOARD_FINGER`).
+pub const BOARD_GRAV_M_S2: f64 = if BOARD_GRAVITY { finger_model::params::G_STANDARD } else { 0.0 };
+pub const BOARD_GRAV_DIR_DEG: f64 = 0.0;
+
 /// The constants above as build.rs wrote them from the design file (`FINGER_DESIGN`,
 /// docs/design.md), or the paper's finger on VHB 4905 without one.
 mod design {

@@ -94,11 +94,18 @@ struct Sensing {
 }
 
 /// The low-voltage check before re-arming after a read-back fault: its voltage (V) and
-/// length (ms).
+/// length (ms). Every channel is driven to it, whatever its target (a target of 0 V too: a
+/// short that stays draws its current there, before any `volt`), at no less than
+/// [`LOW_CHECK_SLEW_V_PER_S`].
 #[cfg(not(m3))]
 pub const LOW_CHECK_V: f32 = 200.0;
 #[cfg(not(m3))]
 pub const LOW_CHECK_MS: u32 = 300;
+/// The check's least slew, V/s (the default slew: 100 ms to its voltage, 0.15 µA of charge
+/// into the card's stack; under a slow slew, 100 V/s, a 1 MΩ short drew 15 µA at the check's
+/// end, under the 30 µA trip).
+#[cfg(not(m3))]
+pub const LOW_CHECK_SLEW_V_PER_S: f32 = 2000.0;
 
 #[cfg(not(m3))]
 impl Sensing {
@@ -173,6 +180,9 @@ pub struct View {
     pub enable: bool,
     pub servo_duty: u16,
     pub fault: Latched,
+    /// The channel whose read-back latched the fault (0-based), if one did.
+    #[cfg(not(m3))]
+    pub fault_ch: Option<u8>,
     /// Locked out for good ([`Control::lock_out`]): never arms.
     pub locked_out: bool,
     /// Ticks since start, ms.
@@ -242,6 +252,9 @@ pub struct Control<B: Board> {
     servo_released: u16,
     v_from: [f32; HV_CHANNELS],
     fault: Option<Fault>,
+    /// The channel whose read-back latched `fault`, if one did.
+    #[cfg(not(m3))]
+    fault_ch: Option<u8>,
     /// Never arm (e.g. the emulator image on a real chip): the fault it reports, for good.
     lockout: Option<Fault>,
     seq: u32,
@@ -309,6 +322,8 @@ impl<B: Board> Control<B> {
             servo_released,
             v_from: [0.0; HV_CHANNELS],
             fault: None,
+            #[cfg(not(m3))]
+            fault_ch: None,
             lockout: None,
             seq: 0,
             epoch: 0,
@@ -360,6 +375,8 @@ impl<B: Board> Control<B> {
             enable: self.enable,
             servo_duty: self.servo_duty,
             fault: Latched(self.fault),
+            #[cfg(not(m3))]
+            fault_ch: self.fault_ch,
             locked_out: self.lockout.is_some(),
             now_ms: self.now_ms,
             stack_ratio: self.stacks.as_ref().map(|s| s.ratios()).unwrap_or([1.0; HV_CHANNELS]),
@@ -451,6 +468,7 @@ impl<B: Board> Control<B> {
             sn.ripple_ms = [0; HV_CHANNELS];
             sn.check_until_ms = None;
             sn.recheck = recheck;
+            self.fault_ch = None;
         }
         self.servo_from = self.servo_released;
         self.servo_to = self.servo_released;
@@ -465,9 +483,17 @@ impl<B: Board> Control<B> {
         self.fault_stop(reason);
     }
 
-    /// A fault stop: as [`Control::stop`], the fault stays latched.
+    /// A fault stop: as [`Control::stop`], the fault stays latched, and so do the thickness
+    /// guards' lowered ceilings (`vceil`, `film_check`: what the guard had found when the fault
+    /// cut) until the `stop` that clears the fault.
     fn fault_stop(&mut self, f: Fault) {
+        #[cfg(not(m3))]
+        let guard = self.sensing.guard;
         self.stop();
+        #[cfg(not(m3))]
+        {
+            self.sensing.guard = guard;
+        }
         self.fault = Some(f);
     }
 
@@ -584,7 +610,8 @@ impl<B: Board> Control<B> {
     /// too, at 0 V: the film recovers in time); the duty of the guarded value is written. Then
     /// the servo follows; a disarm ramp that reached 0 drops the enable; the watchdog is fed if
     /// the command side checked in at `last_checkin_ms` within [`CHECKIN_BOUND_MS`]. Returns
-    /// what the tick's parts cost, in `clock` counts.
+    /// what the tick's parts cost, in `clock` counts (`clock` runs forward within a tick; a
+    /// reading that went back, a wrap, spans 0, never 2^32).
     pub fn tick_timed(&mut self, last_checkin_ms: u32, clock: fn() -> u32) -> TickCost {
         self.now_ms = self.now_ms.wrapping_add(1);
         let mut cost = TickCost::default();
@@ -592,9 +619,9 @@ impl<B: Board> Control<B> {
         {
             let t0 = clock();
             cost.sense_source = self.read_back(clock);
-            cost.read_back = clock().wrapping_sub(t0).saturating_sub(cost.sense_source);
+            cost.read_back = clock().saturating_sub(t0).saturating_sub(cost.sense_source);
         }
-        let step = self.slew * 0.001;
+        let step = self.slew_now() * 0.001;
         let mut worst = 0u32;
         #[cfg(not(m3))]
         let hold = self.hold_ceiling_v();
@@ -614,13 +641,14 @@ impl<B: Board> Control<B> {
                 v_cap = ceil.min(hold);
                 t = t.min(ceil);
                 if sn.check_until_ms.is_some() {
-                    t = t.min(LOW_CHECK_V);
+                    // the check's voltage on every channel, whatever its target
+                    t = LOW_CHECK_V.min(ceil).min(self.write_ceiling_v[ch]);
                     v_cap = LOW_CHECK_V;
                 }
             }
             let t0 = clock();
             let applied = stacks.step(ch, v, t, self.s_floor[ch], self.shaped, step, v_cap);
-            worst = worst.max(clock().wrapping_sub(t0));
+            worst = worst.max(clock().saturating_sub(t0));
             // a fault stop zeroes every channel; the later ones still step (at 0 V)
             let nv = match applied {
                 Ok(nv) if nv >= 0.0 => nv,
@@ -638,7 +666,7 @@ impl<B: Board> Control<B> {
                 // voltage past it)
                 let in_force = if self.shaped { nv.min(v_cap) } else { v_cap.min(hold) };
                 let d = self.loop_duty(ch, nv, in_force);
-                cost.read_back = cost.read_back.wrapping_add(clock().wrapping_sub(t0));
+                cost.read_back = cost.read_back.wrapping_add(clock().saturating_sub(t0));
                 d
             };
             #[cfg(m3)]
@@ -668,6 +696,13 @@ impl<B: Board> Control<B> {
     #[cfg(all(feature = "hv-door", not(m3)))]
     pub fn set_thickness_guard(&mut self, on: bool) {
         self.sensing.guard_on = on;
+    }
+
+    /// The model's film creeps `k` times faster than the card's (tests only, feature
+    /// `hv-door`: beside a plant film as fast, `Stacks::set_time_scale`). False: refused.
+    #[cfg(all(feature = "hv-door", not(m3)))]
+    pub fn set_film_time_scale(&mut self, k: f32) -> bool {
+        self.stacks.as_mut().is_some_and(|s| s.set_time_scale(k))
     }
 
     /// The read-back's stored calibration (the command side's `cal vmon|c0`, the boot's
@@ -724,6 +759,7 @@ impl<B: Board> Control<B> {
         if !self.sensing.present {
             return hv_duty_for(nv, max);
         }
+        let slew_step = self.slew_now() * 0.001;
         let sn = &mut self.sensing;
         // steady (held, or a shaped or guarded voltage that creeps): the ripple measures it
         let held = nv > sense::RIPPLE_MIN_V && (nv - self.volts[ch]).abs() < 1.0 && self.enable;
@@ -738,10 +774,20 @@ impl<B: Board> Control<B> {
         let drive = (nv - ripple).min(limit_v);
         sn.drive[ch] = drive;
         // held, the ripple swings at its own rate under a slower slew (it only lowers the ask)
-        let max_step = if held { (self.slew * 0.001).max(sense::RIPPLE_STEP_V) } else { self.slew * 0.001 };
+        let max_step = if held { slew_step.max(sense::RIPPLE_STEP_V) } else { slew_step };
         let ask = sn.vloop[ch].step(drive, sn.view.volts[ch], limit_v - ripple, limit_v, max_step);
         sn.ask[ch] = ask;
         hv_duty_for(ask.volts, max).min(limit)
+    }
+
+    /// The slew in force, V/s: the command side's, and during the low-voltage check at least
+    /// [`LOW_CHECK_SLEW_V_PER_S`].
+    fn slew_now(&self) -> f32 {
+        #[cfg(not(m3))]
+        if self.sensing.present && self.sensing.check_until_ms.is_some() {
+            return self.slew.max(LOW_CHECK_SLEW_V_PER_S);
+        }
+        self.slew
     }
 
     /// The tick's read-back: the analog watchdog's trip, each channel's reading, estimate,
@@ -752,14 +798,15 @@ impl<B: Board> Control<B> {
         let Some(hs) = self.board.hv_sense() else { return 0 };
         #[cfg(not(feature = "hw"))]
         self.read_plant();
-        let source = clock().wrapping_sub(t0);
+        let source = clock().saturating_sub(t0);
         let hold = self.hold_ceiling_v();
         let s_hold = self.s_hold();
         let sn = &mut self.sensing;
         sn.present = true;
+        // the fault and the channel it came from
         let mut fault = None;
-        if hs.trip.is_some() {
-            fault = Some(Fault::Breakdown);
+        if let Some(k) = hs.trip {
+            fault = Some((Fault::Breakdown, k));
         }
         for ch in 0..HV_CHANNELS {
             let v = sense::volts_of_code(hs.v_code[ch], &sn.cal[ch]);
@@ -774,14 +821,15 @@ impl<B: Board> Control<B> {
             // is followed at the slew, so the hold ceiling, not the lowered one
             let over_ceiling_v = self.write_ceiling_v[ch].min(hold);
             if let Some(f) = sn.watch[ch].check(&reading, sn.drive[ch], &sn.ask[ch], over_ceiling_v, self.enable, &sn.est[ch]) {
-                fault = fault.or(Some(f));
+                fault = fault.or(Some((f, ch as u8)));
             }
             let s_meas = sn.est[ch].thickness_ratio(sn.c0_pf[ch]);
             sn.view.stack_ratio[ch] = s_meas;
             let windows = sn.est[ch].windows();
             if windows != sn.seen_windows[ch] {
                 sn.seen_windows[ch] = windows;
-                if let (Some(st), true) = (self.stacks.as_ref(), sn.guard_on) {
+                // only a window that measured the film: a stale thickness is no news
+                if let (Some(st), true, true) = (self.stacks.as_ref(), sn.guard_on, sn.est[ch].last_window_measured()) {
                     let s_model = st.ratios()[ch];
                     let (at_model, at_meas) = (st.equilibrium_voltage_at(s_model), st.equilibrium_voltage_at(s_meas));
                     sn.guard[ch].update(s_meas, s_model, s_hold, at_model, at_meas, sn.ripple_ms[ch], sn.est[ch].last_window_joint());
@@ -795,9 +843,10 @@ impl<B: Board> Control<B> {
                 sn.check_until_ms = None;
             }
         }
-        if let Some(f) = fault {
+        if let Some((f, ch)) = fault {
             if self.fault.is_none() || self.enable {
                 self.fault_stop(f);
+                self.fault_ch = Some(ch);
             }
         }
         source

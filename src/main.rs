@@ -162,7 +162,7 @@ mod app {
             if let Some(sp) = mb.setpoints.take() {
                 ctl.apply(&sp);
             }
-            let cost = ctl.tick_timed(mb.checkin_ms, time::systick_elapsed);
+            let cost = ctl.tick_timed(mb.checkin_ms, time::tick_clock);
             tm.tick_stack_max = tm.tick_stack_max.max(cost.stack_step);
             #[cfg(not(m3))]
             {
@@ -182,7 +182,7 @@ mod app {
                 rtic::pend(stm32f4xx_hal::pac::Interrupt::USART1); // transmit (chip::usart)
             }
             tm.ticks += 1;
-            tm.tick_run_max = tm.tick_run_max.max(time::systick_elapsed().saturating_sub(entry));
+            tm.tick_run_max = tm.tick_run_max.max(time::tick_clock().saturating_sub(entry));
         });
     }
 
@@ -251,6 +251,10 @@ mod app {
             cmds.run_reporting(rec, &mut out, Some(&mut report));
             let t1 = out.now_counts();
             report.durations.record(word, (t1 - t0) as u32);
+            #[cfg(not(m3))]
+            if cmds.take_reset() {
+                out.reboot();
+            }
             let stop = cmds.take_stop();
             let sp = cmds.setpoints();
             #[cfg(all(feature = "qemu", not(m3)))]
@@ -320,6 +324,21 @@ mod app {
                     return ms as u64 * time::SYSTICK_PER_MS as u64 + c as u64;
                 }
             }
+        }
+
+        /// `reset`: its reply sent (the queue empty, then two ticks for the last byte on the
+        /// wire), then the chip's system reset; it boots as at power-up.
+        #[cfg(not(m3))]
+        fn reboot(&mut self) -> ! {
+            while !self.tx.lock(|t| t.is_empty()) {
+                self.check_in();
+                cortex_m::asm::wfi();
+            }
+            let t0 = self.check_in().now_ms;
+            while self.check_in().now_ms.wrapping_sub(t0) < 2 {
+                cortex_m::asm::wfi();
+            }
+            cortex_m::peripheral::SCB::sys_reset()
         }
 
         fn flush(&mut self) {

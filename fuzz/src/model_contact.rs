@@ -29,3 +29,15 @@ pub fn check(data: &[u8]) {
         contact(&c.f, p0, tension, v, refused, c.len);
     });
 }
+
+/// The input's contact request as `check` makes it (the finger, P0, P, the voltages), or
+/// `None` where the decoder ends first: for timing the requests (`examples/contact_cost.rs`).
+pub fn request(data: &[u8]) -> Option<(finger_model::Finger<f64>, f64, f64, Vec<f64>)> {
+    let mut out = None;
+    run_ops(data, MAX_OPS, |c, _, v, _, b| {
+        let tension = b.scaled(linear_tension(&c.f, v));
+        let p0 = b.scaled(linear_tension(&c.f, &vec![0.0; v.len()]));
+        out = Some((c.f.clone(), p0, tension, v.to_vec()));
+    });
+    out
+}

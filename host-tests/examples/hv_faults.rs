@@ -1,11 +1,14 @@
 //! Fault injection and soft films against the HV plant, at scale (docs/reliability.md
 //! "Measured HV"): `cargo run --release --example hv_faults -- [FAULT_HISTORIES] [CLEAN]
-//! [SOFT] [FIRST_SEED]` (defaults 1,000,000 / 10,000 / 10,000 / 0: the soak). Prints missed
-//! trips, the latency distribution per fault kind, false trips and the soft films' worst
-//! thickness; every 10,000 fault histories a progress line (seeds so far, missed, worst
-//! breakdown cut), so the soak can run in parts over consecutive seed ranges.
+//! [SOFT] [FIRST_SEED] [HOLD_RUNS] [HOLD_S]` (defaults 1,000,000 / 10,000 / 10,000 / 0 / 100 /
+//! 900: the soak). Prints missed trips, the latency distribution per fault kind, false trips,
+//! the soft films' worst thickness, and the fault-free holds near the ceiling (`ceiling_holds`:
+//! HOLD_RUNS runs of three channels, each HOLD_S of real time on the card's film or one of its
+//! spread: ceilings lowered, the sensed film's worst gap to the model's); every 10,000 fault
+//! histories a progress line (seeds so far, missed, worst breakdown cut), so the soak can run
+//! in parts over consecutive seed ranges.
 use finger_fw::control::Fault;
-use host_tests::plant_runs::{clean_history, fault_history, soft_film_history, Kind, SOFT_TIME_SCALE};
+use host_tests::plant_runs::{ceiling_holds, clean_history, fault_history, soft_film_history, Kind, SOFT_TIME_SCALE};
 use std::time::Instant;
 
 fn arg(k: usize, d: u64) -> u64 {
@@ -14,6 +17,7 @@ fn arg(k: usize, d: u64) -> u64 {
 
 fn main() {
     let (n_fault, n_clean, n_soft, first) = (arg(1, 1_000_000), arg(2, 10_000), arg(3, 10_000), arg(4, 0));
+    let (n_hold_runs, hold_s) = (arg(5, 100), arg(6, 900));
     let t0 = Instant::now();
     let mut lat: Vec<(Kind, u32)> = Vec::new();
     let mut missed = 0;
@@ -62,4 +66,16 @@ fn main() {
         let e_max = runs.iter().map(|r| r.field_max).fold(0.0f32, f32::max);
         println!("soft films (G_eq 6.7..13.4 kPa, {SOFT_TIME_SCALE}x fast creep), guard {}: {n_soft} histories, past 2/3 or collapsed: {bad}, thinnest s {s_min:.4}, highest field {e_max:.2} V/um ({:.0} s)", if guard { "on" } else { "off" }, t2.elapsed().as_secs_f64());
     }
+    let t3 = Instant::now();
+    let holds = ceiling_holds(3_000_000_000 + first, n_hold_runs, hold_s as u32, 1.0, 2);
+    let lowered: Vec<_> = holds.iter().filter(|(_, _, r)| r.lowered > 0 || r.fault.is_some()).collect();
+    let gap = holds.iter().map(|(_, _, r)| r.worst_gap).fold(f32::NEG_INFINITY, f32::max);
+    let s_min = holds.iter().map(|(_, _, r)| r.s_min).fold(1.0f32, f32::min);
+    println!(
+        "holds at 0.9-1.0 of the ceiling (card's film and its spread, G_eq 13.16..15.36 kPa): {} of {hold_s} s, lowered or faulted: {} {:?}, the sensed film at most {gap:.4} thinner than the model's, true film thinnest {s_min:.4} ({:.0} s)",
+        3 * holds.len(),
+        lowered.len(),
+        &lowered[..lowered.len().min(5)],
+        t3.elapsed().as_secs_f64()
+    );
 }

@@ -576,3 +576,62 @@ pub fn table_cost_section() -> String {
     .unwrap();
     w
 }
+
+/// `contact` on the Cortex-M4F: builds `bench/src/bin/contact.rs` (f32, fast-trig: the
+/// firmware's model), runs it in QEMU netduinoplus2 with `-icount shift=0` and returns the
+/// report's section: one row per case, the worst refusal against the goal (5 ms at 168 MHz).
+pub fn contact_cost_section() -> String {
+    use std::fmt::Write as _;
+    const HZ: f64 = 168e6;
+    const GOAL_MS: f64 = 5.0;
+    let elf = build("contact", M4F, "de,f32,fast-trig", "contact-de-f32-fast-trig").unwrap_or_else(|e| panic!("{e}"));
+    let out = run_qemu(&elf, "netduinoplus2", 0).unwrap_or_else(|e| panic!("{e}"));
+    let bench = read_bench(&out).unwrap_or_else(|e| panic!("contact image: {e}"));
+    let mut doc = String::new();
+    writeln!(
+        doc,
+        "## `contact` on the Cortex-M4F\n\n\
+         Instructions per `inverse::contact_force` in f32 with the firmware's model features (fast-trig), \
+         bench image `bench/src/bin/contact.rs`, QEMU netduinoplus2 with `-icount shift=0`; ms at 168 MHz taking \
+         one instruction a cycle (a lower bound: a `vdiv.f32` takes 14, a flash wait state is not counted). One \
+         request is the two fmax checks (P0 and P at their voltages), the free posture at P0 and the pinned \
+         continuation (model finger/pinned.rs; docs/inverse.md \"Contact force\"): steps that halve on a failed \
+         Newton solve (forward-difference Jacobian, up to 30 iterations a try) and a refusal as the limit point at a \
+         step of 1/8,192 or past 2,048 Newton iterations. `default`: the default finger as the board boots (its FE \
+         calibration); `paper`: the paper preset. The cases are each finger's slowest answers and refusals over a grid \
+         of 624 requests timed on the host (`cargo run --release --example contact_grid` in fuzz/: P0 0.05-5 N, P to \
+         1.2 fmax, six voltage sets), and a request past fmax.\n\n\
+         | case (P0-P, voltages) | outcome | instructions | ms at 168 MHz | Newton iterations or refusal |\n\
+         | --- | --- | ---: | ---: | --- |"
+    )
+    .unwrap();
+    let mut worst: Option<(f64, String)> = None;
+    for f in &bench.lines {
+        if f.first() != Some(&"C") {
+            continue;
+        }
+        let instr = bench.instructions(f[3].parse().unwrap()).round();
+        let ms = instr / HZ * 1e3;
+        let what = if f[2] == "ok" {
+            format!("{} iterations, |F| {:.4} N", f[4], f[5].parse::<f64>().unwrap())
+        } else {
+            format!("`err {}`: {}", f[4], f[5..].join(" "))
+        };
+        writeln!(doc, "| {} | {} | {instr:.0} | {ms:.1} | {what} |", f[1], f[2]).unwrap();
+        if f[2] == "err" && worst.as_ref().is_none_or(|w| instr > w.0) {
+            worst = Some((instr, f[1].to_string()));
+        }
+    }
+    if let Some((instr, case)) = worst {
+        let ms = instr / HZ * 1e3;
+        writeln!(
+            doc,
+            "\n**The worst refused `contact`: {instr:.0} instructions, {ms:.0} ms at 168 MHz** ({case}); the goal, {GOAL_MS} ms \
+             ({:.0} instructions), is {}.",
+            GOAL_MS * 1e-3 * HZ,
+            if ms <= GOAL_MS { "met".to_string() } else { format!("not met ({:.0}x over)", ms / GOAL_MS) }
+        )
+        .unwrap();
+    }
+    doc
+}

@@ -183,3 +183,78 @@ pub fn soft_film_history(seed: u64, ms: u32, time_scale: f32, guard: bool) -> Fi
     }
     out
 }
+
+/// The films of the card's stated spread (docs/materials.md "Equilibrium modulus"): G_eq from
+/// the card's fit less its 95 % bound (13.4 - 0.24 kPa) to the stiffest of the three fits
+/// (15.36 kPa), kPa.
+pub const SPREAD_KPA: (f32, f32) = (13.16, 15.36);
+
+/// A hold near the ceiling: how many channels had their ceiling lowered, the fault latched,
+/// the most the sensed film read thinner than the model's once held (from 5 s of board time),
+/// and the thinnest the true film got.
+#[derive(Clone, Copy, Debug)]
+pub struct HoldRun {
+    pub lowered: u32,
+    pub fault: Option<Fault>,
+    pub worst_gap: f32,
+    pub s_min: f32,
+}
+
+/// The plant's film at `g_kpa` (the card's branches), each channel held at `frac` of the
+/// board's hold ceiling (at most 1 V under it: the ceiling is exclusive) for `film_s` of the
+/// film's time, the film and the board's model creeping `time_scale` times faster than the
+/// card (1: real time), armed after a random 0..500 ms.
+pub fn ceiling_hold(seed: u64, g_kpa: f32, frac: [f32; 3], film_s: u32, time_scale: f32) -> HoldRun {
+    let mut plant = Plant::new(seed as u32).unwrap();
+    plant.set_film(g_kpa, time_scale).expect("film");
+    let mut c = Control::new(SimBoard::with_plant(plant), 2000, 2000.0);
+    assert!(c.set_film_time_scale(time_scale), "time scale {time_scale}");
+    run(&mut c, (seed * 37 % 500) as u32);
+    let hold = c.hold_ceiling_v();
+    let target = frac.map(|f| (f * hold).min(hold - 1.0).floor());
+    assert!(c.apply(&setpoints(&c, target, false, 2000.0)));
+    let ticks = (film_s as f32 * 1000.0 / time_scale) as u32;
+    // once held: the 2.7 s ramp and the slew's windows out of the running mean
+    let held_from = 5000;
+    let mut out = HoldRun { lowered: 0, fault: None, worst_gap: f32::NEG_INFINITY, s_min: 1.0 };
+    let mut lowered = [false; 3];
+    for t in 0..ticks {
+        c.tick(c.now_ms());
+        let v = c.view();
+        let sense = v.sense.expect("a read-back");
+        for ch in 0..3 {
+            lowered[ch] |= sense.ceiling_v[ch] < hold;
+            if t >= held_from && sense.stack_ratio[ch].is_finite() {
+                out.worst_gap = out.worst_gap.max(v.stack_ratio[ch] - sense.stack_ratio[ch]);
+            }
+        }
+        if v.fault.get().is_some() {
+            break;
+        }
+    }
+    out.lowered = lowered.iter().filter(|&&l| l).count() as u32;
+    out.fault = c.view().fault.get();
+    out.s_min = c.board().plant.as_ref().expect("plant").truth().iter().map(|t| t.s_min).fold(1.0, f32::min);
+    out
+}
+
+/// `runs` holds of three channels from `seed0` ([`ceiling_hold`]): one run in three on the
+/// card's own film, the others on a film drawn from [`SPREAD_KPA`]; each channel at a
+/// fraction 0.9..1.0 of the ceiling, the third at the ceiling itself (1 V under it). On
+/// `threads` threads, in seed order.
+pub fn ceiling_holds(seed0: u64, runs: u64, film_s: u32, time_scale: f32, threads: u64) -> Vec<(u64, f32, HoldRun)> {
+    let one = |seed: u64| {
+        let mut r = Rng::new(seed);
+        let g = if seed % 3 == 0 { finger_fw::board::BOARD_CARD.g_eq_mpa as f32 * 1e3 } else { r.range(SPREAD_KPA.0, SPREAD_KPA.1) };
+        let frac = [r.range(0.9, 1.0), r.range(0.9, 1.0), 1.0];
+        (seed, g, ceiling_hold(seed, g, frac, film_s, time_scale))
+    };
+    std::thread::scope(|s| {
+        let parts: Vec<_> = (0..threads.max(1))
+            .map(|k| s.spawn(move || (seed0 + k..seed0 + runs).step_by(threads.max(1) as usize).map(one).collect::<Vec<_>>()))
+            .collect();
+        let mut all: Vec<_> = parts.into_iter().flat_map(|h| h.join().unwrap()).collect();
+        all.sort_by_key(|x| x.0);
+        all
+    })
+}

@@ -197,7 +197,8 @@ impl Qemu {
         q
     }
 
-    fn read_banner(&mut self) {
+    /// The next console line is the boot banner ([`Qemu::banner`]): after a boot or a reset.
+    pub fn read_banner(&mut self) {
         let banner = self.line();
         assert!(banner.starts_with("# finger-fw ") && banner.ends_with("ready"), "banner: {banner:?}");
         self.banner = banner;

@@ -248,3 +248,20 @@ fn pose_after_cal_uses_the_calibrated_finger() {
     assert_eq!(a.targets(), [want.volts[0], want.volts[1], want.volts[2]]);
     cmd(&mut a, "stop");
 }
+
+/// A `param` set that changes the calibration in force says so: its reply adds `cal=` with the
+/// factors now in force (was `ok e_b=15` alone, the calibration dropped in silence); a set that
+/// keeps it adds nothing.
+#[test]
+fn a_param_that_changes_the_calibration_says_so() {
+    let mut a = App::new(SimBoard::default());
+    let none = NONE_REPLY.trim_start_matches("ok ");
+    assert_eq!(cmd(&mut a, "param e_b 15"), format!("ok e_b=15 {none}"));
+    assert_eq!(cmd(&mut a, "cal"), NONE_REPLY);
+    // back to docs/model.md's finger: its factors, said again
+    assert_eq!(cmd(&mut a, "param e_b 12"), format!("ok e_b=12 {}", fe_reply().trim_start_matches("ok ")));
+    // kept: nothing added
+    assert_eq!(cmd(&mut a, "param margin 0.5"), "ok margin=0.5");
+    assert_eq!(cmd(&mut a, "param l 27"), "ok l=27");
+    assert_eq!(cmd(&mut a, "param e_b"), "ok e_b=12");
+}

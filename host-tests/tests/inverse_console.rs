@@ -78,6 +78,12 @@ fn contact_reply() {
     let f0 = kv(&out, "force")[0];
     let (fx, fy) = (kv(&out, "fx")[0], kv(&out, "fy")[0]);
     assert!(((fx * fx + fy * fy).sqrt() - f0).abs() < 1e-3 && f0 > 0.1);
+    // one sign everywhere: `force_on_tip` is the model's force (the stop's on the tip, as
+    // Python's `force_on_tip_N`); `fx`, `fy` its opposite
+    let on_tip = kv(&out, "force_on_tip");
+    let c = finger_model::inverse::contact_force(&f, 1.0, &[0.0; 3], 1.5, &[0.0; 3]).unwrap();
+    assert!((on_tip[0] - c.force[0]).abs() < 1e-3 && (on_tip[1] - c.force[1]).abs() < 1e-3, "{out} vs {:?}", c.force);
+    assert!((on_tip[0] + fx).abs() < 1e-3 && (on_tip[1] + fy).abs() < 1e-3, "{out}");
     out.clear();
     assert!(inverse_cmds::contact(&mut out, &f, 1.0, 1.5, &[9000.0, 9000.0, 9000.0]).unwrap(), "{out}");
     assert!(kv(&out, "force")[0] > f0, "voltage raises the contact force: {out}");

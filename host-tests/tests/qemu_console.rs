@@ -20,6 +20,37 @@ host_tests::on_both_images! {
     qemu_ceiling_stays_below_the_cards_hold_ceiling => ceiling_stays_below_the_cards_hold_ceiling;
     qemu_status_follows_the_creep => status_follows_the_creep;
     qemu_stop_drops_a_pasted_arm => stop_drops_a_pasted_arm;
+    qemu_reset_reboots_only_while_disarmed => reset_reboots_only_while_disarmed;
+}
+
+/// `reset` (docs/console.md): refused armed and while the HV ramps down; disarmed, its reply,
+/// then the boot banner, and the board as booted (an unsaved `param` gone). The Cortex-M3
+/// image has none (`err unknown`).
+fn reset_reboots_only_while_disarmed(img: Image) {
+    let mut q = Qemu::boot_on(img, "reset");
+    if img != Image::M4f {
+        expect(&mut q, "reset", "err unknown:");
+        return;
+    }
+    let help = send(&mut q, b"help\n", 1);
+    assert!(help.iter().any(|l| l.starts_with("reset - ")), "{help:?}");
+    // the emulator image's plant: its commands listed too (they were not)
+    assert!(help.iter().any(|l| l.starts_with("plant film ")), "{help:?}");
+    let e_b = field(&expect(&mut q, "param e_b", "ok e_b="), "e_b")[0];
+    expect(&mut q, "param e_b 13", "ok e_b=13");
+    expect(&mut q, "arm", "ok armed=1");
+    expect(&mut q, "volt all 500", "ok volts=");
+    expect(&mut q, "wait 0.5", "ok waited=0.5");
+    expect(&mut q, "reset", "err armed:");
+    expect(&mut q, "disarm", "ok armed=0");
+    // the ramp down: still refused until the HV is at 0
+    expect(&mut q, "reset", "err armed:");
+    expect(&mut q, "wait 1", "ok waited=1");
+    expect(&mut q, "version", "ok version=");
+    assert_eq!(q.cmd("reset"), "ok reset=1");
+    q.read_banner();
+    assert_eq!(field(&expect(&mut q, "param e_b", "ok e_b="), "e_b")[0], e_b, "the unsaved param is gone");
+    expect(&mut q, "status", "ok armed=0 force=0.000 volts=0.0,0.0,0.0 ");
 }
 
 /// `stop` drops the lines queued ahead of it (docs/console.md "Lines"). Armed, `arm`, `volt
@@ -156,8 +187,8 @@ fn console_commands_and_bad_inputs(img: Image) {
 fn pose_and_contact(q: &mut Qemu, vmax: f64) {
     // pose (the inverse model on the target, armed: it sets the tension and the voltages) at a
     // posture of the host's model; the answer agrees with the host's inverse
-    // the board's default finger: docs/model.md's on VHB 4905, with its FE calibration
-    let f = finger_model::Finger::with_calibration(finger_model::Params::<f32>::vhb4905(), finger_model::Calibration::model_md()).unwrap();
+    // the board's default finger: docs/model.md's on VHB 4905 under the board's gravity, with its FE calibration
+    let f = finger_model::Finger::with_calibration(finger_fw::app::board_params::<f32>(), finger_model::Calibration::model_md()).unwrap();
     let s = f.solve(0.8, &[0.1, 0.3, 0.5].map(|x| (x * vmax).floor() as f32), finger_model::Method::converged()).unwrap();
     let deg = [0, 1, 2].map(|k| format!("{:.6}", (s.joint_angle[k] as f64).to_degrees()).parse::<f64>().unwrap());
     // the firmware solves with the finger's branch table, built for its ceiling in force
@@ -203,12 +234,15 @@ fn fmax_against_f64(q: &mut Qemu, img: Image) {
     }
 }
 
-/// The host's f64 model of the board's finger: docs/model.md's on VHB 4905, the board's calibration.
+/// The host's f64 model of the board's finger: docs/model.md's on VHB 4905 (`board_params`) in
+/// the image's orientation (`param grav`, `param grav_dir`: the Cortex-M3 image has none), the
+/// board's calibration.
 fn board_finger(q: &mut Qemu) -> finger_model::Finger<f64> {
     let c = expect(q, "cal", "ok cal=");
     let g: Vec<f64> = c["ok cal=".len()..].split(',').map(|x| x.parse().unwrap()).collect();
     let cal = finger_model::Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] };
-    finger_model::Finger::with_calibration(finger_model::Params::<f64>::vhb4905(), cal).unwrap()
+    let [grav, dir] = ["grav", "grav_dir"].map(|n| expect(q, &format!("param {n}"), &format!("ok {n}="))[n.len() + 4..].parse::<f64>().unwrap());
+    finger_model::Finger::with_calibration(finger_fw::app::board_params::<f64>().with_gravity(grav, dir), cal).unwrap()
 }
 
 /// The M3 image's `pose` (the fixed-point inverse at the given tension), armed: at a posture

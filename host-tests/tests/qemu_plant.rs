@@ -1,5 +1,6 @@
 //! The emulator image against its plant (src/plant.rs, compiled into the image: QEMU's ADC
-//! is a sawtooth): a breakdown cuts every HV duty before the next reply, a module stuck at
+//! is a sawtooth): a breakdown cuts every HV duty before the next reply, a short that stays is
+//! found again by the re-arm's low-voltage check before any `volt`, a module stuck at
 //! 8 kV is cut within the loop's settling, and a film half the card's modulus held at the
 //! largest voltage the board takes for 600 s stays above 2/3 of its thickness.
 use host_tests::qemu::{Qemu, TIM4_CCR};
@@ -24,6 +25,35 @@ fn a_breakdown_cuts_every_duty_before_the_next_reply() {
     assert!(q.cmd("arm").starts_with("err fault:"), "arm refused until stop");
     let trip: u32 = field(&q.cmd("plant status"), "trip_us").parse().unwrap();
     assert!(trip > 0 && trip <= 1000, "trip {trip} µs");
+}
+
+/// A short that stays (`plant breakdown 2`, no clearing time) latches `breakdown` on channel
+/// 2: `status` says `fault_ch=2` and `err fault` names the channel. After `stop`, `arm` and
+/// `wait 0.5`, with no `volt`, the re-arm's low-voltage check has driven every channel to its
+/// 200 V and found the short again: `fault=breakdown fault_ch=2`, the enable low, every duty
+/// 0, and `volt` refused. Before, this arm answered `armed=1 fault=none` and only the next
+/// `volt` tripped.
+#[test]
+fn a_short_that_stays_is_found_at_rearm_before_any_volt() {
+    let mut q = Qemu::boot("plant-rearm");
+    assert_eq!(q.cmd("arm"), "ok armed=1");
+    assert!(q.cmd("volt all 3000").starts_with("ok volts="));
+    assert_eq!(q.cmd("wait 2"), "ok waited=2");
+    assert_eq!(q.cmd("plant breakdown 2"), "ok plant breakdown 2");
+    let st = q.cmd("status");
+    assert_eq!((field(&st, "fault"), field(&st, "fault_ch")), ("breakdown", "2"), "{st}");
+    let refused = q.cmd("arm");
+    assert!(refused.starts_with("err fault:") && refused.contains("breakdown latched on channel 2"), "{refused}");
+    assert_eq!(q.cmd("stop"), "ok stopped");
+    let st = q.cmd("status");
+    assert_eq!(field(&st, "fault"), "none", "{st}");
+    assert!(!st.contains("fault_ch="), "{st}");
+    assert_eq!(q.cmd("arm"), "ok armed=1");
+    assert_eq!(q.cmd("wait 0.5"), "ok waited=0.5");
+    let st = q.cmd("status");
+    assert_eq!((field(&st, "fault"), field(&st, "fault_ch"), field(&st, "enable")), ("breakdown", "2", "0"), "{st}");
+    assert_eq!(duties(&mut q), vec![0, 0, 0]);
+    assert!(q.cmd("volt all 100").starts_with("err fault:"));
 }
 
 #[test]

@@ -352,3 +352,25 @@ fn locked_out_core_never_arms() {
     cmds.execute(b"arm", &mut out);
     assert_eq!(out.0, "err fault: qemu image on a real chip: this image never arms here\n");
 }
+
+/// A clock read across SysTick's reload runs backwards (its count within the millisecond starts
+/// again): the emulator under the wall clock does that inside a tick. Each reading here is
+/// 1000 counts before the last.
+static BACKWARDS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(1_000_000);
+fn backwards_clock() -> u32 {
+    BACKWARDS.fetch_sub(1000, std::sync::atomic::Ordering::Relaxed)
+}
+
+#[test]
+fn a_tick_timed_across_a_clock_wrap_costs_no_impossible_time() {
+    // with the plant, so the read-back and its source are timed too
+    let plant = finger_fw::plant::Plant::new(1).unwrap();
+    let mut c = Control::new(SimBoard::with_plant(plant), 2000, 2000.0);
+    for _ in 0..5 {
+        let cost = c.tick_timed(c.now_ms(), backwards_clock);
+        // was 2^32 - 1000 (25,565,275 µs at 168 MHz): a u32 difference that wrapped
+        for (what, counts) in [("stack_step", cost.stack_step), ("read_back", cost.read_back), ("sense_source", cost.sense_source)] {
+            assert!(counts < 168_000, "{what} = {counts} counts across a wrap");
+        }
+    }
+}

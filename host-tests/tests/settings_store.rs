@@ -29,6 +29,7 @@ const SCRIPTS: &[&[&str]] = &[
     &["param e_b 15", "param nu_b 0.4", "param slew 4000"],
     &["param layers 0"],
     &["param t_min 1.2", "param e 4.4", "param b 9", "cal none"],
+    &["param grav_dir 90", "param grav 3.5", "param rho_b 1.3"],
 ];
 
 /// A deterministic generator for the random sequences (SplitMix64).

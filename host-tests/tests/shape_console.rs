@@ -3,7 +3,7 @@
 //! sub-elements (the model's posture, docs/model.md "Equilibrium"), the tip as `solve`'s.
 use finger_fw::sim::SimBoard;
 use finger_fw::App;
-use finger_model::{Calibration, Finger, Method, Params, Pose};
+use finger_model::{Calibration, Finger, Method, Pose};
 use host_tests::console::ceiling;
 use host_tests::reply::{nums, val};
 use host_tests::sim_console::{feed, frac_of};
@@ -18,8 +18,9 @@ fn cmd(a: &mut App<SimBoard>, line: &str) -> String {
 #[test]
 fn shape_reports_the_poses_of_the_solve() {
     let mut a = App::new(SimBoard::default());
-    // the board's default finger: docs/model.md's on the board's film (VHB 4905), with its FE calibration
-    let f: Finger<f32> = Finger::with_calibration(Params::vhb4905(), Calibration::model_md()).unwrap();
+    // the board's default finger: docs/model.md's on the board's film (VHB 4905) under the
+    // board's gravity, with its FE calibration
+    let f: Finger<f32> = Finger::with_calibration(finger_fw::app::board_params(), Calibration::model_md()).unwrap();
     let p = f.params();
     let sub_len = p.hinge_len() / p.m as f32;
     let vm = ceiling(&mut a);

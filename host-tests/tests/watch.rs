@@ -7,7 +7,8 @@ use finger_fw::control::hv_loop::Ask;
 use finger_fw::control::sense::Estimator;
 use finger_fw::control::watch::{
     Reading, ThicknessGuard, Watch, COLLAPSE_FRAC, DISAGREE_FAST_S, DISAGREE_S, DISAGREE_WINDOWS, FLOOR_MARGIN_S, GUARD_HELD_MS, HV_SETTLE_MS, LEAK_BOUND_UA,
-    LEAK_BOUND_UA_PER_V, LEAK_FLOOR_UA, MISMATCH_FRAC, MISMATCH_V, MODULE_FALL_MS, OPEN_FRAC, OVER_FRAC, OVER_MS, OVER_V,
+    LEAK_BOUND_UA_PER_V, LEAK_CHECK_MIN_V, LEAK_FLOOR_UA, MISMATCH_FRAC, MISMATCH_V, MODULE_FALL_MS, NEAR_GAP_S, OPEN_FRAC, OVER_FRAC, OVER_MS, OVER_V,
+    STUCK_MOVE_V, STUCK_MS,
 };
 use finger_fw::control::Fault;
 use host_tests::synthetic::Stack;
@@ -168,12 +169,13 @@ fn an_output_left_on_with_the_enable_low_latches() {
     assert_eq!(first_fault(1_000, false, |_| 0.0, |_| 700.0), Some((HV_SETTLE_MS, Fault::HvMismatch)));
 }
 
-/// A monitor code that does not move for 50 ticks while the command moves more than 200 V is a
-/// stuck sensor: the command ramping 1 kV -> 1.3 kV at 3 V/ms under a frozen reading latches
-/// once both hold (frozen from tick 1, at 1,003 V; past 1,203 V at tick 68); frozen under a
-/// still command, or one that moves 150 V, it is none.
+/// A monitor code that does not move for `STUCK_MS` ticks while the command moves more than
+/// `STUCK_MOVE_V` (100 V) is a stuck sensor: the command ramping 1 kV -> 1.3 kV at 3 V/ms under
+/// a frozen reading latches once both hold (frozen from tick 1, at 1,003 V; past 1,103 V at tick
+/// 35, 50 ticks frozen at tick 50); frozen under a still command, or one that moves 90 V, it
+/// is none.
 #[test]
-fn a_reading_frozen_while_its_command_moves_200_v_is_a_stuck_sensor() {
+fn a_reading_frozen_while_its_command_moves_past_the_stuck_bound_is_a_stuck_sensor() {
     let frozen = |ramp_v: f32| {
         let mut w = Watch::new();
         let r = reading(1_000.0, 0.1);
@@ -182,9 +184,23 @@ fn a_reading_frozen_while_its_command_moves_200_v_is_a_stuck_sensor() {
             check(&mut w, &r, drive, 5_400.0).map(|f| (k, f))
         })
     };
-    assert_eq!(frozen(300.0), Some((68, Fault::Sensor)));
+    assert_eq!(frozen(300.0), Some((STUCK_MS, Fault::Sensor)));
     assert_eq!(frozen(0.0), None);
-    assert_eq!(frozen(150.0), None);
+    assert_eq!(frozen(0.9 * STUCK_MOVE_V), None);
+}
+
+/// The stuck rule's bound is strict: a monitor frozen at code 0 (the audit's case: `arm`, then a
+/// channel commanded from 0 V to the bound itself) is no fault; 1 V past the bound latches
+/// `sensor` after `STUCK_MS` ticks. (With `>=` for `>`, the first latched.)
+#[test]
+fn a_command_that_moves_exactly_the_stuck_bound_under_a_frozen_code_is_no_fault() {
+    let frozen_at_zero = |to_v: f32| {
+        let mut w = Watch::new();
+        let r = Reading { v: 0.0, i_ua: 0.0, v_code: 0.0 };
+        (0..300u32).find_map(|k| check(&mut w, &r, if k < 5 { 0.0 } else { to_v }, 5_400.0).map(|f| (k, f)))
+    };
+    assert_eq!(frozen_at_zero(STUCK_MOVE_V), None);
+    assert_eq!(frozen_at_zero(STUCK_MOVE_V + 1.0), Some((STUCK_MS, Fault::Sensor)));
 }
 
 /// An estimator that has measured a stack of `c_pf` leaking `leak_ua` (ohmic) at `v`: held
@@ -222,6 +238,29 @@ fn a_leakage_past_its_bound_for_200_ticks_is_a_leak() {
         assert_eq!(with_estimate(&measured(c_pf, 1.2 * bound, v), v), Some((199, Fault::Leakage)), "{v} V");
         assert_eq!(with_estimate(&measured(c_pf, 0.8 * bound, v), v), None, "{v} V");
     }
+}
+
+/// The leakage check acts above `LEAK_CHECK_MIN_V` only: a 1 µA leak measured at 50 V is none
+/// with the command at 50 V, and latches at tick 199 with it 1 V above. (With `>=` for `>`, the
+/// first latched too.)
+#[test]
+fn a_leak_at_the_leakage_checks_own_voltage_is_not_checked() {
+    let c_pf = BOARD_STACK_C0_PF + SENSE_STRAY_PF;
+    let est = measured(c_pf, 1.0, LEAK_CHECK_MIN_V);
+    assert!(est.leakage_ua().is_some_and(|l| l > 0.5), "{:?}", est.leakage_ua());
+    assert_eq!(with_estimate(&est, LEAK_CHECK_MIN_V), None);
+    assert_eq!(with_estimate(&est, LEAK_CHECK_MIN_V + 1.0), Some((199, Fault::Leakage)));
+}
+
+/// A drive counts as steady when it moves at most 1 V + 1 % a tick: on a 20 kV/s ramp (20 V a
+/// tick) from 1 kV, steady from 1,900 V on (tick 45), a collapse under it latches 30 ticks and 3
+/// collapsed ticks later. (With the bound 1 % alone, `1.0 * 0.01 * drive_v`, steady from 2 kV:
+/// 5 ticks later.)
+#[test]
+fn a_collapse_on_a_fast_ramp_latches_once_the_ramp_counts_as_steady() {
+    let ramp = |k: u32| 1_000.0 + 20.0 * k as f32;
+    let got = first_fault(300, true, ramp, |k| 0.9 * COLLAPSE_FRAC * ramp(k));
+    assert_eq!(got, Some((76, Fault::Breakdown)));
 }
 
 /// The ceiling at 1 and no disagreement.
@@ -265,21 +304,33 @@ fn a_film_sensed_thinner_for_three_windows_lowers_the_ceiling_by_the_cards_volta
     assert!(untouched(&g));
 }
 
-/// A sensed film within `FLOOR_MARGIN_S` of its floor lowers the ceiling by 4 x its depth into
-/// the margin each window (0.01 in: x 0.96, twice 0.9216); the derate never leaves [0, 1] and a
+/// A sensed film within `FLOOR_MARGIN_S` of its floor, and thinner than the model's by more
+/// than `NEAR_GAP_S` (the sensing's scatter), lowers the ceiling by 4 x its depth into the
+/// margin each window (0.01 in: x 0.96, twice 0.9216); one that agrees with the model's within
+/// `NEAR_GAP_S` lowers nothing (the card's own film held at the ceiling relaxes into the margin:
+/// the model's guard keeps it above the floor); the derate never leaves [0, 1] and a
 /// sensed stretch out of (0, 1.5] (not a number, a reading of nothing) changes nothing; a film
 /// sensed thinner where the card's voltage says thicker, or the model at 0 V, derates nothing.
 #[test]
 fn a_film_near_its_floor_lowers_the_ceiling_in_proportion() {
     let floor = 0.667f32;
     let s = floor + FLOOR_MARGIN_S - 0.01;
+    let model = s + NEAR_GAP_S + 0.005;
+    assert!(model - s < DISAGREE_S);
     let mut g = ThicknessGuard::new();
-    g.update(s, s, floor, 3_000.0, 3_000.0, 0, false);
+    g.update(s, model, floor, 3_000.0, 3_000.0, 0, false);
     assert!((g.derate - 0.96).abs() < 1e-5, "{g:?}");
-    g.update(s, s, floor, 3_000.0, 3_000.0, 0, false);
+    g.update(s, model, floor, 3_000.0, 3_000.0, 0, false);
     assert!((g.derate - 0.96 * 0.96).abs() < 1e-5, "{g:?}");
+    for agreeing in [s, s - 0.005, s + NEAR_GAP_S] {
+        let mut g = ThicknessGuard::new();
+        for _ in 0..10 {
+            g.update(s, agreeing, floor, 3_000.0, 3_000.0, GUARD_HELD_MS, true);
+        }
+        assert!(untouched(&g), "the model at {agreeing}: {g:?}");
+    }
     let mut deep = ThicknessGuard::new();
-    deep.update(0.1, 0.1, floor, 3_000.0, 3_000.0, 0, false);
+    deep.update(0.1, 0.9, floor, 3_000.0, 3_000.0, 0, false);
     assert_eq!(deep.derate, 0.0);
     for bad in [f32::NAN, 0.0, -0.5, 1.6] {
         let mut g = ThicknessGuard::new();

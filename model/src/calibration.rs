@@ -12,9 +12,11 @@ use crate::mat3::Mat3;
 use crate::params::Params;
 use crate::real::Real;
 
-/// Parameters that do not enter the mechanics (the electrical ceiling, the solver's increments):
-/// changing one keeps a calibration; changing any other makes it [`Calibration::for_params`].
-pub const KEEPS_CALIBRATION: &[&str] = &["margin", "v_supply", "eps_r", "n_inc"];
+/// Parameters that do not enter the compliances the factors correct (the electrical ceiling,
+/// the solver's increments, gravity's load and the body's density: the factors are computed
+/// without gravity, issue 53): changing one keeps a calibration; changing any other makes it
+/// [`Calibration::for_params`].
+pub const KEEPS_CALIBRATION: &[&str] = &["margin", "v_supply", "eps_r", "n_inc", "grav", "grav_dir", "rho_b"];
 
 /// Correction factors (dimensionless; 1 = none).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,7 +71,7 @@ impl<R: Real> Calibration<R> {
     pub fn for_params(p: &Params<R>) -> Self {
         let d = Params::<R>::default();
         let layers = if p.layers == 0 { 0 } else { d.layers };
-        let q = Params { margin: d.margin, v_supply: d.v_supply, eps_r: d.eps_r, n_inc: d.n_inc, ..*p };
+        let q = Params { margin: d.margin, v_supply: d.v_supply, eps_r: d.eps_r, n_inc: d.n_inc, grav: d.grav, grav_dir: d.grav_dir, rho_b: d.rho_b, ..*p };
         if q == (Params { layers, ..d }) {
             Self::model_md()
         } else {
@@ -151,9 +153,9 @@ mod tests {
         assert!(cal.validate(&d).is_ok());
         assert_eq!(Calibration::for_params(&d), cal);
         assert_eq!(Calibration::for_params(&d.without_stacks()), cal);
-        // the electrical and solver parameters do not change it
+        // the electrical and solver parameters do not change it, nor gravity (issue 53)
         let mut p = d;
-        for (name, v) in [("margin", 0.5), ("v_supply", 9000.0), ("eps_r", 4.0), ("n_inc", 7.0)] {
+        for (name, v) in [("margin", 0.5), ("v_supply", 9000.0), ("eps_r", 4.0), ("n_inc", 7.0), ("grav", 9.81), ("grav_dir", 90.0), ("rho_b", 1.3)] {
             assert!(KEEPS_CALIBRATION.contains(&name));
             p.set(name, v).unwrap();
         }

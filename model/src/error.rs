@@ -112,7 +112,8 @@ impl Message for Error {
                 o.text("tension ");
                 o.fixed(tension, 3);
                 o.text(" N is past the end of the equilibrium branch fmax=");
-                o.fixed(fmax, 3);
+                // `limits`' digits: the one figure of the limit
+                o.fixed(fmax, 4);
                 o.text(" N");
             }
             Error::NotConverged { iterations, residual } => {

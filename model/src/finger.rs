@@ -25,6 +25,7 @@ use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
 mod branch_end;
+mod gravity;
 mod joint;
 mod loaded;
 mod march;
@@ -48,8 +49,9 @@ pub use stiffness::JointStiffness;
 pub use types::{BranchEnd, BranchLimit, Compliances, JointEquilibrium, Method, Pose, Solution};
 pub(crate) use types::{Heading, JointMarch};
 
-/// Unknowns of the coupled (tip-loaded) solve: each joint's hole, then the tip position.
-const COUPLED: usize = 2 * MAX_JOINTS + 2;
+/// Unknowns of the coupled (tip-loaded or weighted) solve: each joint's hole, the tip position,
+/// then under gravity each joint's distal centroid.
+const COUPLED: usize = 4 * MAX_JOINTS + 2;
 
 /// A prepared finger: validated parameters and the hinge compliances, computed once.
 #[derive(Clone, Copy, Debug)]
@@ -67,13 +69,49 @@ pub struct Finger<R> {
     link_c: Mat3<R>,
     /// FE calibration of the sub-element compliances (`Calibration::none()`: docs/model.md as is).
     cal: Calibration<R>,
+    /// A fixed load on each joint's distal chain besides the cable (its proximal frame), and
+    /// the wrench it adds on its link (the link's frame): the inverse's distal weight at a
+    /// posture (docs/model.md "Gravity"); none on a finger `new` prepares.
+    held: [Option<TipLoad<R>>; HELD],
+    held_link: [[R; 3]; HELD],
 }
 
-/// The loads a joint sees besides the cable, in its proximal frame.
-#[derive(Clone, Copy)]
-struct TipLoad<R> {
+/// Joints with a held load: every joint with the gravity feature, none without (the fields
+/// and their code leave the image).
+const HELD: usize = if cfg!(feature = "gravity") { MAX_JOINTS } else { 0 };
+
+/// The loads a joint sees besides the cable (a tip force, the distal weight), in its proximal
+/// frame (or the base frame, as its maker says): a force at a point and a couple (N·mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct TipLoad<R> {
     force: [R; 2],
     point: [R; 2],
+    couple: R,
+}
+
+impl<R: Real> TipLoad<R> {
+    /// A force at a point.
+    fn at(force: [R; 2], point: [R; 2]) -> Self {
+        TipLoad { force, point, couple: R::zero() }
+    }
+
+    /// This load and another force at another point: the forces summed at this point, the
+    /// other's moment about it added to the couple.
+    /// The same load in another scalar type.
+    fn cast<S: Real>(&self) -> TipLoad<S> {
+        let c = |x: R| S::from_f64(x.to_f64());
+        TipLoad { force: [c(self.force[0]), c(self.force[1])], point: [c(self.point[0]), c(self.point[1])], couple: c(self.couple) }
+    }
+
+    /// The load times `s`.
+    fn scaled(&self, s: R) -> Self {
+        TipLoad { force: [self.force[0] * s, self.force[1] * s], point: self.point, couple: self.couple * s }
+    }
+
+    fn plus(self, force: [R; 2], at: [R; 2]) -> Self {
+        let arm = [at[0] - self.point[0], at[1] - self.point[1]];
+        TipLoad { force: [self.force[0] + force[0], self.force[1] + force[1]], point: self.point, couple: self.couple + arm[0] * force[1] - arm[1] * force[0] }
+    }
 }
 
 /// A joint's marched state.
@@ -89,11 +127,12 @@ struct JointState<R> {
     tangent: Option<([R; 2], R)>,
 }
 
-/// The loads `Finger::span_loads` finds: cable force, tip force and its point, their sum.
+/// The loads `Finger::span_loads` finds: cable force, tip force, its point and couple, their sum.
 struct SpanLoads<R, T> {
     fc: [T; 2],
     ft: [R; 2],
     tp: [R; 2],
+    tc: R,
     ftot: [T; 2],
 }
 
@@ -203,7 +242,7 @@ impl<R: Real> Finger<R> {
             return Err(Error::Input { input: "tol", reason: "tolerance must be positive" });
         }
         let tol = tol.max(self.resolution());
-        if tip_force[0] != R::zero() || tip_force[1] != R::zero() {
+        if tip_force[0] != R::zero() || tip_force[1] != R::zero() || self.weights().is_some() {
             let (states, tip, iterations) = loaded::newton_coupled(self, c, tension, tip_force, tol, max_iter)?;
             self.assemble(c, tension, tip_force, &states, Some(tip), iterations)
         } else {

@@ -19,6 +19,7 @@ use crate::real::Real;
 mod contact;
 mod fast;
 mod general;
+mod gravity;
 mod table;
 
 pub use contact::{contact_force, Contact};
@@ -135,7 +136,8 @@ pub fn solve_pose_tabled<R: Real>(table: &BranchTable<R>, angles: &[R], tension:
 pub fn solve_pose_tabled_into<R: Real>(table: &BranchTable<R>, angles: &[R], tension: Option<R>, out: &mut PoseSolution<R>) -> Result<(), Error> {
     let f = table.finger();
     check_inputs(f, angles, tension, None)?;
-    if takes_general(f) && general::solve_tabled(table, angles, tension, out)? {
+    // under gravity the table of the joints alone does not hold: the untabled inverse
+    if takes_general(f) && !f.has_weight() && general::solve_tabled(table, angles, tension, out)? {
         return Ok(());
     }
     // (the tabled path tried already: not again)
@@ -236,7 +238,9 @@ fn solve<R: Real>(f: &Finger<R>, table: Table<'_, R>, angles: &[R], tension: Opt
         iterations: 0,
     };
     out.angles[..n].copy_from_slice(angles);
-    if takes_general(f) {
+    if f.has_weight() {
+        gravity::solve(f, angles, tension, opts, &mut out)?;
+    } else if takes_general(f) {
         // sub-divided hinges or flexible links: bracketed root finding around the forward
         // per-joint equilibrium (`general`). A build without `inverse-fast` (the firmware,
         // whose default model is m = 8) takes this path for m = 1 too and leaves the fast

@@ -195,9 +195,10 @@ const fn info(name: &'static str, min: f64, max: f64, open: bool, range: &'stati
     ParamInfo { name, min, max, open, range, read_only: false }
 }
 
-/// Every parameter by its console name, with its range. Lengths are bounded to 1e-3..1e4 mm
-/// and moduli to 1e-3..1e6 MPa so that no product in the model overflows f32.
-pub const PARAMS: &[ParamInfo] = &[
+/// The parameter table (`PARAMS`), the gravity feature's three after the rest.
+macro_rules! params_table {
+    ($($extra:expr),*) => {
+        &[
     info("n", 1.0, MAX_JOINTS as f64, false, "integer 1..5"),
     info("l", 1e-3, 1e4, false, "1e-3..1e4 mm, > 2a"),
     info("b", 1e-3, 1e4, false, "1e-3..1e4 mm, > t_min"),
@@ -220,10 +221,22 @@ pub const PARAMS: &[ParamInfo] = &[
     info("nu_b", 0.0, 0.499, false, "0..0.499"),
     info("span_floor", 1e-6, 1e3, false, "1e-6 mm..L_h"),
     info("flex_links", 0.0, 1.0, false, "0 or 1"),
+            $($extra),*
+        ]
+    };
+}
+
+/// Every parameter by its console name, with its range. Lengths are bounded to 1e-3..1e4 mm
+/// and moduli to 1e-3..1e6 MPa so that no product in the model overflows f32.
+#[cfg(feature = "gravity")]
+pub const PARAMS: &[ParamInfo] = params_table!(
     info("grav", 0.0, 20.0, false, "0..20 m/s2 (0: off)"),
     info("grav_dir", -180.0, 180.0, false, "-180..180 deg from +x toward +y"),
-    info("rho_b", 0.0, 25.0, false, "0..25 g/cm3"),
-];
+    info("rho_b", 0.0, 25.0, false, "0..25 g/cm3")
+);
+/// Every parameter by its console name (without the gravity feature: none of gravity's).
+#[cfg(not(feature = "gravity"))]
+pub const PARAMS: &[ParamInfo] = params_table!();
 
 fn is_integer_name(name: &str) -> bool {
     matches!(name, "n" | "layers" | "n_inc" | "m" | "plate" | "flex_links")
@@ -257,7 +270,7 @@ impl<R: Real> Params<R> {
 
     /// Whether gravity acts (a magnitude and a mass).
     pub fn has_gravity(&self) -> bool {
-        self.grav > R::zero() && (self.rho_b > R::zero() || (self.layers > 0 && self.card.rho_g_cm3 > 0.0))
+        cfg!(feature = "gravity") && self.grav > R::zero() && (self.rho_b > R::zero() || (self.layers > 0 && self.card.rho_g_cm3 > 0.0))
     }
 
     /// The default finger (docs/model.md) with the board's film, VHB 4905.
@@ -326,8 +339,11 @@ impl<R: Real> Params<R> {
             "nu_b" => self.nu_b.to_f64(),
             "span_floor" => self.span_floor.to_f64(),
             "flex_links" => self.flex_links as u32 as f64,
+            #[cfg(feature = "gravity")]
             "grav" => self.grav.to_f64(),
+            #[cfg(feature = "gravity")]
             "grav_dir" => self.grav_dir.to_f64(),
+            #[cfg(feature = "gravity")]
             "rho_b" => self.rho_b.to_f64(),
             _ => return None,
         })
@@ -373,8 +389,11 @@ impl<R: Real> Params<R> {
             "nu_b" => p.nu_b = r,
             "span_floor" => p.span_floor = r,
             "flex_links" => p.flex_links = k != 0,
+            #[cfg(feature = "gravity")]
             "grav" => p.grav = r,
+            #[cfg(feature = "gravity")]
             "grav_dir" => p.grav_dir = r,
+            #[cfg(feature = "gravity")]
             "rho_b" => p.rho_b = r,
             _ => return Err(bad),
         }

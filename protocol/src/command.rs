@@ -32,17 +32,18 @@ pub enum Command {
     Factory,
     Config,
     Wait,
+    Reset,
 }
 
 /// Each command's word, in the order of the enum.
-const NAMES: [&str; 23] = [
+const NAMES: [&str; 24] = [
     "help", "version", "status", "limits", "material", "solve", "shape", "arm", "disarm", "stop", "timing", "volt", "force", "pose", "contact", "plant",
-    "param", "preset", "cal", "save", "factory", "config", "wait",
+    "param", "preset", "cal", "save", "factory", "config", "wait", "reset",
 ];
 
 /// `NAMES` end to end and where each ends: what the image holds (one string and a byte per
 /// command: the Cortex-M3 image's flash). The build checks it is `NAMES`.
-const TEXT: &str = "helpversionstatuslimitsmaterialsolveshapearmdisarmstoptimingvoltforceposecontactplantparampresetcalsavefactoryconfigwait";
+const TEXT: &str = "helpversionstatuslimitsmaterialsolveshapearmdisarmstoptimingvoltforceposecontactplantparampresetcalsavefactoryconfigwaitreset";
 const ENDS: [u8; NAMES.len() + 1] = crate::code::ends(TEXT, &NAMES);
 
 impl Command {
@@ -71,6 +72,7 @@ impl Command {
         Command::Factory,
         Command::Config,
         Command::Wait,
+        Command::Reset,
     ];
 
     /// The command a line's first word names (exact: lowercase, as the board's line buffer

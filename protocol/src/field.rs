@@ -84,6 +84,8 @@ fields! {
     /// status: the horn's angle; limits: its travel (two)
     SERVO: "servo", Numbers, "deg";
     FAULT: "fault", Word, "name";
+    /// the channel whose read-back latched the fault, 1..3
+    FAULT_CH: "fault_ch", Number, "channel";
     ENABLE: "enable", Number, "0/1";
     STIFFNESS: "stiffness", Numbers, "N/mm, N/mm, N·mm/rad";
     ITERS: "iters", Number, "count";
@@ -92,6 +94,8 @@ fields! {
     FX: "fx", Number, "N";
     FY: "fy", Number, "N";
     POINT: "point", Numbers, "mm, mm";
+    /// the stop's force on the tip, x and y (`fx`, `fy`: the tip's on the stop, opposite)
+    FORCE_ON_TIP: "force_on_tip", Numbers, "N, N";
     NODES: "nodes", Numbers, "mm, mm, deg per pose";
     HINGES: "hinges", Numbers, "mm, mm, deg per pose";
     VMAX: "vmax", Numbers, "V";
@@ -150,10 +154,16 @@ fields! {
     DEFAULT: "default", Number, "as the parameter";
     /// always `1`
     FACTORY: "factory", Number, "-";
+    /// always `1`: the board reboots once the reply is sent
+    RESET: "reset", Number, "-";
     /// the boot banner's, not a reply's
     CONFIG: "config", Word, "-";
     FILM_KPA: "film_kpa", Number, "kPa";
     CURRENT_UA: "current_ua", Numbers, "µA";
+    /// status, limits: gravity's magnitude in force (0: off)
+    GRAV: "grav", Number, "m/s²";
+    /// status, limits: gravity's direction from the straight finger's axis toward the cable side
+    GRAV_DIR: "grav_dir", Number, "deg";
 }
 
 /// `const_concat!(a, b, ...)`: the `&'static str` constants `a`, `b`, ... end to end, one

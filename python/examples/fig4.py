@@ -109,7 +109,8 @@ def run(path: Path, out: Path) -> Path:
     ax.set_ylabel("y, mm (flexor side)")
     ax.set_title(scene.get("title", path.stem), fontsize=9)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper left")
+    # beside the axes, where it covers no posture (inside, it hid the 1 N curves)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     out.mkdir(parents=True, exist_ok=True)
     png = out / f"{path.stem}.png"
     fig.savefig(png, dpi=120, bbox_inches="tight")
@@ -138,7 +139,8 @@ def compare(paths: list[Path], out: Path) -> Path:
         s = f.solve(P, v, **solve_kw)
         xy = s.nodes[:, :2]
         dash, mark = STYLES[i % len(STYLES)]
-        label = f"{sc.get('title', p.stem)}: tip {np.degrees(s.tip[2]):.3f} deg"
+        # a scene's own colour notes ("; purple: ...") belong to its own figure, not to this one
+        label = f"{sc.get('title', p.stem).split(';')[0]}: tip {np.degrees(s.tip[2]):.3f} deg"
         for a in (ax, zoom):
             a.plot(xy[:, 0], xy[:, 1], linestyle=dash, marker=mark, color=colors[i], ms=4, lw=1.4, label=label if a is ax else None)
         tips.append(xy[-1])

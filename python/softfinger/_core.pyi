@@ -55,7 +55,7 @@ class Solution:
 
 class Solutions:
     """``solve_many``'s answers; the first axis of every array is the posture (N). A refused
-    row (``errors="mask"``) holds zeros, ``ok`` False, and its exception in ``errors``."""
+    row (``errors="mask"``) holds NaN in every result (its asked tension and voltages kept), ``ok`` False, and its exception in ``errors``."""
 
     tension_N: F64
     """(N,), N."""
@@ -108,7 +108,7 @@ class PoseSolution:
         """The feasible interval of tensions [low, high], N."""
     @property
     def solution(self) -> Solution:
-        """The posture as a forward solution (no tip stiffness)."""
+        """The posture as a forward solution, with its tip stiffness."""
     @property
     def iterations(self) -> int: ...
 
@@ -121,6 +121,10 @@ class Contact:
     @property
     def force_N(self) -> F64:
         """The force the object exerts on the tip, N, shape (2,); the finger presses with −force."""
+    @property
+    def force_on_tip_N(self) -> F64:
+        """``force_N`` by the name of its sign: the stop's force on the tip, N, shape (2,) (the
+        console's ``force_on_tip``; its ``fx``, ``fy`` are the opposite)."""
     @property
     def magnitude_N(self) -> float: ...
     @property
@@ -152,8 +156,12 @@ class Finger:
     calibration that does not apply to the finger raises :class:`InputError` (never dropped).
     ``**params``: any parameter by its console name (``l``, ``b``, ``w``, ``t_min``, ``a``,
     ``e_b``, ``e``, ``layers``, ``z0``, ``g``, ``nu``, ``eps_r``, ``margin``, ``v_supply``,
-    ``n_inc``, ``m``, ``plate``, ``nu_b``, ``span_floor``, ``flex_links``; mm, MPa, V). Raises
-    :class:`InputError` for a value out of range. ``card``: the DE film's material card
+    ``n_inc``, ``m``, ``plate``, ``nu_b``, ``span_floor``, ``flex_links``; mm, MPa, V; gravity:
+    ``grav`` m/s² 0..20 (0: off), ``grav_dir`` degrees -180..180 from the straight finger's axis
+    toward the cable side (0 hanging straight down, 90 held horizontally curling downward, -90
+    curling upward), ``rho_b`` the body's density g/cm³). Raises :class:`InputError` naming the
+    parameter for a value out of range. The board's finger (``"board"``) hangs straight down
+    under 9.81 m/s², as the board's; the other presets have no gravity. ``card``: the DE film's material card
     (:func:`cards`, e.g. ``"VHB-4905"``; docs/materials.md) on the preset's finger: its
     equilibrium modulus (``g``) and permittivity (``eps_r``), its breakdown field in the
     ceiling; default the preset's. The repr names preset, card, calibration and ceiling."""
@@ -189,11 +197,14 @@ class Finger:
               tol: float = 1e-9, max_iter: int = 200, stiffness: bool = True) -> Solution:
         """The posture at cable tension ``P`` (N) and channel voltages ``volts`` (V, n values or
         one). ``tol`` mm; ``method="stepping"``: the paper's load stepping, ``n_inc`` steps."""
-    def solve_many(self, P: ArrayLike, volts: ArrayLike, *, method: Method = "converged", n_inc: Optional[int] = None,
+    def solve_many(self, P: ArrayLike, volts: ArrayLike, *, grav_dir: Optional[ArrayLike] = None,
+                   method: Method = "converged", n_inc: Optional[int] = None,
                    tol: float = 1e-9, max_iter: int = 200, stiffness: bool = True,
                    errors: Literal["raise", "mask"] = "raise") -> Solutions:
         """``solve`` over N postures in parallel (GIL released): ``P`` (N,) or one number, N;
-        ``volts`` (N, n), (n,) or one number, V. ``errors="raise"``: the first refused row's
+        ``volts`` (N, n), (n,) or one number, V; ``grav_dir`` (N,) or one number, degrees: the
+        finger's orientation per posture (None: the finger's own ``grav_dir``; out of range
+        raises :class:`InputError` naming it). ``errors="raise"``: the first refused row's
         exception (its ``index``); ``"mask"``: see :class:`Solutions`."""
     def pose(self, angles: ArrayLike, P: Optional[float] = None, *, degrees: bool = False) -> PoseSolution:
         """The inverse: joint angles (rad; degrees with ``degrees=True``) and optionally the
@@ -206,6 +217,11 @@ class Finger:
 
 def cards() -> List[str]:
     """Every material card's name (``Finger(card=...)``)."""
+
+BOARD_GRAV_M_S2: float
+"""The board's finger's gravity, m/s² (9.81: on; ``Finger()``'s ``grav``)."""
+BOARD_GRAV_DIR_DEG: float
+"""The board's finger's orientation, degrees (0: hanging straight down)."""
 
 def parameter_ranges() -> List[Tuple[str, str]]:
     """Every parameter name with its valid range, as the console states them."""

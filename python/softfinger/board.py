@@ -86,6 +86,11 @@ def _float(v: Value) -> float:
     raise BoardLinkError(f"a number was expected, got {v!r}")
 
 
+def _optional(f: Dict[str, Value], key: str) -> Optional[float]:
+    """A number field a newer firmware adds (None when the reply lacks it)."""
+    return _float(f[key]) if key in f else None
+
+
 @dataclass(frozen=True)
 class Status:
     """The board's ``status``: what it is doing now."""
@@ -113,6 +118,11 @@ class Status:
     imeas_uA: Optional[Tuple[float, ...]] = None
     #: each stack's thickness sensed from its capacitance, mm (nan until measured)
     thick_meas_mm: Optional[Tuple[float, ...]] = None
+    #: the orientation in force (firmware with gravity; None otherwise): gravity's magnitude,
+    #: m/s² (0: off), and its direction, degrees from the straight finger's axis toward the
+    #: cable side (0 hanging straight down)
+    grav_m_s2: Optional[float] = None
+    grav_dir_deg: Optional[float] = None
     #: every field of the reply, parsed (newer firmware may add some)
     fields: Dict[str, Value] = field(default_factory=dict, compare=False)
 
@@ -137,6 +147,8 @@ class Status:
             vmeas_V=cls._measured(line, "vmeas"),
             imeas_uA=cls._measured(line, "imeas"),
             thick_meas_mm=cls._measured(line, "thick_meas"),
+            grav_m_s2=_optional(f, "grav"),
+            grav_dir_deg=_optional(f, "grav_dir"),
             fields=f,
         )
 
@@ -165,6 +177,9 @@ class Limits:
     #: the largest cable tension at the present voltages (end of the equilibrium branch), N;
     #: None when the board could not compute it
     fmax_N: Optional[float]
+    #: the orientation in force, as :class:`Status`' (None: firmware without gravity)
+    grav_m_s2: Optional[float] = None
+    grav_dir_deg: Optional[float] = None
     #: every field of the reply, parsed
     fields: Dict[str, Value] = field(default_factory=dict, compare=False)
 
@@ -178,6 +193,8 @@ class Limits:
             supply_V=_float(f["supply"]),
             margin=_float(f["margin"]),
             fmax_N=fmax if isinstance(fmax, float) else None,
+            grav_m_s2=_optional(f, "grav"),
+            grav_dir_deg=_optional(f, "grav_dir"),
             fields=f,
         )
 
@@ -439,8 +456,9 @@ class Board:
         self._link = _link
         self.timeout_s = timeout_s
         self._closed = False
-        #: the board's ``status`` after the ``stop`` that :meth:`close` sent (None before, or
-        #: when the board did not answer it)
+        #: the board's ``status`` 0.2 s (board time) after the ``stop`` that :meth:`close` sent,
+        #: the HV modules' discharge of the stacks over (``vmeas_V`` ~0; None before, or when
+        #: the board did not answer)
         self.final_status: Optional[Status] = None
         #: the lines before the last command's final reply (``help``'s list)
         self.before: List[str] = []
@@ -453,7 +471,9 @@ class Board:
     @classmethod
     def sim(cls, program: Union[str, Path, None] = None, *, timeout_s: float = 30.0) -> "Board":
         """finger-sim (the firmware's application on a simulated board) as a child process,
-        over its stdin and stdout. Time passes only through :meth:`wait` (1 ms control ticks).
+        over its stdin and stdout. Its time runs with the wall clock while it waits for the next
+        line (a line takes none; :meth:`wait` runs its seconds of 1 ms control ticks at once), as
+        a real board lives on between commands.
         ``timeout_s`` finds a board that hangs, not a slow one: a local child process on a
         loaded machine can wait seconds for the CPU.
         ``program``: default :func:`find_sim`."""
@@ -661,10 +681,12 @@ class Board:
 
     def _safe_stop(self) -> None:
         """``stop`` (its ``ok stopped`` wherever it comes among the late replies of an
-        interrupted command), then the board's ``status`` (:attr:`final_status`: HV at 0 and
-        disarmed, as the board reports it), read past those late replies."""
+        interrupted command), then 0.2 s for the stacks to discharge (right after a stop they
+        still hold their charge: ~0.1 s), then the board's ``status`` (:attr:`final_status`: HV
+        at 0 and disarmed, as the board measures it), read past those late replies."""
         try:
             self.command("stop")
+            self.command("wait 0.2")
             self.final_status = self.status()
         except (BoardTimeout, BoardLinkError, BoardError):
             return

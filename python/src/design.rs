@@ -174,9 +174,11 @@ fn column(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<R>> {
 /// `tension_N` (N, 2: the interval's ends, low = top voltage, high = 0 V), `kyy` and `ktt`
 /// (N, 2) at those ends (N/mm, N·mm/rad), `volts_top_V`, `s_min` (the thinnest stack's thickness
 /// stretch), `margin` defaults to the card's finger's (0.9). `field_V_per_um` (the highest field across a layer), `fmax_N` (the lower of the
-/// two ends'), `grip_N` (0 with `grip=False`), and the card's `breakdown_V_per_um`.
+/// two ends'), `grip_N` (0 with `grip=False`), and the card's `breakdown_V_per_um`. `grav`
+/// (m/s²) and `grav_dir` (degrees) the orientation every candidate is judged in (default: no
+/// gravity), refused out of range as `Finger(grav=...)` is.
 #[pyfunction]
-#[pyo3(signature = (card, t_min, a, e_b, w, layers, z0, v_supply, *, margin = None, angle_deg = 10.0, grip = true))]
+#[pyo3(signature = (card, t_min, a, e_b, w, layers, z0, v_supply, *, margin = None, angle_deg = 10.0, grip = true, grav = 0.0, grav_dir = 0.0))]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_designs<'py>(
     py: Python<'py>,
@@ -191,9 +193,13 @@ pub fn evaluate_designs<'py>(
     margin: Option<&Bound<'py, PyAny>>,
     angle_deg: R,
     grip: bool,
+    grav: R,
+    grav_dir: R,
 ) -> PyResult<Bound<'py, PyDict>> {
     let c = crate::card_of(card)?;
-    let base = Params::<R>::with_card(c);
+    let mut base = Params::<R>::with_card(c);
+    base.set("grav", grav).map_err(crate::model_err)?;
+    base.set("grav_dir", grav_dir).map_err(crate::model_err)?;
     let mut cols: Vec<Vec<R>> = [("t_min", t_min), ("a", a), ("e_b", e_b), ("w", w), ("layers", layers), ("z0", z0), ("v_supply", v_supply)]
         .iter()
         .map(|(n, o)| column(o, n))

@@ -46,12 +46,25 @@ struct Row {
 /// The forward solve and, when asked, the tip stiffness from the same compliances.
 fn solve_row(f: &Model<R>, tension: R, volts: &[R], m: Method<R>, stiffness: bool) -> Result<Row, Error> {
     let c = f.compliances(volts)?;
-    let sol = f.solve_with(&c, tension, [0.0; 2], m)?;
+    let sol = f.solve_with(&c, tension, [0.0; 2], m).map_err(|e| past_fmax(f, tension, volts, e))?;
     let stiffness = if stiffness { Some(mat3::inverse_spd(&f.tip_compliance(&c, &sol)).ok_or(Error::Singular { what: "tip compliance" })?) } else { None };
     Ok(Row { sol, stiffness })
 }
 
-/// What `solve_many` keeps of one posture (zeros for a refused row: never NaN).
+/// A solve that ran off the branch's end (links touching, a limit point) quotes the limit
+/// itself, `fmax` at its voltages (`Finger.fmax`, the board's `limits`), not the tension where
+/// the solver's steps found the end (the board's `solve` does the same).
+fn past_fmax(f: &Model<R>, tension: R, volts: &[R], e: Error) -> Error {
+    match e {
+        Error::Contact { .. } | Error::LimitPoint { .. } => match f.fmax(volts) {
+            Ok(b) if tension > b.tension => Error::ForceLimit { tension, fmax: b.tension },
+            _ => e,
+        },
+        _ => e,
+    }
+}
+
+/// What `solve_many` keeps of one posture (a refused row: NaN, numpy's missing value).
 #[derive(Clone, Copy, Default)]
 struct Compact {
     tension: R,
@@ -66,6 +79,22 @@ struct Compact {
 }
 
 impl Compact {
+    /// A refused row of `errors="mask"`: the asked tension and voltages, NaN for every result.
+    fn refused(tension: R, volts: &[R]) -> Self {
+        let mut v = [R::NAN; MAX_JOINTS];
+        v[..volts.len()].copy_from_slice(volts);
+        Compact {
+            tension,
+            volts: v,
+            joints: [R::NAN; MAX_JOINTS],
+            nodes: [[R::NAN; 3]; MAX_JOINTS + 1],
+            thickness: [R::NAN; MAX_JOINTS],
+            cable: R::NAN,
+            stiffness: [[R::NAN; 3]; 3],
+            iterations: 0,
+            residual: R::NAN,
+        }
+    }
     fn of(r: &Row) -> Self {
         let s = &r.sol;
         Compact {
@@ -256,6 +285,8 @@ impl BranchLimit {
 struct PoseSolution {
     pose: inverse::PoseSolution<R>,
     forward: ModelSolution<R>,
+    /// The tip stiffness of the posture at its tension and voltages.
+    stiffness: Mat3<R>,
 }
 
 #[pymethods]
@@ -290,10 +321,10 @@ impl PoseSolution {
     fn interval_N<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
         arr1(py, &self.pose.interval)
     }
-    /// The posture as a forward solution (nodes, tip, cable; no tip stiffness).
+    /// The posture as a forward solution (nodes, tip, cable and the tip stiffness there).
     #[getter]
     fn solution(&self) -> Solution {
-        Solution { row: Row { sol: self.forward, stiffness: None } }
+        Solution { row: Row { sol: self.forward, stiffness: Some(self.stiffness) } }
     }
     /// Newton iterations spent in all.
     #[getter]
@@ -333,6 +364,12 @@ impl Contact {
     fn force_N<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
         arr1(py, &self.c.force)
     }
+    /// The stop's force on the tip, N, shape (2,): `force_N` by the name of its sign (the
+    /// console's `force_on_tip`; its `fx`, `fy` are the opposite).
+    #[getter]
+    fn force_on_tip_N<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<R>> {
+        arr1(py, &self.c.force)
+    }
     /// |force|, N.
     #[getter]
     fn magnitude_N(&self) -> R {
@@ -350,7 +387,7 @@ impl Contact {
     }
     fn __repr__(&self) -> String {
         format!(
-            "Contact(point_mm=({:.3}, {:.3}), force_N=({:.4}, {:.4}), magnitude_N={:.4})",
+            "Contact(point_mm=({:.3}, {:.3}), force_on_tip_N=({:.4}, {:.4}), magnitude_N={:.4})",
             self.c.point[0],
             self.c.point[1],
             self.c.force[0],
@@ -362,10 +399,25 @@ impl Contact {
 
 /// Channel voltages of one posture: a sequence of n numbers, or one number for every joint.
 fn volts_of(obj: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<R>> {
+    numbers_of(obj, n, "volts", "V")
+}
+
+/// One number for every joint, or a sequence of them: the argument `what` (unit `unit`); any
+/// other type is a `TypeError` that names the argument and what it takes.
+fn numbers_of(obj: &Bound<'_, PyAny>, n: usize, what: &str, unit: &str) -> PyResult<Vec<R>> {
     if let Ok(v) = obj.extract::<R>() {
         return Ok(vec![v; n]);
     }
-    let a = obj.extract::<PyArrayLike1<'_, R, AllowTypeChange>>()?;
+    let not_numbers = || {
+        let ty = obj.get_type().name().map(|t| t.to_string()).unwrap_or_else(|_| "?".into());
+        let shown = obj.repr().map(|r| r.to_string()).unwrap_or_default();
+        let shown: String = shown.chars().take(40).collect();
+        PyTypeError::new_err(format!("{what}: a number ({unit}) for every joint or a sequence of {n} numbers, not {ty} {shown}"))
+    };
+    if obj.is_instance_of::<pyo3::types::PyString>() || obj.is_instance_of::<pyo3::types::PyBytes>() {
+        return Err(not_numbers());
+    }
+    let a = obj.extract::<PyArrayLike1<'_, R, AllowTypeChange>>().map_err(|_| not_numbers())?;
     Ok(a.as_array().to_vec())
 }
 
@@ -383,13 +435,47 @@ fn board_calibration(p: &Params<R>) -> Calibration<R> {
     Calibration::for_params(&q)
 }
 
-/// An `InputError` for a calibration that does not apply to the finger asked for.
+/// The parameters in which `p` is not the finger the FE calibration belongs to (the rule of
+/// `Calibration::for_params`, the board's `param` too: docs/model.md's finger, every parameter
+/// but `KEEPS_CALIBRATION`'s at its default, `layers` the default or 0, on the board's film or
+/// the default one): each as `name = value (the calibrated finger's: default)`.
+fn calibration_differs(p: &Params<R>) -> Vec<(&'static str, String)> {
+    use finger_model::calibration::KEEPS_CALIBRATION;
+    let d = Params::<R>::default();
+    let b = Params::<R>::with_card(BOARD_CARD);
+    let boards_film = p.card == b.card && p.g == b.g && p.nu == b.nu && p.de_rule == b.de_rule;
+    let mut out = Vec::new();
+    if !boards_film && (p.card != d.card || p.de_rule != d.de_rule) {
+        out.push(("card", format!("card = {} (the calibrated finger's: {} or {})", p.card.name, d.card.name, b.card.name)));
+    }
+    for i in PARAMS {
+        let film = matches!(i.name, "g" | "nu" | "e_de");
+        if KEEPS_CALIBRATION.contains(&i.name) || (film && boards_film) || (i.name == "layers" && p.layers == 0) {
+            continue;
+        }
+        if let (Some(v), Some(dv)) = (p.get(i.name), d.get(i.name)) {
+            if v != dv {
+                out.push((i.name, format!("{} = {v} (the calibrated finger's: {dv})", i.name)));
+            }
+        }
+    }
+    out
+}
+
+/// An `InputError` for a calibration that does not apply to the finger asked for: named after
+/// the first parameter that leaves the calibrated finger, every such parameter in the message.
 fn calibration_refused(what: &str, p: &Params<R>) -> PyErr {
+    let differs = calibration_differs(p);
+    let name = differs.first().map_or("calibration", |d| d.0);
+    let which = if differs.is_empty() {
+        format!("card {}, m = {}, layers = {}", p.card.name, p.m, p.layers)
+    } else {
+        differs.iter().map(|d| d.1.as_str()).collect::<Vec<_>>().join(", ")
+    };
     errors::model_err_msg(
-        Error::Param { name: "calibration", range: "docs/model.md's finger (m = 8, plate, flexible links, its geometry) on VHB 4905 or the default film" },
+        Error::Param { name, range: "docs/model.md's finger (m = 8, plate, flexible links, its geometry, body modulus and stack count) on VHB 4905 or the default film" },
         format!(
-            "calibration {what} does not apply to this finger (card {}, m = {}, layers = {}): the FE factors were computed for docs/model.md's finger on VHB 4905 or the default film; pass calibration=None for the uncalibrated model, or 8 factors",
-            p.card.name, p.m, p.layers
+            "calibration {what} does not apply to this finger: {which}; the FE factors belong to docs/model.md's finger on VHB 4905 or the default film (a board's `param` set drops them the same way); pass calibration=None for the uncalibrated model, or 8 factors"
         ),
     )
 }
@@ -428,6 +514,12 @@ fn calibration_of(arg: Option<CalArg>, p: &Params<R>, preset: &str) -> PyResult<
 
 /// The board's film, compiled into the firmware (src/board.rs `BOARD_CARD`).
 const BOARD_CARD: &Card = &finger_model::material::VHB_4905;
+/// The board's finger's orientation (src/board.rs `BOARD_GRAVITY`, issue 53): standard gravity,
+/// hanging straight down. The one switch: false gives preset "board" without gravity.
+const BOARD_GRAVITY: bool = true;
+/// The board's finger's `grav` (m/s²) and `grav_dir` (degrees).
+const BOARD_GRAV_M_S2: R = if BOARD_GRAVITY { finger_model::params::G_STANDARD } else { 0.0 };
+const BOARD_GRAV_DIR_DEG: R = 0.0;
 /// The board's HV modules' limit, V (src/board.rs `HV_MAX_V`).
 const BOARD_HV_MAX_V: R = 10_000.0;
 
@@ -443,7 +535,7 @@ fn hold_ceiling_of(p: &Params<R>) -> PyResult<R> {
 /// "Geometry"). An override that is only consistent with a later one is retried after the others.
 fn params_of(preset: &str, card: Option<&str>, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Params<R>> {
     let mut p = match preset {
-        "board" => Params::with_card(BOARD_CARD),
+        "board" => Params::with_card(BOARD_CARD).with_gravity(BOARD_GRAV_M_S2, BOARD_GRAV_DIR_DEG),
         "default" => Params::default(),
         "paper" => Params::paper(),
         "paper_model" => Params::paper_model(),
@@ -648,7 +740,7 @@ impl Finger {
     /// joint, or one number for all).
     fn volts_for_thickness<'py>(&self, py: Python<'py>, thickness_mm: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<R>>> {
         let n = self.f.params().n;
-        let t = volts_of(thickness_mm, n)?;
+        let t = numbers_of(thickness_mm, n, "thickness_mm", "mm")?;
         if t.len() != n {
             return Err(PyValueError::new_err(format!("thickness_mm: {n} values (one per joint) or one number")));
         }
@@ -684,14 +776,16 @@ impl Finger {
     }
 
     /// `solve` over N postures in parallel, without the GIL: `P` shape (N,) or a number,
-    /// `volts` shape (N, n), (n,) or a number.
-    #[pyo3(signature = (P, volts, *, method = "converged", n_inc = None, tol = 1e-9, max_iter = 200, stiffness = true, errors = "raise"))]
+    /// `volts` shape (N, n), (n,) or a number; `grav_dir` (degrees, the finger's orientation,
+    /// docs/python.md) shape (N,) or a number, None: the finger's own.
+    #[pyo3(signature = (P, volts, *, grav_dir = None, method = "converged", n_inc = None, tol = 1e-9, max_iter = 200, stiffness = true, errors = "raise"))]
     #[allow(non_snake_case, clippy::too_many_arguments)]
     fn solve_many(
         &self,
         py: Python<'_>,
         P: &Bound<'_, PyAny>,
         volts: &Bound<'_, PyAny>,
+        grav_dir: Option<&Bound<'_, PyAny>>,
         method: &str,
         n_inc: Option<u32>,
         tol: R,
@@ -731,12 +825,45 @@ impl Finger {
             }
             (v, None)
         };
+        // the orientations: one finger per distinct grav_dir, each checked as `Finger(grav_dir=)`
+        let (dirs, d_rows): (Vec<R>, Option<usize>) = match grav_dir {
+            None => (vec![], None),
+            Some(g) => match g.extract::<R>() {
+                Ok(x) => (vec![x], None),
+                Err(_) => {
+                    let a = g.extract::<PyArrayLike1<'_, R, AllowTypeChange>>()?;
+                    let v = a.as_array().to_vec();
+                    let len = v.len();
+                    (v, Some(len))
+                }
+            },
+        };
+        let mut fingers: Vec<(R, Model<R>)> = Vec::new();
+        for &d in &dirs {
+            if !fingers.iter().any(|x| x.0.to_bits() == d.to_bits()) {
+                let mut p = *self.f.params();
+                p.set("grav_dir", d).map_err(model_err)?;
+                fingers.push((d, Model::with_calibration(p, *self.f.calibration()).map_err(model_err)?));
+            }
+        }
         let rows = match (p_rows, v_rows) {
             (Some(a), Some(b)) if a != b => return Err(PyValueError::new_err(format!("P has {a} rows, volts {b}"))),
             (Some(a), _) | (None, Some(a)) => a,
             (None, None) => 1,
         };
-        let f = &self.f;
+        let rows = match (d_rows, rows) {
+            (Some(d), r) if d != r && (p_rows.is_some() || v_rows.is_some()) => {
+                return Err(PyValueError::new_err(format!("grav_dir has {d} rows, P and volts {r}")))
+            }
+            (Some(d), _) => d,
+            (None, r) => r,
+        };
+        let finger_of = |i: usize| -> &Model<R> {
+            match dirs.get(if d_rows.is_some() { i } else { 0 }) {
+                Some(d) => &fingers.iter().find(|x| x.0.to_bits() == d.to_bits()).expect("every grav_dir prepared").1,
+                None => &self.f,
+            }
+        };
         // one compact row per posture (not the whole model Solution, which carries every
         // sub-element's state), filled in parallel
         let out: Vec<Result<Compact, Error>> = py.detach(|| {
@@ -746,7 +873,7 @@ impl Finger {
                     let t = tensions[if p_rows.is_some() { i } else { 0 }];
                     let v = if v_rows.is_some() { &volts[i * n..(i + 1) * n] } else { &volts[..n] };
                     self.check_hold(v)?;
-                    solve_row(f, t, v, m, stiffness).map(|r| Compact::of(&r))
+                    solve_row(finger_of(i), t, v, m, stiffness).map(|r| Compact::of(&r))
                 })
                 .collect()
         });
@@ -760,8 +887,17 @@ impl Finger {
                 err_list.append((i, e.value(py)))?;
             }
         }
-        let zero = Compact::default();
-        let c = |i: usize| out[i].as_ref().unwrap_or(&zero);
+        let rows_c: Vec<Compact> = out
+            .iter()
+            .enumerate()
+            .map(|(i, r)| match r {
+                Ok(c) => *c,
+                Err(_) => {
+                    Compact::refused(tensions[if p_rows.is_some() { i } else { 0 }], if v_rows.is_some() { &volts[i * n..(i + 1) * n] } else { &volts[..n] })
+                }
+            })
+            .collect();
+        let c = |i: usize| &rows_c[i];
         let per_joint = |g: &dyn Fn(&Compact, usize) -> R| Array2::from_shape_fn((rows, n), |(i, k)| g(c(i), k));
         let stiff = stiffness.then(|| Array3::from_shape_fn((rows, 3, 3), |(i, a, b)| c(i).stiffness[a][b]).into_pyarray(py).unbind());
         Ok(Solutions {
@@ -785,7 +921,7 @@ impl Finger {
     #[pyo3(signature = (angles, P = None, *, degrees = false))]
     #[allow(non_snake_case)]
     fn pose(&self, py: Python<'_>, angles: &Bound<'_, PyAny>, P: Option<R>, degrees: bool) -> PyResult<PoseSolution> {
-        let mut a = volts_of(angles, self.f.params().n)?;
+        let mut a = numbers_of(angles, self.f.params().n, "angles", if degrees { "degrees" } else { "rad" })?;
         // the firmware's words (src/app/pose.rs): the cable runs on the flexor side
         if let Some(k) = a.iter().position(|&x| x < 0.0) {
             let deg = if degrees { a[k] } else { a[k].to_degrees() };
@@ -797,14 +933,31 @@ impl Finger {
         let f = &self.f;
         // the board's inverse: its top voltage under the ceiling in force
         let opts = inverse::Options { hv_fs: self.hold, ..Default::default() };
-        let (pose, forward) = py
-            .detach(|| -> Result<_, Error> {
-                let pose = inverse::solve_pose_with(f, &a, P, &opts)?;
-                let forward = pose.to_solution(f)?;
-                Ok((pose, forward))
-            })
-            .map_err(model_err)?;
-        Ok(PoseSolution { pose, forward })
+        let out = py.detach(|| -> Result<_, Error> {
+            let pose = inverse::solve_pose_with(f, &a, P, &opts)?;
+            let forward = pose.to_solution(f)?;
+            let c = f.compliances(&pose.volts[..pose.n])?;
+            let stiffness = mat3::inverse_spd(&f.tip_compliance(&c, &forward)).ok_or(Error::Singular { what: "tip compliance" })?;
+            Ok((pose, forward, stiffness))
+        });
+        match out {
+            Ok((pose, forward, stiffness)) => Ok(PoseSolution { pose, forward, stiffness }),
+            // a tension given outside the tensions that hold the posture: say so, with them
+            Err(e @ Error::Unreachable { .. }) if P.is_some() => {
+                let p = P.unwrap_or(0.0);
+                match py.detach(|| inverse::solve_pose_with(f, &a, None, &opts)) {
+                    Ok(free) if !(free.interval[0] <= p && p <= free.interval[1]) => Err(errors::model_err_msg(
+                        e,
+                        format!(
+                            "P = {p} N is outside the tensions that hold this posture, {:.4} to {:.4} N (pose(angles) without P takes the midpoint; the model: {e})",
+                            free.interval[0], free.interval[1]
+                        ),
+                    )),
+                    _ => Err(model_err(e)),
+                }
+            }
+            Err(e) => Err(model_err(e)),
+        }
     }
 
     /// The contact force: the tip stops at the free tip of (`P0`, `volts0`, default `volts`);
@@ -815,7 +968,7 @@ impl Finger {
         let n = self.f.params().n;
         let v = volts_of(volts, n)?;
         let v0 = match volts0 {
-            Some(o) => volts_of(o, n)?,
+            Some(o) => numbers_of(o, n, "volts0", "V")?,
             None => v.clone(),
         };
         let f = &self.f;
@@ -865,7 +1018,7 @@ impl Finger {
             _ => "margin x pull-in",
         };
         format!(
-            "Finger(preset={:?}, card={:?}, calibration={:?}, ceiling={:.1} V ({why}), n={}, m={}, layers={}, e_de={:.4} MPa)",
+            "Finger(preset={:?}, card={:?}, calibration={:?}, ceiling={:.1} V ({why}), n={}, m={}, layers={}, e_de={:.4} MPa, grav={} m/s2 at {} deg)",
             self.preset,
             p.card.name,
             self.cal_name,
@@ -873,7 +1026,9 @@ impl Finger {
             p.n,
             p.m,
             p.layers,
-            p.e_de()
+            p.e_de(),
+            p.grav,
+            p.grav_dir
         )
     }
 }
@@ -893,6 +1048,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Contact>()?;
     m.add_class::<BranchLimit>()?;
     m.add_function(wrap_pyfunction!(parameter_ranges, m)?)?;
+    // the board's finger's orientation (preset "board"; softfinger.design's default)
+    m.add("BOARD_GRAV_M_S2", BOARD_GRAV_M_S2)?;
+    m.add("BOARD_GRAV_DIR_DEG", BOARD_GRAV_DIR_DEG)?;
     m.add_function(wrap_pyfunction!(cards, m)?)?;
     m.add_function(wrap_pyfunction!(_finger_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(design::evaluate_designs, m)?)?;

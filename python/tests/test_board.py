@@ -231,3 +231,28 @@ def test_status_carries_the_hv_read_back(sim_program):
         assert all(v - 110 <= m <= v + 10 for m in st.vmeas_V), st.vmeas_V
         assert all(abs(i) < 1.0 for i in st.imeas_uA), st.imeas_uA
         assert st.thick_meas_mm == pytest.approx(st.thick_mm, rel=0.02)
+
+
+def test_contact_has_one_sign_on_the_board_and_in_python(sim_program):
+    """`force_on_tip` (the stop's force on the tip) is Python's `force_on_tip_N`; the board's
+    older `fx`, `fy` are its opposite (the tip's force on the stop)."""
+    with sf.Board.sim(sim_program) as b:
+        r = b.fields("contact 1 1.5")
+    c = sf.Finger().contact(1.0, 1.5, [0, 0, 0])
+    assert np.allclose(r["force_on_tip"], c.force_on_tip_N, atol=2e-4), (r, c)
+    assert np.allclose(c.force_on_tip_N, c.force_N)
+    assert np.allclose((r["fx"], r["fy"]), -c.force_on_tip_N, atol=2e-4), (r, c)
+    assert "force_on_tip_N=" in repr(c)
+
+
+def test_the_final_status_reads_the_stacks_discharged(sim_program):
+    """`stop` then the board's own time: the final status measures ~0 V on every stack, as a
+    real board does a moment after a stop (was about 2.9 kV: finger-sim's time stood still)."""
+    with sf.Board.sim(sim_program) as b:
+        b.arm()
+        b.volt("all", 3000)
+        b.wait(2.0)
+        assert all(v > 2500 for v in b.status().vmeas_V)
+    st = b.final_status
+    assert st is not None and not st.armed and st.volts_V == (0.0, 0.0, 0.0)
+    assert all(abs(v) < 50 for v in st.vmeas_V), st

@@ -101,6 +101,40 @@ def test_the_model_and_a_design_pickle():
     assert Design.from_toml(d.to_toml("a comment")) == d
     with pytest.raises(ValueError):
         Design.from_toml(d.to_toml() + "t_mni = 1.0\n")
+    # a path, as a Path or as the text of one, reads the file (was a TOMLDecodeError)
+    path = ROOT / "designs" / "VHB-4905.toml"
+    assert Design.from_toml(path) == Design.load(path) == Design.from_toml(str(path))
+    with pytest.raises(FileNotFoundError) as e:
+        Design.from_toml("designs/no-such.toml")
+    assert "Design.load" in str(e.value)
+    with pytest.raises(ValueError) as e:
+        Design.from_toml("not = toml = text")
+    assert "TOML text or a path" in str(e.value)
+
+
+def test_a_design_file_carries_the_orientation_of_the_board_it_builds():
+    d = Design(card="VHB-4905")
+    # the board's orientation by default: standard gravity, hanging straight down
+    assert (d.grav, d.grav_dir) == (sf.Finger().params["grav"], sf.Finger().params["grav_dir"]) == (9.81, 0.0)
+    text = d.to_toml()
+    assert "grav = 9.81\n" in text and "grav_dir = 0.0\n" in text
+    h = d.replace(grav_dir=90.0)
+    assert Design.from_toml(h.to_toml()) == h
+    f = h.finger()
+    assert (f.params["grav"], f.params["grav_dir"]) == (9.81, 90.0)
+    # a file from before gravity (no orientation keys) builds the board's
+    old = "\n".join(l for l in text.splitlines() if not l.startswith("grav")) + "\n"
+    assert Design.from_toml(old) == d
+    for bad in ("grav = 25.0", "grav_dir = 200.0", "grav_dir = \"down\""):
+        key = bad.split(" ")[0]
+        with pytest.raises(ValueError, match=key):
+            Design.from_toml(old + bad + "\n")
+    # the study's inputs stay the design variables; its evaluation takes an orientation
+    assert "grav" not in d.params() and d.orientation() == {"grav": 9.81, "grav_dir": 0.0}
+    with pytest.raises(sf.InputError) as e:
+        evaluate("VHB-4905", [d], grip=False, grav_dir=200.0)
+    assert e.value.fields["name"] == "grav_dir"
+    assert evaluate("VHB-4905", [d], grip=False, grav=9.81, grav_dir=90.0).feasible.shape == (1,)
 
 
 def sim_lines(program, lines):
@@ -116,9 +150,12 @@ def fields(line):
 def check_board_is_the_designs(d, send):
     """`send(lines)` -> the replies, on a board built for design `d`: `limits` is the design's
     ceiling, `material` its card, and the console's parameters cannot raise the ceiling."""
-    t_min, layers, lim, mat, *_, lim2 = send(["param t_min", "param layers", "limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"])
-    # the board's default finger is the design's
+    grav, grav_dir, t_min, layers, lim, mat, *_, lim2 = send(
+        ["param grav", "param grav_dir", "param t_min", "param layers", "limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"]
+    )
+    # the board's default finger is the design's, in the design's orientation
     assert float(t_min.split("=")[1]) == pytest.approx(d.t_min) and float(layers.split("=")[1]) == d.layers, (t_min, layers)
+    assert (float(grav.split("=")[1]), float(grav_dir.split("=")[1])) == (pytest.approx(d.grav), d.grav_dir), (grav, grav_dir)
     ceiling = d.finger().ceiling()
     vmax = [float(v) for v in fields(lim)["vmax"].split(",")]
     assert vmax == [pytest.approx(ceiling, abs=0.15)] * 3, (lim, ceiling)
@@ -178,6 +215,27 @@ def test_the_page_is_what_its_command_writes(tmp_path):
     for card in res["cards"]:
         assert (tmp_path / "designs" / f"{card}.toml").read_text() == (ROOT / "designs" / f"{card}.toml").read_text()
     assert (tmp_path / "docs" / "design-pareto.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert "<svg" in (tmp_path / "docs" / "design-pareto.svg").read_text()[:2000]
+    # the figure too: a regeneration with nothing changed gives no diff (no date, fixed ids)
+    svg = (tmp_path / "docs" / "design-pareto.svg").read_text()
+    assert "<svg" in svg[:2000] and "<dc:date>" not in svg
+    assert svg == (ROOT / "docs" / "design-pareto.svg").read_text(), "docs/design-pareto.svg is not what `report --from docs/design-results.json` writes"
+    again = tmp_path / "again"
+    report.write(res, again)
+    assert (again / "docs" / "design-pareto.png").read_bytes() == (tmp_path / "docs" / "design-pareto.png").read_bytes()
     page = (ROOT / "docs" / "design.md").read_text()
     assert "](design-pareto.png)" in page and "design-pareto.svg" in page
+
+
+def test_a_design_checks_figures_are_plain_numbers():
+    """`python -m softfinger.design fe` prints each check's ratios and errors: plain floats,
+    not numpy scalars (their repr was `np.float64(1.27...)`). The FE results here are the
+    model's own, 1 % stiffer: no CalculiX run."""
+    from softfinger.design import fe
+
+    d = Design.load(ROOT / "designs" / "VHB-4905.toml")
+    results = [fe.CaseResult(c, True, joints_rad=c.model_joints_rad, direct=tuple(np.float64(x) * 1.01 for x in c.model_direct)) for c in fe.cases_of(d)]
+    ch = fe.DesignCheck(d, results)
+    for figures in (ch.ratio("kyy"), ch.ratio("ktt"), ch.errors()):
+        assert figures and all(type(v) is float for v in figures.values()), figures
+        assert "np.float64" not in repr(figures)
+    assert ch.errors()["kyy_pct"] == pytest.approx(100 * (1 / 1.01 - 1))

@@ -60,3 +60,29 @@ def test_every_python_block_of_python_md_runs(sim_program, monkeypatch):
             assert out.getvalue().splitlines() == shown, text
         ran += 1
     assert ran >= 2
+
+
+def test_every_table_of_the_docs_has_its_header_row():
+    """A Markdown table renders only under its header and delimiter rows: a block of `| ... |`
+    lines (outside code blocks) whose second line is no `| --- |` row shows as plain text
+    (docs/reliability.md's table of finds, split by a blank line, did)."""
+    pages = sorted(ROOT.glob("docs/**/*.md")) + [ROOT / "README.md"] + sorted(ROOT.glob("*/README.md"))
+    bad = []
+    for page in pages:
+        lines = page.read_text().splitlines()
+        fence, i = False, 0
+        row = lambda s: s.startswith("|") and s.rstrip().endswith("|")
+        while i < len(lines):
+            if lines[i].lstrip().startswith("```"):
+                fence, i = not fence, i + 1
+                continue
+            if not fence and row(lines[i]):
+                j = i
+                while j < len(lines) and row(lines[j]):
+                    j += 1
+                if j - i < 2 or not re.match(r"^\|\s*:?-{3,}", lines[i + 1]):
+                    bad.append(f"{page.relative_to(ROOT)}:{i + 1}: {lines[i][:60]}")
+                i = j
+                continue
+            i += 1
+    assert not bad, "tables without a header row:\n" + "\n".join(bad)

@@ -95,13 +95,16 @@ def test_shapes_units_and_no_nan():
     assert s.joints_rad[2] > s.joints_rad[1] > s.joints_rad[0]
     assert s.thickness_mm[0] == pytest.approx(2.0) and s.thickness_mm[2] < s.thickness_mm[0]
     assert "Solution(" in repr(s)
-    # a mask of refused rows leaves zeros, never NaN
+    # a mask of refused rows: NaN in every result (numpy's missing value; was 0, a straight
+    # finger in a plot), the asked tension and voltages kept, ok False
     many = f.solve_many([1.0, 1.0, 50.0], [[0, 0, 0], [0, 0, 2 * f.ceiling()], [0, 0, 0]], errors="mask")
     assert many.ok.tolist() == [True, False, False]
     assert [i for i, _ in many.errors] == [1, 2]
     assert isinstance(many.errors[0][1], sf.VoltageCeilingError) and many.errors[0][1].index == 1
     for a in (many.joints_rad, many.nodes, many.tip, many.cable_mm, many.thickness_mm, many.stiffness, many.residual_mm):
-        assert np.isfinite(a).all()
+        assert np.isfinite(a[0]).all() and np.isnan(a[1:]).all()
+    assert many.tension_N.tolist() == [1.0, 1.0, 50.0] and many.volts_V[1, 2] == 2 * f.ceiling()
+    assert many.iterations[1:].tolist() == [0, 0]
     # pose: the inverse lands on the forward model
     target = f.solve(1.0, [0.2 * c, 0.5 * c, 0.8 * c]).joints_rad
     p = f.pose(target)
@@ -193,6 +196,14 @@ def test_presets_parameters_and_calibration():
             sf.Finger(**kw)
         assert "calibration" in str(e.value) and "calibration=None" in str(e.value), kw
     assert sf.Finger(layers=2, calibration=None).params["layers"] == 2
+    # the error names the parameter that left the calibrated finger, not those that did not
+    # (the board's `param e_b 15` drops the factors by the same rule and says `cal=`)
+    for kw, name in (({"e_b": 15}, "e_b"), ({"layers": 2}, "layers"), ({"card": "Elastosil-2030"}, "card")):
+        with pytest.raises(sf.InputError) as e:
+            sf.Finger(**kw)
+        assert e.value.name == name and f"{name} = " in str(e.value), (kw, str(e.value))
+        if name == "e_b":
+            assert "layers = " not in str(e.value) and "card " not in str(e.value), str(e.value)
     # the calibration changes the answer
     assert not np.array_equal(board.solve(1.0, 0).joints_rad, sf.Finger(calibration=None).solve(1.0, 0).joints_rad)
     names = [n for n, _ in sf.parameter_ranges()]
@@ -222,3 +233,37 @@ def test_material_cards():
     assert sf.Finger(preset="paper", card="VHB-4905").params["m"] == 1
     with pytest.raises(ValueError):
         sf.Finger(card="unobtainium")
+
+
+def test_errors_name_the_argument_and_the_limit():
+    """What a refusal says: the argument and what it takes, the interval a given tension
+    missed, the one figure of the branch's end (`fmax`, the board's `limits`)."""
+    f = sf.Finger()
+    with pytest.raises(TypeError) as e:
+        f.solve(1, "1000")
+    assert "volts" in str(e.value) and "3 numbers" in str(e.value) and "str" in str(e.value), str(e.value)
+    with pytest.raises(TypeError) as e:
+        f.pose("5 5 5")
+    assert str(e.value).startswith("angles:"), str(e.value)
+    q = f.pose([5, 5, 5], degrees=True)
+    lo, hi = q.interval_N
+    for P in (hi + 0.3, lo - 0.3):
+        with pytest.raises(sf.UnreachableError) as e:
+            f.pose([5, 5, 5], P=P, degrees=True)
+        assert "outside" in str(e.value) and f"{lo:.4f} to {hi:.4f} N" in str(e.value), str(e.value)
+    # past the branch's end: fmax itself, as Finger.fmax gives it
+    b = f.fmax([0, 0, 0])
+    with pytest.raises(sf.BranchEndError) as e:
+        f.solve(100.0, 0)
+    assert e.value.fmax == b.tension_N and f"fmax={b.tension_N:.4f} N" in str(e.value), str(e.value)
+    with pytest.raises(sf.BranchEndError) as e:
+        f.contact(1.0, 100.0, [0, 0, 0])
+    assert e.value.fmax == b.tension_N, str(e.value)
+
+
+def test_the_inverse_posture_has_its_stiffness():
+    f = sf.Finger()
+    q = f.pose([5, 5, 5], degrees=True)
+    k = q.solution.stiffness
+    assert k is not None and k.shape == (3, 3)
+    assert np.allclose(k, f.solve(q.tension_N, q.volts_V).stiffness, rtol=1e-6)

@@ -88,8 +88,10 @@ pub struct Commands {
     pub(super) sense_cal: super::hv_cal::SenseCal,
     #[cfg(not(m3))]
     pub(super) sense_cal_req: Option<super::hv_cal::SenseCal>,
-    /// The core's latched fault, as the console names it.
+    /// The core's latched fault, as the console names it, and the channel (0-based) whose
+    /// read-back latched it.
     pub(super) fault: Option<&'static str>,
+    pub(super) fault_ch: Option<u8>,
     pub(super) locked_out: bool,
     pub(super) now_ms: u32,
     /// HV setpoints (targets), V.
@@ -107,6 +109,9 @@ pub struct Commands {
     pub(super) wait: Option<Wait>,
     /// A `stop` line reached [`Commands::execute`] (see [`Commands::take_stop`]).
     pub(super) stop_asked: bool,
+    /// A `reset` was answered: the chip's command task reboots (see [`Commands::take_reset`]).
+    #[cfg(all(target_os = "none", not(m3)))]
+    pub(super) reset_asked: bool,
     /// The settings store and what the boot found in it (app/stored.rs, app/config.rs).
     #[cfg(feature = "settings")]
     pub(super) cfg: ConfigState,
@@ -143,6 +148,7 @@ impl Commands {
             #[cfg(not(m3))]
             sense_cal_req: None,
             fault: None,
+            fault_ch: None,
             locked_out: false,
             now_ms: 0,
             target_v: [0.0; CHANNELS],
@@ -155,6 +161,8 @@ impl Commands {
             seq: 0,
             wait: None,
             stop_asked: false,
+            #[cfg(all(target_os = "none", not(m3)))]
+            reset_asked: false,
             #[cfg(feature = "settings")]
             cfg: ConfigState::new(),
         };
@@ -191,6 +199,14 @@ impl Commands {
         self.wait.is_some()
     }
 
+    /// `err fault` for a latched fault `f`, naming its channel when one latched it.
+    pub(in crate::app) fn latched(&self, f: &str) -> CmdError {
+        match self.fault_ch {
+            Some(k) => err!(Fault; "fault ", f, " latched on channel ", k + 1, "; send stop to clear it"),
+            None => err!(Fault; "fault ", f, " latched; send stop to clear it"),
+        }
+    }
+
     /// Take the control core's report. A stop since the last one (a new epoch): disarmed,
     /// tension 0, targets 0, as the core already is.
     pub fn sync(&mut self, v: &View) {
@@ -198,6 +214,10 @@ impl Commands {
         self.volts = v.volts;
         self.duty = v.duty;
         self.fault = v.fault.text();
+        #[cfg(not(m3))]
+        {
+            self.fault_ch = v.fault_ch;
+        }
         self.locked_out = v.locked_out;
         self.stack_ratio = v.stack_ratio;
         #[cfg(not(m3))]
@@ -223,6 +243,12 @@ impl Commands {
     /// A `stop` was executed as a line: the caller stops the control core.
     pub fn take_stop(&mut self) -> bool {
         core::mem::take(&mut self.stop_asked)
+    }
+
+    /// A `reset` was answered: the caller sends the reply, then reboots the chip.
+    #[cfg(all(target_os = "none", not(m3)))]
+    pub fn take_reset(&mut self) -> bool {
+        core::mem::take(&mut self.reset_asked)
     }
 
     /// What the outputs should do now (a new `seq` each call).
@@ -429,6 +455,10 @@ impl Commands {
                 if report.is_some() {
                     let _ = w!(out; super::help::HELP_TIMING, nl);
                 }
+                #[cfg(all(not(feature = "hw"), not(m3)))]
+                if self.plant_view.is_some() {
+                    let _ = w!(out; super::help::HELP_PLANT, nl);
+                }
             }
             Some(Command::Version) => {
                 no_args(args, "version")?;
@@ -456,7 +486,7 @@ impl Commands {
                     return Err(err!(Fault; f, ": this image never arms here"));
                 }
                 if let Some(f) = self.fault {
-                    return Err(err!(Fault; "fault ", f, " latched; send stop to clear it"));
+                    return Err(self.latched(f));
                 }
                 self.armed = true;
                 let _ = w!(r; const_concat!(field::ARMED.first(), "1"));
@@ -508,6 +538,16 @@ impl Commands {
             Some(Command::Factory) => self.cmd_factory(args, r)?,
             #[cfg(feature = "settings")]
             Some(Command::Config) => self.cmd_config(args, r, out)?,
+            // a reboot from the console (the chip images): disarmed and the HV at 0 only
+            #[cfg(all(target_os = "none", not(m3)))]
+            Some(Command::Reset) => {
+                no_args(args, "reset")?;
+                self.require_disarmed("reset")?;
+                self.reset_asked = true;
+                let _ = w!(r; const_concat!(field::RESET.first(), "1"));
+            }
+            #[cfg(not(target_os = "none"))]
+            Some(Command::Reset) => return Err(err!(Unknown; "reset reboots the chip images only; here, start the board again")),
             Some(Command::Wait) => {
                 let [s] = args else { return Err(err!(Usage; "wait <seconds>")) };
                 let s = number(s, "seconds")?;

@@ -66,6 +66,8 @@ pub(crate) const HELP: &[&str] = &[
         "HV read-back calibration: monitors, stacks' C0 (only tightens; set only while disarmed; save stores it)"
     ),
     help_line!("wait <s>", "run the control loop for s seconds, then reply"),
+    #[cfg(all(target_os = "none", not(m3)))]
+    help_line!("reset", "reboot the board (as at power-up: the stored settings, or the compiled defaults); only while disarmed"),
     #[cfg(feature = "settings")]
     help_line!("save", "keep the settings in force across resets; only while disarmed"),
     #[cfg(feature = "settings")]
@@ -77,6 +79,14 @@ pub(crate) const HELP: &[&str] = &[
 /// `help`'s line for `timing`, listed where the runtime measures (the chip images).
 pub(crate) const HELP_TIMING: &str = help_line!("timing", "the board's own real-time measurements: tick period, latency, stop, command durations");
 
+/// `help`'s line for `plant`, listed where a simulated plant answers it (finger-sim, the
+/// emulator image; docs/firmware.md "The plant").
+#[cfg(all(not(feature = "hw"), not(m3)))]
+pub(crate) const HELP_PLANT: &str = help_line!(
+    "plant film <G_eq kPa> [time scale] | breakdown <ch> [clears after ms] | stuck <ch> <V> | open <ch> | leak <ch> <MOhm> | gain <ch> <x> | status",
+    "the simulated HV plant's test console: change its film, inject a fault, read its truth"
+);
+
 /// Whether `word` (lowercase) is a command of this build's `help` (or `timing`): the first
 /// word of each alternative of a line's syntax. `timing`'s durations file the rest under
 /// `unknown`. The Cortex-M3 image calls every word a command (360 bytes its flash lacks).
@@ -84,7 +94,7 @@ pub fn is_command(word: &[u8]) -> bool {
     if cfg!(m3) {
         return true;
     }
-    if word == b"timing" {
+    if word == b"timing" || (cfg!(not(feature = "hw")) && word == b"plant") {
         return true;
     }
     // byte by byte (no string search in the M3 image's flash): a line's first word, or the

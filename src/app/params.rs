@@ -105,11 +105,17 @@ impl FwParams {
 pub(crate) const CAL_NAMES: [&str; 8] = ["h1", "h2", "h3", "h4", "ea0", "ea1", "ei0", "ei1"];
 
 /// The board's default finger: docs/model.md's on the board's film (`Params::with_card`: the card's
-/// equilibrium modulus, permittivity, branches and breakdown field), with a design's values
+/// equilibrium modulus, permittivity, branches and breakdown field) under the board's gravity
+/// (`board::BOARD_GRAVITY`: 9.81 m/s², hanging straight down), with a design's values
 /// (`board::BOARD_FINGER`, docs/design.md) set as the console sets them. Generic so that the
 /// host's f64 model (the web view's overlay) is the board's finger too.
 pub fn board_params<R: finger_model::Real>() -> Params<R> {
+    use crate::board::{BOARD_GRAVITY, BOARD_GRAV_DIR_DEG, BOARD_GRAV_M_S2};
     let mut p = Params::with_card(crate::board::BOARD_CARD);
+    // (a constant: no code where it is off, the Cortex-M3 image)
+    if BOARD_GRAVITY {
+        (p.grav, p.grav_dir) = (R::from_f64(BOARD_GRAV_M_S2), R::from_f64(BOARD_GRAV_DIR_DEG));
+    }
     for &(name, v) in crate::board::BOARD_FINGER {
         // build.rs checked the ranges; a refused value would keep the default's
         let _ = p.set(name, v.into());

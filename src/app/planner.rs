@@ -92,12 +92,13 @@ impl Planner {
     }
 
     /// The finger's branch table, built at its first use after a model change (None for a
-    /// finger without stacks, or if it cannot be built: the full solves answer then).
+    /// finger without stacks or under gravity, whose joints the table of the joints alone does
+    /// not hold, or if it cannot be built: the full solves answer then).
     #[cfg(feature = "pose")]
     pub(crate) fn branch_table(&self) -> Option<&finger_model::inverse::BranchTable<f32>> {
         self.inv_table
             .get_or_init(|| {
-                if self.finger.params().layers > 0 {
+                if self.finger.params().layers > 0 && !self.finger.has_weight() {
                     finger_model::inverse::BranchTable::new(&self.finger, &self.inverse_options()).ok()
                 } else {
                     None

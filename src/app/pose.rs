@@ -37,7 +37,7 @@ use finger_protocol::field;
 use heapless::String;
 
 use super::commands::Commands;
-#[cfg(m3)]
+#[cfg(any(m3, feature = "contact"))]
 use super::errors::model_err;
 #[cfg(any(feature = "pose", feature = "contact"))]
 use super::errors::{head, ErrorCode};
@@ -212,9 +212,11 @@ where
     }
     match contact_force(finger, R::from_f64(f64::from(p0)), &zero[..n], R::from_f64(f64::from(p)), &v[..n]) {
         Ok(c) => {
-            // the finger presses on the object with minus the object's force on the tip
-            let (fx, fy) = (f32_of(-c.force[0]), f32_of(-c.force[1]));
-            w!(out; const_concat!("ok ", field::FX.first()), Fixed(fx, 4), field::FY.after(), Fixed(fy, 4), field::FORCE.after(), Fixed(f32_of(c.magnitude()), 4), field::POINT.after(), Fixed(f32_of(c.point[0]), 3), ",", Fixed(f32_of(c.point[1]), 3))?;
+            // `force_on_tip`: the stop's force on the tip (the model's, Python's); `fx`, `fy`
+            // (the contract's first fields): the tip's on the stop, its opposite
+            let (fx, fy) = (f32_of(c.force[0]), f32_of(c.force[1]));
+            w!(out; const_concat!("ok ", field::FX.first()), Fixed(-fx, 4), field::FY.after(), Fixed(-fy, 4), field::FORCE.after(), Fixed(f32_of(c.magnitude()), 4), field::POINT.after(), Fixed(f32_of(c.point[0]), 3), ",", Fixed(f32_of(c.point[1]), 3))?;
+            w!(out; field::FORCE_ON_TIP.after(), Fixed(fx, 4), ",", Fixed(fy, 4))?;
             Ok(true)
         }
         Err(e) => {
@@ -337,6 +339,13 @@ impl Commands {
             v = [number(args[2], "V1")?, number(args[3], "V2")?, number(args[4], "V3")?];
         }
         self.check_volts(&v)?;
+        // past fmax: `limits`' figure, the one every refusal quotes (the model's own check
+        // below finds the same limit to its bisection's last digit)
+        if let Ok(b) = self.planner.fmax(&v) {
+            if p > b.tension {
+                return Err(model_err(finger_model::Error::ForceLimit { tension: p.into(), fmax: b.tension.into() }));
+            }
+        }
         let mut line: String<240> = String::new();
         let volts: &[f32] = if args.len() > 2 { &v } else { &[] };
         let _ = contact(&mut line, self.planner.finger(), p0, p, volts);

@@ -9,6 +9,8 @@
 use crate::num::Fixed;
 use crate::rx::Record;
 use core::fmt::Write;
+#[cfg(not(m3))]
+use cortex_m::peripheral::SCB;
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use finger_protocol::field;
 
@@ -33,6 +35,25 @@ pub fn start_systick(syst: &mut SYST) {
 pub fn systick_elapsed() -> u32 {
     (SYSTICK_PER_MS - 1).saturating_sub(SYST::get_current())
 }
+
+/// SysTick counts since the reload that began the running control tick, also past the next
+/// reload (whose exception pends while the control task runs): a clock that does not run
+/// backwards within a tick that overruns its millisecond once. Under the wall-clock emulator a
+/// host stall can pass two reloads; spans then read short (`saturating_sub`: 0), never 2^32.
+/// The Cortex-M3 image (its flash) reads [`systick_elapsed`]: a span across the reload, 0.
+#[cfg(not(m3))]
+pub fn tick_clock() -> u32 {
+    loop {
+        let before = SCB::is_pendst_pending();
+        let c = systick_elapsed();
+        if SCB::is_pendst_pending() == before {
+            return if before { c + SYSTICK_PER_MS } else { c };
+        }
+    }
+}
+
+#[cfg(m3)]
+pub use systick_elapsed as tick_clock;
 
 /// What the control and console tasks measure, SysTick counts.
 #[derive(Clone, Copy)]

@@ -70,6 +70,10 @@ impl TxQueue {
         }
         fits
     }
+    /// Nothing left to send (the board's last byte may still be in the shift register).
+    pub fn is_empty(&self) -> bool {
+        self.q.is_empty() && self.owed_stops == 0
+    }
     pub fn push_stop_reply(&mut self) {
         self.pay_stops();
         if self.owed_stops == 0 && self.free() >= STOP_REPLY.len() {

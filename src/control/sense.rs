@@ -94,6 +94,8 @@ pub struct Estimator {
     /// The last window solved its capacitance jointly with the leakage (a pair): its
     /// capacitance owes nothing to a leakage assumed from before.
     joint: bool,
+    /// The last window measured the capacitance (a plausible swing): the thickness is fresh.
+    measured: bool,
 }
 
 /// Each new window's weight in the capacitance's and the leakage's running means.
@@ -116,6 +118,7 @@ impl Estimator {
             leaks: 0,
             windows: 0,
             joint: false,
+            measured: false,
         }
     }
 
@@ -197,6 +200,7 @@ impl Estimator {
         // at the parts' extreme) all count
         let plausible = c > 0.5 * SENSE_STRAY_MIN_PF && c < 4.0 * c0;
         let leak = if paired && !plausible { None } else { leak };
+        self.measured = plausible;
         if plausible {
             self.c_pf += C_WEIGHT * (c - self.c_pf);
             self.swings = self.swings.saturating_add(1);
@@ -219,6 +223,13 @@ impl Estimator {
     /// swing's capacitance carries any leakage that arose since the last measure.
     pub fn last_window_joint(&self) -> bool {
         self.joint
+    }
+
+    /// The last window closed measured the capacitance: the thickness now is that window's
+    /// (false for a window without a swing: a channel held under the ripple's voltage keeps
+    /// the thickness of its last swing, however long ago).
+    pub fn last_window_measured(&self) -> bool {
+        self.measured
     }
 
     /// The capacitance the sense sees, pF, once measured.

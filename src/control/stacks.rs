@@ -67,6 +67,20 @@ impl Stacks {
         Some(stacks)
     }
 
+    /// The film's branches relax `k` times faster than the card's (tests only, feature
+    /// `hv-door`: a plant film as fast, so that ten minutes of creep take one of board time).
+    /// False (nothing changes) for a `k` the relaxation refuses.
+    #[cfg(all(feature = "hv-door", not(m3)))]
+    pub fn set_time_scale(&mut self, k: f32) -> bool {
+        match Relaxation::new(&self.law, TICK_S * k) {
+            Ok(r) if k >= 1.0 => {
+                self.relax = r;
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// The board's hold ceiling, V.
     pub fn hold_ceiling_v(&self) -> f32 {
         self.hold_v

@@ -268,6 +268,36 @@ function fitView(s) {
   // the world group is flipped (flexor side up): world y maps to SVG -y
   $('finger').setAttribute('viewBox', `${x0.toFixed(1)} ${(-y1).toFixed(1)} ${(x1 - x0).toFixed(1)} ${(y1 - y0).toFixed(1)}`);
   drawScaleBar(x0, -y0);
+  state.view = { x1, y0 };
+  drawGravity();
+}
+
+/** Gravity's direction (`grav_dir`, degrees from the straight finger's axis +x toward the
+ * cable side +y) as an arrow `g` at the drawing's bottom right; none when `grav` is 0. */
+function drawGravity() {
+  const g = $('gravity');
+  if (!g || !state.view) return;
+  g.innerHTML = '';
+  const grav = Number(state.params.grav || 0), dir = Number(state.params.grav_dir || 0);
+  // bottom right: the cable flexes the finger upward (toward +y), so the corner stays free
+  const cx = state.view.x1 - 15, cy = -state.view.y0 - 14, L = 6;
+  // base frame to SVG: x right, world y up (the world group is flipped)
+  const ux = Math.cos(dir * Math.PI / 180), uy = -Math.sin(dir * Math.PI / 180);
+  g.dataset.grav = grav;
+  g.dataset.dir = dir;
+  if (!(grav > 0)) {
+    el('text', { x: cx, y: cy, 'text-anchor': 'middle', 'font-size': 2.8, fill: '#666', class: 'no-grav' }, g).textContent = 'no gravity';
+    return;
+  }
+  const x0 = cx - ux * L, y0 = cy - uy * L, x1 = cx + ux * L, y1 = cy + uy * L;
+  el('line', { x1: f3(x0), y1: f3(y0), x2: f3(x1), y2: f3(y1), stroke: '#606', 'stroke-width': 0.7, class: 'arrow' }, g);
+  // the head: two strokes back from the tip at ±25°
+  const h = 2.2, a = Math.atan2(uy, ux);
+  for (const s of [1, -1]) {
+    const b = a + Math.PI + s * 0.44;
+    el('line', { x1: f3(x1), y1: f3(y1), x2: f3(x1 + h * Math.cos(b)), y2: f3(y1 + h * Math.sin(b)), stroke: '#606', 'stroke-width': 0.7, class: 'head' }, g);
+  }
+  el('text', { x: f3(cx), y: f3(cy + L + 4.5), 'text-anchor': 'middle', 'font-size': 3.0, fill: '#606', class: 'label' }, g).textContent = `g ${grav} m/s², ${dir}°`;
 }
 
 /** A 10 mm scale bar at the drawing's bottom left (SVG coordinates: x right, y down). */
@@ -527,6 +557,24 @@ async function refreshLimits() {
   if (fmax > 0 && !state.fmaxSet) { $('force').max = Math.ceil(fmax * 1.2); state.fmaxSet = true; }
 }
 
+/** The orientation control and the arrow follow the board's `grav`, `grav_dir`. */
+function showOrientation() {
+  const d = Number(state.params.grav_dir || 0), g = Number(state.params.grav || 0);
+  if (state.held !== 'grav-dir') { $('grav-dir').value = d; $('grav-dir-out').textContent = d; }
+  $('grav-state').textContent = g > 0 ? `(g ${g} m/s² at ${d}°)` : '(no gravity: param grav 0)';
+  drawGravity();
+}
+
+/** Set the orientation at the board (`param grav_dir`, refused while armed), then redraw. */
+async function setOrientation(d) {
+  const line = `param grav_dir ${d}`;
+  const r = showReply(line, await cmd(line, false));
+  if (r.ok) { await readParams(); await refreshLimits(); }
+  showOrientation();
+  if (r.ok && !state.armed) await preview();
+  return r;
+}
+
 async function readParams() {
   const r = await cmd('param');
   if (!r.ok) return;
@@ -543,6 +591,7 @@ async function readParams() {
       state.wasm.host_param(b.length, v);
     }
   }
+  showOrientation();
 }
 
 /** Armed: the board's state now (`status`) drawn live. */
@@ -768,6 +817,11 @@ function wire() {
     $(id).addEventListener('blur', () => { state.held = null; });
   }
   $('pose').addEventListener('click', () => doPose().catch((e) => log('note', String(e))));
+  $('grav-dir').addEventListener('input', () => { $('grav-dir-out').textContent = $('grav-dir').value; });
+  $('grav-dir').addEventListener('change', () => setOrientation($('grav-dir').value).catch((e) => log('note', String(e))));
+  for (const b of document.querySelectorAll('.grav-preset')) {
+    b.addEventListener('click', () => setOrientation(b.dataset.dir).catch((e) => log('note', String(e))));
+  }
   $('cmd-form').addEventListener('submit', async (e) => {
     e.preventDefault();
     const line = $('cmd').value.trim();

@@ -243,6 +243,69 @@ test('a pose outside the range shows the board refusal', async () => {
   assert.ok((await page.textContent('#refusal')).endsWith(lim.line));
 });
 
+/** The gravity arrow's direction on screen: its shaft's unit vector (SVG: x right, y down). */
+async function arrowDir() {
+  const a = await page.evaluate(() => {
+    const l = document.querySelector('#gravity line.arrow');
+    return l && ['x1', 'y1', 'x2', 'y2'].map((k) => Number(l.getAttribute(k)));
+  });
+  assert.ok(a, 'the gravity arrow is drawn');
+  const n = Math.hypot(a[2] - a[0], a[3] - a[1]);
+  return [(a[2] - a[0]) / n, (a[3] - a[1]) / n];
+}
+
+test('the orientation control sets grav_dir at the board, and the drawing points gravity that way', async () => {
+  // the board's finger hangs straight down: gravity along the straight finger (+x, right)
+  for (const c of ['status', 'limits']) {
+    const r = await board(c);
+    assert.equal(r.kv.grav, '9.81', c);
+    assert.equal(r.kv.grav_dir, '0', c);
+  }
+  assert.equal(await page.getAttribute('#gravity', 'data-dir'), '0');
+  let [ux, uy] = await arrowDir();
+  assert.ok(Math.abs(ux - 1) < 1e-3 && Math.abs(uy) < 1e-3, `hanging: ${ux},${uy}`);
+  assert.equal(await page.inputValue('#grav-dir'), '0');
+  // held horizontally, curling downward: gravity toward the cable side, which is drawn up
+  await page.click('.grav-preset[data-dir="90"]');
+  await page.waitForFunction(() => document.getElementById('gravity').dataset.dir === '90');
+  assert.equal((await board('param grav_dir')).line, 'ok grav_dir=90');
+  assert.equal((await board('limits')).kv.grav_dir, '90');
+  [ux, uy] = await arrowDir();
+  assert.ok(Math.abs(ux) < 1e-3 && Math.abs(uy + 1) < 1e-3, `90: ${ux},${uy}`);
+  assert.equal(await page.inputValue('#grav-dir'), '90');
+  // the host overlay takes the board's orientation with its other parameters
+  assert.equal(await page.evaluate(() => window.finger.params.grav_dir), 90);
+  // the slider: -90, curling upward, gravity drawn down
+  await page.$eval('#grav-dir', (e) => { e.value = '-90'; e.dispatchEvent(new Event('change')); });
+  await page.waitForFunction(() => document.getElementById('gravity').dataset.dir === '-90');
+  assert.equal((await board('status')).kv.grav_dir, '-90');
+  [ux, uy] = await arrowDir();
+  assert.ok(Math.abs(ux) < 1e-3 && Math.abs(uy - 1) < 1e-3, `-90: ${ux},${uy}`);
+  assert.match(await page.textContent('#grav-state'), /g 9\.81 m\/s² at -90°/);
+  // armed: the board refuses, its refusal is shown, nothing changes
+  await page.click('#arm');
+  await page.waitForFunction(() => window.finger.armed === true);
+  await page.click('.grav-preset[data-dir="0"]');
+  await page.waitForFunction(() => document.getElementById('refusal').textContent.startsWith('param grav_dir 0  ->  err armed: '));
+  assert.equal((await board('param grav_dir')).line, 'err armed: param only while disarmed');
+  assert.equal((await board('status')).kv.grav_dir, '-90');
+  assert.equal(await page.inputValue('#grav-dir'), '-90');
+  assert.equal(await page.getAttribute('#gravity', 'data-dir'), '-90');
+  await page.click('#stop');
+  await page.waitForFunction(() => window.finger.armed === false);
+  // no gravity: no arrow, the drawing says so
+  assert.match((await board('param grav 0')).line, /^ok grav=0$/);
+  await page.evaluate(() => readParams());
+  assert.equal(await page.locator('#gravity line.arrow').count(), 0);
+  assert.match(await page.textContent('#gravity'), /no gravity/);
+  // back to the board's finger
+  assert.match((await board('preset default')).line, /^ok preset=default$/);
+  await page.evaluate(() => readParams());
+  assert.equal(await page.getAttribute('#gravity', 'data-dir'), '0');
+  assert.equal(await page.inputValue('#grav-dir'), '0');
+  assert.deepEqual(pageErrors, []);
+});
+
 test('the strip chart gains points while the board runs, and exports them as CSV', async () => {
   const lim = await board('limits');
   const vmax = Math.min(...lim.kv.vmax.split(',').map(Number));

@@ -172,6 +172,9 @@ fn main() {
     // ---- the branch-table path
     eprintln!("perf-report: branch-table image");
     let section = format!("{section}{}\n", perf::table_cost_section());
+    // ---- contact
+    eprintln!("perf-report: contact image");
+    let section = format!("{section}{}\n", perf::contact_cost_section());
     match md.find("## Stability tests") {
         Some(i) => md.insert_str(i, &section),
         None => md.push_str(&section),

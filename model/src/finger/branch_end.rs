@@ -51,6 +51,9 @@ pub(super) fn fmax<R: Real>(f: &Finger<R>, volts: &[R]) -> Result<BranchLimit<R>
 /// branch (tensions and hole guesses, from the branch table: the march up the branch
 /// continues from them instead of starting at the straight joint).
 pub(super) fn fmax_with<R: Real>(f: &Finger<R>, c: &Compliances<R>, starts: Option<&[Option<[(R, [R; 2]); 2]>; MAX_JOINTS]>) -> Result<BranchLimit<R>, Error> {
+    if f.weights().is_some() {
+        return fmax_coupled(f, c);
+    }
     let (n, m) = (f.p.n, f.p.m);
     // the most thinned stack first (it usually ends first); each later joint marches only
     // up to the end found so far: reaching it, it does not end before
@@ -87,12 +90,12 @@ fn branch_point<R: Real>(f: &Finger<R>, c: &[Mat3<R>; MAX_SUB], from: &Pt<R>, pr
     // a point on the branch converges from the predictor in full steps; past the end there
     // is none: few halvings, so that a trial there fails fast
     let opts = SolveOptions { max_halvings: POINT_HALVINGS, ..SolveOptions::new(tol, f.resolution(), POINT_ITER) };
-    let attempt = match f.newton_dual_with(c, p, guess, &opts) {
-        Err(_) if guess != from.st.hole => f.newton_dual_with(c, p, from.st.hole, &opts),
+    let attempt = match f.newton_dual_with(c, p, guess, None, &opts) {
+        Err(_) if guess != from.st.hole => f.newton_dual_with(c, p, from.st.hole, None, &opts),
         other => other,
     };
     let (st, _) = attempt.map_err(|(why, _)| why)?;
-    if !tension::same_branch(f, &from.st, &st) {
+    if !tension::same_branch(f, &from.st, &st, false) {
         return Err(None);
     }
     let span = super::norm2([st.hole[0], st.hole[1] - f.p.e]);
@@ -148,7 +151,7 @@ fn joint_end<R: Real>(
         let tol = f.resolution().max(R::from_f64(1e-9));
         let opts = SolveOptions { max_halvings: POINT_HALVINGS, ..SolveOptions::new(tol, f.resolution(), POINT_ITER) };
         let solved = pts.map(|(ps, guess)| {
-            let (st, _) = f.newton_dual_with(c, ps, guess, &opts).ok()?;
+            let (st, _) = f.newton_dual_with(c, ps, guess, None, &opts).ok()?;
             // on the table's branch: the solved hole within a twentieth of a hinge length
             // of the table's
             (super::norm2([st.hole[0] - guess[0], st.hole[1] - guess[1]]) <= lh / R::from_f64(20.0)).then(|| {
@@ -235,4 +238,47 @@ fn joint_end<R: Real>(
         why = None;
     }
     Err(Error::NotConverged { iterations: 0, residual: f64::INFINITY })
+}
+
+/// fmax under gravity (docs/model.md "Gravity": the joints are coupled): the feasible boundary
+/// of the converged coupled solve in the tension, to `REL`, from a search that doubles the
+/// tension from the softest joint's linear one-radian tension up to the search bound (1000
+/// times that). Where the first refusal is a contact, so is the end; else a limit point.
+fn fmax_coupled<R: Real>(f: &Finger<R>, c: &Compliances<R>) -> Result<BranchLimit<R>, Error> {
+    let n = f.p.n;
+    let c33 = (0..n).map(|k| c.c[k][..f.p.m].iter().fold(R::zero(), |a, m| a + m[2][2])).fold(R::zero(), |a, b| a.max(b));
+    let p_lin = R::one() / (f.p.e * c33);
+    let bound = R::from_f64(1000.0) * p_lin;
+    let holds = |p: R| f.solve_with(c, p, [R::zero(); 2], super::Method::converged());
+    // the finger under its own weight alone must stand
+    holds(R::zero())?;
+    let (mut lo, mut hi) = (R::zero(), p_lin / R::from_f64(8.0));
+    let mut why = loop {
+        match holds(hi) {
+            Ok(_) => {
+                lo = hi;
+                if hi >= bound {
+                    return Ok(BranchLimit { tension: bound, joint: 1, kind: BranchEnd::SearchBound });
+                }
+                hi = (hi + hi).min(bound);
+            }
+            Err(e) => break Some(e),
+        }
+    };
+    while hi - lo > R::from_f64(REL) * hi {
+        let mid = R::from_f64(0.5) * (lo + hi);
+        match holds(mid) {
+            Ok(_) => lo = mid,
+            Err(e) => {
+                hi = mid;
+                why = Some(e);
+            }
+        }
+    }
+    let (joint, kind) = match why {
+        Some(Error::Contact { joint, .. }) => (joint.max(1), BranchEnd::Contact),
+        Some(Error::LimitPoint { joint, .. }) => (joint.max(1), BranchEnd::LimitPoint),
+        _ => (1, BranchEnd::LimitPoint),
+    };
+    Ok(BranchLimit { tension: lo, joint, kind })
 }

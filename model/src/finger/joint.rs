@@ -23,11 +23,11 @@ impl<R: Real> Finger<R> {
             return Err(MarchError::Contact);
         }
         let fc = [span_v[0] * -tension / span, span_v[1] * -tension / span];
-        let (ft, tp) = match tip {
-            Some(t) => (t.force, t.point),
-            None => ([R::zero(); 2], [R::zero(); 2]),
+        let (ft, tp, tc) = match tip {
+            Some(t) => (t.force, t.point, t.couple),
+            None => ([R::zero(); 2], [R::zero(); 2], R::zero()),
         };
-        Ok(SpanLoads { fc, ft, tp, ftot: [fc[0] + ft[0], fc[1] + ft[1]] })
+        Ok(SpanLoads { fc, ft, tp, tc, ftot: [fc[0] + ft[0], fc[1] + ft[1]] })
     }
 
     /// The plain march of joint k's sub-elements for a guessed guide-hole position `b_hole` (the
@@ -63,10 +63,28 @@ impl<R: Real> Finger<R> {
         Ok(([b[0] - st.hole[0], b[1] - st.hole[1]], st))
     }
 
-    /// The exact 2x2 tangent of a joint's hole residual (tension alone), from one march on
-    /// dual numbers (see `dual`).
-    pub(super) fn joint_tangent(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], _r: [R; 2]) -> Result<[[R; 2]; 2], MarchError> {
-        self.eval_dual(c, tension, b).map(|(_, _, jac)| jac)
+    /// The exact 2x2 tangent of a joint's hole residual (tension and a fixed load `tip`), from
+    /// one march on dual numbers (see `dual`).
+    pub(super) fn joint_tangent(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], tip: Option<TipLoad<R>>) -> Result<[[R; 2]; 2], MarchError> {
+        self.eval_dual(c, tension, b, tip).map(|(_, _, jac)| jac)
+    }
+
+    /// Joint k's (0-based) fixed load (`held`), times `s`.
+    pub(super) fn held_at(&self, k: usize, s: R) -> Option<TipLoad<R>> {
+        self.held.get(k).copied().flatten().map(|l| l.scaled(s))
+    }
+
+    /// Link k's (0-based) deflection under tension with its fixed load (`held_link`).
+    pub(super) fn held_link_q(&self, k: usize, tension: R) -> [R; 3] {
+        if !self.p.flex_links {
+            return [R::zero(); 3];
+        }
+        let mut w = self.link_wrench(tension, None);
+        let h = self.held_link.get(k).copied().unwrap_or([R::zero(); 3]);
+        for i in 0..3 {
+            w[i] += h[i];
+        }
+        crate::mat3::mul_vec(&self.link_c, &w)
     }
 
     /// One march of joint `joint` (1-based) under tension alone from the hole guess `b` (no
@@ -76,7 +94,7 @@ impl<R: Real> Finger<R> {
     /// confirming marches; `iterations` is 0. The sub-element displacements go to `q`.
     #[inline(always)]
     pub(crate) fn joint_march<B: By<R>>(&self, joint: usize, by: B, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<JointMarch<R>, Error> {
-        let (end, hole, link) = by.arrive(self, tension, b, q).map_err(|e| match e {
+        let (end, hole, link) = by.arrive(self, joint.max(1) - 1, tension, b, q).map_err(|e| match e {
             MarchError::Contact => Error::Contact { joint, tension: tension.to_f64() },
             MarchError::Singular => Error::Singular { what: "joint march" },
         })?;
@@ -93,8 +111,10 @@ impl<R: Real> Finger<R> {
 /// A way `Finger::joint_march` marches a joint under tension alone (`by`'s types): the hinge's
 /// end, the hole it arrives at and the link's deflection. One type per way, so each caller's
 /// march is built for its way, with no choice made at run time.
+/// Joint `k` (0-based) carries its fixed load (`Finger::held`) in every way: the ways in the
+/// running frame, which carry none, take the compliance way then or refuse.
 pub(crate) trait By<R: Real> {
-    fn arrive(self, f: &Finger<R>, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError>;
+    fn arrive(self, f: &Finger<R>, k: usize, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError>;
 }
 
 /// The ways of `Finger::joint_march`.
@@ -122,25 +142,31 @@ pub(crate) mod by {
 
     impl<R: Real> By<R> for Compliance<'_, R> {
         #[inline(always)]
-        fn arrive(self, f: &Finger<R>, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError> {
-            let (end, hole, _) = f.march(self.0, tension, b, None, q)?;
-            Ok((end, hole, f.link_q(tension, None)))
+        fn arrive(self, f: &Finger<R>, k: usize, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError> {
+            let (end, hole, _) = f.march(self.0, tension, b, f.held_at(k, R::one()), q)?;
+            Ok((end, hole, f.held_link_q(k, tension)))
         }
     }
 
     impl<R: Real> By<R> for Cable<'_, R> {
         #[inline(always)]
-        fn arrive(self, f: &Finger<R>, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError> {
+        fn arrive(self, f: &Finger<R>, k: usize, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError> {
+            if f.held_at(k, R::one()).is_some() {
+                return Compliance(self.0).arrive(f, k, tension, b, q);
+            }
             match f.march_cable(&march::ByCompliance(self.0), tension, b, q) {
                 Ok((end, hole, _, _)) => Ok((end, hole, f.link_q(tension, None))),
-                Err(_) => Compliance(self.0).arrive(f, tension, b, q),
+                Err(_) => Compliance(self.0).arrive(f, k, tension, b, q),
             }
         }
     }
 
     impl<R: Real> By<R> for Stiffness<'_, R> {
         #[inline(always)]
-        fn arrive(self, f: &Finger<R>, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError> {
+        fn arrive(self, f: &Finger<R>, k: usize, tension: R, b: [R; 2], q: &mut [[R; 3]; MAX_SUB]) -> Result<(Pose<R>, [R; 2], [R; 3]), MarchError> {
+            if f.held_at(k, R::one()).is_some() {
+                return Err(MarchError::Singular);
+            }
             let k = JointStiffness::new(f, self.0, self.1);
             let (end, hole, _, _) = f.march_cable(&march_stiffness::ByStiffness(k), tension, b, q)?;
             Ok((end, hole, self.2))

@@ -1,6 +1,7 @@
-//! The tip-loaded equilibrium (docs/model.md "Equilibrium": an external tip load couples the
-//! joints): every guide hole and the tip solved together by damped Newton under load
-//! continuation. Not the tension-alone solve (`tension`).
+//! The coupled equilibrium (docs/model.md "Equilibrium": an external tip load or the finger's
+//! weight couples the joints): every guide hole, the tip and, under gravity, each joint's
+//! distal centroid solved together by damped Newton under load continuation. Not the
+//! tension-alone solve (`tension`).
 
 use super::{Compliances, Finger, Heading, JointState, MarchError, COUPLED};
 use crate::error::Error;
@@ -17,16 +18,18 @@ struct Coupled<'a, R> {
     c: &'a Compliances<R>,
     tension: R,
     force: [R; 2],
+    /// The weight's share of its full value (the load continuation's factor).
+    weight: R,
     states: [[JointState<R>; MAX_JOINTS]; 3],
 }
 
 impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
     type Refusal = MarchError;
     fn dim(&self) -> usize {
-        2 * self.f.p.n + 2
+        coupled_dim(self.f)
     }
     fn residual(&mut self, x: &[R; COUPLED], slot: usize) -> Result<[R; COUPLED], MarchError> {
-        let (r, st) = coupled_residual(self.f, self.c, self.tension, self.force, x)?;
+        let (r, st) = coupled_residual(self.f, self.c, self.tension, self.force, self.weight, x)?;
         self.states[slot] = st;
         Ok(r)
     }
@@ -36,35 +39,96 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
     }
 }
 
-/// Tip-loaded equilibrium, every hole and the tip together (docs/model.md "Equilibrium": an
-/// external tip load couples the joints).
-/// Coupled residual for the tip-loaded case. Unknowns: each joint's hole (2 per joint),
-/// then the tip position (2). Returns the residual and the marched states.
+/// The coupled system's size: each joint's hole, the tip and, under gravity, each joint's
+/// distal centroid.
+pub(super) fn coupled_dim<R: Real>(f: &Finger<R>) -> usize {
+    let n = f.p.n;
+    2 * n + 2 + if f.weights().is_some() { 2 * n } else { 0 }
+}
+
+/// The coupled system's start at the straight finger (holes, tip, centroids).
+pub(super) fn straight_unknowns<R: Real>(f: &Finger<R>) -> [R; COUPLED] {
+    let n = f.p.n;
+    let mut x = [R::zero(); COUPLED];
+    let mut states = [f.straight(); MAX_JOINTS];
+    for k in 0..n {
+        x[2 * k] = f.p.hinge_len();
+        x[2 * k + 1] = f.p.e;
+        states[k] = f.straight();
+    }
+    x[2 * n] = R::from_u32(n as u32) * f.p.l;
+    f.put_centroids(&states, &mut x);
+    x
+}
+
+impl<R: Real> Finger<R> {
+    /// Under gravity, the distal centroids of the posture `states` give (rigid links: the
+    /// coupled unknowns' start) into `x` after the holes and the tip.
+    pub(super) fn put_centroids(&self, states: &[JointState<R>; MAX_JOINTS], x: &mut [R; COUPLED]) {
+        let n = self.p.n;
+        if let Some(w) = self.weights() {
+            let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
+            let mut node = Heading::origin();
+            for k in 0..n {
+                let e = states[k].end;
+                let hinge_end = node.then(e.x, e.y, e.theta);
+                lumps[k] = self.lumps_of(&node, &hinge_end);
+                node = hinge_end.then(self.link_len, R::zero(), R::zero());
+            }
+            let c = w.centroids(n, &lumps);
+            for k in 0..n {
+                x[2 * n + 2 + 2 * k] = c[k][0];
+                x[2 * n + 3 + 2 * k] = c[k][1];
+            }
+        }
+    }
+}
+
+/// The coupled residual (docs/model.md "Equilibrium", "Gravity"). Unknowns: each joint's hole
+/// (2 per joint), the tip position (2) and, under gravity, each joint's distal centroid (2 per
+/// joint, base frame), whose weight (times `weight`) loads that joint and the link before it.
+/// Residual: each hole's mismatch, the tip's with the chain, each centroid's with the chain's.
+/// Returns the residual and the marched states.
 pub(super) fn coupled_residual<R: Real>(
     f: &Finger<R>,
     c: &Compliances<R>,
     tension: R,
     force: [R; 2],
-    x: &[R; 2 * MAX_JOINTS + 2],
-) -> Result<([R; 2 * MAX_JOINTS + 2], [JointState<R>; MAX_JOINTS]), MarchError> {
+    weight: R,
+    x: &[R; COUPLED],
+) -> Result<([R; COUPLED], [JointState<R>; MAX_JOINTS]), MarchError> {
     let n = f.p.n;
     let tip = [x[2 * n], x[2 * n + 1]];
+    let w = f.weights();
+    let centroid = |k: usize| [x[2 * n + 2 + 2 * k], x[2 * n + 3 + 2 * k]];
+    let grav = |k: usize| w.as_ref().map(|w| (w, weight, centroid(k.min(n - 1))));
+    let tip_load = Some((force, tip));
     let mut states = [f.straight(); MAX_JOINTS];
-    let mut r = [R::zero(); 2 * MAX_JOINTS + 2];
+    let mut r = [R::zero(); COUPLED];
+    let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
     let mut frame = Heading::origin();
     for k in 0..n {
-        let tl = Finger::tip_in_frame(&frame, force, tip);
+        let tl = f.joint_ext_load(k, tip_load, grav(k)).map(|l| Finger::load_in_frame(&frame, l));
         let b = [x[2 * k], x[2 * k + 1]];
-        let st = f.marched(&c.c[k], tension, b, Some(tl))?;
+        let st = f.marched(&c.c[k], tension, b, tl)?;
         r[2 * k] = b[0] - st.hole[0];
         r[2 * k + 1] = b[1] - st.hole[1];
         let hinge_end = frame.then(st.end.x, st.end.y, st.end.theta);
-        let ql = f.link_q(tension, Some((&hinge_end, force, tip)));
+        let ql = f.link_q(tension, f.link_load(k, &hinge_end, tip_load, grav(k + 1)).map(|l| (&hinge_end, l)));
+        lumps[k] = f.lumps_of(&frame, &hinge_end);
         frame = hinge_end.then(f.link_len + ql[0], ql[1], ql[2]);
         states[k] = st;
     }
     r[2 * n] = tip[0] - frame.pose.x;
     r[2 * n + 1] = tip[1] - frame.pose.y;
+    if let Some(w) = &w {
+        let now = w.centroids(n, &lumps);
+        for k in 0..n {
+            let c = centroid(k);
+            r[2 * n + 2 + 2 * k] = c[0] - now[k][0];
+            r[2 * n + 3 + 2 * k] = c[1] - now[k][1];
+        }
+    }
     Ok((r, states))
 }
 
@@ -80,19 +144,15 @@ pub(super) fn newton_coupled<R: Real>(
     max_iter: u32,
 ) -> Result<([JointState<R>; MAX_JOINTS], [R; 2], u32), Error> {
     let n = f.p.n;
-    let mut x = [R::zero(); COUPLED];
-    for k in 0..n {
-        x[2 * k] = f.p.hinge_len();
-        x[2 * k + 1] = f.p.e;
-    }
-    x[2 * n] = R::from_u32(n as u32) * f.p.l;
-    let mut eq = Coupled { f, c, tension: R::zero(), force: [R::zero(); 2], states: [[f.straight(); MAX_JOINTS]; 3] };
+    let mut x = straight_unknowns(f);
+    let mut eq = Coupled { f, c, tension: R::zero(), force: [R::zero(); 2], weight: R::zero(), states: [[f.straight(); MAX_JOINTS]; 3] };
     let mut iters = 0u32;
     let mut result = None;
     let opts_for = |left: u32| SolveOptions::new(tol, f.resolution() * R::from_u32(n as u32), left);
     let mut step = |_: R, to: R| -> Result<(), Step<Option<MarchError>>> {
         eq.tension = tension * to;
         eq.force = [force[0] * to, force[1] * to];
+        eq.weight = to;
         let mut xt = x;
         let left = max_iter.saturating_sub(iters);
         match newton::solve(&mut eq, &mut xt, &opts_for(left)) {

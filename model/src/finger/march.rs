@@ -287,7 +287,7 @@ impl<R: Real, T: Scalar<R>> Frame<SubLoads<R, T>, SubDisp<T>> for PoseFrame<R, T
         let d0 = [self.pose.x + co * l, self.pose.y + s * l];
         let mut m0 = (self.b[0] - d0[0]) * self.fc[1] - (self.b[1] - d0[1]) * self.fc[0];
         if let Some(t) = self.tip {
-            m0 += (d0[1] - t.point[1]) * t.force[0] - (d0[0] - t.point[0]) * t.force[1];
+            m0 += (d0[1] - t.point[1]) * t.force[0] - (d0[0] - t.point[0]) * t.force[1] + t.couple;
         }
         ([co * ft[0] + s * ft[1], -s * ft[0] + co * ft[1]], m0, l)
     }
@@ -344,16 +344,18 @@ impl<R: Real> Finger<R> {
         c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b: [D<R>; 2],
+        tip: Option<TipLoad<R>>,
         q: &mut [[R; 3]; MAX_SUB],
     ) -> Result<(Pose<D<R>>, [D<R>; 2], [D<R>; 2]), MarchError> {
-        let frame = PoseFrame::new(self, tension, b, None)?;
+        let frame = PoseFrame::new(self, tension, b, tip)?;
         self.march_joint(&ByComplianceLoaded(c), frame, q, |x| x.v)?.end(self.p.e)
     }
 
-    /// One dual march at hole guess `b` (tension alone): state, residual, Jacobian.
-    pub(super) fn eval_dual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2]) -> Result<Eval<R>, MarchError> {
+    /// One dual march at hole guess `b` (tension and a fixed load `tip`): state, residual,
+    /// Jacobian.
+    pub(super) fn eval_dual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], tip: Option<TipLoad<R>>) -> Result<Eval<R>, MarchError> {
         let mut q = [[R::zero(); 3]; MAX_SUB];
-        let (end, hole, r, jac) = self.eval_dual_into(c, tension, b, &mut q)?;
+        let (end, hole, r, jac) = self.eval_dual_into(c, tension, b, tip, &mut q)?;
         Ok((JointState { q, end, hole, tangent: None }, r, jac))
     }
 
@@ -365,11 +367,12 @@ impl<R: Real> Finger<R> {
         c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b: [R; 2],
+        tip: Option<TipLoad<R>>,
         q: &mut [[R; 3]; MAX_SUB],
     ) -> Result<(Pose<R>, [R; 2], [R; 2], [[R; 2]; 2]), MarchError> {
         let (z, o) = (R::zero(), R::one());
         let bd = [D { v: b[0], d: [o, z] }, D { v: b[1], d: [z, o] }];
-        let (end_d, hole_d, _) = self.march_dual(c, tension, bd, q)?;
+        let (end_d, hole_d, _) = self.march_dual(c, tension, bd, tip, q)?;
         let end = Pose { x: end_d.x.v, y: end_d.y.v, theta: end_d.theta.v };
         let hole = [hole_d[0].v, hole_d[1].v];
         let r = [b[0] - hole[0], b[1] - hole[1]];
@@ -386,10 +389,11 @@ impl<R: Real> Finger<R> {
         c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b: [R; 2],
+        tip: Option<TipLoad<R>>,
         tol: R,
         max_iter: u32,
     ) -> Result<(JointState<R>, u32), (Option<MarchError>, u32)> {
-        self.newton_dual_with(c, tension, b, &SolveOptions::new(tol, self.resolution(), max_iter))
+        self.newton_dual_with(c, tension, b, tip, &SolveOptions::new(tol, self.resolution(), max_iter))
     }
 
     /// `newton_dual` with the solver's options (iterations, line-search halvings) given.
@@ -398,9 +402,10 @@ impl<R: Real> Finger<R> {
         c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b: [R; 2],
+        tip: Option<TipLoad<R>>,
         opts: &SolveOptions<R>,
     ) -> Result<(JointState<R>, u32), (Option<MarchError>, u32)> {
-        let mut eq = JointHoles { f: self, c, tension, q: [[[R::zero(); 3]; MAX_SUB]; 2], st: [None; 2] };
+        let mut eq = JointHoles { f: self, c, tension, tip, q: [[[R::zero(); 3]; MAX_SUB]; 2], st: [None; 2] };
         let mut x = b;
         match solve::newton::solve(&mut eq, &mut x, opts) {
             Ok((rep, slot)) => {
@@ -419,6 +424,7 @@ struct JointHoles<'a, R> {
     f: &'a Finger<R>,
     c: &'a [Mat3<R>; MAX_SUB],
     tension: R,
+    tip: Option<TipLoad<R>>,
     q: [[[R; 3]; MAX_SUB]; 2],
     #[allow(clippy::type_complexity)]
     st: [Option<(Pose<R>, [R; 2], [R; 2], [[R; 2]; 2])>; 2],
@@ -428,7 +434,7 @@ impl<R: Real> Equations<R, 2> for JointHoles<'_, R> {
     type Refusal = MarchError;
     fn residual(&mut self, x: &[R; 2], slot: usize) -> Result<[R; 2], MarchError> {
         let slot = slot.min(1);
-        let ev = self.f.eval_dual_into(self.c, self.tension, *x, &mut self.q[slot])?;
+        let ev = self.f.eval_dual_into(self.c, self.tension, *x, self.tip, &mut self.q[slot])?;
         self.st[slot] = Some(ev);
         Ok(ev.2)
     }
@@ -455,7 +461,7 @@ mod tests {
     fn plain_march_is_the_pose_frame_march() {
         for f in fingers() {
             let c = f.compliances(&[0.0; 3]).unwrap();
-            let tips = [None, Some(TipLoad { force: [0.3, -0.7], point: [60.0, 12.0] })];
+            let tips = [None, Some(TipLoad { force: [0.3, -0.7], point: [60.0, 12.0], couple: 0.0 })];
             for tension in [0.0, 0.2, 1.0, 7.0] {
                 for b in [[10.0, 5.0], [9.3, 6.1], [8.0, 7.5]] {
                     for tip in tips {
@@ -471,7 +477,7 @@ mod tests {
                         assert_eq!(a.hole, t.1);
                         assert_eq!(a.end, t.0);
                         assert_eq!(a.q, q);
-                        let d = f.eval_dual(&c.c[0], tension, b).ok().unwrap();
+                        let d = f.eval_dual(&c.c[0], tension, b, None).ok().unwrap();
                         let plain = f.marched(&c.c[0], tension, b, None).ok().unwrap();
                         assert_eq!(d.0.hole, plain.hole, "dual value part equals the plain march");
                     }
@@ -578,15 +584,15 @@ mod tests {
             let c = f.compliances(&[0.0; 3]).unwrap();
             for tension in [0.2, 1.0, 7.0] {
                 let b = [9.4, 6.0];
-                let (_, r0, jac) = f.eval_dual(&c.c[0], tension, b).ok().unwrap();
+                let (_, r0, jac) = f.eval_dual(&c.c[0], tension, b, None).ok().unwrap();
                 assert!(r0[0].is_finite());
                 let h = 1e-6;
                 for i in 0..2 {
                     let (mut bp, mut bm) = (b, b);
                     bp[i] += h;
                     bm[i] -= h;
-                    let (_, rp, _) = f.eval_dual(&c.c[0], tension, bp).ok().unwrap();
-                    let (_, rm, _) = f.eval_dual(&c.c[0], tension, bm).ok().unwrap();
+                    let (_, rp, _) = f.eval_dual(&c.c[0], tension, bp, None).ok().unwrap();
+                    let (_, rm, _) = f.eval_dual(&c.c[0], tension, bm, None).ok().unwrap();
                     for row in 0..2 {
                         let fd = (rp[row] - rm[row]) / (2.0 * h);
                         assert!((fd - jac[row][i]).abs() < 1e-7, "J[{row}][{i}] {} vs {fd}", jac[row][i]);

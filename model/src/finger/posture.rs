@@ -14,7 +14,7 @@ impl<R: Real> Finger<R> {
     /// the cable inside the link compresses it with P at the offset e (moment P·e about its
     /// axis), plus the tip load if any; linear, loads in the undeformed link frame.
     /// `tip`: the hinge's end (the link's proximal frame), the tip force and its point.
-    pub(super) fn link_q(&self, tension: R, tip: Option<(&Heading<R>, [R; 2], [R; 2])>) -> [R; 3] {
+    pub(super) fn link_q(&self, tension: R, tip: Option<(&Heading<R>, TipLoad<R>)>) -> [R; 3] {
         if !self.p.flex_links {
             return [R::zero(); 3];
         }
@@ -22,15 +22,16 @@ impl<R: Real> Finger<R> {
     }
 
     /// `link_q`'s wrench (Fx, Fy, M) on a link's distal end, in its undeformed frame.
-    pub(super) fn link_wrench(&self, tension: R, tip: Option<(&Heading<R>, [R; 2], [R; 2])>) -> [R; 3] {
+    pub(super) fn link_wrench(&self, tension: R, tip: Option<(&Heading<R>, TipLoad<R>)>) -> [R; 3] {
         let mut w = [-tension, R::zero(), tension * self.p.e];
-        if let Some((hinge_end, force, point)) = tip {
+        if let Some((hinge_end, load)) = tip {
             let end = hinge_end.then(self.link_len, R::zero(), R::zero());
-            let tl = Self::tip_in_frame(&end, force, point);
+            let tl = Self::load_in_frame(&end, load);
             let (s, c) = (hinge_end.s, hinge_end.c);
+            let force = load.force;
             w[0] += c * force[0] + s * force[1];
             w[1] += -s * force[0] + c * force[1];
-            w[2] += tl.point[0] * tl.force[1] - tl.point[1] * tl.force[0];
+            w[2] += tl.point[0] * tl.force[1] - tl.point[1] * tl.force[0] + tl.couple;
         }
         w
     }
@@ -71,41 +72,65 @@ impl<R: Real> Finger<R> {
         let mut links = [[R::zero(); 3]; MAX_JOINTS];
         // with a tip load on flexible links the tip point enters the links' loads: the solved
         // tip when the caller has it (the coupled and pinned solves carry it as an unknown),
-        // else a fixed point on the tip from the rigid-link tip (the load stepping)
+        // else a fixed point on the tip from the rigid-link tip (the load stepping); the
+        // weight beyond each link (docs/model.md "Gravity") likewise, from the chain before
         let n = self.p.n;
+        let weights = if self.p.flex_links { self.weights() } else { None };
         let given = tip_point.is_some();
-        let passes = if loaded && self.p.flex_links && !given { 8 } else { 1 };
+        let passes = if self.p.flex_links && ((loaded && !given) || weights.is_some()) { 8 } else { 1 };
         let mut tip_point = if loaded && self.p.flex_links { tip_point } else { None };
+        let mut centroids: Option<[[R; 2]; MAX_JOINTS]> = None;
+        let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
         for _ in 0..passes {
             let tip = if loaded { tip_point.map(|t| (tip_force, t)) } else { None };
             for k in 0..n {
                 let e = ends[k];
                 let hinge_end = nodes[k].then(e.x, e.y, e.theta);
-                links[k] = if loaded && tip.is_none() { [R::zero(); 3] } else { self.link_q(tension, tip.map(|(f, t)| (&hinge_end, f, t))) };
+                let grav = match (&weights, centroids) {
+                    (Some(w), Some(c)) => Some((w, R::one(), c[(k + 1).min(n - 1)])),
+                    _ => None,
+                };
+                links[k] = if loaded && tip.is_none() {
+                    [R::zero(); 3]
+                } else {
+                    self.link_q(tension, self.link_load(k, &hinge_end, tip, grav).map(|l| (&hinge_end, l)))
+                };
+                lumps[k] = self.lumps_of(&nodes[k], &hinge_end);
                 let q = links[k];
                 nodes[k + 1] = hinge_end.then(self.link_len + q[0], q[1], q[2]);
             }
             let new_tip = [nodes[n].pose.x, nodes[n].pose.y];
-            if given {
+            let mut settled = given || !(loaded && self.p.flex_links);
+            if let Some(t) = tip_point {
+                settled |= (new_tip[0] - t[0]).abs() + (new_tip[1] - t[1]).abs() <= self.resolution();
+            }
+            if let Some(w) = &weights {
+                let now = w.centroids(n, &lumps);
+                if let Some(before) = centroids {
+                    let moved = (0..n).map(|k| (now[k][0] - before[k][0]).abs() + (now[k][1] - before[k][1]).abs()).fold(R::zero(), |a, b| a.max(b));
+                    settled &= moved <= self.resolution();
+                } else {
+                    settled = false;
+                }
+                centroids = Some(now);
+            }
+            if settled {
                 break;
             }
-            if let Some(t) = tip_point {
-                if (new_tip[0] - t[0]).abs() + (new_tip[1] - t[1]).abs() <= self.resolution() {
-                    break;
-                }
+            if !given {
+                tip_point = Some(new_tip);
             }
-            tip_point = Some(new_tip);
         }
         (nodes, links)
     }
 
-    /// The tip load as joint k sees it (its proximal frame), from a base-frame force at a
-    /// base-frame point.
-    pub(super) fn tip_in_frame(frame: &Heading<R>, force: [R; 2], point: [R; 2]) -> TipLoad<R> {
+    /// A base-frame load as a frame sees it (the couple is the same in every frame).
+    pub(super) fn load_in_frame(frame: &Heading<R>, l: TipLoad<R>) -> TipLoad<R> {
         let (s, c) = (frame.s, frame.c);
+        let (force, point) = (l.force, l.point);
         let dx = point[0] - frame.pose.x;
         let dy = point[1] - frame.pose.y;
-        TipLoad { force: [c * force[0] + s * force[1], -s * force[0] + c * force[1]], point: [c * dx + s * dy, -s * dx + c * dy] }
+        TipLoad { force: [c * force[0] + s * force[1], -s * force[0] + c * force[1]], point: [c * dx + s * dy, -s * dx + c * dy], couple: l.couple }
     }
 
     /// Collect the solution: nodes, joint angles, spans, excursion, residual, tangents.
@@ -128,6 +153,19 @@ impl<R: Real> Finger<R> {
         let chain_tip = [nodes[n].x, nodes[n].y];
         let tip = tip_point.unwrap_or(chain_tip);
         let mut res2 = (tip[0] - chain_tip[0]).sq() + (tip[1] - chain_tip[1]).sq();
+        // under gravity each joint's distal weight at the centroid the chain puts it
+        // (docs/model.md "Gravity"): the joints are coupled, as under a tip load
+        let weights = self.weights();
+        let mut centroids = [[R::zero(); 2]; MAX_JOINTS];
+        if let Some(w) = &weights {
+            let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
+            for k in 0..n {
+                let e = states[k].end;
+                lumps[k] = self.lumps_of(&heads[k], &heads[k].then(e.x, e.y, e.theta));
+            }
+            centroids = w.centroids(n, &lumps);
+        }
+        let coupled = loaded || weights.is_some();
         // residual and tangent determinant of the joint before (tension alone)
         let mut prev: Option<([R; 2], R)> = None;
         for k in 0..n {
@@ -142,14 +180,17 @@ impl<R: Real> Finger<R> {
             }
             sol.span[k] = span;
             sol.cable_excursion += self.p.hinge_len() - span;
-            let tl = if loaded { Some(Self::tip_in_frame(&heads[k], tip_force, tip)) } else { None };
+            let tl = self
+                .joint_ext_load(k, if loaded { Some((tip_force, tip)) } else { None }, weights.as_ref().map(|w| (w, R::one(), centroids[k])))
+                .map(|l| Self::load_in_frame(&heads[k], l))
+                .or(self.held_at(k, R::one()));
             // tension alone: one dual march gives the residual and the exact tangent; a joint
             // equal to the one before (same compliance, same hole) has the same ones
             let same = k > 0 && c.c[k][..self.p.m] == c.c[k - 1][..self.p.m] && st.hole == states[k - 1].hole;
-            let dual = match (loaded, same, prev) {
+            let dual = match (coupled || self.held_at(k, R::one()).is_some(), same, prev) {
                 (true, _, _) => None,
                 (false, true, Some(p)) => Some(p),
-                (false, _, _) => self.eval_dual(&c.c[k], tension, st.hole).ok().map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
+                (false, _, _) => self.eval_dual(&c.c[k], tension, st.hole, None).ok().map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
             };
             prev = dual;
             if let Some((r, det)) = dual {
@@ -160,7 +201,7 @@ impl<R: Real> Finger<R> {
             match self.hole_residual(&c.c[k], tension, st.hole, tl) {
                 Ok((r, _)) => {
                     res2 += r[0] * r[0] + r[1] * r[1];
-                    if let Ok(jac) = self.joint_tangent(&c.c[k], tension, st.hole, r) {
+                    if let Ok(jac) = self.joint_tangent(&c.c[k], tension, st.hole, tl) {
                         sol.tangent_det[k] = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
                     }
                 }

@@ -3,7 +3,7 @@
 //! "Joint compliance with the stack"). No solving here.
 
 use super::types::cast_mat;
-use super::{Compliances, Finger};
+use super::{Compliances, Finger, HELD};
 use crate::calibration::Calibration;
 use crate::error::Error;
 use crate::mat3::{self, Mat3};
@@ -39,7 +39,7 @@ impl<R: Real> Finger<R> {
         let sub_len = p.hinge_len() / R::from_u32(p.m as u32);
         let link_len = p.l - p.hinge_len();
         let link_c = if p.flex_links { uniform_beam_compliance(e, p.w, p.b, link_len) } else { mat3::zero() };
-        Ok(Finger { p, hinge_c, hinge_k, sub_len, link_len, link_c, cal })
+        Ok(Finger { p, hinge_c, hinge_k, sub_len, link_len, link_c, cal, held: [None; HELD], held_link: [[R::zero(); 3]; HELD] })
     }
 
     pub fn params(&self) -> &Params<R> {
@@ -63,6 +63,8 @@ impl<R: Real> Finger<R> {
             sub_len: S::from_f64(self.sub_len.to_f64()),
             link_len: S::from_f64(self.link_len.to_f64()),
             link_c: cast_mat(&self.link_c),
+            held: self.held.map(|h| h.map(|l| l.cast())),
+            held_link: self.held_link.map(|w| w.map(|x| S::from_f64(x.to_f64()))),
             cal: Calibration {
                 hinge: self.cal.hinge.map(|x| S::from_f64(x.to_f64())),
                 stack_axial: self.cal.stack_axial.map(|x| S::from_f64(x.to_f64())),

@@ -31,11 +31,23 @@ fn states<R: Real>(f: &Finger<R>, c: &Compliances<R>, tension: R, force: [R; 2],
         let load = [force[0] * lam, force[1] * lam];
         let (nodes, _) = f.chain(&states, p, load, None);
         let tip = [nodes[n].pose.x, nodes[n].pose.y];
+        // the weight (docs/model.md "Gravity"), its share and centroids from the step before
+        let weights = f.weights();
+        let mut centroids = [[R::zero(); 2]; MAX_JOINTS];
+        if let Some(w) = &weights {
+            let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
+            for k in 0..n {
+                let e = states[k].end;
+                lumps[k] = f.lumps_of(&nodes[k], &nodes[k].then(e.x, e.y, e.theta));
+            }
+            centroids = w.centroids(n, &lumps);
+        }
         let mut next = states;
         for k in 0..n {
-            let tl = Finger::tip_in_frame(&nodes[k], load, tip);
-            next[k] = explicit_step(f, &c.c[k], p, &states[k], if loaded { Some(tl) } else { None })
-                .map_err(|_| Error::Contact { joint: k + 1, tension: p.to_f64() })?;
+            let tl = f
+                .joint_ext_load(k, if loaded { Some((load, tip)) } else { None }, weights.as_ref().map(|w| (w, lam, centroids[k])))
+                .map(|l| Finger::load_in_frame(&nodes[k], l));
+            next[k] = explicit_step(f, &c.c[k], p, &states[k], tl).map_err(|_| Error::Contact { joint: k + 1, tension: p.to_f64() })?;
         }
         states = next;
     }
@@ -52,7 +64,7 @@ fn explicit_step<R: Real>(
 ) -> Result<JointState<R>, MarchError> {
     let e = f.p.e;
     let b = prev.hole;
-    let SpanLoads { fc, ft, tp, ftot } = f.span_loads(tension, b, tip)?;
+    let SpanLoads { fc, ft, tp, tc, ftot } = f.span_loads(tension, b, tip)?;
     let mut frame = Heading::origin();
     let mut q = [[R::zero(); 3]; MAX_SUB];
     for j in 0..f.p.m {
@@ -62,7 +74,7 @@ fn explicit_step<R: Real>(
         let d = frame.point(f.sub_len + qp[0], qp[1]);
         let mut mo = (b[0] - d[0]) * fc[1] - (b[1] - d[1]) * fc[0];
         if tip.is_some() {
-            mo += (tp[0] - d[0]) * ft[1] - (tp[1] - d[1]) * ft[0];
+            mo += (tp[0] - d[0]) * ft[1] - (tp[1] - d[1]) * ft[0] + tc;
         }
         let fj = [co * ftot[0] + s * ftot[1], -s * ftot[0] + co * ftot[1]];
         q[j] = mat3::mul_vec(&c[j], &[fj[0], fj[1], mo]);

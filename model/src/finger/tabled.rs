@@ -146,7 +146,7 @@ fn fill_from_holes<R: Real>(
 /// hinge length of the guess; else the load continuation from the straight joint.
 #[inline(never)]
 fn polish_joint<R: Real>(f: &Finger<R>, k: usize, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], tol: R, max_iter: u32) -> Result<(JointState<R>, u32), Error> {
-    match f.newton_dual(c, tension, b, tol, max_iter) {
+    match f.newton_dual(c, tension, b, f.held_at(k, R::one()), tol, max_iter) {
         Ok((st, it)) if norm2([st.hole[0] - b[0], st.hole[1] - b[1]]) <= f.p.hinge_len() / R::from_f64(2.0) => Ok((st, it)),
         _ => tension::newton_joint(f, k, c, tension, tol, max_iter, tension / R::from_f64(4096.0)),
     }

@@ -49,14 +49,14 @@ fn solve_into<R: Real>(f: &Finger<R>, c: &Compliances<R>, tension: R, tol: R, ma
         holes[k] = st.hole;
         let tangent = match st.tangent {
             Some(t) => Some(t),
-            None => f.eval_dual(&c.c[k], tension, st.hole).ok().map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
+            None => f.eval_dual(&c.c[k], tension, st.hole, f.held_at(k, R::one())).ok().map(|(_, r, j)| (r, j[0][0] * j[1][1] - j[0][1] * j[1][0])),
         };
         let r2 = match tangent {
             Some((r, det)) => {
                 sol.tangent_det[k] = det;
                 r[0] * r[0] + r[1] * r[1]
             }
-            None => match f.hole_residual(&c.c[k], tension, st.hole, None) {
+            None => match f.hole_residual(&c.c[k], tension, st.hole, f.held_at(k, R::one())) {
                 Ok((r, _)) => r[0] * r[0] + r[1] * r[1],
                 Err(_) => return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() }),
             },
@@ -113,10 +113,14 @@ pub(super) fn newton_joint<R: Real>(
     max_iter: u32,
     min_step: R,
 ) -> Result<(JointState<R>, u32), Error> {
-    if tension == R::zero() {
+    // a fixed load (`held`) grows with the tension along the continuation, from the straight
+    // joint; without tension it is the continuation's only load
+    let held = f.held_at(k, R::one());
+    if tension == R::zero() && held.is_none() {
         let st = f.marched(c, tension, [f.p.hinge_len(), f.p.e], None).map_err(|_| Error::Singular { what: "joint" })?;
         return Ok((st, 0));
     }
+    let unit = if tension == R::zero() { R::one() } else { tension };
     // the unloaded joint is straight (the march at zero tension gives exactly this)
     let mut last = f.straight();
     let mut b = last.hole;
@@ -126,19 +130,20 @@ pub(super) fn newton_joint<R: Real>(
     let mut rate = [R::zero(); 2];
     let mut failed_at = tension;
     let mut step = |from: R, to: R| -> Result<(), Step<Option<MarchError>>> {
-        let (done, target) = (tension * from, tension * to);
+        let (done, target) = (unit * from, unit * to);
         let dp = target - done;
         let guess = [b[0] + rate[0] * dp, b[1] + rate[1] * dp];
-        let attempt = match f.newton_dual(c, target, guess, tol, max_iter.saturating_sub(iters)) {
+        let (p_to, load) = (tension * to, f.held_at(k, to));
+        let attempt = match f.newton_dual(c, p_to, guess, load, tol, max_iter.saturating_sub(iters)) {
             Err((_, it)) if done > R::zero() => {
                 // the predictor overshot: retry from the last solution itself
                 iters += it;
-                f.newton_dual(c, target, b, tol, max_iter.saturating_sub(iters))
+                f.newton_dual(c, p_to, b, load, tol, max_iter.saturating_sub(iters))
             }
             other => other,
         };
         let (it, outcome) = match attempt {
-            Ok((st, it)) => (it, if same_branch(f, &last, &st) { Ok(st) } else { Err(None) }),
+            Ok((st, it)) => (it, if same_branch(f, &last, &st, held.is_some()) { Ok(st) } else { Err(None) }),
             Err((why, it)) => (it, Err(why)),
         };
         iters += it;
@@ -169,13 +174,13 @@ pub(super) fn newton_joint<R: Real>(
             }
         })
     };
-    match continuation::run(R::one(), min_step / tension, None, &mut track) {
+    match continuation::run(R::one(), min_step / unit, None, &mut track) {
         Ok(_) => Ok((last, iters)),
         Err((lam, _)) => {
             let done = tension * lam;
             Err(match why_failed {
                 Some(MarchError::Contact) => Error::Contact { joint: k + 1, tension: failed_at.to_f64() },
-                _ if done > R::zero() && near_limit_point(f, c, done, &last) => Error::LimitPoint { joint: k + 1, tension: done.to_f64() },
+                _ if done > R::zero() && near_limit_point(f, c, done, &last, f.held_at(k, lam)) => Error::LimitPoint { joint: k + 1, tension: done.to_f64() },
                 _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
             })
         }
@@ -185,17 +190,22 @@ pub(super) fn newton_joint<R: Real>(
 /// Load continuation stays on the physical branch: under a growing tension a joint flexes
 /// further (its angle grows) by a bounded amount per step. A Newton solution that fails
 /// this (a jump to another branch, far from the last one) is rejected and the step halved.
-pub(super) fn same_branch<R: Real>(f: &Finger<R>, last: &JointState<R>, next: &JointState<R>) -> bool {
+/// With a fixed load growing beside the tension (`loaded`) the joint may turn either way: only
+/// the bound holds.
+pub(super) fn same_branch<R: Real>(f: &Finger<R>, last: &JointState<R>, next: &JointState<R>, loaded: bool) -> bool {
     let dtheta = next.end.theta - last.end.theta;
     let dhole = norm2([next.hole[0] - last.hole[0], next.hole[1] - last.hole[1]]);
-    dtheta >= -R::from_f64(1e-9) && dtheta <= R::from_f64(0.8) && dhole <= R::from_f64(0.5) * f.p.hinge_len()
+    let turn_ok = if loaded { dtheta.abs() <= R::from_f64(0.8) } else { dtheta >= -R::from_f64(1e-9) && dtheta <= R::from_f64(0.8) };
+    turn_ok && dhole <= R::from_f64(0.5) * f.p.hinge_len()
 }
 
 /// Whether the equilibrium tangent at a solved state is (nearly) singular: the branch
 /// turns back there (a limit point), so no solution exists just beyond it.
-fn near_limit_point<R: Real>(f: &Finger<R>, c: &[Mat3<R>; MAX_SUB], tension: R, st: &JointState<R>) -> bool {
-    let Ok((r, _)) = f.hole_residual(c, tension, st.hole, None) else { return false };
-    match f.joint_tangent(c, tension, st.hole, r) {
+fn near_limit_point<R: Real>(f: &Finger<R>, c: &[Mat3<R>; MAX_SUB], tension: R, st: &JointState<R>, held: Option<super::TipLoad<R>>) -> bool {
+    if f.hole_residual(c, tension, st.hole, held).is_err() {
+        return false;
+    }
+    match f.joint_tangent(c, tension, st.hole, held) {
         Ok(j) => (j[0][0] * j[1][1] - j[0][1] * j[1][0]).abs() < R::from_f64(0.2),
         Err(_) => false,
     }
@@ -215,7 +225,7 @@ pub(super) fn joint_equilibrium<R: Real>(
     }
     let tol = tol.max(f.resolution());
     let k = joint.max(1) - 1;
-    let warm = guess.and_then(|b| match f.newton_dual(c, tension, b, tol, 40) {
+    let warm = guess.and_then(|b| match f.newton_dual(c, tension, b, f.held_at(k, R::one()), tol, 40) {
         Ok((st, it)) if norm2([st.hole[0] - b[0], st.hole[1] - b[1]]) <= f.p.hinge_len() / R::from_f64(2.0) => Some((st, it)),
         _ => None,
     });
@@ -223,6 +233,6 @@ pub(super) fn joint_equilibrium<R: Real>(
         Some(v) => v,
         None => newton_joint(f, k, c, tension, tol, 200, tension / R::from_f64(4096.0))?,
     };
-    let link = f.link_q(tension, None);
+    let link = f.held_link_q(k, tension);
     Ok(JointEquilibrium { q: st.q, end: st.end, hole: st.hole, link, angle: st.end.theta + link[2], iterations })
 }

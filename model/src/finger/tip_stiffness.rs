@@ -5,6 +5,7 @@
 use super::{norm2, Compliances, Finger, Heading, Solution};
 use crate::error::Error;
 use crate::mat3::{self, Mat3, Vec3};
+use crate::params::MAX_JOINTS;
 use crate::real::Real;
 
 impl<R: Real> Finger<R> {
@@ -70,15 +71,34 @@ impl<R: Real> Finger<R> {
             Ok(())
         };
         let cross = |r: [R; 2], f: [R; 2]| r[0] * f[1] - r[1] * f[0];
+        // under gravity, the distal centroids where the posture puts the lumps (docs/model.md
+        // "Gravity")
+        let weights = self.weights();
+        let mut centroids = [[R::zero(); 2]; MAX_JOINTS];
+        if let Some(w) = &weights {
+            let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
+            let mut node = Heading::origin();
+            for k in 0..n {
+                let end = self.walk(&sol.q[k]).pose;
+                let hinge_end = node.then(end.x, end.y, end.theta);
+                lumps[k] = self.lumps_of(&node, &hinge_end);
+                let l = sol.links[k];
+                node = hinge_end.then(self.link_len + l[0], l[1], l[2]);
+            }
+            centroids = w.centroids(n, &lumps);
+        }
+        let grav = |k: usize| weights.as_ref().map(|w| (w, R::one(), centroids[k.min(n - 1)]));
+        let tip_load = if loaded { Some((ft, tip)) } else { None };
         let mut node = Heading::origin();
         for k in 0..n {
             // in the joint's own frame (node k-1), as its march: no rounding of far-off positions
             // enters a short span's direction
-            let (ftl, tpl) = if loaded {
-                let t = Self::tip_in_frame(&node, ft, tip);
-                (t.force, t.point)
-            } else {
-                ([R::zero(); 2], [R::zero(); 2])
+            let (ftl, tpl, tcl) = match self.joint_ext_load(k, tip_load, grav(k)) {
+                Some(l) => {
+                    let t = Self::load_in_frame(&node, l);
+                    (t.force, t.point, t.couple)
+                }
+                None => ([R::zero(); 2], [R::zero(); 2], R::zero()),
             };
             let hinge_end = self.walk(&sol.q[k]);
             // the cable's pull on joint k's distal chain: P along span k at its hole B, toward
@@ -95,7 +115,7 @@ impl<R: Real> Finger<R> {
             for (q, cj) in sol.q[k][..m].iter().zip(&c.c[k][..m]) {
                 let d = pose.then(self.sub_len + q[0], q[1], q[2]);
                 let at = [d.pose.x, d.pose.y];
-                let moment = cross([b[0] - at[0], b[1] - at[1]], fc) + cross([tpl[0] - at[0], tpl[1] - at[1]], ftl);
+                let moment = cross([b[0] - at[0], b[1] - at[1]], fc) + cross([tpl[0] - at[0], tpl[1] - at[1]], ftl) + tcl;
                 compare(q, [pose.c * f[0] + pose.s * f[1], -pose.s * f[0] + pose.c * f[1], moment], cj)?;
                 pose = d;
             }
@@ -103,7 +123,7 @@ impl<R: Real> Finger<R> {
             let hinge_end = node.then(end.x, end.y, end.theta);
             let link = sol.links[k];
             if self.p.flex_links {
-                compare(&link, self.link_wrench(p, if loaded { Some((&hinge_end, ft, tip)) } else { None }), &self.link_c)?;
+                compare(&link, self.link_wrench(p, self.link_load(k, &hinge_end, tip_load, grav(k + 1)).map(|l| (&hinge_end, l))), &self.link_c)?;
             }
             node = hinge_end.then(self.link_len + link[0], link[1], link[2]);
         }

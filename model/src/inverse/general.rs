@@ -196,8 +196,9 @@ pub(super) fn solve<R: Real>(
         }
     }
     // 2-3. the feasible interval and the tension (`choose_tension`); a negative angle is
-    //      outside every tension's reach
-    let negative = (0..n).filter(|&k| angles[k] < R::zero()).min_by(|&a, &b| angles[a].partial_cmp(&angles[b]).unwrap_or(core::cmp::Ordering::Equal));
+    //      outside every tension's reach (unless a held load, the weight, bends it back)
+    let negative =
+        (0..n).filter(|&k| angles[k] < R::zero() && !f.has_held()).min_by(|&a, &b| angles[a].partial_cmp(&angles[b]).unwrap_or(core::cmp::Ordering::Equal));
     let (interval, pt, worst) = choose_tension(&tension_ends(&lo, &hi, n)[..n], tension, negative, g.rel);
     out.interval = interval;
     if let Some(k) = worst {

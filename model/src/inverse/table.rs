@@ -451,7 +451,8 @@ impl<R: Real> BranchTable<R> {
     #[inline(never)]
     fn forward_holes(&self, c: &Compliances<R>, tension: R) -> Option<[[R; 2]; MAX_JOINTS]> {
         let n = self.finger.params().n;
-        if !(tension.is_finite() && c.n == n) {
+        // under gravity the joints are coupled: the table of the joints alone does not hold
+        if !(tension.is_finite() && c.n == n) || self.finger.has_weight() {
             return None;
         }
         let h =

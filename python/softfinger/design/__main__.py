@@ -69,8 +69,12 @@ def main(argv=None) -> int:
         designs = [Design.load(p) for p in a.designs]
         checks, wall, n = fe.check(designs, scheduler=a.scheduler, workers=a.workers)
         print(f"FE stage: {wall:.1f} s on {n} worker(s)")
+        def fmt(d: dict) -> str:
+            return ", ".join(f"{k} {v:.4g}" for k, v in d.items())
+
         for ch in checks:
-            print(ch.design.card, "ok" if ch.ok else [r.error for r in ch.results], "k_yy ratio (direct)", ch.ratio("kyy"), "errors %", ch.errors())
+            state = "ok" if ch.ok else "FE failed: " + "; ".join(str(r.error) for r in ch.results if r.error)
+            print(f"{ch.design.card}: {state}; k_yy ratio (direct): {fmt(ch.ratio('kyy'))}; model - FE, % of FE: {fmt(ch.errors()) or '-'}")
     elif a.cmd == "report":
         from . import report
 

@@ -91,10 +91,12 @@ def _ratio(k: np.ndarray) -> np.ndarray:
     return np.where(lo > 0, hi / np.where(lo > 0, lo, 1.0), 1.0)
 
 
-def evaluate(card: str, inputs: Dict[str, Sequence[float]] | Sequence[Design], *, grip: bool = True, fmax_floor_N: float = FMAX_FLOOR_N, reference_deg: float = REFERENCE_DEG) -> Evaluation:
+def evaluate(card: str, inputs: Dict[str, Sequence[float]] | Sequence[Design], *, grip: bool = True, fmax_floor_N: float = FMAX_FLOOR_N, reference_deg: float = REFERENCE_DEG, grav: float = 0.0, grav_dir: float = 0.0) -> Evaluation:
     """Evaluate candidates of `card`: a dict of arrays by console name (t_min, a, e_b, w,
     layers, z0, v_supply; margin optional) or a sequence of Designs. `grip=False` skips the
-    grip force (the costly part: about 25x the rest) and leaves that objective 0."""
+    grip force (the costly part: about 25x the rest) and leaves that objective 0. `grav` (m/s²)
+    and `grav_dir` (degrees): the orientation every candidate is judged in (default: none, the
+    study's so far; a Design's own `grav`/`grav_dir` is the board it builds)."""
     if not isinstance(inputs, dict):
         designs = list(inputs)
         if any(d.card != card for d in designs):
@@ -107,7 +109,7 @@ def evaluate(card: str, inputs: Dict[str, Sequence[float]] | Sequence[Design], *
         from .space import MARGIN
 
         cols["margin"] = np.full(n, MARGIN)
-    r = _core.evaluate_designs(card, cols["t_min"], cols["a"], cols["e_b"], cols["w"], cols["layers"], cols["z0"], cols["v_supply"], margin=cols["margin"], angle_deg=reference_deg, grip=grip)
+    r = _core.evaluate_designs(card, cols["t_min"], cols["a"], cols["e_b"], cols["w"], cols["layers"], cols["z0"], cols["v_supply"], margin=cols["margin"], angle_deg=reference_deg, grip=grip, grav=grav, grav_dir=grav_dir)
     kind, stage = r["kind"].astype(int), r["stage"].astype(int)
     refused = kind != 0
     solved = ~refused

@@ -102,8 +102,9 @@ def run_case(case: Case, program: Optional[str] = None) -> CaseResult:
 
 def cases_of(design: Design, *, kind: str = "3d", density: str = "notch", reference_deg: float = REFERENCE_DEG) -> List[Case]:
     """The two FE cases of a design: its reference posture by the model's inverse at both ends
-    of the tension interval (the ends `evaluate` takes its ratios at)."""
-    f = design.finger()
+    of the tension interval (the ends `evaluate` takes its ratios at), without gravity as the
+    study and the FE driver's cases are."""
+    f = design.replace(grav=0.0).finger()
     angles = [reference_deg] * f.n
     q = f.pose(angles, degrees=True)
     out = []
@@ -131,10 +132,10 @@ class DesignCheck:
         "ktt"), model and FE."""
         j = 0 if which == "kyy" else 1
         m = [r.case.model_direct[j] for r in self.results]
-        out = {"model": max(m) / min(m)}
+        out = {"model": float(max(m) / min(m))}
         if self.ok:
             fe = [r.direct[j] for r in self.results]
-            out["fe"] = max(fe) / min(fe)
+            out["fe"] = float(max(fe) / min(fe))
         return out
 
     def errors(self) -> Dict[str, float]:
@@ -149,7 +150,7 @@ class DesignCheck:
             rr = self.ratio(name)
             e[f"ratio_{name}_pct"] = 100.0 * (rr["model"] / rr["fe"] - 1.0)
             e[f"excess_{name}_pct"] = 100.0 * ((rr["model"] - 1.0) / (rr["fe"] - 1.0) - 1.0) if rr["fe"] > 1.0 else float("nan")
-        return e
+        return {k: float(v) for k, v in e.items()}
 
 
 def client_of(scheduler: Optional[str] = None, workers: int = 2):

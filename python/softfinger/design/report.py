@@ -182,6 +182,12 @@ def figure(res: Dict, png: Path, svg: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    # the same figure from the same results, byte for byte: fixed SVG ids, no date nor version
+    with matplotlib.rc_context({"svg.hashsalt": "softfinger-design-pareto"}):
+        _draw(plt, res, png, svg)
+
+
+def _draw(plt, res: Dict, png: Path, svg: Path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
     colors = {"VHB-4905": "tab:red", "Elastosil-2030": "tab:blue"}
     for card, c in res["cards"].items():
@@ -200,8 +206,8 @@ def figure(res: Dict, png: Path, svg: Path) -> None:
     fig.suptitle(f"Feasible designs (faint) and the Pareto front, reference posture {REFERENCE_DEG:g}° per joint")
     fig.tight_layout()
     png.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(png, dpi=110)
-    fig.savefig(svg)
+    fig.savefig(png, dpi=110, metadata={"Software": None})
+    fig.savefig(svg, metadata={"Date": None, "Creator": None})
     plt.close(fig)
 
 
@@ -285,9 +291,9 @@ def write(res: Dict, root: Path) -> None:
         failed = len(f["checks"]) - len(oks)
         w(f"\nOver the {len(oks)} designs CalculiX solved{f' ({failed} did not converge)' if failed else ''}, the model's ratio of the direct stiffness is within {worst:.1f} % (1/C_yy) and {worst_t:.1f} % (1/C_θθ) of CalculiX's; the stiffnesses themselves differ more (the columns 1/C_yy and 1/C_θθ: the uncalibrated model on a coarse mesh), and that difference largely cancels in the ratio.\n")
     w("## From a design to a board\n")
-    w("A design is a TOML file: `card` plus the console's parameter names (`t_min`, `a`, `e_b`, `w`, `layers`, `z0`, `v_supply`, `margin`; `softfinger.design.Design.to_toml`). The best design per card is `designs/<card>.toml`. The firmware builds for one with\n")
+    w("A design is a TOML file: `card` plus the console's parameter names (`t_min`, `a`, `e_b`, `w`, `layers`, `z0`, `v_supply`, `margin`, and the orientation the board is built for, `grav` and `grav_dir`: the board's, 9.81 m/s² hanging straight down, unless the file says otherwise; `softfinger.design.Design.to_toml`). The study judges designs without gravity (`evaluate(..., grav=, grav_dir=)` takes one). The best design per card is `designs/<card>.toml`. The firmware builds for one with\n")
     w("```sh\nFINGER_DESIGN=designs/Elastosil-2030.toml cargo build --release\n```\n")
-    w("build.rs reads the file (a relative path from the repository's top; an unknown key, a missing one, a value outside the model's range or `paper-elastic` stops the build with the reason) and writes the board constants src/board.rs includes: `BOARD_CARD`, `BOARD_Z0_MM`, `BOARD_LAYERS`, `BOARD_MARGIN`, the HV modules' `HV_FULL_SCALE_V` and `HV_LIMIT_V` (the design's supply) and `BOARD_FINGER` (the design's values, which the board's default parameters take, `preset default` too). Without `FINGER_DESIGN` the constants are the paper's finger on VHB 4905, as before. On that image `material` reports the design's card, z0 and margin, and `limits` its ceiling (`vmax` = `vhold` = the design's ceiling); they stay board constants: `param v_supply`, `param margin` or `param z0` can only lower the ceiling in force, never raise it past `vhold`.\n")
+    w("build.rs reads the file (a relative path from the repository's top; an unknown key, a missing one, a value outside the model's range or `paper-elastic` stops the build with the reason) and writes the board constants src/board.rs includes: `BOARD_CARD`, `BOARD_Z0_MM`, `BOARD_LAYERS`, `BOARD_MARGIN`, the HV modules' `HV_FULL_SCALE_V` and `HV_LIMIT_V` (the design's supply) and `BOARD_FINGER` (the design's values, which the board's default parameters take, `preset default` too; `grav` and `grav_dir` optional, 0..20 m/s² and -180..180°, else the board's orientation). Without `FINGER_DESIGN` the constants are the paper's finger on VHB 4905, as before. On that image `material` reports the design's card, z0 and margin, and `limits` its ceiling (`vmax` = `vhold` = the design's ceiling); they stay board constants: `param v_supply`, `param margin` or `param z0` can only lower the ceiling in force, never raise it past `vhold`.\n")
     w("Tests (`python/tests/test_design.py`, in `scripts/test`'s pytest): a 48-trial study finds a design that meets every constraint; designs the model refuses come back infeasible with their error, the other rows unchanged; a study killed (SIGKILL) mid-run resumes with every stored trial; `Finger` and `Design` pickle and round-trip; `designs/VHB-4905.toml` builds the firmware release image by the command above, which booted in QEMU answers `param` with the design's values, `material` with its card and `limits` with its ceiling, which `param` cannot raise (then the default image is built back; about two minutes, two LTO links); `designs/Elastosil-2030.toml` does the same on the board's application on the host (finger-sim, the same build.rs and board.rs constants); this page, its figure (PNG and SVG) and designs/*.toml are what `--from docs/design-results.json` writes. tools/calculix tests/tip_compliance.rs solves two stacks that nearly fill their notches (the front's).\n")
     w("## Cost and benchmark\n")
     m = res["machine"]

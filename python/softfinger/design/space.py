@@ -14,6 +14,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, Optional, Sequence, Tuple
 
+from .._core import BOARD_GRAV_DIR_DEG, BOARD_GRAV_M_S2
+
 #: The films a board can be built with (docs/materials.md). ``paper-elastic`` is the paper's
 #: modulus as printed, never a board's card, so it is not designed for.
 CARDS: Tuple[str, ...] = ("VHB-4905", "Elastosil-2030")
@@ -100,6 +102,9 @@ SPACE: Dict[str, Tuple[Variable, ...]] = {
 
 #: The TOML's keys besides `card`: the console's parameter names (docs/console.md), in order.
 TOML_KEYS: Tuple[str, ...] = ("t_min", "a", "e_b", "w", "layers", "z0", "v_supply", "margin")
+#: The finger's orientation (console names; issue 53), written after TOML_KEYS; a file without
+#: them builds the board's (gravity on, hanging straight down).
+ORIENTATION_KEYS: Tuple[str, ...] = ("grav", "grav_dir")
 
 
 @dataclass(frozen=True)
@@ -116,16 +121,24 @@ class Design:
     z0: float = 0.5
     v_supply: float = 10000.0
     margin: float = MARGIN
+    #: the orientation the board built for it has (m/s², degrees): the board's by default
+    grav: float = BOARD_GRAV_M_S2
+    grav_dir: float = BOARD_GRAV_DIR_DEG
 
     def params(self) -> Dict[str, float]:
-        """The console parameters (``Finger(card=..., **params)``)."""
+        """The design variables by console name (the study's inputs; ``orientation`` apart)."""
         return {k: float(getattr(self, k)) for k in TOML_KEYS}
 
+    def orientation(self) -> Dict[str, float]:
+        """``grav`` and ``grav_dir`` by console name."""
+        return {k: float(getattr(self, k)) for k in ORIENTATION_KEYS}
+
     def finger(self):
-        """The model of this design (uncalibrated: the FE calibration is the default finger's)."""
+        """The model of this design in its orientation (uncalibrated: the FE calibration is the
+        default finger's)."""
         from .. import Finger
 
-        return Finger(preset="default", card=self.card, calibration=None, **self.params())
+        return Finger(preset="default", card=self.card, calibration=None, **self.params(), **self.orientation())
 
     def stack_mm(self) -> float:
         """The stack's thickness at rest, mm."""
@@ -135,28 +148,45 @@ class Design:
         """The design file (`designs/<card>.toml`, `FINGER_DESIGN=` for the firmware's build)."""
         lines = [f"# {l}" for l in comment.splitlines()] if comment else []
         lines.append(f'card = "{self.card}"')
-        for k in TOML_KEYS:
+        for k in TOML_KEYS + ORIENTATION_KEYS:
             v = getattr(self, k)
             lines.append(f"{k} = {int(v)}" if k == "layers" else f"{k} = {float(v)!r}")
         return "\n".join(lines) + "\n"
 
     @classmethod
-    def from_toml(cls, text: str) -> "Design":
-        """A design from its TOML; unknown keys or a missing one are an error (a typo must not
-        build a default board)."""
-        d = tomllib.loads(text)
+    def from_toml(cls, text: "str | Path") -> "Design":
+        """A design from its TOML text, or from a TOML file given as a :class:`pathlib.Path`
+        (or a ``str`` that names an existing ``.toml`` file; :meth:`load` takes a path too);
+        unknown keys or a missing one are an error (a typo must not build a default board)."""
+        if isinstance(text, Path):
+            return cls.load(text)
+        if text.strip().endswith(".toml") and "\n" not in text.strip():
+            if not Path(text.strip()).is_file():
+                raise FileNotFoundError(f"design TOML: {text.strip()!r} looks like a path but is no file (from_toml takes TOML text or a path; Design.load(path) reads a file)")
+            return cls.load(text.strip())
+        try:
+            d = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise ValueError(f"design TOML: not TOML text ({e}); from_toml takes TOML text or a path, Design.load(path) reads a file") from e
         want = {"card", *TOML_KEYS}
-        extra, missing = set(d) - want, want - set(d)
+        extra, missing = set(d) - want - set(ORIENTATION_KEYS), want - set(d)
         if extra or missing:
-            raise ValueError(f"design TOML: unknown keys {sorted(extra)}, missing {sorted(missing)}; keys: card, {', '.join(TOML_KEYS)}")
+            raise ValueError(
+                f"design TOML: unknown keys {sorted(extra)}, missing {sorted(missing)}; keys: card, {', '.join(TOML_KEYS)} (optional: {', '.join(ORIENTATION_KEYS)})"
+            )
         if d["card"] not in CARDS:
             raise ValueError(f"design TOML: card {d['card']!r}; cards: {', '.join(CARDS)}")
         if d["layers"] != int(d["layers"]):
             raise ValueError("design TOML: layers is an integer")
-        return cls(card=d["card"], **{k: (int(d[k]) if k == "layers" else float(d[k])) for k in TOML_KEYS})
+        for k, (lo, hi) in zip(ORIENTATION_KEYS, ((0.0, 20.0), (-180.0, 180.0))):
+            if k in d and not (isinstance(d[k], (int, float)) and lo <= d[k] <= hi):
+                raise ValueError(f"design TOML: {k} = {d[k]!r} is outside {lo:g}..{hi:g}")
+        orientation = {k: float(d[k]) for k in ORIENTATION_KEYS if k in d}
+        return cls(card=d["card"], **{k: (int(d[k]) if k == "layers" else float(d[k])) for k in TOML_KEYS}, **orientation)
 
     @classmethod
     def load(cls, path: Path | str) -> "Design":
+        """A design from its TOML file."""
         return cls.from_toml(Path(path).read_text())
 
     def replace(self, **kw) -> "Design":

@@ -86,7 +86,21 @@ impl Commands {
                 let _ = if ch > 0 { r.write_str(",") } else { Ok(()) };
                 let _ = r.write_str(if sv.disagreed[ch] { "thinner" } else { "ok" });
             }
+            // the channel whose read-back latched the fault, 1-based (only while one is latched)
+            if let (Some(k), Some(_)) = (self.fault_ch, self.fault) {
+                let _ = w!(r; field::FAULT_CH.after(), k + 1);
+            }
         }
+        #[cfg(not(m3))]
+        self.orientation(r);
+    }
+
+    /// ` grav=<m/s²> grav_dir=<deg>`: the orientation in force (`status`, `limits`; not on the
+    /// Cortex-M3 image: its flash, and its fixed-point model has no gravity).
+    #[cfg(not(m3))]
+    fn orientation(&self, r: &mut Reply) {
+        let p = self.planner.finger().params();
+        let _ = w!(r; field::GRAV.after(), Short(p.grav), field::GRAV_DIR.after(), Short(p.grav_dir));
     }
 
     /// A stack's thickness at rest, mm: layers x z0 of the model (0 without stacks).
@@ -127,6 +141,8 @@ impl Commands {
             let _ = w!(r; field::VMAX_OK.after());
             list(r, &ok, 1);
         }
+        #[cfg(not(m3))]
+        self.orientation(r);
     }
 
     /// Check channel voltages against the ceilings: `limit` at or past ([`largest_below`]).
@@ -180,12 +196,28 @@ impl Commands {
         return self
             .planner
             .forward_with(p, &vf, |sol| solve_reply(r, sol, self.planner.finger().tip_stiffness(sol).map_err(model_err)?))
-            .map_err(model_err)?;
+            .map_err(|e| model_err(self.past_fmax(p, &vf, e)))?;
         // the M3's: from the fixed-point state (app/m3.rs)
         #[cfg(m3)]
         {
             let (sol, k) = forward_stiffness(self.planner.finger(), p, &vf).map_err(model_err)?;
             solve_reply(r, &sol, k)
+        }
+    }
+
+    /// A solve that ran off the branch's end (links touching, a limit point) quotes the limit
+    /// itself, fmax at its voltages (`limits`' figure, `force`'s refusal), not the tension
+    /// where the solver's steps found the end.
+    #[cfg(not(m3))]
+    fn past_fmax(&self, p: f32, volts: &[f32; CHANNELS], e: finger_model::Error) -> finger_model::Error {
+        use finger_model::Error;
+        match e {
+            // the planner's fmax: `limits`' own figure (its table's, when it has one)
+            Error::Contact { .. } | Error::LimitPoint { .. } => match self.planner.fmax(volts) {
+                Ok(b) if p > b.tension => Error::ForceLimit { tension: p.into(), fmax: b.tension.into() },
+                _ => e,
+            },
+            _ => e,
         }
     }
 
@@ -252,7 +284,7 @@ impl Commands {
 
     pub(in crate::app) fn require_armed(&self, what: &str) -> Result<(), CmdError> {
         if let Some(f) = self.fault {
-            return Err(err!(Fault; "fault ", f, " latched; send stop to clear it"));
+            return Err(self.latched(f));
         }
         if !self.armed {
             return Err(err!(NotArmed; what, " needs arm"));
@@ -308,6 +340,8 @@ impl Commands {
         let Some(name) = name else {
             return Err(err!(Usage; "no parameter ", (console::printable(args[0])), "; param lists them"));
         };
+        #[allow(unused_mut)]
+        let mut cal_changed = false;
         if let Some(v) = args.get(1) {
             let v = number(v, name)?;
             if PARAMS.iter().any(|i| i.name == name) {
@@ -317,8 +351,14 @@ impl Commands {
                 let mut p = *self.planner.finger().params();
                 p.set(name, v.into()).map_err(model_err)?;
                 // the FE calibration belongs to the mechanical parameters it was computed for
-                let cal = if KEEPS_CALIBRATION.contains(&name) { *self.planner.finger().calibration() } else { calibration_for(&p) };
+                let was = *self.planner.finger().calibration();
+                let cal = if KEEPS_CALIBRATION.contains(&name) { was } else { calibration_for(&p) };
                 self.adopt_model(p, cal)?;
+                // said in the reply, not in the Cortex-M3 image (its flash)
+                #[cfg(not(m3))]
+                {
+                    cal_changed = cal != was;
+                }
             } else {
                 let mut fw = self.fw;
                 fw.set(name, v)?;
@@ -334,6 +374,11 @@ impl Commands {
             None => self.fw.get(name).unwrap_or(0.0),
         };
         let _ = w!(r; name, "=", Short(v));
+        if cal_changed {
+            // the set left (or came back to) the finger the FE calibration belongs to
+            let _ = w!(r; field::CAL.after());
+            self.write_cal(r);
+        }
         Ok(())
     }
 
@@ -376,10 +421,15 @@ impl Commands {
             self.require_disarmed("cal")?;
             self.adopt_model(*self.planner.finger().params(), cal)?;
         }
+        let _ = w!(r; field::CAL.first());
+        self.write_cal(r);
+        Ok(())
+    }
+
+    /// The eight calibration factors in force, comma-separated (`cal=`'s value).
+    fn write_cal(&self, r: &mut Reply) {
         let c = self.planner.finger().calibration();
         let g = [c.hinge[0], c.hinge[1], c.hinge[2], c.hinge[3], c.stack_axial[0], c.stack_axial[1], c.stack_bending[0], c.stack_bending[1]];
-        let _ = w!(r; field::CAL.first());
         list(r, &g, 6);
-        Ok(())
     }
 }

@@ -17,13 +17,15 @@ use finger_model::material::{Breakdown, Card};
 use finger_model::{de, Calibration, Finger, Method, Params};
 
 /// The model's element compliance (hinge, with its stack at thickness `stack_mm` (0: none), and
-/// link) at zero load: `Finger::tip_compliance` of a one-joint finger.
+/// link) at zero load and without gravity: `Finger::tip_compliance` of a one-joint finger.
 pub fn model_element_compliance(p: &Params<f64>, cal: &Calibration<f64>, stack_mm: f64) -> Result<Mat3<f64>, String> {
     // the supply, margin and breakdown field do not enter the mechanics: raised so that every
     // thickness down to near the 33 % limit can be evaluated (one leaked card per call: a
     // host tool's handful of calls)
     let card: &'static Card = Box::leak(Box::new(Card { breakdown: Breakdown { field0_v_per_um: 1e9 }, ..*p.card }));
-    let q = Params { n: 1, layers: if stack_mm > 0.0 { p.layers } else { 0 }, v_supply: 1e5, margin: 0.999, card, ..*p };
+    // without gravity: the FE's unit loads carry no body load, so the calibration must not
+    // absorb it (docs/fidelity-fe.md "Under its own weight")
+    let q = Params { n: 1, layers: if stack_mm > 0.0 { p.layers } else { 0 }, v_supply: 1e5, margin: 0.999, card, grav: 0.0, ..*p };
     let f = Finger::with_calibration(q, *cal).map_err(|e| e.to_string())?;
     let v = if stack_mm > 0.0 { de::voltage_for_thickness(&q, 1, stack_mm).map_err(|e| e.to_string())? } else { 0.0 };
     let c = f.compliances(&[v]).map_err(|e| e.to_string())?;

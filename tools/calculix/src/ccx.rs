@@ -147,8 +147,60 @@ impl Law {
     }
 }
 
-/// A material card for (E, ν) in this law.
-fn material(s: &mut String, name: &str, e: f64, nu: f64, law: Law) {
+/// Gravity on the finger (docs/fidelity-fe.md "Under its own weight"): a body load of constant
+/// magnitude and direction in the base frame, on every step of the run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gravity {
+    /// Magnitude, m/s² (0: off).
+    pub g_m_s2: f64,
+    /// Direction in the base frame, degrees from the straight finger's axis (+x) toward the
+    /// cable side (+y): 90 held horizontally curling downward with it, -90 curling upward
+    /// against it, 0 hanging straight down, 180 pointing up.
+    pub dir_deg: f64,
+    /// The body's density, g/cm³.
+    pub rho_body_g_cm3: f64,
+    /// The stacks' (film's) density, g/cm³.
+    pub rho_stack_g_cm3: f64,
+}
+
+impl Gravity {
+    /// No gravity (the calibration's runs and every run before it).
+    pub const OFF: Gravity = Gravity { g_m_s2: 0.0, dir_deg: 0.0, rho_body_g_cm3: 0.0, rho_stack_g_cm3: 0.0 };
+
+    /// The gravity these parameters carry (`grav`, `grav_dir`, `rho_b`, the card's film
+    /// density).
+    pub fn of(p: &Params<f64>) -> Gravity {
+        Gravity { g_m_s2: p.grav, dir_deg: p.grav_dir, rho_body_g_cm3: p.rho_b, rho_stack_g_cm3: p.card.rho_g_cm3 }
+    }
+
+    pub fn is_on(&self) -> bool {
+        self.g_m_s2 != 0.0
+    }
+    /// The magnitude in the mesh's units, mm/s².
+    pub fn mm_s2(&self) -> f64 {
+        1e3 * self.g_m_s2
+    }
+    /// The unit direction (x, y) in the base frame.
+    pub fn unit(&self) -> [f64; 2] {
+        let (s, c) = self.dir_deg.to_radians().sin_cos();
+        [c, s]
+    }
+}
+
+/// g/cm³ to the mesh's units (mm, N, MPa: mass in tonnes), t/mm³.
+pub fn t_per_mm3(g_cm3: f64) -> f64 {
+    g_cm3 * 1e-9
+}
+
+/// A material card for (E, ν) in this law, with its density (t/mm³) if gravity is on.
+fn material(s: &mut String, name: &str, e: f64, nu: f64, law: Law, rho_t_mm3: Option<f64>) {
+    material_law(s, name, e, nu, law);
+    if let Some(r) = rho_t_mm3 {
+        let _ = writeln!(s, "*DENSITY\n{r:.9e}");
+    }
+}
+
+fn material_law(s: &mut String, name: &str, e: f64, nu: f64, law: Law) {
     match law {
         Law::StVenantKirchhoff => {
             let _ = writeln!(s, "*MATERIAL, NAME={name}\n*ELASTIC\n{e:.9e}, {nu:.6}");
@@ -167,7 +219,8 @@ pub type NodalLoads = Vec<(usize, f64, f64)>;
 pub enum Loads {
     /// The cable: constant-force springs between consecutive guide holes (node ids), NLGEOM, one
     /// step per tension (N), each ramped from the last.
-    Cable { holes: Vec<usize>, tensions: Vec<f64>, law: Law },
+    /// Gravity (`grav`) is applied in the first step, ramped with its tension, and held.
+    Cable { holes: Vec<usize>, tensions: Vec<f64>, law: Law, grav: Gravity },
     /// Linear steps, one per load case.
     Unit(Vec<NodalLoads>),
 }
@@ -288,9 +341,13 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
         Loads::Cable { law, .. } => *law,
         Loads::Unit(_) => Law::StVenantKirchhoff, // linear steps: Hooke's law
     };
+    let grav = match loads {
+        Loads::Cable { grav, .. } if grav.is_on() => Some(*grav),
+        _ => None,
+    };
     let (body_law, stack_law) = law.parts();
-    material(&mut s, "BODY", p.e_b, p.nu_b, body_law);
-    material(&mut s, "STACK", p.e_de(), p.nu, stack_law);
+    material(&mut s, "BODY", p.e_b, p.nu_b, body_law, grav.map(|g| t_per_mm3(g.rho_body_g_cm3)));
+    material(&mut s, "STACK", p.e_de(), p.nu, stack_law, grav.map(|g| t_per_mm3(g.rho_stack_g_cm3)));
     let thick = if kind == Kind::Half3d { String::new() } else { format!("\n{:.9e}", p.w) };
     for (set, _, mat, _) in &blocks {
         let name = if *mat == Material::Body { "BODY" } else { "STACK" };
@@ -313,8 +370,16 @@ pub fn deck(p: &Params<f64>, kind: Kind, mesh: &AnyMesh, clamp_x: f64, loads: &L
             let _ = writeln!(s, "*INITIAL CONDITIONS, TYPE=TEMPERATURE\nNALL, 0.");
             write_bcs(&mut s, mesh);
             for (i, t) in tensions.iter().enumerate() {
-                let _ =
-                    writeln!(s, "*STEP, NLGEOM, INC=2000\n*STATIC\n0.25, 1., 1.e-6, 0.5\n*TEMPERATURE\nNALL, {t:.9e}\n*NODE PRINT, NSET=NOUT\nU\n*END STEP");
+                let _ = writeln!(s, "*STEP, NLGEOM, INC=2000\n*STATIC\n0.25, 1., 1.e-6, 0.5\n*TEMPERATURE\nNALL, {t:.9e}");
+                if let (0, Some(g)) = (i, grav) {
+                    // the body load on the solid elements (not the cable's springs)
+                    let u = g.unit();
+                    let _ = writeln!(s, "*DLOAD");
+                    for (set, _, _, _) in &blocks {
+                        let _ = writeln!(s, "{set}, GRAV, {:.9e}, {:.12e}, {:.12e}, 0.", g.mm_s2(), u[0], u[1]);
+                    }
+                }
+                let _ = writeln!(s, "*NODE PRINT, NSET=NOUT\nU\n*NODE PRINT, NSET=NCLAMP\nRF\n*END STEP");
                 times.push((i + 1) as f64);
             }
         }
@@ -400,48 +465,153 @@ pub fn run(deck: &Deck) -> Result<Results, FeError> {
 
 /// `run`, keeping the steps that ended before a failure: (their results, the failure).
 pub fn run_partial(deck: &Deck) -> Result<(Results, Option<FeError>), FeError> {
+    let (dat, failure) = run_dat(deck)?;
+    steps_done(&dat, deck, "displacements", failure)
+}
+
+/// `run_partial` with the clamp's reaction forces (nodes of NCLAMP, (RF_x, RF_y), this model's
+/// share of the width) at the same step ends: (displacements, reactions, the failure). A cable
+/// deck prints them.
+pub fn run_partial_reactions(deck: &Deck) -> Result<(Results, Results, Option<FeError>), FeError> {
+    let (dat, failure) = run_dat(deck)?;
+    let (u, failure) = steps_done(&dat, deck, "displacements", failure)?;
+    let d = Deck { text: String::new(), out_nodes: Vec::new(), times: deck.times[..u.len()].to_vec() };
+    let rf = parse_blocks(&dat, &d, "forces")?;
+    Ok((u, rf, failure))
+}
+
+/// The steps' results read from a `.dat`: all of them, or after a failure the steps that ended
+/// before it.
+fn steps_done(dat: &str, deck: &Deck, what: &str, failure: Option<FeError>) -> Result<(Results, Option<FeError>), FeError> {
+    match failure {
+        None => Ok((parse_blocks(dat, deck, what)?, None)),
+        Some(e) => {
+            let mut done = Vec::new();
+            for k in 1..=deck.times.len() {
+                let d = Deck { text: String::new(), out_nodes: deck.out_nodes.clone(), times: deck.times[..k].to_vec() };
+                match parse_blocks(dat, &d, what) {
+                    Ok(r) => done = r,
+                    Err(_) => break,
+                }
+            }
+            Ok((done, Some(e)))
+        }
+    }
+}
+
+static CACHE: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
+
+/// Keep every successful run's `.dat` in `dir` by its deck (a hash of the deck's text and its
+/// length), and read it from there when the same deck runs again (ccx is deterministic on one
+/// thread): the report's runs, so that rerunning the report after a model change does not solve
+/// the FE again. None (the default, and the tests'): every deck is solved.
+pub fn set_cache(dir: Option<PathBuf>) {
+    *CACHE.lock().unwrap_or_else(|e| e.into_inner()) = dir;
+}
+
+fn cache_file(deck: &Deck) -> Option<PathBuf> {
+    let dir = CACHE.lock().unwrap_or_else(|e| e.into_inner()).clone()?;
+    // FNV-1a, 64 bits
+    let h = deck.text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3));
+    Some(dir.join(format!("{h:016x}-{}.dat", deck.text.len())))
+}
+
+/// Run ccx on the deck in a fresh scratch directory (or read its kept `.dat`, `set_cache`):
+/// (the `.dat`, the failure if it failed).
+fn run_dat(deck: &Deck) -> Result<(String, Option<FeError>), FeError> {
+    let cached = cache_file(deck);
+    if let Some(dat) = cached.as_ref().and_then(|f| std::fs::read_to_string(f).ok()) {
+        // its CPU time beside it
+        let cpu = cached.as_ref().and_then(|f| std::fs::read_to_string(f.with_extension("cpu")).ok()).and_then(|s| s.trim().parse::<f64>().ok()).unwrap_or(0.0);
+        CPU_S.with(|c| c.set(c.get() + cpu));
+        return Ok((dat, None));
+    }
+    let (dat, failure, cpu) = run_ccx(deck)?;
+    CPU_S.with(|c| c.set(c.get() + cpu));
+    if let (Some(f), None) = (&cached, &failure) {
+        let _ = std::fs::create_dir_all(f.parent().unwrap_or(f))
+            .and_then(|_| std::fs::write(f.with_extension("cpu"), format!("{cpu}\n")))
+            .and_then(|_| std::fs::write(f, &dat));
+    }
+    Ok((dat, failure))
+}
+
+thread_local! {
+    static CPU_S: std::cell::Cell<f64> = const { std::cell::Cell::new(0.0) };
+}
+
+/// The CPU time (user + system, s) of the ccx runs this thread has made so far, a kept run
+/// counting what it took when it was solved (Linux; 0 where /proc is not there).
+pub fn thread_cpu_seconds() -> f64 {
+    CPU_S.with(|c| c.get())
+}
+
+/// A child's CPU time (s) once it has exited and before it is reaped: fields 14 and 15 of
+/// /proc/<pid>/stat (clock ticks of 1/100 s, Linux's USER_HZ). None while it runs.
+fn exited_cpu_s(pid: u32) -> Option<Option<f64>> {
+    let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else { return Some(None) };
+    let f: Vec<&str> = stat.rsplit_once(')').map_or("", |x| x.1).split_whitespace().collect();
+    match f.first() {
+        Some(&"Z") | Some(&"X") => Some(f.get(11).zip(f.get(12)).and_then(|(u, s)| Some((u.parse::<f64>().ok()? + s.parse::<f64>().ok()?) / 100.0))),
+        Some(_) => None,
+        None => Some(None),
+    }
+}
+
+fn run_ccx(deck: &Deck) -> Result<(String, Option<FeError>, f64), FeError> {
     let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
     let dir: PathBuf = std::env::temp_dir().join(format!("finger-calculix-{}-{n}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| FeError::Spawn(e.to_string()))?;
     std::fs::write(dir.join("job.inp"), &deck.text).map_err(|e| FeError::Spawn(e.to_string()))?;
-    let out = Command::new("ccx")
+    let file = |name: &str| std::fs::File::create(dir.join(name)).map_err(|e| FeError::Spawn(e.to_string()));
+    let mut child = Command::new("ccx")
         .arg("-i")
         .arg("job")
         .current_dir(&dir)
         .env("OMP_NUM_THREADS", "1")
         .env("CCX_NPROC_EQUATION_SOLVER", "1")
-        .output()
+        .stdout(file("log.out")?)
+        .stderr(file("log.err")?)
+        .spawn()
         .map_err(|e| FeError::Spawn(e.to_string()))?;
-    let log = String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
-    let dat = std::fs::read_to_string(dir.join("job.dat")).unwrap_or_default();
+    // wait for it to exit, read its CPU time, then reap it
+    let mut nap = std::time::Duration::from_millis(1);
+    let cpu = loop {
+        if let Some(c) = exited_cpu_s(child.id()) {
+            break c.unwrap_or(0.0);
+        }
+        std::thread::sleep(nap);
+        nap = (nap * 2).min(std::time::Duration::from_millis(20));
+    };
+    let status = child.wait().map_err(|e| FeError::Spawn(e.to_string()))?;
+    let read = |name: &str| std::fs::read(dir.join(name)).map(|b| String::from_utf8_lossy(&b).into_owned()).unwrap_or_default();
+    let log = read("log.out") + &read("log.err");
+    let dat = read("job.dat");
     let keep = std::env::var_os("FINGER_CALCULIX_KEEP").is_some();
     if !keep {
         let _ = std::fs::remove_dir_all(&dir);
     }
-    if !out.status.success() || log.contains("*ERROR") {
+    if !status.success() || log.contains("*ERROR") {
         let tail: Vec<&str> = log.lines().filter(|l| !l.trim().is_empty()).collect();
         let tail = tail[tail.len().saturating_sub(6)..].join(" | ");
-        // the steps that ended before it
-        let mut done = Vec::new();
-        for k in 1..=deck.times.len() {
-            let d = Deck { text: String::new(), out_nodes: deck.out_nodes.clone(), times: deck.times[..k].to_vec() };
-            match parse_dat(&dat, &d) {
-                Ok(r) => done = r,
-                Err(_) => break,
-            }
-        }
-        return Ok((done, Some(FeError::Ccx(tail))));
+        return Ok((dat, Some(FeError::Ccx(tail)), cpu));
     }
-    Ok((parse_dat(&dat, deck)?, None))
+    Ok((dat, None, cpu))
 }
 
 /// The `.dat` blocks "displacements (vx,vy,vz) for set NOUT and time T", at the step ends.
 pub fn parse_dat(dat: &str, deck: &Deck) -> Result<Results, FeError> {
+    parse_blocks(dat, deck, "displacements")
+}
+
+/// The `.dat` blocks whose header starts with `what` ("displacements", "forces"), at the step
+/// ends; for "displacements" every output node must be there.
+fn parse_blocks(dat: &str, deck: &Deck, what: &str) -> Result<Results, FeError> {
     let mut blocks: Vec<(f64, BTreeMap<usize, [f64; 2]>)> = Vec::new();
     let mut cur: Option<(f64, BTreeMap<usize, [f64; 2]>)> = None;
     for line in dat.lines() {
         let l = line.trim();
-        if l.starts_with("displacements") {
+        if l.starts_with(what) {
             if let Some(b) = cur.take() {
                 blocks.push(b);
             }
@@ -471,7 +641,7 @@ pub fn parse_dat(dat: &str, deck: &Deck) -> Result<Results, FeError> {
             .iter()
             .rev()
             .find(|b| (b.0 - t).abs() < 1e-6 * t.max(1.0))
-            .ok_or_else(|| FeError::Parse(format!("no displacements at step end t = {t} (did the step converge?)")))?;
+            .ok_or_else(|| FeError::Parse(format!("no {what} at step end t = {t} (did the step converge?)")))?;
         if deck.out_nodes.iter().any(|n| !b.1.contains_key(n)) {
             return Err(FeError::Parse(format!("missing output nodes at t = {t}")));
         }

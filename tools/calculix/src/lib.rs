@@ -3,8 +3,10 @@
 //!
 //! - [`mesh`]: the plane mesh from `Params` (notches, links, stacks) and its 3D extrusion.
 //! - [`ccx`]: the input deck, running ccx, reading its `.dat`.
-//! - this file: the finger under cable tension (NLGEOM, follower springs), section poses,
+//! - this file: the finger under cable tension and gravity (NLGEOM, follower springs, a
+//!   `GRAV` body load), the clamp's reaction, section poses,
 //!   joint angles and tip; one element's small-load compliance (linear unit loads).
+//! - [`gravity`]: the finger under its own weight in three orientations, model against FE.
 //! - [`calibrate`]: corrections to the model's sub-element compliances from those unit loads.
 //!
 //! Definitions (the same in the report):
@@ -15,9 +17,11 @@
 //! - tip: section n (the finger's end face).
 
 pub mod calibrate;
+pub mod gravity;
 pub mod ccx;
 pub mod mesh;
 
+pub use ccx::Gravity;
 use ccx::{AnyMesh, FeError, Kind, Law, Loads, NodalLoads};
 use finger_model::mat3::Mat3;
 use finger_model::Params;
@@ -75,6 +79,9 @@ pub struct FeState {
     pub joint_angle: Vec<f64>,
     /// Cable span k (hole at node k-1 to link k's proximal hole), mm.
     pub span: Vec<f64>,
+    /// The clamp's reaction on the finger, whole width: (Fx N, Fy N, M N·mm about the clamp
+    /// section's centre (0, 0)).
+    pub root: [f64; 3],
 }
 
 impl FeState {
@@ -95,7 +102,20 @@ pub fn finger_mesh(p: &Params<f64>, stack_mm: &[f64], kind: Kind, d: &Density) -
 /// The finger clamped at x = 0, pulled by the cable (constant tension through every guide hole,
 /// anchored at the tip), NLGEOM: one ccx run, one state per tension (increasing).
 pub fn finger_under_cable(p: &Params<f64>, stack_mm: &[f64], kind: Kind, d: &Density, law: Law, tensions: &[f64]) -> Result<Vec<FeState>, FeError> {
-    match finger_under_cable_partial(p, stack_mm, kind, d, law, tensions)? {
+    finger_under_load(p, stack_mm, kind, d, law, &Gravity::OFF, tensions)
+}
+
+/// `finger_under_cable` under gravity too (applied with the first tension and held).
+pub fn finger_under_load(
+    p: &Params<f64>,
+    stack_mm: &[f64],
+    kind: Kind,
+    d: &Density,
+    law: Law,
+    grav: &Gravity,
+    tensions: &[f64],
+) -> Result<Vec<FeState>, FeError> {
+    match finger_under_load_partial(p, stack_mm, kind, d, law, grav, tensions)? {
         (s, None) => Ok(s),
         (_, Some(e)) => Err(e),
     }
@@ -110,6 +130,32 @@ pub fn finger_under_cable_partial(
     law: Law,
     tensions: &[f64],
 ) -> Result<(Vec<FeState>, Option<FeError>), FeError> {
+    finger_under_load_partial(p, stack_mm, kind, d, law, &Gravity::OFF, tensions)
+}
+
+/// The clamp's reaction (Fx, Fy, M about (0, 0)) on the finger from its nodes' reaction forces
+/// (this model's share), for the whole width.
+fn root_reaction(mesh: &AnyMesh, kind: Kind, rf: &BTreeMap<usize, [f64; 2]>) -> [f64; 3] {
+    let mut r = [0.0; 3];
+    for (&i, f) in rf {
+        let x = mesh.xy(i);
+        r[0] += f[0];
+        r[1] += f[1];
+        r[2] += x[0] * f[1] - x[1] * f[0];
+    }
+    r.map(|v| v / kind.load_share())
+}
+
+/// `finger_under_load`, keeping the tensions solved before ccx stopped: (states, why it stopped).
+pub fn finger_under_load_partial(
+    p: &Params<f64>,
+    stack_mm: &[f64],
+    kind: Kind,
+    d: &Density,
+    law: Law,
+    grav: &Gravity,
+    tensions: &[f64],
+) -> Result<(Vec<FeState>, Option<FeError>), FeError> {
     let mesh = finger_mesh(p, stack_mm, kind, d);
     // guide holes: base (node 0), then per link its proximal end and node k
     let mut holes = vec![mesh.find(0.0, p.e)?];
@@ -122,11 +168,11 @@ pub fn finger_under_cable_partial(
     let mut out_nodes: Vec<usize> = sections.iter().flatten().copied().chain(holes.iter().copied()).collect();
     out_nodes.sort();
     out_nodes.dedup();
-    let loads = Loads::Cable { holes: holes.clone(), tensions: tensions.to_vec(), law };
+    let loads = Loads::Cable { holes: holes.clone(), tensions: tensions.to_vec(), law, grav: *grav };
     let deck = ccx::deck(p, kind, &mesh, 0.0, &loads, out_nodes);
-    let (res, failure) = ccx::run_partial(&deck)?;
+    let (res, rf, failure) = ccx::run_partial_reactions(&deck)?;
     let mut states = Vec::new();
-    for (t, u) in tensions.iter().zip(res.iter()) {
+    for ((t, u), rf) in tensions.iter().zip(res.iter()).zip(rf.iter()) {
         let mut nodes: Vec<SectionPose> = sections.iter().map(|s| section_pose(&mesh, s, u)).collect();
         // unwrap along the finger: each joint turns by less than half a turn
         for k in 1..nodes.len() {
@@ -145,7 +191,7 @@ pub fn finger_under_cable_partial(
                 ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
             })
             .collect();
-        states.push(FeState { tension: *t, nodes, joint_angle, span });
+        states.push(FeState { tension: *t, nodes, joint_angle, span, root: root_reaction(&mesh, kind, rf) });
     }
     Ok((states, failure))
 }
@@ -337,7 +383,7 @@ pub fn tip_compliance_under_cable(
     let mut out_nodes: Vec<usize> = sections.iter().flatten().copied().chain(holes.iter().copied()).collect();
     out_nodes.sort();
     out_nodes.dedup();
-    let loads = Loads::Cable { holes: holes.clone(), tensions: vec![tension], law };
+    let loads = Loads::Cable { holes: holes.clone(), tensions: vec![tension], law, grav: Gravity::OFF };
     let mut deck = ccx::deck(p, kind, &mesh, 0.0, &loads, out_nodes);
     for (j, f) in perturb.iter().enumerate() {
         let mut w = [0.0; 3];
@@ -346,10 +392,13 @@ pub fn tip_compliance_under_cable(
         for (n, fx, fy) in face_loads(p, kind, &mesh, x_tip, w)? {
             let _ = writeln!(deck.text, "{}, 1, {fx:.12e}\n{}, 2, {fy:.12e}", n + 1, n + 1);
         }
-        let _ = writeln!(deck.text, "*NODE PRINT, NSET=NOUT\nU\n*END STEP");
+        let _ = writeln!(deck.text, "*NODE PRINT, NSET=NOUT\nU\n*NODE PRINT, NSET=NCLAMP\nRF\n*END STEP");
         deck.times.push((j + 2) as f64);
     }
-    let res = ccx::run(&deck)?;
+    let (res, rf, failure) = ccx::run_partial_reactions(&deck)?;
+    if let Some(e) = failure {
+        return Err(e);
+    }
     let poses: Vec<Vec<SectionPose>> = res
         .iter()
         .map(|u| {
@@ -386,5 +435,5 @@ pub fn tip_compliance_under_cable(
             ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
         })
         .collect();
-    Ok((FeState { tension, nodes: base.clone(), joint_angle, span }, c))
+    Ok((FeState { tension, nodes: base.clone(), joint_angle, span, root: root_reaction(&mesh, kind, &rf[0]) }, c))
 }

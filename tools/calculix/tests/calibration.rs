@@ -82,3 +82,15 @@ fn the_boards_default_calibration_is_fe_calibrates_line() {
     }
     assert_eq!(Calibration::for_params(&Params::<f64>::default()), Calibration::<f64>::model_md());
 }
+
+#[test]
+fn the_calibration_does_not_see_gravity() {
+    // the FE's unit loads carry no body load, so the model's side of the calibration is taken
+    // without gravity too: a finger held horizontally under 9.81 m/s² calibrates as one without
+    let p = Params::<f64>::default();
+    for (q, t) in [(p.without_stacks(), 0.0), (p, 2.0)] {
+        let a = model_element_compliance(&q, &Calibration::none(), t).unwrap();
+        let b = model_element_compliance(&q.with_gravity(9.81, 90.0), &Calibration::none(), t).unwrap();
+        assert_eq!(a, b, "stack {t} mm");
+    }
+}

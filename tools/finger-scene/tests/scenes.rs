@@ -648,3 +648,28 @@ fn a_scene_without_out_writes_under_target_not_into_the_current_directory() {
     assert!(st.success(), "{} is not git-ignored", svg.display());
     let _ = std::fs::remove_dir_all(&cwd);
 }
+
+#[test]
+fn gravity_keys_take_the_orientation_and_are_refused_at_their_line() {
+    let s = scene::parse("g", "[finger]\ngrav = 9.81\ngrav_dir = -90\nrho_b = 1.3\n[drive]\ntensions = [0.5]\n").unwrap();
+    let p = s.finger.params;
+    assert_eq!((p.grav, p.grav_dir, p.rho_b), (9.81, -90.0, 1.3));
+    assert_eq!(p, Params { rho_b: 1.3, ..Params::<f64>::default().with_gravity(9.81, -90.0) });
+    // the paper's preset with an orientation, and the default's: no gravity
+    let s = scene::parse("g", "[finger]\npreset = \"paper\"\ngrav_dir = 90\ngrav = 9.81\n[drive]\ntensions = [0.5]\n").unwrap();
+    assert_eq!((s.finger.params.grav, s.finger.params.grav_dir), (9.81, 90.0));
+    assert_eq!(scene::parse("d", "[drive]\ntensions = 0.5\n").unwrap().finger.params.grav, 0.0);
+    // the scene runs in it
+    assert_eq!(scene::run(&s, None).unwrap().postures.len(), 1);
+    for (text, line, name) in [
+        ("[finger]\ngrav = 25\n[drive]\ntensions = 1\n", 2, "grav"),
+        ("[finger]\nlayers = 4\ngrav_dir = 200\n[drive]\ntensions = 1\n", 3, "grav_dir"),
+        ("[finger]\n  grav_dir = -181\n[drive]\ntensions = 1\n", 2, "grav_dir"),
+        ("[finger]\nrho_b = -1\n[drive]\ntensions = 1\n", 2, "rho_b"),
+        ("[finger]\ngrav = nan\n[drive]\ntensions = 1\n", 2, "grav"),
+    ] {
+        let e = scene::parse("e", text).unwrap_err();
+        assert_eq!(e.line, line, "{text:?}: {e}");
+        assert!(e.to_string().contains(name), "{text:?}: {e}");
+    }
+}

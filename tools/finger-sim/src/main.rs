@@ -2,9 +2,12 @@
 //! Reads console lines from stdin, answers on stdout (the grammar of docs/console.md),
 //! exits at end of input.
 //!
-//! - default: a script, line by line: each line is read when the previous one is answered,
-//!   commands take no time and time passes only through `wait <s>` (1 ms control ticks), so
-//!   runs are deterministic and independent of the machine.
+//! - default: the board's time is the wall clock's while finger-sim waits for input: the
+//!   board lives on between lines as a real one does (after `stop` its stacks discharge, the
+//!   film creeps), the milliseconds it waited ticked when the next bytes arrive (at most
+//!   [`IDLE_MAX_MS`] at a time); a line itself takes no time, and `wait <s>` runs s seconds of
+//!   1 ms control ticks at once. Input that arrives in one piece (a script piped in) has no
+//!   waits between its lines, so its replies are the same on any machine.
 //! - `--virtual`: the real-time core in virtual time (`finger_fw::sim::VirtualSim`): all of
 //!   stdin goes onto the wire at once and arrives at 115200 baud, the control core ticks every
 //!   1 ms while commands run, each command takes its modelled time (`sim::default_cost`), a
@@ -14,10 +17,15 @@
 //! terminal, it greets on stderr (what it is, `help`, how to quit); piped, it prints nothing
 //! but the board's replies.
 use std::io::{IsTerminal, Read, Write};
+use std::time::Instant;
 
 use finger_fw::plant::Plant;
 use finger_fw::sim::{default_cost, SimBoard, VirtualSim};
 use finger_fw::App;
+
+/// The longest wait for input ticked on the board at once, ms (10 min: the stacks have
+/// discharged and the film has relaxed long before).
+const IDLE_MAX_MS: u128 = 600_000;
 
 struct Out<W: Write>(W);
 
@@ -30,7 +38,9 @@ impl<W: Write> std::fmt::Write for Out<W> {
 const USAGE: &str = "\
 usage: finger-sim [--virtual]
   The driver board's application on a simulated board: console lines on stdin, replies on
-  stdout (docs/console.md). Exits at the end of input (Ctrl-D at a terminal).
+  stdout (docs/console.md). Exits at the end of input (Ctrl-D at a terminal). The board's time
+  runs with the wall clock while it waits for input (a line takes none; `wait <s>` runs s
+  seconds at once), so a script piped in whole answers the same on any machine.
   --virtual   the real-time core in virtual time: input at 115200 baud, 1 ms control ticks,
               each command taking its modelled time; `# t=<ms> ticks=<n>` on stderr at the end
   --help      this text";
@@ -95,6 +105,7 @@ fn main() {
     let mut app = App::new(SimBoard::with_plant(plant));
     let mut buf = [0u8; 4096];
     loop {
+        let idle = Instant::now();
         let n = match stdin.read(&mut buf) {
             Ok(0) => break,
             Ok(n) => n,
@@ -104,6 +115,11 @@ fn main() {
                 std::process::exit(1);
             }
         };
+        // the board lived on while nothing arrived
+        let idle_ms = idle.elapsed().as_millis().min(IDLE_MAX_MS) as u32;
+        if idle_ms > 0 {
+            app.tick(idle_ms, &mut out);
+        }
         for &b in &buf[..n] {
             app.input_byte(b, &mut out);
             while app.busy() {

@@ -58,3 +58,54 @@ fn a_banner_at_a_terminal_and_none_in_a_pipe() {
     assert!(t.contains("Type `help` for the commands; Ctrl-D quits."), "{t}");
     assert!(t.contains("ok version="), "{t}");
 }
+
+/// The board's time runs with the wall clock while finger-sim waits for input: `stop`, then a
+/// `status` sent 0.3 s later reads the stacks discharged (the plant's HV modules bleed them in
+/// about 0.1 s), as a real board reads them; a script piped in whole has no such waits.
+#[test]
+fn after_stop_the_stacks_read_discharged_a_moment_later() {
+    use std::io::{BufRead, BufReader, Write};
+    use std::process::{Command, Stdio};
+    let mut c = Command::new(env!("CARGO_BIN_EXE_finger-sim")).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap();
+    let mut input = c.stdin.take().unwrap();
+    let mut replies = BufReader::new(c.stdout.take().unwrap());
+    let mut reply = |input: &mut std::process::ChildStdin, line: &str| {
+        input.write_all(format!("{line}\n").as_bytes()).unwrap();
+        let mut r = String::new();
+        replies.read_line(&mut r).unwrap();
+        r
+    };
+    let vmeas = |r: &str| -> Vec<f64> {
+        let v = r.split(' ').find_map(|kv| kv.strip_prefix("vmeas=")).unwrap_or_else(|| panic!("{r}"));
+        v.split(',').map(|x| x.parse().unwrap()).collect()
+    };
+    assert_eq!(reply(&mut input, "arm"), "ok armed=1\n");
+    assert!(reply(&mut input, "volt all 3000").starts_with("ok volts="));
+    assert_eq!(reply(&mut input, "wait 2"), "ok waited=2\n");
+    let charged = vmeas(&reply(&mut input, "status"));
+    assert!(charged.iter().all(|&v| v > 2500.0), "{charged:?}");
+    assert_eq!(reply(&mut input, "stop"), "ok stopped\n");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let st = reply(&mut input, "status");
+    // was 2904.7,... : the board's time stood still between lines
+    assert!(vmeas(&st).iter().all(|&v| v.abs() < 50.0), "{st}");
+    assert!(st.starts_with("ok armed=0 force=0.000 volts=0.0,0.0,0.0 "), "{st}");
+    drop(input);
+    assert!(c.wait().unwrap().success());
+}
+
+/// `help` lists every command the simulated board answers: the plant's test console too, and
+/// not `reset` (the chip images' alone), which is refused as unknown here.
+#[test]
+fn help_lists_the_plant_and_reset_is_the_chips() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let mut c = Command::new(env!("CARGO_BIN_EXE_finger-sim")).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap();
+    c.stdin.take().unwrap().write_all(b"help\nplant status\nreset\n").unwrap();
+    let out = c.wait_with_output().unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.lines().any(|l| l.starts_with("plant film <G_eq kPa>") && l.contains(" | status - ")), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("ok plant film_kpa=")), "{text}");
+    assert!(!text.lines().any(|l| l.starts_with("reset")), "{text}");
+    assert!(text.lines().last().unwrap().starts_with("err unknown: reset"), "{text}");
+}

@@ -132,11 +132,12 @@ impl Link {
             .spawn()
             .map_err(|e| LinkError::Open(format!("qemu-system-arm: {e} (scripts/setup installs it)")))?;
         // QEMU's own messages pass to stderr, but not its notice that the socket waits for us
+        // (`qemu-system-arm: -chardev ...: info: QEMU waiting for connection on: ...`)
         if let Some(err) = child.stderr.take() {
             std::thread::spawn(move || {
                 use std::io::BufRead;
                 for l in std::io::BufReader::new(err).lines().map_while(Result::ok) {
-                    if !l.starts_with("QEMU waiting for connection") {
+                    if !l.contains("info: QEMU waiting for connection") {
                         eprintln!("{l}");
                     }
                 }

@@ -78,6 +78,15 @@ enum What {
         /// ignores).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Gravity's magnitude for the scene's finger, m/s² (0..20, 0: off; default: the
+        /// scene's `grav`).
+        #[arg(long)]
+        grav: Option<f64>,
+        /// The finger's orientation, degrees from its straight axis toward the cable side (0
+        /// hanging straight down, 90 held horizontally curling downward, -90 curling upward;
+        /// default: the scene's `grav_dir`).
+        #[arg(long, allow_negative_numbers = true)]
+        grav_dir: Option<f64>,
     },
     /// Keep the settings in force across resets (`save`; the board refuses while armed, and
     /// settings that would raise a ceiling).
@@ -271,7 +280,11 @@ fn main() -> ExitCode {
     }
     // a scene is read and run on the host model (and refused) before any board is touched
     let scene = match &cli.what {
-        What::Run { scene, .. } => match finger_scene::read_file(scene).map_err(finger::run::RunError::Scene).and_then(|s| finger::run::host(&s)) {
+        What::Run { scene, grav, grav_dir, .. } => match finger_scene::read_file(scene)
+            .map_err(finger::run::RunError::Scene)
+            .and_then(|s| finger::run::oriented(s, *grav, *grav_dir))
+            .and_then(|s| finger::run::host(&s))
+        {
             Ok(s) if !s.scene.board => {
                 eprintln!(
                     "finger run: {}: `board = false`: this scene is the paper's model, past what the board's film holds (docs/scenes.md \"The shipped scenes\"); run it on the host: cd tools/finger-scene && cargo run -- {}",
@@ -369,7 +382,7 @@ fn main() -> ExitCode {
                 }
             }
         }
-        What::Run { scene: path, drive, out } => {
+        What::Run { scene: path, drive, out, .. } => {
             let out = out.unwrap_or_else(|| repo_root().join("target").join("runs"));
             run_scene(&mut con, &path, scene.expect("read above"), drive, &out)
         }

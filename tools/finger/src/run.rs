@@ -278,6 +278,18 @@ pub fn host(scene: &Scene) -> Result<SceneResult, RunError> {
     finger_scene::run(&s, None).map_err(RunError::Scene)
 }
 
+/// `scene` in another orientation (`finger run --grav --grav-dir`): gravity's magnitude (m/s²)
+/// and direction (degrees from the straight finger's axis toward the cable side) of its finger,
+/// each checked as the scene's own keys are; `None` keeps the scene's.
+pub fn oriented(mut scene: Scene, grav: Option<f64>, grav_dir: Option<f64>) -> Result<Scene, RunError> {
+    for (name, flag, v) in [("grav", "--grav", grav), ("grav_dir", "--grav-dir", grav_dir)] {
+        if let Some(v) = v {
+            scene.finger.params.set(name, v).map_err(|e| RunError::Scene(SceneError::model(finger_scene::Pos::WHOLE, flag, e)))?;
+        }
+    }
+    Ok(scene)
+}
+
 /// Run the scene of `host` (see [`host`]) on the board: every posture through `solve`, and
 /// with `drive` through `volt`/`force` as well, `stop` at the end whatever happened.
 /// `progress` is told after each posture.

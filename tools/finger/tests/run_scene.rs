@@ -304,3 +304,48 @@ fn every_shipped_scene_runs_on_the_board_or_says_it_is_the_papers_model() {
     assert!(ran >= 3 && labelled >= 1, "{ran} ran, {labelled} labelled");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_orientation_flags_give_the_host_and_the_board_the_scenes_finger_in_that_orientation() {
+    let s = finger_scene::parse("o", DRIVE_SCENE).unwrap();
+    assert_eq!(s.finger.params.grav, 0.0, "a scene's default finger has no gravity");
+    let o = finger::run::oriented(s.clone(), Some(9.81), Some(-90.0)).unwrap();
+    assert_eq!((o.finger.params.grav, o.finger.params.grav_dir), (9.81, -90.0));
+    assert_eq!(finger::run::oriented(s.clone(), None, None).unwrap().finger.params, s.finger.params);
+    for (grav, dir, flag) in [(None, Some(200.0), "--grav-dir"), (Some(-1.0), None, "--grav"), (None, Some(f64::NAN), "--grav-dir")] {
+        let e = finger::run::oriented(s.clone(), grav, dir).unwrap_err().to_string();
+        assert!(e.starts_with(flag) && e.contains(&flag[2..].replace('-', "_")), "{e}");
+    }
+    // out of range: refused before any board is touched (the named one does not exist)
+    let (dir, scene) = drive_scene("run-oriented");
+    let out_dir = dir.join("refused");
+    let out = finger(&["--sim", "--sim-bin", "/nonexistent/board", "run", scene.to_str().unwrap(), "--grav-dir", "-200", "--out", out_dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("grav_dir"), "{}", text(&out.stderr));
+    assert!(!out_dir.exists());
+    // on the sim: the host's columns are the f64 model of the oriented finger, the board got it
+    let (board, log) = logged_sim(&dir, "board.sh", "");
+    let out = finger(&[
+        "--sim",
+        "--sim-bin",
+        board.to_str().unwrap(),
+        "run",
+        scene.to_str().unwrap(),
+        "--grav",
+        "9.81",
+        "--grav-dir",
+        "-90",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    check_against_host(&dir.join("drive-board.csv"), o.finger.params, &[600.0, 300.0, 0.0], &o.tensions);
+    let sent = std::fs::read_to_string(&log).unwrap();
+    assert!(sent.lines().any(|l| l == "param grav_dir -90"), "{sent}");
+    // without the flags the scene's finger (no gravity; the board's has it) is what it gets
+    let out = finger(&["--sim", "--sim-bin", board.to_str().unwrap(), "run", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let sent = std::fs::read_to_string(&log).unwrap();
+    assert!(sent.lines().any(|l| l == "param grav 0"), "{sent}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

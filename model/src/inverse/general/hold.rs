@@ -76,7 +76,9 @@ impl<'a, R: Real> Gen<'a, R> {
         slope_hint: Option<R>,
         q_out: &mut [[R; 3]; MAX_SUB],
     ) -> Result<Held<R>, Error> {
-        if !(theta > R::zero()) {
+        // the joint's own turn under its held load (the weight: docs/model.md "Gravity"), linear
+        let theta_held = self.f.held_turn(joint.max(1) - 1, c);
+        if !(theta > R::zero()) && theta_held == R::zero() {
             // the straight joint (θ* = 0) at P = 0; a negative angle is refused by the caller
             *q_out = [[R::zero(); 3]; MAX_SUB];
             return Ok(Held { tension: R::zero(), thickness: t, st: self.straight_st(), slope: s_lin, jac: None, exact: true });
@@ -86,7 +88,8 @@ impl<'a, R: Real> Gen<'a, R> {
         }
         let (x0, guess) = match hint {
             Some((p, h)) if p > R::zero() && p.is_finite() => (p, Some(h)),
-            _ => (theta / s_lin, None),
+            // past the held turn (a cable cannot push): the least tension the solve tries
+            _ => (((theta - theta_held) / s_lin).max(R::from_f64(1e-3) * theta.abs() / s_lin), None),
         };
         let f = self.f;
         // quasi-Newton on (b, P) first: one march per step
