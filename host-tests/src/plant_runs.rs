@@ -250,9 +250,8 @@ pub fn ceiling_holds(seed0: u64, runs: u64, film_s: u32, time_scale: f32, thread
         (seed, g, ceiling_hold(seed, g, frac, film_s, time_scale))
     };
     std::thread::scope(|s| {
-        let parts: Vec<_> = (0..threads.max(1))
-            .map(|k| s.spawn(move || (seed0 + k..seed0 + runs).step_by(threads.max(1) as usize).map(one).collect::<Vec<_>>()))
-            .collect();
+        let parts: Vec<_> =
+            (0..threads.max(1)).map(|k| s.spawn(move || (seed0 + k..seed0 + runs).step_by(threads.max(1) as usize).map(one).collect::<Vec<_>>())).collect();
         let mut all: Vec<_> = parts.into_iter().flat_map(|h| h.join().unwrap()).collect();
         all.sort_by_key(|x| x.0);
         all
