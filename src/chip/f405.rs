@@ -129,6 +129,7 @@ impl Board for F405Board {
 
 /// PB6-8 (the HV control PWMs) and PB12 (the HV enable) low as outputs: GPIOB BSRR, then
 /// MODER, the stores of `__pre_init` (image/fault.rs).
+#[cfg(feature = "hw")]
 fn hv_pins_low() {
     // SAFETY: stores to GPIOB that only drive the HV pins low (the port's owner is this
     // bring-up, which configures these pins next).
@@ -194,8 +195,10 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
 
     let gpioa = dp.GPIOA.split(&mut rcc);
     let gpiob = dp.GPIOB.split(&mut rcc);
-    // the split resets GPIOB (its pins inputs, floating): the HV pins low again at once, as
-    // `__pre_init` left them, until their set-up below
+    // the split resets GPIOB (its pins inputs, floating): on the board the HV pins low again
+    // at once, as `__pre_init` left them, until their set-up below (the emulator images, which
+    // never arm a real chip, leave it: the M3 image's flash budget)
+    #[cfg(feature = "hw")]
     hv_pins_low();
     let enable = EnablePin { pin: gpiob.pb12.into_push_pull_output_in_state(PinState::Low), high: false };
 
