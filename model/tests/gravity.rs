@@ -291,3 +291,15 @@ fn an_unreachable_posture_under_gravity_is_refused_as_unreachable() {
         assert!(matches!(e, Error::Unreachable { .. }), "dir {dir}: {e:?}");
     }
 }
+
+/// Past the branch's end under gravity the coupled solve refuses: its continuation keeps each
+/// step on the physical branch (before, 100 N answered a finger coiled to -500° a joint).
+#[test]
+fn past_fmax_under_gravity_the_solve_refuses() {
+    let f = board(0.0);
+    let end = f.fmax(&[0.0; 3]).unwrap();
+    for p in [1.5 * end.tension, 100.0] {
+        let r = f.solve(p, &[0.0; 3], Method::converged());
+        assert!(r.is_err(), "{p} N: {:?}", r.map(|s| s.joint_angle));
+    }
+}

@@ -13,10 +13,12 @@ import softfinger as sf
 REACHED_DEG = [4.66, 5.35, 6.21]
 
 
-def bench_finger(layers: int, fidelity: bool) -> sf.Finger:
-    """finger-scenes' `params`: docs/model.md's default values with the hinge model pinned."""
+def bench_finger(layers: int, fidelity: bool, grav_dir=None) -> sf.Finger:
+    """finger-scenes' `params`: docs/model.md's default values with the hinge model pinned (and
+    standard gravity along `grav_dir` degrees, if given)."""
     m, plate, flex = (8, 1, 1) if fidelity else (1, 0, 0)
-    return sf.Finger(preset="default", layers=layers, m=m, plate=plate, flex_links=flex)
+    g = {} if grav_dir is None else {"grav": 9.81, "grav_dir": grav_dir}
+    return sf.Finger(preset="default", layers=layers, m=m, plate=plate, flex_links=flex, **g)
 
 
 def parse_reference(line: str):
@@ -32,6 +34,7 @@ SCENE_MODEL = {  # name -> (layers, fidelity), as finger-scenes' SCENES
     "de-1.0N-uni8kV": (4, False), "de-1.0N-per9/5/0kV": (4, False),
     "bare-7N": (0, False), "bare-250N-contact": (0, False),
     "bare-1.0N-fid": (0, True), "de-1.0N-per9/5/0kV-fid": (4, True),
+    "de-1.0N-per9/5/0kV-fid-g0": (4, True, 0.0), "de-1.0N-per9/5/0kV-fid-g90": (4, True, 90.0),
 }
 
 
@@ -39,8 +42,7 @@ def test_results_equal_the_rust_model_digit_for_digit(reference_lines):
     seen = set()
     for line in reference_lines:
         name, method, tension, volts, parts = parse_reference(line)
-        layers, fid = SCENE_MODEL[name]
-        f = bench_finger(layers, fid)
+        f = bench_finger(*SCENE_MODEL[name])
         kw = {"method": "converged"} if method == "converged" else {"method": "stepping", "n_inc": 20}
         seen.add((name, method))
         if parts[0].startswith("err"):

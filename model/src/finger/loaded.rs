@@ -156,6 +156,13 @@ pub(super) fn newton_coupled<R: Real>(
         let mut xt = x;
         let left = max_iter.saturating_sub(iters);
         match newton::solve(&mut eq, &mut xt, &opts_for(left)) {
+            // each accepted step stays on the physical branch: no joint turns by more than
+            // tension::same_branch's bound nor its hole jumps (past the branch's end Newton can
+            // land on a coiled equilibrium of the coupled system: refused, the step halved)
+            Ok((rep, slot)) if !same_branch(f, result.as_ref(), &eq.states[slot]) => {
+                iters += rep.iterations;
+                Err(if iters >= max_iter { Step::Stop(None) } else { Step::Retry(None) })
+            }
             Ok((rep, slot)) => {
                 iters += rep.iterations;
                 x = xt;
@@ -183,4 +190,17 @@ pub(super) fn newton_coupled<R: Real>(
             _ => Error::NotConverged { iterations: iters, residual: f64::INFINITY },
         }),
     }
+}
+
+/// A coupled step's joints against the last accepted ones (the straight finger before the first):
+/// every joint turns by at most 0.8 rad and its hole moves at most half a hinge length, and no
+/// joint passes half a turn.
+fn same_branch<R: Real>(f: &Finger<R>, last: Option<&[JointState<R>; MAX_JOINTS]>, next: &[JointState<R>; MAX_JOINTS]) -> bool {
+    let straight = f.straight();
+    (0..f.p.n).all(|k| {
+        let before = last.map_or(&straight, |l| &l[k]);
+        let dtheta = (next[k].end.theta - before.end.theta).abs();
+        let dhole = super::norm2([next[k].hole[0] - before.hole[0], next[k].hole[1] - before.hole[1]]);
+        dtheta <= R::from_f64(0.8) && dhole <= R::from_f64(0.5) * f.p.hinge_len() && next[k].end.theta.abs() < R::from_f64(core::f64::consts::PI)
+    })
 }
