@@ -7,7 +7,7 @@
 //! proximal end is node k-1), and the link at its midpoint, on the centreline. Masses in g,
 //! forces in N.
 
-use super::{Finger, Heading, TipLoad, HELD};
+use super::{Finger, Heading, JointState, TipLoad, HELD};
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
@@ -87,6 +87,17 @@ impl<R: Real> Finger<R> {
     pub(crate) fn lumps_of(&self, node: &Heading<R>, hinge_end: &Heading<R>) -> [[R; 2]; 3] {
         let mid = hinge_end.then(R::from_f64(0.5) * self.link_len, R::zero(), R::zero());
         [[node.pose.x, node.pose.y], [hinge_end.pose.x, hinge_end.pose.y], [mid.pose.x, mid.pose.y]]
+    }
+
+    /// The distal centroids (`Weights::centroids`) of a chain given by each joint's proximal
+    /// frame `nodes[k]` and its states' hinge ends.
+    pub(super) fn centroids_of_chain(&self, w: &Weights<R>, nodes: &[Heading<R>], states: &[JointState<R>; MAX_JOINTS]) -> [[R; 2]; MAX_JOINTS] {
+        let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
+        for k in 0..self.p.n {
+            let e = states[k].end;
+            lumps[k] = self.lumps_of(&nodes[k], &nodes[k].then(e.x, e.y, e.theta));
+        }
+        w.centroids(self.p.n, &lumps)
     }
 
     /// The base-frame load on link k (0-based) besides the cable: the tip force at `tip`, the

@@ -156,15 +156,7 @@ impl<R: Real> Finger<R> {
         // under gravity each joint's distal weight at the centroid the chain puts it
         // (docs/model.md "Gravity"): the joints are coupled, as under a tip load
         let weights = self.weights();
-        let mut centroids = [[R::zero(); 2]; MAX_JOINTS];
-        if let Some(w) = &weights {
-            let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
-            for k in 0..n {
-                let e = states[k].end;
-                lumps[k] = self.lumps_of(&heads[k], &heads[k].then(e.x, e.y, e.theta));
-            }
-            centroids = w.centroids(n, &lumps);
-        }
+        let centroids = weights.as_ref().map_or([[R::zero(); 2]; MAX_JOINTS], |w| self.centroids_of_chain(w, &heads, states));
         let coupled = loaded || weights.is_some();
         // residual and tangent determinant of the joint before (tension alone)
         let mut prev: Option<([R; 2], R)> = None;

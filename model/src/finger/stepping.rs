@@ -33,15 +33,7 @@ fn states<R: Real>(f: &Finger<R>, c: &Compliances<R>, tension: R, force: [R; 2],
         let tip = [nodes[n].pose.x, nodes[n].pose.y];
         // the weight (docs/model.md "Gravity"), its share and centroids from the step before
         let weights = f.weights();
-        let mut centroids = [[R::zero(); 2]; MAX_JOINTS];
-        if let Some(w) = &weights {
-            let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
-            for k in 0..n {
-                let e = states[k].end;
-                lumps[k] = f.lumps_of(&nodes[k], &nodes[k].then(e.x, e.y, e.theta));
-            }
-            centroids = w.centroids(n, &lumps);
-        }
+        let centroids = weights.as_ref().map_or([[R::zero(); 2]; MAX_JOINTS], |w| f.centroids_of_chain(w, &nodes, &states));
         let mut next = states;
         for k in 0..n {
             let tl = f
