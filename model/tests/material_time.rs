@@ -72,3 +72,27 @@ fn the_hold_floor_of_vhb_lies_above_the_limit() {
     let law = StackLaw::<f32>::new(&VHB_4905, 0.5, 0.9).unwrap();
     assert!(hold_ratio(&law).unwrap() > LIMIT_RATIO as f32);
 }
+
+/// A floor the guard cannot hold the film above (0, below 0, infinite, NaN) gets a bound of 0 V,
+/// whatever the film's branches; a floor in (0, 1] gets a positive bound (the mutants of
+/// `voltage_bound_now`'s input test survived without this).
+#[test]
+fn the_guard_bound_is_zero_for_a_floor_it_cannot_hold() {
+    use finger_model::material::voltage_bound_now;
+    let law = StackLaw::<f64>::new(&VHB_4905, 0.5, 0.9).unwrap();
+    let relax = Relaxation::new(&law, 0.001).unwrap();
+    let mut held = StackState::<f64>::rest();
+    for _ in 0..30_000 {
+        held.advance(&law, &relax, 4000.0).unwrap();
+    }
+    for state in [StackState::<f64>::rest(), held] {
+        for floor in [0.0, -0.0, -0.5, -1.0, -f64::MIN_POSITIVE, f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            let v = voltage_bound_now(&law, &state, floor);
+            assert_eq!(v, 0.0, "floor {floor}, s {}: bound {v} V", state.s);
+        }
+        for floor in [LIMIT_RATIO, 0.8, 0.9] {
+            let v = voltage_bound_now(&law, &state, floor);
+            assert!(v > 0.0 && v.is_finite(), "floor {floor}, s {}: bound {v} V", state.s);
+        }
+    }
+}
