@@ -303,3 +303,23 @@ fn past_fmax_under_gravity_the_solve_refuses() {
         assert!(r.is_err(), "{p} N: {:?}", r.map(|s| s.joint_angle));
     }
 }
+
+/// A uniform posture the weight alone bends the finger past (held horizontally: curling down
+/// at 5°, where the weight alone bends joint 1 about 14°; curling up at -5°, where it bends
+/// joint 3 about -1.4° only) needs a cable that pushes: refused as unreachable, naming the
+/// joint, in f32 (the board's scalar) as in f64. Before, both ended in `NotConverged` (the
+/// tension's root took the joint at P = 0 as straight).
+#[test]
+fn a_posture_past_the_weight_alone_is_unreachable_in_f32_and_f64() {
+    for (dir, deg, joint) in [(90.0, 5.0, 1), (-90.0, -5.0, 3), (90.0, -5.0, 1)] {
+        let f = board(dir);
+        let e64 = inverse::solve_pose(&f, &[f64::to_radians(deg); 3], None).unwrap_err();
+        let p32: Params<f32> = f.params().cast();
+        let f32f = Finger::<f32>::with_calibration(p32, Calibration::for_params(&p32)).unwrap();
+        let e32 = inverse::solve_pose(&f32f, &[(deg as f32).to_radians(); 3], None).unwrap_err();
+        println!("dir {dir} at {deg}°: f64 {e64:?}, f32 {e32:?}");
+        for e in [e64, e32] {
+            assert!(matches!(e, Error::Unreachable { joint: j, .. } if j == joint), "dir {dir} at {deg}°: {e:?}");
+        }
+    }
+}
