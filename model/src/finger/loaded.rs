@@ -20,7 +20,12 @@ struct Coupled<'a, R> {
     force: [R; 2],
     /// The weight's share of its full value (the load continuation's factor).
     weight: R,
-    states: [[JointState<R>; MAX_JOINTS]; 3],
+    /// Each slot's evaluation (`Trace`): its marched states, and where a forward difference resumes.
+    traces: [Trace<R>; 3],
+    /// The Jacobian estimate and the point (x, r) it was last formed or updated at: forward
+    /// differences once, then Broyden's rank-one update at each Newton iterate (and across the
+    /// continuation's steps); None: forward differences at the next call.
+    jac: Option<([[R; COUPLED]; COUPLED], [R; COUPLED], [R; COUPLED])>,
 }
 
 impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
@@ -29,13 +34,68 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
         coupled_dim(self.f)
     }
     fn residual(&mut self, x: &[R; COUPLED], slot: usize) -> Result<[R; COUPLED], MarchError> {
-        let (r, st) = coupled_residual(self.f, self.c, self.tension, self.force, self.weight, x)?;
-        self.states[slot] = st;
+        let mut t = Trace::new(self.f);
+        let r = coupled_eval(self.f, self.c, self.tension, self.force, self.weight, x, (0, false), &mut t)?;
+        self.traces[slot] = t;
         Ok(r)
     }
-    fn jacobian(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], _: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
+    fn jacobian(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
+        let dim = self.dim();
+        let mut jac = match self.jac {
+            // Broyden's good update from the last point: J += (Δr - J Δx) Δxᵀ / |Δx|² (at the
+            // same x, a new continuation step: J as it was)
+            Some((mut jac, x0, r0)) => {
+                let dx: [R; COUPLED] = core::array::from_fn(|i| x[i] - x0[i]);
+                let dx2 = dx[..dim].iter().fold(R::zero(), |a, &v| a + v * v);
+                if dx2 > R::zero() {
+                    for row in 0..dim {
+                        let jd = (0..dim).fold(R::zero(), |a, c| a + jac[row][c] * dx[c]);
+                        let u = (r[row] - r0[row] - jd) / dx2;
+                        for col in 0..dim {
+                            jac[row][col] += u * dx[col];
+                        }
+                    }
+                }
+                jac
+            }
+            None => self.forward_difference(x, r, slot)?,
+        };
+        // without a tip force the tip is no load: its columns are the identity's, exactly
+        if self.force == [R::zero(); 2] {
+            let n = self.f.p.n;
+            for i in 2 * n..2 * n + 2 {
+                for row in 0..dim {
+                    jac[row][i] = if row == i { R::one() } else { R::zero() };
+                }
+            }
+        }
+        self.jac = Some((jac, *x, *r));
+        Ok(jac)
+    }
+}
+
+impl<R: Real> Coupled<'_, R> {
+    /// Forward differences of the residual at `x` (evaluated into `slot`), each column's
+    /// evaluation resumed where its unknown enters the chain (`enters_at`); a tip without a
+    /// force has no column (`jacobian` sets it).
+    fn forward_difference(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
+        let (n, dim) = (self.f.p.n, self.dim());
         let h = R::from_f64(R::SQRT_EPS) * (self.f.p.hinge_len() + self.f.p.e);
-        newton::forward_difference(self, x, r, &[h; COUPLED])
+        let no_tip_force = self.force == [R::zero(); 2];
+        let mut jac = [[R::zero(); COUPLED]; COUPLED];
+        for i in 0..dim {
+            if no_tip_force && (i == 2 * n || i == 2 * n + 1) {
+                continue;
+            }
+            let mut xp = *x;
+            xp[i] += h;
+            let mut t = self.traces[slot];
+            let rp = coupled_eval(self.f, self.c, self.tension, self.force, self.weight, &xp, enters_at(n, i), &mut t)?;
+            for row in 0..dim {
+                jac[row][i] = (rp[row] - r[row]) / h;
+            }
+        }
+        Ok(jac)
     }
 }
 
@@ -97,43 +157,110 @@ pub(super) fn coupled_residual<R: Real>(
     weight: R,
     x: &[R; COUPLED],
 ) -> Result<([R; COUPLED], [JointState<R>; MAX_JOINTS]), MarchError> {
+    let mut t = Trace::new(f);
+    let r = coupled_eval(f, c, tension, force, weight, x, (0, false), &mut t)?;
+    Ok((r, t.states))
+}
+
+/// An evaluation of the coupled residual, kept per joint so that another can resume from a
+/// joint (`coupled_eval`): each joint's proximal frame and hinge end (base frame), its state,
+/// lumps and hole residual.
+#[derive(Clone, Copy)]
+struct Trace<R> {
+    frames: [Heading<R>; MAX_JOINTS + 1],
+    ends: [Heading<R>; MAX_JOINTS],
+    states: [JointState<R>; MAX_JOINTS],
+    lumps: [[[R; 2]; 3]; MAX_JOINTS],
+    holes: [[R; 2]; MAX_JOINTS],
+}
+
+impl<R: Real> Trace<R> {
+    fn new(f: &Finger<R>) -> Self {
+        let o = Heading::origin();
+        Trace {
+            frames: [o; MAX_JOINTS + 1],
+            ends: [o; MAX_JOINTS],
+            states: [f.straight(); MAX_JOINTS],
+            lumps: [[[R::zero(); 2]; 3]; MAX_JOINTS],
+            holes: [[R::zero(); 2]; MAX_JOINTS],
+        }
+    }
+}
+
+/// The coupled residual into `t`, resuming at `from` = (joint, past its march): the joints
+/// before it (and that joint's march, if past it) as `t` holds them, from an evaluation whose
+/// unknowns differ from `x` only in what loads the chain from there on (a forward-difference
+/// column: the same arithmetic as the whole evaluation, bit for bit).
+#[allow(clippy::too_many_arguments)]
+fn coupled_eval<R: Real>(
+    f: &Finger<R>,
+    c: &Compliances<R>,
+    tension: R,
+    force: [R; 2],
+    weight: R,
+    x: &[R; COUPLED],
+    from: (usize, bool),
+    t: &mut Trace<R>,
+) -> Result<[R; COUPLED], MarchError> {
     let n = f.p.n;
     let tip = [x[2 * n], x[2 * n + 1]];
     let w = f.weights();
     let centroid = |k: usize| [x[2 * n + 2 + 2 * k], x[2 * n + 3 + 2 * k]];
     let grav = |k: usize| w.as_ref().map(|w| (w, weight, centroid(k.min(n - 1))));
     let tip_load = Some((force, tip));
-    let mut states = [f.straight(); MAX_JOINTS];
-    let mut r = [R::zero(); COUPLED];
-    let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
-    let mut frame = Heading::origin();
-    for k in 0..n {
-        let tl = f.joint_ext_load(k, tip_load, grav(k)).map(|l| Finger::load_in_frame(&frame, l));
-        let b = [x[2 * k], x[2 * k + 1]];
-        let st = f.marched(&c.c[k], tension, b, tl)?;
-        r[2 * k] = b[0] - st.hole[0];
-        r[2 * k + 1] = b[1] - st.hole[1];
-        let hinge_end = frame.then(st.end.x, st.end.y, st.end.theta);
+    for k in from.0..n {
+        let frame = t.frames[k];
+        if !(k == from.0 && from.1) {
+            let tl = f.joint_ext_load(k, tip_load, grav(k)).map(|l| Finger::load_in_frame(&frame, l));
+            let b = [x[2 * k], x[2 * k + 1]];
+            let st = f.marched(&c.c[k], tension, b, tl)?;
+            t.holes[k] = [b[0] - st.hole[0], b[1] - st.hole[1]];
+            t.ends[k] = frame.then(st.end.x, st.end.y, st.end.theta);
+            t.lumps[k] = f.lumps_of(&frame, &t.ends[k]);
+            t.states[k] = st;
+        }
+        let hinge_end = t.ends[k];
         let ql = f.link_q(tension, f.link_load(k, &hinge_end, tip_load, grav(k + 1)).map(|l| (&hinge_end, l)));
-        lumps[k] = f.lumps_of(&frame, &hinge_end);
-        frame = hinge_end.then(f.link_len + ql[0], ql[1], ql[2]);
-        states[k] = st;
+        t.frames[k + 1] = hinge_end.then(f.link_len + ql[0], ql[1], ql[2]);
     }
-    r[2 * n] = tip[0] - frame.pose.x;
-    r[2 * n + 1] = tip[1] - frame.pose.y;
+    let mut r = [R::zero(); COUPLED];
+    for k in 0..n {
+        r[2 * k] = t.holes[k][0];
+        r[2 * k + 1] = t.holes[k][1];
+    }
+    let end = t.frames[n];
+    r[2 * n] = tip[0] - end.pose.x;
+    r[2 * n + 1] = tip[1] - end.pose.y;
     if let Some(w) = &w {
-        let now = w.centroids(n, &lumps);
+        let now = w.centroids(n, &t.lumps);
         for k in 0..n {
             let c = centroid(k);
             r[2 * n + 2 + 2 * k] = c[0] - now[k][0];
             r[2 * n + 3 + 2 * k] = c[1] - now[k][1];
         }
     }
-    Ok((r, states))
+    Ok(r)
 }
 
-/// Converged equilibrium with a tip load: damped Newton (`solve::newton`, forward-difference
-/// Jacobian) on all holes and the tip together, under load continuation
+/// Where a change in unknown `i` first enters the coupled chain (`coupled_eval`'s `from`): a
+/// hole at its joint's march, the tip at the first joint's, a centroid at the link before its
+/// joint (joint 1's at its march).
+fn enters_at(n: usize, i: usize) -> (usize, bool) {
+    if i < 2 * n {
+        (i / 2, false)
+    } else if i < 2 * n + 2 {
+        (0, false)
+    } else {
+        match (i - 2 * n - 2) / 2 {
+            0 => (0, false),
+            j => (j - 1, true),
+        }
+    }
+}
+
+/// Converged equilibrium with a tip load: damped Newton (`solve::newton`; the Jacobian by
+/// forward differences once, then Broyden's update, forward differences again where a step
+/// fails on it) on all holes and the tip together, under load continuation
 /// (`solve::continuation`) in the load factor λ (tension and tip force together).
 pub(super) fn newton_coupled<R: Real>(
     f: &Finger<R>,
@@ -145,7 +272,7 @@ pub(super) fn newton_coupled<R: Real>(
 ) -> Result<([JointState<R>; MAX_JOINTS], [R; 2], u32), Error> {
     let n = f.p.n;
     let mut x = straight_unknowns(f);
-    let mut eq = Coupled { f, c, tension: R::zero(), force: [R::zero(); 2], weight: R::zero(), states: [[f.straight(); MAX_JOINTS]; 3] };
+    let mut eq = Coupled { f, c, tension: R::zero(), force: [R::zero(); 2], weight: R::zero(), traces: [Trace::new(f); 3], jac: None };
     let mut iters = 0u32;
     let mut result = None;
     let opts_for = |left: u32| SolveOptions::new(tol, f.resolution() * R::from_u32(n as u32), left);
@@ -155,18 +282,28 @@ pub(super) fn newton_coupled<R: Real>(
         eq.weight = to;
         let mut xt = x;
         let left = max_iter.saturating_sub(iters);
-        match newton::solve(&mut eq, &mut xt, &opts_for(left)) {
+        let carried = eq.jac.is_some();
+        let mut run = newton::solve(&mut eq, &mut xt, &opts_for(left));
+        if run.is_err() && carried {
+            // Broyden's estimate may be what failed: once more from the step's start on forward
+            // differences
+            iters += run.as_ref().err().map_or(0, |f| f.iterations());
+            eq.jac = None;
+            xt = x;
+            run = newton::solve(&mut eq, &mut xt, &opts_for(max_iter.saturating_sub(iters)));
+        }
+        match run {
             // each accepted step stays on the physical branch: no joint turns by more than
             // tension::same_branch's bound nor its hole jumps (past the branch's end Newton can
             // land on a coiled equilibrium of the coupled system: refused, the step halved)
-            Ok((rep, slot)) if !same_branch(f, result.as_ref(), &eq.states[slot]) => {
+            Ok((rep, slot)) if !same_branch(f, result.as_ref(), &eq.traces[slot].states) => {
                 iters += rep.iterations;
                 Err(if iters >= max_iter { Step::Stop(None) } else { Step::Retry(None) })
             }
             Ok((rep, slot)) => {
                 iters += rep.iterations;
                 x = xt;
-                result = Some(eq.states[slot]);
+                result = Some(eq.traces[slot].states);
                 Ok(())
             }
             Err(fail) => {
