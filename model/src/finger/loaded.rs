@@ -5,7 +5,7 @@
 
 use super::{Compliances, Finger, Heading, JointState, MarchError, COUPLED};
 use crate::error::Error;
-use crate::params::MAX_JOINTS;
+use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 use crate::solve::continuation::{self, Step};
 use crate::solve::newton::{self, Equations};
@@ -20,12 +20,15 @@ struct Coupled<'a, R> {
     force: [R; 2],
     /// The weight's share of its full value (the load continuation's factor).
     weight: R,
-    /// Each slot's evaluation (`Trace`): its marched states, and where a forward difference resumes.
+    /// Each slot's marched states and its evaluation (`Trace`: where a forward difference resumes).
+    states: [[JointState<R>; MAX_JOINTS]; 3],
     traces: [Trace<R>; 3],
-    /// The Jacobian estimate and the point (x, r) it was last formed or updated at: forward
-    /// differences once, then Broyden's rank-one update at each Newton iterate (and across the
-    /// continuation's steps); None: forward differences at the next call.
-    jac: Option<([[R; COUPLED]; COUPLED], [R; COUPLED], [R; COUPLED])>,
+    /// The Jacobian estimate: forward differences once, then Broyden's rank-one update at each
+    /// Newton iterate (and across the continuation's steps).
+    jac: [[R; COUPLED]; COUPLED],
+    /// The point (x, r) `jac` was last formed or updated at; None: forward differences at the
+    /// next call.
+    jac_at: Option<([R; COUPLED], [R; COUPLED])>,
 }
 
 impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
@@ -34,17 +37,16 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
         coupled_dim(self.f)
     }
     fn residual(&mut self, x: &[R; COUPLED], slot: usize) -> Result<[R; COUPLED], MarchError> {
-        let mut t = Trace::new(self.f);
-        let r = coupled_eval(self.f, self.c, self.tension, self.force, self.weight, x, (0, false), &mut t)?;
-        self.traces[slot] = t;
-        Ok(r)
+        let (t, st) = (&mut self.traces[slot], &mut self.states[slot]);
+        coupled_eval(self.f, self.c, self.tension, self.force, self.weight, x, (0, false), t, Some(st))
     }
     fn jacobian(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
         let dim = self.dim();
-        let mut jac = match self.jac {
+        match self.jac_at {
             // Broyden's good update from the last point: J += (Δr - J Δx) Δxᵀ / |Δx|² (at the
             // same x, a new continuation step: J as it was)
-            Some((mut jac, x0, r0)) => {
+            Some((x0, r0)) => {
+                let jac = &mut self.jac;
                 let dx: [R; COUPLED] = core::array::from_fn(|i| x[i] - x0[i]);
                 let dx2 = dx[..dim].iter().fold(R::zero(), |a, &v| a + v * v);
                 if dx2 > R::zero() {
@@ -56,33 +58,31 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
                         }
                     }
                 }
-                jac
             }
             None => self.forward_difference(x, r, slot)?,
-        };
+        }
         // without a tip force the tip is no load: its columns are the identity's, exactly
         if self.force == [R::zero(); 2] {
             let n = self.f.p.n;
             for i in 2 * n..2 * n + 2 {
                 for row in 0..dim {
-                    jac[row][i] = if row == i { R::one() } else { R::zero() };
+                    self.jac[row][i] = if row == i { R::one() } else { R::zero() };
                 }
             }
         }
-        self.jac = Some((jac, *x, *r));
-        Ok(jac)
+        self.jac_at = Some((*x, *r));
+        Ok(self.jac)
     }
 }
 
 impl<R: Real> Coupled<'_, R> {
-    /// Forward differences of the residual at `x` (evaluated into `slot`), each column's
-    /// evaluation resumed where its unknown enters the chain (`enters_at`); a tip without a
-    /// force has no column (`jacobian` sets it).
-    fn forward_difference(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
+    /// Forward differences of the residual at `x` (evaluated into `slot`) into `jac`, each
+    /// column's evaluation resumed where its unknown enters the chain (`enters_at`); a tip
+    /// without a force has no column (`jacobian` sets it).
+    fn forward_difference(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<(), MarchError> {
         let (n, dim) = (self.f.p.n, self.dim());
         let h = R::from_f64(R::SQRT_EPS) * (self.f.p.hinge_len() + self.f.p.e);
         let no_tip_force = self.force == [R::zero(); 2];
-        let mut jac = [[R::zero(); COUPLED]; COUPLED];
         for i in 0..dim {
             if no_tip_force && (i == 2 * n || i == 2 * n + 1) {
                 continue;
@@ -90,12 +90,12 @@ impl<R: Real> Coupled<'_, R> {
             let mut xp = *x;
             xp[i] += h;
             let mut t = self.traces[slot];
-            let rp = coupled_eval(self.f, self.c, self.tension, self.force, self.weight, &xp, enters_at(n, i), &mut t)?;
+            let rp = coupled_eval(self.f, self.c, self.tension, self.force, self.weight, &xp, enters_at(n, i), &mut t, None)?;
             for row in 0..dim {
-                jac[row][i] = (rp[row] - r[row]) / h;
+                self.jac[row][i] = (rp[row] - r[row]) / h;
             }
         }
-        Ok(jac)
+        Ok(())
     }
 }
 
@@ -157,40 +157,34 @@ pub(super) fn coupled_residual<R: Real>(
     weight: R,
     x: &[R; COUPLED],
 ) -> Result<([R; COUPLED], [JointState<R>; MAX_JOINTS]), MarchError> {
-    let mut t = Trace::new(f);
-    let r = coupled_eval(f, c, tension, force, weight, x, (0, false), &mut t)?;
-    Ok((r, t.states))
+    let mut states = [f.straight(); MAX_JOINTS];
+    let r = coupled_eval(f, c, tension, force, weight, x, (0, false), &mut Trace::new(), Some(&mut states))?;
+    Ok((r, states))
 }
 
 /// An evaluation of the coupled residual, kept per joint so that another can resume from a
-/// joint (`coupled_eval`): each joint's proximal frame and hinge end (base frame), its state,
-/// lumps and hole residual.
+/// joint (`coupled_eval`): each joint's proximal frame and hinge end (base frame), its lumps
+/// and hole residual.
 #[derive(Clone, Copy)]
 struct Trace<R> {
     frames: [Heading<R>; MAX_JOINTS + 1],
     ends: [Heading<R>; MAX_JOINTS],
-    states: [JointState<R>; MAX_JOINTS],
     lumps: [[[R; 2]; 3]; MAX_JOINTS],
     holes: [[R; 2]; MAX_JOINTS],
 }
 
 impl<R: Real> Trace<R> {
-    fn new(f: &Finger<R>) -> Self {
+    fn new() -> Self {
         let o = Heading::origin();
-        Trace {
-            frames: [o; MAX_JOINTS + 1],
-            ends: [o; MAX_JOINTS],
-            states: [f.straight(); MAX_JOINTS],
-            lumps: [[[R::zero(); 2]; 3]; MAX_JOINTS],
-            holes: [[R::zero(); 2]; MAX_JOINTS],
-        }
+        Trace { frames: [o; MAX_JOINTS + 1], ends: [o; MAX_JOINTS], lumps: [[[R::zero(); 2]; 3]; MAX_JOINTS], holes: [[R::zero(); 2]; MAX_JOINTS] }
     }
 }
 
-/// The coupled residual into `t`, resuming at `from` = (joint, past its march): the joints
-/// before it (and that joint's march, if past it) as `t` holds them, from an evaluation whose
-/// unknowns differ from `x` only in what loads the chain from there on (a forward-difference
-/// column: the same arithmetic as the whole evaluation, bit for bit).
+/// The coupled residual into `t` (and the marched states into `states`, if given), resuming at
+/// `from` = (joint, past its march): the joints before it (and that joint's march, if past it)
+/// as `t` holds them, from an evaluation whose unknowns differ from `x` only in what loads the
+/// chain from there on (a forward-difference column: the same arithmetic as the whole
+/// evaluation, bit for bit).
 #[allow(clippy::too_many_arguments)]
 fn coupled_eval<R: Real>(
     f: &Finger<R>,
@@ -201,6 +195,7 @@ fn coupled_eval<R: Real>(
     x: &[R; COUPLED],
     from: (usize, bool),
     t: &mut Trace<R>,
+    mut states: Option<&mut [JointState<R>; MAX_JOINTS]>,
 ) -> Result<[R; COUPLED], MarchError> {
     let n = f.p.n;
     let tip = [x[2 * n], x[2 * n + 1]];
@@ -208,16 +203,23 @@ fn coupled_eval<R: Real>(
     let centroid = |k: usize| [x[2 * n + 2 + 2 * k], x[2 * n + 3 + 2 * k]];
     let grav = |k: usize| w.as_ref().map(|w| (w, weight, centroid(k.min(n - 1))));
     let tip_load = Some((force, tip));
+    // the sub-element displacements where no state is kept
+    let mut scratch = [[R::zero(); 3]; MAX_SUB];
     for k in from.0..n {
         let frame = t.frames[k];
         if !(k == from.0 && from.1) {
             let tl = f.joint_ext_load(k, tip_load, grav(k)).map(|l| Finger::load_in_frame(&frame, l));
             let b = [x[2 * k], x[2 * k + 1]];
-            let st = f.marched(&c.c[k], tension, b, tl)?;
-            t.holes[k] = [b[0] - st.hole[0], b[1] - st.hole[1]];
-            t.ends[k] = frame.then(st.end.x, st.end.y, st.end.theta);
+            let (end, hole, _) = match states.as_deref_mut() {
+                Some(st) => f.march(&c.c[k], tension, b, tl, &mut st[k].q)?,
+                None => f.march(&c.c[k], tension, b, tl, &mut scratch)?,
+            };
+            if let Some(st) = states.as_deref_mut() {
+                (st[k].end, st[k].hole, st[k].tangent) = (end, hole, None);
+            }
+            t.holes[k] = [b[0] - hole[0], b[1] - hole[1]];
+            t.ends[k] = frame.then(end.x, end.y, end.theta);
             t.lumps[k] = f.lumps_of(&frame, &t.ends[k]);
-            t.states[k] = st;
         }
         let hinge_end = t.ends[k];
         let ql = f.link_q(tension, f.link_load(k, &hinge_end, tip_load, grav(k + 1)).map(|l| (&hinge_end, l)));
@@ -272,7 +274,17 @@ pub(super) fn newton_coupled<R: Real>(
 ) -> Result<([JointState<R>; MAX_JOINTS], [R; 2], u32), Error> {
     let n = f.p.n;
     let mut x = straight_unknowns(f);
-    let mut eq = Coupled { f, c, tension: R::zero(), force: [R::zero(); 2], weight: R::zero(), traces: [Trace::new(f); 3], jac: None };
+    let mut eq = Coupled {
+        f,
+        c,
+        tension: R::zero(),
+        force: [R::zero(); 2],
+        weight: R::zero(),
+        states: [[f.straight(); MAX_JOINTS]; 3],
+        traces: [Trace::new(); 3],
+        jac: [[R::zero(); COUPLED]; COUPLED],
+        jac_at: None,
+    };
     let mut iters = 0u32;
     let mut result = None;
     let opts_for = |left: u32| SolveOptions::new(tol, f.resolution() * R::from_u32(n as u32), left);
@@ -282,13 +294,13 @@ pub(super) fn newton_coupled<R: Real>(
         eq.weight = to;
         let mut xt = x;
         let left = max_iter.saturating_sub(iters);
-        let carried = eq.jac.is_some();
+        let carried = eq.jac_at.is_some();
         let mut run = newton::solve(&mut eq, &mut xt, &opts_for(left));
         if run.is_err() && carried {
             // Broyden's estimate may be what failed: once more from the step's start on forward
             // differences
             iters += run.as_ref().err().map_or(0, |f| f.iterations());
-            eq.jac = None;
+            eq.jac_at = None;
             xt = x;
             run = newton::solve(&mut eq, &mut xt, &opts_for(max_iter.saturating_sub(iters)));
         }
@@ -296,14 +308,14 @@ pub(super) fn newton_coupled<R: Real>(
             // each accepted step stays on the physical branch: no joint turns by more than
             // tension::same_branch's bound nor its hole jumps (past the branch's end Newton can
             // land on a coiled equilibrium of the coupled system: refused, the step halved)
-            Ok((rep, slot)) if !same_branch(f, result.as_ref(), &eq.traces[slot].states) => {
+            Ok((rep, slot)) if !same_branch(f, result.as_ref(), &eq.states[slot]) => {
                 iters += rep.iterations;
                 Err(if iters >= max_iter { Step::Stop(None) } else { Step::Retry(None) })
             }
             Ok((rep, slot)) => {
                 iters += rep.iterations;
                 x = xt;
-                result = Some(eq.traces[slot].states);
+                result = Some(eq.states[slot]);
                 Ok(())
             }
             Err(fail) => {
