@@ -3,6 +3,7 @@
 //! distal centroid solved together by damped Newton under load continuation. Not the
 //! tension-alone solve (`tension`).
 
+use super::gravity::Weights;
 use super::{Compliances, Finger, Heading, JointState, MarchError, COUPLED};
 use crate::error::Error;
 use crate::params::{MAX_JOINTS, MAX_SUB};
@@ -20,6 +21,8 @@ struct Coupled<'a, R> {
     force: [R; 2],
     /// The weight's share of its full value (the load continuation's factor).
     weight: R,
+    /// The finger's weight (`Finger::weights`, once per solve).
+    w: Option<Weights<R>>,
     /// Each slot's marched states and its evaluation (`Trace`: where a forward difference resumes).
     states: [[JointState<R>; MAX_JOINTS]; 3],
     traces: [Trace<R>; 3],
@@ -38,7 +41,7 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
     }
     fn residual(&mut self, x: &[R; COUPLED], slot: usize) -> Result<[R; COUPLED], MarchError> {
         let (t, st) = (&mut self.traces[slot], &mut self.states[slot]);
-        coupled_eval(self.f, self.c, self.tension, self.force, self.weight, x, (0, false), t, Some(st))
+        coupled_eval(self.f, self.c, self.tension, self.force, (self.w.as_ref(), self.weight), x, (0, false), t, Some(st))
     }
     fn jacobian(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
         let dim = self.dim();
@@ -90,7 +93,7 @@ impl<R: Real> Coupled<'_, R> {
             let mut xp = *x;
             xp[i] += h;
             let mut t = self.traces[slot];
-            let rp = coupled_eval(self.f, self.c, self.tension, self.force, self.weight, &xp, enters_at(n, i), &mut t, None)?;
+            let rp = coupled_eval(self.f, self.c, self.tension, self.force, (self.w.as_ref(), self.weight), &xp, enters_at(n, i), &mut t, None)?;
             for row in 0..dim {
                 self.jac[row][i] = (rp[row] - r[row]) / h;
             }
@@ -103,7 +106,7 @@ impl<R: Real> Coupled<'_, R> {
 /// distal centroid.
 pub(super) fn coupled_dim<R: Real>(f: &Finger<R>) -> usize {
     let n = f.p.n;
-    2 * n + 2 + if f.weights().is_some() { 2 * n } else { 0 }
+    2 * n + 2 + if f.p.has_gravity() { 2 * n } else { 0 }
 }
 
 /// The coupled system's start at the straight finger (holes, tip, centroids).
@@ -158,7 +161,7 @@ pub(super) fn coupled_residual<R: Real>(
     x: &[R; COUPLED],
 ) -> Result<([R; COUPLED], [JointState<R>; MAX_JOINTS]), MarchError> {
     let mut states = [f.straight(); MAX_JOINTS];
-    let r = coupled_eval(f, c, tension, force, weight, x, (0, false), &mut Trace::new(), Some(&mut states))?;
+    let r = coupled_eval(f, c, tension, force, (f.weights().as_ref(), weight), x, (0, false), &mut Trace::new(), Some(&mut states))?;
     Ok((r, states))
 }
 
@@ -191,7 +194,7 @@ fn coupled_eval<R: Real>(
     c: &Compliances<R>,
     tension: R,
     force: [R; 2],
-    weight: R,
+    (w, weight): (Option<&Weights<R>>, R),
     x: &[R; COUPLED],
     from: (usize, bool),
     t: &mut Trace<R>,
@@ -199,9 +202,8 @@ fn coupled_eval<R: Real>(
 ) -> Result<[R; COUPLED], MarchError> {
     let n = f.p.n;
     let tip = [x[2 * n], x[2 * n + 1]];
-    let w = f.weights();
     let centroid = |k: usize| [x[2 * n + 2 + 2 * k], x[2 * n + 3 + 2 * k]];
-    let grav = |k: usize| w.as_ref().map(|w| (w, weight, centroid(k.min(n - 1))));
+    let grav = |k: usize| w.map(|w| (w, weight, centroid(k.min(n - 1))));
     let tip_load = Some((force, tip));
     // the sub-element displacements where no state is kept
     let mut scratch = [[R::zero(); 3]; MAX_SUB];
@@ -233,7 +235,7 @@ fn coupled_eval<R: Real>(
     let end = t.frames[n];
     r[2 * n] = tip[0] - end.pose.x;
     r[2 * n + 1] = tip[1] - end.pose.y;
-    if let Some(w) = &w {
+    if let Some(w) = w {
         let now = w.centroids(n, &t.lumps);
         for k in 0..n {
             let c = centroid(k);
@@ -280,6 +282,7 @@ pub(super) fn newton_coupled<R: Real>(
         tension: R::zero(),
         force: [R::zero(); 2],
         weight: R::zero(),
+        w: f.weights(),
         states: [[f.straight(); MAX_JOINTS]; 3],
         traces: [Trace::new(); 3],
         jac: [[R::zero(); COUPLED]; COUPLED],
