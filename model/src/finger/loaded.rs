@@ -37,11 +37,13 @@ struct Coupled<'a, R> {
 impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
     type Refusal = MarchError;
     fn dim(&self) -> usize {
-        coupled_dim(self.f)
+        coupled_dim(self.f) - if self.tipless() { 2 } else { 0 }
     }
     fn residual(&mut self, x: &[R; COUPLED], slot: usize) -> Result<[R; COUPLED], MarchError> {
+        let full = self.unpack(x);
         let (t, st) = (&mut self.traces[slot], &mut self.states[slot]);
-        coupled_eval(self.f, self.c, self.tension, self.force, (self.w.as_ref(), self.weight), x, (0, false), t, Some(st))
+        let r = coupled_eval(self.f, self.c, self.tension, self.force, (self.w.as_ref(), self.weight), &full, (0, false), t, Some(st))?;
+        Ok(self.pack(&r))
     }
     fn jacobian(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
         let dim = self.dim();
@@ -64,36 +66,58 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
             }
             None => self.forward_difference(x, r, slot)?,
         }
-        // without a tip force the tip is no load: its columns are the identity's, exactly
-        if self.force == [R::zero(); 2] {
-            let n = self.f.p.n;
-            for i in 2 * n..2 * n + 2 {
-                for row in 0..dim {
-                    self.jac[row][i] = if row == i { R::one() } else { R::zero() };
-                }
-            }
-        }
         self.jac_at = Some((*x, *r));
         Ok(self.jac)
     }
 }
 
 impl<R: Real> Coupled<'_, R> {
-    /// Forward differences of the residual at `x` (evaluated into `slot`) into `jac`, each
-    /// column's evaluation resumed where its unknown enters the chain (`enters_at`); a tip
-    /// without a force has no column (`jacobian` sets it).
+    /// Without a tip force the tip loads nothing: Newton's unknowns and residual leave it out
+    /// (the holes, then the centroids; `pack`, `unpack`), and the answer's tip is the chain's.
+    fn tipless(&self) -> bool {
+        self.force == [R::zero(); 2]
+    }
+
+    /// The coupled unknowns (or residual) as Newton's: without the tip's two when `tipless`.
+    fn pack(&self, v: &[R; COUPLED]) -> [R; COUPLED] {
+        let n = self.f.p.n;
+        if !self.tipless() {
+            return *v;
+        }
+        core::array::from_fn(|i| if i < 2 * n { v[i] } else { v.get(i + 2).copied().unwrap_or(R::zero()) })
+    }
+
+    /// Newton's unknowns as the coupled ones (`pack`'s inverse; the tip 0: it loads nothing).
+    fn unpack(&self, v: &[R; COUPLED]) -> [R; COUPLED] {
+        let n = self.f.p.n;
+        if !self.tipless() {
+            return *v;
+        }
+        core::array::from_fn(|i| {
+            if i < 2 * n {
+                v[i]
+            } else if i < 2 * n + 2 {
+                R::zero()
+            } else {
+                v[i - 2]
+            }
+        })
+    }
+
+    /// Forward differences of the residual at Newton's `x` (evaluated into `slot`) into `jac`,
+    /// each column's evaluation resumed where its unknown enters the chain (`enters_at`).
     fn forward_difference(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<(), MarchError> {
         let (n, dim) = (self.f.p.n, self.dim());
         let h = R::from_f64(R::SQRT_EPS) * (self.f.p.hinge_len() + self.f.p.e);
-        let no_tip_force = self.force == [R::zero(); 2];
+        let full = self.unpack(x);
         for i in 0..dim {
-            if no_tip_force && (i == 2 * n || i == 2 * n + 1) {
-                continue;
-            }
-            let mut xp = *x;
-            xp[i] += h;
+            // the unknown's index among the coupled ones
+            let at = if self.tipless() && i >= 2 * n { i + 2 } else { i };
+            let mut xp = full;
+            xp[at] += h;
             let mut t = self.traces[slot];
-            let rp = coupled_eval(self.f, self.c, self.tension, self.force, (self.w.as_ref(), self.weight), &xp, enters_at(n, i), &mut t, None)?;
+            let rp = coupled_eval(self.f, self.c, self.tension, self.force, (self.w.as_ref(), self.weight), &xp, enters_at(n, at), &mut t, None)?;
+            let rp = self.pack(&rp);
             for row in 0..dim {
                 self.jac[row][i] = (rp[row] - r[row]) / h;
             }
@@ -204,7 +228,7 @@ fn coupled_eval<R: Real>(
     let tip = [x[2 * n], x[2 * n + 1]];
     let centroid = |k: usize| [x[2 * n + 2 + 2 * k], x[2 * n + 3 + 2 * k]];
     let grav = |k: usize| w.map(|w| (w, weight, centroid(k.min(n - 1))));
-    let tip_load = Some((force, tip));
+    let tip_load = if force == [R::zero(); 2] { None } else { Some((force, tip)) };
     // the sub-element displacements where no state is kept
     let mut scratch = [[R::zero(); 3]; MAX_SUB];
     for k in from.0..n {
@@ -295,7 +319,7 @@ pub(super) fn newton_coupled<R: Real>(
         eq.tension = tension * to;
         eq.force = [force[0] * to, force[1] * to];
         eq.weight = to;
-        let mut xt = x;
+        let mut xt = eq.pack(&x);
         let left = max_iter.saturating_sub(iters);
         let carried = eq.jac_at.is_some();
         let mut run = newton::solve(&mut eq, &mut xt, &opts_for(left));
@@ -304,7 +328,7 @@ pub(super) fn newton_coupled<R: Real>(
             // differences
             iters += run.as_ref().err().map_or(0, |f| f.iterations());
             eq.jac_at = None;
-            xt = x;
+            xt = eq.pack(&x);
             run = newton::solve(&mut eq, &mut xt, &opts_for(max_iter.saturating_sub(iters)));
         }
         match run {
@@ -317,7 +341,12 @@ pub(super) fn newton_coupled<R: Real>(
             }
             Ok((rep, slot)) => {
                 iters += rep.iterations;
-                x = xt;
+                x = eq.unpack(&xt);
+                if eq.tipless() {
+                    // the chain's tip
+                    let end = eq.traces[slot].frames[n].pose;
+                    (x[2 * n], x[2 * n + 1]) = (end.x, end.y);
+                }
                 result = Some(eq.states[slot]);
                 Ok(())
             }
