@@ -99,6 +99,13 @@ def test_the_model_and_a_design_pickle():
     d = Design(card="Elastosil-2030", layers=12, z0=0.1)
     assert pickle.loads(pickle.dumps(d)) == d
     assert Design.from_toml(d.to_toml("a comment")) == d
+    # with its FE calibration: the 8 factors round-trip, and the model is the calibrated one
+    c = d.replace(cal=(1.36, 1.66, 1.05, 1.06, 0.82, 0.04, 1.4, -0.12))
+    assert Design.from_toml(c.to_toml()) == c and pickle.loads(pickle.dumps(c)) == c
+    assert c.finger().calibration == list(c.cal) and d.finger().calibration == [1, 1, 1, 1, 1, 0, 1, 0]
+    for bad in ("cal = [1.0, 2.0]", "cal = \"none\"", "cal = [1, 1, 1, 1, 1, 0, 1, nan]"):
+        with pytest.raises(ValueError, match="cal"):
+            Design.from_toml(d.to_toml() + bad + "\n")
     with pytest.raises(ValueError):
         Design.from_toml(d.to_toml() + "t_mni = 1.0\n")
     # a path, as a Path or as the text of one, reads the file (was a TOMLDecodeError)
@@ -149,10 +156,16 @@ def fields(line):
 
 def check_board_is_the_designs(d, send):
     """`send(lines)` -> the replies, on a board built for design `d`: `limits` is the design's
-    ceiling, `material` its card, and the console's parameters cannot raise the ceiling."""
-    grav, grav_dir, t_min, layers, lim, mat, *_, lim2 = send(
-        ["param grav", "param grav_dir", "param t_min", "param layers", "limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"]
+    ceiling, `material` its card, `cal` its FE calibration, and the console's parameters cannot
+    raise the ceiling."""
+    cal, paper, cal_paper, default, cal_default, grav, grav_dir, t_min, layers, lim, mat, *_, lim2 = send(
+        ["cal", "preset paper", "cal", "preset default", "cal", "param grav", "param grav_dir", "param t_min", "param layers", "limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"]
     )
+    # the design's calibration round-trips from its TOML into the image's `cal` (6 decimals),
+    # dropped by another finger and back with `preset default`; none without one
+    none = "ok cal=1.000000,1.000000,1.000000,1.000000,1.000000,0.000000,1.000000,0.000000"
+    assert cal == cal_default == ("ok cal=" + ",".join(f"{g:.6f}" for g in d.cal) if d.cal else none), (cal, d.cal)
+    assert cal_paper == none, cal_paper
     # the board's default finger is the design's, in the design's orientation
     assert float(t_min.split("=")[1]) == pytest.approx(d.t_min) and float(layers.split("=")[1]) == d.layers, (t_min, layers)
     assert (float(grav.split("=")[1]), float(grav_dir.split("=")[1])) == (pytest.approx(d.grav), d.grav_dir), (grav, grav_dir)
@@ -169,6 +182,7 @@ def check_board_is_the_designs(d, send):
 def test_the_design_file_builds_a_board_whose_ceiling_is_the_designs():
     path = ROOT / "designs" / "Elastosil-2030.toml"
     d = Design.load(path)
+    assert d.cal is not None, "the design file carries its FE calibration (`python -m softfinger.design calibrate`)"
     # the board's console on the host (finger-sim: the firmware's application and its
     # board.rs constants, from the same build.rs), built for this design in its own target dir
     env = {**os.environ, "FINGER_DESIGN": str(path)}
@@ -176,6 +190,18 @@ def test_the_design_file_builds_a_board_whose_ceiling_is_the_designs():
     assert out.returncode == 0, out.stderr
     program = host_target_dir(ROOT / "target" / "design", "debug") / "finger-sim"
     check_board_is_the_designs(d, lambda lines: sim_lines(program, lines))
+
+
+def test_a_design_calibration_the_model_refuses_stops_the_build(tmp_path):
+    """build.rs checks a design's `cal` as the board's `cal` does (the model builds the design's
+    finger with it): a factor below 0.1 stops the build with the reason; nothing is built."""
+    d = Design.load(ROOT / "designs" / "Elastosil-2030.toml")
+    path = tmp_path / "bad.toml"
+    path.write_text(d.replace(cal=(1.0, 1.0, 1.0, 0.05, 1.0, 0.0, 1.0, 0.0)).to_toml())
+    env = {**os.environ, "FINGER_DESIGN": str(path)}
+    out = subprocess.run(["cargo", "build", "--quiet", "-p", "finger-sim", "--target", "host-tuple", "--target-dir", "target/design"], cwd=ROOT, env=env, capture_output=True, text=True)
+    assert out.returncode != 0
+    assert "cal = [1.0, 1.0, 1.0, 0.05" in out.stderr and "the model refuses it" in out.stderr and "0.1..10" in out.stderr, out.stderr[-2000:]
 
 
 def test_the_design_file_builds_a_firmware_image_whose_limits_are_the_designs(tmp_path):

@@ -4,6 +4,9 @@
   resume a card's Optuna study (journal file out/design/studies.journal by default);
 - ``sweep --card C [--grid 7]``: the exhaustive grid, its rate and best design;
 - ``fe DESIGN.toml ... [--scheduler tcp://...] [--workers 2]``: FE-check designs on Dask;
+- ``calibrate [DESIGN.toml ...] [--from results.json]``: the designs' FE calibration factors
+  (``fe-calibrate``), written into their TOML files (``cal``), or into a report's results
+  for each card's best design, then the page and designs/<card>.toml rewritten from them;
 - ``report [--trials N] [--grid 7] [--fe-repeats 2] [--scheduler ...] [--from results.json | --fe-only results.json]``: everything, then
   docs/design.md, its figure and designs/<card>.toml.
 """
@@ -36,6 +39,9 @@ def main(argv=None) -> int:
     f.add_argument("designs", nargs="+")
     f.add_argument("--scheduler", default=None, help="a Dask scheduler's address (default: a LocalCluster)")
     f.add_argument("--workers", type=int, default=2)
+    c = sub.add_parser("calibrate", help="FE calibration factors of designs, into their TOML files (or a report's results)")
+    c.add_argument("designs", nargs="*")
+    c.add_argument("--from", dest="from_json", default=None, help="a report's results.json: calibrate each card's best design, then rewrite the page and designs/*.toml")
     r = sub.add_parser("report", help="everything, then docs/design.md, its figure and designs/<card>.toml")
     r.add_argument("--trials", type=int, default=2048)
     r.add_argument("--grid", type=int, default=7)
@@ -75,6 +81,34 @@ def main(argv=None) -> int:
         for ch in checks:
             state = "ok" if ch.ok else "FE failed: " + "; ".join(str(r.error) for r in ch.results if r.error)
             print(f"{ch.design.card}: {state}; k_yy ratio (direct): {fmt(ch.ratio('kyy'))}; model - FE, % of FE: {fmt(ch.errors()) or '-'}")
+    elif a.cmd == "calibrate":
+        from . import fe, report
+
+        refused = 0
+        for path in a.designs:
+            d = Design.load(path)
+            head = []
+            for line in Path(path).read_text().splitlines():
+                if not line.startswith("#") or line.startswith("# FE calibration"):
+                    break
+                head.append(line[1:].strip())
+            try:
+                d = d.replace(cal=fe.calibrate(d))
+            except fe.CalibrationRefused as e:
+                print(f"{path}: no FE calibration, file unchanged: {e}")
+                refused += 1
+                continue
+            Path(path).write_text(d.to_toml("\n".join(head)))
+            print(f"{path}: cal " + " ".join(f"{g:.6f}" for g in d.cal))
+        if a.from_json:
+            res = json.loads(Path(a.from_json).read_text())
+            report.calibrate(res)
+            report.write(res, root)
+            for card, c in res["cards"].items():
+                print(f"{card}: " + ("cal " + " ".join(f"{g:.6f}" for g in c["cal"]) if c.get("cal") else f"no FE calibration: {c.get('cal_refused')}"))
+        if not a.designs and not a.from_json:
+            ap.error("calibrate: design files or --from results.json")
+        return 1 if refused else 0
     elif a.cmd == "report":
         from . import report
 

@@ -42,18 +42,44 @@ def repo_root() -> Path:
     raise RuntimeError("not inside the repository: run from it, or set SOFTFINGER_FE")
 
 
-def fe_program() -> Path:
-    """The ``fe-design`` binary: ``$SOFTFINGER_FE``, else the repository's release build (built
-    here if missing: ``cargo build --release --bin fe-design`` in tools/calculix)."""
+def fe_program(name: str = "fe-design") -> Path:
+    """A tools/calculix binary (``fe-design``: ``$SOFTFINGER_FE`` if set), else the repository's
+    release build (built here if missing: ``cargo build --release --bin <name>`` in
+    tools/calculix)."""
     env = os.environ.get("SOFTFINGER_FE")
-    if env:
+    if env and name == "fe-design":
         return Path(env)
     host = subprocess.run(["rustc", "--print", "host-tuple"], capture_output=True, text=True, check=True).stdout.strip()
     root = repo_root()
-    p = root / "target" / host / "release" / "fe-design"
+    p = root / "target" / host / "release" / name
     if not p.is_file():
-        subprocess.run(["cargo", "build", "--release", "--quiet", "--bin", "fe-design"], cwd=root / "tools" / "calculix", check=True)
+        subprocess.run(["cargo", "build", "--release", "--quiet", "--bin", name], cwd=root / "tools" / "calculix", check=True)
     return p
+
+
+class CalibrationRefused(RuntimeError):
+    """The design's FE calibration leaves the range the model (and the board's ``cal``)
+    accepts: factors finite and 0.1..10 at every stack thickness. Nothing is written."""
+
+
+def calibrate(design: Design) -> tuple:
+    """The design's FE calibration factors (``fe-calibrate --card <card> --set ...``: linear
+    CalculiX unit loads on one element, 3D half width, fine mesh, without gravity as the
+    calibration is defined, docs/fidelity-fe.md): the 8 of the console's ``cal`` line, which
+    the design's TOML carries and the board built from it boots with."""
+    if shutil.which("ccx") is None:
+        raise RuntimeError("ccx not found: scripts/setup installs calculix-ccx")
+    args = [str(fe_program("fe-calibrate")), "--card", design.card]
+    for k, v in design.params().items():
+        args += ["--set", f"{k}={v!r}"]
+    out = subprocess.run(args, capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    if out.returncode != 0:
+        why = (out.stderr.strip().splitlines() or ["?"])[-1].removeprefix("error: ")
+        if "cal out of range" in why:
+            raise CalibrationRefused(why)
+        raise RuntimeError(f"fe-calibrate failed for {design}: {why}")
+    line = next(l for l in out.stdout.splitlines() if l.startswith("cal "))
+    return tuple(float(x) for x in line.split()[1:])
 
 
 @dataclass(frozen=True)

@@ -151,6 +151,7 @@ def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_pe
         cpu = sum(r.cpu_seconds for c in ch for r in c.results)
         timed.append({"workers": nw, "wall": wall, "cpu": cpu, **mach.summary(wall, cpu)})
     out["fe"] = {"kind": "3D half width, C3D20R, the coarse mesh with 16 columns per notch (`Density::coarse`, notch_cols of `fine`)", "runs": 2 * len(chosen), "timed": timed, "cores": cores, "scheduler": scheduler or "LocalCluster"}
+    calibrate(out)
     out["fe"]["checks"] = [
         {
             "design": asdict(ch.design),
@@ -163,6 +164,17 @@ def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_pe
         for ch in checks
     ]
     return out
+
+
+def calibrate(res: Dict) -> None:
+    """Each card's best design's FE calibration (``fe.calibrate``) into ``res["cards"][card]["cal"]``:
+    designs/<card>.toml carries it, and the board built from it boots with it."""
+    for c in res["cards"].values():
+        if c.get("best"):
+            try:
+                c["cal"], c["cal_refused"] = list(fe.calibrate(Design(**c["best"]["design"]))), None
+            except fe.CalibrationRefused as e:
+                c["cal"], c["cal_refused"] = None, str(e)
 
 
 def _fmt_design(d: Dict) -> str:
@@ -293,8 +305,9 @@ def write(res: Dict, root: Path) -> None:
     w("## From a design to a board\n")
     w("A design is a TOML file: `card` plus the console's parameter names (`t_min`, `a`, `e_b`, `w`, `layers`, `z0`, `v_supply`, `margin`, and the orientation the board is built for, `grav` and `grav_dir`: the board's, 9.81 m/s² hanging straight down, unless the file says otherwise; `softfinger.design.Design.to_toml`). The study judges designs without gravity (`evaluate(..., grav=, grav_dir=)` takes one). The best design per card is `designs/<card>.toml`. The firmware builds for one with\n")
     w("```sh\nFINGER_DESIGN=designs/Elastosil-2030.toml cargo build --release\n```\n")
-    w("build.rs reads the file (a relative path from the repository's top; an unknown key, a missing one, a value outside the model's range or `paper-elastic` stops the build with the reason) and writes the board constants src/board.rs includes: `BOARD_CARD`, `BOARD_Z0_MM`, `BOARD_LAYERS`, `BOARD_MARGIN`, the HV modules' `HV_FULL_SCALE_V` and `HV_LIMIT_V` (the design's supply) and `BOARD_FINGER` (the design's values, which the board's default parameters take, `preset default` too; `grav` and `grav_dir` optional, 0..20 m/s² and -180..180°, else the board's orientation). Without `FINGER_DESIGN` the constants are the paper's finger on VHB 4905, as before. On that image `material` reports the design's card, z0 and margin, and `limits` its ceiling (`vmax` = `vhold` = the design's ceiling); they stay board constants: `param v_supply`, `param margin` or `param z0` can only lower the ceiling in force, never raise it past `vhold`.\n")
-    w("Tests (`python/tests/test_design.py`, in `scripts/test`'s pytest): a 48-trial study finds a design that meets every constraint; designs the model refuses come back infeasible with their error, the other rows unchanged; a study killed (SIGKILL) mid-run resumes with every stored trial; `Finger` and `Design` pickle and round-trip; `designs/VHB-4905.toml` builds the firmware release image by the command above, which booted in QEMU answers `param` with the design's values, `material` with its card and `limits` with its ceiling, which `param` cannot raise (then the default image is built back; about two minutes, two LTO links); `designs/Elastosil-2030.toml` does the same on the board's application on the host (finger-sim, the same build.rs and board.rs constants); this page, its figure (PNG and SVG) and designs/*.toml are what `--from docs/design-results.json` writes. tools/calculix tests/tip_compliance.rs solves two stacks that nearly fill their notches (the front's).\n")
+    w("build.rs reads the file (a relative path from the repository's top; an unknown key, a missing one, a value outside the model's range or `paper-elastic` stops the build with the reason) and writes the board constants src/board.rs includes: `BOARD_CARD`, `BOARD_Z0_MM`, `BOARD_LAYERS`, `BOARD_MARGIN`, the HV modules' `HV_FULL_SCALE_V` and `HV_LIMIT_V` (the design's supply) and `BOARD_FINGER` (the design's values, which the board's default parameters take, `preset default` too; `grav` and `grav_dir` optional, 0..20 m/s² and -180..180°, else the board's orientation) and `BOARD_CAL`, the design's FE calibration. Without `FINGER_DESIGN` the constants are the paper's finger on VHB 4905, as before. On that image `material` reports the design's card, z0 and margin, and `limits` its ceiling (`vmax` = `vhold` = the design's ceiling); they stay board constants: `param v_supply`, `param margin` or `param z0` can only lower the ceiling in force, never raise it past `vhold`.\n")
+    w("**The design's FE calibration.** `cal = [h1, h2, h3, h4, ea0, ea1, ei0, ei1]` in the file (optional) are the factors of the console's `cal` (docs/fidelity-fe.md \"The calibration\"), computed for the design as `fe-calibrate` computes the default finger's (`fe-calibrate --card <card> --set <name>=<value> ...`: linear CalculiX unit loads on one element of the design, 3D half width, fine mesh, without gravity) by `python -m softfinger.design calibrate designs/<card>.toml` (or `calibrate --from docs/design-results.json` for each card's best design; `report` runs it). build.rs builds the design's finger with them as the board's `cal` does (`Finger::with_calibration`: every factor finite and within 0.1..10 at every stack thickness from the pull-in thickness to the rest thickness) and stops the build with the model's reason if it refuses them. The board boots with them: `cal` reads them, `preset default` restores them, and a `param` set of a mechanical parameter drops them as it drops the default finger's (the same rule, `Calibration::if_for`). The factors do not enter a ceiling (the hold ceiling and the thinning guard are the film's, docs/materials.md). Where the FE's element leaves that range the tool writes none and says why in the file's comment: the board runs the uncalibrated model.\n")
+    w("Tests (`python/tests/test_design.py`, in `scripts/test`'s pytest): a 48-trial study finds a design that meets every constraint; designs the model refuses come back infeasible with their error, the other rows unchanged; a study killed (SIGKILL) mid-run resumes with every stored trial; `Finger` and `Design` pickle and round-trip; `designs/VHB-4905.toml` builds the firmware release image by the command above, which booted in QEMU answers `param` with the design's values, `material` with its card and `limits` with its ceiling, which `param` cannot raise (then the default image is built back; about two minutes, two LTO links); `designs/Elastosil-2030.toml` does the same on the board's application on the host (finger-sim, the same build.rs and board.rs constants), and its `cal` reads the file's factors (dropped by `preset paper`, back with `preset default`); a `cal` the model refuses stops the build with the reason; this page, its figure (PNG and SVG) and designs/*.toml are what `--from docs/design-results.json` writes. tools/calculix tests/tip_compliance.rs solves two stacks that nearly fill their notches (the front's).\n")
     w("## Cost and benchmark\n")
     m = res["machine"]
     w(f"This machine: {m['cores']} cores (shared with other jobs while this ran: their CPU time is on record for the FE stage), {m['arch']}, Python {m['python']}. Heavy runs under `nice -n 10`.\n")
@@ -345,8 +358,10 @@ def write(res: Dict, root: Path) -> None:
         b = c["best"]
         if not b:
             continue
-        d = Design(**b["design"])
+        d = Design(**b["design"]).replace(cal=c.get("cal"))
         ch = _check_of(res, b["design"])
         fe_txt = f"FE (CalculiX, direct stiffness 1/C_yy): model {ch['ratio_kyy']['model']:.3f}x, FE {ch['ratio_kyy']['fe']:.3f}x" if ch and ch["ok"] else "FE: not checked"
         comment = f"The best design on {card} of the design study (docs/design.md; generated by `{COMMAND}`).\nk_yy ratio {b['ratio_kyy']:.3f}x, k_tt ratio {b['ratio_ktt']:.3f}x at every joint {REFERENCE_DEG:g} deg; grip {b['grip_N']:.2f} N at fmax; ceiling {b['ceiling_V']:.0f} V.\n{fe_txt}.\nBuild the board for it: FINGER_DESIGN=designs/{card}.toml cargo build --release"
+        if c.get("cal_refused"):
+            comment += f"\nNo FE calibration: {c['cal_refused']}; the board built from it runs the uncalibrated model."
         (root / "designs" / f"{card}.toml").write_text(d.to_toml(comment))
