@@ -16,7 +16,8 @@ import pytest
 
 import softfinger as sf
 from softfinger.design import CONSTRAINTS, Design, evaluate, run_study, storage_of
-from softfinger.design.study import feasible_trials
+from softfinger.design.evaluate import HORIZONTAL
+from softfinger.design.study import feasible_trials, study_name
 
 from conftest import ROOT, cargo, host_target_dir
 
@@ -32,7 +33,8 @@ def test_a_small_study_finds_a_feasible_design(tmp_path):
     assert all(c <= 0 for c in cons), cons
     # the design evaluated again: feasible, the same ratio, a real change of stiffness
     d = Design(card="Elastosil-2030", margin=0.9, **{k: (int(v) if k == "layers" else v) for k, v in best.params.items()})
-    ev = evaluate("Elastosil-2030", [d])
+    # (the study's orientation: held horizontally under its weight)
+    ev = evaluate("Elastosil-2030", [d], grav=HORIZONTAL[0], grav_dir=HORIZONTAL[1])
     assert ev.feasible[0] and ev.objectives[0, 0] == pytest.approx(best.values[0], rel=1e-12)
     assert ev.objectives[0, 0] > 1.001
     r = ev.row(0)
@@ -69,7 +71,7 @@ def test_a_killed_study_resumes_with_its_trials(tmp_path):
         if not journal.exists():
             return []
         try:
-            return optuna.load_study(study_name="design-VHB-4905", storage=storage_of(journal)).get_trials(deepcopy=False)
+            return optuna.load_study(study_name=study_name("VHB-4905", HORIZONTAL), storage=storage_of(journal)).get_trials(deepcopy=False)
         except KeyError:
             return []
 
@@ -265,3 +267,35 @@ def test_a_design_checks_figures_are_plain_numbers():
         assert figures and all(type(v) is float for v in figures.values()), figures
         assert "np.float64" not in repr(figures)
     assert ch.errors()["kyy_pct"] == pytest.approx(100 * (1 / 1.01 - 1))
+
+
+def test_the_reference_posture_is_held_under_the_fingers_weight_horizontally():
+    """The study judges a design held horizontally under its weight (`HORIZONTAL`): its
+    reference posture is the 0 V posture of the reference's tip angle (3 x 10°), held at both
+    ends of the tension interval by the inverse; a design whose weight alone bends it past that
+    is infeasible, refused at the stage `reference`."""
+    g = dict(grav=HORIZONTAL[0], grav_dir=HORIZONTAL[1])
+    # the study's best VHB design without gravity (a 0.5 mm hinge) sags past it under its weight
+    soft = Design.load(ROOT / "designs" / "VHB-4905.toml")
+    assert evaluate("VHB-4905", [soft], grip=False).feasible[0]
+    held = evaluate("VHB-4905", [soft], grip=False, **g)
+    assert not held.feasible[0] and held.error[0] == "reference:Unreachable"
+    f = soft.replace(cal=None, **g).finger()
+    assert np.degrees(f.solve(0.0, [0, 0, 0], stiffness=False).joints_rad.sum()) > 30.0
+    # a design that holds it: the 0 V end at the tension whose 0 V posture has the tip at 30°,
+    # the other end the same posture by the inverse (every joint as at 0 V)
+    d = Design(card="Elastosil-2030", t_min=0.5, a=8.7, e_b=26.0, w=10.0, layers=40, z0=0.09, v_supply=4500.0)
+    ev = evaluate("Elastosil-2030", [d], grip=False, **g)
+    assert ev.feasible[0], ev.error[0]
+    r = ev.row(0)
+    f = d.replace(**g).finger()
+    q0 = f.solve(r["tension_hi_N"], [0, 0, 0], stiffness=False).joints_rad
+    # (the inverse's 0 V end: the round trip's 0.01°)
+    assert np.degrees(q0.sum()) == pytest.approx(30.0, abs=0.01)
+    assert not np.allclose(q0, q0[0], atol=np.radians(0.5)), "the weight loads the joints unequally"
+    top = f.pose(q0, P=r["tension_lo_N"])
+    assert max(top.volts_V) == pytest.approx(r["volts_top_V"], rel=1e-3)
+    back = f.solve(r["tension_lo_N"], top.volts_V, stiffness=False).joints_rad
+    assert np.degrees(np.abs(back - q0)).max() < 0.01
+    # fmax under gravity without the grip: at least the floor (the constraint's 0)
+    assert r["fmax_N"] == 2.0 and r["c_fmax"] == 0.0

@@ -51,19 +51,26 @@ def main(argv=None) -> int:
     r.add_argument("--scheduler", default=None)
     r.add_argument("--from", dest="from_json", default=None, help="rewrite the page from a results.json, running nothing")
     r.add_argument("--fe-only", dest="fe_only", default=None, help="keep the search of a results.json, run the FE stage again")
+    for p_ in (s, g, r):
+        p_.add_argument("--grav", type=float, default=None, help="gravity, m/s² (default: evaluate.HORIZONTAL's; 0: none)")
+        p_.add_argument("--grav-dir", type=float, default=None, help="gravity's direction, degrees (default: evaluate.HORIZONTAL's, 90: held horizontally)")
     a = ap.parse_args(argv)
+    if a.cmd in ("study", "sweep", "report"):
+        from .evaluate import HORIZONTAL
+
+        orientation = (HORIZONTAL[0] if a.grav is None else a.grav, (HORIZONTAL[1] if a.grav_dir is None else a.grav_dir) if (a.grav is None or a.grav) else 0.0)
     root = repo_root()
     if a.cmd == "study":
         from .study import feasible_trials, run_study, storage_of
 
-        st = run_study(a.card, a.trials, storage_of(a.storage or root / "out" / "design" / "studies.journal"), batch=a.batch, seed=a.seed, sampler=a.sampler)
+        st = run_study(a.card, a.trials, storage_of(a.storage or root / "out" / "design" / "studies.journal"), batch=a.batch, seed=a.seed, sampler=a.sampler, orientation=orientation)
         ft = feasible_trials(st)
         best = max(ft, key=lambda t: t.values[0], default=None)
         print(f"{len(st.trials)} trials, {len(ft)} feasible" + (f"; best k_yy ratio {best.values[0]:.4f}: {best.params}" if best else ""))
     elif a.cmd == "sweep":
         from .study import sweep
 
-        sw = sweep(a.card, a.grid)
+        sw = sweep(a.card, a.grid, orientation=orientation)
         print(f"{sw.candidates:,} candidates in {sw.seconds:.1f} s ({sw.rate_per_min:,.0f}/min), {sw.feasible:,} feasible")
         ev = sw.evaluation
         if ev is not None and len(ev):
@@ -116,7 +123,7 @@ def main(argv=None) -> int:
             res = json.loads(Path(a.from_json).read_text())
         else:
             search = json.loads(Path(a.fe_only).read_text()) if a.fe_only else None
-            res = report.run(root, trials=a.trials, grid=a.grid, fe_per_card=a.fe_per_card, fe_repeats=a.fe_repeats, storage=a.storage, scheduler=a.scheduler, search=search)
+            res = report.run(root, trials=a.trials, grid=a.grid, fe_per_card=a.fe_per_card, fe_repeats=a.fe_repeats, storage=a.storage, scheduler=a.scheduler, search=search, orientation=orientation)
             out = root / "out" / "design" / "results.json"
             out.parent.mkdir(parents=True, exist_ok=True)
             out.write_text(json.dumps(res, indent=1, default=float))
