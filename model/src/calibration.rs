@@ -77,7 +77,8 @@ impl<R: Real> Calibration<R> {
     /// of [`Calibration::for_params`] for any finger (a design's, docs/design.md).
     pub fn if_for(self, p: &Params<R>, of: &Params<R>) -> Self {
         let layers = if p.layers == 0 { 0 } else { of.layers };
-        let q = Params { margin: of.margin, v_supply: of.v_supply, eps_r: of.eps_r, n_inc: of.n_inc, grav: of.grav, grav_dir: of.grav_dir, rho_b: of.rho_b, ..*p };
+        let q =
+            Params { margin: of.margin, v_supply: of.v_supply, eps_r: of.eps_r, n_inc: of.n_inc, grav: of.grav, grav_dir: of.grav_dir, rho_b: of.rho_b, ..*p };
         if q == (Params { layers, ..*of }) {
             self
         } else {

@@ -171,6 +171,11 @@ pub fn run(p: &Params<f64>, kind: Kind, d: &Density) -> Result<CalibrationRun, B
         [mg - g1 * mt, g1]
     };
     let cal = Calibration { hinge, stack_axial: line(0), stack_bending: line(1) };
-    cal.validate(p).map_err(|e| FeError::Parse(format!("calibration out of range: {e}: {cal:?}; per thickness (EA, EI): {:?}", stacks.iter().map(|s| (s.thickness_mm, s.factors)).collect::<Vec<_>>())))?;
+    cal.validate(p).map_err(|e| {
+        FeError::Parse(format!(
+            "calibration out of range: {e}: {cal:?}; per thickness (EA, EI): {:?}",
+            stacks.iter().map(|s| (s.thickness_mm, s.factors)).collect::<Vec<_>>()
+        ))
+    })?;
     Ok(CalibrationRun { kind, density: *d, cal, fe_hinge, stacks })
 }
