@@ -261,12 +261,15 @@ def test_a_design_checks_figures_are_plain_numbers():
     from softfinger.design import fe
 
     d = Design.load(ROOT / "designs" / "VHB-4905.toml")
-    results = [fe.CaseResult(c, True, joints_rad=c.model_joints_rad, direct=tuple(np.float64(x) * 1.01 for x in c.model_direct)) for c in fe.cases_of(d)]
+    results = [fe.CaseResult(c, True, tension_N=np.float64(c.tension_N) * 1.02, joints_rad=c.model_joints_rad, direct=tuple(np.float64(x) * 1.01 for x in c.model_direct)) for c in fe.cases_of(d)]
     ch = fe.DesignCheck(d, results)
     for figures in (ch.ratio("kyy"), ch.ratio("ktt"), ch.errors()):
         assert figures and all(type(v) is float for v in figures.values()), figures
         assert "np.float64" not in repr(figures)
     assert ch.errors()["kyy_pct"] == pytest.approx(100 * (1 / 1.01 - 1))
+    # the FE at its own tension for the reference's tip angle (fe-design tip_deg=)
+    assert all(c.tip_deg == pytest.approx(np.degrees(sum(c.model_joints_rad))) for c in fe.cases_of(d))
+    assert ch.errors()["tension_pct"] == pytest.approx(100 * (1 / 1.02 - 1)) and ch.errors()["posture_deg"] == 0.0
 
 
 def test_the_reference_posture_is_held_under_the_fingers_weight_horizontally():
