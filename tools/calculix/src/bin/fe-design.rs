@@ -35,7 +35,9 @@ fn main() {
                 None => usage(&format!("card {v}: one of {}", CARDS.iter().map(|c| c.name).collect::<Vec<_>>().join(", "))),
             },
             "tension" => tension = Some(v.parse::<f64>().unwrap_or_else(|_| usage("tension: a number (N)"))),
-            "tip_deg" => tip_deg = Some(v.parse::<f64>().ok().filter(|x| x.is_finite() && x.abs() < 180.0).unwrap_or_else(|| usage("tip_deg: degrees, -180..180"))),
+            "tip_deg" => {
+                tip_deg = Some(v.parse::<f64>().ok().filter(|x| x.is_finite() && x.abs() < 180.0).unwrap_or_else(|| usage("tip_deg: degrees, -180..180")))
+            }
             "stack" => {
                 stack = Some(v.split(',').map(|x| x.parse::<f64>().unwrap_or_else(|_| usage("stack: mm per joint, comma-separated"))).collect::<Vec<_>>())
             }
