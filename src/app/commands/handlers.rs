@@ -213,7 +213,8 @@ impl Commands {
         use finger_model::Error;
         match e {
             // the planner's fmax: `limits`' own figure (its table's, when it has one)
-            Error::Contact { .. } | Error::LimitPoint { .. } => match self.planner.fmax(volts) {
+            // under gravity the coupled solve's continuation can also stall there (NotConverged)
+            Error::Contact { .. } | Error::LimitPoint { .. } | Error::NotConverged { .. } => match self.planner.fmax(volts) {
                 Ok(b) if p > b.tension => Error::ForceLimit { tension: p.into(), fmax: b.tension.into() },
                 _ => e,
             },
