@@ -63,7 +63,7 @@ impl CodeScale {
 
 /// A tick's mean code in sixteenths: None for a reading not finite or negative.
 pub fn c16_of_code(code: f32) -> Option<u32> {
-    if code >= 0.0 && code <= ADC_FULL_CODE {
+    if (0.0..=ADC_FULL_CODE).contains(&code) {
         Some((code * 16.0) as u32)
     } else {
         None
