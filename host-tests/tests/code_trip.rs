@@ -161,3 +161,68 @@ fn just_under_the_over_voltage_bound_is_no_fault() {
     r.plant.inject(0, Inject::Gain((bound - 40.0) / CEILING_V)).unwrap();
     assert_eq!(r.run(8_000, [CEILING_V; HV_CHANNELS], 2_000.0), None);
 }
+
+/// The checks' own bounds, tick by tick on synthetic readings (the plant runs above show them
+/// against a board): a mean current exactly at the watchdog's code is no fault, a sixteenth of
+/// a code above it `breakdown`.
+#[test]
+fn the_current_trips_above_the_watchdogs_code_not_at_it() {
+    let s = CodeScale::new(MAX_DUTY);
+    let at = s.current_high_c16() as f32 / 16.0;
+    assert_eq!(CodeWatch::new().check(&s, 100.0, at, 10, 700, true), None);
+    assert_eq!(CodeWatch::new().check(&s, 100.0, at + 1.0 / 16.0, 10, 700, true), Some(Fault::Breakdown));
+}
+
+/// A reading exactly at the over-voltage bound, held, is no fault; a sixteenth of a code above
+/// it is `hv-mismatch` at its OVER_MS-th tick.
+#[test]
+fn over_voltage_counts_above_the_bound_not_at_it() {
+    let s = CodeScale::new(MAX_DUTY);
+    let ceiling = 431;
+    let at = s.over_bound_c16(ceiling) as f32 / 16.0;
+    let mut w = CodeWatch::new();
+    for _ in 0..500 {
+        assert_eq!(w.check(&s, at, 2048.0, ceiling, ceiling, true), None);
+    }
+    let mut w = CodeWatch::new();
+    let first = (1..=500).find(|_| w.check(&s, at + 1.0 / 16.0, 2048.0, ceiling, ceiling, true).is_some());
+    assert_eq!(first, Some(OVER_MS));
+}
+
+/// A code that does not move while the duty moves by exactly the duty of STUCK_MOVE_V is no
+/// fault; one count more is `sensor`.
+#[test]
+fn a_stuck_code_counts_when_the_duty_moved_past_the_bound_not_by_it() {
+    let s = CodeScale::new(MAX_DUTY);
+    let m = s.stuck_move_duty();
+    assert!(m > 0);
+    for (moved, want) in [(m, None), (m + 1, Some(Fault::Sensor))] {
+        let mut w = CodeWatch::new();
+        // still for 5 ticks, then one count a tick up to `moved`, the code frozen throughout
+        let got = (0..300u16).find_map(|k| w.check(&s, 300.0, 2048.0, 100 + moved.min(k.saturating_sub(5)), 700, true));
+        assert_eq!(got, want, "the duty moved by {moved} (the bound {m})");
+    }
+}
+
+/// A ceiling that drops from 5 kV to 4 kV (duty 400 to 320 of 800): the bound falls from the
+/// old one at the module's fall (MODULE_FALL_MS, 25 ms). A module falling at its own 15 ms is no
+/// fault; a reading that stays at 4.9 kV (under the old bound, past the new 4,140 V) counts from
+/// when the falling bound passes it (about 8 ms after the drop), `hv-mismatch` OVER_MS later.
+#[test]
+fn the_bound_falls_at_the_modules_fall_after_the_ceiling_drops() {
+    let s = CodeScale::new(MAX_DUTY);
+    let (hi, lo) = (400u16, 320u16);
+    let code = |v: f32| v * ADC_FULL_CODE / VMON_FULL_SCALE_V;
+    // the monitor's last quarter code alternates (a moving code: no stuck monitor)
+    let run = |after: &dyn Fn(u32) -> f32| -> Option<(u32, Fault)> {
+        let mut w = CodeWatch::new();
+        for k in 0..100u32 {
+            assert_eq!(w.check(&s, code(5_000.0) + (k % 2) as f32 * 0.25, 2048.0, hi, hi, true), None);
+        }
+        (1..=300u32).find_map(|t| w.check(&s, code(after(t)) + (t % 2) as f32 * 0.25, 2048.0, lo, lo, true).map(|f| (t, f)))
+    };
+    assert_eq!(run(&|t| 4_000.0 + 1_000.0 * (-(t as f32) / 15.0).exp()), None, "the module's own fall");
+    let (t, f) = run(&|_| 4_900.0).expect("a module that stays past the new ceiling latched nothing");
+    assert_eq!(f, Fault::HvMismatch);
+    assert!((OVER_MS + 4..=OVER_MS + 12).contains(&t), "latched {t} ms after the drop");
+}

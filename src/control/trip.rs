@@ -59,6 +59,23 @@ impl CodeScale {
     fn c16_of_duty(&self, duty: u32) -> u32 {
         ((duty as u64 * self.c16_per_duty_q16 as u64) >> 16) as u32
     }
+
+    /// The over-voltage bound of a ceiling of `duty`, sixteenths of a code: its code x (1 +
+    /// `OVER_FRAC`) + `OVER_V`'s (a reading above it counts).
+    pub fn over_bound_c16(&self, duty: u16) -> u32 {
+        let c = self.c16_of_duty(duty as u32);
+        c + ((c as u64 * self.over_frac_q16 as u64) >> 16) as u32 + self.over_v_c16
+    }
+
+    /// The current code the checks trip above (the analog watchdog's HTR), sixteenths.
+    pub fn current_high_c16(&self) -> u32 {
+        self.current_high_c16
+    }
+
+    /// The duty a stuck monitor's command must move past.
+    pub fn stuck_move_duty(&self) -> u16 {
+        self.stuck_move_duty
+    }
 }
 
 /// A tick's mean code in sixteenths: None for a reading not finite or negative.
@@ -106,8 +123,7 @@ impl CodeWatch {
         // the bound: the ceiling in force, a drop followed at the module's fall
         let c16 = ceiling_duty as u32 * 16;
         self.fall_env16 = if c16 >= self.fall_env16 { c16 } else { self.fall_env16 - (self.fall_env16 - c16) / FALL_TICKS };
-        let bound = s.c16_of_duty(self.fall_env16 / 16);
-        let bound = bound + ((bound as u64 * s.over_frac_q16 as u64) >> 16) as u32 + s.over_v_c16;
+        let bound = s.over_bound_c16((self.fall_env16 / 16) as u16);
         self.over_ms = if v > bound { self.over_ms.saturating_add(1) } else { 0 };
         if self.over_ms as u32 >= OVER_MS {
             return Some(Fault::HvMismatch);
