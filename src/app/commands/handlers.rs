@@ -91,6 +91,11 @@ impl Commands {
                 let _ = w!(r; field::FAULT_CH.after(), k + 1);
             }
         }
+        // the M3 image: no read-back fields, the fault's channel alone
+        #[cfg(m3)]
+        if let (Some(k), Some(_)) = (self.fault_ch, self.fault) {
+            let _ = w!(r; field::FAULT_CH.after(), k + 1);
+        }
         #[cfg(not(m3))]
         self.orientation(r);
     }
