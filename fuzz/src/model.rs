@@ -294,5 +294,34 @@ pub(crate) fn contact(f: &Finger<f64>, p0: f64, tension: f64, v: &[f64], refused
         let tip = c.solution.tip();
         let on = (tip.x - c.point[0]).hypot(tip.y - c.point[1]);
         assert!(on <= 1e-4 * len, "contact: tip {on:e} mm off the stop");
+        // the branch the finger reaches: a joint past ±100° only where the free posture at P0
+        // (the forward solve from rest) has one
+        let free0 = f.solve(p0, &vec![0.0; n], Method::converged()).expect("contact answered, its free posture refused");
+        let wild = 100f64.to_radians();
+        for k in 0..n {
+            let q = c.solution.joint_angle[k];
+            assert!(
+                q.abs() <= wild || free0.joint_angle[k].abs() > wild,
+                "contact P0={p0} P={tension} V={v:?}: joint {k} at {:.1} deg, free {:.1}",
+                q.to_degrees(),
+                free0.joint_angle[k].to_degrees()
+            );
+        }
+        // the stop only pushes: the force has no component along the tip's approach (the free
+        // tip's motion as the tension rises at P0, here by a forward difference of 1/32 of P0
+        // and 1/4,096 of fmax; 5 % of |F| for the difference's angle), where the free posture is
+        // not coiled past ±100° a joint (there a difference does not give the tangent)
+        let coiled = (0..n).any(|k| free0.joint_angle[k].abs() > wild);
+        if let (false, Ok(end)) = (coiled, f.fmax(&vec![0.0; n])) {
+            if let Ok(up) = f.solve(p0 + p0 / 32.0 + end.tension / 4096.0, &vec![0.0; n], Method::converged()) {
+                let d = [up.tip().x - free0.tip().x, up.tip().y - free0.tip().y];
+                let along = (c.force[0] * d[0] + c.force[1] * d[1]) / d[0].hypot(d[1]);
+                assert!(
+                    !(along > 0.05 * c.magnitude() + 1e-9 * (1.0 + tension)),
+                    "contact P0={p0} P={tension} V={v:?}: the stop pulls on the tip ({along:e} N along the approach, |F| {:e})",
+                    c.magnitude()
+                );
+            }
+        }
     }
 }

@@ -13,9 +13,16 @@ use crate::error::Error;
 use crate::params::MAX_JOINTS;
 use crate::real::Real;
 use crate::solve::continuation::{self, Step};
+use crate::solve::lu::Lu;
 use crate::solve::newton::{self, Equations};
 use crate::solve::SolveOptions;
 
+/// |det| below this fraction of the free posture's, falling by half or more in a step: near
+/// enough to a fold for det²'s secant through zero to place it.
+const NEAR_FOLD: f64 = 0.2;
+/// The longest step between the two points det²'s secant is taken over (det² is linear in λ
+/// near a fold only).
+const FOLD_SPAN: f64 = 1.0 / 256.0;
 /// Newton iterations per continuation step.
 const STEP_ITER: u32 = 30;
 /// Smallest continuation step: a step halved below it is the limit point. Every contact the
@@ -41,6 +48,8 @@ struct PinnedTip<'a, R> {
     tension: R,
     point: [R; 2],
     states: [[JointState<R>; MAX_JOINTS]; 3],
+    /// The determinant of the last Jacobian (None: none since it was cleared).
+    det: Option<R>,
 }
 
 impl<R: Real> Equations<R, COUPLED> for PinnedTip<'_, R> {
@@ -63,7 +72,9 @@ impl<R: Real> Equations<R, COUPLED> for PinnedTip<'_, R> {
         let fs = R::from_f64(R::SQRT_EPS) * (self.tension + x[2 * n].abs() + x[2 * n + 1].abs() + R::one());
         h[2 * n] = fs;
         h[2 * n + 1] = fs;
-        newton::forward_difference(self, x, r, &h)
+        let jac = newton::forward_difference(self, x, r, &h)?;
+        self.det = Some(Lu::new(&jac, self.dim()).map_or(R::zero(), |lu| lu.determinant()));
+        Ok(jac)
     }
 }
 
@@ -71,12 +82,12 @@ impl<R: Real> Equations<R, COUPLED> for PinnedTip<'_, R> {
 /// tension `p` and `volts`: the force the point exerts on the tip. Refusals: `Contact`
 /// (the links touch on the way), `LimitPoint` (the pinned equilibrium's tangent turns
 /// singular: the stop cannot be held), else `NotConverged`.
-pub(super) fn solve<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R]) -> Result<Pinned<R>, Error> {
-    solve_counted(f, free0, p, volts).0
+pub(super) fn solve<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R], approach: Option<[R; 2]>) -> Result<Pinned<R>, Error> {
+    solve_counted(f, free0, p, volts, approach).0
 }
 
 /// [`solve`] and the Newton iterations it spent, refused or not.
-fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R]) -> (Result<Pinned<R>, Error>, u32) {
+fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R], approach: Option<[R; 2]>) -> (Result<Pinned<R>, Error>, u32) {
     let n = f.p.n;
     let p0 = free0.tension;
     let v0 = free0.volts;
@@ -108,9 +119,33 @@ fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R])
         Ok(c) => c,
         Err(e) => return (Err(e), 0),
     };
-    let mut eq = PinnedTip { f, c: c0, tension: p0, point, states: [[f.straight(); MAX_JOINTS]; 3] };
+    let mut eq = PinnedTip { f, c: c0, tension: p0, point, states: [[f.straight(); MAX_JOINTS]; 3], det: None };
+    let refused_at = |lam: R, why: Option<MarchError>| {
+        let reached = (p0 + lam * (p - p0)).to_f64();
+        match why {
+            Some(MarchError::Contact) => Error::Contact { joint: 0, tension: reached },
+            _ => Error::LimitPoint { joint: 0, tension: reached },
+        }
+    };
+    // the free posture's tangent: every accepted point keeps its determinant's sign (a point
+    // past a fold of the pinned equilibrium is on a branch the finger does not reach)
+    let det0 = match eq.residual(&x, 0).and_then(|r| eq.jacobian(&x, &r, 0)) {
+        Ok(_) => eq.det.unwrap_or(R::zero()),
+        Err(why) => return (Err(refused_at(R::zero(), Some(why))), 0),
+    };
+    if !(det0 != R::zero()) {
+        return (Err(refused_at(R::zero(), None)), 0);
+    }
+    let mut last_states = free_states;
+    for k in 0..n {
+        last_states[k].hole = [x[2 * k], x[2 * k + 1]];
+    }
+    // the approach's unit direction: a force with a positive component along it pulls
+    let pull_tol = R::from_f64(R::SQRT_EPS) * (R::one() + p0 + p);
     let mut iters = 0u32;
     let mut last: Option<(R, [R; COUPLED])> = None;
+    // the last two accepted points' (λ, det): where det² reaches zero on their secant
+    let mut dets: [Option<(R, R)>; 2] = [None, None];
     let mut at = (R::zero(), x);
     let mut answer = None;
     let mut step = |from: R, to: R| -> Result<(), Step<Result<Option<MarchError>, Error>>> {
@@ -130,24 +165,71 @@ fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R])
                 }
             }
         }
-        let run = |xt: &mut [R; COUPLED], eq: &mut PinnedTip<'_, R>| newton::solve(eq, xt, &opts);
+        let run = |xt: &mut [R; COUPLED], eq: &mut PinnedTip<'_, R>| {
+            eq.det = None;
+            newton::solve(eq, xt, &opts)
+        };
         let mut outcome = run(&mut xt, &mut eq);
         if outcome.is_err() && last.is_some() {
             iters += outcome.as_ref().err().map_or(0, |f| f.iterations());
             xt = at.1;
             outcome = run(&mut xt, &mut eq);
         }
+        // a failed step whose end lies past the fold the determinants point to: the limit point
+        // (a shorter step cannot pass it)
+        let fold_within = |dets: &[Option<(R, R)>; 2]| match *dets {
+            [Some((la, da)), Some((lb, db))]
+                if R::from_f64(4.0) * db * db <= da * da
+                    && db.abs() <= R::from_f64(NEAR_FOLD) * det0.abs()
+                    && da * det0 > R::zero()
+                    && db * det0 > R::zero()
+                    && lb > la
+                    && lb - la <= R::from_f64(FOLD_SPAN) =>
+            {
+                lb + db * db * (lb - la) / (da * da - db * db) <= to
+            }
+            _ => false,
+        };
+        let failed = |why: Option<MarchError>, dets: &[Option<(R, R)>; 2]| {
+            if fold_within(dets) {
+                Step::Stop(Ok(None))
+            } else {
+                Step::Retry(Ok(why))
+            }
+        };
         match outcome {
             Ok((rep, slot)) => {
                 iters += rep.iterations;
+                // the determinant at the answer: the last Newton Jacobian's, or one there
+                let det = match eq.det {
+                    Some(d) => d,
+                    None => {
+                        let r = eq.residual(&xt, newton::SCRATCH).map_err(|w| Step::Retry(Ok(Some(w))))?;
+                        eq.jacobian(&xt, &r, newton::SCRATCH).map_err(|w| Step::Retry(Ok(Some(w))))?;
+                        eq.det.unwrap_or(R::zero())
+                    }
+                };
+                // on the branch reached from the free posture: no joint turns by more than the
+                // coupled solve's bound in a step, and the tangent keeps its sign
+                if !loaded::same_branch(f, Some(&last_states), &eq.states[slot]) {
+                    return Err(failed(None, &dets));
+                }
+                if let Some(d) = approach {
+                    let along = d[0] * xt[2 * n] + d[1] * xt[2 * n + 1];
+                    if along > pull_tol {
+                        return Err(Step::Stop(Err(Error::PullingStop { tension: eq.tension.to_f64(), force: along.to_f64() })));
+                    }
+                }
                 last = Some(at);
                 at = (to, xt);
+                last_states = eq.states[slot];
+                dets = [dets[1], Some((to, det))];
                 answer = Some(eq.states[slot]);
                 Ok(())
             }
             Err(fail) => {
                 iters += fail.iterations();
-                Err(Step::Retry(Ok(fail.refusal().copied())))
+                Err(failed(fail.refusal().copied(), &dets))
             }
         }
     };
@@ -165,13 +247,7 @@ fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R])
             }
         },
         Err((_, Err(e))) => Err(e),
-        Err((lam, Ok(why))) => {
-            let reached = (p0 + lam * (p - p0)).to_f64();
-            Err(match why {
-                Some(MarchError::Contact) => Error::Contact { joint: 0, tension: reached },
-                _ => Error::LimitPoint { joint: 0, tension: reached },
-            })
-        }
+        Err((lam, Ok(why))) => Err(refused_at(lam, why)),
     };
     (answer, iters)
 }
@@ -190,7 +266,7 @@ mod tests {
         let p = Params::<f64> { t_min: 0.0234375, a: 8.705505632961241, e: 0.6470405774008609, ..Params::paper() };
         let f = Finger::new(p).unwrap();
         let free0 = f.solve(8.909440657448953e-2, &[0.0; 3], Method::converged()).unwrap();
-        let (r, iters) = solve_counted(&f, &free0, 13.408160566953532, &[0.0, 8150.0, 0.0]);
+        let (r, iters) = solve_counted(&f, &free0, 13.408160566953532, &[0.0, 8150.0, 0.0], None);
         assert!(matches!(r, Err(Error::LimitPoint { .. })), "{:?}", r.err());
         // the budget, 2,048, and one step's two tries of 30
         assert!(iters <= 2048 + 2 * 30, "{iters} Newton iterations");
@@ -215,7 +291,7 @@ mod tests {
         };
         let f = Finger::new(p).unwrap();
         let free0 = f.solve(1.691105422117015e-2, &[0.0], Method::converged()).unwrap();
-        let (r, iters) = solve_counted(&f, &free0, 8.167500816323055e-3, &[0.0]);
+        let (r, iters) = solve_counted(&f, &free0, 8.167500816323055e-3, &[0.0], None);
         let c = r.unwrap();
         let mag = (c.force[0] * c.force[0] + c.force[1] * c.force[1]).sqrt();
         assert!((mag - 8.7459e-3).abs() < 1e-6, "{mag:e} N after {iters} iterations");
