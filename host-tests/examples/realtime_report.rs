@@ -20,7 +20,7 @@ fn main() {
     };
     // stop during the first armed pose (the branch-table build), during help, during wait 600
     arm(&mut q);
-    q.write(b"pose 10 10 10\r\nstop\r\n");
+    q.write(b"pose 9.58 11.04 12.84\r\nstop\r\n");
     q.finals(2);
     arm(&mut q);
     q.write(b"help\r\nstop\r\n");
@@ -33,7 +33,7 @@ fn main() {
     // a ramp at 100 kV/s while the long commands run
     assert_eq!(q.cmd("param slew 100000"), "ok slew=100000");
     assert_eq!(q.cmd("arm"), "ok armed=1");
-    q.write(b"volt 1 5000\r\nhelp\r\nparam\r\npose 12 12 12\r\nforce 0.3\r\ncontact 1 1.5\r\nlimits\r\nsolve 0.5 0 1000 2000\r\nstatus\r\nversion\r\n");
+    q.write(b"volt 1 5000\r\nhelp\r\nparam\r\npose 7.08 8.15 9.47\r\nforce 0.3\r\ncontact 1 1.5\r\nlimits\r\nsolve 0.5 0 1000 2000\r\nstatus\r\nversion\r\n");
     q.finals(10);
     // setpoints whose fmax is not cached yet: volt and force with a tension, limits
     q.write(b"volt all 2000\r\nforce 0.5\r\nvolt 2 4000\r\nlimits\r\n");
@@ -46,9 +46,22 @@ fn main() {
     let stops = stop_latencies(&trace);
     let worst_ticks = stops.iter().map(|s| s.0).max().unwrap_or(0);
     let fs = hv_full_scale(&trace);
-    // slew steps: a stop (all duties to 0 at once) is not one
+    // slew steps: a rise is bounded by the slew; a fall (a lowered setpoint, the voltage loop,
+    // a derate) is shown apart, a stop (all duties to 0 at once) is neither
     let ticks: Vec<[u64; 3]> = duties_per_tick(&trace);
-    let step = ticks.windows(2).filter(|w| w[1] != [0; 3]).map(max_step).max().unwrap_or(0);
+    let moves = |up: bool| {
+        ticks
+            .windows(2)
+            .filter(|w| w[1] != [0; 3])
+            .flat_map(|w| (0..3).map(move |c| if up { w[1][c].saturating_sub(w[0][c]) } else { w[0][c].saturating_sub(w[1][c]) }))
+            .max()
+            .unwrap_or(0)
+    };
+    let (rise, fall) = (moves(true), moves(false));
+    let bound = 100 * fs / 10_000 + 1;
+    if let Some((i, w)) = ticks.windows(2).enumerate().find(|(_, w)| w[1] != [0; 3] && max_step(w) > bound) {
+        eprintln!("realtime_report: a duty step past the slew's bound at tick {i}: {:?} -> {:?}", w[0], w[1]);
+    }
     let period: Vec<&str> = kv(&t, "tick_period_us").split(',').collect();
     let lat: Vec<&str> = kv(&t, "tick_latency_us").split(',').collect();
     let mut cmds: Vec<(String, f64)> =
@@ -80,7 +93,8 @@ fn main() {
     s.push_str(&format!("| control ticks counted | {} |\n", kv(&t, "ticks")));
     s.push_str(&format!("| stop: console interrupt entry to HV off, max ({} stops) | {} us |\n", kv(&t, "stops"), kv(&t, "stop_us")));
     s.push_str(&format!("| stop: control ticks between the stop line's last byte and all duties 0 (trace), worst | {worst_ticks} |\n"));
-    s.push_str(&format!("| largest HV duty step per tick at 100 kV/s (trace; bound 100 V = {} counts of {fs}, + 1) | {step} counts |\n", 100 * fs / 10_000));
+    s.push_str(&format!("| largest HV duty rise per tick at 100 kV/s (trace; bound 100 V = {} counts of {fs}, + 1) | {rise} counts |\n", 100 * fs / 10_000));
+    s.push_str(&format!("| largest HV duty fall per tick, a stop's aside (trace; a fall is not slew-bound) | {fall} counts |\n"));
     s.push_str("\nWorst command durations (the command side running the line, model solves included; replies are\n");
     s.push_str("queued, not waited for, unless the 2 KiB transmit queue is full; the control core takes the\n");
     s.push_str("setpoints at its next tick, within 1 ms):\n\n| command | worst |\n| --- | --- |\n");

@@ -54,20 +54,8 @@ fn main() {
         }
     }
     let mut p = p.unwrap_or_else(|| usage("card=<card> first"));
-    // an override only consistent with a later one (a before l) is retried after the others
-    while !sets.is_empty() {
-        let before = sets.len();
-        let mut first = None;
-        sets.retain(|(k, v)| match p.set(k, *v) {
-            Ok(()) => false,
-            Err(e) => {
-                first.get_or_insert(format!("{k}={v}: {e}"));
-                true
-            }
-        });
-        if sets.len() == before {
-            usage(&first.unwrap_or_default());
-        }
+    if let Err(e) = finger_calculix::apply_overrides(&mut p, sets) {
+        usage(&e);
     }
     let tension = tension.unwrap_or_else(|| usage("tension=<N>"));
     let stack = stack.unwrap_or_else(|| usage("stack=<mm>,<mm>,<mm>"));
