@@ -290,7 +290,12 @@ pub(crate) fn contact(f: &Finger<f64>, p0: f64, tension: f64, v: &[f64], refused
         check_finite_solution(&c.solution, "contact");
         let r = f.equilibrium_residual(&c.solution);
         let bound = equilibrium_bound(&c.solution);
-        assert!(matches!(r, Ok(r) if r <= bound), "contact P0={p0} P={tension} V={v:?}: not in equilibrium, {r:?} (bound {bound:e})");
+        // the pinned solve holds the holes and the tip to an absolute 1e-11 mm a joint's pitch:
+        // where the loads turn the softest joint by less than 1e-12 rad (tensions of 1e-84 N:
+        // fuzz/regressions/model_contact/), the whole deflection is under that tolerance and a
+        // relative imbalance is not resolved (F = 0 answers at once); there only finiteness
+        let resolved = p0.max(tension) >= 1e-12 * linear_tension(f, v);
+        assert!(!resolved || matches!(r, Ok(r) if r <= bound), "contact P0={p0} P={tension} V={v:?}: not in equilibrium, {r:?} (bound {bound:e})");
         let tip = c.solution.tip();
         let on = (tip.x - c.point[0]).hypot(tip.y - c.point[1]);
         assert!(on <= 1e-4 * len, "contact: tip {on:e} mm off the stop");
