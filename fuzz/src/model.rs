@@ -314,7 +314,7 @@ pub(crate) fn contact(f: &Finger<f64>, p0: f64, tension: f64, v: &[f64], refused
         }
         // the stop only pushes: the force has no component along the tip's approach (the free
         // tip's motion as the tension rises at P0, here by a forward difference of 1/32 of P0
-        // and 1/4,096 of fmax; 5 % of |F| for the difference's angle), where the free posture is
+        // and 1/4,096 of fmax; 5 % of |F|, and 1e-7 N a newton of tension, for the difference's angle), where the free posture is
         // not coiled past ±100° a joint (there a difference does not give the tangent)
         let coiled = (0..n).any(|k| free0.joint_angle[k].abs() > wild);
         if let (false, Ok(end)) = (coiled, f.fmax(&vec![0.0; n])) {
@@ -322,7 +322,7 @@ pub(crate) fn contact(f: &Finger<f64>, p0: f64, tension: f64, v: &[f64], refused
                 let d = [up.tip().x - free0.tip().x, up.tip().y - free0.tip().y];
                 let along = (c.force[0] * d[0] + c.force[1] * d[1]) / d[0].hypot(d[1]);
                 assert!(
-                    !(along > 0.05 * c.magnitude() + 1e-9 * (1.0 + tension)),
+                    !(along > 0.05 * c.magnitude() + 1e-7 * (1.0 + p0 + tension)),
                     "contact P0={p0} P={tension} V={v:?}: the stop pulls on the tip ({along:e} N along the approach, |F| {:e})",
                     c.magnitude()
                 );

@@ -214,8 +214,8 @@ impl<R: Real> Finger<R> {
 
     /// The tip pinned where `free0`'s tip is, at tension `p` and `volts` (`pinned::solve`).
     #[inline(always)]
-    pub(crate) fn pinned_tip(&self, free0: &Solution<R>, p: R, volts: &[R], approach: Option<[R; 2]>) -> Result<pinned::Pinned<R>, Error> {
-        pinned::solve(self, free0, p, volts, approach)
+    pub(crate) fn pinned_tip(&self, free0: &Solution<R>, p: R, volts: &[R]) -> Result<pinned::Pinned<R>, Error> {
+        pinned::solve(self, free0, p, volts)
     }
 
     /// The inputs every solve checks first.

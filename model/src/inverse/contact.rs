@@ -44,32 +44,14 @@ pub fn contact_force<R: Real>(f: &Finger<R>, p0: R, volts0: &[R], p: R, volts: &
             return Err(Error::Input { input: name, reason: "a cable cannot push: tension must be >= 0" });
         }
     }
-    let mut fmax0 = R::zero();
-    for (i, (t, v)) in [(p0, volts0), (p, volts)].into_iter().enumerate() {
+    for (t, v) in [(p0, volts0), (p, volts)] {
         let end = f.fmax(v)?;
         if t > end.tension {
             return Err(Error::ForceLimit { tension: t.to_f64(), fmax: end.tension.to_f64() });
         }
-        if i == 0 {
-            fmax0 = end.tension;
-        }
     }
     let free0 = f.solve(p0, volts0, Method::converged())?;
-    let pin = f.pinned_tip(&free0, p, volts, approach(f, &free0, fmax0)?)?;
+    let pin = f.pinned_tip(&free0, p, volts)?;
     let point = [free0.tip().x, free0.tip().y];
     Ok(Contact { point, force: pin.force, solution: pin.solution, iterations: pin.iterations })
-}
-
-/// The direction the free tip moves in as the tension rises at (P0, V0) (unit, base frame): the
-/// stop's normal, from a free solve 1/64 of P0 below it (1/4,096 of fmax above it near 0 N).
-/// The stop can only push against it; None where the tip does not move.
-fn approach<R: Real>(f: &Finger<R>, free0: &Solution<R>, fmax0: R) -> Result<Option<[R; 2]>, Error> {
-    let p0 = free0.tension;
-    let dp = (p0 / R::from_f64(64.0)).max(fmax0 / R::from_f64(4096.0));
-    let (below, p1) = if p0 >= dp + dp { (true, p0 - dp) } else { (false, p0 + dp) };
-    let other = f.solve(p1, &free0.volts[..free0.n], Method::converged())?;
-    let (a, b) = if below { (other.tip(), free0.tip()) } else { (free0.tip(), other.tip()) };
-    let d = [b.x - a.x, b.y - a.y];
-    let len = (d[0].sq() + d[1].sq()).sqrt();
-    Ok((len > R::zero()).then(|| [d[0] / len, d[1] / len]))
 }
