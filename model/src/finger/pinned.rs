@@ -5,8 +5,14 @@
 //! continuation from the free posture at (P0, V0), where F = 0, to (P, V): tension and
 //! voltages move together along λ, damped Newton (`solve::newton`, forward-difference
 //! Jacobian) at each step, steps doubled on success and halved on failure
-//! (`solve::continuation`), refused as a limit point when a step falls below [`MIN_STEP`] or the
-//! Newton iterations pass [`MAX_ITERS`] (docs/inverse.md "Contact force": what bounds the cost).
+//! (`solve::continuation`). Each accepted step stays on the branch the finger reaches (the
+//! coupled solve's `loaded::same_branch`; a step that lands elsewhere is halved) and its stop
+//! only pushes (the force along the approach, the free tip's rate at the start: else
+//! `PullingStop`). Refused as a limit point when a failed step ends past the fold that the
+//! tangent determinants of the last two accepted points place (det²'s secant through zero,
+//! close to the fold only: [`NEAR_FOLD`], [`FOLD_SPAN`]), when a step falls below [`MIN_STEP`]
+//! or the Newton iterations pass [`MAX_ITERS`] (docs/inverse.md "Contact force": what bounds
+//! the cost).
 
 use super::{loaded, Compliances, Finger, JointState, MarchError, Solution, COUPLED};
 use crate::error::Error;
@@ -48,8 +54,9 @@ struct PinnedTip<'a, R> {
     tension: R,
     point: [R; 2],
     states: [[JointState<R>; MAX_JOINTS]; 3],
-    /// The determinant of the last Jacobian (None: none since it was cleared).
-    det: Option<R>,
+    /// The last Jacobian (None: none since it was cleared; its determinant taken only at an
+    /// accepted point, not every iteration).
+    jac: Option<[[R; COUPLED]; COUPLED]>,
 }
 
 impl<R: Real> Equations<R, COUPLED> for PinnedTip<'_, R> {
@@ -73,7 +80,7 @@ impl<R: Real> Equations<R, COUPLED> for PinnedTip<'_, R> {
         h[2 * n] = fs;
         h[2 * n + 1] = fs;
         let jac = newton::forward_difference(self, x, r, &h)?;
-        self.det = Some(Lu::new(&jac, self.dim()).map_or(R::zero(), |lu| lu.determinant()));
+        self.jac = Some(jac);
         Ok(jac)
     }
 }
@@ -119,7 +126,7 @@ fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R])
         Ok(c) => c,
         Err(e) => return (Err(e), 0),
     };
-    let mut eq = PinnedTip { f, c: c0, tension: p0, point, states: [[f.straight(); MAX_JOINTS]; 3], det: None };
+    let mut eq = PinnedTip { f, c: c0, tension: p0, point, states: [[f.straight(); MAX_JOINTS]; 3], jac: None };
     let refused_at = |lam: R, why: Option<MarchError>| {
         let reached = (p0 + lam * (p - p0)).to_f64();
         match why {
@@ -127,13 +134,14 @@ fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R])
             _ => Error::LimitPoint { joint: 0, tension: reached },
         }
     };
-    // the free posture's tangent: every accepted point keeps its determinant's sign (a point
-    // past a fold of the pinned equilibrium is on a branch the finger does not reach)
+    // the free posture's tangent: the scale of the determinants that place a fold, and the
+    // approach
     let (r0, jac0) = match eq.residual(&x, 0).and_then(|r| eq.jacobian(&x, &r, 0).map(|j| (r, j))) {
         Ok(rj) => rj,
         Err(why) => return (Err(refused_at(R::zero(), Some(why))), 0),
     };
-    let det0 = eq.det.unwrap_or(R::zero());
+    let det_of = |jac: &Option<[[R; COUPLED]; COUPLED]>| jac.as_ref().and_then(|j| Lu::new(j, dim)).map_or(R::zero(), |lu| lu.determinant());
+    let det0 = det_of(&eq.jac);
     if !(det0 != R::zero()) {
         return (Err(refused_at(R::zero(), None)), 0);
     }
@@ -168,7 +176,7 @@ fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R])
             }
         }
         let run = |xt: &mut [R; COUPLED], eq: &mut PinnedTip<'_, R>| {
-            eq.det = None;
+            eq.jac = None;
             newton::solve(eq, xt, &opts)
         };
         let mut outcome = run(&mut xt, &mut eq);
@@ -203,16 +211,14 @@ fn solve_counted<R: Real>(f: &Finger<R>, free0: &Solution<R>, p: R, volts: &[R])
             Ok((rep, slot)) => {
                 iters += rep.iterations;
                 // the determinant at the answer: the last Newton Jacobian's, or one there
-                let det = match eq.det {
-                    Some(d) => d,
-                    None => {
-                        let r = eq.residual(&xt, newton::SCRATCH).map_err(|w| Step::Retry(Ok(Some(w))))?;
-                        eq.jacobian(&xt, &r, newton::SCRATCH).map_err(|w| Step::Retry(Ok(Some(w))))?;
-                        eq.det.unwrap_or(R::zero())
-                    }
-                };
+                if eq.jac.is_none() {
+                    let r = eq.residual(&xt, newton::SCRATCH).map_err(|w| Step::Retry(Ok(Some(w))))?;
+                    eq.jacobian(&xt, &r, newton::SCRATCH).map_err(|w| Step::Retry(Ok(Some(w))))?;
+                }
+                let det = det_of(&eq.jac);
                 // on the branch reached from the free posture: no joint turns by more than the
-                // coupled solve's bound in a step, and the tangent keeps its sign
+                // coupled solve's bound (`loaded::same_branch`) in a step; a step that lands
+                // elsewhere (past a fold, on another equilibrium) is halved
                 if !loaded::same_branch(f, Some(&last_states), &eq.states[slot]) {
                     return Err(failed(None, &dets));
                 }
