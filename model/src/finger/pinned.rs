@@ -34,7 +34,8 @@ const STEP_ITER: u32 = 30;
 /// Smallest continuation step: a step halved below it is the limit point. Every contact the
 /// model answers on the fuzz corpora (466) and the default and paper fingers' grids needs steps
 /// of 1/8,192 at the least; the refusals went on halving to 1/65,536 (the floor before) at up
-/// to 30 Newton iterations a try, twice (docs/inverse.md "Contact force").
+/// to 30 Newton iterations a try, twice (docs/inverse.md "Contact force"; since issue 55 the
+/// one answer that needed 1/8,192, below P0, is a pulling stop).
 const MIN_STEP: f64 = 1.0 / 8192.0;
 /// The continuation's Newton iterations, all steps together: past them the step is refused as
 /// the limit point too. The answers above take at most 1,613 (f32) and 893 (f64).
