@@ -1,7 +1,8 @@
 //! The board's design constants, every build (host ones too): `$OUT_DIR/board_design.rs`,
 //! which src/board.rs includes, from the design file `FINGER_DESIGN` names (a TOML: `card`
-//! plus the console's t_min, a, e_b, w, layers, z0, v_supply, margin, optionally grav and
-//! grav_dir; docs/design.md), or the paper's finger on VHB 4905 without it. Then the linker setup for the firmware binary
+//! plus the console's t_min, a, e_b, w, layers, z0, v_supply, margin, optionally grav,
+//! grav_dir and the design's FE calibration `cal`; docs/design.md), or the paper's finger on
+//! VHB 4905 without it. Then the linker setup for the firmware binary
 //! (target only): memory.x, cortex-m-rt's link.x, then memory-m3.x for the Cortex-M3 image
 //! (thumbv7m-none-eabi, which also gets `cfg(m3)`: stack placement and its 64 KiB / 20 KiB
 //! budget) and defmt's defmt.x (feature `log`). Host builds of the library (host-tests) need
@@ -34,7 +35,7 @@ fn design_constants() -> String {
                 pub const BOARD_CARD: &finger_model::material::Card = &finger_model::material::VHB_4905;\n\
                 pub const BOARD_Z0_MM: f32 = 0.5;\npub const BOARD_LAYERS: u32 = 4;\npub const BOARD_MARGIN: f32 = 0.9;\n\
                 pub const HV_FULL_SCALE_V: f32 = 10_000.0;\npub const HV_LIMIT_V: f32 = 10_000.0;\n\
-                pub const BOARD_FINGER: &[(&str, f32)] = &[];\n"
+                pub const BOARD_FINGER: &[(&str, f32)] = &[];\npub const BOARD_CAL: Option<[f32; 8]> = None;\n"
             .to_string();
     };
     let path = PathBuf::from(env::var("CARGO_MANIFEST_DIR").unwrap()).join(path);
@@ -42,9 +43,9 @@ fn design_constants() -> String {
     let fail = |msg: String| -> ! { panic!("FINGER_DESIGN={}: {msg}", path.display()) };
     let text = fs::read_to_string(&path).unwrap_or_else(|e| fail(e.to_string()));
     let t: toml::Table = text.parse().unwrap_or_else(|e: toml::de::Error| fail(e.to_string()));
-    let known = |k: &str| k == "card" || KEYS.iter().chain(&OPTIONAL_KEYS).any(|x| x.0 == k);
+    let known = |k: &str| k == "card" || k == "cal" || KEYS.iter().chain(&OPTIONAL_KEYS).any(|x| x.0 == k);
     if let Some(k) = t.keys().find(|k| !known(k)) {
-        fail(format!("unknown key {k}; keys: card, t_min, a, e_b, w, layers, z0, v_supply, margin (and optional grav, grav_dir)"));
+        fail(format!("unknown key {k}; keys: card, t_min, a, e_b, w, layers, z0, v_supply, margin (and optional grav, grav_dir, cal)"));
     }
     let card = t.get("card").and_then(|v| v.as_str()).unwrap_or_else(|| fail("card = \"<name>\" missing".into()));
     let Some(&(_, card_const)) = CARDS.iter().find(|c| c.0 == card) else {
@@ -86,7 +87,41 @@ fn design_constants() -> String {
         }
         s += &format!("(\"{k}\", {:?}), ", x as f32);
     }
-    s + "];\n"
+    s += "];\n";
+    s + &format!("pub const BOARD_CAL: Option<[f32; 8]> = {};\n", design_calibration(&t, card, &v, &path))
+}
+
+/// The design's `cal = [h1, h2, h3, h4, ea0, ea1, ei0, ei1]` (the design tool's FE calibration,
+/// docs/design.md) as a Rust `Option`, refused as the board refuses `cal`: the model builds the
+/// design's finger with it (`Finger::with_calibration`, f32 as on the board: factors finite and
+/// within 0.1..10 at every stack thickness) or the build stops.
+fn design_calibration(t: &toml::Table, card: &str, v: &[f64; 8], path: &std::path::Path) -> String {
+    use finger_model::{Calibration, Finger, Params};
+    let fail = |msg: String| -> ! { panic!("FINGER_DESIGN={}: {msg}", path.display()) };
+    let Some(c) = t.get("cal") else { return "None".into() };
+    let usage = "cal = [h1, h2, h3, h4, ea0, ea1, ei0, ei1] (8 numbers, the console's `cal` order)";
+    let g: Vec<f64> = match c.as_array() {
+        Some(a) if a.len() == 8 => a
+            .iter()
+            .map(|x| match x {
+                toml::Value::Float(x) => *x,
+                toml::Value::Integer(x) => *x as f64,
+                _ => fail(usage.into()),
+            })
+            .collect(),
+        _ => fail(usage.into()),
+    };
+    let g32: [f32; 8] = std::array::from_fn(|k| g[k] as f32);
+    let Some(c) = finger_model::material::cards::CARDS.iter().find(|c| c.name == card) else { fail(format!("card {card}")) };
+    let mut p = Params::<f32>::with_card(c);
+    // as `app::params::board_params` sets them (the ranges checked above)
+    for (i, &(k, _, _)) in KEYS.iter().enumerate() {
+        let _ = p.set(k, v[i] as f32 as f64);
+    }
+    if let Err(e) = Finger::with_calibration(p, Calibration::from_factors(g32)) {
+        fail(format!("cal = {g:?}: the model refuses it for this design: {e} (the board's `cal` refuses the same)"));
+    }
+    format!("Some({g32:?})")
 }
 
 fn main() {

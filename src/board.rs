@@ -36,6 +36,10 @@ pub const BOARD_MARGIN: f32 = design::BOARD_MARGIN;
 /// The design's finger (console names and values) the board's default parameters take
 /// (`app::params::board_params`); empty for the paper's finger.
 pub const BOARD_FINGER: &[(&str, f32)] = design::BOARD_FINGER;
+/// The design's FE calibration factors (`cal`'s order: h1..h4, ea0, ea1, ei0, ei1), computed
+/// for its finger by the design tool (docs/design.md "From a design to a board"): the board's
+/// default finger carries them (`app::params::calibration_for`); None: docs/model.md's rule.
+pub const BOARD_CAL: Option<[f32; 8]> = design::BOARD_CAL;
 
 /// The board's finger's orientation (issue 53): gravity on, at standard gravity, hanging
 /// straight down (`grav_dir` 0: a finger on a downward-facing gripper); off on the Cortex-M3

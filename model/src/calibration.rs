@@ -69,14 +69,26 @@ impl<R: Real> Calibration<R> {
     /// one; the silicone card's are [`Calibration::elastosil_2030`], given by name: the board's
     /// film is compiled in, and the Cortex-M3 image has no flash for a second comparison).
     pub fn for_params(p: &Params<R>) -> Self {
-        let d = Params::<R>::default();
-        let layers = if p.layers == 0 { 0 } else { d.layers };
-        let q = Params { margin: d.margin, v_supply: d.v_supply, eps_r: d.eps_r, n_inc: d.n_inc, grav: d.grav, grav_dir: d.grav_dir, rho_b: d.rho_b, ..*p };
-        if q == (Params { layers, ..d }) {
-            Self::model_md()
+        Self::model_md().if_for(p, &Params::default())
+    }
+
+    /// These factors if `p` is the finger `of` they were computed for (every parameter but
+    /// those of [`KEEPS_CALIBRATION`] equal; `layers` that finger's or 0), else none: the rule
+    /// of [`Calibration::for_params`] for any finger (a design's, docs/design.md).
+    pub fn if_for(self, p: &Params<R>, of: &Params<R>) -> Self {
+        let layers = if p.layers == 0 { 0 } else { of.layers };
+        let q =
+            Params { margin: of.margin, v_supply: of.v_supply, eps_r: of.eps_r, n_inc: of.n_inc, grav: of.grav, grav_dir: of.grav_dir, rho_b: of.rho_b, ..*p };
+        if q == (Params { layers, ..*of }) {
+            self
         } else {
             Self::none()
         }
+    }
+
+    /// The factors in `cal`'s order (h1..h4, ea0, ea1, ei0, ei1; the console's `cal` line).
+    pub fn from_factors(g: [R; 8]) -> Self {
+        Calibration { hinge: [g[0], g[1], g[2], g[3]], stack_axial: [g[4], g[5]], stack_bending: [g[6], g[7]] }
     }
 
     /// Every factor finite, and the factors at every stack thickness the parameters allow
@@ -169,6 +181,27 @@ mod tests {
         assert_eq!(Calibration::for_params(&Params::<f32>::paper()), Calibration::none());
         let paper_rule = Params { de_rule: crate::params::DeModulusRule::PaperEq3, ..d };
         assert_eq!(Calibration::for_params(&paper_rule), Calibration::none());
+    }
+
+    #[test]
+    fn a_designs_factors_belong_to_the_designs_finger_only() {
+        // `if_for`: the rule of `for_params` for any finger (a design's, build.rs `cal`)
+        let mut design = Params::<f32>::default();
+        design.set("t_min", 0.5).unwrap();
+        let cal = Calibration::from_factors([1.25, 1.15, 1.04, 1.04, 1.02, -0.04, 1.9, -0.25]);
+        assert_eq!((cal.hinge[3], cal.stack_axial[1], cal.stack_bending[0]), (1.04, -0.04, 1.9));
+        assert_eq!(cal.if_for(&design, &design), cal);
+        assert_eq!(cal.if_for(&design.without_stacks(), &design), cal);
+        let mut p = design;
+        p.set("grav_dir", 90.0).unwrap();
+        p.set("margin", 0.5).unwrap();
+        assert_eq!(cal.if_for(&p, &design), cal);
+        for (name, v) in [("t_min", 1.5), ("a", 4.0), ("layers", 3.0)] {
+            let mut p = design;
+            p.set(name, v).unwrap();
+            assert_eq!(cal.if_for(&p, &design), Calibration::none(), "{name}");
+        }
+        assert_eq!(cal.if_for(&Params::default(), &design), Calibration::none());
     }
 
     #[test]

@@ -37,8 +37,63 @@ pub const ERROR_KINDS: [&str; 14] = [
     "PullingStop",
 ];
 
-/// Which step refused (0: none).
-pub const STAGES: [&str; 6] = ["", "params", "pose", "range", "fmax", "grip"];
+/// Which step refused (0: none). `reference`: under gravity, the 0 V posture of the reference's
+/// tip angle (`reference_under_weight`).
+pub const STAGES: [&str; 7] = ["", "params", "pose", "range", "fmax", "grip", "reference"];
+
+/// The reference posture under the finger's weight: the 0 V posture whose tip angle is the
+/// reference's (the sum of `angles`), at the tension that gives it (found by bracketing and
+/// regula falsi on the forward solve). A weight alone can bend the joints unequally, so every
+/// joint at the same angle is no posture a finger under its weight reaches with one cable and
+/// stacks of a few % of authority; its tip angle is. Refused: the weight alone bends the tip past
+/// it (`Unreachable`, joint 0, needed the tip angle, min what the weight gives), or no tension
+/// up to the branch's end reaches it (the forward solve's refusal).
+fn reference_under_weight(f: &Model<R>, angles: &[R]) -> Result<([R; finger_model::params::MAX_JOINTS], R), Error> {
+    let n = f.params().n;
+    let target: R = angles[..n].iter().sum();
+    let zeros = [0.0; finger_model::params::MAX_JOINTS];
+    let tip = |t: R| -> Result<(R, [R; finger_model::params::MAX_JOINTS]), Error> {
+        let s = f.solve(t, &zeros[..n], finger_model::Method::converged())?;
+        Ok((s.joint_angle[..n].iter().sum::<R>() - target, s.joint_angle))
+    };
+    let (mut lo, mut r_lo) = (0.0, tip(0.0)?.0);
+    if r_lo >= 0.0 {
+        return Err(Error::Unreachable { joint: 0, needed: target, min: r_lo + target, max: f64::INFINITY });
+    }
+    let (mut hi, mut r_hi) = (0.25, tip(0.25)?.0);
+    while r_hi < 0.0 {
+        (lo, r_lo) = (hi, r_hi);
+        hi *= 2.0;
+        if hi > 1024.0 {
+            return Err(Error::Unreachable { joint: 0, needed: target, min: r_lo + target, max: r_lo + target });
+        }
+        r_hi = tip(hi)?.0;
+    }
+    // Illinois regula falsi on [lo, hi]: r(lo) < 0 <= r(hi)
+    let (mut side, mut best) = (0i8, (hi, r_hi));
+    for _ in 0..60 {
+        let t = (lo * r_hi - hi * r_lo) / (r_hi - r_lo);
+        let (r, q) = tip(t)?;
+        if r.abs() < 1e-12 || (hi - lo) < 1e-12 * hi {
+            return Ok((q, t));
+        }
+        best = (t, r);
+        if r < 0.0 {
+            (lo, r_lo) = (t, r);
+            if side == -1 {
+                r_hi /= 2.0;
+            }
+            side = -1;
+        } else {
+            (hi, r_hi) = (t, r);
+            if side == 1 {
+                r_lo /= 2.0;
+            }
+            side = 1;
+        }
+    }
+    Err(Error::NotConverged { iterations: 60, residual: best.1.abs() })
+}
 
 fn kind_code(e: &Error) -> u8 {
     match e {
@@ -82,7 +137,7 @@ struct Candidate([R; 8]);
 
 const NAMES: [&str; 8] = ["t_min", "a", "e_b", "w", "layers", "z0", "v_supply", "margin"];
 
-fn evaluate(base: &Params<R>, c: &Candidate, angles: &[R], grip: bool) -> Eval {
+fn evaluate(base: &Params<R>, c: &Candidate, angles: &[R], grip: bool, fmax_floor: Option<R>) -> Eval {
     let mut out = Eval::default();
     let fail = |mut out: Eval, stage: u8, e: Error| {
         out.kind = kind_code(&e);
@@ -119,6 +174,18 @@ fn evaluate(base: &Params<R>, c: &Candidate, angles: &[R], grip: bool) -> Eval {
         Err(e) => return fail(out, 1, e),
     };
     out.ceiling = f.voltage_ceiling();
+    let under_weight;
+    let angles = if f.has_weight() {
+        match reference_under_weight(&f, angles) {
+            Ok((q, _)) => {
+                under_weight = q;
+                &under_weight[..p.n]
+            }
+            Err(e) => return fail(out, 6, e),
+        }
+    } else {
+        angles
+    };
     let pose = match solve_pose(&f, angles, None) {
         Ok(s) => s,
         Err(e) => return fail(out, 2, e),
@@ -146,7 +213,14 @@ fn evaluate(base: &Params<R>, c: &Candidate, angles: &[R], grip: bool) -> Eval {
     }
     out.s_min = s_min;
     out.field_top = field;
-    let fmax = [lo, hi].iter().try_fold(R::INFINITY, |m, end| f.fmax(&end.volts[..n]).map(|b| m.min(b.tension)));
+    // under gravity fmax is a bisection of coupled solves (hundreds of ms): without the grip, a
+    // finger that holds the floor at both ends is reported at the floor (the constraint's 0:
+    // fmax >= floor); only one that does not gets its fmax (how far it falls short)
+    let holds_floor = |floor: R| [lo, hi].iter().all(|end| f.solve(floor, &end.volts[..n], finger_model::Method::converged()).is_ok());
+    let fmax = match fmax_floor {
+        Some(floor) if !grip && f.has_weight() && holds_floor(floor) => Ok(floor),
+        _ => [lo, hi].iter().try_fold(R::INFINITY, |m, end| f.fmax(&end.volts[..n]).map(|b| m.min(b.tension))),
+    };
     out.fmax = match fmax {
         Ok(t) => t,
         Err(e) => return fail(out, 4, e),
@@ -171,7 +245,9 @@ fn column(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<R>> {
 
 /// Evaluate N designs on one material card in parallel (GIL released). Every design variable
 /// is a number or an array of N (console names and units: mm, MPa, V); `angle_deg` the
-/// reference posture (every joint at this angle, degrees). Returns a dict of arrays (N,):
+/// reference posture (every joint at this angle, degrees; under gravity the 0 V posture of
+/// their tip angle, `reference_under_weight`). `fmax_floor` (N): under gravity and without the
+/// grip, a finger that holds it at both ends reports `fmax_N` = the floor (at least that). Returns a dict of arrays (N,):
 /// `kind`/`stage` (0: solved; else the index into `error_kinds`/`stages`), `ceiling_V`,
 /// `tension_N` (N, 2: the interval's ends, low = top voltage, high = 0 V), `kyy` and `ktt`
 /// (N, 2) at those ends (N/mm, N·mm/rad), `volts_top_V`, `s_min` (the thinnest stack's thickness
@@ -180,7 +256,7 @@ fn column(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<R>> {
 /// (m/s²) and `grav_dir` (degrees) the orientation every candidate is judged in (default: no
 /// gravity), refused out of range as `Finger(grav=...)` is.
 #[pyfunction]
-#[pyo3(signature = (card, t_min, a, e_b, w, layers, z0, v_supply, *, margin = None, angle_deg = 10.0, grip = true, grav = 0.0, grav_dir = 0.0))]
+#[pyo3(signature = (card, t_min, a, e_b, w, layers, z0, v_supply, *, margin = None, angle_deg = 10.0, grip = true, grav = 0.0, grav_dir = 0.0, fmax_floor = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_designs<'py>(
     py: Python<'py>,
@@ -197,6 +273,7 @@ pub fn evaluate_designs<'py>(
     grip: bool,
     grav: R,
     grav_dir: R,
+    fmax_floor: Option<R>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let c = crate::card_of(card)?;
     let mut base = Params::<R>::with_card(c);
@@ -219,7 +296,7 @@ pub fn evaluate_designs<'py>(
     }
     let angles = vec![angle_deg.to_radians(); base.n];
     let at = |i: usize| Candidate(core::array::from_fn(|j| cols[j][if cols[j].len() == 1 { 0 } else { i }]));
-    let out: Vec<Eval> = py.detach(|| (0..rows).into_par_iter().map(|i| evaluate(&base, &at(i), &angles, grip)).collect());
+    let out: Vec<Eval> = py.detach(|| (0..rows).into_par_iter().map(|i| evaluate(&base, &at(i), &angles, grip, fmax_floor)).collect());
     let d = PyDict::new(py);
     let col1 = |g: &dyn Fn(&Eval) -> R| Array1::from_shape_fn(rows, |i| g(&out[i]));
     let col2 = |g: &dyn Fn(&Eval) -> [R; 2]| numpy::ndarray::Array2::from_shape_fn((rows, 2), |(i, j)| g(&out[i])[j]);

@@ -16,7 +16,8 @@ import pytest
 
 import softfinger as sf
 from softfinger.design import CONSTRAINTS, Design, evaluate, run_study, storage_of
-from softfinger.design.study import feasible_trials
+from softfinger.design.evaluate import HORIZONTAL
+from softfinger.design.study import feasible_trials, study_name
 
 from conftest import ROOT, cargo, host_target_dir
 
@@ -32,7 +33,8 @@ def test_a_small_study_finds_a_feasible_design(tmp_path):
     assert all(c <= 0 for c in cons), cons
     # the design evaluated again: feasible, the same ratio, a real change of stiffness
     d = Design(card="Elastosil-2030", margin=0.9, **{k: (int(v) if k == "layers" else v) for k, v in best.params.items()})
-    ev = evaluate("Elastosil-2030", [d])
+    # (the study's orientation: held horizontally under its weight)
+    ev = evaluate("Elastosil-2030", [d], grav=HORIZONTAL[0], grav_dir=HORIZONTAL[1])
     assert ev.feasible[0] and ev.objectives[0, 0] == pytest.approx(best.values[0], rel=1e-12)
     assert ev.objectives[0, 0] > 1.001
     r = ev.row(0)
@@ -69,7 +71,7 @@ def test_a_killed_study_resumes_with_its_trials(tmp_path):
         if not journal.exists():
             return []
         try:
-            return optuna.load_study(study_name="design-VHB-4905", storage=storage_of(journal)).get_trials(deepcopy=False)
+            return optuna.load_study(study_name=study_name("VHB-4905", HORIZONTAL), storage=storage_of(journal)).get_trials(deepcopy=False)
         except KeyError:
             return []
 
@@ -99,6 +101,13 @@ def test_the_model_and_a_design_pickle():
     d = Design(card="Elastosil-2030", layers=12, z0=0.1)
     assert pickle.loads(pickle.dumps(d)) == d
     assert Design.from_toml(d.to_toml("a comment")) == d
+    # with its FE calibration: the 8 factors round-trip, and the model is the calibrated one
+    c = d.replace(cal=(1.36, 1.66, 1.05, 1.06, 0.82, 0.04, 1.4, -0.12))
+    assert Design.from_toml(c.to_toml()) == c and pickle.loads(pickle.dumps(c)) == c
+    assert c.finger().calibration == list(c.cal) and d.finger().calibration == [1, 1, 1, 1, 1, 0, 1, 0]
+    for bad in ("cal = [1.0, 2.0]", "cal = \"none\"", "cal = [1, 1, 1, 1, 1, 0, 1, nan]"):
+        with pytest.raises(ValueError, match="cal"):
+            Design.from_toml(d.to_toml() + bad + "\n")
     with pytest.raises(ValueError):
         Design.from_toml(d.to_toml() + "t_mni = 1.0\n")
     # a path, as a Path or as the text of one, reads the file (was a TOMLDecodeError)
@@ -149,10 +158,16 @@ def fields(line):
 
 def check_board_is_the_designs(d, send):
     """`send(lines)` -> the replies, on a board built for design `d`: `limits` is the design's
-    ceiling, `material` its card, and the console's parameters cannot raise the ceiling."""
-    grav, grav_dir, t_min, layers, lim, mat, *_, lim2 = send(
-        ["param grav", "param grav_dir", "param t_min", "param layers", "limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"]
+    ceiling, `material` its card, `cal` its FE calibration, and the console's parameters cannot
+    raise the ceiling."""
+    cal, paper, cal_paper, default, cal_default, grav, grav_dir, t_min, layers, lim, mat, *_, lim2 = send(
+        ["cal", "preset paper", "cal", "preset default", "cal", "param grav", "param grav_dir", "param t_min", "param layers", "limits", "material", "param v_supply 100000", "param margin 0.99", "param z0 2", "limits"]
     )
+    # the design's calibration round-trips from its TOML into the image's `cal` (6 decimals),
+    # dropped by another finger and back with `preset default`; none without one
+    none = "ok cal=1.000000,1.000000,1.000000,1.000000,1.000000,0.000000,1.000000,0.000000"
+    assert cal == cal_default == ("ok cal=" + ",".join(f"{g:.6f}" for g in d.cal) if d.cal else none), (cal, d.cal)
+    assert cal_paper == none, cal_paper
     # the board's default finger is the design's, in the design's orientation
     assert float(t_min.split("=")[1]) == pytest.approx(d.t_min) and float(layers.split("=")[1]) == d.layers, (t_min, layers)
     assert (float(grav.split("=")[1]), float(grav_dir.split("=")[1])) == (pytest.approx(d.grav), d.grav_dir), (grav, grav_dir)
@@ -169,6 +184,7 @@ def check_board_is_the_designs(d, send):
 def test_the_design_file_builds_a_board_whose_ceiling_is_the_designs():
     path = ROOT / "designs" / "Elastosil-2030.toml"
     d = Design.load(path)
+    assert d.cal is not None, "the design file carries its FE calibration (`python -m softfinger.design calibrate`)"
     # the board's console on the host (finger-sim: the firmware's application and its
     # board.rs constants, from the same build.rs), built for this design in its own target dir
     env = {**os.environ, "FINGER_DESIGN": str(path)}
@@ -176,6 +192,18 @@ def test_the_design_file_builds_a_board_whose_ceiling_is_the_designs():
     assert out.returncode == 0, out.stderr
     program = host_target_dir(ROOT / "target" / "design", "debug") / "finger-sim"
     check_board_is_the_designs(d, lambda lines: sim_lines(program, lines))
+
+
+def test_a_design_calibration_the_model_refuses_stops_the_build(tmp_path):
+    """build.rs checks a design's `cal` as the board's `cal` does (the model builds the design's
+    finger with it): a factor below 0.1 stops the build with the reason; nothing is built."""
+    d = Design.load(ROOT / "designs" / "Elastosil-2030.toml")
+    path = tmp_path / "bad.toml"
+    path.write_text(d.replace(cal=(1.0, 1.0, 1.0, 0.05, 1.0, 0.0, 1.0, 0.0)).to_toml())
+    env = {**os.environ, "FINGER_DESIGN": str(path)}
+    out = subprocess.run(["cargo", "build", "--quiet", "-p", "finger-sim", "--target", "host-tuple", "--target-dir", "target/design"], cwd=ROOT, env=env, capture_output=True, text=True)
+    assert out.returncode != 0
+    assert "cal = [1.0, 1.0, 1.0, 0.05" in out.stderr and "the model refuses it" in out.stderr and "0.1..10" in out.stderr, out.stderr[-2000:]
 
 
 def test_the_design_file_builds_a_firmware_image_whose_limits_are_the_designs(tmp_path):
@@ -233,9 +261,44 @@ def test_a_design_checks_figures_are_plain_numbers():
     from softfinger.design import fe
 
     d = Design.load(ROOT / "designs" / "VHB-4905.toml")
-    results = [fe.CaseResult(c, True, joints_rad=c.model_joints_rad, direct=tuple(np.float64(x) * 1.01 for x in c.model_direct)) for c in fe.cases_of(d)]
+    results = [fe.CaseResult(c, True, tension_N=np.float64(c.tension_N) * 1.02, joints_rad=c.model_joints_rad, direct=tuple(np.float64(x) * 1.01 for x in c.model_direct)) for c in fe.cases_of(d)]
     ch = fe.DesignCheck(d, results)
     for figures in (ch.ratio("kyy"), ch.ratio("ktt"), ch.errors()):
         assert figures and all(type(v) is float for v in figures.values()), figures
         assert "np.float64" not in repr(figures)
     assert ch.errors()["kyy_pct"] == pytest.approx(100 * (1 / 1.01 - 1))
+    # the FE at its own tension for the reference's tip angle (fe-design tip_deg=)
+    assert all(c.tip_deg == pytest.approx(np.degrees(sum(c.model_joints_rad))) for c in fe.cases_of(d))
+    assert ch.errors()["tension_pct"] == pytest.approx(100 * (1 / 1.02 - 1)) and ch.errors()["posture_deg"] == 0.0
+
+
+def test_the_reference_posture_is_held_under_the_fingers_weight_horizontally():
+    """The study judges a design held horizontally under its weight (`HORIZONTAL`): its
+    reference posture is the 0 V posture of the reference's tip angle (3 x 10°), held at both
+    ends of the tension interval by the inverse; a design whose weight alone bends it past that
+    is infeasible, refused at the stage `reference`."""
+    g = dict(grav=HORIZONTAL[0], grav_dir=HORIZONTAL[1])
+    # the study's best VHB design without gravity (a 0.5 mm hinge) sags past it under its weight
+    soft = Design.load(ROOT / "designs" / "VHB-4905.toml")
+    assert evaluate("VHB-4905", [soft], grip=False).feasible[0]
+    held = evaluate("VHB-4905", [soft], grip=False, **g)
+    assert not held.feasible[0] and held.error[0] == "reference:Unreachable"
+    f = soft.replace(cal=None, **g).finger()
+    assert np.degrees(f.solve(0.0, [0, 0, 0], stiffness=False).joints_rad.sum()) > 30.0
+    # a design that holds it: the 0 V end at the tension whose 0 V posture has the tip at 30°,
+    # the other end the same posture by the inverse (every joint as at 0 V)
+    d = Design(card="Elastosil-2030", t_min=0.5, a=8.7, e_b=26.0, w=10.0, layers=40, z0=0.09, v_supply=4500.0)
+    ev = evaluate("Elastosil-2030", [d], grip=False, **g)
+    assert ev.feasible[0], ev.error[0]
+    r = ev.row(0)
+    f = d.replace(**g).finger()
+    q0 = f.solve(r["tension_hi_N"], [0, 0, 0], stiffness=False).joints_rad
+    # (the inverse's 0 V end: the round trip's 0.01°)
+    assert np.degrees(q0.sum()) == pytest.approx(30.0, abs=0.01)
+    assert not np.allclose(q0, q0[0], atol=np.radians(0.5)), "the weight loads the joints unequally"
+    top = f.pose(q0, P=r["tension_lo_N"])
+    assert max(top.volts_V) == pytest.approx(r["volts_top_V"], rel=1e-3)
+    back = f.solve(r["tension_lo_N"], top.volts_V, stiffness=False).joints_rad
+    assert np.degrees(np.abs(back - q0)).max() < 0.01
+    # fmax under gravity without the grip: at least the floor (the constraint's 0)
+    assert r["fmax_N"] == 2.0 and r["c_fmax"] == 0.0

@@ -127,9 +127,17 @@ pub fn board_params<R: finger_model::Real>() -> Params<R> {
 /// docs/model.md's finger on the board's film has docs/model.md's calibration. Its hinge factors belong
 /// to the geometry; its stack factors were computed for the paper's film, and on VHB 4905 the
 /// stacks add almost nothing to the joints (docs/materials.md), so the film does not clear it.
+/// A board built from a design file with `cal` (docs/design.md) gives the design's finger the
+/// design's factors (build.rs checked them as `Finger::with_calibration` does).
 pub fn calibration_for<R: finger_model::Real>(p: &Params<R>) -> Calibration<R> {
     let d = Params::<R>::default();
     let board = board_params::<R>();
+    if let Some(g) = crate::board::BOARD_CAL {
+        let cal = Calibration::from_factors(g.map(|x| R::from_f64(x as f64))).if_for(p, &board);
+        if cal != Calibration::none() {
+            return cal;
+        }
+    }
     let film_is_the_boards = p.card == board.card && p.g == board.g && p.nu == board.nu && p.de_rule == board.de_rule;
     let mut q = *p;
     if film_is_the_boards {

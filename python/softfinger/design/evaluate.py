@@ -5,9 +5,13 @@ released) over many candidates of one card.
 Objectives (larger is better):
 
 - ``ratio_kyy``, ``ratio_ktt``: the tip stiffness k_yy (N/mm) and k_θθ (N·mm/rad), max over
-  min, at the reference posture (every joint at 10°) held by the inverse across the feasible
-  voltages: the two ends of its tension interval, one joint at the top voltage the ceiling
-  allows and the joints at 0 V (``inverse::stiffness_range``);
+  min, at the reference posture held by the inverse across the feasible voltages: the two ends
+  of its tension interval, one joint at the top voltage the ceiling allows and the joints at
+  0 V (``inverse::stiffness_range``). The reference posture: every joint at 10° without
+  gravity; under the finger's weight (the study's ``HORIZONTAL``) the 0 V posture with the same
+  tip angle (30°), at the tension that gives it: the weight loads the joints unequally, and no
+  design holds every joint at 10° horizontally (a design whose weight alone bends it past that
+  tip angle, or that no tension brings there, is refused at the stage ``reference``);
 - ``grip_N``: the grip force at fmax: the tip stopped where the posture's 0 V end puts it, the
   cable pulled to fmax (``contact``), |F| in N.
 
@@ -43,6 +47,10 @@ CONSTRAINTS = ("refused", "ceiling", "breakdown", "thinning", "fmax", "fits")
 REFERENCE_DEG = 10.0
 #: The fmax floor, N: the finger must pull at least this much before its branch ends.
 FMAX_FLOOR_N = 2.0
+#: The orientation the study judges a design in (m/s², degrees; issue 55): held horizontally,
+#: the weight bending the finger the way the cable does (``grav_dir`` 90), where a soft finger
+#: sags: the reference posture must be held under the finger's own weight.
+HORIZONTAL = (9.81, 90.0)
 
 
 @dataclass
@@ -96,7 +104,10 @@ def evaluate(card: str, inputs: Dict[str, Sequence[float]] | Sequence[Design], *
     layers, z0, v_supply; margin optional) or a sequence of Designs. `grip=False` skips the
     grip force (the costly part: about 25x the rest) and leaves that objective 0. `grav` (m/s²)
     and `grav_dir` (degrees): the orientation every candidate is judged in (default: none, the
-    study's so far; a Design's own `grav`/`grav_dir` is the board it builds)."""
+    study's so far; a Design's own `grav`/`grav_dir` is the board it builds). Under gravity
+    without the grip, `fmax_N` is the floor for a finger that holds it at both ends (the exact
+    fmax there is a bisection of coupled solves, hundreds of ms; the constraint needs only
+    fmax >= floor)."""
     if not isinstance(inputs, dict):
         designs = list(inputs)
         if any(d.card != card for d in designs):
@@ -109,7 +120,7 @@ def evaluate(card: str, inputs: Dict[str, Sequence[float]] | Sequence[Design], *
         from .space import MARGIN
 
         cols["margin"] = np.full(n, MARGIN)
-    r = _core.evaluate_designs(card, cols["t_min"], cols["a"], cols["e_b"], cols["w"], cols["layers"], cols["z0"], cols["v_supply"], margin=cols["margin"], angle_deg=reference_deg, grip=grip, grav=grav, grav_dir=grav_dir)
+    r = _core.evaluate_designs(card, cols["t_min"], cols["a"], cols["e_b"], cols["w"], cols["layers"], cols["z0"], cols["v_supply"], margin=cols["margin"], angle_deg=reference_deg, grip=grip, grav=grav, grav_dir=grav_dir, fmax_floor=fmax_floor_N)
     kind, stage = r["kind"].astype(int), r["stage"].astype(int)
     refused = kind != 0
     solved = ~refused

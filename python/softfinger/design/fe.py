@@ -42,18 +42,44 @@ def repo_root() -> Path:
     raise RuntimeError("not inside the repository: run from it, or set SOFTFINGER_FE")
 
 
-def fe_program() -> Path:
-    """The ``fe-design`` binary: ``$SOFTFINGER_FE``, else the repository's release build (built
-    here if missing: ``cargo build --release --bin fe-design`` in tools/calculix)."""
+def fe_program(name: str = "fe-design") -> Path:
+    """A tools/calculix binary (``fe-design``: ``$SOFTFINGER_FE`` if set), else the repository's
+    release build (built here if missing: ``cargo build --release --bin <name>`` in
+    tools/calculix)."""
     env = os.environ.get("SOFTFINGER_FE")
-    if env:
+    if env and name == "fe-design":
         return Path(env)
     host = subprocess.run(["rustc", "--print", "host-tuple"], capture_output=True, text=True, check=True).stdout.strip()
     root = repo_root()
-    p = root / "target" / host / "release" / "fe-design"
+    p = root / "target" / host / "release" / name
     if not p.is_file():
-        subprocess.run(["cargo", "build", "--release", "--quiet", "--bin", "fe-design"], cwd=root / "tools" / "calculix", check=True)
+        subprocess.run(["cargo", "build", "--release", "--quiet", "--bin", name], cwd=root / "tools" / "calculix", check=True)
     return p
+
+
+class CalibrationRefused(RuntimeError):
+    """The design's FE calibration leaves the range the model (and the board's ``cal``)
+    accepts: factors finite and 0.1..10 at every stack thickness. Nothing is written."""
+
+
+def calibrate(design: Design) -> tuple:
+    """The design's FE calibration factors (``fe-calibrate --card <card> --set ...``: linear
+    CalculiX unit loads on one element, 3D half width, fine mesh, without gravity as the
+    calibration is defined, docs/fidelity-fe.md): the 8 of the console's ``cal`` line, which
+    the design's TOML carries and the board built from it boots with."""
+    if shutil.which("ccx") is None:
+        raise RuntimeError("ccx not found: scripts/setup installs calculix-ccx")
+    args = [str(fe_program("fe-calibrate")), "--card", design.card]
+    for k, v in design.params().items():
+        args += ["--set", f"{k}={v!r}"]
+    out = subprocess.run(args, capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    if out.returncode != 0:
+        why = (out.stderr.strip().splitlines() or ["?"])[-1].removeprefix("error: ")
+        if "cal out of range" in why:
+            raise CalibrationRefused(why)
+        raise RuntimeError(f"fe-calibrate failed for {design}: {why}")
+    line = next(l for l in out.stdout.splitlines() if l.startswith("cal "))
+    return tuple(float(x) for x in line.split()[1:])
 
 
 @dataclass(frozen=True)
@@ -68,12 +94,16 @@ class Case:
     model_direct: tuple  # (1/C_yy N/mm, 1/C_θθ N·mm/rad), the model's
     kind: str = "3d"
     density: str = "notch"
+    #: the reference posture's tip angle, degrees: the FE runs at its own tension for it
+    #: (``fe-design tip_deg=``, the model's tension the first guess); None: at the model's
+    tip_deg: Optional[float] = None
 
 
 @dataclass
 class CaseResult:
     case: Case
     ok: bool
+    tension_N: float = 0.0  # the FE's (= the model's without tip_deg)
     joints_rad: tuple = ()
     direct: tuple = ()  # (1/C_yy, 1/C_θθ), FE
     seconds: float = 0.0
@@ -88,6 +118,8 @@ def run_case(case: Case, program: Optional[str] = None) -> CaseResult:
     d = case.design
     args = [prog, f"card={d.card}"] + [f"{k}={v}" for k, v in d.params().items()]
     args += [f"tension={case.tension_N!r}", "stack=" + ",".join(repr(float(x)) for x in case.stack_mm), f"kind={case.kind}", f"density={case.density}"]
+    if case.tip_deg is not None:
+        args.append(f"tip_deg={case.tip_deg!r}")
     t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
     out = subprocess.run(args, capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"})
     secs, r1 = time.perf_counter() - t0, resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -97,13 +129,15 @@ def run_case(case: Case, program: Optional[str] = None) -> CaseResult:
     kv = dict(line.split("=", 1) for line in out.stdout.split() if "=" in line)
     num = lambda k: [float(x) for x in kv[k].split(",")]
     c = np.array(num("compliance")).reshape(3, 3)
-    return CaseResult(case, True, joints_rad=tuple(num("joints")), direct=(1.0 / c[1, 1], 1.0 / c[2, 2]), seconds=secs, cpu_seconds=cpu, nodes=int(kv["nodes"]))
+    return CaseResult(case, True, tension_N=num("tension")[0], joints_rad=tuple(num("joints")), direct=(1.0 / c[1, 1], 1.0 / c[2, 2]), seconds=secs, cpu_seconds=cpu, nodes=int(kv["nodes"]))
 
 
-def cases_of(design: Design, *, kind: str = "3d", density: str = "notch", reference_deg: float = REFERENCE_DEG) -> List[Case]:
+def cases_of(design: Design, *, kind: str = "3d", density: str = "notch", reference_deg: float = REFERENCE_DEG, fe_tension: bool = True) -> List[Case]:
     """The two FE cases of a design: its reference posture by the model's inverse at both ends
-    of the tension interval (the ends `evaluate` takes its ratios at), without gravity as the
-    study and the FE driver's cases are."""
+    of the tension interval (the ends `evaluate` takes its ratios at), without gravity (the FE
+    check's cases have none). `fe_tension`: each end's FE at its own tension for the reference
+    posture's tip angle (the stacks at the model's thicknesses), so that both ends compare one
+    posture in the FE too; else at the model's tension."""
     f = design.replace(grav=0.0).finger()
     angles = [reference_deg] * f.n
     q = f.pose(angles, degrees=True)
@@ -112,7 +146,8 @@ def cases_of(design: Design, *, kind: str = "3d", density: str = "notch", refere
         s = f.pose(angles, P=P, degrees=True)
         sol = f.solve(P, s.volts_V)
         c = np.linalg.inv(sol.stiffness)
-        out.append(Case(design, end, P, tuple(float(x) for x in s.thickness_mm), tuple(float(x) for x in sol.joints_rad), (1.0 / c[1, 1], 1.0 / c[2, 2]), kind, density))
+        tip = float(np.degrees(np.sum(sol.joints_rad))) if fe_tension else None
+        out.append(Case(design, end, P, tuple(float(x) for x in s.thickness_mm), tuple(float(x) for x in sol.joints_rad), (1.0 / c[1, 1], 1.0 / c[2, 2]), kind, density, tip))
     return out
 
 
@@ -145,6 +180,10 @@ class DesignCheck:
             return {}
         e: Dict[str, float] = {}
         e["joint_pct"] = max((100.0 * (m / f - 1.0) for r in self.results for m, f in zip(r.case.model_joints_rad, r.joints_rad)), key=abs)
+        # the FE's posture against the reference (degrees) and its tension against the model's
+        e["posture_deg"] = max((float(np.degrees(f - m)) for r in self.results for m, f in zip(r.case.model_joints_rad, r.joints_rad)), key=abs)
+        if all(r.tension_N > 0 for r in self.results):
+            e["tension_pct"] = max((100.0 * (r.case.tension_N / r.tension_N - 1.0) for r in self.results), key=abs)
         for j, name in enumerate(("kyy", "ktt")):
             e[f"{name}_pct"] = max((100.0 * (r.case.model_direct[j] / r.direct[j] - 1.0) for r in self.results), key=abs)
             rr = self.ratio(name)

@@ -21,7 +21,7 @@ from typing import Dict, List
 import numpy as np
 
 from . import fe
-from .evaluate import CONSTRAINTS, FMAX_FLOOR_N, OBJECTIVES, REFERENCE_DEG, evaluate
+from .evaluate import CONSTRAINTS, FMAX_FLOOR_N, HORIZONTAL, OBJECTIVES, REFERENCE_DEG, evaluate
 from .space import CARDS, LINK_B_MM, MARGIN, SPACE, Design, grid_size, variables
 from .study import design_of_trial, feasible_trials, pareto_mask, run_study, storage_of, sweep
 
@@ -35,11 +35,12 @@ def _snap(d: Design) -> Design:
     return d.replace(**kw)
 
 
-def _front_rows(card: str, designs: List[Design]) -> List[Dict]:
+def _front_rows(card: str, designs: List[Design], orientation=HORIZONTAL) -> List[Dict]:
     """Model rows (objectives, constraints, outputs) of `designs`, feasible ones only."""
     if not designs:
         return []
-    ev = evaluate(card, designs)
+    g = dict(grav=orientation[0], grav_dir=orientation[1])
+    ev = evaluate(card, designs, **g)
     # a supply above the card's hold ceiling is never used: the smallest on the step that
     # reaches the ceiling gives the same finger (the same objectives), and a smaller HV module
     step = next(v for v in variables(card) if v.name == "v_supply")
@@ -51,7 +52,7 @@ def _front_rows(card: str, designs: List[Design]) -> List[Dict]:
         tidy.append(d)
     if tidy != designs:
         designs = list(dict.fromkeys(tidy))
-        ev = evaluate(card, designs)
+        ev = evaluate(card, designs, **g)
     rows = []
     for i, d in enumerate(designs):
         if ev.feasible[i]:
@@ -98,11 +99,11 @@ class _Machine:
         return {"load_before": self.loads[0], "load_mean": float(np.mean(self.loads)), "load_max": float(max(self.loads)), "machine_cpu": busy, "others_cpu": max(0.0, busy - own_cpu)}
 
 
-def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_per_card: int = 5, fe_repeats: int = 2, storage: str | None = None, scheduler: str | None = None, progress: bool = True, search: Dict | None = None) -> Dict:
+def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_per_card: int = 5, fe_repeats: int = 2, storage: str | None = None, scheduler: str | None = None, progress: bool = True, search: Dict | None = None, orientation=HORIZONTAL) -> Dict:
     """Everything the page reports, as plain data (saved to out/design/results.json).
     `search`: a previous run's results whose search (studies, sweep, front) is kept; only the
     FE stage runs again."""
-    out: Dict = {"machine": {"cores": os.cpu_count(), "python": platform.python_version(), "arch": platform.machine()}, "cards": {}}
+    out: Dict = {"machine": {"cores": os.cpu_count(), "python": platform.python_version(), "arch": platform.machine()}, "cards": {}, "orientation": list(orientation)}
     storage = storage or str(root / "out" / "design" / "studies.journal")
     chosen: List[Design] = []
     if search is not None:
@@ -113,17 +114,17 @@ def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_pe
     for card in CARDS if search is None else ():
         c: Dict = {}
         t0 = time.perf_counter()
-        st = run_study(card, trials, storage_of(storage), batch=batch, progress=progress)
+        st = run_study(card, trials, storage_of(storage), batch=batch, progress=progress, orientation=orientation)
         c["study"] = {"trials": len(st.trials), "seconds_this_run": time.perf_counter() - t0, "feasible": len(feasible_trials(st)), "storage": str(storage), "sampler": "NSGA-II", "batch": batch}
         t0 = time.perf_counter()
-        sw = sweep(card, grid, progress=progress)
+        sw = sweep(card, grid, progress=progress, orientation=orientation)
         c["sweep"] = {"candidates": sw.candidates, "seconds": sw.seconds, "feasible": sw.feasible, "per_min": sw.rate_per_min, "grid": grid}
         # the front: the study's feasible trials and the sweep's non-dominated ones
         designs = [_snap(design_of_trial(card, t)) for t in feasible_trials(st)]
         if sw.evaluation is not None:
             designs += [sw.evaluation.design(i) for i in range(len(sw.evaluation))]
         designs = list(dict.fromkeys(designs))
-        rows = _front_rows(card, designs)
+        rows = _front_rows(card, designs, orientation)
         vals = np.array([[r[k] for k in OBJECTIVES] for r in rows]) if rows else np.zeros((0, 3))
         front = pareto_mask(vals) if len(rows) else np.zeros(0, dtype=bool)
         c["all"] = [[r["ratio_kyy"], r["ratio_ktt"], r["grip_N"]] for r in rows]
@@ -151,6 +152,7 @@ def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_pe
         cpu = sum(r.cpu_seconds for c in ch for r in c.results)
         timed.append({"workers": nw, "wall": wall, "cpu": cpu, **mach.summary(wall, cpu)})
     out["fe"] = {"kind": "3D half width, C3D20R, the coarse mesh with 16 columns per notch (`Density::coarse`, notch_cols of `fine`)", "runs": 2 * len(chosen), "timed": timed, "cores": cores, "scheduler": scheduler or "LocalCluster"}
+    calibrate(out)
     out["fe"]["checks"] = [
         {
             "design": asdict(ch.design),
@@ -158,11 +160,31 @@ def run(root: Path, *, trials: int = 2048, batch: int = 64, grid: int = 7, fe_pe
             "errors": ch.errors(),
             "ratio_kyy": ch.ratio("kyy"),
             "ratio_ktt": ch.ratio("ktt"),
-            "ends": [{"end": r.case.end, "tension_N": r.case.tension_N, "ok": r.ok, "error": r.error, "seconds": r.seconds, "nodes": r.nodes, "model_direct": r.case.model_direct, "fe_direct": r.direct, "model_joints_deg": np.degrees(r.case.model_joints_rad).tolist(), "fe_joints_deg": np.degrees(r.joints_rad).tolist() if r.ok else []} for r in ch.results],
+            "ends": [{"end": r.case.end, "tension_N": r.case.tension_N, "fe_tension_N": r.tension_N, "ok": r.ok, "error": r.error, "seconds": r.seconds, "nodes": r.nodes, "model_direct": r.case.model_direct, "fe_direct": r.direct, "model_joints_deg": np.degrees(r.case.model_joints_rad).tolist(), "fe_joints_deg": np.degrees(r.joints_rad).tolist() if r.ok else []} for r in ch.results],
         }
         for ch in checks
     ]
     return out
+
+
+def calibrate(res: Dict) -> None:
+    """Each card's best design's FE calibration (``fe.calibrate``) into ``res["cards"][card]["cal"]``:
+    designs/<card>.toml carries it, and the board built from it boots with it."""
+    for c in res["cards"].values():
+        if c.get("best"):
+            try:
+                c["cal"], c["cal_refused"] = list(fe.calibrate(Design(**c["best"]["design"]))), None
+            except fe.CalibrationRefused as e:
+                c["cal"], c["cal_refused"] = None, str(e)
+
+
+def _judged(res: Dict) -> str:
+    """The sentence on the orientation the run judged its designs in."""
+    o = res.get("orientation")
+    if not o or not o[0]:
+        return "The study judges designs without gravity (`evaluate(..., grav=, grav_dir=)` takes one)."
+    return (f"The study judges designs under their own weight ({o[0]:g} m/s², `grav_dir` {o[1]:g}°: held horizontally, `evaluate.HORIZONTAL`): the reference posture is the 0 V posture of the same tip angle "
+            f"({REFERENCE_DEG:g}° a joint without gravity) at the tension that gives it, held at both ends by the inverse; a design whose weight alone bends it past that, or that cannot be held there, is infeasible.")
 
 
 def _fmt_design(d: Dict) -> str:
@@ -285,16 +307,22 @@ def write(res: Dict, root: Path) -> None:
         e = ch["errors"]
         w(f"| {d['card']} | {_fmt_design(d)} | {fill} | {obj:.3f} | yes | {e['joint_pct']:+.1f} | {e['kyy_pct']:+.1f} | {e['ktt_pct']:+.1f} | {ch['ratio_kyy']['model']:.3f} / {ch['ratio_kyy']['fe']:.3f} | {e['excess_kyy_pct']:+.0f} | {ch['ratio_ktt']['model']:.3f} / {ch['ratio_ktt']['fe']:.3f} | {e['excess_ktt_pct']:+.0f} |")
     oks = [ch for ch in f["checks"] if ch["ok"]]
+    held = [ch for ch in oks if "posture_deg" in ch["errors"]]
+    if held:
+        worst_p = max((ch["errors"]["posture_deg"] for ch in held), key=abs)
+        worst_t = max((ch["errors"]["tension_pct"] for ch in held), key=abs)
+        w(f"\nBoth ends at one posture in the FE too: each end's FE runs at its own tension for the reference posture's tip angle (`fe-design tip_deg=`: load steps around the model's tension, then secant runs to 0.01°), the stacks at the model's thicknesses. Over the {len(held)} designs, the FE's joints stand within {abs(worst_p):.2f}° of the reference posture's (worst {worst_p:+.2f}°: the tip angle is held, its split over the joints is the FE's), and the model's tension differs from the FE's by {worst_t:+.1f} % at worst (model minus FE, % of FE).\n")
     if oks:
         worst = max(abs(ch["errors"]["ratio_kyy_pct"]) for ch in oks)
         worst_t = max(abs(ch["errors"]["ratio_ktt_pct"]) for ch in oks)
         failed = len(f["checks"]) - len(oks)
         w(f"\nOver the {len(oks)} designs CalculiX solved{f' ({failed} did not converge)' if failed else ''}, the model's ratio of the direct stiffness is within {worst:.1f} % (1/C_yy) and {worst_t:.1f} % (1/C_θθ) of CalculiX's; the stiffnesses themselves differ more (the columns 1/C_yy and 1/C_θθ: the uncalibrated model on a coarse mesh), and that difference largely cancels in the ratio.\n")
     w("## From a design to a board\n")
-    w("A design is a TOML file: `card` plus the console's parameter names (`t_min`, `a`, `e_b`, `w`, `layers`, `z0`, `v_supply`, `margin`, and the orientation the board is built for, `grav` and `grav_dir`: the board's, 9.81 m/s² hanging straight down, unless the file says otherwise; `softfinger.design.Design.to_toml`). The study judges designs without gravity (`evaluate(..., grav=, grav_dir=)` takes one). The best design per card is `designs/<card>.toml`. The firmware builds for one with\n")
+    w(f"A design is a TOML file: `card` plus the console's parameter names (`t_min`, `a`, `e_b`, `w`, `layers`, `z0`, `v_supply`, `margin`, and the orientation the board is built for, `grav` and `grav_dir`: the board's, 9.81 m/s² hanging straight down, unless the file says otherwise; `softfinger.design.Design.to_toml`). {_judged(res)} The best design per card is `designs/<card>.toml`. The firmware builds for one with\n")
     w("```sh\nFINGER_DESIGN=designs/Elastosil-2030.toml cargo build --release\n```\n")
-    w("build.rs reads the file (a relative path from the repository's top; an unknown key, a missing one, a value outside the model's range or `paper-elastic` stops the build with the reason) and writes the board constants src/board.rs includes: `BOARD_CARD`, `BOARD_Z0_MM`, `BOARD_LAYERS`, `BOARD_MARGIN`, the HV modules' `HV_FULL_SCALE_V` and `HV_LIMIT_V` (the design's supply) and `BOARD_FINGER` (the design's values, which the board's default parameters take, `preset default` too; `grav` and `grav_dir` optional, 0..20 m/s² and -180..180°, else the board's orientation). Without `FINGER_DESIGN` the constants are the paper's finger on VHB 4905, as before. On that image `material` reports the design's card, z0 and margin, and `limits` its ceiling (`vmax` = `vhold` = the design's ceiling); they stay board constants: `param v_supply`, `param margin` or `param z0` can only lower the ceiling in force, never raise it past `vhold`.\n")
-    w("Tests (`python/tests/test_design.py`, in `scripts/test`'s pytest): a 48-trial study finds a design that meets every constraint; designs the model refuses come back infeasible with their error, the other rows unchanged; a study killed (SIGKILL) mid-run resumes with every stored trial; `Finger` and `Design` pickle and round-trip; `designs/VHB-4905.toml` builds the firmware release image by the command above, which booted in QEMU answers `param` with the design's values, `material` with its card and `limits` with its ceiling, which `param` cannot raise (then the default image is built back; about two minutes, two LTO links); `designs/Elastosil-2030.toml` does the same on the board's application on the host (finger-sim, the same build.rs and board.rs constants); this page, its figure (PNG and SVG) and designs/*.toml are what `--from docs/design-results.json` writes. tools/calculix tests/tip_compliance.rs solves two stacks that nearly fill their notches (the front's).\n")
+    w("build.rs reads the file (a relative path from the repository's top; an unknown key, a missing one, a value outside the model's range or `paper-elastic` stops the build with the reason) and writes the board constants src/board.rs includes: `BOARD_CARD`, `BOARD_Z0_MM`, `BOARD_LAYERS`, `BOARD_MARGIN`, the HV modules' `HV_FULL_SCALE_V` and `HV_LIMIT_V` (the design's supply) and `BOARD_FINGER` (the design's values, which the board's default parameters take, `preset default` too; `grav` and `grav_dir` optional, 0..20 m/s² and -180..180°, else the board's orientation) and `BOARD_CAL`, the design's FE calibration. Without `FINGER_DESIGN` the constants are the paper's finger on VHB 4905, as before. On that image `material` reports the design's card, z0 and margin, and `limits` its ceiling (`vmax` = `vhold` = the design's ceiling); they stay board constants: `param v_supply`, `param margin` or `param z0` can only lower the ceiling in force, never raise it past `vhold`.\n")
+    w("**The design's FE calibration.** `cal = [h1, h2, h3, h4, ea0, ea1, ei0, ei1]` in the file (optional) are the factors of the console's `cal` (docs/fidelity-fe.md \"The calibration\"), computed for the design as `fe-calibrate` computes the default finger's (`fe-calibrate --card <card> --set <name>=<value> ...`: linear CalculiX unit loads on one element of the design, 3D half width, fine mesh, without gravity) by `python -m softfinger.design calibrate designs/<card>.toml` (or `calibrate --from docs/design-results.json` for each card's best design; `report` runs it). build.rs builds the design's finger with them as the board's `cal` does (`Finger::with_calibration`: every factor finite and within 0.1..10 at every stack thickness from the pull-in thickness to the rest thickness) and stops the build with the model's reason if it refuses them. The board boots with them: `cal` reads them, `preset default` restores them, and a `param` set of a mechanical parameter drops them as it drops the default finger's (the same rule, `Calibration::if_for`). The factors do not enter a ceiling (the hold ceiling and the thinning guard are the film's, docs/materials.md). Where the FE's element leaves that range the tool writes none and says why in the file's comment: the board runs the uncalibrated model.\n")
+    w("Tests (`python/tests/test_design.py`, in `scripts/test`'s pytest): a 48-trial study finds a design that meets every constraint; designs the model refuses come back infeasible with their error, the other rows unchanged; a study killed (SIGKILL) mid-run resumes with every stored trial; `Finger` and `Design` pickle and round-trip; `designs/VHB-4905.toml` builds the firmware release image by the command above, which booted in QEMU answers `param` with the design's values, `material` with its card and `limits` with its ceiling, which `param` cannot raise (then the default image is built back; about two minutes, two LTO links); `designs/Elastosil-2030.toml` does the same on the board's application on the host (finger-sim, the same build.rs and board.rs constants), and its `cal` reads the file's factors (dropped by `preset paper`, back with `preset default`); a `cal` the model refuses stops the build with the reason; held horizontally under its weight, the study's best VHB design without gravity sags past the reference's tip angle (infeasible, stage `reference`) while a stiffer one holds it at both ends; this page, its figure (PNG and SVG) and designs/*.toml are what `--from docs/design-results.json` writes. tools/calculix tests/tip_compliance.rs solves two stacks that nearly fill their notches (the front's).\n")
     w("## Cost and benchmark\n")
     m = res["machine"]
     w(f"This machine: {m['cores']} cores (shared with other jobs while this ran: their CPU time is on record for the FE stage), {m['arch']}, Python {m['python']}. Heavy runs under `nice -n 10`.\n")
@@ -345,8 +373,10 @@ def write(res: Dict, root: Path) -> None:
         b = c["best"]
         if not b:
             continue
-        d = Design(**b["design"])
+        d = Design(**b["design"]).replace(cal=c.get("cal"))
         ch = _check_of(res, b["design"])
         fe_txt = f"FE (CalculiX, direct stiffness 1/C_yy): model {ch['ratio_kyy']['model']:.3f}x, FE {ch['ratio_kyy']['fe']:.3f}x" if ch and ch["ok"] else "FE: not checked"
         comment = f"The best design on {card} of the design study (docs/design.md; generated by `{COMMAND}`).\nk_yy ratio {b['ratio_kyy']:.3f}x, k_tt ratio {b['ratio_ktt']:.3f}x at every joint {REFERENCE_DEG:g} deg; grip {b['grip_N']:.2f} N at fmax; ceiling {b['ceiling_V']:.0f} V.\n{fe_txt}.\nBuild the board for it: FINGER_DESIGN=designs/{card}.toml cargo build --release"
+        if c.get("cal_refused"):
+            comment += f"\nNo FE calibration: {c['cal_refused']}; the board built from it runs the uncalibrated model."
         (root / "designs" / f"{card}.toml").write_text(d.to_toml(comment))

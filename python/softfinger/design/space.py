@@ -124,6 +124,13 @@ class Design:
     #: the orientation the board built for it has (m/s², degrees): the board's by default
     grav: float = BOARD_GRAV_M_S2
     grav_dir: float = BOARD_GRAV_DIR_DEG
+    #: the FE calibration factors computed for this design (``cal``'s 8, the console's order;
+    #: ``fe.calibrate``), which the board built from it carries; None: uncalibrated
+    cal: Optional[Tuple[float, ...]] = None
+
+    def __post_init__(self):
+        if self.cal is not None:
+            object.__setattr__(self, "cal", tuple(float(g) for g in self.cal))
 
     def params(self) -> Dict[str, float]:
         """The design variables by console name (the study's inputs; ``orientation`` apart)."""
@@ -134,11 +141,11 @@ class Design:
         return {k: float(getattr(self, k)) for k in ORIENTATION_KEYS}
 
     def finger(self):
-        """The model of this design in its orientation (uncalibrated: the FE calibration is the
-        default finger's)."""
+        """The model of this design in its orientation, with the design's FE calibration
+        (``cal``; uncalibrated without one): the model the board built from it runs."""
         from .. import Finger
 
-        return Finger(preset="default", card=self.card, calibration=None, **self.params(), **self.orientation())
+        return Finger(preset="default", card=self.card, calibration=None if self.cal is None else list(self.cal), **self.params(), **self.orientation())
 
     def stack_mm(self) -> float:
         """The stack's thickness at rest, mm."""
@@ -151,6 +158,9 @@ class Design:
         for k in TOML_KEYS + ORIENTATION_KEYS:
             v = getattr(self, k)
             lines.append(f"{k} = {int(v)}" if k == "layers" else f"{k} = {float(v)!r}")
+        if self.cal is not None:
+            lines.append("# FE calibration (h1 h2 h3 h4 ea0 ea1 ei0 ei1: the console's `cal`), computed for this design")
+            lines.append("cal = [" + ", ".join(repr(float(g)) for g in self.cal) + "]")
         return "\n".join(lines) + "\n"
 
     @classmethod
@@ -169,11 +179,14 @@ class Design:
         except tomllib.TOMLDecodeError as e:
             raise ValueError(f"design TOML: not TOML text ({e}); from_toml takes TOML text or a path, Design.load(path) reads a file") from e
         want = {"card", *TOML_KEYS}
-        extra, missing = set(d) - want - set(ORIENTATION_KEYS), want - set(d)
+        extra, missing = set(d) - want - set(ORIENTATION_KEYS) - {"cal"}, want - set(d)
         if extra or missing:
             raise ValueError(
-                f"design TOML: unknown keys {sorted(extra)}, missing {sorted(missing)}; keys: card, {', '.join(TOML_KEYS)} (optional: {', '.join(ORIENTATION_KEYS)})"
+                f"design TOML: unknown keys {sorted(extra)}, missing {sorted(missing)}; keys: card, {', '.join(TOML_KEYS)} (optional: {', '.join(ORIENTATION_KEYS)}, cal)"
             )
+        cal = d.get("cal")
+        if cal is not None and not (isinstance(cal, list) and len(cal) == 8 and all(isinstance(g, (int, float)) and math.isfinite(g) for g in cal)):
+            raise ValueError(f"design TOML: cal = {cal!r}: 8 finite numbers (h1 h2 h3 h4 ea0 ea1 ei0 ei1)")
         if d["card"] not in CARDS:
             raise ValueError(f"design TOML: card {d['card']!r}; cards: {', '.join(CARDS)}")
         if d["layers"] != int(d["layers"]):
@@ -182,7 +195,7 @@ class Design:
             if k in d and not (isinstance(d[k], (int, float)) and lo <= d[k] <= hi):
                 raise ValueError(f"design TOML: {k} = {d[k]!r} is outside {lo:g}..{hi:g}")
         orientation = {k: float(d[k]) for k in ORIENTATION_KEYS if k in d}
-        return cls(card=d["card"], **{k: (int(d[k]) if k == "layers" else float(d[k])) for k in TOML_KEYS}, **orientation)
+        return cls(card=d["card"], **{k: (int(d[k]) if k == "layers" else float(d[k])) for k in TOML_KEYS}, **orientation, cal=None if cal is None else tuple(float(g) for g in cal))
 
     @classmethod
     def load(cls, path: Path | str) -> "Design":

@@ -13,11 +13,11 @@ import itertools
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .evaluate import CONSTRAINTS, OBJECTIVES, Evaluation, evaluate
+from .evaluate import CONSTRAINTS, HORIZONTAL, OBJECTIVES, Evaluation, evaluate
 from .space import MARGIN, Design, variables
 
 
@@ -59,11 +59,12 @@ def suggest(trial, card: str) -> Dict[str, float]:
     return out
 
 
-def study_name(card: str) -> str:
-    return f"design-{card}"
+def study_name(card: str, orientation: Tuple[float, float] = (0.0, 0.0)) -> str:
+    """A card's study in one orientation (a storage keeps each apart: their trials differ)."""
+    return f"design-{card}" if not orientation[0] else f"design-{card}-grav{orientation[0]:g}-dir{orientation[1]:g}"
 
 
-def run_study(card: str, n_trials: int, storage, *, batch: int = 64, seed: int = 0, sampler: str = "nsga2", progress: bool = True, stop_after: Optional[int] = None):
+def run_study(card: str, n_trials: int, storage, *, batch: int = 64, seed: int = 0, sampler: str = "nsga2", progress: bool = True, stop_after: Optional[int] = None, orientation: Tuple[float, float] = HORIZONTAL):
     """Run (or resume) the study of `card` in `storage` until it holds `n_trials` trials.
 
     Each batch of `batch` trials is asked and told in an in-memory study that mirrors the
@@ -72,15 +73,17 @@ def run_study(card: str, n_trials: int, storage, *, batch: int = 64, seed: int =
     an unfinished trial, so a killed run loses only the batch it was evaluating, and a restart
     goes on from the stored trials. (Asking and telling against a journal file or SQLite
     directly costs 10-100 ms a trial in Optuna's storage layer, far more than the model.)
-    `stop_after`: return after this many batches. Returns the stored study."""
+    `stop_after`: return after this many batches. `orientation`: (grav m/s², grav_dir degrees)
+    every candidate is judged in (``evaluate.HORIZONTAL``; (0, 0) without gravity). Returns the
+    stored study."""
     import optuna
     from optuna.trial import TrialState
     from tqdm import tqdm
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     directions = ["maximize"] * len(OBJECTIVES)
-    stored = optuna.create_study(study_name=study_name(card), storage=storage, directions=directions, load_if_exists=True)
-    work = optuna.create_study(study_name=study_name(card), directions=directions, sampler=sampler_of(sampler, seed, batch))
+    stored = optuna.create_study(study_name=study_name(card, orientation), storage=storage, directions=directions, load_if_exists=True)
+    work = optuna.create_study(study_name=study_name(card, orientation), directions=directions, sampler=sampler_of(sampler, seed, batch))
     work.add_trials(stored.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
     done = len(work.trials)
     batches = 0
@@ -89,7 +92,7 @@ def run_study(card: str, n_trials: int, storage, *, batch: int = 64, seed: int =
             k = min(batch, n_trials - done)
             trials = [work.ask() for _ in range(k)]
             values = [suggest(t, card) for t in trials]
-            ev = evaluate(card, {name: [v[name] for v in values] for name in values[0]})
+            ev = evaluate(card, {name: [v[name] for v in values] for name in values[0]}, grav=orientation[0], grav_dir=orientation[1])
             for i, t in enumerate(trials):
                 for name, c in zip(CONSTRAINTS, ev.constraints[i]):
                     t.set_constraint(name, float(c))
@@ -157,9 +160,11 @@ def grid_inputs(card: str, count: int = 7) -> Dict[str, np.ndarray]:
     return {v.name: m.ravel() for v, m in zip(vs, mesh)}
 
 
-def sweep(card: str, count: int = 7, *, chunk: int = 50_000, progress: bool = True, grip_front: bool = True) -> Sweep:
+def sweep(card: str, count: int = 7, *, chunk: int = 50_000, progress: bool = True, grip_front: bool = True, orientation: Tuple[float, float] = HORIZONTAL) -> Sweep:
     """Evaluate every grid point of `card` without the grip (the costly contact solve), then
-    the grip of the feasible candidates non-dominated in the two stiffness ratios."""
+    the grip of the feasible candidates non-dominated in the two stiffness ratios; each judged
+    in `orientation` (grav, grav_dir)."""
+    g = dict(grav=orientation[0], grav_dir=orientation[1])
     from tqdm import tqdm
 
     inputs = grid_inputs(card, count)
@@ -169,7 +174,7 @@ def sweep(card: str, count: int = 7, *, chunk: int = 50_000, progress: bool = Tr
     with tqdm(total=n, desc=f"sweep {card}", unit="cand", unit_scale=True, disable=not progress) as bar:
         for s in range(0, n, chunk):
             part = {k: v[s : s + chunk] for k, v in inputs.items()}
-            ev = evaluate(card, part, grip=False)
+            ev = evaluate(card, part, grip=False, **g)
             idx = np.flatnonzero(ev.feasible)
             keep.append({k: v[idx] for k, v in part.items()})
             bar.update(len(part["t_min"]))
@@ -178,10 +183,10 @@ def sweep(card: str, count: int = 7, *, chunk: int = 50_000, progress: bool = Tr
     feas["margin"] = np.full(len(feas["t_min"]), MARGIN)
     count_feasible = len(feas["t_min"])
     if count_feasible and grip_front:
-        ev = evaluate(card, feas, grip=False)
+        ev = evaluate(card, feas, grip=False, **g)
         front = pareto_mask(ev.objectives[:, :2])
         idx = np.flatnonzero(front)
-        ev = evaluate(card, {k: v[idx] for k, v in feas.items()}, grip=True)
+        ev = evaluate(card, {k: v[idx] for k, v in feas.items()}, grip=True, **g)
     else:
-        ev = evaluate(card, feas, grip=False) if count_feasible else None
+        ev = evaluate(card, feas, grip=False, **g) if count_feasible else None
     return Sweep(card=card, candidates=n, seconds=seconds, feasible=count_feasible, evaluation=ev)

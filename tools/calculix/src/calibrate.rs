@@ -117,7 +117,7 @@ pub fn stack_factors(p: &Params<f64>, hinge: [f64; 4], t: f64, fe: &Mat3<f64>) -
     };
     let mut g = [1.0, 1.0];
     for _ in 0..30 {
-        let r = at(g)?;
+        let r = at(g).map_err(|e| format!("stack factors at t = {t} mm: EA x {:.4}, EI x {:.4} on the way to the FE's: {e} (the model's range; the beam stack cannot be calibrated to the FE there)", g[0], g[1]))?;
         if r[0].abs() < 1e-10 && r[1].abs() < 1e-10 {
             return Ok(g);
         }
@@ -171,6 +171,11 @@ pub fn run(p: &Params<f64>, kind: Kind, d: &Density) -> Result<CalibrationRun, B
         [mg - g1 * mt, g1]
     };
     let cal = Calibration { hinge, stack_axial: line(0), stack_bending: line(1) };
-    cal.validate(p).map_err(|e| FeError::Parse(format!("calibration out of range: {e}")))?;
+    cal.validate(p).map_err(|e| {
+        FeError::Parse(format!(
+            "calibration out of range: {e}: {cal:?}; per thickness (EA, EI): {:?}",
+            stacks.iter().map(|s| (s.thickness_mm, s.factors)).collect::<Vec<_>>()
+        ))
+    })?;
     Ok(CalibrationRun { kind, density: *d, cal, fe_hinge, stacks })
 }

@@ -1,6 +1,7 @@
-//! `cargo run --bin fe-calibrate [-- --paper] [--set name=value ...] [--coarse] [--plane-strain]`
+//! `cargo run --bin fe-calibrate [-- --paper] [--card <name>] [--set name=value ...] [--coarse] [--plane-strain]`
 //! (in tools/calculix): the FE calibration of the model's sub-element compliances for the default
-//! finger (docs/model.md "Geometry"), `--paper` with the paper preset's E_de (Eq. 3), `--set` for any other parameter set
+//! finger (docs/model.md "Geometry"), `--paper` with the paper preset's E_de (Eq. 3), `--card` on a
+//! film card (`Params::with_card`: a design's, python's `softfinger.design calibrate`), `--set` for any other parameter set
 //! (console names, `Params::set`): linear CalculiX unit loads on one element (3D half width by
 //! default), with and without its stack at three thicknesses; prints the factors
 //! (`finger_model::Calibration`), the element compliances before and after, and the factors
@@ -14,6 +15,17 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let has = |a: &str| args.iter().any(|x| x == a);
     let mut p = Params::<f64>::default();
+    if let Some(i) = args.iter().position(|a| a == "--card") {
+        let name = args.get(i + 1).map(String::as_str).unwrap_or("");
+        match finger_model::material::cards::CARDS.iter().find(|c| c.name == name) {
+            Some(c) => p = Params::with_card(c),
+            None => {
+                let names: Vec<_> = finger_model::material::cards::CARDS.iter().map(|c| c.name).collect();
+                eprintln!("error: --card {name}: one of {}", names.join(", "));
+                std::process::exit(2);
+            }
+        }
+    }
     if has("--paper") {
         p.de_rule = DeModulusRule::PaperEq3;
     }
@@ -49,8 +61,8 @@ fn main() {
         d,
         if has("--paper") {
             "paper preset's E_de"
-        } else if has("--set") {
-            "the defaults (docs/model.md) with --set"
+        } else if has("--set") || has("--card") {
+            "the defaults (docs/model.md) with --card / --set"
         } else {
             "the defaults (docs/model.md)"
         }
