@@ -13,7 +13,11 @@
 //! - a voltage refused by `de::check_voltage` is never answered;
 //! - a contact answer's force and posture are finite, in equilibrium under its tip load
 //!   (`Finger::equilibrium_residual` within `model::equilibrium_bound`), the tip on the stop
-//!   (within 1e-4 of the length).
+//!   (within 1e-4 of the length);
+//! - an answer is on the branch the finger reaches: no hinge turned by more than 100° from the
+//!   free posture at P0 (issue 55);
+//! - the stop never pulls: the force's component along the tip's approach is not positive
+//!   (within 5 % of |F| for the approach's finite difference).
 
 use crate::model::{contact, linear_tension, run_ops};
 

@@ -596,11 +596,13 @@ pub fn contact_cost_section() -> String {
          one instruction a cycle (a lower bound: a `vdiv.f32` takes 14, a flash wait state is not counted). One \
          request is the two fmax checks (P0 and P at their voltages), the free posture at P0 and the pinned \
          continuation (model finger/pinned.rs; docs/inverse.md \"Contact force\"): steps that halve on a failed \
-         Newton solve (forward-difference Jacobian, up to 30 iterations a try) and a refusal as the limit point at a \
-         step of 1/8,192 or past 2,048 Newton iterations. `default`: the default finger as the board boots (its FE \
-         calibration); `paper`: the paper preset. The cases are each finger's slowest answers and refusals over a grid \
-         of 624 requests timed on the host (`cargo run --release --example contact_grid` in fuzz/: P0 0.05-5 N, P to \
-         1.2 fmax, six voltage sets), and a request past fmax.\n\n\
+         Newton solve (forward-difference Jacobian, up to 30 iterations a try) or land off the branch the finger \
+         reaches, a refusal as the limit point where a failed step passes the fold the tangent's determinants place, \
+         at a step of 1/8,192 or past 2,048 Newton iterations, and as a pulling stop (issue 55). `default`: the default \
+         finger as the board boots (its FE calibration); `paper`: the paper preset. The cases are each finger's slowest \
+         answers and refusals over a grid of 624 requests timed on the host (`cargo run --release --example \
+         contact_grid` in fuzz/: P0 0.05-5 N, P to 1.2 fmax, six voltage sets; the slowest before and after issue 55), \
+         a request past fmax and one below P0.\n\n\
          | case (P0-P, voltages) | outcome | instructions | ms at 168 MHz | Newton iterations or refusal |\n\
          | --- | --- | ---: | ---: | --- |"
     )

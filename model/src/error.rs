@@ -31,6 +31,9 @@ pub enum Error {
     LimitPoint { joint: usize, tension: f64 },
     /// A tension past the end of the equilibrium branch (contact or limit point).
     ForceLimit { tension: f64, fmax: f64 },
+    /// `contact`: at this tension the stop would pull on the tip (`force` N along the tip's
+    /// approach, > 0): the tip leaves the stop, which can only push.
+    PullingStop { tension: f64, force: f64 },
     /// The converged solver did not reach its tolerance.
     NotConverged { iterations: u32, residual: f64 },
     /// A linear system was singular (should not happen on valid parameters).
@@ -48,7 +51,7 @@ impl Message for Error {
             Error::NonFinite { .. } => ErrorCode::BadNumber,
             Error::Input { .. } => ErrorCode::Usage,
             Error::VoltageCeiling { .. } | Error::ThicknessLimit { .. } | Error::PullIn { .. } => ErrorCode::Limit,
-            Error::Contact { .. } | Error::LimitPoint { .. } | Error::ForceLimit { .. } => ErrorCode::Limit,
+            Error::Contact { .. } | Error::LimitPoint { .. } | Error::ForceLimit { .. } | Error::PullingStop { .. } => ErrorCode::Limit,
             Error::NotConverged { .. } | Error::Singular { .. } => ErrorCode::Fault,
             Error::Unreachable { .. } => ErrorCode::Unreachable,
         }
@@ -115,6 +118,13 @@ impl Message for Error {
                 // `limits`' digits: the one figure of the limit
                 o.fixed(fmax, 4);
                 o.text(" N");
+            }
+            Error::PullingStop { tension, force } => {
+                o.text("the stop would pull on the tip (");
+                o.fixed(force, 4);
+                o.text(" N along its approach) at ");
+                o.fixed(tension, 3);
+                o.text(" N: the tip leaves it");
             }
             Error::NotConverged { iterations, residual } => {
                 o.text("solver did not converge: ");

@@ -17,7 +17,9 @@ from typing import Any, Dict, Optional
 
 
 class FingerError(Exception):
-    """Base of every model refusal (also the class of ``Singular``: a singular system)."""
+    """Base of every model refusal (also the class of ``Singular``: a singular system; and of
+    ``PullingStop``: ``contact``'s stop would pull on the tip, fields ``tension`` N and
+    ``force``, N along the tip's approach)."""
 
     kind: str
     code: str

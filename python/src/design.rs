@@ -20,7 +20,7 @@ use rayon::prelude::*;
 type R = f64;
 
 /// The model's refusals by kind, as `evaluate_designs` codes them (0: solved).
-pub const ERROR_KINDS: [&str; 13] = [
+pub const ERROR_KINDS: [&str; 14] = [
     "",
     "Param",
     "NonFinite",
@@ -34,6 +34,7 @@ pub const ERROR_KINDS: [&str; 13] = [
     "NotConverged",
     "Singular",
     "Unreachable",
+    "PullingStop",
 ];
 
 /// Which step refused (0: none). `reference`: under gravity, the 0 V posture of the reference's
@@ -108,6 +109,7 @@ fn kind_code(e: &Error) -> u8 {
         Error::NotConverged { .. } => 10,
         Error::Singular { .. } => 11,
         Error::Unreachable { .. } => 12,
+        Error::PullingStop { .. } => 13,
         #[allow(unreachable_patterns)]
         _ => 11,
     }

@@ -15,7 +15,7 @@ fn class_of(e: &Error) -> &'static str {
         Error::NotConverged { .. } => "NotConvergedError",
         Error::Param { .. } | Error::NonFinite { .. } | Error::Input { .. } => "InputError",
         Error::Contact { .. } | Error::LimitPoint { .. } | Error::ForceLimit { .. } => "BranchEndError",
-        Error::Singular { .. } => "FingerError",
+        Error::Singular { .. } | Error::PullingStop { .. } => "FingerError",
         // a variant this package does not know yet: the base class, its text in `detail`
         #[allow(unreachable_patterns)]
         _ => "FingerError",
@@ -71,6 +71,11 @@ fn fields<'py>(py: Python<'py>, e: &Error) -> PyResult<(&'static str, Bound<'py,
             d.set_item("tension", tension)?;
             d.set_item("fmax", fmax)?;
             "ForceLimit"
+        }
+        Error::PullingStop { tension, force } => {
+            d.set_item("tension", tension)?;
+            d.set_item("force", force)?;
+            "PullingStop"
         }
         Error::NotConverged { iterations, residual } => {
             d.set_item("iterations", iterations)?;

@@ -170,6 +170,11 @@ def test_each_exception_is_raised_where_the_model_refuses():
         f.contact(1.0, 2 * fmax, [0, 0, 0])
     assert e.value.kind == "ForceLimit" and e.value.fmax == fmax
 
+    # a tension below P0: the stop would pull on the tip (issue 55)
+    with pytest.raises(sf.FingerError) as e:
+        f.contact(1.0, 0.5, [0, 0, 0])
+    assert e.value.kind == "PullingStop" and e.value.code == "limit" and e.value.force > 0
+
     # every subclass is a FingerError
     for cls in (sf.VoltageCeilingError, sf.ThicknessLimitError, sf.UnreachableError, sf.NotConvergedError, sf.InputError, sf.BranchEndError):
         assert issubclass(cls, sf.FingerError)

@@ -3,7 +3,8 @@
 //! free posture, the pinned continuation), on the default finger as the board boots (its FE
 //! calibration) and the paper preset. The cases are the slowest refusals and answers of
 //! `cargo run --release --example contact_grid` in fuzz/ (each finger's grid of 624 requests
-//! timed on the host), and a request past fmax. Prints `CAL`, then one line per case
+//! timed on the host, before and after issue 55's branch and pull checks), a request past fmax
+//! and one below P0 (the stop would pull). Prints `CAL`, then one line per case
 //! `C <case> ok <ticks> <iterations> <|F| N>` or `C <case> err <ticks> <code> <message>`, then
 //! `END`.
 #![no_std]
@@ -41,9 +42,14 @@ fn main() -> ! {
     run("default/0.05-6.399N-6.7kV", &board, 0.05, 6.3994436, [6666.0; 3]);
     run("default/1.464-11.694N-0,5,10kV", &board, 1.4642856, 11.694181, [0.0, t2, t1]);
     run("default/2.879-8.304N-3.3kV", &board, 2.8785713, 8.304465, [3333.0; 3]);
+    run("default/0.757-12.920N-10,0,5kV", &board, 0.75714284, 12.919881, [t1, 0.0, t2]);
+    run("default/1.464-10.233N-10,0,5kV", &board, 1.4642856, 10.232768, [t1, 0.0, t2]);
     run("default/1-30N-0V-past-fmax", &board, 1.0, 30.0, [0.0; 3]);
+    run("default/1-0.5N-0V-pulls", &board, 1.0, 0.5, [0.0; 3]);
     run("paper/4.293-93.947N-0V", &paper, 4.292857, 93.94711, [0.0; 3]);
     run("paper/2.171-152.468N-3.3kV", &paper, 2.1714284, 152.46796, [3333.0; 3]);
     run("paper/5-173.704N-0,5,10kV", &paper, 5.0, 173.70447, [0.0, t2, t1]);
+    run("paper/3.586-232.743N-6.7kV", &paper, 3.5857143, 232.74316, [6666.0; 3]);
+    run("paper/1.464-29.876N-10,0,5kV", &paper, 1.4642856, 29.876339, [t1, 0.0, t2]);
     bench::end()
 }

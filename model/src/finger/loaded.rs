@@ -376,7 +376,7 @@ pub(super) fn newton_coupled<R: Real>(
 /// A coupled step's joints against the last accepted ones (the straight finger before the first):
 /// every joint turns by at most 0.8 rad and its hole moves at most half a hinge length, and no
 /// joint passes half a turn.
-fn same_branch<R: Real>(f: &Finger<R>, last: Option<&[JointState<R>; MAX_JOINTS]>, next: &[JointState<R>; MAX_JOINTS]) -> bool {
+pub(super) fn same_branch<R: Real>(f: &Finger<R>, last: Option<&[JointState<R>; MAX_JOINTS]>, next: &[JointState<R>; MAX_JOINTS]) -> bool {
     let straight = f.straight();
     (0..f.p.n).all(|k| {
         let before = last.map_or(&straight, |l| &l[k]);

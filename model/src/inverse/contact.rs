@@ -4,8 +4,10 @@
 //! finger/pinned.rs), so every request inside the branch answers or is refused with a typed
 //! reason: a tension past fmax (`ForceLimit`, at P0 with V0 or at P with V), the links
 //! touching on the way (`Contact`), the stop not holdable (`LimitPoint` of the pinned
-//! equilibrium). F is the force the object exerts on the tip; the finger presses with -F. The
-//! tip is pinned (no slip, no separation test).
+//! equilibrium), the stop pulling on the tip (`PullingStop`: along the way the stop's force
+//! has a component along the tip's approach, the direction the free tip moves in as the
+//! tension rises at (P0, V0): the tip leaves it). F is the force the object exerts on the tip;
+//! the finger presses with -F. The tip is pinned (no slip).
 
 use crate::error::Error;
 use crate::finger::{Finger, Method, Solution};
