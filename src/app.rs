@@ -40,7 +40,7 @@ mod hv_cal_cmd;
 pub mod pose;
 #[cfg(feature = "shape")]
 mod shape;
-#[cfg(all(not(feature = "hw"), not(m3)))]
+#[cfg(not(feature = "hw"))]
 mod plant_cmd;
 mod wire;
 mod host;

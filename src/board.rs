@@ -146,7 +146,7 @@ pub trait Board {
     }
     /// The simulated plant behind the read-back (`plant ...` on the console): the emulator
     /// image and the host's plant board only, never the board build.
-    #[cfg(all(not(feature = "hw"), not(m3)))]
+    #[cfg(not(feature = "hw"))]
     fn plant(&mut self) -> Option<&mut crate::plant::Plant> {
         None
     }

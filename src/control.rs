@@ -18,12 +18,12 @@ use embedded_hal::pwm::SetDutyCycle;
 use crate::board::{Board, HV_CHANNELS, HV_FULL_SCALE_V, HV_LIMIT_V, HV_MAX_V, HV_ZERO_DUTY_PCT};
 
 pub mod fault;
-#[cfg(not(m3))]
 pub mod hv_loop;
-#[cfg(not(m3))]
 pub mod sense;
 pub mod stacks;
-#[cfg(not(m3))]
+// the Cortex-M3 image's checks, and the host's (its tests)
+#[cfg(any(m3, not(target_os = "none")))]
+pub mod trip;
 pub mod watch;
 pub use fault::{Fault, Latched};
 pub use stacks::Stacks;
@@ -43,7 +43,7 @@ pub struct SenseView {
 }
 
 /// A change the plant's test console asks of the board's plant (`plant ...`).
-#[cfg(all(not(feature = "hw"), not(m3)))]
+#[cfg(not(feature = "hw"))]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PlantRequest {
     Film { g_eq_kpa: f32, time_scale: f32 },
@@ -52,7 +52,7 @@ pub enum PlantRequest {
 
 /// What `plant status` shows of the plant: per channel its true voltage (V), current (µA)
 /// and thickness stretch, and its film's G_eq (kPa).
-#[cfg(all(not(feature = "hw"), not(m3)))]
+#[cfg(not(feature = "hw"))]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlantView {
     pub volts: [f32; HV_CHANNELS],
@@ -97,7 +97,6 @@ struct Sensing {
 /// length (ms). Every channel is driven to it, whatever its target (a target of 0 V too: a
 /// short that stays draws its current there, before any `volt`), at no less than
 /// [`LOW_CHECK_SLEW_V_PER_S`].
-#[cfg(not(m3))]
 pub const LOW_CHECK_V: f32 = 200.0;
 #[cfg(not(m3))]
 pub const LOW_CHECK_MS: u32 = 300;
@@ -181,7 +180,6 @@ pub struct View {
     pub servo_duty: u16,
     pub fault: Latched,
     /// The channel whose read-back latched the fault (0-based), if one did.
-    #[cfg(not(m3))]
     pub fault_ch: Option<u8>,
     /// Locked out for good ([`Control::lock_out`]): never arms.
     pub locked_out: bool,
@@ -194,10 +192,9 @@ pub struct View {
     pub sense: Option<SenseView>,
     /// The plant's trip latency (injection to the enable low), worst so far, µs: boards
     /// with a plant only.
-    #[cfg(not(m3))]
     pub trip_max_us: Option<u32>,
     /// The plant's truth per channel and its film's G_eq (kPa): boards with a plant only.
-    #[cfg(all(not(feature = "hw"), not(m3)))]
+    #[cfg(not(feature = "hw"))]
     pub plant: Option<PlantView>,
 }
 
@@ -253,7 +250,6 @@ pub struct Control<B: Board> {
     v_from: [f32; HV_CHANNELS],
     fault: Option<Fault>,
     /// The channel whose read-back latched `fault`, if one did.
-    #[cfg(not(m3))]
     fault_ch: Option<u8>,
     /// Never arm (e.g. the emulator image on a real chip): the fault it reports, for good.
     lockout: Option<Fault>,
@@ -266,9 +262,13 @@ pub struct Control<B: Board> {
     /// The channel's ceiling in force as a voltage: the writer's ceiling's.
     #[cfg(not(m3))]
     write_ceiling_v: [f32; HV_CHANNELS],
-    #[cfg(not(m3))]
+    /// The Cortex-M3 image's read-back: its hard checks in integers ([`trip`]).
+    #[cfg(m3)]
+    code_scale: trip::CodeScale,
+    #[cfg(m3)]
+    code_watch: [trip::CodeWatch; HV_CHANNELS],
     trip_max_us: Option<u32>,
-    #[cfg(all(not(feature = "hw"), not(m3)))]
+    #[cfg(not(feature = "hw"))]
     plant_view: Option<PlantView>,
 }
 
@@ -322,7 +322,6 @@ impl<B: Board> Control<B> {
             servo_released,
             v_from: [0.0; HV_CHANNELS],
             fault: None,
-            #[cfg(not(m3))]
             fault_ch: None,
             lockout: None,
             seq: 0,
@@ -332,13 +331,21 @@ impl<B: Board> Control<B> {
             sensing: Sensing::new(),
             #[cfg(not(m3))]
             write_ceiling_v: [0.0; HV_CHANNELS],
-            #[cfg(not(m3))]
+            #[cfg(m3)]
+            code_scale: trip::CodeScale::new(0),
+            #[cfg(m3)]
+            code_watch: [trip::CodeWatch::new(); HV_CHANNELS],
             trip_max_us: None,
-            #[cfg(all(not(feature = "hw"), not(m3)))]
+            #[cfg(not(feature = "hw"))]
             plant_view: None,
         };
         for ch in 0..HV_CHANNELS {
             c.hv_max[ch] = c.board.hv(ch).max_duty_cycle();
+        }
+        // one scale: the three HV PWMs are one timer's (TIM4)
+        #[cfg(m3)]
+        {
+            c.code_scale = trip::CodeScale::new(c.hv_max[0]);
         }
         c.hv_off_now();
         c.write_servo(servo_released);
@@ -350,7 +357,7 @@ impl<B: Board> Control<B> {
         {
             c.sensing.present = c.board.hv_sense().is_some();
         }
-        #[cfg(all(not(feature = "hw"), not(m3)))]
+        #[cfg(not(feature = "hw"))]
         c.read_plant();
         c
     }
@@ -375,16 +382,14 @@ impl<B: Board> Control<B> {
             enable: self.enable,
             servo_duty: self.servo_duty,
             fault: Latched(self.fault),
-            #[cfg(not(m3))]
             fault_ch: self.fault_ch,
             locked_out: self.lockout.is_some(),
             now_ms: self.now_ms,
             stack_ratio: self.stacks.as_ref().map(|s| s.ratios()).unwrap_or([1.0; HV_CHANNELS]),
             #[cfg(not(m3))]
             sense: self.sensing.present.then_some(self.sensing.view),
-            #[cfg(not(m3))]
             trip_max_us: self.trip_max_us,
-            #[cfg(all(not(feature = "hw"), not(m3)))]
+            #[cfg(not(feature = "hw"))]
             plant: self.plant_view,
         }
     }
@@ -468,8 +473,12 @@ impl<B: Board> Control<B> {
             sn.ripple_ms = [0; HV_CHANNELS];
             sn.check_until_ms = None;
             sn.recheck = recheck;
-            self.fault_ch = None;
         }
+        #[cfg(m3)]
+        {
+            self.code_watch = [trip::CodeWatch::new(); HV_CHANNELS];
+        }
+        self.fault_ch = None;
         self.servo_from = self.servo_released;
         self.servo_to = self.servo_released;
         self.write_servo(self.servo_released);
@@ -621,7 +630,6 @@ impl<B: Board> Control<B> {
     pub fn tick_timed(&mut self, last_checkin_ms: u32, clock: fn() -> u32) -> TickCost {
         self.now_ms = self.now_ms.wrapping_add(1);
         let mut cost = TickCost::default();
-        #[cfg(not(m3))]
         {
             let t0 = clock();
             cost.sense_source = self.read_back(clock);
@@ -729,7 +737,7 @@ impl<B: Board> Control<B> {
     }
 
     /// The plant's truth into the view (boards with a plant).
-    #[cfg(all(not(feature = "hw"), not(m3)))]
+    #[cfg(not(feature = "hw"))]
     fn read_plant(&mut self) {
         if let Some(p) = self.board.plant() {
             self.trip_max_us = Some(p.trip_max_us);
@@ -744,7 +752,7 @@ impl<B: Board> Control<B> {
     }
 
     /// The plant's test console: a change to the board's plant (none without one).
-    #[cfg(all(not(feature = "hw"), not(m3)))]
+    #[cfg(not(feature = "hw"))]
     pub fn plant_request(&mut self, req: PlantRequest) {
         if let Some(p) = self.board.plant() {
             let _ = match req {
@@ -850,12 +858,36 @@ impl<B: Board> Control<B> {
                 sn.check_until_ms = None;
             }
         }
+        self.latch_read_back(fault);
+        source
+    }
+
+    /// The Cortex-M3 image's read-back: the analog watchdog's trip and each channel's hard
+    /// checks in integers ([`trip::CodeWatch`]). A fault cuts the HV at once (latched until `stop`).
+    #[cfg(m3)]
+    fn read_back(&mut self, clock: fn() -> u32) -> u32 {
+        let t0 = clock();
+        let Some(hs) = self.board.hv_sense() else { return 0 };
+        self.read_plant();
+        let source = clock().saturating_sub(t0);
+        let mut fault = hs.trip.map(|k| (Fault::Breakdown, k));
+        for ch in 0..HV_CHANNELS {
+            if let Some(f) = self.code_watch[ch].check(&self.code_scale, hs.v_code[ch], hs.i_code[ch], self.duty[ch], self.ceiling[ch], self.enable) {
+                fault = fault.or(Some((f, ch as u8)));
+            }
+        }
+        self.latch_read_back(fault);
+        source
+    }
+
+    /// A read-back's fault and its channel: the HV cut, the fault latched (one already
+    /// latched with the enable low stays).
+    fn latch_read_back(&mut self, fault: Option<(Fault, u8)>) {
         if let Some((f, ch)) = fault {
             if self.fault.is_none() || self.enable {
                 self.fault_stop(f);
                 self.fault_ch = Some(ch);
             }
         }
-        source
     }
 }

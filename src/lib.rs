@@ -40,10 +40,10 @@ pub mod flash_ctl;
 #[cfg(feature = "settings")]
 pub mod flash_ram;
 pub mod num;
-#[cfg(all(not(feature = "hw"), not(m3)))]
+#[cfg(not(feature = "hw"))]
 pub mod plant;
 pub mod rx;
-#[cfg(any(feature = "hw", not(target_os = "none")))]
+#[cfg(any(feature = "hw", m3, not(target_os = "none")))]
 pub mod sampling;
 #[cfg(feature = "settings")]
 pub mod settings;

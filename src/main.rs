@@ -37,7 +37,7 @@ pub struct Mailbox {
     /// The command side's last check-in, control ms (the watchdog feeds only after a recent one).
     checkin_ms: u32,
     /// A `plant ...` line's change to the emulator's plant.
-    #[cfg(all(feature = "qemu", not(m3)))]
+    #[cfg(feature = "qemu")]
     plant: Option<finger_fw::control::PlantRequest>,
     /// A `cal vmon|c0` line's calibration for the read-back.
     #[cfg(not(m3))]
@@ -129,7 +129,7 @@ mod app {
             stop: false,
             view,
             checkin_ms: 0,
-            #[cfg(all(feature = "qemu", not(m3)))]
+            #[cfg(feature = "qemu")]
             plant: None,
             #[cfg(not(m3))]
             sense_cal: None,
@@ -151,7 +151,7 @@ mod app {
             if core::mem::take(&mut mb.stop) {
                 ctl.stop();
             }
-            #[cfg(all(feature = "qemu", not(m3)))]
+            #[cfg(feature = "qemu")]
             if let Some(p) = mb.plant.take() {
                 ctl.plant_request(p);
             }
@@ -164,16 +164,10 @@ mod app {
             }
             let cost = ctl.tick_timed(mb.checkin_ms, time::tick_clock);
             tm.tick_stack_max = tm.tick_stack_max.max(cost.stack_step);
-            #[cfg(not(m3))]
-            {
-                tm.tick_sense_max = tm.tick_sense_max.max(cost.read_back);
-                tm.tick_source_max = tm.tick_source_max.max(cost.sense_source);
-            }
+            tm.tick_sense_max = tm.tick_sense_max.max(cost.read_back);
+            tm.tick_source_max = tm.tick_source_max.max(cost.sense_source);
             mb.view = ctl.view();
-            #[cfg(not(m3))]
-            {
-                tm.trip_max_us = mb.view.trip_max_us;
-            }
+            tm.trip_max_us = mb.view.trip_max_us;
             #[cfg(feature = "qemu")]
             {
                 // tick marker for the register trace (TIM4 CCR4: channel 4 is not an output)
@@ -257,14 +251,14 @@ mod app {
             }
             let stop = cmds.take_stop();
             let sp = cmds.setpoints();
-            #[cfg(all(feature = "qemu", not(m3)))]
+            #[cfg(feature = "qemu")]
             let plant = cmds.take_plant();
             #[cfg(not(m3))]
             let sense_cal = cmds.take_sense_cal();
             out.mailbox.lock(|m| {
                 m.setpoints = Some(sp);
                 m.stop |= stop;
-                #[cfg(all(feature = "qemu", not(m3)))]
+                #[cfg(feature = "qemu")]
                 {
                     m.plant = plant;
                 }

@@ -5,10 +5,10 @@ use core::convert::Infallible;
 use embedded_hal::digital::{ErrorType as PinErrorType, OutputPin};
 use embedded_hal::pwm::{ErrorType as PwmErrorType, SetDutyCycle};
 
-#[cfg(all(not(feature = "hw"), not(m3)))]
+#[cfg(not(feature = "hw"))]
 use crate::board::HvSense;
 use crate::board::{Board, HV_CHANNELS};
-#[cfg(all(not(feature = "hw"), not(m3)))]
+#[cfg(not(feature = "hw"))]
 use crate::plant::Plant;
 
 /// A PWM output: the last duty written and how many writes.
@@ -66,11 +66,11 @@ pub struct SimBoard {
     pub enable: SimPin,
     pub watchdog_feeds: u64,
     /// The HV plant behind a read-back (None: no read-back, the HV runs open loop).
-    #[cfg(all(not(feature = "hw"), not(m3)))]
+    #[cfg(not(feature = "hw"))]
     pub plant: Option<Plant>,
 }
 
-#[cfg(all(not(feature = "hw"), not(m3)))]
+#[cfg(not(feature = "hw"))]
 impl SimBoard {
     /// The board with the plant behind its read-back (finger-sim, the plant's tests).
     pub fn with_plant(plant: Plant) -> Self {
@@ -88,7 +88,7 @@ impl Default for SimBoard {
             hv: [hv; HV_CHANNELS],
             enable: SimPin::default(),
             watchdog_feeds: 0,
-            #[cfg(all(not(feature = "hw"), not(m3)))]
+            #[cfg(not(feature = "hw"))]
             plant: None,
         }
     }
@@ -116,13 +116,13 @@ impl Board for SimBoard {
     fn newline(&self) -> &'static str {
         "\n"
     }
-    #[cfg(all(not(feature = "hw"), not(m3)))]
+    #[cfg(not(feature = "hw"))]
     fn hv_sense(&mut self) -> Option<HvSense> {
         let duty = [self.hv[0].duty, self.hv[1].duty, self.hv[2].duty];
         let (max, enable) = (self.hv[0].max, self.enable.high);
         self.plant.as_mut().map(|p| p.tick(duty, max, enable))
     }
-    #[cfg(all(not(feature = "hw"), not(m3)))]
+    #[cfg(not(feature = "hw"))]
     fn plant(&mut self) -> Option<&mut Plant> {
         self.plant.as_mut()
     }
@@ -287,7 +287,7 @@ impl VirtualSim {
         let start_ms = app.ctl.now_ms();
         let mut reply: String<32768> = String::new();
         app.cmds.run(rec, &mut reply);
-        #[cfg(all(not(feature = "hw"), not(m3)))]
+        #[cfg(not(feature = "hw"))]
         if let Some(p) = app.cmds.take_plant() {
             app.ctl.plant_request(p);
         }

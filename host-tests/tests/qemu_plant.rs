@@ -2,9 +2,74 @@
 //! is a sawtooth): a breakdown cuts every HV duty before the next reply, a short that stays is
 //! found again by the re-arm's low-voltage check before any `volt`, a module stuck at
 //! 8 kV is cut within the loop's settling, and a film half the card's modulus held at the
-//! largest voltage the board takes for 600 s stays above 2/3 of its thickness.
+//! largest voltage the board takes for 600 s stays above 2/3 of its thickness. On both images
+//! (the Cortex-M3's carries the plant too, issue 54): a breakdown, a module stuck past the
+//! ceiling and a monitor stuck while the voltage moves each latch their fault on their channel.
+use host_tests::image::Image;
 use host_tests::qemu::{Qemu, TIM4_CCR};
 use host_tests::reply::val as field;
+
+// the read-back's hard checks on both images (issue 54, a trip on every image): the Cortex-M3
+// image's are integer (src/control/trip.rs), against the same plant (QEMU models no ADC)
+host_tests::on_both_images! {
+    a_breakdown_trips_and_names_its_channel => breakdown_trips;
+    a_module_stuck_past_the_ceiling_is_cut => stuck_module_cut;
+    a_monitor_stuck_while_the_voltage_moves_is_a_sensor_fault => stuck_monitor;
+}
+
+/// HV up on every channel, then the fault `inject` on channel `ch` (1-based) and `wait_s`:
+/// the fault `want` latched on that channel, the enable low, every duty 0, `arm` refused
+/// naming the channel.
+fn trips(img: Image, tag: &str, volts: u32, inject: &str, wait_s: &str, want: &str, ch: &str) -> Qemu {
+    let mut q = Qemu::boot_on(img, tag);
+    assert_eq!(q.cmd("arm"), "ok armed=1");
+    assert!(q.cmd(&format!("volt all {volts}")).starts_with("ok volts="));
+    assert_eq!(q.cmd("wait 2"), "ok waited=2");
+    let st = q.cmd("status");
+    assert_eq!(field(&st, "fault"), "none", "{st}");
+    assert!(duties(&mut q).iter().all(|&d| d > 0), "HV up before the fault");
+    assert_eq!(q.cmd(inject), format!("ok {inject}"));
+    if wait_s != "0" {
+        assert_eq!(q.cmd(&format!("wait {wait_s}")), format!("ok waited={wait_s}"));
+    }
+    let st = q.cmd("status");
+    assert_eq!((field(&st, "fault"), field(&st, "fault_ch"), field(&st, "enable")), (want, ch, "0"), "{st}");
+    assert_eq!(duties(&mut q), vec![0, 0, 0], "{st}");
+    let refused = q.cmd("arm");
+    assert!(refused.starts_with("err fault:") && refused.contains(&format!("{want} latched on channel {ch}")), "{refused}");
+    q
+}
+
+/// A short through stack 2: the analog watchdog's trip (the plant's) cuts every duty before
+/// the next reply, within 1 ms of the injection.
+fn breakdown_trips(img: Image) {
+    let mut q = trips(img, "trip-breakdown", 3000, "plant breakdown 2", "0", "breakdown", "2");
+    let trip: u32 = field(&q.cmd("plant status"), "trip_us").parse().unwrap();
+    assert!(trip > 0 && trip <= 1000, "trip {trip} µs");
+}
+
+/// Module 1's output stuck at 8 kV (past the 5.4 kV ceiling; its own slew draws no current
+/// past the trip): `hv-mismatch` within the over-voltage check's 60 ms after it passes.
+fn stuck_module_cut(img: Image) {
+    trips(img, "trip-stuck", 2000, "plant stuck 1 8000", "0.35", "hv-mismatch", "1");
+}
+
+/// Monitor 3 stuck at code 373 (about 1,000 V, where it is) while the voltage ramps to
+/// 2,000 V: the code does not move for 50 ms while the command moved past 100 V: `sensor`.
+fn stuck_monitor(img: Image) {
+    let mut q = Qemu::boot_on(img, "trip-monitor");
+    assert_eq!(q.cmd("arm"), "ok armed=1");
+    assert!(q.cmd("volt all 1000").starts_with("ok volts="));
+    assert_eq!(q.cmd("wait 1"), "ok waited=1");
+    assert_eq!(q.cmd("plant monitor 3 373"), "ok plant monitor 3 373");
+    assert_eq!(q.cmd("wait 0.2"), "ok waited=0.2");
+    assert_eq!(field(&q.cmd("status"), "fault"), "none", "a still voltage shows no stuck monitor");
+    assert!(q.cmd("volt all 2000").starts_with("ok volts="));
+    assert_eq!(q.cmd("wait 0.3"), "ok waited=0.3");
+    let st = q.cmd("status");
+    assert_eq!((field(&st, "fault"), field(&st, "fault_ch"), field(&st, "enable")), ("sensor", "3", "0"), "{st}");
+    assert_eq!(duties(&mut q), vec![0, 0, 0], "{st}");
+}
 
 fn duties(q: &mut Qemu) -> Vec<u32> {
     q.read_words(TIM4_CCR[0], 3)

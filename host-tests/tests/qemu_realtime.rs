@@ -44,7 +44,11 @@ fn held_below_hold_ceiling(img: Image) {
     let v = (vmax - 1.0).floor();
     let r = q.cmd(&format!("volt all {v}"));
     assert!(r.starts_with("ok volts="), "{v} V: {r}");
-    assert_eq!(q.cmd("wait 120"), "ok waited=120");
+    // the F405's film creeps and its guard acts over minutes; the M3 drives open loop (its duty
+    // is the target's once the ramp ends, 2.7 s at the default slew), and its soft-float plant
+    // costs QEMU 25 times the instructions a tick: 120 s there passes the harness's read timeout
+    let wait = if img == Image::M3 { "wait 10" } else { "wait 120" };
+    assert_eq!(q.cmd(wait), format!("ok waited={}", &wait[5..]));
     let fs = q.read_words(TIM4_ARR, 1)[0] as f64 + 1.0;
     let duty = q.read_words(TIM4_CCR[0], 3);
     assert_eq!(duty.len(), 3);

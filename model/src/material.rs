@@ -396,16 +396,24 @@ pub enum Hold {
     /// thinning guard's law: of the two it thins the most (the conservative side).
     FreeFilm,
     /// c = 1: bonded to the hinge's face, held along the hinge, free across its width (pure
-    /// shear), `G_eq (1 - s^4) = beta`. The law of the stiffness a voltage buys.
+    /// shear), `G_eq (1 - s^4) = beta`.
     Bonded,
+    /// Bonded and held across its width too (plane strain along the hinge: a stack many times
+    /// wider than it is thick, bonded on its face, is held across over most of its width): it
+    /// does not thin (s = 1, incompressible); the voltage acts as the blocked in-plane stress
+    /// `-beta` along the hinge and softens its tangent there from 4 G to 4 G - beta. The law
+    /// of the stack's stiffness and its actuation in the solves ([`laminate_of_free_film`]).
+    Laminate,
 }
 
 impl Hold {
-    /// The share c of the layer's in-plane spread the hold takes away along the hinge.
-    pub fn c(self) -> f64 {
+    /// The share c of the layer's in-plane spread the hold takes away along the hinge (the
+    /// laminate, held both ways, spreads nowhere: none).
+    pub fn c(self) -> Option<f64> {
         match self {
-            Hold::FreeFilm => 0.0,
-            Hold::Bonded => 1.0,
+            Hold::FreeFilm => Some(0.0),
+            Hold::Bonded => Some(1.0),
+            Hold::Laminate => None,
         }
     }
 }
@@ -417,6 +425,15 @@ pub fn held_stress<R: Real>(law: &StackLaw<R>, s: R, hold: Hold) -> R {
         Hold::Bonded => {
             let s2 = s * s;
             law.g_eq * (R::one() - s2 * s2)
+        }
+        // held both ways the thickness carries no in-plane spread: the balance is s = 1 at any
+        // beta (an infinite slope), its stress the Maxwell pressure the hold takes
+        Hold::Laminate => {
+            if s < R::one() {
+                R::from_f64(f64::INFINITY)
+            } else {
+                R::zero()
+            }
         }
     }
 }
@@ -436,6 +453,10 @@ pub fn held_equilibrium_ratio<R: Real>(law: &StackLaw<R>, volts: R, hold: Hold) 
             }
             Ok(x.sqrt().sqrt())
         }
+        Hold::Laminate => {
+            check_volts(volts)?;
+            Ok(R::one())
+        }
     }
 }
 
@@ -445,7 +466,44 @@ pub fn held_width_stretch<R: Real>(s: R, hold: Hold) -> R {
     match hold {
         Hold::FreeFilm => R::one() / s.sqrt(),
         Hold::Bonded => R::one() / s,
+        Hold::Laminate => R::one(),
     }
+}
+
+/// The bonded layer's in-plane response along the hinge at `volts`, relaxed, at the bond's
+/// stretch λ1 = 1 (docs/materials.md "Free film and bonded stack"): the blocked nominal stress
+/// (MPa; negative: the layer pushes on the bond's ends) and the tangent modulus dP1/dλ1 at
+/// fixed voltage (MPa). `Bonded` (width free): `G (1 - μ²)` and `G (1 + 3 μ² - μ⁶)`, μ = 1/s;
+/// `Laminate` (width held): `-beta` and `4 G - beta`. A free film is not held along the hinge:
+/// refused (`Input`).
+pub fn held_axial<R: Real>(law: &StackLaw<R>, volts: R, hold: Hold) -> Result<(R, R), Error> {
+    let g = law.g_eq;
+    match hold {
+        Hold::FreeFilm => Err(Error::Input { input: "hold", reason: "a free film is not held along the hinge" }),
+        Hold::Bonded => {
+            let s = held_equilibrium_ratio(law, volts, hold)?;
+            let mu2 = R::one() / (s * s);
+            Ok((g * (R::one() - mu2), g * (R::one() + R::from_f64(3.0) * mu2 - mu2 * mu2 * mu2)))
+        }
+        Hold::Laminate => {
+            check_volts(volts)?;
+            let beta = law.beta(volts);
+            Ok((-beta, R::from_f64(4.0) * g - beta))
+        }
+    }
+}
+
+/// The laminate ([`Hold::Laminate`]) from the free film's relaxed thickness stretch `s_free`
+/// at the same voltage (the solves' state of a stack: the thickness the guard watches, one to
+/// one with the voltage on the stable branch): `b = beta / G = s - s⁴` (the free-film
+/// balance), the tangent's factor `1 - b/4` over its value at 0 V, and that factor's
+/// derivative in `s_free`, `-(1 - 4 s³)/4`. Closed form, any scalar (the solves' kernel).
+#[inline(always)]
+pub fn laminate_of_free_film<R: Real>(s_free: R) -> (R, R, R) {
+    let s3 = s_free * s_free * s_free;
+    let b = s_free - s3 * s_free;
+    let quarter = R::from_f64(0.25);
+    (b, R::one() - quarter * b, (R::from_f64(4.0) * s3 - R::one()) * quarter)
 }
 
 /// `Balance::pull_in` relaxed, where P = Q: s_pi = 4^(-1/3) (a constant: no cube root on the
@@ -666,7 +724,7 @@ mod tests {
                 for (h, s) in [(Hold::FreeFilm, free), (Hold::Bonded, bonded)] {
                     // the balance G (s^(1-c) - s^4) = beta, with c from the hold
                     let beta = law.eps * v * v / (law.z0 * law.z0);
-                    let c = h.c();
+                    let c = h.c().unwrap();
                     assert!((law.g_eq * (s.powf(1.0 - c) - s.powi(4)) - beta).abs() < 1e-12 * beta.max(law.g_eq), "{h:?}");
                     assert!((held_stress(&law, s, h) - beta).abs() < 1e-12 * beta.max(law.g_eq), "{h:?}");
                 }
@@ -685,6 +743,64 @@ mod tests {
         assert!(held_equilibrium_ratio(&law, v_zero * (1.0 - 1e-6), Hold::Bonded).unwrap() < 0.05);
         assert!(matches!(held_equilibrium_ratio(&law, -1.0, Hold::Bonded), Err(Error::Input { .. })));
         assert!(matches!(held_equilibrium_ratio(&law, f64::NAN, Hold::Bonded), Err(Error::NonFinite { .. })));
+    }
+
+    /// The laminate (held along and across): the blocked stress and the tangent are the first
+    /// and second derivatives in λ1 of its free enthalpy per reference volume at fixed voltage,
+    /// `G/2 (λ1² + λ1⁻² − 2) − beta/2 λ1²` (plane strain, s = 1/λ1, the field V/(s z0)),
+    /// taken here by central differences; the pure-shear `Bonded` layer's likewise, its width
+    /// λ2 free (σ2 = 0 at each λ1, by bisection). `laminate_of_free_film` is the laminate at the
+    /// free film's thickness of the same voltage; the free film is refused.
+    #[test]
+    fn the_laminates_blocked_stress_and_tangent_are_its_enthalpys_derivatives() {
+        for card in CARDS {
+            let law = StackLaw::<f64>::new(card, 0.5, 0.9).unwrap();
+            let g = law.g_eq;
+            let top = hold_ceiling(&law, law.margin);
+            for i in 0..=10 {
+                let v = top * f64::from(i) / 10.0;
+                let beta = law.eps * v * v / (law.z0 * law.z0);
+                // the laminate: Π(λ1) = W - beta/2 λ1²
+                let pi = |l: f64| 0.5 * g * (l * l + 1.0 / (l * l) - 2.0) - 0.5 * beta * l * l;
+                let h = 1e-4;
+                let p1 = (pi(1.0 + h) - pi(1.0 - h)) / (2.0 * h);
+                let k1 = (pi(1.0 + h) - 2.0 * pi(1.0) + pi(1.0 - h)) / (h * h);
+                let (blocked, tangent) = held_axial(&law, v, Hold::Laminate).unwrap();
+                assert!((blocked - p1).abs() < 1e-6 * g && (tangent - k1).abs() < 1e-5 * g, "{} {v}: {blocked} {p1} {tangent} {k1}", card.name);
+                assert_eq!(held_equilibrium_ratio(&law, v, Hold::Laminate).unwrap(), 1.0);
+                // the pure-shear layer: Π(λ1) = min over λ2 of W(λ1, λ2) - beta/2 (λ1 λ2)²
+                let pi_ps = |l1: f64| {
+                    let w = |l2: f64| 0.5 * g * (l1 * l1 + l2 * l2 + 1.0 / (l1 * l1 * l2 * l2) - 3.0) - 0.5 * beta * (l1 * l2).powi(2);
+                    // dΠ/dλ2 = 0 on the stable side: bisection on the derivative
+                    let dw = |l2: f64| (w(l2 + 1e-7) - w(l2 - 1e-7)) / 2e-7;
+                    let (mut lo, mut hi) = (0.5, 1.6);
+                    for _ in 0..200 {
+                        let mid = 0.5 * (lo + hi);
+                        if dw(mid) < 0.0 {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    w(0.5 * (lo + hi))
+                };
+                let h = 1e-3;
+                let p1 = (pi_ps(1.0 + h) - pi_ps(1.0 - h)) / (2.0 * h);
+                let k1 = (pi_ps(1.0 + h) - 2.0 * pi_ps(1.0) + pi_ps(1.0 - h)) / (h * h);
+                let (blocked, tangent) = held_axial(&law, v, Hold::Bonded).unwrap();
+                assert!((blocked - p1).abs() < 1e-4 * g && (tangent - k1).abs() < 1e-2 * g, "bonded {} {v}: {blocked} {p1} {tangent} {k1}", card.name);
+                // the laminate at the free film's thickness of the same voltage
+                let s = equilibrium_ratio(&law, v).unwrap();
+                let (b, kappa, dkappa) = laminate_of_free_film(s);
+                assert!((b * g - beta).abs() < 1e-12 * g, "{} {v}", card.name);
+                assert!((kappa - (4.0 * g - beta) / (4.0 * g)).abs() < 1e-12);
+                let hs = 1e-6;
+                let fd = (laminate_of_free_film(s + hs).1 - laminate_of_free_film(s - hs).1) / (2.0 * hs);
+                assert!((dkappa - fd).abs() < 1e-8, "{dkappa} {fd}");
+            }
+            assert!(matches!(held_axial(&law, 1000.0, Hold::FreeFilm), Err(Error::Input { .. })));
+            assert!(matches!(held_axial(&law, f64::NAN, Hold::Laminate), Err(Error::NonFinite { .. })));
+        }
     }
 
     #[test]

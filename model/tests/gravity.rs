@@ -303,3 +303,62 @@ fn past_fmax_under_gravity_the_solve_refuses() {
         assert!(r.is_err(), "{p} N: {:?}", r.map(|s| s.joint_angle));
     }
 }
+
+/// A uniform posture the weight alone bends the finger past (held horizontally: curling down
+/// at 5°, where the weight alone bends joint 1 about 14°; curling up at -5°, where it bends
+/// joint 3 about -1.4° only) needs a cable that pushes: refused as unreachable, naming the
+/// joint, in f32 (the board's scalar) as in f64. Before, both ended in `NotConverged` (the
+/// tension's root took the joint at P = 0 as straight).
+#[test]
+fn a_posture_past_the_weight_alone_is_unreachable_in_f32_and_f64() {
+    for (dir, deg, joint) in [(90.0, 5.0, 1), (-90.0, -5.0, 3), (90.0, -5.0, 1)] {
+        let f = board(dir);
+        let e64 = inverse::solve_pose(&f, &[f64::to_radians(deg); 3], None).unwrap_err();
+        let p32: Params<f32> = f.params().cast();
+        let f32f = Finger::<f32>::with_calibration(p32, Calibration::for_params(&p32)).unwrap();
+        let e32 = inverse::solve_pose(&f32f, &[(deg as f32).to_radians(); 3], None).unwrap_err();
+        println!("dir {dir} at {deg}°: f64 {e64:?}, f32 {e32:?}");
+        for e in [e64, e32] {
+            assert!(matches!(e, Error::Unreachable { joint: j, .. } if j == joint), "dir {dir} at {deg}°: {e:?}");
+        }
+    }
+}
+
+/// The tip stiffness under gravity carries the weight's posture-dependent term: its compliance
+/// is the forward solve's own response to a small tip force (central differences, ±1e-4 N, x
+/// and y), in the four orientations, with no cable (the cable's own geometric term, which K_tip
+/// leaves out, is then zero). Σ J C Jᵀ at the same posture (the finger without its weight)
+/// misses it by far more.
+#[test]
+fn tip_compliance_under_gravity_is_the_forward_response() {
+    let tight = Method::Converged { tol: 1e-12, max_iter: 400 };
+    for dir in DIRS {
+        let f = board(dir);
+        let v = [0.0; 3];
+        let sol = f.solve(0.0, &v, tight).unwrap();
+        let c = f.compliances(&v).unwrap();
+        let with = f.tip_compliance(&c, &sol);
+        let mut p0 = *f.params();
+        p0.grav = 0.0;
+        let without = Finger::with_calibration(p0, *f.calibration()).unwrap().tip_compliance(&c, &sol);
+        let h = 1e-4;
+        let (mut err_with, mut err_without) = (0.0f64, 0.0f64);
+        for i in 0..2 {
+            let mut df = [0.0; 2];
+            df[i] = h;
+            let plus = f.solve_loaded(0.0, &v, df, tight).unwrap().tip();
+            let minus = f.solve_loaded(0.0, &v, [-df[0], -df[1]], tight).unwrap().tip();
+            let fd = [(plus.x - minus.x) / (2.0 * h), (plus.y - minus.y) / (2.0 * h), (plus.theta - minus.theta) / (2.0 * h)];
+            let size = (fd[0] * fd[0] + fd[1] * fd[1]).sqrt();
+            for r in 0..3 {
+                // the angle's row in rad/N against mm/N: over the finger's length
+                let scale = if r == 2 { size / (3.0 * f.params().l) } else { size };
+                err_with = err_with.max((with[r][i] - fd[r]).abs() / scale);
+                err_without = err_without.max((without[r][i] - fd[r]).abs() / scale);
+            }
+        }
+        println!("dir {dir}: C_tip against the forward's response: {err_with:.2e} with the weight's term, {err_without:.2e} without");
+        assert!(err_with < 1e-4, "dir {dir}: {err_with}");
+        assert!(err_without > 1e-2, "dir {dir}: {err_without}");
+    }
+}

@@ -51,12 +51,13 @@ fn solve_row(f: &Model<R>, tension: R, volts: &[R], m: Method<R>, stiffness: boo
     Ok(Row { sol, stiffness })
 }
 
-/// A solve that ran off the branch's end (links touching, a limit point) quotes the limit
+/// A solve that ran off the branch's end (links touching, a limit point, a stall past it) quotes the limit
 /// itself, `fmax` at its voltages (`Finger.fmax`, the board's `limits`), not the tension where
 /// the solver's steps found the end (the board's `solve` does the same).
 fn past_fmax(f: &Model<R>, tension: R, volts: &[R], e: Error) -> Error {
     match e {
-        Error::Contact { .. } | Error::LimitPoint { .. } => match f.fmax(volts) {
+        // under gravity the coupled solve's continuation can also stall there (NotConverged)
+        Error::Contact { .. } | Error::LimitPoint { .. } | Error::NotConverged { .. } => match f.fmax(volts) {
             Ok(b) if tension > b.tension => Error::ForceLimit { tension, fmax: b.tension },
             _ => e,
         },

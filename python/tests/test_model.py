@@ -150,7 +150,7 @@ def test_each_exception_is_raised_where_the_model_refuses():
     assert e.value.code == "unreachable"
 
     with pytest.raises(sf.NotConvergedError) as e:
-        f.solve(7.0, [0, 0, 0], max_iter=1)
+        f.solve(5.0, [0, 0, 0], max_iter=1)  # below fmax (past it the refusal quotes fmax)
     assert e.value.iterations == 1 and e.value.code == "fault"
 
     with pytest.raises(sf.InputError) as e:

@@ -76,12 +76,11 @@ pub struct Commands {
     /// The read-back, on a board that has one.
     #[cfg(not(m3))]
     pub(super) sense: Option<crate::control::SenseView>,
-    #[cfg(not(m3))]
     pub(super) trip_max_us: Option<u32>,
     /// The plant's truth (boards with a plant) and the request of the last `plant` line.
-    #[cfg(all(not(feature = "hw"), not(m3)))]
+    #[cfg(not(feature = "hw"))]
     pub(super) plant_view: Option<crate::control::PlantView>,
-    #[cfg(all(not(feature = "hw"), not(m3)))]
+    #[cfg(not(feature = "hw"))]
     pub(super) plant_req: Option<crate::control::PlantRequest>,
     /// The read-back's calibration in force, and a change not yet handed to the core.
     #[cfg(not(m3))]
@@ -137,11 +136,10 @@ impl Commands {
             stack_ratio: [1.0; CHANNELS],
             #[cfg(not(m3))]
             sense: None,
-            #[cfg(not(m3))]
             trip_max_us: None,
-            #[cfg(all(not(feature = "hw"), not(m3)))]
+            #[cfg(not(feature = "hw"))]
             plant_view: None,
-            #[cfg(all(not(feature = "hw"), not(m3)))]
+            #[cfg(not(feature = "hw"))]
             plant_req: None,
             #[cfg(not(m3))]
             sense_cal: super::hv_cal::SenseCal::NOMINAL,
@@ -214,18 +212,15 @@ impl Commands {
         self.volts = v.volts;
         self.duty = v.duty;
         self.fault = v.fault.text();
-        #[cfg(not(m3))]
-        {
-            self.fault_ch = v.fault_ch;
-        }
+        self.fault_ch = v.fault_ch;
         self.locked_out = v.locked_out;
         self.stack_ratio = v.stack_ratio;
         #[cfg(not(m3))]
         {
             self.sense = v.sense;
-            self.trip_max_us = v.trip_max_us;
         }
-        #[cfg(all(not(feature = "hw"), not(m3)))]
+        self.trip_max_us = v.trip_max_us;
+        #[cfg(not(feature = "hw"))]
         {
             self.plant_view = v.plant;
         }
@@ -455,7 +450,7 @@ impl Commands {
                 if report.is_some() {
                     let _ = w!(out; super::help::HELP_TIMING, nl);
                 }
-                #[cfg(all(not(feature = "hw"), not(m3)))]
+                #[cfg(not(feature = "hw"))]
                 if self.plant_view.is_some() {
                     let _ = w!(out; super::help::HELP_PLANT, nl);
                 }
@@ -525,7 +520,7 @@ impl Commands {
             Some(Command::Pose) => return Err(err!(Unknown; "pose is not in this build (feature pose)")),
             #[cfg(not(feature = "contact"))]
             Some(Command::Contact) => return Err(err!(Unknown; "contact is not in this build (feature contact)")),
-            #[cfg(all(not(feature = "hw"), not(m3)))]
+            #[cfg(not(feature = "hw"))]
             Some(Command::Plant) => self.cmd_plant(args, r)?,
             #[cfg(feature = "hw")]
             Some(Command::Plant) => return Err(err!(Unknown; "plant is not in this build (the simulated plant: finger-sim and the emulator image)")),

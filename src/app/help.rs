@@ -81,9 +81,9 @@ pub(crate) const HELP_TIMING: &str = help_line!("timing", "the board's own real-
 
 /// `help`'s line for `plant`, listed where a simulated plant answers it (finger-sim, the
 /// emulator image; docs/firmware.md "The plant").
-#[cfg(all(not(feature = "hw"), not(m3)))]
+#[cfg(not(feature = "hw"))]
 pub(crate) const HELP_PLANT: &str = help_line!(
-    "plant film <G_eq kPa> [time scale] | breakdown <ch> [clears after ms] | stuck <ch> <V> | open <ch> | leak <ch> <MOhm> | gain <ch> <x> | status",
+    "plant film <G_eq kPa> [time scale] | breakdown <ch> [clears after ms] | stuck <ch> <V> | open <ch> | leak <ch> <MOhm> | gain <ch> <x> | monitor <ch> <code> | status",
     "the simulated HV plant's test console: change its film, inject a fault, read its truth"
 );
 

@@ -173,7 +173,7 @@ impl<B: Board> App<B> {
 
     /// After a line: a `stop` it executed stops the core; its setpoints to the core.
     fn hand_over(&mut self) {
-        #[cfg(all(not(feature = "hw"), not(m3)))]
+        #[cfg(not(feature = "hw"))]
         if let Some(p) = self.cmds.take_plant() {
             self.ctl.plant_request(p);
         }

@@ -25,7 +25,7 @@ fn channel(c: &[u8]) -> Result<usize, CmdError> {
 }
 
 const USAGE: &str =
-    "plant film <G_eq kPa> [time scale] | breakdown <ch> [clears after ms] | stuck <ch> <V> | open <ch> | leak <ch> <MOhm> | gain <ch> <x> | status";
+    "plant film <G_eq kPa> [time scale] | breakdown <ch> [clears after ms] | stuck <ch> <V> | open <ch> | leak <ch> <MOhm> | gain <ch> <x> | monitor <ch> <code> | status";
 
 impl Commands {
     #[inline(never)]
@@ -91,6 +91,13 @@ impl Commands {
                     return Err(err!(Usage; "plant gain: 0..2"));
                 }
                 PlantRequest::Inject(channel(c)?, Inject::Gain(x))
+            }
+            (b"monitor", [c, code]) => {
+                let code = number(code, "code")?;
+                if !(0.0..=4095.0).contains(&code) {
+                    return Err(err!(Usage; "plant monitor: code 0..4095"));
+                }
+                PlantRequest::Inject(channel(c)?, Inject::MonitorStuck(code))
             }
             _ => return Err(err!(Usage; USAGE)),
         };

@@ -71,7 +71,7 @@ pub struct F405Board {
     hv: [HvPwm; 3],
     enable: Enable,
     /// The emulator image's HV plant behind the read-back (QEMU's ADC is a sawtooth).
-    #[cfg(all(feature = "qemu", not(m3)))]
+    #[cfg(feature = "qemu")]
     plant: crate::plant::Plant,
     #[cfg(feature = "hw")]
     iwdg: stm32f4xx_hal::watchdog::IndependentWatchdog,
@@ -103,7 +103,7 @@ impl Board for F405Board {
     }
     /// The emulator image: the plant stepped over the tick with the duties in TIM4's compare
     /// registers and the enable as last written.
-    #[cfg(all(feature = "qemu", not(m3)))]
+    #[cfg(feature = "qemu")]
     fn hv_sense(&mut self) -> Option<crate::board::HvSense> {
         use embedded_hal::pwm::SetDutyCycle;
         // SAFETY: reads of TIM4's compare registers, which only the HV writer sets.
@@ -112,7 +112,7 @@ impl Board for F405Board {
         let max = self.hv[0].max_duty_cycle();
         Some(self.plant.tick(duty, max, self.enable.high))
     }
-    #[cfg(all(feature = "qemu", not(m3)))]
+    #[cfg(feature = "qemu")]
     fn plant(&mut self) -> Option<&mut crate::plant::Plant> {
         Some(&mut self.plant)
     }
@@ -242,7 +242,7 @@ pub fn bring_up(dp: pac::Peripherals) -> Chip {
         servo,
         hv,
         enable,
-        #[cfg(all(feature = "qemu", not(m3)))]
+        #[cfg(feature = "qemu")]
         plant: match crate::plant::Plant::new(1) {
             Some(p) => p,
             None => panic!(),

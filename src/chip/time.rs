@@ -66,9 +66,7 @@ pub struct Timing {
     pub tick_stack_max: u32,
     /// The read-back's work in a tick (estimate, checks, guard, loop), max; and its source's
     /// (the ADC's averages, or the emulator's plant), max.
-    #[cfg(not(m3))]
     pub tick_sense_max: u32,
-    #[cfg(not(m3))]
     pub tick_source_max: u32,
     /// Entry to entry of the control task, min and max.
     pub period: (u32, u32),
@@ -88,9 +86,7 @@ impl Timing {
             tick_latency: (u32::MAX, 0),
             tick_run_max: 0,
             tick_stack_max: 0,
-            #[cfg(not(m3))]
             tick_sense_max: 0,
-            #[cfg(not(m3))]
             tick_source_max: 0,
             period: (u32::MAX, 0),
             stop_max: 0,
@@ -172,7 +168,6 @@ pub fn write_timing(o: &mut dyn Write, t: &Timing, d: &Durations) {
     if let Some(trip) = t.trip_max_us {
         let _ = w!(o; field::TRIP_US.after(), trip);
     }
-    #[cfg(not(m3))]
     if t.tick_sense_max > 0 {
         let _ = w!(o; field::TICK_SENSE_US.after(), Fixed(t.tick_sense_max as f32 / CORE_MHZ as f32, 3), field::TICK_SOURCE_US.after(), Fixed(t.tick_source_max as f32 / CORE_MHZ as f32, 3));
     }

@@ -21,39 +21,27 @@ pub enum Fault {
     BoardCard,
     /// The emulator image on a real chip (it has no watchdog): never arms.
     EmulatorOnChip,
-    /// The read-back (docs/firmware.md "Faults of the read-back"; not on the Cortex-M3
-    /// image): a stack's return current past the trip, or its voltage collapsing under a
-    /// steady command.
-    #[cfg(not(m3))]
+    /// The read-back (docs/firmware.md "Faults of the read-back"; the Cortex-M3 image has
+    /// the hard checks alone, `super::trip`): a stack's return current past the trip, or its
+    /// voltage collapsing under a steady command.
     Breakdown,
     /// A measured voltage off its command longer than the loop's settling, or past the
     /// ceiling in force.
-    #[cfg(not(m3))]
     HvMismatch,
     /// A stack's sensed capacitance far below the stack's: disconnected.
-    #[cfg(not(m3))]
     StackOpen,
     /// A reading at its rail, out of its range, or stuck.
-    #[cfg(not(m3))]
     Sensor,
     /// The leakage at a held voltage past its bound.
-    #[cfg(not(m3))]
     Leakage,
 }
 
 /// Every fault's console text, in the enum's order, end to end; [`FAULT_ENDS`] splits it.
-#[cfg(not(m3))]
 const FAULT_TEXT: &str = "hv-refusedpwmenablehv-modelboard cardqemu image on a real chipbreakdownhv-mismatchstack-opensensorleakage";
-#[cfg(not(m3))]
 const FAULT_ENDS: [u8; 12] = [0, 10, 13, 19, 27, 37, 62, 71, 82, 92, 98, 105];
-#[cfg(m3)]
-const FAULT_TEXT: &str = "hv-refusedpwmenablehv-modelboard cardqemu image on a real chip";
-#[cfg(m3)]
-const FAULT_ENDS: [u8; 7] = [0, 10, 13, 19, 27, 37, 62];
 
 impl Fault {
     /// Every fault, in the enum's order.
-    #[cfg(not(m3))]
     pub const ALL: [Fault; 11] = [
         Fault::HvRefused,
         Fault::Pwm,
@@ -67,11 +55,8 @@ impl Fault {
         Fault::Sensor,
         Fault::Leakage,
     ];
-    #[cfg(m3)]
-    pub const ALL: [Fault; 6] = [Fault::HvRefused, Fault::Pwm, Fault::Enable, Fault::HvModel, Fault::BoardCard, Fault::EmulatorOnChip];
 
     /// A fault of the read-back: re-arming after it runs the low-voltage check first.
-    #[cfg(not(m3))]
     pub fn is_read_back(self) -> bool {
         matches!(self, Fault::Breakdown | Fault::HvMismatch | Fault::StackOpen | Fault::Sensor | Fault::Leakage)
     }

@@ -3,9 +3,10 @@
 //! distal centroid solved together by damped Newton under load continuation. Not the
 //! tension-alone solve (`tension`).
 
+use super::gravity::Weights;
 use super::{Compliances, Finger, Heading, JointState, MarchError, COUPLED};
 use crate::error::Error;
-use crate::params::MAX_JOINTS;
+use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 use crate::solve::continuation::{self, Step};
 use crate::solve::newton::{self, Equations};
@@ -20,22 +21,108 @@ struct Coupled<'a, R> {
     force: [R; 2],
     /// The weight's share of its full value (the load continuation's factor).
     weight: R,
+    /// The finger's weight (`Finger::weights`, once per solve).
+    w: Option<Weights<R>>,
+    /// Each slot's marched states and its evaluation (`Trace`: where a forward difference resumes).
     states: [[JointState<R>; MAX_JOINTS]; 3],
+    traces: [Trace<R>; 3],
+    /// The Jacobian estimate: forward differences once, then Broyden's rank-one update at each
+    /// Newton iterate (and across the continuation's steps).
+    jac: [[R; COUPLED]; COUPLED],
+    /// The point (x, r) `jac` was last formed or updated at; None: forward differences at the
+    /// next call.
+    jac_at: Option<([R; COUPLED], [R; COUPLED])>,
 }
 
 impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
     type Refusal = MarchError;
     fn dim(&self) -> usize {
-        coupled_dim(self.f)
+        coupled_dim(self.f) - if self.tipless() { 2 } else { 0 }
     }
     fn residual(&mut self, x: &[R; COUPLED], slot: usize) -> Result<[R; COUPLED], MarchError> {
-        let (r, st) = coupled_residual(self.f, self.c, self.tension, self.force, self.weight, x)?;
-        self.states[slot] = st;
-        Ok(r)
+        let full = self.unpack(x);
+        let (t, st) = (&mut self.traces[slot], &mut self.states[slot]);
+        let r = coupled_eval(self.f, self.c, self.tension, self.force, (self.w.as_ref(), self.weight), &full, (0, false), t, Some(st))?;
+        Ok(self.pack(&r))
     }
-    fn jacobian(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], _: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
+    fn jacobian(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
+        let dim = self.dim();
+        match self.jac_at {
+            // Broyden's good update from the last point: J += (Δr - J Δx) Δxᵀ / |Δx|² (at the
+            // same x, a new continuation step: J as it was)
+            Some((x0, r0)) => {
+                let jac = &mut self.jac;
+                let dx: [R; COUPLED] = core::array::from_fn(|i| x[i] - x0[i]);
+                let dx2 = dx[..dim].iter().fold(R::zero(), |a, &v| a + v * v);
+                if dx2 > R::zero() {
+                    for row in 0..dim {
+                        let jd = (0..dim).fold(R::zero(), |a, c| a + jac[row][c] * dx[c]);
+                        let u = (r[row] - r0[row] - jd) / dx2;
+                        for col in 0..dim {
+                            jac[row][col] += u * dx[col];
+                        }
+                    }
+                }
+            }
+            None => self.forward_difference(x, r, slot)?,
+        }
+        self.jac_at = Some((*x, *r));
+        Ok(self.jac)
+    }
+}
+
+impl<R: Real> Coupled<'_, R> {
+    /// Without a tip force the tip loads nothing: Newton's unknowns and residual leave it out
+    /// (the holes, then the centroids; `pack`, `unpack`), and the answer's tip is the chain's.
+    fn tipless(&self) -> bool {
+        self.force == [R::zero(); 2]
+    }
+
+    /// The coupled unknowns (or residual) as Newton's: without the tip's two when `tipless`.
+    fn pack(&self, v: &[R; COUPLED]) -> [R; COUPLED] {
+        let n = self.f.p.n;
+        if !self.tipless() {
+            return *v;
+        }
+        core::array::from_fn(|i| if i < 2 * n { v[i] } else { v.get(i + 2).copied().unwrap_or(R::zero()) })
+    }
+
+    /// Newton's unknowns as the coupled ones (`pack`'s inverse; the tip 0: it loads nothing).
+    fn unpack(&self, v: &[R; COUPLED]) -> [R; COUPLED] {
+        let n = self.f.p.n;
+        if !self.tipless() {
+            return *v;
+        }
+        core::array::from_fn(|i| {
+            if i < 2 * n {
+                v[i]
+            } else if i < 2 * n + 2 {
+                R::zero()
+            } else {
+                v[i - 2]
+            }
+        })
+    }
+
+    /// Forward differences of the residual at Newton's `x` (evaluated into `slot`) into `jac`,
+    /// each column's evaluation resumed where its unknown enters the chain (`enters_at`).
+    fn forward_difference(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<(), MarchError> {
+        let (n, dim) = (self.f.p.n, self.dim());
         let h = R::from_f64(R::SQRT_EPS) * (self.f.p.hinge_len() + self.f.p.e);
-        newton::forward_difference(self, x, r, &[h; COUPLED])
+        let full = self.unpack(x);
+        for i in 0..dim {
+            // the unknown's index among the coupled ones
+            let at = if self.tipless() && i >= 2 * n { i + 2 } else { i };
+            let mut xp = full;
+            xp[at] += h;
+            let mut t = self.traces[slot];
+            let rp = coupled_eval(self.f, self.c, self.tension, self.force, (self.w.as_ref(), self.weight), &xp, enters_at(n, at), &mut t, None)?;
+            let rp = self.pack(&rp);
+            for row in 0..dim {
+                self.jac[row][i] = (rp[row] - r[row]) / h;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -43,7 +130,7 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
 /// distal centroid.
 pub(super) fn coupled_dim<R: Real>(f: &Finger<R>) -> usize {
     let n = f.p.n;
-    2 * n + 2 + if f.weights().is_some() { 2 * n } else { 0 }
+    2 * n + 2 + if f.p.has_gravity() { 2 * n } else { 0 }
 }
 
 /// The coupled system's start at the straight finger (holes, tip, centroids).
@@ -97,43 +184,111 @@ pub(super) fn coupled_residual<R: Real>(
     weight: R,
     x: &[R; COUPLED],
 ) -> Result<([R; COUPLED], [JointState<R>; MAX_JOINTS]), MarchError> {
+    let mut states = [f.straight(); MAX_JOINTS];
+    let r = coupled_eval(f, c, tension, force, (f.weights().as_ref(), weight), x, (0, false), &mut Trace::new(), Some(&mut states))?;
+    Ok((r, states))
+}
+
+/// An evaluation of the coupled residual, kept per joint so that another can resume from a
+/// joint (`coupled_eval`): each joint's proximal frame and hinge end (base frame), its lumps
+/// and hole residual.
+#[derive(Clone, Copy)]
+struct Trace<R> {
+    frames: [Heading<R>; MAX_JOINTS + 1],
+    ends: [Heading<R>; MAX_JOINTS],
+    lumps: [[[R; 2]; 3]; MAX_JOINTS],
+    holes: [[R; 2]; MAX_JOINTS],
+}
+
+impl<R: Real> Trace<R> {
+    fn new() -> Self {
+        let o = Heading::origin();
+        Trace { frames: [o; MAX_JOINTS + 1], ends: [o; MAX_JOINTS], lumps: [[[R::zero(); 2]; 3]; MAX_JOINTS], holes: [[R::zero(); 2]; MAX_JOINTS] }
+    }
+}
+
+/// The coupled residual into `t` (and the marched states into `states`, if given), resuming at
+/// `from` = (joint, past its march): the joints before it (and that joint's march, if past it)
+/// as `t` holds them, from an evaluation whose unknowns differ from `x` only in what loads the
+/// chain from there on (a forward-difference column: the same arithmetic as the whole
+/// evaluation, bit for bit).
+#[allow(clippy::too_many_arguments)]
+fn coupled_eval<R: Real>(
+    f: &Finger<R>,
+    c: &Compliances<R>,
+    tension: R,
+    force: [R; 2],
+    (w, weight): (Option<&Weights<R>>, R),
+    x: &[R; COUPLED],
+    from: (usize, bool),
+    t: &mut Trace<R>,
+    mut states: Option<&mut [JointState<R>; MAX_JOINTS]>,
+) -> Result<[R; COUPLED], MarchError> {
     let n = f.p.n;
     let tip = [x[2 * n], x[2 * n + 1]];
-    let w = f.weights();
     let centroid = |k: usize| [x[2 * n + 2 + 2 * k], x[2 * n + 3 + 2 * k]];
-    let grav = |k: usize| w.as_ref().map(|w| (w, weight, centroid(k.min(n - 1))));
-    let tip_load = Some((force, tip));
-    let mut states = [f.straight(); MAX_JOINTS];
-    let mut r = [R::zero(); COUPLED];
-    let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
-    let mut frame = Heading::origin();
-    for k in 0..n {
-        let tl = f.joint_ext_load(k, tip_load, grav(k)).map(|l| Finger::load_in_frame(&frame, l));
-        let b = [x[2 * k], x[2 * k + 1]];
-        let st = f.marched(&c.c[k], tension, b, tl)?;
-        r[2 * k] = b[0] - st.hole[0];
-        r[2 * k + 1] = b[1] - st.hole[1];
-        let hinge_end = frame.then(st.end.x, st.end.y, st.end.theta);
+    let grav = |k: usize| w.map(|w| (w, weight, centroid(k.min(n - 1))));
+    let tip_load = if force == [R::zero(); 2] { None } else { Some((force, tip)) };
+    // the sub-element displacements where no state is kept
+    let mut scratch = [[R::zero(); 3]; MAX_SUB];
+    for k in from.0..n {
+        let frame = t.frames[k];
+        if !(k == from.0 && from.1) {
+            let tl = f.joint_ext_load(k, tip_load, grav(k)).map(|l| Finger::load_in_frame(&frame, l));
+            let b = [x[2 * k], x[2 * k + 1]];
+            let (end, hole, _) = match states.as_deref_mut() {
+                Some(st) => f.march(&c.c[k], tension, b, tl, &mut st[k].q)?,
+                None => f.march(&c.c[k], tension, b, tl, &mut scratch)?,
+            };
+            if let Some(st) = states.as_deref_mut() {
+                (st[k].end, st[k].hole, st[k].tangent) = (end, hole, None);
+            }
+            t.holes[k] = [b[0] - hole[0], b[1] - hole[1]];
+            t.ends[k] = frame.then(end.x, end.y, end.theta);
+            t.lumps[k] = f.lumps_of(&frame, &t.ends[k]);
+        }
+        let hinge_end = t.ends[k];
         let ql = f.link_q(tension, f.link_load(k, &hinge_end, tip_load, grav(k + 1)).map(|l| (&hinge_end, l)));
-        lumps[k] = f.lumps_of(&frame, &hinge_end);
-        frame = hinge_end.then(f.link_len + ql[0], ql[1], ql[2]);
-        states[k] = st;
+        t.frames[k + 1] = hinge_end.then(f.link_len + ql[0], ql[1], ql[2]);
     }
-    r[2 * n] = tip[0] - frame.pose.x;
-    r[2 * n + 1] = tip[1] - frame.pose.y;
-    if let Some(w) = &w {
-        let now = w.centroids(n, &lumps);
+    let mut r = [R::zero(); COUPLED];
+    for k in 0..n {
+        r[2 * k] = t.holes[k][0];
+        r[2 * k + 1] = t.holes[k][1];
+    }
+    let end = t.frames[n];
+    r[2 * n] = tip[0] - end.pose.x;
+    r[2 * n + 1] = tip[1] - end.pose.y;
+    if let Some(w) = w {
+        let now = w.centroids(n, &t.lumps);
         for k in 0..n {
             let c = centroid(k);
             r[2 * n + 2 + 2 * k] = c[0] - now[k][0];
             r[2 * n + 3 + 2 * k] = c[1] - now[k][1];
         }
     }
-    Ok((r, states))
+    Ok(r)
 }
 
-/// Converged equilibrium with a tip load: damped Newton (`solve::newton`, forward-difference
-/// Jacobian) on all holes and the tip together, under load continuation
+/// Where a change in unknown `i` first enters the coupled chain (`coupled_eval`'s `from`): a
+/// hole at its joint's march, the tip at the first joint's, a centroid at the link before its
+/// joint (joint 1's at its march).
+fn enters_at(n: usize, i: usize) -> (usize, bool) {
+    if i < 2 * n {
+        (i / 2, false)
+    } else if i < 2 * n + 2 {
+        (0, false)
+    } else {
+        match (i - 2 * n - 2) / 2 {
+            0 => (0, false),
+            j => (j - 1, true),
+        }
+    }
+}
+
+/// Converged equilibrium with a tip load: damped Newton (`solve::newton`; the Jacobian by
+/// forward differences once, then Broyden's update, forward differences again where a step
+/// fails on it) on all holes and the tip together, under load continuation
 /// (`solve::continuation`) in the load factor λ (tension and tip force together).
 pub(super) fn newton_coupled<R: Real>(
     f: &Finger<R>,
@@ -145,7 +300,18 @@ pub(super) fn newton_coupled<R: Real>(
 ) -> Result<([JointState<R>; MAX_JOINTS], [R; 2], u32), Error> {
     let n = f.p.n;
     let mut x = straight_unknowns(f);
-    let mut eq = Coupled { f, c, tension: R::zero(), force: [R::zero(); 2], weight: R::zero(), states: [[f.straight(); MAX_JOINTS]; 3] };
+    let mut eq = Coupled {
+        f,
+        c,
+        tension: R::zero(),
+        force: [R::zero(); 2],
+        weight: R::zero(),
+        w: f.weights(),
+        states: [[f.straight(); MAX_JOINTS]; 3],
+        traces: [Trace::new(); 3],
+        jac: [[R::zero(); COUPLED]; COUPLED],
+        jac_at: None,
+    };
     let mut iters = 0u32;
     let mut result = None;
     let opts_for = |left: u32| SolveOptions::new(tol, f.resolution() * R::from_u32(n as u32), left);
@@ -153,9 +319,19 @@ pub(super) fn newton_coupled<R: Real>(
         eq.tension = tension * to;
         eq.force = [force[0] * to, force[1] * to];
         eq.weight = to;
-        let mut xt = x;
+        let mut xt = eq.pack(&x);
         let left = max_iter.saturating_sub(iters);
-        match newton::solve(&mut eq, &mut xt, &opts_for(left)) {
+        let carried = eq.jac_at.is_some();
+        let mut run = newton::solve(&mut eq, &mut xt, &opts_for(left));
+        if run.is_err() && carried {
+            // Broyden's estimate may be what failed: once more from the step's start on forward
+            // differences
+            iters += run.as_ref().err().map_or(0, |f| f.iterations());
+            eq.jac_at = None;
+            xt = eq.pack(&x);
+            run = newton::solve(&mut eq, &mut xt, &opts_for(max_iter.saturating_sub(iters)));
+        }
+        match run {
             // each accepted step stays on the physical branch: no joint turns by more than
             // tension::same_branch's bound nor its hole jumps (past the branch's end Newton can
             // land on a coiled equilibrium of the coupled system: refused, the step halved)
@@ -165,7 +341,12 @@ pub(super) fn newton_coupled<R: Real>(
             }
             Ok((rep, slot)) => {
                 iters += rep.iterations;
-                x = xt;
+                x = eq.unpack(&xt);
+                if eq.tipless() {
+                    // the chain's tip
+                    let end = eq.traces[slot].frames[n].pose;
+                    (x[2 * n], x[2 * n + 1]) = (end.x, end.y);
+                }
                 result = Some(eq.states[slot]);
                 Ok(())
             }

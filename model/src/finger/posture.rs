@@ -190,14 +190,17 @@ impl<R: Real> Finger<R> {
                 sol.tangent_det[k] = det;
                 continue;
             }
-            match self.hole_residual(&c.c[k], tension, st.hole, tl) {
-                Ok((r, _)) => {
+            // its residual and tangent from one dual march (its value part is the plain march's),
+            // else the residual from the plain march
+            match self.eval_dual(&c.c[k], tension, st.hole, tl) {
+                Ok((_, r, jac)) => {
                     res2 += r[0] * r[0] + r[1] * r[1];
-                    if let Ok(jac) = self.joint_tangent(&c.c[k], tension, st.hole, tl) {
-                        sol.tangent_det[k] = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
-                    }
+                    sol.tangent_det[k] = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
                 }
-                Err(_) => return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() }),
+                Err(_) => match self.hole_residual(&c.c[k], tension, st.hole, tl) {
+                    Ok((r, _)) => res2 += r[0] * r[0] + r[1] * r[1],
+                    Err(_) => return Err(Error::Contact { joint: k + 1, tension: tension.to_f64() }),
+                },
             }
         }
         sol.residual = res2.sqrt();

@@ -7,6 +7,7 @@ use super::{Compliances, Finger, HELD};
 use crate::calibration::Calibration;
 use crate::error::Error;
 use crate::mat3::{self, Mat3};
+use crate::material::Hold;
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 use crate::{de, hinge};
@@ -88,6 +89,31 @@ impl<R: Real> Finger<R> {
     /// (`de::StackStiffness`, its constants taken once).
     pub fn stack(&self) -> de::StackStiffness<R> {
         de::StackStiffness::new(&self.p, self.sub_len, &self.cal)
+    }
+
+    /// The stack's kernel under `hold` (`de::StackStiffness::with_hold`): `Hold::FreeFilm` is
+    /// `stack`, what the solves take; `Hold::Laminate` the bonded stack held across its width.
+    pub fn stack_held(&self, hold: Hold) -> Result<de::StackStiffness<R>, Error> {
+        de::StackStiffness::with_hold(&self.p, self.sub_len, &self.cal, hold)
+    }
+
+    /// A joint's rotation under its voltage alone with its stack at state `t` (the free film's
+    /// thickness, mm) by the kernel `stack`, rad (+: toward the cable): each sub-element's
+    /// `C_j w_act` (`StackStiffness::active`), the rotation summed. No external load, so the
+    /// loads' geometry does not enter and the link carries nothing: the unimorph's bending
+    /// (docs/materials.md "Free film and bonded stack"). 0 for the free film and without stacks.
+    pub fn voltage_rotation(&self, stack: &de::StackStiffness<R>, t: R) -> Result<R, Error> {
+        if self.p.layers == 0 || cfg!(not(feature = "de")) {
+            return Ok(R::zero());
+        }
+        let w = stack.active(t);
+        let mut c = [mat3::zero(); MAX_SUB];
+        super::JointStiffness::new(self, stack, t).compliances_into(&mut c)?;
+        let mut th = R::zero();
+        for cj in c.iter().take(self.p.m) {
+            th += cj[2][0] * w[0] + cj[2][1] * w[1] + cj[2][2] * w[2];
+        }
+        Ok(th)
     }
 
     /// Hinge compliance of sub-element j (no stack): the Castigliano integrals of docs/model.md

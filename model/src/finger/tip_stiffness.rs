@@ -9,38 +9,124 @@ use crate::params::MAX_JOINTS;
 use crate::real::Real;
 
 impl<R: Real> Finger<R> {
-    /// Linearised tip compliance `C_tip = Σ J C Jᵀ` over every sub-element (docs/model.md "Tip
-    /// stiffness"), J mapping a sub-element's distal-end displacement (its proximal frame,
-    /// rotation about its distal end) to the tip's (x, y, θ) in the base frame.
+    /// Linearised tip compliance (docs/model.md "Tip stiffness"): `C_tip = Σ J C Jᵀ` over every
+    /// sub-element and flexible link, J mapping a segment's distal-end displacement (its
+    /// proximal frame, rotation about its distal end) to the tip's (x, y, θ) in the base frame;
+    /// under gravity with the weight's posture-dependent term, `C_tip = J (C⁻¹ - G)⁻¹ Jᵀ`, G the
+    /// Hessian of the lumped weights' work (`weight_terms`), solved by one sweep from the base to
+    /// the tip (without weight the sweep is Σ J C Jᵀ: G = 0).
     pub fn tip_compliance(&self, c: &Compliances<R>, sol: &Solution<R>) -> Mat3<R> {
         let n = sol.n;
         let tip = sol.nodes[n];
-        let mut ct = mat3::zero();
+        let terms = self.weight_terms(sol);
+        // G couples every pair of DOFs (u upstream of d) by ω_u g_d, ω 1 for a rotation: segment
+        // s's equations (C_s⁻¹ - g_θ e3 e3ᵀ) dq_s = Jᵀ dF + A g_s + B e3, A the rotation of the
+        // segments before it, B = Σ g·dq over the segments after it; B at the first segment is
+        // the sweep's one unknown X, each quantity affine in it (value, coefficient of X), and
+        // B after the last is 0. One sweep for the three unit loads (Fx, Fy, M) at once.
+        let z = R::zero();
+        let mut rot = [[z; 2]; 3];
+        let mut after = [[z, R::one()]; 3];
+        let mut du = [[[z; 2]; 3]; 3];
         let mut node = Heading::origin();
+        let mut segment = |pose: &Heading<R>, next: &Heading<R>, cs: &Mat3<R>, load: ([R; 2], R)| {
+            let (s, co) = (pose.s, pose.c);
+            let d = [next.pose.x, next.pose.y];
+            let (dx, dy) = (tip.x - d[0], tip.y - d[1]);
+            let jm: Mat3<R> = [[co, -s, -dy], [s, co, dx], [z, z, R::one()]];
+            // g: the weight beyond (force f, Σ p·f) against this segment's three motions
+            let (f, pf) = load;
+            let g = [co * f[1] - s * f[0], -s * f[1] - co * f[0], d[0] * f[0] + d[1] * f[1] - pf];
+            // (C⁻¹ - g_θ e3 e3ᵀ)⁻¹ v = C v + γ c3 (c3 · v) (Sherman-Morrison), c3 = C e3
+            let c3 = [cs[0][2], cs[1][2], cs[2][2]];
+            let gamma = g[2] / (R::one() - g[2] * c3[2]);
+            let solve = |v: [R; 3]| {
+                let cv = mat3::mul_vec(cs, &v);
+                let k = gamma * (c3[0] * v[0] + c3[1] * v[1] + c3[2] * v[2]);
+                [cv[0] + k * c3[0], cv[1] + k * c3[1], cv[2] + k * c3[2]]
+            };
+            let (q, w) = (solve(g), solve([z, z, R::one()]));
+            let (gq, gw) = (g[0] * q[0] + g[1] * q[1] + g[2] * q[2], g[0] * w[0] + g[1] * w[1] + g[2] * w[2]);
+            for r in 0..3 {
+                // the load's generalized force on this segment, Jᵀ e_r
+                let p = solve([jm[r][0], jm[r][1], jm[r][2]]);
+                let gp = g[0] * p[0] + g[1] * p[1] + g[2] * p[2];
+                let mut dq = [[z; 2]; 3];
+                let mut b = [z; 2];
+                for a in 0..2 {
+                    let base = if a == 0 { gp } else { z };
+                    b[a] = (after[r][a] - base - rot[r][a] * gq) / (R::one() + gw);
+                    for i in 0..3 {
+                        dq[i][a] = (if a == 0 { p[i] } else { z }) + rot[r][a] * q[i] + b[a] * w[i];
+                    }
+                }
+                for a in 0..2 {
+                    after[r][a] = b[a];
+                    rot[r][a] += dq[2][a];
+                    for i in 0..3 {
+                        du[r][i][a] += jm[i][0] * dq[0][a] + jm[i][1] * dq[1][a] + jm[i][2] * dq[2][a];
+                    }
+                }
+            }
+        };
         for k in 0..n {
             let mut pose = node;
             for j in 0..sol.m {
                 let qj = sol.q[k][j];
-                let (s, co) = (pose.s, pose.c);
                 let next = pose.then(self.sub_len + qj[0], qj[1], qj[2]);
-                let (dx, dy) = (tip.x - next.pose.x, tip.y - next.pose.y);
-                let jm: Mat3<R> = [[co, -s, -dy], [s, co, dx], [R::zero(), R::zero(), R::one()]];
-                let jc = mat3::mul(&jm, &c.c[k][j]);
-                ct = mat3::add(&ct, &mat3::mul(&jc, &mat3::transpose(&jm)));
+                segment(&pose, &next, &c.c[k][j], terms[k].0);
                 pose = next;
             }
-            if self.p.flex_links {
-                let (s, co) = (pose.s, pose.c);
-                let end = sol.nodes[k + 1];
-                let (dx, dy) = (tip.x - end.x, tip.y - end.y);
-                let jm: Mat3<R> = [[co, -s, -dy], [s, co, dx], [R::zero(), R::zero(), R::one()]];
-                let jc = mat3::mul(&jm, &self.link_c);
-                ct = mat3::add(&ct, &mat3::mul(&jc, &mat3::transpose(&jm)));
-            }
             let l = sol.links[k];
-            node = pose.then(self.link_len + l[0], l[1], l[2]);
+            let end = pose.then(self.link_len + l[0], l[1], l[2]);
+            if self.p.flex_links {
+                segment(&pose, &end, &self.link_c, terms[k].1);
+            }
+            node = end;
+        }
+        // B after the last segment is 0: X from each load's coefficient
+        let mut ct = mat3::zero();
+        for r in 0..3 {
+            let x = if after[r][1] != z { -after[r][0] / after[r][1] } else { z };
+            for i in 0..3 {
+                ct[i][r] = du[r][i][0] + x * du[r][i][1];
+            }
         }
         ct
+    }
+
+    /// Under gravity, the lumped weight beyond each joint's sub-elements and beyond each link
+    /// (its force, N, and Σ p·f over its lumps, N·mm, base frame, at the posture `sol`): the
+    /// weight's term in the tip compliance. Zero without gravity.
+    fn weight_terms(&self, sol: &Solution<R>) -> [(([R; 2], R), ([R; 2], R)); MAX_JOINTS] {
+        let n = sol.n;
+        let z = R::zero();
+        let mut out = [(([z; 2], z), ([z; 2], z)); MAX_JOINTS];
+        let Some(w) = self.weights() else { return out };
+        let (half, link) = (w.force(w.half_hinge_g), w.force(w.link_g));
+        let dot = |p: [R; 2], f: [R; 2]| p[0] * f[0] + p[1] * f[1];
+        let mut lumps = [[[z; 2]; 3]; MAX_JOINTS];
+        let mut node = Heading::origin();
+        for k in 0..n {
+            let e = self.walk(&sol.q[k]).pose;
+            let hinge_end = node.then(e.x, e.y, e.theta);
+            lumps[k] = self.lumps_of(&node, &hinge_end);
+            let l = sol.links[k];
+            node = hinge_end.then(self.link_len + l[0], l[1], l[2]);
+        }
+        // from the tip back: beyond link k, every lump of the elements after it; beyond joint
+        // k's sub-elements, its hinge's distal half, its link's midpoint and those
+        let (mut f, mut pf) = ([z; 2], z);
+        for k in (0..n).rev() {
+            let [prox, end, mid] = lumps[k];
+            out[k].1 = (f, pf);
+            f = [f[0] + half[0] + link[0], f[1] + half[1] + link[1]];
+            pf += dot(end, half) + dot(mid, link);
+            out[k].0 = (f, pf);
+            f = [f[0] + half[0], f[1] + half[1]];
+            pf += dot(prox, half);
+        }
+        out
     }
 
     /// The equilibrium residual of a solved posture under its own tension, voltages and tip

@@ -91,6 +91,11 @@ impl Commands {
                 let _ = w!(r; field::FAULT_CH.after(), k + 1);
             }
         }
+        // the M3 image: no read-back fields, the fault's channel alone
+        #[cfg(m3)]
+        if let (Some(k), Some(_)) = (self.fault_ch, self.fault) {
+            let _ = w!(r; field::FAULT_CH.after(), k + 1);
+        }
         #[cfg(not(m3))]
         self.orientation(r);
     }
@@ -213,7 +218,8 @@ impl Commands {
         use finger_model::Error;
         match e {
             // the planner's fmax: `limits`' own figure (its table's, when it has one)
-            Error::Contact { .. } | Error::LimitPoint { .. } => match self.planner.fmax(volts) {
+            // under gravity the coupled solve's continuation can also stall there (NotConverged)
+            Error::Contact { .. } | Error::LimitPoint { .. } | Error::NotConverged { .. } => match self.planner.fmax(volts) {
                 Ok(b) if p > b.tension => Error::ForceLimit { tension: p.into(), fmax: b.tension.into() },
                 _ => e,
             },

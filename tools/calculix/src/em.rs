@@ -804,3 +804,67 @@ pub fn finger_under_cable_em(p: &Params<f64>, volts: &[f64], d: &Density, tensio
         })
         .collect())
 }
+
+// ---- the model beside it -------------------------------------------------------------------
+
+/// The model's one hinge (the finger's calibration, `Calibration::for_params`) at `volts`, its
+/// stack the laminate (`Hold::Laminate`, `Finger::stack_held`), as `hinge_em` measures the FE:
+/// its rotation under the voltage alone (rad, `Finger::voltage_rotation`) and its rotational
+/// stiffness at a fixed rotation at 0 V over that at `volts` (`Σ C_θM`: the laminate's
+/// softening; a pure moment, so the same at any rotation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelHinge {
+    pub rotation: f64,
+    pub ratio: f64,
+}
+
+pub fn model_hinge(p: &Params<f64>, volts: f64) -> Result<ModelHinge, String> {
+    use finger_model::material::Hold;
+    use finger_model::{Calibration, Finger, JointStiffness};
+    let q = Params { n: 1, grav: 0.0, ..*p };
+    let f = Finger::with_calibration(q, Calibration::for_params(p)).map_err(|e| e.to_string())?;
+    let stack = f.stack_held(Hold::Laminate).map_err(|e| e.to_string())?;
+    let (t0, t) = (f.stack_thickness(0.0).map_err(|e| e.to_string())?, f.stack_thickness(volts).map_err(|e| e.to_string())?);
+    let c33 = |t: f64| -> Result<f64, String> {
+        let k = JointStiffness::new(&f, &stack, t);
+        (0..q.m).map(|j| k.compliance(j).map(|c| c[2][2]).map_err(|e| e.to_string())).sum()
+    };
+    Ok(ModelHinge { rotation: f.voltage_rotation(&stack, t).map_err(|e| e.to_string())?, ratio: c33(t)? / c33(t0)? })
+}
+
+/// A hinge of the FE-against-model table (`fe-em-table`, `em-hinges.txt`): a card and the
+/// console parameters it sets.
+#[derive(Clone, Copy, Debug)]
+pub struct EmHinge {
+    pub name: &'static str,
+    pub card: &'static str,
+    pub sets: &'static [(&'static str, f64)],
+}
+
+impl EmHinge {
+    /// Its parameter set (without gravity: the FE has none).
+    pub fn params(&self) -> Result<Params<f64>, String> {
+        let card = finger_model::material::CARDS.iter().find(|c| c.name == self.card).ok_or(format!("card {}", self.card))?;
+        let mut p = Params::with_card(card);
+        crate::apply_overrides(&mut p, self.sets.iter().map(|(k, v)| (k.to_string(), *v)).collect())?;
+        Ok(p)
+    }
+}
+
+/// The board's finger, the design study's best VHB and Elastosil designs (`designs/`, without
+/// their gravity) and a corner of the design space (the study's front design with the thickest
+/// hinge and stiffest body, issue 55).
+pub const EM_HINGES: [EmHinge; 4] = [
+    EmHinge { name: "board", card: "VHB-4905", sets: &[] },
+    EmHinge {
+        name: "designs/VHB-4905",
+        card: "VHB-4905",
+        sets: &[("t_min", 0.5), ("a", 4.7), ("e_b", 12.0), ("w", 29.5), ("layers", 8.0), ("z0", 0.5), ("v_supply", 5500.0), ("margin", 0.9)],
+    },
+    EmHinge {
+        name: "designs/Elastosil-2030",
+        card: "Elastosil-2030",
+        sets: &[("t_min", 0.5), ("a", 10.0), ("e_b", 40.0), ("w", 26.5), ("layers", 12.0), ("z0", 0.24), ("v_supply", 10250.0), ("margin", 0.9)],
+    },
+    EmHinge { name: "corner", card: "VHB-4905", sets: &[("t_min", 2.9), ("a", 2.6), ("e_b", 40.0), ("w", 30.0), ("layers", 7.0)] },
+];

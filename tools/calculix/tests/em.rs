@@ -42,6 +42,14 @@ fn the_boards_hinge_under_its_ceiling_bends_toward_the_cable_and_barely_softens(
     assert!((on.turned - off.turned).abs() < 0.05f64.to_radians(), "{} vs {}", on.turned, off.turned);
     let s_free = finger_model::de::layer_thickness_ratio(&p, 1, v).unwrap();
     assert!(on.s_mid_centre > s_free && on.s_mid_edge > s_free, "bonded {:.4}/{:.4}, free {s_free:.4}", on.s_mid_centre, on.s_mid_edge);
+    // the model's laminate beside this run (`em::model_hinge`): its rotation under the voltage
+    // alone within a quarter of the FE's (this mesh's is 0.63°, 11 % under the coarse mesh's
+    // and 14 % under the medium one's: the model is 20 % above it, 7 % and 3 % above those),
+    // its stiffness ratio's excess above the FE's (the table's test has the rest)
+    let m = finger_calculix::em::model_hinge(&p, v * 0.999_999).unwrap();
+    println!("FE {deg:.4}° {ratio:.5}, model {:.4}° {:.5}", m.rotation.to_degrees(), m.ratio);
+    assert!((m.rotation / on.rotation - 1.0).abs() < 0.25, "model {:.4}° vs FE {deg:.4}°", m.rotation.to_degrees());
+    assert!(m.ratio > ratio, "model {:.5} vs FE {ratio:.5}", m.ratio);
 }
 
 /// The FE has no body load: a set with gravity on is refused before any run, not solved
@@ -51,4 +59,48 @@ fn gravity_is_refused_not_ignored() {
     let p = Params::<f64>::vhb4905().with_gravity(9.81, 90.0);
     assert!(matches!(free_film(&p, 1000.0, FixedPoint::default()), Err(finger_calculix::ccx::FeError::Mesh(_))));
     assert!(matches!(hinge_em(&p, 1000.0, 0.1, 0.01, &Density::coarse(), FixedPoint::default()), Err(finger_calculix::ccx::FeError::Mesh(_))));
+}
+
+/// The model's laminate (`em::model_hinge`: the bonded stack held across its width, its
+/// blocked stress off the neutral axis and its softened tangent) against the electromechanical
+/// FE's table (`em-hinges.txt`, `cargo run --release --bin fe-em-table`: the board's finger and
+/// three designs, coarse mesh, at the film's ceiling), for the same hinges (`em::EM_HINGES`).
+/// What holds today (docs/materials.md "Free film and bonded stack" has the table): the
+/// rotation under the voltage alone has the FE's sign and is within 30 % of it on every hinge
+/// (7 % on the board's); the stiffness ratio's excess at a fixed rotation is between half and 6
+/// times the FE's (twice on the board's). Not yet the 5 % (docs/materials.md says why).
+#[test]
+fn the_laminate_against_the_fe_table() {
+    use finger_calculix::em::{model_hinge, EM_HINGES};
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/em-hinges.txt")).unwrap();
+    let mut seen = 0;
+    for line in text.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()) {
+        let field =
+            |k: &str| line.split_whitespace().find_map(|f| f.strip_prefix(k).and_then(|v| v.strip_prefix('='))).unwrap_or_else(|| panic!("{k} in {line}"));
+        let num = |k: &str| field(k).parse::<f64>().unwrap();
+        let h = EM_HINGES.iter().find(|h| h.name == field("name")).unwrap_or_else(|| panic!("{line}"));
+        let p = h.params().unwrap();
+        let v = num("volts");
+        assert!((v - de::voltage_ceiling(&p)).abs() < 1e-3, "{}: the table's voltage is the ceiling", h.name);
+        let m = model_hinge(&p, v * 0.999_999).unwrap();
+        let (fe_rot, fe_ratio) = (num("fe_rotation_deg").to_radians(), num("fe_ratio"));
+        let e_rot = m.rotation / fe_rot - 1.0;
+        let x = (m.ratio - 1.0) / (fe_ratio - 1.0);
+        println!(
+            "{}: rotation model {:.3}° FE {:.3}° ({:+.1} %), ratio model {:.5} FE {:.5} (excess {x:.2}×)",
+            h.name,
+            m.rotation.to_degrees(),
+            fe_rot.to_degrees(),
+            100.0 * e_rot,
+            m.ratio,
+            fe_ratio
+        );
+        assert!(fe_rot > 0.0 && e_rot.abs() < 0.3, "{}: rotation {e_rot:+.3}", h.name);
+        if h.name == "board" {
+            assert!(e_rot.abs() < 0.08, "board: rotation {e_rot:+.3}");
+        }
+        assert!(fe_ratio > 1.0 && (0.5..6.0).contains(&x), "{}: excess {x}", h.name);
+        seen += 1;
+    }
+    assert_eq!(seen, EM_HINGES.len(), "one line per hinge");
 }

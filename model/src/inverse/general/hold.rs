@@ -120,6 +120,16 @@ impl<'a, R: Real> Gen<'a, R> {
                 }
             }
         }
+        // under a held load (the weight) the joint at P = 0 is not straight: where the load
+        // alone bends it to θ* or past, no tension holds it there (a cable cannot push)
+        if theta_held != R::zero() {
+            let eq0 = f.joint_equilibrium(joint, c, R::zero(), None, self.tol_hole)?;
+            self.iters += eq0.iterations;
+            if eq0.angle >= theta {
+                let cl = s_lin / self.p.e;
+                return Err(Error::Unreachable { joint, needed: -cl.to_f64(), min: cl.to_f64(), max: cl.to_f64() });
+            }
+        }
         if !cfg!(feature = "inverse-fallback") {
             return Err(Error::NotConverged { iterations: self.iters, residual: f64::INFINITY });
         }

@@ -6,20 +6,18 @@
 //! - without `tension`: one hinge of the design (`hinge_em`) at 0 V and at `volts` (default:
 //!   the film's hold ceiling): its rotation under the voltage alone, its stiffness at the fixed
 //!   rotation `theta` (default 10°) at both and their ratio, the bonded layers' thickness
-//!   stretch at mid-hinge, and the free film's (the model's) at that voltage; beside them the
-//!   model's ratio (one joint, uncalibrated, 1/C_θM) at the free film's thickness (what the
-//!   solves use), at the bonded stack's, and at the bonded stack's with its volume kept;
+//!   stretch at mid-hinge, and the free film's at that voltage; beside them the model's
+//!   (`em::model_hinge`: the laminate, the finger's calibration): its rotation under the
+//!   voltage alone and its stiffness ratio at a fixed rotation;
 //! - with `tension`: the whole finger under the cable with `volts` per joint (one value: every
 //!   joint), its joint angles per tension (`finger_under_cable_em`).
 //!
 //! Prints `key=value` lines; an error on stderr with exit code 1 (ccx failed) or 2 (bad
 //! arguments).
-use finger_calculix::calibrate::model_element_compliance;
-use finger_calculix::em::{finger_under_cable_em, hinge_em, FixedPoint};
+use finger_calculix::em::{finger_under_cable_em, hinge_em, model_hinge, FixedPoint};
 use finger_calculix::mesh::Density;
 use finger_model::material::cards::CARDS;
-use finger_model::material::{held_width_stretch, Hold};
-use finger_model::{de, Calibration, Params};
+use finger_model::{de, Params};
 
 fn usage(msg: &str) -> ! {
     eprintln!("error: {msg}");
@@ -91,18 +89,14 @@ fn main() {
             println!("s_mid_bonded={:.6},{:.6}", on.s_mid_centre, on.s_mid_edge);
             println!("s_free_film={s_free:.6}");
             println!("runs={}", off.iterations + on.iterations);
-            // the model's hinge (one joint, uncalibrated) at the thickness each hold gives: its
-            // rotational stiffness 1/C_θM at 0 V over that at the voltage
-            let t0 = f64::from(p.layers) * p.z0;
-            let c33 = |q: &Params<f64>, t: f64| model_element_compliance(q, &Calibration::none(), t).map(|c| c[2][2]).unwrap_or(f64::NAN);
-            let c0 = c33(&p, t0);
-            let held = |h: Hold| de::stack_thickness_held(&p, 1, volts[0].min(0.999_999 * ceiling), h).unwrap_or(f64::NAN);
-            let (t_free, t_bonded) = (held(Hold::FreeFilm), held(Hold::Bonded));
-            // volume kept: the bonded stack widens by 1/s (E_de w scaled through g)
-            let wide = Params { g: p.g * held_width_stretch(t_bonded / t0, Hold::Bonded), ..p };
-            println!("model_ratio_free_film={:.6}", c33(&p, t_free) / c0);
-            println!("model_ratio_bonded={:.6}", c33(&p, t_bonded) / c0);
-            println!("model_ratio_bonded_volume={:.6}", c33(&wide, t_bonded) / c0);
+            // the solves' model: the laminate (its softening and its actuation), calibrated
+            match model_hinge(&p, volts[0].min(0.999_999 * ceiling)) {
+                Ok(m) => {
+                    println!("model_rotation_deg={:.6}", m.rotation.to_degrees());
+                    println!("model_ratio={:.6}", m.ratio);
+                }
+                Err(e) => println!("model_error={e}"),
+            }
         }
         Some(t) => {
             let v: Vec<f64> = if volts.len() == 1 { vec![volts[0]; p.n] } else { volts };
