@@ -28,6 +28,7 @@ fn refusal(e: &Error) -> Option<&'static str> {
         Error::ForceLimit { .. } => Some("refused: past fmax"),
         Error::Contact { .. } => Some("refused: links touching"),
         Error::LimitPoint { .. } => Some("refused: stop out of reach"),
+        Error::PullingStop { .. } => Some("refused: the stop pulls"),
         _ => None,
     }
 }
