@@ -82,6 +82,10 @@ pub const SENSE_SAMPLES_PER_TICK: u32 = 10;
 /// The analog watchdog's trip on a return current, µA: past any charging current the
 /// module's own slew allows (C at the 2/3 limit x 150 kV/s = 24 µA), below its 100 µA limit.
 pub const TRIP_CURRENT_UA: f32 = 30.0;
+/// The over-voltage rule's margin past the ceiling in force: this fraction plus `OVER_V`, V
+/// (control::watch's rule, the M3's trip and the analog watchdog's voltage code).
+pub const OVER_FRAC: f32 = 0.02;
+pub const OVER_V: f32 = 60.0;
 /// Each stack's electrode area (the hinge's width x its length), mm².
 pub const BOARD_STACK_AREA_MM2: f32 = 200.0;
 /// The stray capacitance the return sense sees besides the stack (the HV lead beside the

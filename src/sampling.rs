@@ -11,8 +11,10 @@
 //! voltage monitor) in bits 16..27, channel k at word index 3g + k. The buffer holds two
 //! halves of one tick's samples each, DMA2 stream 0 circular over both.
 
-use crate::board::{HvSense, ADC_FULL_CODE, HV_CHANNELS, HV_LIMIT_V, IMON_SPAN_UA, IMON_ZERO_CODE, SENSE_SAMPLES_PER_TICK, TRIP_CURRENT_UA, VMON_FULL_SCALE_V};
-use crate::control::watch::{OVER_FRAC, OVER_V};
+use crate::board::{
+    HvSense, ADC_FULL_CODE, HV_CHANNELS, HV_LIMIT_V, IMON_SPAN_UA, IMON_ZERO_CODE, OVER_FRAC, OVER_V, SENSE_SAMPLES_PER_TICK, TRIP_CURRENT_UA,
+    VMON_FULL_SCALE_V,
+};
 
 /// Words of one tick's samples (one half of the buffer).
 pub const HALF_WORDS: usize = SENSE_SAMPLES_PER_TICK as usize * HV_CHANNELS;
@@ -100,7 +102,7 @@ pub struct AwdCodes {
     pub current_high: u16,
     pub current_low: u16,
     /// ADC2 (the voltage monitors): past the board's hard limit by the over-ceiling bound
-    /// (`watch::OVER_FRAC`, `OVER_V`); below: never.
+    /// (`board::OVER_FRAC`, `OVER_V`); below: never.
     pub volts_high: u16,
 }
 

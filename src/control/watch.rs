@@ -27,9 +27,9 @@ pub const FOLLOW_FRAC: f32 = 0.15;
 /// the monitor.
 pub const STUCK_MOVE_V: f32 = 0.5 * super::LOW_CHECK_V;
 pub const STUCK_MS: u32 = 50;
-/// Past the ceiling in force by this fraction plus [`OVER_V`], for [`OVER_MS`]: at once.
-pub const OVER_FRAC: f32 = 0.02;
-pub const OVER_V: f32 = 60.0;
+/// Past the ceiling in force by this fraction plus [`OVER_V`], for [`OVER_MS`]: at once (board
+/// constants: the analog watchdog's voltage code uses them too).
+pub use crate::board::{OVER_FRAC, OVER_V};
 pub const OVER_MS: u32 = 60;
 /// The module's fall, the time constant the over-ceiling bound decays with after a command
 /// drops (the module's datasheet lag, with margin), ms.
