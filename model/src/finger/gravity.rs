@@ -11,6 +11,9 @@ use super::{Finger, Heading, JointState, TipLoad, HELD};
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
+/// Proximal frames, hinge ends and weight lumps of a chain (`Finger::chain_at_posture`).
+pub(super) type ChainAtPosture<R> = ([Heading<R>; MAX_JOINTS], [Heading<R>; MAX_JOINTS], [[[R; 2]; 3]; MAX_JOINTS]);
+
 /// The finger's weight: the lumps' masses (g) and gravity's force per gram (N/g, base frame).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Weights<R> {
@@ -150,6 +153,26 @@ impl<R: Real> Finger<R> {
         self.weights().is_some()
     }
 
+    /// The chain at a posture of sub-element displacements `sub_q` and link deflections `links`:
+    /// each joint's proximal frame, its hinge's distal end and the weight's lumps there (base
+    /// frame; the walk of `weight_at_posture`, the tip compliance's weight term and the
+    /// equilibrium residual).
+    pub(super) fn chain_at_posture(&self, sub_q: &[[[R; 3]; MAX_SUB]; MAX_JOINTS], links: &[[R; 3]; MAX_JOINTS]) -> ChainAtPosture<R> {
+        let mut nodes = [Heading::origin(); MAX_JOINTS];
+        let mut ends = [Heading::origin(); MAX_JOINTS];
+        let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
+        let mut node = Heading::origin();
+        for k in 0..self.p.n {
+            let e = self.walk(&sub_q[k]).pose;
+            let hinge_end = node.then(e.x, e.y, e.theta);
+            lumps[k] = self.lumps_of(&node, &hinge_end);
+            (nodes[k], ends[k]) = (node, hinge_end);
+            let l = links[k];
+            node = hinge_end.then(self.link_len + l[0], l[1], l[2]);
+        }
+        (nodes, ends, lumps)
+    }
+
     /// The weight's load on each joint (its proximal frame) and the wrench it adds on each link
     /// (the link's frame) at the posture of sub-element displacements `sub_q` and link
     /// deflections `links`: the inverse's fixed loads (`held`).
@@ -158,18 +181,7 @@ impl<R: Real> Finger<R> {
         let mut held = [None; HELD];
         let mut held_link = [[R::zero(); 3]; HELD];
         let Some(w) = self.weights() else { return (held, held_link) };
-        let mut nodes = [Heading::origin(); MAX_JOINTS];
-        let mut ends = [Heading::origin(); MAX_JOINTS];
-        let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
-        let mut node = Heading::origin();
-        for k in 0..n {
-            let e = self.walk(&sub_q[k]).pose;
-            let hinge_end = node.then(e.x, e.y, e.theta);
-            lumps[k] = self.lumps_of(&node, &hinge_end);
-            (nodes[k], ends[k]) = (node, hinge_end);
-            let l = links[k];
-            node = hinge_end.then(self.link_len + l[0], l[1], l[2]);
-        }
+        let (nodes, ends, lumps) = self.chain_at_posture(sub_q, links);
         let c = w.centroids(n, &lumps);
         for (k, (h, hl)) in held.iter_mut().zip(held_link.iter_mut()).enumerate().take(n) {
             let g = Some((&w, R::one(), c[k]));

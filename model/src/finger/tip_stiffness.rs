@@ -105,15 +105,7 @@ impl<R: Real> Finger<R> {
         let Some(w) = self.weights() else { return out };
         let (half, link) = (w.force(w.half_hinge_g), w.force(w.link_g));
         let dot = |p: [R; 2], f: [R; 2]| p[0] * f[0] + p[1] * f[1];
-        let mut lumps = [[[z; 2]; 3]; MAX_JOINTS];
-        let mut node = Heading::origin();
-        for k in 0..n {
-            let e = self.walk(&sol.q[k]).pose;
-            let hinge_end = node.then(e.x, e.y, e.theta);
-            lumps[k] = self.lumps_of(&node, &hinge_end);
-            let l = sol.links[k];
-            node = hinge_end.then(self.link_len + l[0], l[1], l[2]);
-        }
+        let (_, _, lumps) = self.chain_at_posture(&sol.q, &sol.links);
         // from the tip back: beyond link k, every lump of the elements after it; beyond joint
         // k's sub-elements, its hinge's distal half, its link's midpoint and those
         let (mut f, mut pf) = ([z; 2], z);
@@ -162,16 +154,7 @@ impl<R: Real> Finger<R> {
         let weights = self.weights();
         let mut centroids = [[R::zero(); 2]; MAX_JOINTS];
         if let Some(w) = &weights {
-            let mut lumps = [[[R::zero(); 2]; 3]; MAX_JOINTS];
-            let mut node = Heading::origin();
-            for k in 0..n {
-                let end = self.walk(&sol.q[k]).pose;
-                let hinge_end = node.then(end.x, end.y, end.theta);
-                lumps[k] = self.lumps_of(&node, &hinge_end);
-                let l = sol.links[k];
-                node = hinge_end.then(self.link_len + l[0], l[1], l[2]);
-            }
-            centroids = w.centroids(n, &lumps);
+            centroids = w.centroids(n, &self.chain_at_posture(&sol.q, &sol.links).2);
         }
         let grav = |k: usize| weights.as_ref().map(|w| (w, R::one(), centroids[k.min(n - 1)]));
         let tip_load = if loaded { Some((ft, tip)) } else { None };
