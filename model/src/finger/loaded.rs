@@ -46,13 +46,21 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
         Ok(self.pack(&r))
     }
     fn jacobian(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<[[R; COUPLED]; COUPLED], MarchError> {
+        let mut jac = [[R::zero(); COUPLED]; COUPLED];
+        self.jacobian_into(x, r, slot, &mut jac)?;
+        Ok(jac)
+    }
+    fn jacobian_into(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize, out: &mut [[R; COUPLED]; COUPLED]) -> Result<(), MarchError> {
         let dim = self.dim();
-        match self.jac_at {
+        match &self.jac_at {
             // Broyden's good update from the last point: J += (Δr - J Δx) Δxᵀ / |Δx|² (at the
             // same x, a new continuation step: J as it was)
             Some((x0, r0)) => {
                 let jac = &mut self.jac;
-                let dx: [R; COUPLED] = core::array::from_fn(|i| x[i] - x0[i]);
+                let mut dx = [R::zero(); COUPLED];
+                for i in 0..dim {
+                    dx[i] = x[i] - x0[i];
+                }
                 let dx2 = dx[..dim].iter().fold(R::zero(), |a, &v| a + v * v);
                 if dx2 > R::zero() {
                     for row in 0..dim {
@@ -67,7 +75,11 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
             None => self.forward_difference(x, r, slot)?,
         }
         self.jac_at = Some((*x, *r));
-        Ok(self.jac)
+        // the leading block only: Newton factors it in place, the estimate stays here
+        for (o, j) in out[..dim].iter_mut().zip(&self.jac[..dim]) {
+            o[..dim].copy_from_slice(&j[..dim]);
+        }
+        Ok(())
     }
 }
 
@@ -109,15 +121,19 @@ impl<R: Real> Coupled<'_, R> {
     fn forward_difference(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize) -> Result<(), MarchError> {
         let (n, dim) = (self.f.p.n, self.dim());
         let h = R::from_f64(R::SQRT_EPS) * (self.f.p.hinge_len() + self.f.p.e);
-        let full = self.unpack(x);
+        let mut xp = self.unpack(x);
+        // the evaluation each column resumes (copied once; a column's changes undone after it)
+        let mut t = self.traces[slot];
         for i in 0..dim {
             // the unknown's index among the coupled ones
             let at = if self.tipless() && i >= 2 * n { i + 2 } else { i };
-            let mut xp = full;
+            let from = enters_at(n, at);
+            let x_at = xp[at];
             xp[at] += h;
-            let mut t = self.traces[slot];
-            let rp = coupled_eval(self.f, self.c, self.tension, self.force, (self.w.as_ref(), self.weight), &xp, enters_at(n, at), &mut t, None)?;
-            let rp = self.pack(&rp);
+            let rp = coupled_eval(self.f, self.c, self.tension, self.force, (self.w.as_ref(), self.weight), &xp, from, &mut t, None);
+            xp[at] = x_at;
+            t.restore(&self.traces[slot], from.0, n);
+            let rp = self.pack(&rp?);
             for row in 0..dim {
                 self.jac[row][i] = (rp[row] - r[row]) / h;
             }
@@ -204,6 +220,14 @@ impl<R: Real> Trace<R> {
     fn new() -> Self {
         let o = Heading::origin();
         Trace { frames: [o; MAX_JOINTS + 1], ends: [o; MAX_JOINTS], lumps: [[[R::zero(); 2]; 3]; MAX_JOINTS], holes: [[R::zero(); 2]; MAX_JOINTS] }
+    }
+
+    /// What an evaluation resumed at joint `k` of `n` wrote, back as `src` holds it.
+    fn restore(&mut self, src: &Self, k: usize, n: usize) {
+        self.frames[k + 1..=n].copy_from_slice(&src.frames[k + 1..=n]);
+        self.ends[k..n].copy_from_slice(&src.ends[k..n]);
+        self.lumps[k..n].copy_from_slice(&src.lumps[k..n]);
+        self.holes[k..n].copy_from_slice(&src.holes[k..n]);
     }
 }
 

@@ -1,13 +1,17 @@
 //! Dense LU decomposition with partial pivoting, PA = LU, of the leading `dim x dim` block of
 //! an `N x N` array: computed once, then `solve`, `determinant`, `inverse` (after nalgebra's
-//! `linalg/lu.rs`, without allocation).
+//! `linalg/lu.rs`, without allocation). The factors overwrite the matrix they come from:
+//! [`Lu::in_place`] on a `&mut` array (no copy), [`Lu::new`] on a copy of it.
+
+use core::borrow::{Borrow, BorrowMut};
 
 use crate::real::Real;
 
-/// The factors of PA = LU (L unit lower, U upper, packed in one array) and the row order.
+/// The factors of PA = LU (L unit lower, U upper, packed in one array `M`: the array itself, or
+/// a `&mut` to the one factored in place) and the row order.
 #[derive(Clone, Copy, Debug)]
-pub struct Lu<R, const N: usize> {
-    lu: [[R; N]; N],
+pub struct Lu<R, const N: usize, M = [[R; N]; N]> {
+    lu: M,
     perm: [usize; N],
     dim: usize,
     /// +1 or -1: the permutation's sign.
@@ -15,12 +19,21 @@ pub struct Lu<R, const N: usize> {
 }
 
 impl<R: Real, const N: usize> Lu<R, N> {
-    /// Factor the leading `dim` block of `a`. `None` if a pivot vanishes against the largest
-    /// entry of its column (singular to the scalar's resolution) or is not finite.
+    /// Factor the leading `dim` block of a copy of `a`. `None` if a pivot vanishes against the
+    /// largest entry of its column (singular to the scalar's resolution) or is not finite.
     #[inline]
     pub fn new(a: &[[R; N]; N], dim: usize) -> Option<Self> {
+        Lu::in_place(*a, dim)
+    }
+}
+
+impl<R: Real, const N: usize, M: BorrowMut<[[R; N]; N]>> Lu<R, N, M> {
+    /// Factor the leading `dim` block of `a` where it is (its entries become the factors; the
+    /// rest untouched). `None` as [`Lu::new`].
+    #[inline]
+    pub fn in_place(mut a: M, dim: usize) -> Option<Self> {
         let dim = dim.min(N);
-        let mut lu = *a;
+        let lu = a.borrow_mut();
         let mut perm = [0usize; N];
         for (i, p) in perm.iter_mut().enumerate() {
             *p = i;
@@ -53,34 +66,36 @@ impl<R: Real, const N: usize> Lu<R, N> {
                 }
             }
         }
-        Some(Lu { lu, perm, dim, sign })
+        Some(Lu { lu: a, perm, dim, sign })
     }
+}
 
+impl<R: Real, const N: usize, M: Borrow<[[R; N]; N]>> Lu<R, N, M> {
     /// x with A x = b (first `dim` entries).
     #[inline]
     pub fn solve(&self, b: &[R; N]) -> [R; N] {
-        let d = self.dim;
+        let (d, lu) = (self.dim, self.lu.borrow());
         let mut x = [R::zero(); N];
         for i in 0..d {
             let mut s = b[self.perm[i]];
             for k in 0..i {
-                s -= self.lu[i][k] * x[k];
+                s -= lu[i][k] * x[k];
             }
             x[i] = s;
         }
         for i in (0..d).rev() {
             let mut s = x[i];
             for k in i + 1..d {
-                s -= self.lu[i][k] * x[k];
+                s -= lu[i][k] * x[k];
             }
-            x[i] = s / self.lu[i][i];
+            x[i] = s / lu[i][i];
         }
         x
     }
 
     /// det A.
     pub fn determinant(&self) -> R {
-        (0..self.dim).fold(self.sign, |p, i| p * self.lu[i][i])
+        (0..self.dim).fold(self.sign, |p, i| p * self.lu.borrow()[i][i])
     }
 
     /// A⁻¹ (leading block; the rest zero).
@@ -121,5 +136,12 @@ mod tests {
             }
         }
         assert!(Lu::new(&[[1.0f64, 2.0], [2.0, 4.0]], 2).is_none());
+        // in place: the same factors, written over the matrix (its block; the rest untouched)
+        let mut b = a;
+        let lu2 = Lu::in_place(&mut b, 3).unwrap();
+        assert_eq!(lu2.solve(&[5.0, 3.0, 10.0, 0.0]), x);
+        assert_eq!(lu2.determinant(), lu.determinant());
+        assert_eq!(b[3], a[3]);
+        assert_ne!(b[..3], a[..3]);
     }
 }

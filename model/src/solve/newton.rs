@@ -27,6 +27,13 @@ pub trait Equations<R: Real, const N: usize> {
     fn residual(&mut self, x: &[R; N], slot: usize) -> Result<[R; N], Self::Refusal>;
     /// ∂r/∂x at x, `r = residual(x, slot)` the last evaluation into `slot`.
     fn jacobian(&mut self, x: &[R; N], r: &[R; N], slot: usize) -> Result<[[R; N]; N], Self::Refusal>;
+    /// `jacobian` into `jac` (what [`solve`] calls: a system that keeps its own Jacobian
+    /// writes its leading `dim()` block, no array moved by value). Default: `jacobian`'s.
+    #[inline]
+    fn jacobian_into(&mut self, x: &[R; N], r: &[R; N], slot: usize, jac: &mut [[R; N]; N]) -> Result<(), Self::Refusal> {
+        *jac = self.jacobian(x, r, slot)?;
+        Ok(())
+    }
 }
 
 /// Forward differences of `eq`'s residual, step `h[i]` in unknown i (for `jacobian`).
@@ -87,15 +94,16 @@ pub fn solve<R: Real, const N: usize, S: Equations<R, N> + ?Sized>(
     let mut rn = metric(&r, dim);
     let (tol, floor) = if squared::<R>() { (opts.tol * opts.tol, opts.floor * opts.floor) } else { (opts.tol, opts.floor) };
     let two = R::from_f64(2.0);
+    // the Jacobian, then its factors (in place: one array for the whole solve)
+    let mut jac = [[R::zero(); N]; N];
     for it in 0..opts.max_iter {
         if rn <= tol {
             return Ok((Converged { iterations: it, residual: R::from_f64(unmetric(rn)) }, cur));
         }
-        let jac = match eq.jacobian(x, &r, cur) {
-            Ok(j) => j,
-            Err(e) => return Err(Failure::Stalled { iterations: it, residual: unmetric(rn), last: Some(e) }),
-        };
-        let Some(lu) = Lu::new(&jac, dim) else { return Err(Failure::Singular { iterations: it }) };
+        if let Err(e) = eq.jacobian_into(x, &r, cur, &mut jac) {
+            return Err(Failure::Stalled { iterations: it, residual: unmetric(rn), last: Some(e) });
+        }
+        let Some(lu) = Lu::in_place(&mut jac, dim) else { return Err(Failure::Singular { iterations: it }) };
         let dx = lu.solve(&r);
         let mut lambda = R::one();
         let mut accepted = false;
