@@ -15,7 +15,7 @@
 //! than one joint's. A point's Newton takes few line-search halvings: on the branch the
 //! predictor's full steps converge, past its end a trial fails fast (docs/fmax-cost.md).
 
-use super::{tension, BranchEnd, BranchLimit, Compliances, Finger, JointState, MarchError};
+use super::{loaded, tension, BranchEnd, BranchLimit, Compliances, Finger, JointState, MarchError};
 use crate::error::Error;
 use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
@@ -31,6 +31,8 @@ const POINT_ITER: u32 = 12;
 const POINT_HALVINGS: u32 = 2;
 /// A march cycle that advances the tension by less than this fraction has stalled.
 const STALL: f64 = 1e-3;
+/// Newton iterations a step of fmax's walk up the coupled branch may take (each try).
+const WALK_ITER: u32 = 20;
 
 /// A solved point on the branch.
 #[derive(Clone, Copy)]
@@ -240,39 +242,60 @@ fn joint_end<R: Real>(
     Err(Error::NotConverged { iterations: 0, residual: f64::INFINITY })
 }
 
-/// fmax under gravity (docs/model.md "Gravity": the joints are coupled): the feasible boundary
-/// of the converged coupled solve in the tension, to `REL`, from a search that doubles the
-/// tension from the softest joint's linear one-radian tension up to the search bound (1000
-/// times that). Where the first refusal is a contact, so is the end; else a limit point.
+/// fmax under gravity (docs/model.md "Gravity": the joints are coupled): the end of the
+/// coupled equilibrium's branch in the tension, to `REL`, followed from the weight alone
+/// (`loaded::CoupledBranch`: each step's solve starts from the last answer) in steps that
+/// double from an eighth of the softest joint's linear one-radian tension up to the search
+/// bound (1000 times that), halving after a refused one. The end is where a forward solve
+/// (from the straight finger) holds: if it does not, the bisection of forward solves below it
+/// answers. Where a refusal is a contact, so is the end; else a limit point.
 fn fmax_coupled<R: Real>(f: &Finger<R>, c: &Compliances<R>) -> Result<BranchLimit<R>, Error> {
     let n = f.p.n;
     let c33 = (0..n).map(|k| c.c[k][..f.p.m].iter().fold(R::zero(), |a, m| a + m[2][2])).fold(R::zero(), |a, b| a.max(b));
     let p_lin = R::one() / (f.p.e * c33);
     let bound = R::from_f64(1000.0) * p_lin;
-    let holds = |p: R| f.solve_with(c, p, [R::zero(); 2], super::Method::converged());
+    let method = super::Method::converged();
+    let super::Method::Converged { tol, max_iter } = method else { unreachable!() };
     // the finger under its own weight alone must stand
-    holds(R::zero())?;
-    let (mut lo, mut hi) = (R::zero(), p_lin / R::from_f64(8.0));
-    let mut why = loop {
-        match holds(hi) {
-            Ok(_) => {
-                lo = hi;
-                if hi >= bound {
-                    return Ok(BranchLimit { tension: bound, joint: 1, kind: BranchEnd::SearchBound });
-                }
-                hi = (hi + hi).min(bound);
-            }
-            Err(e) => break Some(e),
+    let mut walk = loaded::CoupledBranch::start(f, c, tol, max_iter)?;
+    let (mut h, mut grow, mut contact) = (p_lin / R::from_f64(8.0), true, false);
+    loop {
+        let lo = walk.tension();
+        if lo >= bound {
+            return Ok(BranchLimit { tension: bound, joint: 1, kind: BranchEnd::SearchBound });
         }
-    };
+        if !grow && h <= R::from_f64(REL) * (lo + h) {
+            break;
+        }
+        match walk.step((lo + h).min(bound), WALK_ITER) {
+            // a step doubles after two taken in a row (one, before the first refusal)
+            Ok(()) if grow => h = h + h,
+            Ok(()) => grow = true,
+            Err(why) => {
+                contact |= matches!(why, Some(MarchError::Contact));
+                (h, grow) = (h / R::from_f64(2.0), false);
+            }
+        }
+    }
+    let lo = walk.tension();
+    match f.solve_with(c, lo, [R::zero(); 2], method) {
+        Ok(s) => Ok(ends_at(f, lo, s, contact, None)),
+        Err(e) => fmax_bisected(f, c, R::zero(), lo, Some(e)),
+    }
+}
+
+/// fmax under gravity by the bisection of forward solves between a tension that holds, `lo`,
+/// and one that does not, `hi` (refused with `why`).
+fn fmax_bisected<R: Real>(f: &Finger<R>, c: &Compliances<R>, mut lo: R, mut hi: R, mut why: Option<Error>) -> Result<BranchLimit<R>, Error> {
+    let holds = |p: R| f.solve_with(c, p, [R::zero(); 2], super::Method::converged());
+    let mut last = holds(lo)?;
     let mut contact = matches!(why, Some(Error::Contact { .. }));
-    let mut last = None;
     while hi - lo > R::from_f64(REL) * hi {
         let mid = R::from_f64(0.5) * (lo + hi);
         match holds(mid) {
             Ok(s) => {
                 lo = mid;
-                last = Some(s);
+                last = s;
             }
             Err(e) => {
                 hi = mid;
@@ -281,18 +304,23 @@ fn fmax_coupled<R: Real>(f: &Finger<R>, c: &Compliances<R>) -> Result<BranchLimi
             }
         }
     }
+    Ok(ends_at(f, lo, last, contact, why))
+}
+
+/// The end at `lo`, `last` the forward solve there, `contact` whether a refusal past it was
+/// one (`why`: the last refusal of a forward solve, if one).
+fn ends_at<R: Real>(f: &Finger<R>, lo: R, last: super::Solution<R>, mut contact: bool, why: Option<Error>) -> BranchLimit<R> {
+    let n = f.p.n;
     // how it ends: a span at its floor (or within ten floors of it at the last tension held, where
     // the coupled continuation gives up before the march meets the floor) is contact, at the
     // joint of the shortest span; else a limit point
-    let shortest = last.map(|s| (0..n).fold((0, s.span[0]), |b, k| if s.span[k] < b.1 { (k, s.span[k]) } else { b }));
-    if let Some((_, span)) = shortest {
-        contact |= span <= R::from_f64(10.0) * f.p.span_floor;
-    }
-    let joint = match (why, shortest) {
-        (_, Some((k, _))) if contact => k + 1,
-        (Some(Error::Contact { joint, .. } | Error::LimitPoint { joint, .. }), _) => joint.max(1),
+    let (k, span) = (0..n).fold((0, last.span[0]), |b, k| if last.span[k] < b.1 { (k, last.span[k]) } else { b });
+    contact |= span <= R::from_f64(10.0) * f.p.span_floor;
+    let joint = match why {
+        _ if contact => k + 1,
+        Some(Error::Contact { joint, .. } | Error::LimitPoint { joint, .. }) => joint.max(1),
         _ => 1,
     };
     let kind = if contact { BranchEnd::Contact } else { BranchEnd::LimitPoint };
-    Ok(BranchLimit { tension: lo, joint, kind })
+    BranchLimit { tension: lo, joint, kind }
 }

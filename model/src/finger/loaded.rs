@@ -322,20 +322,40 @@ pub(super) fn newton_coupled<R: Real>(
     tol: R,
     max_iter: u32,
 ) -> Result<([JointState<R>; MAX_JOINTS], [R; 2], u32), Error> {
-    let n = f.p.n;
     let mut x = straight_unknowns(f);
-    let mut eq = Coupled {
-        f,
-        c,
-        tension: R::zero(),
-        force: [R::zero(); 2],
-        weight: R::zero(),
-        w: f.weights(),
-        states: [[f.straight(); MAX_JOINTS]; 3],
-        traces: [Trace::new(); 3],
-        jac: [[R::zero(); COUPLED]; COUPLED],
-        jac_at: None,
-    };
+    let mut eq = Coupled::new(f, c);
+    continued(&mut eq, &mut x, tension, force, tol, max_iter)
+}
+
+impl<'a, R: Real> Coupled<'a, R> {
+    fn new(f: &'a Finger<R>, c: &'a Compliances<R>) -> Self {
+        Coupled {
+            f,
+            c,
+            tension: R::zero(),
+            force: [R::zero(); 2],
+            weight: R::zero(),
+            w: f.weights(),
+            states: [[f.straight(); MAX_JOINTS]; 3],
+            traces: [Trace::new(); 3],
+            jac: [[R::zero(); COUPLED]; COUPLED],
+            jac_at: None,
+        }
+    }
+}
+
+/// `newton_coupled` from the coupled unknowns `x` (updated: on success, the answer's) with
+/// `eq` (its Jacobian estimate kept for a later solve).
+fn continued<R: Real>(
+    eq: &mut Coupled<'_, R>,
+    x: &mut [R; COUPLED],
+    tension: R,
+    force: [R; 2],
+    tol: R,
+    max_iter: u32,
+) -> Result<([JointState<R>; MAX_JOINTS], [R; 2], u32), Error> {
+    let f = eq.f;
+    let n = f.p.n;
     let mut iters = 0u32;
     let mut result = None;
     let opts_for = |left: u32| SolveOptions::new(tol, f.resolution() * R::from_u32(n as u32), left);
@@ -343,17 +363,17 @@ pub(super) fn newton_coupled<R: Real>(
         eq.tension = tension * to;
         eq.force = [force[0] * to, force[1] * to];
         eq.weight = to;
-        let mut xt = eq.pack(&x);
+        let mut xt = eq.pack(x);
         let left = max_iter.saturating_sub(iters);
         let carried = eq.jac_at.is_some();
-        let mut run = newton::solve(&mut eq, &mut xt, &opts_for(left));
+        let mut run = newton::solve(eq, &mut xt, &opts_for(left));
         if run.is_err() && carried {
             // Broyden's estimate may be what failed: once more from the step's start on forward
             // differences
             iters += run.as_ref().err().map_or(0, |f| f.iterations());
             eq.jac_at = None;
-            xt = eq.pack(&x);
-            run = newton::solve(&mut eq, &mut xt, &opts_for(max_iter.saturating_sub(iters)));
+            xt = eq.pack(x);
+            run = newton::solve(eq, &mut xt, &opts_for(max_iter.saturating_sub(iters)));
         }
         match run {
             // each accepted step stays on the physical branch: no joint turns by more than
@@ -365,7 +385,7 @@ pub(super) fn newton_coupled<R: Real>(
             }
             Ok((rep, slot)) => {
                 iters += rep.iterations;
-                x = eq.unpack(&xt);
+                *x = eq.unpack(&xt);
                 if eq.tipless() {
                     // the chain's tip
                     let end = eq.traces[slot].frames[n].pose;
@@ -408,4 +428,66 @@ pub(super) fn same_branch<R: Real>(f: &Finger<R>, last: Option<&[JointState<R>; 
         let dhole = super::norm2([next[k].hole[0] - before.hole[0], next[k].hole[1] - before.hole[1]]);
         dtheta <= R::from_f64(0.8) && dhole <= R::from_f64(0.5) * f.p.hinge_len() && next[k].end.theta.abs() < R::from_f64(core::f64::consts::PI)
     })
+}
+
+/// The coupled equilibrium at the finger's full weight without a tip force, followed up the
+/// tension (fmax under gravity): each step's solve starts from the last answer and its
+/// Broyden estimate instead of from the straight finger.
+pub(super) struct CoupledBranch<'a, R> {
+    eq: Coupled<'a, R>,
+    /// The last answer: its unknowns, tension and joints, and the Jacobian estimate there.
+    x: [R; COUPLED],
+    tension: R,
+    states: [JointState<R>; MAX_JOINTS],
+    jac: [[R; COUPLED]; COUPLED],
+    jac_at: Option<([R; COUPLED], [R; COUPLED])>,
+    tol: R,
+}
+
+impl<'a, R: Real> CoupledBranch<'a, R> {
+    /// The answer at tension 0 (the weight alone), as `newton_coupled` finds it.
+    pub(super) fn start(f: &'a Finger<R>, c: &'a Compliances<R>, tol: R, max_iter: u32) -> Result<Self, Error> {
+        let tol = tol.max(f.resolution());
+        let mut x = straight_unknowns(f);
+        let mut eq = Coupled::new(f, c);
+        let (states, _, _) = continued(&mut eq, &mut x, R::zero(), [R::zero(); 2], tol, max_iter)?;
+        Ok(CoupledBranch { jac: eq.jac, jac_at: eq.jac_at, eq, x, tension: R::zero(), states, tol })
+    }
+
+    /// The last answer's tension.
+    pub(super) fn tension(&self) -> R {
+        self.tension
+    }
+
+    /// A step to tension `p` from the last answer: damped Newton on the carried estimate (at
+    /// most `max_iter` iterations), once more on forward differences if that fails; taken if
+    /// it converges on the same branch (`same_branch`). Refused: the last answer and its
+    /// estimate stay, and the march's refusal, if one, is returned.
+    pub(super) fn step(&mut self, p: R, max_iter: u32) -> Result<(), Option<MarchError>> {
+        let f = self.eq.f;
+        let opts = SolveOptions::new(self.tol, f.resolution() * R::from_u32(f.p.n as u32), max_iter);
+        (self.eq.tension, self.eq.force, self.eq.weight) = (p, [R::zero(); 2], R::one());
+        let mut why = None;
+        for fresh in [false, true] {
+            if fresh {
+                self.eq.jac_at = None;
+            }
+            let mut xt = self.eq.pack(&self.x);
+            match newton::solve(&mut self.eq, &mut xt, &opts) {
+                Ok((_, slot)) if same_branch(f, Some(&self.states), &self.eq.states[slot]) => {
+                    self.x = self.eq.unpack(&xt);
+                    self.tension = p;
+                    self.states = self.eq.states[slot];
+                    self.jac = self.eq.jac;
+                    self.jac_at = self.eq.jac_at;
+                    return Ok(());
+                }
+                Ok(_) => {}
+                Err(fail) => why = fail.refusal().copied().or(why),
+            }
+        }
+        self.eq.jac = self.jac;
+        self.eq.jac_at = self.jac_at;
+        Err(why)
+    }
 }
