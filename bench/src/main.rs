@@ -5,6 +5,9 @@
 //! `R <scene> <scalar> <method> ok <solve_ticks> <setup_ticks> <tip_x> <tip_y> <a1> <a2> <a3> <iters>`
 //! `R <scene> <scalar> <method> err <solve_ticks> <setup_ticks> <error code>`
 //!
+//! and under gravity, the converged forward started from an earlier answer (`warm_starts`):
+//! `W <scene> <scalar> <case> ok <solve_ticks> <iters> <tip moved from the cold solve's, mm>`
+//!
 //! `setup` is `Finger::compliances` (DE thinning and the joint compliances for the scene's
 //! voltages, once per voltage change); `solve` is `Finger::solve_with` (equilibrium, posture,
 //! excursion). Angles in rad, positions in mm. The host (perf-report) turns ticks into
@@ -110,6 +113,51 @@ fn run_scene<S: Real>(name: &str, s: &Scene, prep: impl Fn(&Scene) -> Result<(Fi
                 );
             }
             Err(e) => hprintln!("R {} {} {} err {} {} {}", s.name, name, mname, t1 - t0, setup, e.code()),
+        }
+    }
+    if finger.has_weight() {
+        warm_starts(name, s, &finger, &comp);
+    }
+}
+
+/// Under gravity, the converged forward started from an earlier answer (`Finger::solve_from`:
+/// the board's last posture) at the scene's tension and voltages, after solves (not counted)
+/// at fractions of the tension (`at_...`) and at 0 V (`0V`): `again`, the same solve twice;
+/// `from-0.9P`, one before at 0.9 of the tension (the first start from an answer: its Broyden
+/// estimate is the solve from the straight finger's, refused, formed again by forward
+/// differences); `from-0.5P-0.9P`, two before (the estimate carried from the second); `from-0V`,
+/// one at 0 V; `from-0V-0.9P`, one at 0 V then one at 0.9 of the tension. One line each:
+/// `W <scene> <scalar> <case> ok <solve_ticks> <iters> <tip moved from the cold solve's, mm>`
+/// (or `W ... err <ticks> <code>`).
+fn warm_starts<S: Real>(name: &str, s: &Scene, f: &Finger<S>, comp: &finger_model::Compliances<S>) {
+    let method = cast_method::<S>(Method::converged());
+    let tension = S::from_f64(s.tension);
+    let Ok(cold) = f.solve_with(comp, tension, [S::zero(); 2], method) else { return };
+    let Ok(c0) = f.compliances(&[S::zero(); 3]) else { return };
+    let cases: [(&str, &[(f64, bool)]); 5] = [
+        ("again", &[(1.0, true)]),
+        ("from-0.9P", &[(0.9, true)]),
+        ("from-0.5P-0.9P", &[(0.5, true), (0.9, true)]),
+        ("from-0V", &[(1.0, false)]),
+        ("from-0V-0.9P", &[(1.0, false), (0.9, true)]),
+    ];
+    for (from, before) in cases {
+        let mut last = None;
+        if before.iter().any(|&(p, at_volts)| f.solve_from(if at_volts { comp } else { &c0 }, tension * S::from_f64(p), method, &mut last).is_err()) {
+            hprintln!("W {} {} {} err 0 start", s.name, name, from);
+            continue;
+        }
+        let t0 = cycles::now();
+        let r = f.solve_from(comp, tension, method, &mut last);
+        core::hint::black_box(&r);
+        let t1 = cycles::now();
+        match r {
+            Ok(sol) => {
+                let (a, b) = (sol.tip(), cold.tip());
+                let moved = ((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y)).sqrt();
+                hprintln!("W {} {} {} ok {} {} {:e}", s.name, name, from, t1 - t0, sol.iterations, moved.to_f64())
+            }
+            Err(e) => hprintln!("W {} {} {} err {} {}", s.name, name, from, t1 - t0, e.code()),
         }
     }
 }

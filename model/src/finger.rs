@@ -46,12 +46,16 @@ mod types;
 pub(crate) use joint::{by, By};
 pub use prepare::uniform_beam_compliance;
 pub use stiffness::JointStiffness;
+pub use loaded::CoupledStart;
 pub use types::{BranchEnd, BranchLimit, Compliances, JointEquilibrium, Method, Pose, Solution};
 pub(crate) use types::{Heading, JointMarch};
 
 /// Unknowns of the coupled (tip-loaded or weighted) solve: each joint's hole, the tip position,
 /// then under gravity each joint's distal centroid.
 const COUPLED: usize = 4 * MAX_JOINTS + 2;
+/// Newton iterations a solve started from an earlier answer (`Finger::solve_from`) may take
+/// before it falls back to the solve from the straight finger.
+const WARM_ITER: u32 = 8;
 
 /// A prepared finger: validated parameters and the hinge compliances, computed once.
 #[derive(Clone, Copy, Debug)]
@@ -173,6 +177,32 @@ impl<R: Real> Finger<R> {
             Method::Stepping { n_inc } => stepping::solve(self, c, tension, tip_force, n_inc),
             Method::Converged { tol, max_iter } => self.solve_converged(c, tension, tip_force, tol, max_iter),
         }
+    }
+
+    /// `solve_with` under tension alone, started from `last` (a coupled answer of this finger
+    /// kept from an earlier solve: the board's last posture) and kept into it. Under gravity
+    /// with the converged method, Newton starts from `last`'s answer and Broyden Jacobian (at
+    /// most `WARM_ITER` iterations, once more on forward differences) instead of from the
+    /// straight finger under load continuation; a start that does not converge on the same
+    /// branch (`loaded::same_branch`: no joint turned by more than 0.8 rad) falls back to
+    /// that. Otherwise `solve_with` (and `last` stays).
+    pub fn solve_from(&self, c: &Compliances<R>, tension: R, method: Method<R>, last: &mut Option<CoupledStart<R>>) -> Result<Solution<R>, Error> {
+        let Method::Converged { tol, max_iter } = method else { return self.solve_with(c, tension, [R::zero(); 2], method) };
+        if self.weights().is_none() {
+            return self.solve_with(c, tension, [R::zero(); 2], method);
+        }
+        self.check_load(c, tension, [R::zero(); 2])?;
+        if !tol.is_finite() || tol <= R::zero() {
+            return Err(Error::Input { input: "tol", reason: "tolerance must be positive" });
+        }
+        if let Some(s) = last.as_mut() {
+            if let Ok(iters) = s.step(self, c, tension, tol, WARM_ITER.min(max_iter)) {
+                return self.assemble(c, tension, [R::zero(); 2], s.states(), Some(s.tip(self.p.n)), iters);
+            }
+        }
+        let (s, iters) = loaded::CoupledStart::solve(self, c, tension, tol, max_iter)?;
+        let s = last.insert(s);
+        self.assemble(c, tension, [R::zero(); 2], s.states(), Some(s.tip(self.p.n)), iters)
     }
 
     // The solvers' entry points below delegate to their modules, inlined always: the image is

@@ -244,7 +244,7 @@ fn joint_end<R: Real>(
 
 /// fmax under gravity (docs/model.md "Gravity": the joints are coupled): the end of the
 /// coupled equilibrium's branch in the tension, to `REL`, followed from the weight alone
-/// (`loaded::CoupledBranch`: each step's solve starts from the last answer) in steps that
+/// (`loaded::CoupledStart::step`: each step's solve starts from the last answer) in steps that
 /// double from an eighth of the softest joint's linear one-radian tension up to the search
 /// bound (1000 times that), halving after a refused one. The end is where a forward solve
 /// (from the straight finger) holds: if it does not, the bisection of forward solves below it
@@ -257,7 +257,7 @@ fn fmax_coupled<R: Real>(f: &Finger<R>, c: &Compliances<R>) -> Result<BranchLimi
     let method = super::Method::converged();
     let super::Method::Converged { tol, max_iter } = method else { unreachable!() };
     // the finger under its own weight alone must stand
-    let mut walk = loaded::CoupledBranch::start(f, c, tol, max_iter)?;
+    let (mut walk, _) = loaded::CoupledStart::solve(f, c, R::zero(), tol, max_iter)?;
     let (mut h, mut grow, mut contact) = (p_lin / R::from_f64(8.0), true, false);
     loop {
         let lo = walk.tension();
@@ -267,10 +267,10 @@ fn fmax_coupled<R: Real>(f: &Finger<R>, c: &Compliances<R>) -> Result<BranchLimi
         if !grow && h <= R::from_f64(REL) * (lo + h) {
             break;
         }
-        match walk.step((lo + h).min(bound), WALK_ITER) {
+        match walk.step(f, c, (lo + h).min(bound), tol, WALK_ITER) {
             // a step doubles after two taken in a row (one, before the first refusal)
-            Ok(()) if grow => h = h + h,
-            Ok(()) => grow = true,
+            Ok(_) if grow => h = h + h,
+            Ok(_) => grow = true,
             Err(why) => {
                 contact |= matches!(why, Some(MarchError::Contact));
                 (h, grow) = (h / R::from_f64(2.0), false);

@@ -26,12 +26,40 @@ struct Coupled<'a, R> {
     /// Each slot's marched states and its evaluation (`Trace`: where a forward difference resumes).
     states: [[JointState<R>; MAX_JOINTS]; 3],
     traces: [Trace<R>; 3],
-    /// The Jacobian estimate: forward differences once, then Broyden's rank-one update at each
-    /// Newton iterate (and across the continuation's steps).
+    /// The Jacobian estimate (kept where the caller keeps it: `CoupledStart`).
+    est: &'a mut Estimate<R>,
+}
+
+/// The coupled system's Jacobian estimate: forward differences once, then Broyden's rank-one
+/// update at each Newton iterate (and carried across the continuation's steps, tensions and
+/// voltages: `carry`).
+#[derive(Clone, Copy)]
+pub(super) struct Estimate<R> {
     jac: [[R; COUPLED]; COUPLED],
-    /// The point (x, r) `jac` was last formed or updated at; None: forward differences at the
-    /// next call.
-    jac_at: Option<([R; COUPLED], [R; COUPLED])>,
+    /// Whether `jac` holds an estimate; false: forward differences at the next call.
+    formed: bool,
+    /// The point (x, r) of this system `jac` was last formed or updated at (the next update's
+    /// base); None: `jac` as it is at the next call.
+    at: Option<([R; COUPLED], [R; COUPLED])>,
+}
+
+impl<R: Real> Estimate<R> {
+    /// None yet: forward differences at the first call.
+    pub(super) fn new() -> Self {
+        Estimate { jac: [[R::zero(); COUPLED]; COUPLED], formed: false, at: None }
+    }
+
+    /// The system changes (another load factor, tension or compliances): the estimate is kept
+    /// as it is, but its last point is not one of the new system's (a residual there would
+    /// make the next update take the change of system for a slope).
+    fn carry(&mut self) {
+        self.at = None;
+    }
+
+    /// Forward differences at the next call.
+    fn drop(&mut self) {
+        (self.formed, self.at) = (false, None);
+    }
 }
 
 impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
@@ -52,11 +80,13 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
     }
     fn jacobian_into(&mut self, x: &[R; COUPLED], r: &[R; COUPLED], slot: usize, out: &mut [[R; COUPLED]; COUPLED]) -> Result<(), MarchError> {
         let dim = self.dim();
-        match &self.jac_at {
-            // Broyden's good update from the last point: J += (Δr - J Δx) Δxᵀ / |Δx|² (at the
-            // same x, a new continuation step: J as it was)
+        let est = &mut *self.est;
+        match &est.at {
+            // carried into this system: J as it is
+            None if est.formed => {}
+            // Broyden's good update from the last point: J += (Δr - J Δx) Δxᵀ / |Δx|²
             Some((x0, r0)) => {
-                let jac = &mut self.jac;
+                let jac = &mut est.jac;
                 let mut dx = [R::zero(); COUPLED];
                 for i in 0..dim {
                     dx[i] = x[i] - x0[i];
@@ -72,11 +102,14 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
                     }
                 }
             }
-            None => self.forward_difference(x, r, slot)?,
+            None => {
+                self.forward_difference(x, r, slot)?;
+                self.est.formed = true;
+            }
         }
-        self.jac_at = Some((*x, *r));
+        self.est.at = Some((*x, *r));
         // the leading block only: Newton factors it in place, the estimate stays here
-        for (o, j) in out[..dim].iter_mut().zip(&self.jac[..dim]) {
+        for (o, j) in out[..dim].iter_mut().zip(&self.est.jac[..dim]) {
             o[..dim].copy_from_slice(&j[..dim]);
         }
         Ok(())
@@ -135,7 +168,7 @@ impl<R: Real> Coupled<'_, R> {
             t.restore(&self.traces[slot], from.0, n);
             let rp = self.pack(&rp?);
             for row in 0..dim {
-                self.jac[row][i] = (rp[row] - r[row]) / h;
+                self.est.jac[row][i] = (rp[row] - r[row]) / h;
             }
         }
         Ok(())
@@ -323,12 +356,14 @@ pub(super) fn newton_coupled<R: Real>(
     max_iter: u32,
 ) -> Result<([JointState<R>; MAX_JOINTS], [R; 2], u32), Error> {
     let mut x = straight_unknowns(f);
-    let mut eq = Coupled::new(f, c);
+    let mut est = Estimate::new();
+    let mut eq = Coupled::new(f, c, &mut est);
     continued(&mut eq, &mut x, tension, force, tol, max_iter)
 }
 
 impl<'a, R: Real> Coupled<'a, R> {
-    fn new(f: &'a Finger<R>, c: &'a Compliances<R>) -> Self {
+    #[inline(always)]
+    fn new(f: &'a Finger<R>, c: &'a Compliances<R>, est: &'a mut Estimate<R>) -> Self {
         Coupled {
             f,
             c,
@@ -338,8 +373,7 @@ impl<'a, R: Real> Coupled<'a, R> {
             w: f.weights(),
             states: [[f.straight(); MAX_JOINTS]; 3],
             traces: [Trace::new(); 3],
-            jac: [[R::zero(); COUPLED]; COUPLED],
-            jac_at: None,
+            est,
         }
     }
 }
@@ -365,13 +399,15 @@ fn continued<R: Real>(
         eq.weight = to;
         let mut xt = eq.pack(x);
         let left = max_iter.saturating_sub(iters);
-        let carried = eq.jac_at.is_some();
+        // (the estimate's last point is the step before's: the first update mixes the two
+        // load factors, which reaches further near a limit point than the estimate as it is)
+        let carried = eq.est.formed;
         let mut run = newton::solve(eq, &mut xt, &opts_for(left));
         if run.is_err() && carried {
             // Broyden's estimate may be what failed: once more from the step's start on forward
             // differences
             iters += run.as_ref().err().map_or(0, |f| f.iterations());
-            eq.jac_at = None;
+            eq.est.drop();
             xt = eq.pack(x);
             run = newton::solve(eq, &mut xt, &opts_for(max_iter.saturating_sub(iters)));
         }
@@ -430,64 +466,92 @@ pub(super) fn same_branch<R: Real>(f: &Finger<R>, last: Option<&[JointState<R>; 
     })
 }
 
-/// The coupled equilibrium at the finger's full weight without a tip force, followed up the
-/// tension (fmax under gravity): each step's solve starts from the last answer and its
-/// Broyden estimate instead of from the straight finger.
-pub(super) struct CoupledBranch<'a, R> {
-    eq: Coupled<'a, R>,
-    /// The last answer: its unknowns, tension and joints, and the Jacobian estimate there.
+/// A coupled answer kept to start a later solve from (`Finger::solve_from`: the board's last
+/// posture; fmax's walk up the branch): the coupled unknowns, tension and joints, and the
+/// Jacobian estimate there.
+#[derive(Clone, Copy)]
+pub struct CoupledStart<R> {
     x: [R; COUPLED],
     tension: R,
     states: [JointState<R>; MAX_JOINTS],
-    jac: [[R; COUPLED]; COUPLED],
-    jac_at: Option<([R; COUPLED], [R; COUPLED])>,
-    tol: R,
+    est: Estimate<R>,
 }
 
-impl<'a, R: Real> CoupledBranch<'a, R> {
-    /// The answer at tension 0 (the weight alone), as `newton_coupled` finds it.
-    pub(super) fn start(f: &'a Finger<R>, c: &'a Compliances<R>, tol: R, max_iter: u32) -> Result<Self, Error> {
-        let tol = tol.max(f.resolution());
-        let mut x = straight_unknowns(f);
-        let mut eq = Coupled::new(f, c);
-        let (states, _, _) = continued(&mut eq, &mut x, R::zero(), [R::zero(); 2], tol, max_iter)?;
-        Ok(CoupledBranch { jac: eq.jac, jac_at: eq.jac_at, eq, x, tension: R::zero(), states, tol })
-    }
-
-    /// The last answer's tension.
-    pub(super) fn tension(&self) -> R {
+impl<R: Real> CoupledStart<R> {
+    /// The answer's tension, N.
+    pub fn tension(&self) -> R {
         self.tension
     }
 
-    /// A step to tension `p` from the last answer: damped Newton on the carried estimate (at
-    /// most `max_iter` iterations), once more on forward differences if that fails; taken if
-    /// it converges on the same branch (`same_branch`). Refused: the last answer and its
-    /// estimate stay, and the march's refusal, if one, is returned.
-    pub(super) fn step(&mut self, p: R, max_iter: u32) -> Result<(), Option<MarchError>> {
-        let f = self.eq.f;
-        let opts = SolveOptions::new(self.tol, f.resolution() * R::from_u32(f.p.n as u32), max_iter);
-        (self.eq.tension, self.eq.force, self.eq.weight) = (p, [R::zero(); 2], R::one());
-        let mut why = None;
+    /// The answer's joints.
+    pub(super) fn states(&self) -> &[JointState<R>; MAX_JOINTS] {
+        &self.states
+    }
+
+    /// The answer's tip (the chain's), base frame, mm.
+    pub(super) fn tip(&self, n: usize) -> [R; 2] {
+        [self.x[2 * n], self.x[2 * n + 1]]
+    }
+
+    /// The coupled equilibrium at `tension` as `newton_coupled` finds it (from the straight
+    /// finger, under load continuation; at the finger's full weight, no tip force), and its
+    /// iterations.
+    pub(super) fn solve(f: &Finger<R>, c: &Compliances<R>, tension: R, tol: R, max_iter: u32) -> Result<(Self, u32), Error> {
+        let tol = tol.max(f.resolution());
+        let mut x = straight_unknowns(f);
+        let mut est = Estimate::new();
+        let mut eq = Coupled::new(f, c, &mut est);
+        let (states, _, iters) = continued(&mut eq, &mut x, tension, [R::zero(); 2], tol, max_iter)?;
+        Ok((CoupledStart { x, tension, states, est }, iters))
+    }
+
+    /// A step to tension `p` (at `c`'s compliances) from this answer, written over it: damped
+    /// Newton on the carried estimate (at most `max_iter` iterations, `CARRIED_HALVINGS` line
+    /// search halvings), once more on forward differences at the start if that fails; taken if it
+    /// converges on the same branch (`same_branch`): its iterations. Refused: the answer stays
+    /// (its estimate may not), and the march's refusal, if one, is returned.
+    pub(super) fn step(&mut self, f: &Finger<R>, c: &Compliances<R>, p: R, tol: R, max_iter: u32) -> Result<u32, Option<MarchError>> {
+        let n = f.p.n;
+        let CoupledStart { x, tension, states, est } = self;
+        let mut eq = Coupled::new(f, c, est);
+        (eq.tension, eq.weight) = (p, R::one());
+        let mut opts = SolveOptions::new(tol.max(f.resolution()), f.resolution() * R::from_u32(n as u32), max_iter);
+        let (mut why, mut iters) = (None, 0);
+        eq.est.carry();
         for fresh in [false, true] {
             if fresh {
-                self.eq.jac_at = None;
+                eq.est.drop();
+                opts.max_halvings = SolveOptions::<R>::new(tol, tol, 0).max_halvings;
+            } else if !eq.est.formed {
+                continue;
+            } else {
+                opts.max_halvings = CARRIED_HALVINGS;
             }
-            let mut xt = self.eq.pack(&self.x);
-            match newton::solve(&mut self.eq, &mut xt, &opts) {
-                Ok((_, slot)) if same_branch(f, Some(&self.states), &self.eq.states[slot]) => {
-                    self.x = self.eq.unpack(&xt);
-                    self.tension = p;
-                    self.states = self.eq.states[slot];
-                    self.jac = self.eq.jac;
-                    self.jac_at = self.eq.jac_at;
-                    return Ok(());
+            let mut xt = eq.pack(x);
+            match newton::solve(&mut eq, &mut xt, &opts) {
+                Ok((rep, slot)) if same_branch(f, Some(states), &eq.states[slot]) => {
+                    *x = eq.unpack(&xt);
+                    // the chain's tip
+                    let end = eq.traces[slot].frames[n].pose;
+                    (x[2 * n], x[2 * n + 1]) = (end.x, end.y);
+                    *tension = p;
+                    *states = eq.states[slot];
+                    return Ok(iters + rep.iterations);
                 }
-                Ok(_) => {}
-                Err(fail) => why = fail.refusal().copied().or(why),
+                Ok((rep, _)) => iters += rep.iterations,
+                Err(fail) => {
+                    iters += fail.iterations();
+                    why = fail.refusal().copied().or(why);
+                }
             }
         }
-        self.eq.jac = self.jac;
-        self.eq.jac_at = self.jac_at;
         Err(why)
     }
 }
+
+/// Line-search halvings a step from a carried estimate may take before it is retried on
+/// forward differences (an estimate carried from another tension or voltage can point
+/// nowhere downhill: cheaper to form it again than to halve twelve times).
+const CARRIED_HALVINGS: u32 = 2;
+
+
