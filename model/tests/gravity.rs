@@ -362,3 +362,50 @@ fn tip_compliance_under_gravity_is_the_forward_response() {
         assert!(err_without > 1e-2, "dir {dir}: {err_without}");
     }
 }
+
+/// The coupled forward started from an earlier answer (`Finger::solve_from`, the board's last
+/// posture: another tension, other voltages) answers what the solve from the straight finger
+/// does (asked again, with no iteration); from an answer far off (near fmax, for a solve at no
+/// tension) it falls back to that solve. f64 and f32 (the board's scalar). The cost:
+/// docs/performance.md (the bench's `W` lines).
+#[test]
+fn a_solve_from_an_earlier_answer_agrees_with_the_solve_from_straight() {
+    fn check<R: finger_model::Real>(f: &Finger<R>, dir: f64) {
+        let m = Method::converged();
+        let v = |x: f64| [R::from_f64(x); 3];
+        let (c, c0) = (f.compliances(&v(3000.0)).unwrap(), f.compliances(&v(0.0)).unwrap());
+        let p = |x: f64| R::from_f64(x);
+        let tip_gap = |a: &finger_model::Solution<R>, b: &finger_model::Solution<R>| {
+            let (a, b) = (a.tip(), b.tip());
+            ((a.x - b.x).to_f64().powi(2) + (a.y - b.y).to_f64().powi(2)).sqrt()
+        };
+        let tol_mm = if R::EPS > 1e-10 { 1e-4 } else { 1e-8 };
+        let mut last = None;
+        let first = f.solve_from(&c0, p(0.7), m, &mut last).unwrap();
+        let cold_first = f.solve_with(&c0, p(0.7), [p(0.0); 2], m).unwrap();
+        assert!(tip_gap(&first, &cold_first) == 0.0, "dir {dir}: with nothing kept, the solve from straight");
+        for (pp, cc) in [(1.0, &c), (1.0, &c), (0.9, &c0), (2.0, &c)] {
+            let cold = f.solve_with(cc, p(pp), [p(0.0); 2], m).unwrap();
+            let warm = f.solve_from(cc, p(pp), m, &mut last).unwrap();
+            println!("dir {dir} {} at {pp} N: iterations {} from the last answer, {} from straight; tip {:.1e} mm apart", R::NAME, warm.iterations, cold.iterations, tip_gap(&warm, &cold));
+            assert!(tip_gap(&warm, &cold) < tol_mm, "dir {dir} at {pp} N");
+            assert!(warm.residual.to_f64() < tol_mm);
+        }
+        // asked again: the answer kept is checked, no iteration
+        let again = f.solve_from(&c, p(2.0), m, &mut last).unwrap();
+        assert_eq!(again.iterations, 0);
+        // from near fmax to no tension: past the branch rule's 0.8 rad a joint, the solve from straight
+        let end = f.fmax(&v(0.0)).unwrap().tension;
+        f.solve_from(&c0, end * p(0.98), m, &mut last).unwrap();
+        let cold = f.solve_with(&c0, p(0.0), [p(0.0); 2], m).unwrap();
+        let back = f.solve_from(&c0, p(0.0), m, &mut last).unwrap();
+        assert!(tip_gap(&back, &cold) < tol_mm, "dir {dir}: from near fmax");
+        assert_eq!(back.iterations, cold.iterations, "dir {dir}: the fallback is the solve from straight");
+    }
+    for dir in DIRS {
+        let f = board(dir);
+        check(&f, dir);
+        let p32: Params<f32> = f.params().cast();
+        check(&Finger::<f32>::with_calibration(p32, Calibration::for_params(&p32)).unwrap(), dir);
+    }
+}
