@@ -9,7 +9,7 @@
 
 use core::cell::Cell;
 
-#[cfg(any(feature = "pose", not(m3)))]
+#[cfg(feature = "pose")]
 use finger_model::Solution;
 use finger_model::{BranchLimit, Error as ModelError, Finger};
 
@@ -29,10 +29,6 @@ pub(crate) struct Planner {
     /// its cost). None inside for a finger without stacks.
     #[cfg(feature = "pose")]
     inv_table: core::cell::OnceCell<Option<finger_model::inverse::BranchTable<f32>>>,
-    /// Under gravity, the last coupled answer (`Finger::solve_from`: the next forward starts
-    /// from it, not from the straight finger); cleared with the model.
-    #[cfg(not(m3))]
-    last: core::cell::RefCell<Option<finger_model::finger::CoupledStart<f32>>>,
 }
 
 impl Planner {
@@ -48,8 +44,6 @@ impl Planner {
             fmax_computed: Cell::new(0),
             #[cfg(feature = "pose")]
             inv_table: core::cell::OnceCell::new(),
-            #[cfg(not(m3))]
-            last: core::cell::RefCell::new(None),
         }
     }
 
@@ -61,10 +55,6 @@ impl Planner {
     pub(crate) fn set_finger(&mut self, f: Finger<f32>) {
         self.finger = f;
         self.fmax_cache.set(None);
-        #[cfg(not(m3))]
-        {
-            *self.last.get_mut() = None;
-        }
         self.clear_table();
     }
 
@@ -135,23 +125,7 @@ impl Planner {
             t.solve_into(&c, p, &mut sol)?;
             return Ok(use_it(&sol));
         }
-        #[cfg(not(m3))]
-        if self.finger.has_weight() {
-            let c = self.finger.compliances(volts)?;
-            return self.solve_from(&c, p).map(|s| use_it(&s));
-        }
         forward(&self.finger, p, volts).map(|s| use_it(&s))
-    }
-
-    /// The converged forward at compliances `c`, under gravity started from the last answer
-    /// (`Finger::solve_from`), kept for the next.
-    #[cfg(not(m3))]
-    fn solve_from(&self, c: &finger_model::Compliances<f32>, p: f32) -> Result<Solution<f32>, ModelError> {
-        let method = finger_model::Method::converged();
-        match self.last.try_borrow_mut() {
-            Ok(mut last) => self.finger.solve_from(c, p, method, &mut last),
-            Err(_) => self.finger.solve_with(c, p, [0.0; 2], method),
-        }
     }
 
     /// [`Planner::forward_with`] with the stacks at `thick_mm` now instead of relaxed at
@@ -178,7 +152,7 @@ impl Planner {
                 t.solve_into(&c, p, &mut sol)?;
                 return Ok(use_it(&sol));
             }
-            self.solve_from(&c, p).map(|s| use_it(&s))
+            self.finger.solve_with(&c, p, [0.0; 2], finger_model::Method::converged()).map(|s| use_it(&s))
         }
     }
 }

@@ -83,11 +83,13 @@ fn main() {
     // ---- target runs
     let mut rows: Vec<Row> = Vec::new();
     let mut cal_notes = Vec::new();
+    let mut warm = Vec::new();
     for img in IMAGES {
         eprintln!("perf-report: building and running {} ({})", img.name, img.features);
         let elf = perf::build("finger-bench", img.triple, img.features, img.name).unwrap_or_else(|e| panic!("{e}"));
         let out = perf::run_qemu(&elf, img.machine, img.shift).unwrap_or_else(|e| panic!("{e}"));
         let recs = perf::parse(img, &out).unwrap_or_else(|e| panic!("{}: {e}", img.name));
+        warm.extend(warm_rows(img, &out));
         let cal = out.lines().find(|l| l.starts_with("CAL")).unwrap_or("").to_string();
         cal_notes.push(format!("{}: `{}`", img.name, cal));
         for rec in recs {
@@ -169,6 +171,7 @@ fn main() {
          the answer (docs/inverse.md \"Reached from rest\": an answer the finger does not reach is \
          refused), which the tabled path does not need: 13,000 to 19,000 (m = 1) and 20,000 to 39,000 (m = 8) of theirs.\n\n{inverse_table}\n"
     );
+    let section = format!("{section}{}\n", warm_section(&rows, &warm));
     // ---- the branch-table path
     eprintln!("perf-report: branch-table image");
     let section = format!("{section}{}\n", perf::table_cost_section());
@@ -184,6 +187,53 @@ fn main() {
     std::fs::write(root.join("docs/performance.md"), md).unwrap();
     std::fs::write(root.join("docs/perf-error-vs-instructions.svg"), plot(&rows)).unwrap();
     eprintln!("perf-report: wrote docs/performance.md and docs/perf-error-vs-instructions.svg");
+}
+
+/// A bench image's `W` lines (the forward under gravity started from an earlier answer) in the
+/// firmware's image (m4f-fasttrig), as table rows: image, scene, scalar, case, instructions, iterations, tip moved (mm) or
+/// the error code.
+fn warm_rows(img: &perf::Image, out: &str) -> Vec<[String; 7]> {
+    let Ok(bench) = perf::read_bench(out) else { return Vec::new() };
+    if img.name != "m4f-fasttrig" {
+        return Vec::new();
+    }
+    let mut rows = Vec::new();
+    for f in bench.lines.iter().filter(|f| f.first() == Some(&"W") && f.len() >= 6) {
+        let instr = f[5].parse::<f64>().map(|t| format!("{:.0}", bench.instructions(t))).unwrap_or_else(|_| "-".into());
+        let (iters, moved) = match (f[4], f.get(6), f.get(7)) {
+            ("ok", Some(i), Some(m)) => (i.to_string(), m.parse::<f64>().map(|m| format!("{m:.1e}")).unwrap_or_else(|_| "-".into())),
+            _ => ("-".into(), format!("err {}", f.get(6).copied().unwrap_or("?"))),
+        };
+        rows.push([img.name.to_string(), f[1].to_string(), f[2].to_string(), f[3].to_string(), instr, iters, moved]);
+    }
+    rows
+}
+
+/// The section on the forward under gravity started from an earlier answer (`W` lines).
+fn warm_section(rows: &[Row], warm: &[[String; 7]]) -> String {
+    let mut s = String::from(
+        "## The forward under gravity from the last answer on the Cortex-M4F\n\n\
+         `Finger::solve_from` (the model's; the firmware does not use it, docs/model.md \"Gravity\" says why): \
+         the coupled solve started from an earlier answer of the same finger (its coupled unknowns, \
+         joints and Broyden Jacobian estimate, kept by the caller) instead of from the straight finger; Newton on the \
+         carried estimate, forward differences at the start where that fails, the solve from straight where that \
+         fails too (docs/model.md \"Gravity\"). Bench image `bench/src/main.rs` (`warm_starts`), the gravity scenes at \
+         their tension and voltages, after solves not counted: `again`, the same solve before; `from-0.9P`, one at 0.9 \
+         of the tension (the first start from an answer of the solve from straight: its estimate is refused and formed \
+         again by forward differences at the start); `from-0.5P-0.9P`, two before (the estimate carried from the \
+         second); `from-0V`, one with the stacks at 0 V; `from-0V-0.9P`, one at 0 V then one at 0.9 of the tension. \
+         *cold*: the same scene's converged solve from straight (the tables above). *tip moved*: from the cold \
+         answer's tip, mm.\n\n\
+         | image | scene | scalar | from | instructions | cold | iterations | tip moved mm |\n| --- | --- | --- | --- | ---: | ---: | ---: | ---: |\n",
+    );
+    for [image, scene, scalar, case, instr, iters, moved] in warm {
+        let cold = rows
+            .iter()
+            .find(|r| &r.rec.image == image && &r.rec.scene == scene && &r.rec.scalar == scalar && r.rec.method == "conv")
+            .map_or("-".to_string(), |r| format!("{:.0}", r.rec.instr));
+        s.push_str(&format!("| {image} | {scene} | {scalar} | {case} | {instr} | {cold} | {iters} | {moved} |\n"));
+    }
+    s
 }
 
 /// Series key: image + scalar.
@@ -669,7 +719,7 @@ fn plot(rows: &[Row]) -> String {
 }
 
 /// Why the counts of the last structural change moved (the section `moved` writes).
-const MOVED_WHY: &str = "This change (issues 53, 54, 55; 2026-12-07): the bench images carry the model feature `gravity` (the held loads threaded through the per-joint solves, zero without weight: the paper scenes' converged forward on the M4F, f32/fast-trig, median 6,206 -> 6,958 instructions, the M3's about +3 %; the tabled path unchanged), two scenes under gravity (`-g0`, `-g90`: 125,581 and 125,599 instructions, the coupled solve's Broyden Jacobian; 447,000 by hand before it), and \"`contact` on the Cortex-M4F\" after the fold detection, the branch rule and the pulling-stop refusal (worst refused 261 ms at 168 MHz, was 907 ms). Errors unchanged. \"Before\" is this report at 4cf1f45c's parent report (a750fd7b).";
+const MOVED_WHY: &str = "This change (issue 53, 2026-12-08): the coupled forward under gravity without the by-value copies of its 22 x 22 arrays (the LU factored in place, `Lu::in_place`; Newton's Jacobian written into one array per solve, `Equations::jacobian_into`, the coupled system's Broyden estimate copied by its leading block only; each forward-difference column resumed on one copy of the evaluation, what it wrote undone after it): the gravity scenes' converged forward on the M4F, f32/fast-trig, 125,581 -> 114,819 (`-g0`) and 125,598 -> 114,831 (`-g90`), the same iterations and answers. New section: the forward under gravity from the last answer (`Finger::solve_from`). The scenes without gravity take the same path as before. \"Before\" is this report at the parent commit.";
 
 /// The rows of the tables under `heading` in `md`: the first `key` cells joined, then the next `cols` cells.
 fn table_rows(md: &str, heading: &str, key: usize, cols: usize) -> BTreeMap<String, Vec<String>> {
