@@ -219,11 +219,11 @@ fn warm_section(rows: &[Row], warm: &[[String; 7]]) -> String {
          carried estimate, forward differences at the start where that fails, the solve from straight where that \
          fails too (docs/model.md \"Gravity\"). Bench image `bench/src/main.rs` (`warm_starts`), the gravity scenes at \
          their tension and voltages, after solves not counted: `again`, the same solve before; `from-0.9P`, one at 0.9 \
-         of the tension (the first start from an answer of the solve from straight: its estimate is refused and formed \
-         again by forward differences at the start); `from-0.5P-0.9P`, two before (the estimate carried from the \
-         second); `from-0V`, one with the stacks at 0 V; `from-0V-0.9P`, one at 0 V then one at 0.9 of the tension. \
+         of the tension (the estimate carried from the solve from straight); `from-0.5P-0.9P`, two before (the \
+         estimate carried from the second); `from-0V`, one with the stacks at 0 V; `from-0V-0.9P`, one at 0 V then one at 0.9 of the tension. \
          *cold*: the same scene's converged solve from straight (the tables above). *tip moved*: from the cold \
          answer's tip, mm.\n\n\
+         **What bounds it** (QEMU's per-instruction trace of the `-g0` scene's cold solve, f32/fast-trig, 114,808): the marches (3 joints of 8 sub-elements; the 12 forward-difference columns, each resumed where its unknown enters, and 4 whole evaluations) about 32,000; two 12 x 12 LU factorizations about 16,000; the evaluations' chain, loads and centroids about 19,000; the answer's assembly (the chain, and each joint's tangent determinant by a dual march) about 14,000; zeroing and copying about 21,000 (residuals and states returned by value, the evaluation's per-slot states set up). From the last answer the Jacobian is carried (no forward differences): one or two iterations, 46,000 to 66,000; asked again, one evaluation and the assembly, 29,000. So the issue's 10,000 is not reached: below about 20,000 (one evaluation of the full model and the assembly) the answer would have to drop the tangent determinants or march fewer than m sub-elements.\n\n\
          | image | scene | scalar | from | instructions | cold | iterations | tip moved mm |\n| --- | --- | --- | --- | ---: | ---: | ---: | ---: |\n",
     );
     for [image, scene, scalar, case, instr, iters, moved] in warm {
@@ -719,7 +719,7 @@ fn plot(rows: &[Row]) -> String {
 }
 
 /// Why the counts of the last structural change moved (the section `moved` writes).
-const MOVED_WHY: &str = "This change (issue 53, 2026-12-08): the coupled forward under gravity without the by-value copies of its 22 x 22 arrays (the LU factored in place, `Lu::in_place`; Newton's Jacobian written into one array per solve, `Equations::jacobian_into`, the coupled system's Broyden estimate copied by its leading block only; each forward-difference column resumed on one copy of the evaluation, what it wrote undone after it): the gravity scenes' converged forward on the M4F, f32/fast-trig, 125,581 -> 114,819 (`-g0`) and 125,598 -> 114,831 (`-g90`), the same iterations and answers. New section: the forward under gravity from the last answer (`Finger::solve_from`). The scenes without gravity take the same path as before. \"Before\" is this report at the parent commit.";
+const MOVED_WHY: &str = "This change (issue 53, 2026-12-08): the coupled forward under gravity without the by-value copies of its 22 x 22 arrays (the LU factored in place, `Lu::in_place`; Newton's Jacobian written into one array per solve, `Equations::jacobian_into`, the coupled system's Broyden estimate copied by its leading block only; each forward-difference column resumed on one copy of the evaluation, what it wrote undone after it): the gravity scenes' converged forward on the M4F, f32/fast-trig, 125,581 -> 114,808 (`-g0`) and 125,599 -> 114,826 (`-g90`), the same iterations and answers. The per-joint Newton (2 x 2, the converged forward without gravity) writes its Jacobian into one array too: the paper scenes' converged forward on the M4F, f32/fast-trig, mean 6,958 -> 6,718. The stepping rows and *setup* moved by about 1 % either way (code layout; the commits since the last report). Errors unchanged. New section: the forward under gravity from the last answer (`Finger::solve_from`). \"Before\" is this report at the parent commit.";
 
 /// The rows of the tables under `heading` in `md`: the first `key` cells joined, then the next `cols` cells.
 fn table_rows(md: &str, heading: &str, key: usize, cols: usize) -> BTreeMap<String, Vec<String>> {
