@@ -44,9 +44,9 @@ mod tip_stiffness;
 mod types;
 
 pub(crate) use joint::{by, By};
+pub use loaded::CoupledStart;
 pub use prepare::uniform_beam_compliance;
 pub use stiffness::JointStiffness;
-pub use loaded::CoupledStart;
 pub use types::{BranchEnd, BranchLimit, Compliances, JointEquilibrium, Method, Pose, Solution};
 pub(crate) use types::{Heading, JointMarch};
 

@@ -387,7 +387,13 @@ fn a_solve_from_an_earlier_answer_agrees_with_the_solve_from_straight() {
         for (pp, cc) in [(1.0, &c), (1.0, &c), (0.9, &c0), (2.0, &c)] {
             let cold = f.solve_with(cc, p(pp), [p(0.0); 2], m).unwrap();
             let warm = f.solve_from(cc, p(pp), m, &mut last).unwrap();
-            println!("dir {dir} {} at {pp} N: iterations {} from the last answer, {} from straight; tip {:.1e} mm apart", R::NAME, warm.iterations, cold.iterations, tip_gap(&warm, &cold));
+            println!(
+                "dir {dir} {} at {pp} N: iterations {} from the last answer, {} from straight; tip {:.1e} mm apart",
+                R::NAME,
+                warm.iterations,
+                cold.iterations,
+                tip_gap(&warm, &cold)
+            );
             assert!(tip_gap(&warm, &cold) < tol_mm, "dir {dir} at {pp} N");
             assert!(warm.residual.to_f64() < tol_mm);
         }

@@ -553,5 +553,3 @@ impl<R: Real> CoupledStart<R> {
 /// forward differences (an estimate carried from another tension or voltage can point
 /// nowhere downhill: cheaper to form it again than to halve twelve times).
 const CARRIED_HALVINGS: u32 = 2;
-
-
