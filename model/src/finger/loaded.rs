@@ -130,7 +130,14 @@ fn broyden_rank_one<R: Real>(jac: &mut [[R; COUPLED]; COUPLED], dim: usize, x: &
 }
 
 /// [`broyden_rank_one`] on the whole coupled system (the pinned solve's).
-pub(super) fn broyden_update<R: Real>(jac: &mut [[R; COUPLED]; COUPLED], f: &Finger<R>, x: &[R; COUPLED], r: &[R; COUPLED], x0: &[R; COUPLED], r0: &[R; COUPLED]) {
+pub(super) fn broyden_update<R: Real>(
+    jac: &mut [[R; COUPLED]; COUPLED],
+    f: &Finger<R>,
+    x: &[R; COUPLED],
+    r: &[R; COUPLED],
+    x0: &[R; COUPLED],
+    r0: &[R; COUPLED],
+) {
     broyden_rank_one(jac, coupled_dim(f), x, r, x0, r0);
 }
 

@@ -45,7 +45,6 @@ const MIN_STEP: f64 = 1.0 / 8192.0;
 /// most 7,636 (f32) and 25,584 (f64).
 const MAX_EVALS: u32 = 32768;
 
-
 /// A pinned-tip answer: the loaded equilibrium, the force on the tip and the iterations.
 pub(crate) struct Pinned<R> {
     pub solution: Solution<R>,
