@@ -352,6 +352,26 @@ impl<R: Real> Params<R> {
     /// Set a parameter by its console name. The whole set is validated; on error nothing
     /// changes.
     pub fn set(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        self.set_many(&[(name, value)])
+    }
+
+    /// Set several parameters by their console names at once (a command line's or a keyword
+    /// list's): each value is checked against its own range, then the whole set once, so the
+    /// order does not matter (`a` may come before the `l` that makes it fit). On error nothing
+    /// changes.
+    pub fn set_many(&mut self, sets: &[(&str, f64)]) -> Result<(), Error> {
+        let mut p = *self;
+        for &(name, value) in sets {
+            p.assign(name, value)?;
+        }
+        p.validate()?;
+        *self = p;
+        Ok(())
+    }
+
+    /// One value into its field after its own checks (name, finite, writable, range, integer);
+    /// the set as a whole is not validated here.
+    fn assign(&mut self, name: &str, value: f64) -> Result<(), Error> {
         let info = PARAMS.iter().find(|p| p.name == name).ok_or(Error::Input { input: "parameter", reason: "unknown parameter name" })?;
         if !value.is_finite() {
             return Err(Error::NonFinite { input: info.name });
@@ -366,7 +386,7 @@ impl<R: Real> Params<R> {
             return Err(bad);
         }
         let k = int.unwrap_or(0);
-        let mut p = *self;
+        let p = self;
         match name {
             "n" => p.n = k as usize,
             "l" => p.l = r,
@@ -397,8 +417,6 @@ impl<R: Real> Params<R> {
             "rho_b" => p.rho_b = r,
             _ => return Err(bad),
         }
-        p.validate()?;
-        *self = p;
         Ok(())
     }
 

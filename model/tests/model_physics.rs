@@ -512,3 +512,25 @@ fn equilibrium_residual_is_not_the_marchs_gain() {
     let rt = f.equilibrium_residual(&tight).unwrap();
     assert!(rt < r / 10.0, "{rt:e} at {:e} mm against {r:e} at {:e} mm", tight.residual, s.residual);
 }
+
+/// `set_many` takes its values in any order (each in its range, then the set once) and, when
+/// one is refused, changes nothing.
+#[test]
+fn set_many_is_order_free_and_all_or_nothing() {
+    let base = Params::<f64>::default();
+    // a = 15 mm fits only a link of 40 mm (2a < l): refused alone, taken with l in either order
+    let mut alone = base;
+    assert!(alone.set("a", 15.0).is_err());
+    assert_eq!(alone, base);
+    for sets in [[("a", 15.0), ("l", 40.0)], [("l", 40.0), ("a", 15.0)]] {
+        let mut p = base;
+        p.set_many(&sets).unwrap();
+        assert_eq!((p.a, p.l), (15.0, 40.0));
+    }
+    // one bad value (out of range, unknown, NaN) and nothing changes, whatever came before it
+    for bad in [("t_min", -1.0), ("nope", 1.0), ("w", f64::NAN)] {
+        let mut p = base;
+        assert!(p.set_many(&[("l", 40.0), bad]).is_err());
+        assert_eq!(p, base);
+    }
+}

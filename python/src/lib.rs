@@ -563,23 +563,10 @@ fn params_of(preset: &str, card: Option<&str>, kwargs: Option<&Bound<'_, PyDict>
     Ok(p)
 }
 
-/// Set parameters by name; one only consistent with a later one is retried after the others.
-fn set_all(p: &mut Params<R>, mut pending: Vec<(String, R)>) -> PyResult<()> {
-    while !pending.is_empty() {
-        let before = pending.len();
-        let mut first_err = None;
-        pending.retain(|(name, v)| match p.set(name, *v) {
-            Ok(()) => false,
-            Err(e) => {
-                first_err.get_or_insert(e);
-                true
-            }
-        });
-        if pending.len() == before {
-            return Err(model_err(first_err.expect("a failed set")));
-        }
-    }
-    Ok(())
+/// Set parameters by name, all at once (`Params::set_many`: each in its range, then the set).
+fn set_all(p: &mut Params<R>, pending: Vec<(String, R)>) -> PyResult<()> {
+    let sets: Vec<(&str, f64)> = pending.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+    p.set_many(&sets).map_err(model_err)
 }
 
 /// A pickled `Finger` rebuilt (`Finger.__reduce__`): the card, the DE modulus rule, every

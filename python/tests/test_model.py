@@ -190,7 +190,7 @@ def test_presets_parameters_and_calibration():
     assert paper.params["e_de"] == pytest.approx(0.6 / (2 * 1.49))
     assert paper.params["m"] == 1 and sf.Finger().params["m"] == 8
     assert paper.calibration == [1, 1, 1, 1, 1, 0, 1, 0] and paper.preset == "paper"
-    # an override only consistent with a later one is retried (a = 15 needs l = 40 first)
+    # overrides are taken all at once, in any order (a = 15 fits only with l = 40)
     assert sf.Finger(preset="default", a=15.0, l=40.0).params["a"] == 15.0
     none = [1, 1, 1, 1, 1, 0, 1, 0]
     # the board's finger: VHB 4905 with the board's FE calibration; docs/model.md's finger

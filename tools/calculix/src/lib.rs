@@ -32,25 +32,14 @@ use mesh::{Density, Segment};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-/// Sets `name=value` overrides on `p` (a command line's parameters): one that only a later one
-/// makes consistent (`a` before `l`) is retried after the others. The first refusal as
-/// `name=value: reason` when no order takes them all.
-pub fn apply_overrides(p: &mut Params<f64>, mut sets: Vec<(String, f64)>) -> Result<(), String> {
-    while !sets.is_empty() {
-        let before = sets.len();
-        let mut first = None;
-        sets.retain(|(k, v)| match p.set(k, *v) {
-            Ok(()) => false,
-            Err(e) => {
-                first.get_or_insert(format!("{k}={v}: {e}"));
-                true
-            }
-        });
-        if sets.len() == before {
-            return Err(first.unwrap_or_default());
-        }
-    }
-    Ok(())
+/// Sets `name=value` overrides on `p` (a command line's parameters), all at once
+/// (`Params::set_many`: each in its range, then the set, so their order does not matter).
+pub fn apply_overrides(p: &mut Params<f64>, sets: Vec<(String, f64)>) -> Result<(), String> {
+    let named: Vec<(&str, f64)> = sets.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+    p.set_many(&named).map_err(|e| {
+        let listed = sets.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ");
+        format!("{listed}: {e}")
+    })
 }
 
 /// A section's rigid motion: centre position (mm, base frame) and angle (rad).
