@@ -306,9 +306,10 @@ pub(crate) fn contact(f: &Finger<f64>, p0: f64, tension: f64, v: &[f64], refused
         // the model corpus's b0e30eb4, 247° of its joint's 250°) is the forward's far-off class
         let free0 = f.solve(p0, &vec![0.0; n], Method::converged()).expect("contact answered, its free posture refused");
         let hinge = |s: &Solution<f64>, k: usize| s.q[k][..s.m].iter().map(|q| q[2]).sum::<f64>();
-        // 180°, not 100°: a pinned finger snapped into an S (a hinge turned 121-133° in steps
-        // that each pass the 0.8 rad bound) is an open class (fuzz/open/model_contact/
-        // contact-hinge-turned-133-deg-s-shape); the coiled answers (541°, 2,170°) stay caught
+        // 180°, not 100°: a pinned finger bent into an S (a hinge turned 121-133°) is a physical
+        // posture, the branch followed continuously (each tension solved from the free posture
+        // alone gives the same smooth path: fuzz/regressions/model_contact/
+        // contact-s-shape-hinge-turned-133-deg-physical); the coiled answers (541°, 2,170°) stay caught
         let wild = 180f64.to_radians();
         // (a free posture coiled past ±100° a joint is the forward's far-off class: not checked)
         let coiled = (0..n).any(|k| free0.joint_angle[k].abs() > wild);

@@ -584,25 +584,29 @@ pub fn contact_cost_section() -> String {
     use std::fmt::Write as _;
     const HZ: f64 = 168e6;
     const GOAL_MS: f64 = 5.0;
-    let elf = build("contact", M4F, "de,f32,fast-trig", "contact-de-f32-fast-trig").unwrap_or_else(|e| panic!("{e}"));
+    let elf = build("contact", M4F, "de,f32,fast-trig,gravity", "contact-de-f32-fast-trig-gravity").unwrap_or_else(|e| panic!("{e}"));
     let out = run_qemu(&elf, "netduinoplus2", 0).unwrap_or_else(|e| panic!("{e}"));
     let bench = read_bench(&out).unwrap_or_else(|e| panic!("contact image: {e}"));
     let mut doc = String::new();
     writeln!(
         doc,
         "## `contact` on the Cortex-M4F\n\n\
-         Instructions per `inverse::contact_force` in f32 with the firmware's model features (fast-trig), \
+         Instructions per `inverse::contact_force` in f32 with the firmware's model features (fast-trig, gravity), \
          bench image `bench/src/bin/contact.rs`, QEMU netduinoplus2 with `-icount shift=0`; ms at 168 MHz taking \
          one instruction a cycle (a lower bound: a `vdiv.f32` takes 14, a flash wait state is not counted). One \
-         request is the two fmax checks (P0 and P at their voltages), the free posture at P0 and the pinned \
+         request is the fmax check (once where P0 and P have the same voltages; under gravity a free solve at each \
+         tension, fmax only to quote a refusal), the free posture at P0 and the pinned \
          continuation (model finger/pinned.rs; docs/inverse.md \"Contact force\"): steps that halve on a failed \
-         Newton solve (forward-difference Jacobian, up to 30 iterations a try) or land off the branch the finger \
-         reaches, a refusal as the limit point where a failed step passes the fold the tangent's determinants place, \
-         at a step of 1/8,192 or past 2,048 Newton iterations, and as a pulling stop (issue 55). `default`: the default \
+         Newton solve (up to 30 iterations a try; the Jacobian by forward differences at the free posture, then \
+         Broyden's update across iterates and steps, a failed step retried once on fresh differences) or land off \
+         the branch the finger reaches, a refusal as the limit point where a failed step passes the fold the \
+         tangent's determinants place, at a step of 1/8,192 or past 32,768 residual evaluations, and as a pulling \
+         stop (issue 55). `default`: the default \
          finger as the board boots (its FE calibration); `paper`: the paper preset. The cases are each finger's slowest \
          answers and refusals over a grid of 624 requests timed on the host (`cargo run --release --example \
          contact_grid` in fuzz/: P0 0.05-5 N, P to 1.2 fmax, six voltage sets; the slowest before and after issue 55), \
-         a request past fmax and one below P0.\n\n\
+         a request past fmax and one below P0; `default-g0`: the board's finger under its weight (grav 9.81, \
+         grav_dir 0), the board's default.\n\n\
          | case (P0-P, voltages) | outcome | instructions | ms at 168 MHz | Newton iterations or refusal |\n\
          | --- | --- | ---: | ---: | --- |"
     )

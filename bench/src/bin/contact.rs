@@ -4,7 +4,8 @@
 //! calibration) and the paper preset. The cases are the slowest refusals and answers of
 //! `cargo run --release --example contact_grid` in fuzz/ (each finger's grid of 624 requests
 //! timed on the host, before and after issue 55's branch and pull checks), a request past fmax
-//! and one below P0 (the stop would pull). Prints `CAL`, then one line per case
+//! and one below P0 (the stop would pull); then the board's finger under gravity (`default-g0`:
+//! its slowest answers, past fmax, a pull). Prints `CAL`, then one line per case
 //! `C <case> ok <ticks> <iterations> <|F| N>` or `C <case> err <ticks> <code> <message>`, then
 //! `END`.
 #![no_std]
@@ -51,5 +52,13 @@ fn main() -> ! {
     run("paper/5-173.704N-0,5,10kV", &paper, 5.0, 173.70447, [0.0, t2, t1]);
     run("paper/3.586-232.743N-6.7kV", &paper, 3.5857143, 232.74316, [6666.0; 3]);
     run("paper/1.464-29.876N-10,0,5kV", &paper, 1.4642856, 29.876339, [t1, 0.0, t2]);
+    // the board's finger as it boots, under its weight (grav 9.81, grav_dir 0)
+    let pg = p.with_gravity(finger_model::params::G_STANDARD as f32, 0.0);
+    let hung = Finger::with_calibration(pg, Calibration::for_params(&pg)).unwrap();
+    run("default-g0/1-1.5N-0V", &hung, 1.0, 1.5, [0.0; 3]);
+    run("default-g0/0.757-12.920N-10,0,5kV", &hung, 0.75714284, 12.919881, [t1, 0.0, t2]);
+    run("default-g0/1.464-11.694N-0,5,10kV", &hung, 1.4642856, 11.694181, [0.0, t2, t1]);
+    run("default-g0/1-30N-0V-past-fmax", &hung, 1.0, 30.0, [0.0; 3]);
+    run("default-g0/1-0.5N-0V-pulls", &hung, 1.0, 0.5, [0.0; 3]);
     bench::end()
 }

@@ -85,23 +85,7 @@ impl<R: Real> Equations<R, COUPLED> for Coupled<'_, R> {
             // carried into this system: J as it is
             None if est.formed => {}
             // Broyden's good update from the last point: J += (Δr - J Δx) Δxᵀ / |Δx|²
-            Some((x0, r0)) => {
-                let jac = &mut est.jac;
-                let mut dx = [R::zero(); COUPLED];
-                for i in 0..dim {
-                    dx[i] = x[i] - x0[i];
-                }
-                let dx2 = dx[..dim].iter().fold(R::zero(), |a, &v| a + v * v);
-                if dx2 > R::zero() {
-                    for row in 0..dim {
-                        let jd = (0..dim).fold(R::zero(), |a, c| a + jac[row][c] * dx[c]);
-                        let u = (r[row] - r0[row] - jd) / dx2;
-                        for col in 0..dim {
-                            jac[row][col] += u * dx[col];
-                        }
-                    }
-                }
-            }
+            Some((x0, r0)) => broyden_rank_one(&mut est.jac, dim, x, r, x0, r0),
             None => {
                 self.forward_difference(x, r, slot)?;
                 self.est.formed = true;
@@ -173,6 +157,34 @@ impl<R: Real> Coupled<'_, R> {
         }
         Ok(())
     }
+}
+
+/// Broyden's good update of `jac` (its leading `dim` block) from (x0, r0) to (x, r):
+/// J += (Δr - J Δx) Δxᵀ / |Δx|² (none where x = x0).
+fn broyden_rank_one<R: Real>(jac: &mut [[R; COUPLED]; COUPLED], dim: usize, x: &[R; COUPLED], r: &[R; COUPLED], x0: &[R; COUPLED], r0: &[R; COUPLED]) {
+    let dx: [R; COUPLED] = core::array::from_fn(|i| x[i] - x0[i]);
+    let dx2 = dx[..dim].iter().fold(R::zero(), |a, &v| a + v * v);
+    if dx2 > R::zero() {
+        for row in 0..dim {
+            let jd = (0..dim).fold(R::zero(), |a, c| a + jac[row][c] * dx[c]);
+            let u = (r[row] - r0[row] - jd) / dx2;
+            for col in 0..dim {
+                jac[row][col] += u * dx[col];
+            }
+        }
+    }
+}
+
+/// [`broyden_rank_one`] on the whole coupled system (the pinned solve's).
+pub(super) fn broyden_update<R: Real>(
+    jac: &mut [[R; COUPLED]; COUPLED],
+    f: &Finger<R>,
+    x: &[R; COUPLED],
+    r: &[R; COUPLED],
+    x0: &[R; COUPLED],
+    r0: &[R; COUPLED],
+) {
+    broyden_rank_one(jac, coupled_dim(f), x, r, x0, r0);
 }
 
 /// The coupled system's size: each joint's hole, the tip and, under gravity, each joint's
