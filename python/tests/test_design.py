@@ -43,9 +43,9 @@ def test_a_small_study_finds_a_feasible_design(tmp_path):
 
 def test_a_refused_design_is_infeasible_not_a_crash():
     good = Design(card="VHB-4905")
-    designs = [Design(card="VHB-4905", t_min=12.0), good, Design(card="VHB-4905", t_min=0.5, e_b=4.0, a=10.0, layers=1)]
+    designs = [Design(card="VHB-4905", t_min=12.0), good, Design(card="VHB-4905", t_min=0.5, e_b=12.0, a=10.0, w=10.0, layers=12)]
     ev = evaluate("VHB-4905", designs)
-    # the model's own refusals, by stage and kind: t_min >= b, and the grip's branch ending
+    # the model's own refusals, by stage and kind: t_min >= b, and the grip's contact at a limit point
     assert ev.error[0] == "params:Param" and ev.error[2].startswith("grip:")
     assert not ev.feasible[0] and not ev.feasible[2] and ev.feasible[1]
     assert ev.constraints[0, CONSTRAINTS.index("refused")] == 1.0
