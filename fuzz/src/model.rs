@@ -228,7 +228,7 @@ pub(crate) fn checked_fmax(c: &Case, v: &[f64], refused: bool) -> Option<f64> {
 pub(crate) fn linear_tension(f: &Finger<f64>, v: &[f64]) -> f64 {
     let p = f.params();
     let Ok(c) = f.compliances(v).or_else(|_| f.compliances(&vec![0.0; p.n])) else { return 1.0 };
-    let softest = (0..p.n).map(|k| 1.0 / (p.e * c.c[k].sub[..p.m].iter().map(|x| x[2][2]).sum::<f64>())).fold(f64::INFINITY, f64::min);
+    let softest = (0..p.n).map(|k| 1.0 / (p.e * c.c[k][..p.m].iter().map(|x| x[2][2]).sum::<f64>())).fold(f64::INFINITY, f64::min);
     if softest.is_finite() && softest > 0.0 {
         softest
     } else {

@@ -296,16 +296,6 @@ impl<R: Real> StackStiffness<R> {
         let n = b * self.push[0];
         [n, R::zero(), n * self.push[1]]
     }
-
-    /// d(active)/dt at state t (b = s - s⁴, s = t/t0: db/dt = (1 - 4 s³)/t0).
-    pub fn active_dt(&self, t: R) -> [R; 3] {
-        if !self.laminate {
-            return [R::zero(); 3];
-        }
-        let (_, _, dkappa_ds) = crate::material::laminate_of_free_film(t * self.inv_t0);
-        let n = -R::from_f64(4.0) * dkappa_ds * self.inv_t0 * self.push[0];
-        [n, R::zero(), n * self.push[1]]
-    }
 }
 
 /// The calibrated beam's upper triangle at thickness t (`StackStiffness`'s K0 at t = t0): the

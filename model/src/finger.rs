@@ -47,7 +47,7 @@ pub(crate) use joint::{by, By};
 pub use loaded::CoupledStart;
 pub use prepare::uniform_beam_compliance;
 pub use stiffness::JointStiffness;
-pub use types::{BranchEnd, BranchLimit, Compliances, JointCompliance, JointEquilibrium, Method, Pose, Solution};
+pub use types::{BranchEnd, BranchLimit, Compliances, JointEquilibrium, Method, Pose, Solution};
 pub(crate) use types::{Heading, JointMarch};
 
 /// Unknowns of the coupled (tip-loaded or weighted) solve: each joint's hole, the tip position,
@@ -231,7 +231,7 @@ impl<R: Real> Finger<R> {
     /// if the hole moved less than half a hinge length; else, or if it fails, load continuation
     /// from the straight joint. Additive, for the inverse model's per-joint root finding.
     #[inline(always)]
-    pub fn joint_equilibrium(&self, joint: usize, c: &JointCompliance<R>, tension: R, guess: Option<[R; 2]>, tol: R) -> Result<JointEquilibrium<R>, Error> {
+    pub fn joint_equilibrium(&self, joint: usize, c: &[Mat3<R>; MAX_SUB], tension: R, guess: Option<[R; 2]>, tol: R) -> Result<JointEquilibrium<R>, Error> {
         tension::joint_equilibrium(self, joint, c, tension, guess, tol)
     }
 

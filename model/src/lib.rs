@@ -35,7 +35,7 @@ pub mod solve;
 
 pub use calibration::Calibration;
 pub use error::Error;
-pub use finger::{BranchEnd, BranchLimit, Compliances, Finger, JointCompliance, JointEquilibrium, JointStiffness, Method, Pose, Solution};
+pub use finger::{BranchEnd, BranchLimit, Compliances, Finger, JointEquilibrium, JointStiffness, Method, Pose, Solution};
 pub use inverse::{solve_pose, Contact, PoseSolution, StiffnessRange};
 pub use params::{DeModulusRule, Params, MAX_JOINTS, MAX_SUB};
 pub use real::Real;

@@ -15,9 +15,10 @@
 //! than one joint's. A point's Newton takes few line-search halvings: on the branch the
 //! predictor's full steps converge, past its end a trial fails fast (docs/fmax-cost.md).
 
-use super::{loaded, tension, BranchEnd, BranchLimit, Compliances, Finger, JointCompliance, JointState, MarchError};
+use super::{loaded, tension, BranchEnd, BranchLimit, Compliances, Finger, JointState, MarchError};
 use crate::error::Error;
-use crate::params::MAX_JOINTS;
+use crate::mat3::Mat3;
+use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 use crate::solve::{bracket, SolveOptions};
 
@@ -66,7 +67,7 @@ pub(super) fn fmax_with<R: Real>(f: &Finger<R>, c: &Compliances<R>, starts: Opti
     let mut best: Option<BranchLimit<R>> = None;
     for (i, &k) in order[..n].iter().enumerate() {
         // a joint with the compliances of one before it ends where that one ends
-        if order[..i].iter().any(|&j| c.c[j].sub[..m] == c.c[k].sub[..m] && f.same_held(j, k)) {
+        if order[..i].iter().any(|&j| c.c[j][..m] == c.c[k][..m] && f.same_held(j, k)) {
             continue;
         }
         let start = starts.and_then(|s| s[k]);
@@ -78,7 +79,7 @@ pub(super) fn fmax_with<R: Real>(f: &Finger<R>, c: &Compliances<R>, starts: Opti
     best.ok_or(Error::Input { input: "n", reason: "no joints" })
 }
 
-fn branch_point<R: Real>(f: &Finger<R>, c: &JointCompliance<R>, from: &Pt<R>, prev: Option<&Pt<R>>, p: R) -> Result<Pt<R>, Option<MarchError>> {
+fn branch_point<R: Real>(f: &Finger<R>, c: &[Mat3<R>; MAX_SUB], from: &Pt<R>, prev: Option<&Pt<R>>, p: R) -> Result<Pt<R>, Option<MarchError>> {
     let tol = f.resolution().max(R::from_f64(1e-9));
     let dp = p - from.p;
     let guess = match prev {
@@ -133,11 +134,11 @@ fn end_estimate<R: Real>(f: &Finger<R>, a: Option<&Pt<R>>, b: &Pt<R>) -> Option<
 fn joint_end<R: Real>(
     f: &Finger<R>,
     k: usize,
-    c: &JointCompliance<R>,
+    c: &[Mat3<R>; MAX_SUB],
     bound: Option<R>,
     start: Option<[(R, [R; 2]); 2]>,
 ) -> Result<Option<BranchLimit<R>>, Error> {
-    let c33 = c.sub[..f.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
+    let c33 = c[..f.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]);
     let p_lin = R::one() / (f.p.e * c33);
     let p_search = R::from_f64(1000.0) * p_lin;
     let p_hi = bound.map_or(p_search, |b| b.min(p_search));
@@ -250,7 +251,7 @@ fn joint_end<R: Real>(
 /// answers. Where a refusal is a contact, so is the end; else a limit point.
 fn fmax_coupled<R: Real>(f: &Finger<R>, c: &Compliances<R>) -> Result<BranchLimit<R>, Error> {
     let n = f.p.n;
-    let c33 = (0..n).map(|k| c.c[k].sub[..f.p.m].iter().fold(R::zero(), |a, m| a + m[2][2])).fold(R::zero(), |a, b| a.max(b));
+    let c33 = (0..n).map(|k| c.c[k][..f.p.m].iter().fold(R::zero(), |a, m| a + m[2][2])).fold(R::zero(), |a, b| a.max(b));
     let p_lin = R::one() / (f.p.e * c33);
     let bound = R::from_f64(1000.0) * p_lin;
     let method = super::Method::converged();

@@ -196,17 +196,15 @@ impl<R: Real> Finger<R> {
         (held, held_link)
     }
 
-    /// Joint k's (0-based) linear turn under its held load and its stack's push alone, rad: the
-    /// load's moment about the joint's proximal end times the sub-elements' rotational
-    /// compliances, plus the push's turn (`JointCompliance::push_turn`); 0 without either.
-    pub(crate) fn held_turn(&self, k: usize, c: &super::JointCompliance<R>) -> R {
-        let push = c.push_turn(self.p.m);
+    /// Joint k's (0-based) linear turn under its held load alone, rad: the load's moment about
+    /// the joint's proximal end times the sub-elements' rotational compliances (0 without one).
+    pub(crate) fn held_turn(&self, k: usize, c: &[crate::mat3::Mat3<R>; MAX_SUB]) -> R {
         match self.held.get(k).copied().flatten() {
             Some(l) => {
                 let moment = l.point[0] * l.force[1] - l.point[1] * l.force[0] + l.couple;
-                moment * c.sub[..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2]) + push
+                moment * c[..self.p.m].iter().fold(R::zero(), |a, m| a + m[2][2])
             }
-            None => push,
+            None => R::zero(),
         }
     }
 

@@ -3,9 +3,9 @@
 //! inverse calls (`joint_march`). The march's loop and forms are in `march` and
 //! `march_stiffness`.
 
-use super::JointCompliance;
 use super::{march, march_stiffness, norm2, Finger, JointMarch, JointState, JointStiffness, MarchError, Pose, SpanLoads, TipLoad};
 use crate::error::Error;
+use crate::mat3::Mat3;
 use crate::params::MAX_SUB;
 use crate::real::Real;
 
@@ -40,7 +40,7 @@ impl<R: Real> Finger<R> {
     #[inline(never)]
     pub(super) fn march(
         &self,
-        c: &JointCompliance<R>,
+        c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b_hole: [R; 2],
         tip: Option<TipLoad<R>>,
@@ -51,21 +51,21 @@ impl<R: Real> Finger<R> {
     }
 
     /// `march`'s state (a fresh displacement array).
-    pub(super) fn marched(&self, c: &JointCompliance<R>, tension: R, b_hole: [R; 2], tip: Option<TipLoad<R>>) -> Result<JointState<R>, MarchError> {
+    pub(super) fn marched(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b_hole: [R; 2], tip: Option<TipLoad<R>>) -> Result<JointState<R>, MarchError> {
         let mut q = [[R::zero(); 3]; MAX_SUB];
         let (end, hole, _) = self.march(c, tension, b_hole, tip, &mut q)?;
         Ok(JointState { q, end, hole, tangent: None })
     }
 
     /// Residual of the hole guess: guess - arrived.
-    pub(super) fn hole_residual(&self, c: &JointCompliance<R>, tension: R, b: [R; 2], tip: Option<TipLoad<R>>) -> Result<([R; 2], JointState<R>), MarchError> {
+    pub(super) fn hole_residual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], tip: Option<TipLoad<R>>) -> Result<([R; 2], JointState<R>), MarchError> {
         let st = self.marched(c, tension, b, tip)?;
         Ok(([b[0] - st.hole[0], b[1] - st.hole[1]], st))
     }
 
     /// The exact 2x2 tangent of a joint's hole residual (tension and a fixed load `tip`), from
     /// one march on dual numbers (see `dual`).
-    pub(super) fn joint_tangent(&self, c: &JointCompliance<R>, tension: R, b: [R; 2], tip: Option<TipLoad<R>>) -> Result<[[R; 2]; 2], MarchError> {
+    pub(super) fn joint_tangent(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], tip: Option<TipLoad<R>>) -> Result<[[R; 2]; 2], MarchError> {
         self.eval_dual(c, tension, b, tip).map(|(_, _, jac)| jac)
     }
 
@@ -121,18 +121,18 @@ pub(crate) trait By<R: Real> {
 pub(crate) mod by {
     use super::{march, march_stiffness, By, Finger, JointStiffness, MarchError, Pose};
     use crate::de::StackStiffness;
-    use crate::finger::JointCompliance;
+    use crate::mat3::Mat3;
     use crate::params::MAX_SUB;
     use crate::real::Real;
 
     /// By compliances in `PoseFrame` (`Finger::march`).
     #[derive(Clone, Copy)]
-    pub(crate) struct Compliance<'a, R>(pub &'a JointCompliance<R>);
+    pub(crate) struct Compliance<'a, R>(pub &'a [Mat3<R>; MAX_SUB]);
 
     /// By compliances in the running frame (`march_cable` by `ByCompliance`) where that march
     /// applies, else as `Compliance`.
     #[derive(Clone, Copy)]
-    pub(crate) struct Cable<'a, R>(pub &'a JointCompliance<R>);
+    pub(crate) struct Cable<'a, R>(pub &'a [Mat3<R>; MAX_SUB]);
 
     /// By the joint's stiffness with its stack at thickness `.1` (mm; the stack's constants
     /// `.0`), no compliance formed, the link's deflection at that tension given (`.2`); refused

@@ -24,7 +24,7 @@
 //! The fixed-point march (`fixed::forward`) runs `march_subs` on the Q forms of
 //! `ByComplianceLoaded` and `PoseFrame`.
 
-use super::{norm2, Finger, JointCompliance, JointState, MarchError, Pose, TipLoad};
+use super::{norm2, Finger, JointState, MarchError, Pose, TipLoad};
 use crate::dual::D;
 use crate::mat3::Mat3;
 use crate::params::MAX_SUB;
@@ -76,26 +76,23 @@ pub(super) type SubLoads<R, T> = ([T; 2], T, R);
 pub(super) type SubDisp<T> = ([T; 3], T);
 
 /// The compliance form from mm, the moment about the proximal end (m0 = mm - f1 L): q =
-/// C ((f, M) + push) in closed form, C symmetric (`Finger::compliances` makes it so: its upper
-/// triangle is read). With a = C ((f, 0) + push), M = (mm - f1 L + f0 a1 - f1 a0) / den,
-/// den = 1 + f1 C02 - f0 C12; refuses a non-positive den (the tabled marches: the full model's
-/// Newton then takes it).
-pub(super) struct ByCompliance<'a, R>(pub &'a JointCompliance<R>);
+/// C (f, M) in closed form, C symmetric (`Finger::compliances` makes it so: its upper triangle
+/// is read). With a = C (f, 0), M = (mm - f1 L + f0 a1 - f1 a0) / den, den = 1 + f1 C02 - f0 C12;
+/// refuses a non-positive den (the tabled marches: the full model's Newton then takes it).
+pub(super) struct ByCompliance<'a, R>(pub &'a [Mat3<R>; MAX_SUB]);
 
 impl<R: Real> SubElement<SubLoads<R, R>> for ByCompliance<'_, R> {
     type Sub = Mat3<R>;
     type Disp = SubDisp<R>;
     #[inline(always)]
     fn subs(&self) -> &[Mat3<R>; MAX_SUB] {
-        &self.0.sub
+        self.0
     }
     #[inline(always)]
     fn equilibrium(&self, cj: &Mat3<R>, (f, mm, l): SubLoads<R, R>) -> Result<SubDisp<R>, MarchError> {
         debug_assert!(cj[1][0] == cj[0][1] && cj[2][0] == cj[0][2] && cj[2][1] == cj[1][2]);
         let (c00, c01, c02, c11, c12, c22) = (cj[0][0], cj[0][1], cj[0][2], cj[1][1], cj[1][2], cj[2][2]);
-        let w = self.0.push;
-        let g = [f[0] + w[0], f[1] + w[1]];
-        let a = [g[0] * c00 + g[1] * c01 + w[2] * c02, g[0] * c01 + g[1] * c11 + w[2] * c12, g[0] * c02 + g[1] * c12 + w[2] * c22];
+        let a = [f[0] * c00 + f[1] * c01, f[0] * c01 + f[1] * c11, f[0] * c02 + f[1] * c12];
         let den = (f[1] * c02 + R::one()) - f[0] * c12;
         if !(den > R::from_f64(1e-6)) {
             return Err(MarchError::Singular);
@@ -106,22 +103,24 @@ impl<R: Real> SubElement<SubLoads<R, R>> for ByCompliance<'_, R> {
 }
 
 /// The compliance form from m0, the moment about the undeflected distal end (the dual/tip-load
-/// form, any scalar): q0 = C ((f, m0) + push), then the moment arm's own change s = (-f1 q0_0 +
-/// f0 q0_1) / den, q = q0 + s C(:, 2); refuses only |den| at or below 1e-6.
-pub(super) struct ByComplianceLoaded<'a, R>(pub &'a JointCompliance<R>);
+/// form, any scalar): q0 = C (f, m0), then the moment arm's own change s = (-f1 q0_0 + f0 q0_1)
+/// / den, q = q0 + s C(:, 2); refuses only |den| at or below 1e-6.
+pub(super) struct ByComplianceLoaded<'a, R>(pub &'a [Mat3<R>; MAX_SUB]);
 
 impl<R: Real, T: Scalar<R>> SubElement<SubLoads<R, T>> for ByComplianceLoaded<'_, R> {
     type Sub = Mat3<R>;
     type Disp = SubDisp<T>;
     #[inline(always)]
     fn subs(&self) -> &[Mat3<R>; MAX_SUB] {
-        &self.0.sub
+        self.0
     }
     #[inline(always)]
     fn equilibrium(&self, cj: &Mat3<R>, (f, m0, _l): SubLoads<R, T>) -> Result<SubDisp<T>, MarchError> {
-        let w = self.0.push;
-        let (g0, g1, gm) = (f[0] + w[0], f[1] + w[1], m0 + w[2]);
-        let q0 = [g0 * cj[0][0] + g1 * cj[0][1] + gm * cj[0][2], g0 * cj[1][0] + g1 * cj[1][1] + gm * cj[1][2], g0 * cj[2][0] + g1 * cj[2][1] + gm * cj[2][2]];
+        let q0 = [
+            f[0] * cj[0][0] + f[1] * cj[0][1] + m0 * cj[0][2],
+            f[0] * cj[1][0] + f[1] * cj[1][1] + m0 * cj[1][2],
+            f[0] * cj[2][0] + f[1] * cj[2][1] + m0 * cj[2][2],
+        ];
         let den = (f[1] * cj[0][2] + R::one()) - f[0] * cj[1][2];
         if !(den.abs() > T::from_f64(1e-6)) {
             return Err(MarchError::Singular);
@@ -342,7 +341,7 @@ impl<R: Real> Finger<R> {
     #[inline(never)]
     fn march_dual(
         &self,
-        c: &JointCompliance<R>,
+        c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b: [D<R>; 2],
         tip: Option<TipLoad<R>>,
@@ -354,7 +353,7 @@ impl<R: Real> Finger<R> {
 
     /// One dual march at hole guess `b` (tension and a fixed load `tip`): state, residual,
     /// Jacobian.
-    pub(super) fn eval_dual(&self, c: &JointCompliance<R>, tension: R, b: [R; 2], tip: Option<TipLoad<R>>) -> Result<Eval<R>, MarchError> {
+    pub(super) fn eval_dual(&self, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], tip: Option<TipLoad<R>>) -> Result<Eval<R>, MarchError> {
         let mut q = [[R::zero(); 3]; MAX_SUB];
         let (end, hole, r, jac) = self.eval_dual_into(c, tension, b, tip, &mut q)?;
         Ok((JointState { q, end, hole, tangent: None }, r, jac))
@@ -365,7 +364,7 @@ impl<R: Real> Finger<R> {
     #[inline(always)]
     fn eval_dual_into(
         &self,
-        c: &JointCompliance<R>,
+        c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b: [R; 2],
         tip: Option<TipLoad<R>>,
@@ -387,7 +386,7 @@ impl<R: Real> Finger<R> {
     /// and tangent determinant of its last march.
     pub(super) fn newton_dual(
         &self,
-        c: &JointCompliance<R>,
+        c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b: [R; 2],
         tip: Option<TipLoad<R>>,
@@ -400,7 +399,7 @@ impl<R: Real> Finger<R> {
     /// `newton_dual` with the solver's options (iterations, line-search halvings) given.
     pub(super) fn newton_dual_with(
         &self,
-        c: &JointCompliance<R>,
+        c: &[Mat3<R>; MAX_SUB],
         tension: R,
         b: [R; 2],
         tip: Option<TipLoad<R>>,
@@ -423,7 +422,7 @@ impl<R: Real> Finger<R> {
 /// dual march, whose state (sub-element q, end, hole, residual, Jacobian) stays in its slot.
 struct JointHoles<'a, R> {
     f: &'a Finger<R>,
-    c: &'a JointCompliance<R>,
+    c: &'a [Mat3<R>; MAX_SUB],
     tension: R,
     tip: Option<TipLoad<R>>,
     q: [[[R; 3]; MAX_SUB]; 2],
@@ -516,7 +515,7 @@ mod tests {
                 let c = f.compliances(&[volts; 3]).unwrap();
                 // what it reads: the upper triangles of symmetric compliances
                 assert!(f.params().layers > 0);
-                for cj in &c.c[0].sub {
+                for cj in &c.c[0] {
                     assert!(cj[1][0] == cj[0][1] && cj[2][0] == cj[0][2] && cj[2][1] == cj[1][2]);
                 }
                 for tension in [0.05, 1.0, 7.0, 15.0] {

@@ -9,7 +9,7 @@ use crate::mat3::Mat3;
 use crate::params::MAX_SUB;
 use crate::real::Real;
 
-/// Sub-element j's q from K_j q = (f0, f1, M) + push (`JointStiffness::push`), M = mm - f1 (L + q0) + f0 q1 the moment about its
+/// Sub-element j's q from K_j q = (f0, f1, M), M = mm - f1 (L + q0) + f0 q1 the moment about its
 /// deformed distal end (linear in q: the third row carries it), K_j from the joint's
 /// `JointStiffness`. Refuses (`Singular`) a non-positive last pivot (the compliance form's
 /// non-positive den).
@@ -26,13 +26,9 @@ impl<R: Real> SubElement<SubLoads<R, R>> for ByStiffness<'_, R> {
     fn equilibrium(&self, kh: &Mat3<R>, (f, mm, l): SubLoads<R, R>) -> Result<SubDisp<R>, MarchError> {
         let zr = R::zero();
         let [k00, k01, k02, k11, k12, k22] = self.0.add_to(kh);
-        // the right-hand side with the stack's push: (f0, f1, M) + push
-        let w = self.0.push();
-        let r = [f[0] + w[0], f[1] + w[1]];
         // rows: K q = (f0, f1, g + f0 q1 - f1 q0), g = mm - f1 L; eliminate below k00, then
         // below u11 (not `mat3::inverse_spd`: the moment's load terms make the rows unsymmetric)
         let g = mm - f[1] * l;
-        let gw = g + w[2];
         let i0 = R::one() / k00;
         let l1 = k01 * i0;
         let l2 = (k02 + f[1]) * i0;
@@ -41,8 +37,8 @@ impl<R: Real> SubElement<SubLoads<R, R>> for ByStiffness<'_, R> {
         let i1 = R::one() / u11;
         let l3 = ((k12 - f[0]) - l2 * k01) * i1;
         let u22 = (k22 - l2 * k02) - l3 * u12;
-        let y1 = r[1] - l1 * r[0];
-        let y2 = (gw - l2 * r[0]) - l3 * y1;
+        let y1 = f[1] - l1 * f[0];
+        let y2 = (g - l2 * f[0]) - l3 * y1;
         // (k00 and u11 are pivots of the positive definite K: positive; u22 is K's last
         // pivot less the load's term, the compliance form's den times K's own)
         if !(u22 > zr) {
@@ -50,7 +46,7 @@ impl<R: Real> SubElement<SubLoads<R, R>> for ByStiffness<'_, R> {
         }
         let q2 = y2 / u22;
         let q1 = (y1 - u12 * q2) * i1;
-        let q0 = (r[0] - k01 * q1 - k02 * q2) * i0;
+        let q0 = (f[0] - k01 * q1 - k02 * q2) * i0;
         Ok(([q0, q1, q2], g + f[0] * q1 - f[1] * q0))
     }
 }
@@ -66,10 +62,9 @@ mod tests {
 
     /// The joint's stiffness and every sub-element's compliance (K_hinge,j + K_de)⁻¹ at
     /// thickness t, the inverse taken here by `mat3::inverse_spd` of the matrices.
-    fn at<R: Real>(f: &Finger<R>, t: R) -> (JointStiffness<'_, R>, crate::finger::JointCompliance<R>) {
+    fn at<R: Real>(f: &Finger<R>, t: R) -> (JointStiffness<'_, R>, [mat3::Mat3<R>; MAX_SUB]) {
         let k = f.joint_stiffness(t);
-        let mut c = crate::finger::JointCompliance::zero();
-        c.push = k.push();
+        let mut c = [mat3::zero(); MAX_SUB];
         for j in 0..f.params().m {
             c[j] = mat3::inverse_spd(&mat3::add(&mat3::inverse_spd(&f.hinge_compliance(j)).unwrap(), &f.stack_stiffness(t))).unwrap();
             assert_eq!(c[j], k.compliance(j).unwrap(), "the joint stiffness's compliance");

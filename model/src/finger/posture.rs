@@ -178,7 +178,7 @@ impl<R: Real> Finger<R> {
                 .or(self.held_at(k, R::one()));
             // tension alone: one dual march gives the residual and the exact tangent; a joint
             // equal to the one before (same compliance, same hole) has the same ones
-            let same = k > 0 && c.c[k].sub[..self.p.m] == c.c[k - 1].sub[..self.p.m] && st.hole == states[k - 1].hole && self.same_held(k, k - 1);
+            let same = k > 0 && c.c[k][..self.p.m] == c.c[k - 1][..self.p.m] && st.hole == states[k - 1].hole && self.same_held(k, k - 1);
             let dual = match (coupled || self.held_at(k, R::one()).is_some(), same, prev) {
                 (true, _, _) => None,
                 (false, true, Some(p)) => Some(p),

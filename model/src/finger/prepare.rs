@@ -107,10 +107,10 @@ impl<R: Real> Finger<R> {
             return Ok(R::zero());
         }
         let w = stack.active(t);
-        let mut c = super::JointCompliance::zero();
+        let mut c = [mat3::zero(); MAX_SUB];
         super::JointStiffness::new(self, stack, t).compliances_into(&mut c)?;
         let mut th = R::zero();
-        for cj in c.sub.iter().take(self.p.m) {
+        for cj in c.iter().take(self.p.m) {
             th += cj[2][0] * w[0] + cj[2][1] * w[1] + cj[2][2] * w[2];
         }
         Ok(th)
@@ -150,7 +150,7 @@ impl<R: Real> Finger<R> {
             return Err(Error::Input { input: "voltages", reason: "one voltage per joint is required" });
         }
         let mut out =
-            Compliances { n: p.n, m: p.m, c: [super::JointCompliance::zero(); MAX_JOINTS], thickness: [R::zero(); MAX_JOINTS], volts: [R::zero(); MAX_JOINTS] };
+            Compliances { n: p.n, m: p.m, c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS], thickness: [R::zero(); MAX_JOINTS], volts: [R::zero(); MAX_JOINTS] };
         out.volts[..p.n].copy_from_slice(volts);
         // the ceiling and the film's law once for every joint
         let stack = de::Stack::new(p);
@@ -159,7 +159,7 @@ impl<R: Real> Finger<R> {
             // a build without the `de` feature refuses stacks in `new`, and leaves the stack's
             // code (thinning, stack stiffness) out of the image
             if p.layers == 0 || cfg!(not(feature = "de")) {
-                out.c[k].sub[..p.m].copy_from_slice(&self.hinge_c[..p.m]);
+                out.c[k][..p.m].copy_from_slice(&self.hinge_c[..p.m]);
                 continue;
             }
             let t = stack.thickness(k + 1, v)?;

@@ -1,10 +1,9 @@
 //! The paper's explicit load stepping (Eq. 29): each step's loads from the geometry of the
 //! step before, first order in 1/n_inc. Not the converged solve.
 
-use super::JointCompliance;
 use super::{Compliances, Finger, Heading, JointState, MarchError, Solution, SpanLoads, TipLoad};
 use crate::error::Error;
-use crate::mat3;
+use crate::mat3::{self, Mat3};
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
@@ -50,7 +49,7 @@ fn states<R: Real>(f: &Finger<R>, c: &Compliances<R>, tension: R, force: [R; 2],
 /// One explicit step for a joint: loads from the previous geometry `prev`.
 fn explicit_step<R: Real>(
     f: &Finger<R>,
-    c: &JointCompliance<R>,
+    c: &[Mat3<R>; MAX_SUB],
     tension: R,
     prev: &JointState<R>,
     tip: Option<TipLoad<R>>,
@@ -70,8 +69,7 @@ fn explicit_step<R: Real>(
             mo += (tp[0] - d[0]) * ft[1] - (tp[1] - d[1]) * ft[0] + tc;
         }
         let fj = [co * ftot[0] + s * ftot[1], -s * ftot[0] + co * ftot[1]];
-        let w = c.push;
-        q[j] = mat3::mul_vec(&c[j], &[fj[0] + w[0], fj[1] + w[1], mo + w[2]]);
+        q[j] = mat3::mul_vec(&c[j], &[fj[0], fj[1], mo]);
         frame = frame.then(f.sub_len + qp[0], qp[1], qp[2]);
     }
     // new geometry from the new q

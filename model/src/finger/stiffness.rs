@@ -5,7 +5,7 @@
 //! m = 1 inverses' and the stiffness march alike. What it is not: the stack's beam itself
 //! (`de::StackStiffness`), or a march.
 
-use super::{Finger, JointCompliance};
+use super::Finger;
 use crate::de::StackStiffness;
 use crate::error::Error;
 use crate::mat3::{self, Mat3};
@@ -21,8 +21,6 @@ pub struct JointStiffness<'a, R> {
     /// The set has stacks: without them C_j is the hinge's own compliance.
     stacks: bool,
     t: R,
-    /// The stack's push on each sub-element at t (`StackStiffness::active`; zeros without).
-    push: [R; 3],
 }
 
 impl<'a, R: Real> JointStiffness<'a, R> {
@@ -33,14 +31,14 @@ impl<'a, R: Real> JointStiffness<'a, R> {
         // a build without the `de` feature refuses stacks in `Finger::new` and leaves the
         // stack's code out of the image
         let stacks = f.p.layers > 0 && cfg!(feature = "de");
-        let (upper, push) = if stacks { (stack.upper(t), stack.active(t)) } else { ([R::zero(); 6], [R::zero(); 3]) };
-        JointStiffness { f, upper, stacks, t, push }
+        let upper = if stacks { stack.upper(t) } else { [R::zero(); 6] };
+        JointStiffness { f, upper, stacks, t }
     }
 
     /// Only the tests' stiffness from a given stack triangle (a bad one, say).
     #[cfg(test)]
     pub(crate) fn with_upper(f: &'a Finger<R>, upper: [R; 6]) -> Self {
-        JointStiffness { f, upper, stacks: true, t: R::zero(), push: [R::zero(); 3] }
+        JointStiffness { f, upper, stacks: true, t: R::zero() }
     }
 
     /// The stack thickness it was built at, mm.
@@ -83,22 +81,6 @@ impl<'a, R: Real> JointStiffness<'a, R> {
         }
     }
 
-    /// The stack's push on each sub-element (its frame; `StackStiffness::active`): every march
-    /// form solves K_j q = w + push.
-    #[inline(always)]
-    pub fn push(&self) -> [R; 3] {
-        self.push
-    }
-
-    /// d(push)/dt; `stack` the stack's constants it was built with.
-    pub fn push_dt(&self, stack: &StackStiffness<R>) -> [R; 3] {
-        if self.stacks {
-            stack.active_dt(self.t)
-        } else {
-            [R::zero(); 3]
-        }
-    }
-
     /// C_j = K_j⁻¹ with `mat3::inverse_spd_upper`'s check value; without stacks the hinge's
     /// own compliance (the Castigliano integrals, not an inverted inverse) and check 0.
     #[inline(always)]
@@ -120,13 +102,11 @@ impl<'a, R: Real> JointStiffness<'a, R> {
         mat3::inverse_spd(&self.matrix(j)).ok_or(Error::Singular { what: "joint stiffness" })
     }
 
-    /// Every sub-element's C_j into `c` (its first m entries) and the push, one test for all
-    /// of them.
+    /// Every sub-element's C_j into `c` (its first m entries), one test for all of them.
     #[inline(always)]
-    pub fn compliances_into(&self, c: &mut JointCompliance<R>) -> Result<(), Error> {
+    pub fn compliances_into(&self, c: &mut [Mat3<R>; MAX_SUB]) -> Result<(), Error> {
         let mut check = R::zero();
-        c.push = self.push;
-        for (j, cj) in c.sub.iter_mut().enumerate().take(self.f.p.m) {
+        for (j, cj) in c.iter_mut().enumerate().take(self.f.p.m) {
             let (m, ck) = self.compliance_checked(j);
             *cj = m;
             check += ck;

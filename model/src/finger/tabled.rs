@@ -2,9 +2,9 @@
 //! (a branch table's): one march per distinct joint, Newton only where that march is not
 //! converged, the posture written in place. The same answer as `tension`'s solve.
 
-use super::JointCompliance;
 use super::{march, norm2, tension, Compliances, Finger, JointState, Method, Pose, Solution};
 use crate::error::Error;
+use crate::mat3::Mat3;
 use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
@@ -145,7 +145,7 @@ fn fill_from_holes<R: Real>(
 /// is not converged: Newton from `b` (dual marches), accepted if it stays within half a
 /// hinge length of the guess; else the load continuation from the straight joint.
 #[inline(never)]
-fn polish_joint<R: Real>(f: &Finger<R>, k: usize, c: &JointCompliance<R>, tension: R, b: [R; 2], tol: R, max_iter: u32) -> Result<(JointState<R>, u32), Error> {
+fn polish_joint<R: Real>(f: &Finger<R>, k: usize, c: &[Mat3<R>; MAX_SUB], tension: R, b: [R; 2], tol: R, max_iter: u32) -> Result<(JointState<R>, u32), Error> {
     match f.newton_dual(c, tension, b, f.held_at(k, R::one()), tol, max_iter) {
         Ok((st, it)) if norm2([st.hole[0] - b[0], st.hole[1] - b[1]]) <= f.p.hinge_len() / R::from_f64(2.0) => Ok((st, it)),
         _ => tension::newton_joint(f, k, c, tension, tol, max_iter, tension / R::from_f64(4096.0)),

@@ -2,10 +2,10 @@
 //! decouple): each joint by Newton on its guide hole under load continuation, then the posture.
 //! Not the tabled start (`tabled`) nor the tip-loaded solve (`loaded`).
 
-use super::JointCompliance;
 use super::{norm2, Compliances, Finger, Heading, JointEquilibrium, JointState, MarchError, Pose, Solution};
 use crate::error::Error;
-use crate::params::MAX_JOINTS;
+use crate::mat3::Mat3;
+use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 use crate::solve::continuation::{self, Step};
 
@@ -32,7 +32,7 @@ fn solve_into<R: Real>(f: &Finger<R>, c: &Compliances<R>, tension: R, tol: R, ma
     let mut iters = 0;
     for k in 0..n {
         // a joint with the same compliance as the one before has the same state (no work)
-        if k > 0 && c.c[k].sub[..m] == c.c[k - 1].sub[..m] && f.same_held(k, k - 1) {
+        if k > 0 && c.c[k][..m] == c.c[k - 1][..m] && f.same_held(k, k - 1) {
             let (done, rest) = sol.q.split_at_mut(k);
             rest[0][..m].copy_from_slice(&done[k - 1][..m]);
             ends[k] = ends[k - 1];
@@ -107,7 +107,7 @@ fn posture_into<R: Real>(
 pub(super) fn newton_joint<R: Real>(
     f: &Finger<R>,
     k: usize,
-    c: &JointCompliance<R>,
+    c: &[Mat3<R>; MAX_SUB],
     tension: R,
     tol: R,
     max_iter: u32,
@@ -201,7 +201,7 @@ pub(super) fn same_branch<R: Real>(f: &Finger<R>, last: &JointState<R>, next: &J
 
 /// Whether the equilibrium tangent at a solved state is (nearly) singular: the branch
 /// turns back there (a limit point), so no solution exists just beyond it.
-fn near_limit_point<R: Real>(f: &Finger<R>, c: &JointCompliance<R>, tension: R, st: &JointState<R>, held: Option<super::TipLoad<R>>) -> bool {
+fn near_limit_point<R: Real>(f: &Finger<R>, c: &[Mat3<R>; MAX_SUB], tension: R, st: &JointState<R>, held: Option<super::TipLoad<R>>) -> bool {
     if f.hole_residual(c, tension, st.hole, held).is_err() {
         return false;
     }
@@ -215,7 +215,7 @@ fn near_limit_point<R: Real>(f: &Finger<R>, c: &JointCompliance<R>, tension: R, 
 pub(super) fn joint_equilibrium<R: Real>(
     f: &Finger<R>,
     joint: usize,
-    c: &JointCompliance<R>,
+    c: &[Mat3<R>; MAX_SUB],
     tension: R,
     guess: Option<[R; 2]>,
     tol: R,

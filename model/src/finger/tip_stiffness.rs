@@ -181,13 +181,11 @@ impl<R: Real> Finger<R> {
             let fc = [-p * span_v[0] / span, -p * span_v[1] / span];
             let f = [fc[0] + ftl[0], fc[1] + ftl[1]];
             let mut pose = Heading::origin();
-            for (q, cj) in sol.q[k][..m].iter().zip(&c.c[k].sub[..m]) {
+            for (q, cj) in sol.q[k][..m].iter().zip(&c.c[k][..m]) {
                 let d = pose.then(self.sub_len + q[0], q[1], q[2]);
                 let at = [d.pose.x, d.pose.y];
                 let moment = cross([b[0] - at[0], b[1] - at[1]], fc) + cross([tpl[0] - at[0], tpl[1] - at[1]], ftl) + tcl;
-                // the stack's push acts with the loads on each sub-element (K q = w + push)
-                let a = c.c[k].push;
-                compare(q, [pose.c * f[0] + pose.s * f[1] + a[0], -pose.s * f[0] + pose.c * f[1] + a[1], moment + a[2]], cj)?;
+                compare(q, [pose.c * f[0] + pose.s * f[1], -pose.s * f[0] + pose.c * f[1], moment], cj)?;
                 pose = d;
             }
             let end = pose.pose;

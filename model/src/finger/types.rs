@@ -85,60 +85,13 @@ impl<R: Real> Method<R> {
     }
 }
 
-/// One joint's sub-element compliances C_j and its stack's push: the active wrench on each
-/// sub-element, in its own frame (N, N, N·mm; `de::StackStiffness::active`, the same for every
-/// sub-element of the joint; zero at 0 V and without stacks). Sub-element j's equilibrium is
-/// `q_j = C_j (w_j + push)` in every march form. `c[j]` indexes C_j.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct JointCompliance<R> {
-    pub sub: [Mat3<R>; MAX_SUB],
-    pub push: [R; 3],
-}
-
-impl<R: Real> JointCompliance<R> {
-    /// Every C_j zero, no push.
-    pub fn zero() -> Self {
-        JointCompliance { sub: [mat3::zero(); MAX_SUB], push: [R::zero(); 3] }
-    }
-
-    /// The compliances `sub` without a push (the hinges alone, a test's).
-    pub fn unpushed(sub: [Mat3<R>; MAX_SUB]) -> Self {
-        JointCompliance { sub, push: [R::zero(); 3] }
-    }
-
-    /// Sub-element j's rotation under the push alone, summed over the first `m`: the joint's
-    /// turn under its voltage with no load (rad, +: toward the cable).
-    pub fn push_turn(&self, m: usize) -> R {
-        let a = self.push;
-        self.sub.iter().take(m).fold(R::zero(), |t, c| t + c[2][0] * a[0] + c[2][1] * a[1] + c[2][2] * a[2])
-    }
-
-    /// The same in another scalar type.
-    pub fn cast<S: Real>(&self) -> JointCompliance<S> {
-        JointCompliance { sub: self.sub.map(|m| cast_mat(&m)), push: self.push.map(|x| S::from_f64(x.to_f64())) }
-    }
-}
-
-impl<R> core::ops::Index<usize> for JointCompliance<R> {
-    type Output = Mat3<R>;
-    fn index(&self, j: usize) -> &Mat3<R> {
-        &self.sub[j]
-    }
-}
-
-impl<R> core::ops::IndexMut<usize> for JointCompliance<R> {
-    fn index_mut(&mut self, j: usize) -> &mut Mat3<R> {
-        &mut self.sub[j]
-    }
-}
-
 /// Compliance of every sub-element of every joint, for one set of channel voltages.
 #[derive(Clone, Copy, Debug)]
 pub struct Compliances<R> {
     pub n: usize,
     pub m: usize,
-    /// C of sub-element j of joint k: `c[k][j]`, and joint k's push `c[k].push`.
-    pub c: [JointCompliance<R>; MAX_JOINTS],
+    /// C of sub-element j of joint k: `c[k][j]`.
+    pub c: [[Mat3<R>; MAX_SUB]; MAX_JOINTS],
     /// Whole-stack thickness per joint, mm (0 without stacks).
     pub thickness: [R; MAX_JOINTS],
     /// The channel voltages these compliances are for, V.
@@ -159,7 +112,12 @@ impl<R: Real> Compliances<R> {
     /// The same compliances in another scalar type (computed once in f32/f64, used in fixed
     /// point).
     pub fn cast<S: Real>(&self) -> Compliances<S> {
-        let c = self.c.map(|j| j.cast());
+        let mut c = [[mat3::zero(); MAX_SUB]; MAX_JOINTS];
+        for k in 0..MAX_JOINTS {
+            for j in 0..MAX_SUB {
+                c[k][j] = cast_mat(&self.c[k][j]);
+            }
+        }
         Compliances { n: self.n, m: self.m, c, thickness: self.thickness.map(|x| S::from_f64(x.to_f64())), volts: self.volts.map(|x| S::from_f64(x.to_f64())) }
     }
 }

@@ -30,9 +30,6 @@ pub(super) struct CMat {
     pub(super) t: [i32; 3],
     pub(super) d02: Scaled,
     pub(super) d12: Scaled,
-    /// The stack's push displacement `C a` (the float `JointCompliance::push`), row i at frac
-    /// `t[i]`: added to the row sums.
-    pub(super) qa: [i64; 3],
 }
 
 /// The wrench's formats (frac bits) by column.
@@ -170,25 +167,13 @@ impl FixedSolution {
 pub(super) use crate::finger::MarchError;
 
 pub(super) fn cmat<R: Real>(m: &[[R; 3]; 3]) -> CMat {
-    cmat_pushed(m, &[R::zero(); 3])
-}
-
-/// `cmat` with the stack's push `a` (N, N, N·mm): its displacement `C a` per row.
-pub(super) fn cmat_pushed<R: Real>(m: &[[R; 3]; 3], a: &[R; 3]) -> CMat {
     let mut v = [[0f64; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
             v[i][j] = m[i][j].to_f64();
         }
     }
-    let mut o = CMat::new(&v);
-    for i in 0..3 {
-        let qa = v[i][0] * a[0].to_f64() + v[i][1] * a[1].to_f64() + v[i][2] * a[2].to_f64();
-        // q 2^t[i], saturated (a push that large saturates the march's rows too)
-        let x = qa * f64::from_bits(((1023 + o.t[i].clamp(-1000, 1000)) as u64) << 52);
-        o.qa[i] = if x.is_finite() { x.clamp(-9.0e18, 9.0e18) as i64 } else { 0 };
-    }
-    o
+    CMat::new(&v)
 }
 
 /// `C (f0, f1, m)` row `i` as a 64-bit sum at frac `cm.t[i]` (three products, no shift).
@@ -203,7 +188,7 @@ type FixedLoads = ([Nt; 2], Nmm);
 /// A sub-element's displacement (q0, q1, q2) in Q formats.
 type FixedDisp = (Mm, Mm, Rad);
 
-/// The Q form of `ByComplianceLoaded`: q0 = C (f, m0) + C push, then the moment arm's own change
+/// The Q form of `ByComplianceLoaded`: q0 = C (f, m0), then the moment arm's own change
 /// s = (-f1 q0_0 + f0 q0_1) / den, q = q0 + s C(:, 2); refuses |den| at or below 2^-20.
 struct FixedByCompliance<'a>(&'a [CMat; MAX_SUB]);
 
@@ -216,11 +201,7 @@ impl SubElement<FixedLoads> for FixedByCompliance<'_> {
     }
     #[inline(always)]
     fn equilibrium(&self, cj: &CMat, (f, m0): FixedLoads) -> Result<FixedDisp, MarchError> {
-        let q0 = [
-            row(cj, 0, f[0], f[1], m0).saturating_add(cj.qa[0]),
-            row(cj, 1, f[0], f[1], m0).saturating_add(cj.qa[1]),
-            row(cj, 2, f[0], f[1], m0).saturating_add(cj.qa[2]),
-        ];
+        let q0 = [row(cj, 0, f[0], f[1], m0), row(cj, 1, f[0], f[1], m0), row(cj, 2, f[0], f[1], m0)];
         // den = 1 + f_y C02 - f_x C12, at frac ACC
         let den = (1i64 << ACC).saturating_add(cj.d02.wide(f[1], ACC)).saturating_sub(cj.d12.wide(f[0], ACC));
         let den26 = shr_round(den, ACC - 26);
@@ -314,7 +295,7 @@ impl FixedFinger {
             let t = if stacks { stack.thickness(k + 1, v)? } else { R::zero() };
             let kj = f.joint_stiffness(t);
             for j in 0..m {
-                self.c[k][j] = cmat_pushed(&kj.compliance(j)?, &kj.push());
+                self.c[k][j] = cmat(&kj.compliance(j)?);
             }
             self.same_as_prev[k] = k > 0 && (!stacks || v == volts[k - 1]);
         }
@@ -583,13 +564,7 @@ impl FixedFinger {
         }
         let pose = |p: &FixedPose| Pose { x: p.x.to_real(), y: p.y.to_real(), theta: p.theta.to_real() };
         let mut s = Solution { n, m: self.m, tension: sol.tension.to_real(), iterations: sol.iterations, ..Solution::empty() };
-        let mut c = Compliances {
-            n,
-            m: self.m,
-            c: [crate::finger::JointCompliance::zero(); MAX_JOINTS],
-            thickness: [R::zero(); MAX_JOINTS],
-            volts: [R::zero(); MAX_JOINTS],
-        };
+        let mut c = Compliances { n, m: self.m, c: [[mat3::zero(); MAX_SUB]; MAX_JOINTS], thickness: [R::zero(); MAX_JOINTS], volts: [R::zero(); MAX_JOINTS] };
         let sub_len: R = self.sub_len.to_real();
         for k in 0..n {
             let ends = self.sub_element_ends(sol, k)?;

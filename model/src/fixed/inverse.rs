@@ -7,7 +7,7 @@
 //! the float inverse's rule (`inverse::choose_tension`), each joint's tensions at the two stack
 //! ends by following its branch from 0 N, the midpoint of the feasible interval. Not here: fmax.
 use super::branch_end::SEARCH_BOUND_N;
-use super::forward::{cmat_pushed, CMat, FixedFinger, MarchError};
+use super::forward::{cmat, CMat, FixedFinger, MarchError};
 use super::q::{Mm, Nt, Rad, Q};
 use crate::de;
 use crate::error::Error;
@@ -63,8 +63,8 @@ impl FixedInverse {
             let mut vs = [R::zero(); MAX_JOINTS];
             vs[..n].iter_mut().for_each(|x| *x = v);
             let comp = f.compliances(&vs[..n])?;
-            for (c, src) in node.iter_mut().zip(&comp.c[0].sub[..p.m]) {
-                *c = cmat_pushed(src, &comp.c[0].push);
+            for (c, src) in node.iter_mut().zip(&comp.c[0][..p.m]) {
+                *c = cmat(src);
             }
         }
         // one exponent per (sub-element, row) across the nodes: the largest row keeps 30 bits
@@ -76,7 +76,6 @@ impl FixedInverse {
                     for x in nd[j].m[r].iter_mut() {
                         *x = super::q::shr_round(*x as i64, d) as i32;
                     }
-                    nd[j].qa[r] = super::q::shr_round(nd[j].qa[r], d);
                     nd[j].t[r] = t;
                 }
             }
@@ -107,9 +106,6 @@ impl FixedInverse {
                 for c in 0..3 {
                     o[j].m[r][c] = lerp(a[j].m[r][c], b[j].m[r][c], w);
                 }
-            }
-            for r in 0..3 {
-                o[j].qa[r] = a[j].qa[r] + (((b[j].qa[r] as i128 - a[j].qa[r] as i128) * w as i128 + (1 << 15)) >> 16) as i64;
             }
             o[j].d02.m = lerp(a[j].d02.m, b[j].d02.m, w);
             o[j].d12.m = lerp(a[j].d12.m, b[j].d12.m, w);
@@ -186,7 +182,7 @@ impl<'a, R: Real> FixedInverseDirect<'a, R> {
         let kj = self.f.joint_stiffness(t);
         let mut o = [CMat::default(); MAX_SUB];
         for (j, c) in o.iter_mut().enumerate().take(self.fwd.m) {
-            *c = cmat_pushed(&kj.compliance(j)?, &kj.push());
+            *c = cmat(&kj.compliance(j)?);
         }
         Ok(o)
     }

@@ -92,16 +92,15 @@ impl<'a, R: Real> Ctx<'a, R> {
     }
 
     /// Joint `joint` (1-based) held at `ang` with stack thickness t: Newton on (δax, δtr, P) of
-    /// `K q - P ŵ(q) - push = 0` (`solve::newton::full_steps`). Also the implicit dP/dθ at fixed t.
+    /// `K q - P ŵ(q) = 0` (`solve::newton::full_steps`). Also the implicit dP/dθ at fixed t.
     /// Not the march's `SubElement`: with θ given and P (or t) unknown the residual is solved for
     /// the load, where the march solves q for a given load; K is the same `JointStiffness`.
     fn hold_tension(&self, joint: usize, ang: &Angle<R>, t: R, guess: [R; 2]) -> Result<Hold<R>, Error> {
-        let kj = self.stiffness(t);
-        let (k, push) = (kj.matrix(0), kj.push());
+        let k = self.stiffness(t).matrix(0);
         // first tension from the moment row with the guessed δ
         let w0 = self.wrench(ang, guess, joint, R::zero())?;
-        let p0 = (k[2][0] * guess[0] + k[2][1] * guess[1] + k[2][2] * ang.theta - push[2]) / w0.w[2];
-        let mut eq = HoldTension { ctx: self, joint, ang, k, push, w: w0 };
+        let p0 = (k[2][0] * guess[0] + k[2][1] * guess[1] + k[2][2] * ang.theta) / w0.w[2];
+        let mut eq = HoldTension { ctx: self, joint, ang, k, w: w0 };
         let mut x = [guess[0], guess[1], p0];
         let (c, inv) = newton::full_steps(&mut eq, &mut x, self.max_iter).map_err(|e| match e {
             Failure::Singular { .. } => Error::LimitPoint { joint, tension: x[2].to_f64() },
@@ -114,7 +113,7 @@ impl<'a, R: Real> Ctx<'a, R> {
         Ok(Hold { delta: [x[0], x[1]], tension: p, thickness: t, wm: w.w[2], dp_dtheta: dp, iters: c.iterations })
     }
 
-    /// Joint held at `ang` under tension P: Newton on (δax, δtr, t) of `K(t) q - P ŵ(q) - push(t) = 0`
+    /// Joint held at `ang` under tension P: Newton on (δax, δtr, t) of `K(t) q - P ŵ(q) = 0`
     /// (`solve::newton::full_steps`).
     fn hold_thickness(&self, joint: usize, ang: &Angle<R>, p: R, guess: Hold<R>) -> Result<Hold<R>, Error> {
         let w0 = Wrench { w: [R::zero(); 3], d: [[R::zero(); 3]; 3] };
@@ -149,14 +148,12 @@ impl<'a, R: Real> Ctx<'a, R> {
     }
 }
 
-/// `K q - P ŵ(q) - push = 0` in (δax, δtr, P) at a fixed stiffness K and the stack's push;
-/// `w` the last wrench evaluated.
+/// `K q - P ŵ(q) = 0` in (δax, δtr, P) at a fixed stiffness K; `w` the last wrench evaluated.
 struct HoldTension<'c, 'a, R> {
     ctx: &'c Ctx<'a, R>,
     joint: usize,
     ang: &'c Angle<R>,
     k: Mat3<R>,
-    push: [R; 3],
     w: Wrench<R>,
 }
 
@@ -170,7 +167,7 @@ impl<R: Real> newton::Linearized<R, 3> for HoldTension<'_, '_, R> {
         let mut r = [R::zero(); 3];
         let mut jm: Mat3<R> = mat3::zero();
         for row in 0..3 {
-            r[row] = k[row][0] * x[0] + k[row][1] * x[1] + k[row][2] * self.ang.theta - p * w.w[row] - self.push[row];
+            r[row] = k[row][0] * x[0] + k[row][1] * x[1] + k[row][2] * self.ang.theta - p * w.w[row];
             jm[row][0] = k[row][0] - p * w.d[0][row];
             jm[row][1] = k[row][1] - p * w.d[1][row];
             jm[row][2] = -w.w[row];
@@ -184,7 +181,7 @@ impl<R: Real> newton::Linearized<R, 3> for HoldTension<'_, '_, R> {
     }
 }
 
-/// `K(t) q - P ŵ(q) - push(t) = 0` in (δax, δtr, t) at a fixed tension P; `w` the last wrench evaluated.
+/// `K(t) q - P ŵ(q) = 0` in (δax, δtr, t) at a fixed tension P; `w` the last wrench evaluated.
 struct HoldThickness<'c, 'a, R> {
     ctx: &'c Ctx<'a, R>,
     joint: usize,
@@ -202,7 +199,6 @@ impl<R: Real> newton::Linearized<R, 3> for HoldThickness<'_, '_, R> {
         let (ctx, p) = (self.ctx, self.p);
         let kj = ctx.stiffness(x[2]);
         let (k, kd) = (kj.matrix(0), kj.dt(&ctx.stack));
-        let (push, push_dt) = (kj.push(), kj.push_dt(&ctx.stack));
         self.w = ctx.wrench(self.ang, [x[0], x[1]], self.joint, p)?;
         let w = &self.w;
         let q = [x[0], x[1], self.ang.theta];
@@ -211,10 +207,10 @@ impl<R: Real> newton::Linearized<R, 3> for HoldThickness<'_, '_, R> {
         let mut r = [R::zero(); 3];
         let mut jm: Mat3<R> = mat3::zero();
         for row in 0..3 {
-            r[row] = kq[row] - p * w.w[row] - push[row];
+            r[row] = kq[row] - p * w.w[row];
             jm[row][0] = k[row][0] - p * w.d[0][row];
             jm[row][1] = k[row][1] - p * w.d[1][row];
-            jm[row][2] = kdq[row] - push_dt[row];
+            jm[row][2] = kdq[row];
         }
         Ok((r, jm))
     }

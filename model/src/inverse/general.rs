@@ -17,7 +17,7 @@ use super::table::{BranchTable, TableEnd, TABLE_BAND};
 use super::{choose_tension, feasible_interval, one_tension, thickness_slack, Options, PoseSolution};
 use crate::de;
 use crate::error::Error;
-use crate::finger::{by, uniform_beam_compliance, By, Finger, JointCompliance, JointEquilibrium, JointMarch, JointStiffness, Method, Pose};
+use crate::finger::{by, uniform_beam_compliance, By, Finger, JointEquilibrium, JointMarch, JointStiffness, Method, Pose};
 use crate::mat3::{self, Mat3};
 use crate::params::{Params, MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
@@ -118,7 +118,7 @@ pub(super) fn solve<R: Real>(
         None => g.stack_ends(opts)?,
     };
     let own;
-    let cs: &[JointCompliance<R>; 2] = match table {
+    let cs: &[[Mat3<R>; MAX_SUB]; 2] = match table {
         Some(tb) => &tb.comp,
         None => {
             own = [g.comp(t_top)?, g.comp(t0)?];

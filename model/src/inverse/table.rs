@@ -14,8 +14,9 @@
 use super::Options;
 use crate::de::Stack;
 use crate::error::Error;
-use crate::finger::{BranchLimit, Compliances, Finger, JointCompliance, Method, Solution};
-use crate::params::MAX_JOINTS;
+use crate::finger::{BranchLimit, Compliances, Finger, Method, Solution};
+use crate::mat3::Mat3;
+use crate::params::{MAX_JOINTS, MAX_SUB};
 use crate::real::Real;
 
 /// The relative band around the feasible interval's bounds inside which an end read off the
@@ -69,7 +70,7 @@ pub struct BranchTable<R> {
     /// The finger's thickness-to-voltage constants (`solve_pose_tabled`'s voltages).
     pub(super) volts: Stack<R>,
     /// Sub-element compliances at each end (the middle branch's are not kept).
-    pub(super) comp: [JointCompliance<R>; 2],
+    pub(super) comp: [[Mat3<R>; MAX_SUB]; 2],
     /// dθ/dP of the straight joint at each end, rad/N.
     pub(super) slope0: [R; 2],
     /// Angle step, rad.

@@ -68,7 +68,7 @@ impl<'a, R: Real> Gen<'a, R> {
         &mut self,
         joint: usize,
         theta: R,
-        c: &JointCompliance<R>,
+        c: &[Mat3<R>; MAX_SUB],
         t: R,
         s_lin: R,
         hint: Option<(R, [R; 2])>,
@@ -183,7 +183,7 @@ impl<'a, R: Real> Gen<'a, R> {
                 None => (mat3::zero(), [true; 3]),
             };
             let me: &Self = self;
-            let mut c = JointCompliance::zero();
+            let mut c = [mat3::zero(); MAX_SUB];
             // the compliances of the last thickness tried (the hole columns' differences
             // keep t)
             let mut c_at: Option<R> = None;

@@ -41,8 +41,8 @@ impl<'a, R: Real> Gen<'a, R> {
 
     /// Sub-element compliances at stack thickness t, as `Finger::compliances` computes them.
     #[inline(never)]
-    pub(in crate::inverse) fn comp(&self, t: R) -> Result<JointCompliance<R>, Error> {
-        let mut c = JointCompliance::zero();
+    pub(in crate::inverse) fn comp(&self, t: R) -> Result<[Mat3<R>; MAX_SUB], Error> {
+        let mut c = [mat3::zero(); MAX_SUB];
         self.comp_into(t, &mut c)?;
         Ok(c)
     }
@@ -51,7 +51,7 @@ impl<'a, R: Real> Gen<'a, R> {
     /// `Finger::joint_stiffness`'s compliances; refuses a thickness that is not positive and
     /// finite (K_de ∝ t axially, t³ in bending: positive semi-definite for t > 0).
     #[inline(never)]
-    pub(super) fn comp_into(&self, t: R, c: &mut JointCompliance<R>) -> Result<(), Error> {
+    pub(super) fn comp_into(&self, t: R, c: &mut [Mat3<R>; MAX_SUB]) -> Result<(), Error> {
         if self.p.layers != 0 && !(t > R::zero() && t.is_finite()) {
             return Err(Error::Singular { what: "joint stiffness" });
         }
@@ -88,7 +88,7 @@ impl<'a, R: Real> Gen<'a, R> {
 
     /// The state of a held end: its own if solved, else one march at its tension and hole.
     #[inline(never)]
-    pub(super) fn state(&self, joint: usize, c: &JointCompliance<R>, h: &Held<R>) -> Result<JointMarch<R>, Error> {
+    pub(super) fn state(&self, joint: usize, c: &[Mat3<R>; MAX_SUB], h: &Held<R>) -> Result<JointMarch<R>, Error> {
         if h.exact || h.tension == R::zero() {
             return Ok(h.st);
         }
@@ -104,9 +104,9 @@ impl<'a, R: Real> Gen<'a, R> {
     /// dθ/dP at P = 0 (straight joint: every sub-element sees the axial force -P and the
     /// moment P e), rad/N.
     #[inline(never)]
-    pub(in crate::inverse) fn slope0(&self, c: &JointCompliance<R>) -> R {
+    pub(in crate::inverse) fn slope0(&self, c: &[Mat3<R>; MAX_SUB]) -> R {
         let e = self.p.e;
-        c.sub.iter().take(self.p.m).fold(self.link_rot, |a, cj| a + cj[2][2] * e - cj[2][0])
+        c.iter().take(self.p.m).fold(self.link_rot, |a, cj| a + cj[2][2] * e - cj[2][0])
     }
 
     pub(super) fn straight(&self) -> JointEquilibrium<R> {

@@ -127,7 +127,7 @@ pub(super) fn step_by_compliance<R: Real>(
     q: &mut [[R; 3]; MAX_SUB],
 ) -> Result<Option<JointMarch<R>>, Error> {
     let [t_top, t0, _] = tb.thickness;
-    let mut c = tb.comp[1];
+    let mut c = [tb.comp[1][0]; MAX_SUB];
     let ck = if t >= t0 {
         &tb.comp[1]
     } else if t <= t_top {
